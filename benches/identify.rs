@@ -1,0 +1,2 @@
+//! Criterion benchmarks of identification (to be written).
+fn main() {}

@@ -1,0 +1,26 @@
+//! Forced-motion records → the nonlinear aerodynamic force law (DESIGN.md §3).
+//!
+//! The chain is: [`dataset`] (read/write the folder format of DATA_FORMAT.md, convert to SI
+//! per unit span) → [`preprocess`] (wind–no-wind subtraction, velocities) → [`record`]
+//! (nondimensional regressors α, Bα̇/U, h/B, ḣ/U and targets C_L, C_M) → [`library`]
+//! (polynomial candidate terms) → [`identifiability`] (numerical rank, dependencies,
+//! canonical basis) → [`regress`] (STLSQ, group STLSQ, δ path) → [`metrics`] (R², Eq. 14
+//! key-frequency loss, MFWA) → [`eq19`] (Scanlan derivatives and N*) → [`pipeline`]
+//! (the whole identification of a data set, the `identification.json` result).
+//!
+//! Sign conventions (DESIGN.md §2): h positive down, α positive nose-up, lift positive down,
+//! moment positive nose-up, C_L = L/(½ρU²B), C_M = M/(½ρU²B²).
+
+pub mod dataset;
+pub mod eq19;
+pub mod error;
+pub mod identifiability;
+pub mod io;
+pub mod library;
+pub mod metrics;
+pub mod pipeline;
+pub mod preprocess;
+pub mod record;
+pub mod regress;
+
+pub use error::{Error, Result};

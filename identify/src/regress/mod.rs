@@ -1,0 +1,3 @@
+//! Sparse regression (to be written).
+
+pub mod pysindy;

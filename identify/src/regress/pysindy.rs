@@ -1,0 +1,1 @@
+//! pysindy-compatible STLSQ (to be written).

@@ -1,0 +1,1 @@
+//! Every figure of aeroform (plotters, bundled font) and the HTML report.

@@ -1,0 +1,2 @@
+//! aeroform command-line interface.
+fn main() {}
