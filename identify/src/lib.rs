@@ -21,6 +21,7 @@ pub mod metrics;
 pub mod pipeline;
 pub mod preprocess;
 pub mod record;
+pub mod synthetic;
 pub mod regress;
 
 pub use error::{Error, Result};
