@@ -126,7 +126,7 @@ def main():
             dict(
                 options=opts,
                 iterations=len(hist),
-                threshold_margin=margin,
+                threshold_margin=None if margin == float("inf") else margin,
                 support=[n for n, c in zip(names, coef) if c != 0.0],
                 coefficients=[float(c) for c in coef],
             )
@@ -164,7 +164,7 @@ def main():
         condition_number=float(s[0] / s[-1]),
         runs=runs,
     )
-    (FIX / "pysindy_parity.json").write_text(json.dumps(meta, indent=1) + "\n")
+    (FIX / "pysindy_parity.json").write_text(json.dumps(meta, indent=1, allow_nan=False) + "\n")
     print(f"cond(theta) = {s[0] / s[-1]:.3e}; wrote {FIX}")
 
 
