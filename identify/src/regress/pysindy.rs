@@ -134,13 +134,13 @@ impl PysindyStlsq {
     /// (pysindy: "threshold cannot be negative", "alpha cannot be negative"), or `max_iter`
     /// when 0 ("max_iter must be positive").
     pub fn check(&self) -> Result<()> {
-        if !(self.threshold >= 0.0) || !self.threshold.is_finite() {
+        if !(self.threshold.is_finite() && self.threshold >= 0.0) {
             return Err(Error::InvalidOption {
                 name: "threshold".into(),
                 message: format!("must be finite and >= 0, got {}", self.threshold),
             });
         }
-        if !(self.alpha >= 0.0) || !self.alpha.is_finite() {
+        if !(self.alpha.is_finite() && self.alpha >= 0.0) {
             return Err(Error::InvalidOption {
                 name: "alpha".into(),
                 message: format!("must be finite and >= 0, got {}", self.alpha),
