@@ -87,30 +87,46 @@ def signals(rng):
     return t, x
 
 
-def main():
-    rng = np.random.default_rng(SEED)
-    t, x = signals(rng)
-    lib = ps.PolynomialLibrary(degree=3, include_bias=False)
-    theta = np.asarray(lib.fit_transform(x))
-    names = lib.get_feature_names()
-    w_true = np.array([LAW.get(n, 0.0) for n in names])
-    y = theta @ w_true + NOISE_Y * rng.standard_normal(N)
-    # Round-trip through the CSV text so that Python and Rust fit the very same doubles.
-    x = np.array([[float(repr(float(v))) for v in row] for row in x])
-    y = np.array([float(repr(float(v))) for v in y])
-    theta = np.asarray(ps.PolynomialLibrary(degree=3, include_bias=False).fit_transform(x))
+def harmonic_signals(rng):
+    """Campaign-like single-frequency forced motion (configuration D, U = 7 m/s, A = 12 deg):
+    alpha = A sin(2 pi f_a t), h = 1.5 mm/deg * A sin(2 pi f_h t), exact velocities, 512 Hz,
+    no noise on x. Under such motion the 34-term library is rank deficient
+    (alpha_dot^2 = w^2 (A^2 - alpha^2) and its products), so only ridge runs (alpha > 0) are
+    well posed."""
+    n, dt, u = 2048, 1.0 / 512.0, 7.0
+    t = np.arange(n) * dt
+    a, wa = np.deg2rad(12.0), 2 * np.pi * 2.0
+    hm, wh = 1.5 * 12.0 * 1e-3, 2 * np.pi * 1.3
+    x = np.column_stack(
+        [
+            a * np.sin(wa * t),
+            B * a * wa * np.cos(wa * t) / u,
+            hm * np.sin(wh * t) / B,
+            hm * wh * np.cos(wh * t) / u,
+        ]
+    )
+    return dt, u, x
 
-    col_norm = np.linalg.norm(theta, axis=0)
-    s = np.linalg.svd(theta, compute_uv=False)
+
+HARMONIC_RUNS = [
+    dict(threshold=0.1, alpha=0.05, max_iter=20, unbias=True, normalize_columns=False),
+    dict(threshold=0.1, alpha=0.05, max_iter=20, unbias=False, normalize_columns=False),
+    dict(threshold=0.05, alpha=0.05, max_iter=20, unbias=True, normalize_columns=False),
+    dict(threshold=0.01, alpha=1e-3, max_iter=20, unbias=True, normalize_columns=False),
+    dict(threshold=0.01, alpha=1e-3, max_iter=20, unbias=False, normalize_columns=False),
+]
+
+
+def fit_runs(x, y, dt, theta, names, run_opts):
     runs = []
-    for opts in RUNS:
+    for opts in run_opts:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             model = ps.SINDy(
                 feature_library=ps.PolynomialLibrary(degree=3, include_bias=False),
                 optimizer=ps.STLSQ(**opts),
             )
-            model.fit(x, t=DT, x_dot=y[:, None])
+            model.fit(x, t=dt, x_dot=y[:, None])
             coef = np.asarray(model.coefficients())[0]
             opt = ps.STLSQ(**opts)
             opt.fit(theta, y)
@@ -132,27 +148,28 @@ def main():
             )
         )
         print(f"{opts} iters={len(hist)} margin={margin:.2e} support={runs[-1]['support']}")
+    return runs
 
+
+def write_fixture(stem, x, y, meta):
     FIX.mkdir(parents=True, exist_ok=True)
     lines = ["x0,x1,x2,x3,y"]
     for row, yi in zip(x, y):
         lines.append(",".join(repr(float(v)) for v in row) + "," + repr(float(yi)))
-    (FIX / "pysindy_parity.csv").write_text("\n".join(lines) + "\n")
-    meta = dict(
+    (FIX / f"{stem}.csv").write_text("\n".join(lines) + "\n")
+    (FIX / f"{stem}.json").write_text(json.dumps(meta, indent=1, allow_nan=False) + "\n")
+    print(f"cond(theta) = {meta['condition_number']:.3e}; wrote {FIX / stem}.{{csv,json}}")
+
+
+def common_meta(names, theta):
+    s = np.linalg.svd(theta, compute_uv=False)
+    return dict(
         generator="benches/peers/make_parity_fixture.py",
         pysindy_version=ps.__version__ if hasattr(ps, "__version__") else "2.1.0",
         numpy_version=np.__version__,
         scipy_version=scipy.__version__,
         sklearn_version=sklearn.__version__,
-        seed=SEED,
-        rng="numpy.random.default_rng(seed): x noise (N x 4) first, then y noise (N)",
-        n_samples=N,
-        dt=DT,
-        chord=B,
-        wind_speed=U,
         variables=["alpha", "B*alpha_dot/U", "h/B", "h_dot/U"],
-        noise_std=dict(x=NOISE_X, y=NOISE_Y),
-        true_law=LAW,
         fit_call=(
             "ps.SINDy(feature_library=ps.PolynomialLibrary(degree=3, include_bias=False), "
             "optimizer=ps.STLSQ(**options)).fit(x, t=dt, x_dot=y[:, None]); "
@@ -160,12 +177,57 @@ def main():
         ),
         library="ps.PolynomialLibrary(degree=3, include_bias=False)",
         feature_names=names,
-        column_norms=[float(c) for c in col_norm],
+        column_norms=[float(c) for c in np.linalg.norm(theta, axis=0)],
+        singular_values=[float(v) for v in s],
         condition_number=float(s[0] / s[-1]),
+        numerical_rank=int(np.sum(s > s[0] * len(s) * np.finfo(float).eps)),
+    )
+
+
+def main():
+    # 1. Generic fixture: two-frequency pitch, multi-sine heave, noisy x and y.
+    rng = np.random.default_rng(SEED)
+    t, x = signals(rng)
+    lib = ps.PolynomialLibrary(degree=3, include_bias=False)
+    theta = np.asarray(lib.fit_transform(x))
+    names = lib.get_feature_names()
+    w_true = np.array([LAW.get(n, 0.0) for n in names])
+    y = theta @ w_true + NOISE_Y * rng.standard_normal(N)
+    runs = fit_runs(x, y, DT, theta, names, RUNS)
+    meta = common_meta(names, theta)
+    meta.update(
+        seed=SEED,
+        rng="numpy.random.default_rng(seed): x noise (N x 4) first, then y noise (N)",
+        n_samples=N,
+        dt=DT,
+        chord=B,
+        wind_speed=U,
+        noise_std=dict(x=NOISE_X, y=NOISE_Y),
+        true_law=LAW,
         runs=runs,
     )
-    (FIX / "pysindy_parity.json").write_text(json.dumps(meta, indent=1, allow_nan=False) + "\n")
-    print(f"cond(theta) = {s[0] / s[-1]:.3e}; wrote {FIX}")
+    write_fixture("pysindy_parity", x, y, meta)
+
+    # 2. Harmonic fixture: the campaign's motion, rank-deficient library, ridge runs only.
+    rng = np.random.default_rng(SEED + 1)
+    dt, u, x = harmonic_signals(rng)
+    theta = np.asarray(lib.fit_transform(x))
+    y = theta @ w_true + NOISE_Y * rng.standard_normal(len(x))
+    runs = fit_runs(x, y, dt, theta, names, HARMONIC_RUNS)
+    meta = common_meta(names, theta)
+    meta.update(
+        seed=SEED + 1,
+        rng="numpy.random.default_rng(seed): y noise (N)",
+        n_samples=len(x),
+        dt=dt,
+        chord=B,
+        wind_speed=u,
+        motion="configuration D (f_alpha 2.0 Hz, f_h 1.3 Hz, 1.5 mm/deg), A = 12 deg, U = 7 m/s",
+        noise_std=dict(x=0.0, y=NOISE_Y),
+        true_law=LAW,
+        runs=runs,
+    )
+    write_fixture("pysindy_parity_harmonic", x, y, meta)
 
 
 if __name__ == "__main__":
