@@ -285,34 +285,61 @@ mod tests {
     #[test]
     fn missing_column_names_column_and_line_1() {
         let e = parse_case_csv("t,h,alpha,lift\n0,0,0,0\n", p(), true).unwrap_err();
-        assert!(matches!(&e, Error::Csv { line: 1, field, .. } if field == "moment"), "{e:?}");
-        assert!(msg(&e).contains("x.csv:1") && msg(&e).contains("`moment`"), "{e}");
+        assert!(
+            matches!(&e, Error::Csv { line: 1, field, .. } if field == "moment"),
+            "{e:?}"
+        );
+        assert!(
+            msg(&e).contains("x.csv:1") && msg(&e).contains("`moment`"),
+            "{e}"
+        );
     }
 
     #[test]
     fn nan_value_names_line_and_column() {
         let text = "t,h,alpha\n0,0,0\n1,0,0\n2,NaN,0\n3,0,0\n";
         let e = parse_case_csv(text, p(), false).unwrap_err();
-        assert!(matches!(&e, Error::Csv { line: 4, field, .. } if field == "h"), "{e:?}");
-        assert!(msg(&e).contains("x.csv:4") && msg(&e).contains("NaN"), "{e}");
+        assert!(
+            matches!(&e, Error::Csv { line: 4, field, .. } if field == "h"),
+            "{e:?}"
+        );
+        assert!(
+            msg(&e).contains("x.csv:4") && msg(&e).contains("NaN"),
+            "{e}"
+        );
         let text = "t,h,alpha\n0,0,0\n1,0,inf\n";
         let e = parse_case_csv(text, p(), false).unwrap_err();
-        assert!(matches!(&e, Error::Csv { line: 3, field, .. } if field == "alpha"), "{e:?}");
+        assert!(
+            matches!(&e, Error::Csv { line: 3, field, .. } if field == "alpha"),
+            "{e:?}"
+        );
     }
 
     #[test]
     fn unparsable_and_empty_fields_name_line_and_column() {
         let e = parse_case_csv("t,h,alpha\n0,0,0\n1,abc,0\n", p(), false).unwrap_err();
-        assert!(matches!(&e, Error::Csv { line: 3, field, .. } if field == "h"), "{e:?}");
+        assert!(
+            matches!(&e, Error::Csv { line: 3, field, .. } if field == "h"),
+            "{e:?}"
+        );
         let e = parse_case_csv("t,h,alpha\n0,0,0\n1, ,0\n", p(), false).unwrap_err();
-        assert!(matches!(&e, Error::Csv { line: 3, field, .. } if field == "h"), "{e:?}");
+        assert!(
+            matches!(&e, Error::Csv { line: 3, field, .. } if field == "h"),
+            "{e:?}"
+        );
     }
 
     #[test]
     fn wrong_field_count_names_line() {
         let e = parse_case_csv("t,h,alpha\n0,0,0\n1,0\n2,0,0\n", p(), false).unwrap_err();
-        assert!(matches!(&e, Error::Csv { line: 3, field, .. } if field == "alpha"), "{e:?}");
-        assert!(msg(&e).contains("2 fields") && msg(&e).contains("has 3"), "{e}");
+        assert!(
+            matches!(&e, Error::Csv { line: 3, field, .. } if field == "alpha"),
+            "{e:?}"
+        );
+        assert!(
+            msg(&e).contains("2 fields") && msg(&e).contains("has 3"),
+            "{e}"
+        );
         let e = parse_case_csv("t,h,alpha\n0,0,0\n1,0,0\n2,0,0,9\n", p(), false).unwrap_err();
         assert!(matches!(&e, Error::Csv { line: 4, .. }), "{e:?}");
     }
@@ -332,7 +359,10 @@ mod tests {
     #[test]
     fn duplicate_column_is_an_error() {
         let e = parse_case_csv("t,h,alpha,h\n0,0,0,0\n", p(), false).unwrap_err();
-        assert!(matches!(&e, Error::Csv { line: 1, field, .. } if field == "h"), "{e:?}");
+        assert!(
+            matches!(&e, Error::Csv { line: 1, field, .. } if field == "h"),
+            "{e:?}"
+        );
     }
 
     #[test]
@@ -342,7 +372,10 @@ mod tests {
             .map(|i| ((1.25 + i as f64 * 0.01) * 1000.0).round() / 1000.0)
             .collect();
         let (t0, dt) = check_sampling(&t, p(), 2).unwrap();
-        assert!((dt - 0.01).abs() < 1e-12 && (t0 - 1.25).abs() < 1e-12, "{t0} {dt}");
+        assert!(
+            (dt - 0.01).abs() < 1e-12 && (t0 - 1.25).abs() < 1e-12,
+            "{t0} {dt}"
+        );
         // Exact recovery of an affine time base.
         let t: Vec<f64> = (0..1000).map(|i| 3.0 + i as f64 / 512.0).collect();
         let (t0, dt) = check_sampling(&t, p(), 2).unwrap();
@@ -357,17 +390,26 @@ mod tests {
             *x += 0.05;
         }
         let e = check_sampling(&t, p(), 2).unwrap_err();
-        assert!(matches!(e, Error::NonUniformSampling { line: 9, .. }), "{e:?}");
+        assert!(
+            matches!(e, Error::NonUniformSampling { line: 9, .. }),
+            "{e:?}"
+        );
         assert!(e.to_string().contains("x.csv:9"), "{e}");
         // Repeated stamp at row 4 → line 6.
         let mut t: Vec<f64> = (0..20).map(|i| i as f64 * 0.1).collect();
         t[4] = t[3];
         let e = check_sampling(&t, p(), 2).unwrap_err();
-        assert!(matches!(e, Error::NonUniformSampling { line: 6, .. }), "{e:?}");
+        assert!(
+            matches!(e, Error::NonUniformSampling { line: 6, .. }),
+            "{e:?}"
+        );
         // Reversed pair rows 10, 11 → first bad row 10 → line 12.
         let mut t: Vec<f64> = (0..20).map(|i| i as f64 * 0.1).collect();
         t.swap(10, 11);
         let e = check_sampling(&t, p(), 2).unwrap_err();
-        assert!(matches!(e, Error::NonUniformSampling { line: 12, .. }), "{e:?}");
+        assert!(
+            matches!(e, Error::NonUniformSampling { line: 12, .. }),
+            "{e:?}"
+        );
     }
 }

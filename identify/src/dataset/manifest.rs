@@ -275,8 +275,7 @@ fn quote(s: &str) -> String {
 /// A TOML key: bare when possible, else a quoted basic string.
 fn key(k: &str) -> String {
     if !k.is_empty()
-        && k
-            .chars()
+        && k.chars()
             .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
     {
         k.to_string()
@@ -338,11 +337,19 @@ impl<'a> Cx<'a> {
         };
         cx.values = text.parse::<toml::Table>().map_err(|e| {
             let line = e.span().map(|s| cx.line(s.start)).unwrap_or(0);
-            cx.err(line, "(syntax)", format!("invalid TOML: {}", e.message().trim()))
+            cx.err(
+                line,
+                "(syntax)",
+                format!("invalid TOML: {}", e.message().trim()),
+            )
         })?;
         cx.spans = DeTable::parse(text).map_err(|e| {
             let line = e.span().map(|s| cx.line(s.start)).unwrap_or(0);
-            cx.err(line, "(syntax)", format!("invalid TOML: {}", e.message().trim()))
+            cx.err(
+                line,
+                "(syntax)",
+                format!("invalid TOML: {}", e.message().trim()),
+            )
         })?;
         Ok(cx)
     }
@@ -441,7 +448,10 @@ impl<'a> Cx<'a> {
                 .enumerate()
                 .find(|(_, c)| c.kind == CaseKind::Free)
             {
-                let line = self.case_node(&root, i).map(|n| n.line_of("kind")).unwrap_or(0);
+                let line = self
+                    .case_node(&root, i)
+                    .map(|n| n.line_of("kind"))
+                    .unwrap_or(0);
                 return Err(self.err(
                     line,
                     "structure",
@@ -721,10 +731,7 @@ impl<'c, 'a> Node<'c, 'a> {
         ])?;
         let id = self.req_str("id")?;
         if !is_valid_case_id(id) {
-            return Err(self.err(
-                "id",
-                format!("case id \"{id}\" must match [A-Za-z0-9._-]+"),
-            ));
+            return Err(self.err("id", format!("case id \"{id}\" must match [A-Za-z0-9._-]+")));
         }
         let kind = match self.req_str("kind")? {
             "forced" => CaseKind::Forced,

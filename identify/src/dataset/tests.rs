@@ -129,7 +129,10 @@ fn unknown_manifest_key_names_key_and_line() {
     let text = SMALL.replace("span = 0.75", "spam = 0.75");
     let (line, field, msg) = manifest_err(&text);
     assert_eq!((line, field.as_str()), (6, "section.spam"), "{msg}");
-    assert!(msg.contains("manifest.toml:6") && msg.contains("`spam`"), "{msg}");
+    assert!(
+        msg.contains("manifest.toml:6") && msg.contains("`spam`"),
+        "{msg}"
+    );
 
     let text = format!("{SMALL}windspeed = 3\n");
     let (line, field, msg) = manifest_err(&text);
@@ -171,10 +174,15 @@ fn unknown_unit_names_field_and_allowed_values() {
 
 #[test]
 fn duplicate_case_id_names_second_occurrence() {
-    let text = format!("{SMALL}\n[[case]]\nid = \"a\"\nkind = \"forced\"\nfile = \"b.csv\"\nwind_speed = 6\n");
+    let text = format!(
+        "{SMALL}\n[[case]]\nid = \"a\"\nkind = \"forced\"\nfile = \"b.csv\"\nwind_speed = 6\n"
+    );
     let (line, field, msg) = manifest_err(&text);
     assert_eq!((line, field.as_str()), (22, "case[2].id"), "{msg}");
-    assert!(msg.contains("duplicate") && msg.contains("line 16"), "{msg}");
+    assert!(
+        msg.contains("duplicate") && msg.contains("line 16"),
+        "{msg}"
+    );
 }
 
 #[test]
@@ -229,13 +237,17 @@ fn wrong_format_missing_keys_and_bad_numbers() {
     let no_case = &SMALL[..SMALL.find("[[case]]").unwrap()];
     let (_, field, _) = manifest_err(no_case);
     assert_eq!(field, "case");
-    let (_, field, _) = manifest_err(&SMALL.replace("wind_speed = 5", "wind_speed = 5\nfreq_pitch = 0"));
+    let (_, field, _) =
+        manifest_err(&SMALL.replace("wind_speed = 5", "wind_speed = 5\nfreq_pitch = 0"));
     assert_eq!(field, "case[1].freq_pitch");
 }
 
 fn full_manifest() -> Manifest {
     let mut extra = toml::Table::new();
-    extra.insert("rig".into(), toml::Value::String("tunnel \"2\"\nnew".into()));
+    extra.insert(
+        "rig".into(),
+        toml::Value::String("tunnel \"2\"\nnew".into()),
+    );
     extra.insert("odd key".into(), toml::Value::Integer(3));
     let mut nested = toml::Table::new();
     nested.insert("x".into(), toml::Value::Float(0.1));
@@ -382,7 +394,13 @@ fn dataset_round_trip_mixed_units_and_si() {
     }
     // The mixed-unit file really holds totals in mm / deg.
     let csv = std::fs::read_to_string(mixed.join("cases/f1.csv")).unwrap();
-    let row: Vec<f64> = csv.lines().nth(1).unwrap().split(',').map(|x| x.parse().unwrap()).collect();
+    let row: Vec<f64> = csv
+        .lines()
+        .nth(1)
+        .unwrap()
+        .split(',')
+        .map(|x| x.parse().unwrap())
+        .collect();
     assert!((row[1] - records[0].h[0] * 1e3).abs() <= 1e-12 * row[1].abs());
     assert!((row[2] - records[0].alpha[0].to_degrees()).abs() <= 1e-12 * row[2].abs());
     let l = records[0].lift.as_ref().unwrap()[0];
@@ -410,12 +428,18 @@ fn writer_rejects_records_that_do_not_match_the_manifest() {
     let free = random_record(&mut rng, "free.2", CaseKind::Free, 10, false);
     // f1 names a nowind_file but the record has none.
     let e = write_dataset(dir.path(), &m, &[r.clone(), free.clone()]).unwrap_err();
-    assert!(matches!(&e, Error::InvalidData { field, .. } if field == "nowind_file"), "{e:?}");
+    assert!(
+        matches!(&e, Error::InvalidData { field, .. } if field == "nowind_file"),
+        "{e:?}"
+    );
     let mut bad = r;
     bad.nowind = Some(Box::new(bad.clone()));
     bad.alpha[3] = f64::NAN;
     let e = write_dataset(dir.path(), &m, &[bad, free]).unwrap_err();
-    assert!(matches!(&e, Error::InvalidData { field, .. } if field == "alpha"), "{e:?}");
+    assert!(
+        matches!(&e, Error::InvalidData { field, .. } if field == "alpha"),
+        "{e:?}"
+    );
     assert!(!dir.path().join("manifest.toml").exists());
 }
 
@@ -429,7 +453,10 @@ fn read_dataset_errors_name_the_case_file() {
     let dir = tempfile::tempdir().unwrap();
     write_small(dir.path(), "t,h,alpha,lift\n0,0,0,0\n1,0,0,0\n2,0,0,0\n");
     let e = read_dataset(dir.path()).unwrap_err();
-    assert!(matches!(&e, Error::Csv { field, line: 1, .. } if field == "moment"), "{e:?}");
+    assert!(
+        matches!(&e, Error::Csv { field, line: 1, .. } if field == "moment"),
+        "{e:?}"
+    );
     assert!(e.to_string().contains("a.csv:1"), "{e}");
 
     write_small(
@@ -437,9 +464,15 @@ fn read_dataset_errors_name_the_case_file() {
         "t,h,alpha,lift,moment\n0,0,0,0,0\n0.1,0,0,0,0\n0.2,0,0,0,0\n0.35,0,0,0,0\n0.45,0,0,0,0\n",
     );
     let e = read_dataset(dir.path()).unwrap_err();
-    assert!(matches!(&e, Error::NonUniformSampling { line: 5, .. }), "{e:?}");
+    assert!(
+        matches!(&e, Error::NonUniformSampling { line: 5, .. }),
+        "{e:?}"
+    );
 
-    write_small(dir.path(), "t,h,alpha,lift,moment\n0,0,0,0,0\n0.1,0,0,0,0\n0.2,0,0,0,0\n");
+    write_small(
+        dir.path(),
+        "t,h,alpha,lift,moment\n0,0,0,0,0\n0.1,0,0,0,0\n0.2,0,0,0,0\n",
+    );
     let ds = read_dataset(dir.path()).unwrap();
     assert!((ds.records[0].dt - 0.1).abs() < 1e-15);
     let e = read_dataset(&dir.path().join("nope")).unwrap_err();

@@ -95,7 +95,8 @@ impl UnitName for LengthUnit {
     const ALL: &'static [(Self, &'static str)] = &[(LengthUnit::M, "m"), (LengthUnit::Mm, "mm")];
 }
 impl UnitName for AngleUnit {
-    const ALL: &'static [(Self, &'static str)] = &[(AngleUnit::Rad, "rad"), (AngleUnit::Deg, "deg")];
+    const ALL: &'static [(Self, &'static str)] =
+        &[(AngleUnit::Rad, "rad"), (AngleUnit::Deg, "deg")];
 }
 impl UnitName for ForceUnit {
     const ALL: &'static [(Self, &'static str)] = &[(ForceUnit::N, "N"), (ForceUnit::NPerM, "N/m")];
@@ -216,7 +217,10 @@ mod tests {
         for x in [0.1, -3.7, 12345.678, 1e-9] {
             assert!((LengthUnit::Mm.from_si(LengthUnit::Mm.to_si(x)) - x).abs() <= 1e-15 * x.abs());
             assert!((AngleUnit::Deg.from_si(AngleUnit::Deg.to_si(x)) - x).abs() <= 1e-15 * x.abs());
-            assert!((ForceUnit::N.from_si(ForceUnit::N.to_si(x, 0.7), 0.7) - x).abs() <= 1e-15 * x.abs());
+            assert!(
+                (ForceUnit::N.from_si(ForceUnit::N.to_si(x, 0.7), 0.7) - x).abs()
+                    <= 1e-15 * x.abs()
+            );
         }
     }
 }

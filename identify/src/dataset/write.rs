@@ -35,11 +35,18 @@ fn check_record(id: &str, r: &Record, what: &str, need_forces: bool) -> Result<(
         return Err(bad(
             id,
             "t",
-            format!("{what}: time base t0 = {} s, dt = {} s is not valid", r.t0, r.dt),
+            format!(
+                "{what}: time base t0 = {} s, dt = {} s is not valid",
+                r.t0, r.dt
+            ),
         ));
     }
     if n < 3 {
-        return Err(bad(id, "t", format!("{what}: {n} samples; at least 3 are needed")));
+        return Err(bad(
+            id,
+            "t",
+            format!("{what}: {n} samples; at least 3 are needed"),
+        ));
     }
     let cols: [(&str, Option<&Vec<f64>>); 4] = [
         ("h", Some(&r.h)),
@@ -149,7 +156,10 @@ pub fn write_dataset(dir: &Path, manifest: &Manifest, records: &[Record]) -> Res
             return Err(bad(
                 &c.id,
                 "id",
-                format!("record has id `{}` but the manifest case is `{}`", r.meta.id, c.id),
+                format!(
+                    "record has id `{}` but the manifest case is `{}`",
+                    r.meta.id, c.id
+                ),
             ));
         }
         check_record(&c.id, r, "record", c.kind == CaseKind::Forced)?;
@@ -160,7 +170,10 @@ pub fn write_dataset(dir: &Path, manifest: &Manifest, records: &[Record]) -> Res
                 return Err(bad(
                     &c.id,
                     "nowind_file",
-                    format!("manifest names {} but the record has no still-air run", f.display()),
+                    format!(
+                        "manifest names {} but the record has no still-air run",
+                        f.display()
+                    ),
                 ))
             }
             (None, Some(_)) => {
