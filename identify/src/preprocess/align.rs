@@ -89,10 +89,10 @@ fn coarse_lag(pairs: &[(Vec<f64>, Vec<f64>)]) -> Option<f64> {
     };
     // Normalised cross-correlation: c(k) / √(E_a(k) E_b(k)) with the energies over the
     // overlap, from prefix sums; lags with less than half the shorter record are skipped.
-    let prefix = |sel: fn(&(Vec<f64>, Vec<f64>)) -> &Vec<f64>, n: usize| -> Vec<f64> {
+    let prefix = |second: bool, n: usize| -> Vec<f64> {
         let mut p = vec![0.0; n + 1];
         for pair in pairs {
-            let x = sel(pair);
+            let x = if second { &pair.1 } else { &pair.0 };
             let mut acc = 0.0;
             for i in 0..n {
                 acc += x[i] * x[i];
@@ -101,8 +101,8 @@ fn coarse_lag(pairs: &[(Vec<f64>, Vec<f64>)]) -> Option<f64> {
         }
         p
     };
-    let pa = prefix(|p| &p.0, na);
-    let pb = prefix(|p| &p.1, nb);
+    let pa = prefix(false, na);
+    let pb = prefix(true, nb);
     let min_overlap = (na.min(nb) / 2).max(4) as i64;
     let ncc = |k: i64| -> Option<(f64, i64)> {
         let i0 = (-k).max(0);
@@ -220,7 +220,7 @@ fn overlap_range(
     let eps = 1e-9 * dt_a;
     let first = ((margin - lag - eps) / dt_a).ceil().max(0.0);
     let last = (((n_b - 1) as f64 * dt_b - margin - lag + eps) / dt_a).floor();
-    if !(last >= first) {
+    if last.is_nan() || last < first {
         return 0..0;
     }
     let first = first as usize;
@@ -458,7 +458,7 @@ mod tests {
         let (wa, wh) = (2.0 * PI * fa, 2.0 * PI * fh);
         let ramp = |t: f64| {
             if t < 2.0 {
-                (0.5 - 0.5 * (PI * t / 2.0).cos())
+                0.5 - 0.5 * (PI * t / 2.0).cos()
             } else {
                 1.0
             }

@@ -39,7 +39,7 @@ impl Phasor {
     fn next(&mut self) -> (f64, f64) {
         let out = (self.c, self.s);
         self.i += 1;
-        if self.i % 64 == 0 {
+        if self.i.is_multiple_of(64) {
             let (s, c) = (self.w * self.i as f64).sin_cos();
             self.c = c;
             self.s = s;
@@ -373,7 +373,7 @@ pub(crate) fn sinusoid_share(x: &[f64], dt: f64, f: f64) -> Option<(f64, f64)> {
 /// `None` for a constant signal or fewer than 4 samples.
 pub fn dominant_frequency(x: &[f64], dt: f64) -> Option<f64> {
     let n = x.len();
-    if n < 4 || !(dt > 0.0) {
+    if n < 4 || dt.is_nan() || dt <= 0.0 {
         return None;
     }
     let m = x.iter().sum::<f64>() / n as f64;
@@ -396,7 +396,7 @@ pub fn dominant_frequency(x: &[f64], dt: f64) -> Option<f64> {
         .enumerate()
         .skip(k_lo)
         .max_by(|a, b| a.1.total_cmp(b.1))?;
-    if !(peak > 0.0) {
+    if peak.is_nan() || peak <= 0.0 {
         return None;
     }
     let mut off = 0.0;

@@ -15,7 +15,7 @@ pub(crate) fn cholesky_solve(g: &mut [f64], p: usize, b: &mut [f64], nrhs: usize
         for k in 0..j {
             d -= g[j * p + k] * g[j * p + k];
         }
-        if !(d > tol) {
+        if d.is_nan() || d <= tol {
             return false;
         }
         let d = d.sqrt();

@@ -148,7 +148,7 @@ impl PreprocessOptions {
             windows.push(("velocity", half_window, order));
         }
         for (name, m, p) in windows {
-            if m == 0 || p == 0 || p >= 2 * m + 1 {
+            if m == 0 || p == 0 || p > 2 * m {
                 return Err(opt(
                     name,
                     format!(
@@ -207,6 +207,9 @@ pub struct PrepareReport {
 pub fn prepare(record: &Record, opts: &PreprocessOptions) -> Result<PreparedCase> {
     prepare_with_report(record, opts).map(|(c, _)| c)
 }
+
+/// A harmonic fit's values, derivatives and rms residual.
+type Fitted = (Vec<f64>, Vec<f64>, f64);
 
 fn bad(case: &str, field: &str, message: String) -> Error {
     Error::InvalidData {
@@ -323,7 +326,7 @@ pub fn prepare_with_report(
         half_window: m,
         order: p,
     };
-    let mut fits: [Option<(Vec<f64>, Vec<f64>, f64)>; 2] = [None, None];
+    let mut fits: [Option<Fitted>; 2] = [None, None];
     let use_harmonic = match opts.velocity {
         VelocityMethod::Auto => record.kind == CaseKind::Forced && !freqs.is_empty(),
         VelocityMethod::Harmonic => {
@@ -373,8 +376,7 @@ pub fn prepare_with_report(
         VelocityMethod::SavitzkyGolay { half_window, order } => (half_window, order),
         _ => (opts.sg_half_window, opts.sg_order),
     };
-    let velocity = |x: &mut Vec<f64>, fit: Option<(Vec<f64>, Vec<f64>, f64)>, name: &str| match fit
-    {
+    let velocity = |x: &mut Vec<f64>, fit: Option<Fitted>, name: &str| match fit {
         Some((v, d, r)) => {
             *x = v;
             Ok((d, VelocitySource::Harmonic { rms_residual: r }))
