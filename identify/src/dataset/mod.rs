@@ -1,1 +1,124 @@
-//! (to be written)
+//! Data sets: read and write the folder format of DATA_FORMAT.md.
+//!
+//! A data set is a folder with `manifest.toml` and case CSV files named by the manifest
+//! (paths relative to the folder). [`read_dataset`] validates everything and returns
+//! [`Record`]s in SI per unit span (h [m], α [rad], L [N/m], M [N·m/m]; DESIGN.md §2
+//! signs); [`write_dataset`] converts back into the manifest's units. Every violation of
+//! the format is an [`Error`] naming the file, the 1-based line and the field.
+
+mod csv;
+mod manifest;
+mod units;
+mod write;
+
+use std::path::{Path, PathBuf};
+
+pub use self::csv::{check_sampling, parse_case_csv, read_case_csv, CaseTable};
+pub use self::manifest::{is_valid_case_id, CaseSpec, Manifest, StructureSpec, FORMAT};
+pub use self::units::{AngleUnit, ForceUnit, LengthUnit, MomentUnit, Units};
+pub use self::write::write_dataset;
+pub use crate::record::{CaseKind, CaseMeta, Record, Section};
+
+use crate::Result;
+
+/// File name of the manifest inside a data-set folder.
+pub const MANIFEST_FILE: &str = "manifest.toml";
+
+/// A data set read from a folder: the manifest and one [`Record`] per case, in manifest
+/// order, SI per unit span.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Dataset {
+    /// The data-set folder.
+    pub root: PathBuf,
+    /// The validated manifest.
+    pub manifest: Manifest,
+    /// `records[i]` is the case `manifest.cases[i]`.
+    pub records: Vec<Record>,
+}
+
+impl Dataset {
+    /// The record of the case with this id.
+    pub fn record(&self, id: &str) -> Option<&Record> {
+        self.records.iter().find(|r| r.meta.id == id)
+    }
+}
+
+/// Reads a whole data set (`dir/manifest.toml` and every case file it names).
+///
+/// # Errors
+/// [`crate::Error::Io`] when a file cannot be read; [`crate::Error::Manifest`],
+/// [`crate::Error::Csv`] or [`crate::Error::NonUniformSampling`] naming file, line and field
+/// for any violation of DATA_FORMAT.md (see [`Manifest::parse`] and [`read_case`]).
+pub fn read_dataset(dir: &Path) -> Result<Dataset> {
+    let manifest = Manifest::read(&dir.join(MANIFEST_FILE))?;
+    let records = manifest
+        .cases
+        .iter()
+        .map(|c| read_case(dir, &manifest, c))
+        .collect::<Result<Vec<_>>>()?;
+    Ok(Dataset {
+        root: dir.to_path_buf(),
+        manifest,
+        records,
+    })
+}
+
+/// Reads one case of a data set in folder `dir` and converts it to SI per unit span.
+///
+/// `t0` and `dt` are the least-squares intercept and slope of `t` against the row index
+/// ([`check_sampling`]). When the case names a `nowind_file`, that still-air run is read the
+/// same way (its `lift` and `moment` are required: they are the raw balance forces) into
+/// [`Record::nowind`].
+///
+/// # Errors
+/// [`crate::Error::Io`] when a file cannot be read; [`crate::Error::Csv`] (missing column —
+/// `lift`, `moment` are required for forced cases —, wrong field count, empty, unparsable or
+/// non-finite value, fewer than 3 rows) and [`crate::Error::NonUniformSampling`] (first bad
+/// row), each naming the file, line and column.
+pub fn read_case(dir: &Path, manifest: &Manifest, case: &CaseSpec) -> Result<Record> {
+    let meta = manifest.case_meta(case);
+    let mut rec = read_record(
+        &dir.join(&case.file),
+        manifest,
+        case.kind,
+        case.kind == CaseKind::Forced,
+        meta.clone(),
+    )?;
+    if let Some(still) = &case.nowind_file {
+        let still = read_record(&dir.join(still), manifest, case.kind, true, meta)?;
+        rec.nowind = Some(Box::new(still));
+    }
+    Ok(rec)
+}
+
+fn read_record(
+    path: &Path,
+    manifest: &Manifest,
+    kind: CaseKind,
+    forces_required: bool,
+    meta: CaseMeta,
+) -> Result<Record> {
+    let table = read_case_csv(path, forces_required)?;
+    let (t0, dt) = check_sampling(&table.t, path, 2)?;
+    let u = &manifest.units;
+    let span = manifest.section.span;
+    let conv = |v: Vec<f64>, f: &dyn Fn(f64) -> f64| -> Vec<f64> {
+        let mut v = v;
+        v.iter_mut().for_each(|x| *x = f(*x));
+        v
+    };
+    Ok(Record {
+        kind,
+        meta,
+        t0,
+        dt,
+        h: conv(table.h, &|x| u.heave.to_si(x)),
+        alpha: conv(table.alpha, &|x| u.pitch.to_si(x)),
+        lift: table.lift.map(|v| conv(v, &|x| u.lift.to_si(x, span))),
+        moment: table.moment.map(|v| conv(v, &|x| u.moment.to_si(x, span))),
+        nowind: None,
+    })
+}
+
+#[cfg(test)]
+mod tests;

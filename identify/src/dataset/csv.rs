@@ -1,0 +1,415 @@
+//! Case CSV reader (hand-rolled: split on commas, one pass, no allocation per field) and
+//! the sampling check of DATA_FORMAT.md.
+
+use std::path::Path;
+
+use crate::{Error, Result};
+
+/// The columns of one case file, in the file's units, in row order.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct CaseTable {
+    /// Time stamps `t` [s].
+    pub t: Vec<f64>,
+    /// Heave `h`, in `units.heave`.
+    pub h: Vec<f64>,
+    /// Pitch `alpha`, in `units.pitch`.
+    pub alpha: Vec<f64>,
+    /// `lift`, in `units.lift`, when the column exists.
+    pub lift: Option<Vec<f64>>,
+    /// `moment`, in `units.moment`, when the column exists.
+    pub moment: Option<Vec<f64>>,
+}
+
+/// Names of the recognised columns, in slot order.
+const NAMES: [&str; 5] = ["t", "h", "alpha", "lift", "moment"];
+
+fn csv_err(path: &Path, line: usize, field: &str, message: String) -> Error {
+    Error::Csv {
+        path: path.to_path_buf(),
+        line,
+        field: field.to_string(),
+        message,
+    }
+}
+
+/// Reads a case file. `forces_required` makes `lift` and `moment` required columns.
+///
+/// # Errors
+/// [`Error::Io`] when the file cannot be read; otherwise as [`parse_case_csv`].
+pub fn read_case_csv(path: &Path, forces_required: bool) -> Result<CaseTable> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    parse_case_csv(&text, path, forces_required)
+}
+
+/// Parses case-file text (`path` only names the file in errors).
+///
+/// The first line is the header; columns are found by name (`t`, `h`, `alpha`, `lift`,
+/// `moment`; surrounding whitespace and double quotes in names are ignored) in any order;
+/// other columns are ignored. Whitespace around fields is ignored. Blank lines are allowed
+/// only at the end of the file.
+///
+/// # Errors
+/// [`Error::Csv`] naming the file, the 1-based line and the column for: an empty file; a
+/// missing required column (`t`, `h`, `alpha`, and `lift`, `moment` when
+/// `forces_required`); a repeated column name; a row whose field count differs from the
+/// header's; an empty field; a value that does not parse as a number or is not finite;
+/// a blank line followed by more rows; fewer than 3 rows.
+pub fn parse_case_csv(text: &str, path: &Path, forces_required: bool) -> Result<CaseTable> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
+    let mut lines = text.split('\n');
+    let header = lines.next().unwrap_or("");
+    let header = header.strip_suffix('\r').unwrap_or(header);
+    if header.trim().is_empty() {
+        return Err(csv_err(
+            path,
+            1,
+            "(header)",
+            "empty header line: the first line must name the columns".into(),
+        ));
+    }
+    let names: Vec<&str> = header
+        .split(',')
+        .map(|f| {
+            let f = f.trim();
+            f.strip_prefix('"')
+                .and_then(|x| x.strip_suffix('"'))
+                .unwrap_or(f)
+                .trim()
+        })
+        .collect();
+    let ncols = names.len();
+    // slot[j] = index into NAMES of column j, or usize::MAX when ignored.
+    let mut slot = vec![usize::MAX; ncols];
+    let mut found = [false; 5];
+    for (j, name) in names.iter().enumerate() {
+        if let Some(k) = NAMES.iter().position(|n| n == name) {
+            if found[k] {
+                return Err(csv_err(
+                    path,
+                    1,
+                    name,
+                    format!("column `{name}` appears more than once in the header"),
+                ));
+            }
+            found[k] = true;
+            slot[j] = k;
+        }
+    }
+    let required = if forces_required { 5 } else { 3 };
+    for k in 0..required {
+        if !found[k] {
+            return Err(csv_err(
+                path,
+                1,
+                NAMES[k],
+                format!(
+                    "required column `{}` is missing (header has: {})",
+                    NAMES[k],
+                    names.join(", ")
+                ),
+            ));
+        }
+    }
+
+    let rows_guess = text.len() / (header.len() + 1).max(8) + 1;
+    let mut cols: [Vec<f64>; 5] = Default::default();
+    for (k, col) in cols.iter_mut().enumerate() {
+        if found[k] {
+            col.reserve(rows_guess);
+        }
+    }
+    let mut blank_line: Option<usize> = None;
+    for (i, raw) in lines.enumerate() {
+        let line_no = i + 2;
+        let line = raw.strip_suffix('\r').unwrap_or(raw);
+        if line.trim().is_empty() {
+            blank_line.get_or_insert(line_no);
+            continue;
+        }
+        if let Some(b) = blank_line {
+            return Err(csv_err(
+                path,
+                b,
+                "(row)",
+                format!("blank line inside the data (more rows follow at line {line_no})"),
+            ));
+        }
+        let mut count = 0usize;
+        for (j, field) in line.split(',').enumerate() {
+            count = j + 1;
+            if j >= ncols {
+                continue;
+            }
+            let k = slot[j];
+            if k == usize::MAX {
+                continue;
+            }
+            let f = field.trim();
+            if f.is_empty() {
+                return Err(csv_err(path, line_no, NAMES[k], "empty field".into()));
+            }
+            let x: f64 = f.parse().map_err(|_| {
+                csv_err(
+                    path,
+                    line_no,
+                    NAMES[k],
+                    format!("cannot parse `{f}` as a number"),
+                )
+            })?;
+            if !x.is_finite() {
+                return Err(csv_err(
+                    path,
+                    line_no,
+                    NAMES[k],
+                    format!("non-finite value `{f}`"),
+                ));
+            }
+            cols[k].push(x);
+        }
+        if count != ncols {
+            let field = if count < ncols {
+                names[count]
+            } else {
+                "(extra field)"
+            };
+            return Err(csv_err(
+                path,
+                line_no,
+                field,
+                format!("row has {count} fields but the header has {ncols}"),
+            ));
+        }
+    }
+    let n = cols[0].len();
+    if n < 3 {
+        return Err(csv_err(
+            path,
+            0,
+            "t",
+            format!("{n} data rows; at least 3 are needed"),
+        ));
+    }
+    let [t, h, alpha, lift, moment] = cols;
+    Ok(CaseTable {
+        t,
+        h,
+        alpha,
+        lift: found[3].then_some(lift),
+        moment: found[4].then_some(moment),
+    })
+}
+
+/// Checks that time stamps are strictly increasing and uniformly spaced, and returns
+/// `(t0, dt)`: the least-squares intercept and slope of `t` against the 0-based row index
+/// (`dt = Σ(i−ī)(tᵢ−t̄) / Σ(i−ī)²`, `t0 = t̄ − dt·ī`).
+///
+/// Every step `tᵢ₊₁ − tᵢ` must lie within 1 % of the median step (time stamps are often
+/// printed with few digits). `first_line` is the file line of row 0 (2 for a file with a
+/// header).
+///
+/// # Errors
+/// [`Error::NonUniformSampling`] naming the line of the first bad row (the later row of the
+/// first step outside the band: a gap, a repeated or a reversed stamp); [`Error::Csv`] when
+/// fewer than 3 stamps are given.
+pub fn check_sampling(t: &[f64], path: &Path, first_line: usize) -> Result<(f64, f64)> {
+    let n = t.len();
+    if n < 3 {
+        return Err(csv_err(
+            path,
+            0,
+            "t",
+            format!("{n} time stamps; at least 3 are needed"),
+        ));
+    }
+    let mut steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
+    let first_bad = |median: f64, steps: &[f64]| {
+        steps
+            .iter()
+            .position(|&d| !(d > 0.0 && (d - median).abs() <= 0.01 * median))
+    };
+    let mut sorted = steps.clone();
+    let mid = sorted.len() / 2;
+    let (_, &mut median, _) = sorted.select_nth_unstable_by(mid, f64::total_cmp);
+    if let Some(i) = first_bad(median, &steps) {
+        return Err(Error::NonUniformSampling {
+            path: path.to_path_buf(),
+            line: first_line + i + 1,
+            step: steps[i],
+            median,
+        });
+    }
+    steps.clear();
+    let nf = n as f64;
+    let ibar = (nf - 1.0) / 2.0;
+    let tbar = t.iter().sum::<f64>() / nf;
+    let sxy: f64 = t
+        .iter()
+        .enumerate()
+        .map(|(i, &ti)| (i as f64 - ibar) * (ti - tbar))
+        .sum();
+    let sxx = nf * (nf * nf - 1.0) / 12.0;
+    let dt = sxy / sxx;
+    Ok((tbar - dt * ibar, dt))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn p() -> &'static Path {
+        Path::new("cases/x.csv")
+    }
+
+    fn msg(e: &Error) -> String {
+        e.to_string()
+    }
+
+    #[test]
+    fn columns_by_name_any_order_extra_ignored_whitespace_ok() {
+        let text = "alpha , t,junk, h ,moment,lift\r\n0.1, 0.0 ,x,1,2,3\r\n0.2,0.5,y,2,3,4\n0.3,1.0,,3,4,5\n\n";
+        let c = parse_case_csv(text, p(), true).unwrap();
+        assert_eq!(c.t, vec![0.0, 0.5, 1.0]);
+        assert_eq!(c.alpha, vec![0.1, 0.2, 0.3]);
+        assert_eq!(c.h, vec![1.0, 2.0, 3.0]);
+        assert_eq!(c.lift, Some(vec![3.0, 4.0, 5.0]));
+        assert_eq!(c.moment, Some(vec![2.0, 3.0, 4.0]));
+    }
+
+    #[test]
+    fn free_case_forces_optional() {
+        let c = parse_case_csv("t,h,alpha\n0,0,0\n1,0,0\n2,0,0\n", p(), false).unwrap();
+        assert_eq!(c.lift, None);
+        assert_eq!(c.moment, None);
+    }
+
+    #[test]
+    fn missing_column_names_column_and_line_1() {
+        let e = parse_case_csv("t,h,alpha,lift\n0,0,0,0\n", p(), true).unwrap_err();
+        assert!(
+            matches!(&e, Error::Csv { line: 1, field, .. } if field == "moment"),
+            "{e:?}"
+        );
+        assert!(
+            msg(&e).contains("x.csv:1") && msg(&e).contains("`moment`"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn nan_value_names_line_and_column() {
+        let text = "t,h,alpha\n0,0,0\n1,0,0\n2,NaN,0\n3,0,0\n";
+        let e = parse_case_csv(text, p(), false).unwrap_err();
+        assert!(
+            matches!(&e, Error::Csv { line: 4, field, .. } if field == "h"),
+            "{e:?}"
+        );
+        assert!(
+            msg(&e).contains("x.csv:4") && msg(&e).contains("NaN"),
+            "{e}"
+        );
+        let text = "t,h,alpha\n0,0,0\n1,0,inf\n";
+        let e = parse_case_csv(text, p(), false).unwrap_err();
+        assert!(
+            matches!(&e, Error::Csv { line: 3, field, .. } if field == "alpha"),
+            "{e:?}"
+        );
+    }
+
+    #[test]
+    fn unparsable_and_empty_fields_name_line_and_column() {
+        let e = parse_case_csv("t,h,alpha\n0,0,0\n1,abc,0\n", p(), false).unwrap_err();
+        assert!(
+            matches!(&e, Error::Csv { line: 3, field, .. } if field == "h"),
+            "{e:?}"
+        );
+        let e = parse_case_csv("t,h,alpha\n0,0,0\n1, ,0\n", p(), false).unwrap_err();
+        assert!(
+            matches!(&e, Error::Csv { line: 3, field, .. } if field == "h"),
+            "{e:?}"
+        );
+    }
+
+    #[test]
+    fn wrong_field_count_names_line() {
+        let e = parse_case_csv("t,h,alpha\n0,0,0\n1,0\n2,0,0\n", p(), false).unwrap_err();
+        assert!(
+            matches!(&e, Error::Csv { line: 3, field, .. } if field == "alpha"),
+            "{e:?}"
+        );
+        assert!(
+            msg(&e).contains("2 fields") && msg(&e).contains("has 3"),
+            "{e}"
+        );
+        let e = parse_case_csv("t,h,alpha\n0,0,0\n1,0,0\n2,0,0,9\n", p(), false).unwrap_err();
+        assert!(matches!(&e, Error::Csv { line: 4, .. }), "{e:?}");
+    }
+
+    #[test]
+    fn blank_line_inside_data_is_an_error() {
+        let e = parse_case_csv("t,h,alpha\n0,0,0\n\n1,0,0\n2,0,0\n", p(), false).unwrap_err();
+        assert!(matches!(&e, Error::Csv { line: 3, .. }), "{e:?}");
+    }
+
+    #[test]
+    fn fewer_than_three_rows_is_an_error() {
+        let e = parse_case_csv("t,h,alpha\n0,0,0\n1,0,0\n", p(), false).unwrap_err();
+        assert!(msg(&e).contains("at least 3"), "{e}");
+    }
+
+    #[test]
+    fn duplicate_column_is_an_error() {
+        let e = parse_case_csv("t,h,alpha,h\n0,0,0,0\n", p(), false).unwrap_err();
+        assert!(
+            matches!(&e, Error::Csv { line: 1, field, .. } if field == "h"),
+            "{e:?}"
+        );
+    }
+
+    #[test]
+    fn sampling_fit_and_tolerance() {
+        // Stamps printed with 3 decimals at 100 Hz jitter well within 1 %.
+        let t: Vec<f64> = (0..50)
+            .map(|i| ((1.25 + i as f64 * 0.01) * 1000.0).round() / 1000.0)
+            .collect();
+        let (t0, dt) = check_sampling(&t, p(), 2).unwrap();
+        assert!(
+            (dt - 0.01).abs() < 1e-12 && (t0 - 1.25).abs() < 1e-12,
+            "{t0} {dt}"
+        );
+        // Exact recovery of an affine time base.
+        let t: Vec<f64> = (0..1000).map(|i| 3.0 + i as f64 / 512.0).collect();
+        let (t0, dt) = check_sampling(&t, p(), 2).unwrap();
+        assert!((dt * 512.0 - 1.0).abs() < 1e-13 && (t0 - 3.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn non_uniform_time_names_first_bad_row() {
+        let mut t: Vec<f64> = (0..20).map(|i| i as f64 * 0.1).collect();
+        // Gap: row 7 (0-based) jumps; file line = 2 + 7 = 9.
+        for x in t.iter_mut().skip(7) {
+            *x += 0.05;
+        }
+        let e = check_sampling(&t, p(), 2).unwrap_err();
+        assert!(
+            matches!(e, Error::NonUniformSampling { line: 9, .. }),
+            "{e:?}"
+        );
+        assert!(e.to_string().contains("x.csv:9"), "{e}");
+        // Repeated stamp at row 4 → line 6.
+        let mut t: Vec<f64> = (0..20).map(|i| i as f64 * 0.1).collect();
+        t[4] = t[3];
+        let e = check_sampling(&t, p(), 2).unwrap_err();
+        assert!(
+            matches!(e, Error::NonUniformSampling { line: 6, .. }),
+            "{e:?}"
+        );
+        // Reversed pair rows 10, 11 → first bad row 10 → line 12.
+        let mut t: Vec<f64> = (0..20).map(|i| i as f64 * 0.1).collect();
+        t.swap(10, 11);
+        let e = check_sampling(&t, p(), 2).unwrap_err();
+        assert!(
+            matches!(e, Error::NonUniformSampling { line: 12, .. }),
+            "{e:?}"
+        );
+    }
+}

@@ -1,0 +1,764 @@
+//! `manifest.toml`: parsing with line numbers, validation, and the canonical writer.
+//!
+//! The manifest is parsed twice from the same text: once into a [`toml::Table`] (the values)
+//! and once into a [`toml::de::DeTable`] (the byte spans), so that every validation error
+//! names the 1-based line of the offending key. Case tables are named `case[i]` with `i`
+//! 1-based (`case[1]` is the first `[[case]]` table).
+
+use std::collections::HashMap;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use toml::de::{DeTable, DeValue};
+use toml::Spanned;
+
+use super::units::{AngleUnit, ForceUnit, LengthUnit, MomentUnit, UnitName, Units};
+use crate::record::{CaseKind, CaseMeta, Section};
+use crate::{Error, Result};
+
+/// The exact value of the manifest's `format` key.
+pub const FORMAT: &str = "aeroform-dataset/1";
+
+/// Structural properties per unit span (manifest `[structure]`), SI.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StructureSpec {
+    /// Mass per unit span m [kg/m], > 0.
+    pub mass: f64,
+    /// Mass moment of inertia about the elastic axis I_α [kg·m²/m], > 0.
+    pub inertia: f64,
+    /// Static unbalance S_α = m·x_α [kg·m/m], positive when the mass centre is aft of the
+    /// elastic axis.
+    pub static_unbalance: f64,
+    /// Still-air natural frequency of heave [Hz], > 0.
+    pub freq_heave: f64,
+    /// Still-air natural frequency of pitch [Hz], > 0.
+    pub freq_pitch: f64,
+    /// Damping ratio of heave (fraction of critical), ≥ 0.
+    pub damping_heave: f64,
+    /// Damping ratio of pitch (fraction of critical), ≥ 0.
+    pub damping_pitch: f64,
+}
+
+/// One `[[case]]` table of the manifest. Values are in the manifest's units
+/// (`amplitude` and `mean_pitch` in `units.pitch`); [`Manifest::case_meta`] converts to SI.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CaseSpec {
+    /// Unique id, `[A-Za-z0-9._-]+`.
+    pub id: String,
+    /// Forced (prescribed motion) or free response.
+    pub kind: CaseKind,
+    /// CSV file, relative to the data-set folder.
+    pub file: PathBuf,
+    /// Wind speed U [m/s], ≥ 0.
+    pub wind_speed: f64,
+    /// Motion configuration label (paper Table I).
+    pub config: Option<String>,
+    /// Pitch amplitude, in `units.pitch`, ≥ 0.
+    pub amplitude: Option<f64>,
+    /// Heave amplitude / pitch amplitude (mm per deg as in the paper; a label), ≥ 0.
+    pub amplitude_ratio: Option<f64>,
+    /// Prescribed pitch frequency [Hz], > 0.
+    pub freq_pitch: Option<f64>,
+    /// Prescribed heave frequency [Hz], > 0.
+    pub freq_heave: Option<f64>,
+    /// Mean angle of attack, in `units.pitch`.
+    pub mean_pitch: Option<f64>,
+    /// Still-air run of the same motion, relative to the data-set folder; when given the
+    /// forces in `file` are raw balance forces.
+    pub nowind_file: Option<PathBuf>,
+    /// The case's `[extra]` table, kept verbatim and otherwise ignored.
+    pub extra: Option<toml::Table>,
+}
+
+impl CaseSpec {
+    /// A forced case with only the required keys set.
+    pub fn forced(id: impl Into<String>, file: impl Into<PathBuf>, wind_speed: f64) -> Self {
+        CaseSpec {
+            id: id.into(),
+            kind: CaseKind::Forced,
+            file: file.into(),
+            wind_speed,
+            config: None,
+            amplitude: None,
+            amplitude_ratio: None,
+            freq_pitch: None,
+            freq_heave: None,
+            mean_pitch: None,
+            nowind_file: None,
+            extra: None,
+        }
+    }
+}
+
+/// A data-set manifest (DATA_FORMAT.md), validated.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Manifest {
+    /// Data-set name.
+    pub name: String,
+    /// Free text.
+    pub description: Option<String>,
+    /// Geometry and air, SI.
+    pub section: Section,
+    /// Structure per unit span; required when any case is free.
+    pub structure: Option<StructureSpec>,
+    /// Units of the CSV columns.
+    pub units: Units,
+    /// The cases, in manifest order (at least one).
+    pub cases: Vec<CaseSpec>,
+    /// The top-level `[extra]` table, kept verbatim and otherwise ignored.
+    pub extra: Option<toml::Table>,
+}
+
+impl Manifest {
+    /// Reads and validates a manifest file.
+    ///
+    /// # Errors
+    /// [`Error::Io`] when the file cannot be read; otherwise as [`Manifest::parse`].
+    pub fn read(path: &Path) -> Result<Manifest> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        Manifest::parse(&text, path)
+    }
+
+    /// Parses and validates manifest text; `path` is only used in error messages.
+    ///
+    /// # Errors
+    /// [`Error::Manifest`] naming `path`, the 1-based line and the dotted field for: TOML
+    /// syntax errors; a `format` other than `"aeroform-dataset/1"`; a missing required
+    /// table or key; an unknown key (outside `[extra]` tables); a value of the wrong type;
+    /// an unknown unit string (the message lists the allowed ones); a case id that is not
+    /// `[A-Za-z0-9._-]+` or is repeated; a `kind` other than `"forced"`/`"free"`; a missing
+    /// `[structure]` while a case is free; a non-finite number or one out of its physical
+    /// range (chord, span, air density, mass, inertia, frequencies > 0; wind speed,
+    /// amplitudes, damping ratios ≥ 0).
+    pub fn parse(text: &str, path: &Path) -> Result<Manifest> {
+        let cx = Cx::new(text, path)?;
+        cx.manifest()
+    }
+
+    /// Writes the manifest in the layout of DATA_FORMAT.md (keys in documented order;
+    /// numbers printed in Rust's shortest round-trip form, so [`Manifest::parse`] gives
+    /// back exactly the same values).
+    pub fn to_toml(&self) -> String {
+        let mut s = String::new();
+        let _ = writeln!(s, "format = {}", quote(FORMAT));
+        let _ = writeln!(s, "name = {}", quote(&self.name));
+        if let Some(d) = &self.description {
+            let _ = writeln!(s, "description = {}", quote(d));
+        }
+        s.push_str("\n[section]\n");
+        let sec = &self.section;
+        for (k, v) in [
+            ("chord", sec.chord),
+            ("span", sec.span),
+            ("air_density", sec.air_density),
+        ] {
+            let _ = writeln!(s, "{k} = {}", float(v));
+        }
+        if let Some(st) = &self.structure {
+            s.push_str("\n[structure]\n");
+            for (k, v) in [
+                ("mass", st.mass),
+                ("inertia", st.inertia),
+                ("static_unbalance", st.static_unbalance),
+                ("freq_heave", st.freq_heave),
+                ("freq_pitch", st.freq_pitch),
+                ("damping_heave", st.damping_heave),
+                ("damping_pitch", st.damping_pitch),
+            ] {
+                let _ = writeln!(s, "{k} = {}", float(v));
+            }
+        }
+        let u = &self.units;
+        s.push_str("\n[units]\n");
+        let _ = writeln!(s, "heave = {}", quote(u.heave.as_str()));
+        let _ = writeln!(s, "pitch = {}", quote(u.pitch.as_str()));
+        let _ = writeln!(s, "lift = {}", quote(u.lift.as_str()));
+        let _ = writeln!(s, "moment = {}", quote(u.moment.as_str()));
+        if let Some(extra) = &self.extra {
+            s.push_str("\n[extra]\n");
+            write_table_body(&mut s, extra);
+        }
+        for c in &self.cases {
+            s.push_str("\n[[case]]\n");
+            let _ = writeln!(s, "id = {}", quote(&c.id));
+            let kind = match c.kind {
+                CaseKind::Forced => "forced",
+                CaseKind::Free => "free",
+            };
+            let _ = writeln!(s, "kind = {}", quote(kind));
+            let _ = writeln!(s, "file = {}", quote(&path_str(&c.file)));
+            let _ = writeln!(s, "wind_speed = {}", float(c.wind_speed));
+            if let Some(v) = &c.config {
+                let _ = writeln!(s, "config = {}", quote(v));
+            }
+            for (k, v) in [
+                ("amplitude", c.amplitude),
+                ("amplitude_ratio", c.amplitude_ratio),
+                ("freq_pitch", c.freq_pitch),
+                ("freq_heave", c.freq_heave),
+                ("mean_pitch", c.mean_pitch),
+            ] {
+                if let Some(v) = v {
+                    let _ = writeln!(s, "{k} = {}", float(v));
+                }
+            }
+            if let Some(p) = &c.nowind_file {
+                let _ = writeln!(s, "nowind_file = {}", quote(&path_str(p)));
+            }
+            if let Some(extra) = &c.extra {
+                s.push_str("\n[case.extra]\n");
+                write_table_body(&mut s, extra);
+            }
+        }
+        s
+    }
+
+    /// The descriptors of `case` converted to SI: `amplitude` and `mean_pitch` from
+    /// `units.pitch` to rad; frequencies [Hz], wind speed [m/s] and `amplitude_ratio`
+    /// (a label) unchanged.
+    pub fn case_meta(&self, case: &CaseSpec) -> CaseMeta {
+        let p = self.units.pitch;
+        CaseMeta {
+            id: case.id.clone(),
+            wind_speed: case.wind_speed,
+            config: case.config.clone(),
+            amplitude: case.amplitude.map(|a| p.to_si(a)),
+            amplitude_ratio: case.amplitude_ratio,
+            freq_pitch: case.freq_pitch,
+            freq_heave: case.freq_heave,
+            mean_pitch: case.mean_pitch.map(|a| p.to_si(a)),
+        }
+    }
+
+    /// The case with this id.
+    pub fn case(&self, id: &str) -> Option<&CaseSpec> {
+        self.cases.iter().find(|c| c.id == id)
+    }
+}
+
+/// A path as written in the manifest (forward slashes on every platform).
+fn path_str(p: &Path) -> String {
+    let s = p.to_string_lossy();
+    if std::path::MAIN_SEPARATOR == '\\' {
+        s.replace('\\', "/")
+    } else {
+        s.into_owned()
+    }
+}
+
+/// A finite float in TOML form (shortest round-trip digits, always with `.` or exponent).
+fn float(x: f64) -> String {
+    toml::Value::Float(x).to_string()
+}
+
+/// A TOML basic string (one line, escaped).
+fn quote(s: &str) -> String {
+    let mut o = String::with_capacity(s.len() + 2);
+    o.push('"');
+    for c in s.chars() {
+        match c {
+            '"' => o.push_str("\\\""),
+            '\\' => o.push_str("\\\\"),
+            '\n' => o.push_str("\\n"),
+            '\t' => o.push_str("\\t"),
+            '\r' => o.push_str("\\r"),
+            c if (c as u32) < 0x20 || c as u32 == 0x7f => {
+                let _ = write!(o, "\\u{:04X}", c as u32);
+            }
+            c => o.push(c),
+        }
+    }
+    o.push('"');
+    o
+}
+
+/// A TOML key: bare when possible, else a quoted basic string.
+fn key(k: &str) -> String {
+    if !k.is_empty()
+        && k.chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
+    {
+        k.to_string()
+    } else {
+        quote(k)
+    }
+}
+
+/// `key = value` lines of an `[extra]` table; nested tables and arrays are written inline.
+fn write_table_body(s: &mut String, t: &toml::Table) {
+    for (k, v) in t {
+        let v = match v {
+            toml::Value::String(x) => quote(x),
+            other => other.to_string(),
+        };
+        let _ = writeln!(s, "{} = {v}", key(k));
+    }
+}
+
+/// True for a valid case id: `[A-Za-z0-9._-]+`.
+pub fn is_valid_case_id(id: &str) -> bool {
+    !id.is_empty()
+        && id
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || matches!(c, '.' | '_' | '-'))
+}
+
+// ---------------------------------------------------------------------------------------
+// Validation.
+
+/// Parse context: the manifest text, its spans and the path for messages.
+struct Cx<'a> {
+    path: &'a Path,
+    line_starts: Vec<usize>,
+    values: toml::Table,
+    spans: Spanned<DeTable<'a>>,
+}
+
+/// A table being validated: its values, its spans, its dotted name and its line.
+#[derive(Clone, Copy)]
+struct Node<'c, 'a> {
+    cx: &'c Cx<'a>,
+    values: &'c toml::Table,
+    spans: Option<&'c DeTable<'a>>,
+    /// Dotted prefix for field names ("" at the top level, "section.", "case[2].").
+    prefix: &'c str,
+    line: usize,
+}
+
+impl<'a> Cx<'a> {
+    fn new(text: &'a str, path: &'a Path) -> Result<Self> {
+        let mut line_starts = vec![0];
+        line_starts.extend(text.match_indices('\n').map(|(i, _)| i + 1));
+        let mut cx = Cx {
+            path,
+            line_starts,
+            values: toml::Table::new(),
+            spans: Spanned::new(0..0, DeTable::default()),
+        };
+        cx.values = text.parse::<toml::Table>().map_err(|e| {
+            let line = e.span().map(|s| cx.line(s.start)).unwrap_or(0);
+            cx.err(
+                line,
+                "(syntax)",
+                format!("invalid TOML: {}", e.message().trim()),
+            )
+        })?;
+        cx.spans = DeTable::parse(text).map_err(|e| {
+            let line = e.span().map(|s| cx.line(s.start)).unwrap_or(0);
+            cx.err(
+                line,
+                "(syntax)",
+                format!("invalid TOML: {}", e.message().trim()),
+            )
+        })?;
+        Ok(cx)
+    }
+
+    /// 1-based line of a byte offset.
+    fn line(&self, offset: usize) -> usize {
+        self.line_starts.partition_point(|&s| s <= offset).max(1)
+    }
+
+    fn err(&self, line: usize, field: impl Into<String>, message: impl Into<String>) -> Error {
+        Error::Manifest {
+            path: self.path.to_path_buf(),
+            line,
+            field: field.into(),
+            message: message.into(),
+        }
+    }
+
+    fn root(&self) -> Node<'_, 'a> {
+        Node {
+            cx: self,
+            values: &self.values,
+            spans: Some(self.spans.get_ref()),
+            prefix: "",
+            line: 1,
+        }
+    }
+
+    fn manifest(&self) -> Result<Manifest> {
+        let root = self.root();
+        root.check_keys(&[
+            "format",
+            "name",
+            "description",
+            "section",
+            "structure",
+            "units",
+            "case",
+            "extra",
+        ])?;
+        let format = root.req_str("format")?;
+        if format != FORMAT {
+            return Err(root.err("format", format!("\"{format}\" is not \"{FORMAT}\"")));
+        }
+        let name = root.req_str("name")?.to_string();
+        let description = root.opt_str("description")?.map(str::to_string);
+
+        let sec_prefix = "section.";
+        let sec = root.req_table("section", sec_prefix)?;
+        sec.check_keys(&["chord", "span", "air_density"])?;
+        let section = Section {
+            chord: sec.req_pos("chord", "m")?,
+            span: sec.req_pos("span", "m")?,
+            air_density: sec.req_pos("air_density", "kg/m^3")?,
+        };
+
+        let structure = match root.opt_table("structure", "structure.")? {
+            None => None,
+            Some(st) => {
+                st.check_keys(&[
+                    "mass",
+                    "inertia",
+                    "static_unbalance",
+                    "freq_heave",
+                    "freq_pitch",
+                    "damping_heave",
+                    "damping_pitch",
+                ])?;
+                Some(StructureSpec {
+                    mass: st.req_pos("mass", "kg/m")?,
+                    inertia: st.req_pos("inertia", "kg m^2/m")?,
+                    static_unbalance: st.req_f64("static_unbalance")?,
+                    freq_heave: st.req_pos("freq_heave", "Hz")?,
+                    freq_pitch: st.req_pos("freq_pitch", "Hz")?,
+                    damping_heave: st.req_nonneg("damping_heave", "")?,
+                    damping_pitch: st.req_nonneg("damping_pitch", "")?,
+                })
+            }
+        };
+
+        let un = root.req_table("units", "units.")?;
+        un.check_keys(&["heave", "pitch", "lift", "moment"])?;
+        let units = Units {
+            heave: un.req_unit::<LengthUnit>("heave")?,
+            pitch: un.req_unit::<AngleUnit>("pitch")?,
+            lift: un.req_unit::<ForceUnit>("lift")?,
+            moment: un.req_unit::<MomentUnit>("moment")?,
+        };
+
+        let extra = root.opt_extra("extra")?;
+        let cases = self.cases(&root)?;
+
+        if structure.is_none() {
+            if let Some((i, c)) = cases
+                .iter()
+                .enumerate()
+                .find(|(_, c)| c.kind == CaseKind::Free)
+            {
+                let line = self
+                    .case_node(&root, i)
+                    .map(|n| n.line_of("kind"))
+                    .unwrap_or(0);
+                return Err(self.err(
+                    line,
+                    "structure",
+                    format!(
+                        "table [structure] is required because case `{}` has kind = \"free\"",
+                        c.id
+                    ),
+                ));
+            }
+        }
+
+        Ok(Manifest {
+            name,
+            description,
+            section,
+            structure,
+            units,
+            cases,
+            extra,
+        })
+    }
+
+    /// The spans of the `i`-th (0-based) case table.
+    fn case_spans(&self, i: usize) -> Option<(&DeTable<'a>, usize)> {
+        let arr = self.spans.get_ref().get("case")?;
+        let item = arr.get_ref().as_array()?.get(i)?;
+        Some((item.get_ref().as_table()?, self.line(item.span().start)))
+    }
+
+    fn case_node<'c>(&'c self, root: &Node<'c, 'a>, i: usize) -> Option<Node<'c, 'a>> {
+        let t = root.values.get("case")?.as_array()?.get(i)?.as_table()?;
+        let (spans, line) = match self.case_spans(i) {
+            Some((s, l)) => (Some(s), l),
+            None => (None, root.line_of("case")),
+        };
+        Some(Node {
+            cx: self,
+            values: t,
+            spans,
+            prefix: "",
+            line,
+        })
+    }
+
+    fn cases(&self, root: &Node<'_, 'a>) -> Result<Vec<CaseSpec>> {
+        let Some(v) = root.values.get("case") else {
+            return Err(root.err(
+                "case",
+                "at least one [[case]] table is required".to_string(),
+            ));
+        };
+        let arr = match v.as_array() {
+            Some(a) if a.iter().all(|x| x.is_table()) => a,
+            _ => {
+                return Err(root.err(
+                    "case",
+                    "`case` must be an array of tables, written [[case]]".to_string(),
+                ))
+            }
+        };
+        if arr.is_empty() {
+            return Err(root.err(
+                "case",
+                "at least one [[case]] table is required".to_string(),
+            ));
+        }
+        let mut seen: HashMap<String, (usize, usize)> = HashMap::new();
+        let mut cases = Vec::with_capacity(arr.len());
+        for i in 0..arr.len() {
+            let prefix = format!("case[{}].", i + 1);
+            let mut node = self
+                .case_node(root, i)
+                .expect("case table exists: checked above");
+            node.prefix = &prefix;
+            let c = node.case()?;
+            if let Some((first, first_line)) = seen.get(&c.id) {
+                return Err(node.err(
+                    "id",
+                    format!(
+                        "duplicate case id \"{}\" (first used by case[{}] at line {first_line})",
+                        c.id,
+                        first + 1
+                    ),
+                ));
+            }
+            seen.insert(c.id.clone(), (i, node.line_of("id")));
+            cases.push(c);
+        }
+        Ok(cases)
+    }
+}
+
+impl<'c, 'a> Node<'c, 'a> {
+    fn field(&self, key: &str) -> String {
+        format!("{}{key}", self.prefix)
+    }
+
+    /// Line of `key` in this table (the table's line when the key is absent).
+    fn line_of(&self, key: &str) -> usize {
+        self.spans
+            .and_then(|s| s.get(key))
+            .map(|v| self.cx.line(v.span().start))
+            .or_else(|| {
+                self.spans.and_then(|s| {
+                    s.iter()
+                        .find(|(k, _)| k.get_ref() == key)
+                        .map(|(k, _)| self.cx.line(k.span().start))
+                })
+            })
+            .unwrap_or(self.line)
+    }
+
+    fn err(&self, key: &str, message: String) -> Error {
+        self.cx.err(self.line_of(key), self.field(key), message)
+    }
+
+    fn check_keys(&self, allowed: &[&str]) -> Result<()> {
+        // Report the first unknown key in file order.
+        let mut unknown: Vec<(usize, &str)> = self
+            .values
+            .keys()
+            .filter(|k| !allowed.contains(&k.as_str()))
+            .map(|k| (self.line_of(k), k.as_str()))
+            .collect();
+        unknown.sort();
+        if let Some((line, k)) = unknown.first() {
+            return Err(self.cx.err(
+                *line,
+                self.field(k),
+                format!(
+                    "unknown key `{k}` (allowed here: {}; put free-form data in an [extra] table)",
+                    allowed.join(", ")
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    fn opt_str(&self, key: &str) -> Result<Option<&'c str>> {
+        match self.values.get(key) {
+            None => Ok(None),
+            Some(toml::Value::String(s)) => Ok(Some(s.as_str())),
+            Some(v) => Err(self.err(key, format!("expected a string, found {}", v.type_str()))),
+        }
+    }
+
+    fn req_str(&self, key: &str) -> Result<&'c str> {
+        self.opt_str(key)?
+            .ok_or_else(|| self.err(key, "required key is missing".to_string()))
+    }
+
+    fn opt_f64(&self, key: &str) -> Result<Option<f64>> {
+        let x = match self.values.get(key) {
+            None => return Ok(None),
+            Some(toml::Value::Float(x)) => *x,
+            Some(toml::Value::Integer(i)) => *i as f64,
+            Some(v) => {
+                return Err(self.err(key, format!("expected a number, found {}", v.type_str())))
+            }
+        };
+        if !x.is_finite() {
+            return Err(self.err(key, format!("{x} is not a finite number")));
+        }
+        Ok(Some(x))
+    }
+
+    fn req_f64(&self, key: &str) -> Result<f64> {
+        self.opt_f64(key)?
+            .ok_or_else(|| self.err(key, "required key is missing".to_string()))
+    }
+
+    fn check_range(&self, key: &str, x: f64, positive: bool, unit: &str) -> Result<f64> {
+        let ok = if positive { x > 0.0 } else { x >= 0.0 };
+        if ok {
+            Ok(x)
+        } else {
+            let unit = if unit.is_empty() {
+                String::new()
+            } else {
+                format!(" {unit}")
+            };
+            let rel = if positive { "> 0" } else { ">= 0" };
+            Err(self.err(key, format!("{x}{unit} must be {rel}")))
+        }
+    }
+
+    fn req_pos(&self, key: &str, unit: &str) -> Result<f64> {
+        let x = self.req_f64(key)?;
+        self.check_range(key, x, true, unit)
+    }
+
+    fn req_nonneg(&self, key: &str, unit: &str) -> Result<f64> {
+        let x = self.req_f64(key)?;
+        self.check_range(key, x, false, unit)
+    }
+
+    fn opt_pos(&self, key: &str, unit: &str) -> Result<Option<f64>> {
+        self.opt_f64(key)?
+            .map(|x| self.check_range(key, x, true, unit))
+            .transpose()
+    }
+
+    fn opt_nonneg(&self, key: &str, unit: &str) -> Result<Option<f64>> {
+        self.opt_f64(key)?
+            .map(|x| self.check_range(key, x, false, unit))
+            .transpose()
+    }
+
+    fn req_unit<U: UnitName>(&self, key: &str) -> Result<U> {
+        let s = self.req_str(key)?;
+        U::from_name(s).ok_or_else(|| {
+            self.err(
+                key,
+                format!("unknown unit \"{s}\"; allowed values: {}", U::allowed()),
+            )
+        })
+    }
+
+    fn opt_path(&self, key: &str) -> Result<Option<PathBuf>> {
+        match self.opt_str(key)? {
+            None => Ok(None),
+            Some("") => Err(self.err(key, "empty path".to_string())),
+            Some(s) => Ok(Some(PathBuf::from(s))),
+        }
+    }
+
+    fn opt_table(&self, key: &str, prefix: &'c str) -> Result<Option<Node<'c, 'a>>> {
+        match self.values.get(key) {
+            None => Ok(None),
+            Some(toml::Value::Table(t)) => {
+                let spans = self
+                    .spans
+                    .and_then(|s| s.get(key))
+                    .and_then(|v| match v.get_ref() {
+                        DeValue::Table(t) => Some(t),
+                        _ => None,
+                    });
+                Ok(Some(Node {
+                    cx: self.cx,
+                    values: t,
+                    spans,
+                    prefix,
+                    line: self.line_of(key),
+                }))
+            }
+            Some(v) => Err(self.err(key, format!("expected a table, found {}", v.type_str()))),
+        }
+    }
+
+    fn req_table(&self, key: &str, prefix: &'c str) -> Result<Node<'c, 'a>> {
+        self.opt_table(key, prefix)?
+            .ok_or_else(|| self.err(key, format!("required table [{key}] is missing")))
+    }
+
+    fn opt_extra(&self, key: &str) -> Result<Option<toml::Table>> {
+        match self.values.get(key) {
+            None => Ok(None),
+            Some(toml::Value::Table(t)) => Ok(Some(t.clone())),
+            Some(v) => Err(self.err(key, format!("expected a table, found {}", v.type_str()))),
+        }
+    }
+
+    fn case(&self) -> Result<CaseSpec> {
+        self.check_keys(&[
+            "id",
+            "kind",
+            "file",
+            "wind_speed",
+            "config",
+            "amplitude",
+            "amplitude_ratio",
+            "freq_pitch",
+            "freq_heave",
+            "mean_pitch",
+            "nowind_file",
+            "extra",
+        ])?;
+        let id = self.req_str("id")?;
+        if !is_valid_case_id(id) {
+            return Err(self.err("id", format!("case id \"{id}\" must match [A-Za-z0-9._-]+")));
+        }
+        let kind = match self.req_str("kind")? {
+            "forced" => CaseKind::Forced,
+            "free" => CaseKind::Free,
+            other => {
+                return Err(self.err(
+                    "kind",
+                    format!("unknown kind \"{other}\"; allowed values: \"forced\", \"free\""),
+                ))
+            }
+        };
+        let file = self
+            .opt_path("file")?
+            .ok_or_else(|| self.err("file", "required key is missing".to_string()))?;
+        Ok(CaseSpec {
+            id: id.to_string(),
+            kind,
+            file,
+            wind_speed: self.req_nonneg("wind_speed", "m/s")?,
+            config: self.opt_str("config")?.map(str::to_string),
+            amplitude: self.opt_nonneg("amplitude", "")?,
+            amplitude_ratio: self.opt_nonneg("amplitude_ratio", "")?,
+            freq_pitch: self.opt_pos("freq_pitch", "Hz")?,
+            freq_heave: self.opt_pos("freq_heave", "Hz")?,
+            mean_pitch: self.opt_f64("mean_pitch")?,
+            nowind_file: self.opt_path("nowind_file")?,
+            extra: self.opt_extra("extra")?,
+        })
+    }
+}

@@ -1,0 +1,322 @@
+//! Tests of `prepare` and its options.
+
+use super::*;
+use crate::record::CaseMeta;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, Normal};
+use std::f64::consts::PI;
+
+/// A sum of sinusoids `Σ a sin(2π f t + φ)` and its derivative.
+#[derive(Clone)]
+struct Motion(Vec<(f64, f64, f64)>);
+
+impl Motion {
+    fn at(&self, t: f64) -> f64 {
+        self.0
+            .iter()
+            .map(|&(a, f, p)| a * (2.0 * PI * f * t + p).sin())
+            .sum()
+    }
+    fn rate(&self, t: f64) -> f64 {
+        self.0
+            .iter()
+            .map(|&(a, f, p)| a * 2.0 * PI * f * (2.0 * PI * f * t + p).cos())
+            .sum()
+    }
+}
+
+fn record(id: &str, dur: f64, alpha: &Motion, h: &Motion, noise: (f64, f64), seed: u64) -> Record {
+    let dt = 1.0 / 512.0;
+    let n = (dur / dt).round() as usize;
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let g = Normal::new(0.0, 1.0).unwrap();
+    let ts: Vec<f64> = (0..n).map(|i| i as f64 * dt).collect();
+    Record {
+        kind: CaseKind::Forced,
+        meta: CaseMeta {
+            id: id.into(),
+            wind_speed: 10.0,
+            ..Default::default()
+        },
+        t0: 0.0,
+        dt,
+        alpha: ts
+            .iter()
+            .map(|&t| alpha.at(t) + noise.0 * g.sample(&mut rng))
+            .collect(),
+        h: ts
+            .iter()
+            .map(|&t| h.at(t) + noise.1 * g.sample(&mut rng))
+            .collect(),
+        lift: Some(ts.iter().map(|&t| 2.0 * alpha.at(t)).collect()),
+        moment: Some(ts.iter().map(|&t| 0.1 * alpha.at(t)).collect()),
+        nowind: None,
+    }
+}
+
+fn max_rel_err(got: &[f64], dt: f64, exact: impl Fn(f64) -> f64) -> f64 {
+    let (mut e, mut m) = (0.0f64, 0.0f64);
+    for (i, g) in got.iter().enumerate() {
+        let x = exact(i as f64 * dt);
+        e = e.max((g - x).abs());
+        m = m.max(x.abs());
+    }
+    e / m
+}
+
+fn two_freq() -> (Motion, Motion, f64, f64) {
+    let (fa, fh) = (2.0021, 1.2987);
+    (
+        Motion(vec![(0.2, fa, 0.3), (0.02, fh, 1.1)]),
+        Motion(vec![(0.01, fh, 0.2), (0.0008, fa, 2.0)]),
+        fa,
+        fh,
+    )
+}
+
+/// Two-frequency motion over 20.3 s (not a whole number of periods) with sensor noise:
+/// forcing frequencies to < 1e-4 Hz and velocities to < 1e-3 of their peak, both from the
+/// spectrum alone and from nominal manifest frequencies.
+#[test]
+fn harmonic_refinement_two_frequencies_with_noise() {
+    let (a, h, fa, fh) = two_freq();
+    let mut r = record("two-freq", 20.3, &a, &h, (2e-3, 1e-4), 42);
+    for nominal in [None, Some((2.0, 1.3))] {
+        r.meta.freq_pitch = nominal.map(|n| n.0);
+        r.meta.freq_heave = nominal.map(|n| n.1);
+        let (p, rep) = prepare_with_report(&r, &PreprocessOptions::default()).unwrap();
+        let fp = p.forcing.pitch.unwrap();
+        let fhh = p.forcing.heave.unwrap();
+        assert!((fp - fa).abs() < 1e-4, "pitch frequency error {}", fp - fa);
+        assert!(
+            (fhh - fh).abs() < 1e-4,
+            "heave frequency error {}",
+            fhh - fh
+        );
+        assert!(matches!(
+            rep.pitch_velocity,
+            VelocitySource::Harmonic { .. }
+        ));
+        assert!(matches!(
+            rep.heave_velocity,
+            VelocitySource::Harmonic { .. }
+        ));
+        let ea = max_rel_err(&p.alpha_dot, p.dt, |t| a.rate(t));
+        let eh = max_rel_err(&p.h_dot, p.dt, |t| h.rate(t));
+        assert!(ea < 1e-3 && eh < 1e-3, "velocity errors {ea:e} {eh:e}");
+        // The motion is replaced by the (denoised) fit.
+        let em = max_rel_err(&p.alpha, p.dt, |t| a.at(t));
+        assert!(em < 1e-3, "motion error {em:e}");
+        assert_eq!(p.lift.len(), r.len());
+    }
+}
+
+#[test]
+fn pitch_only_forcing_has_no_heave_frequency() {
+    let a = Motion(vec![(0.1, 3.0, 0.0)]);
+    let h = Motion(vec![]);
+    let r = record("pitch-only", 8.1, &a, &h, (1e-3, 2e-5), 1);
+    let p = prepare(&r, &PreprocessOptions::default()).unwrap();
+    assert!((p.forcing.pitch.unwrap() - 3.0).abs() < 1e-4);
+    assert_eq!(p.forcing.heave, None);
+    assert!(max_rel_err(&p.alpha_dot, p.dt, |t| a.rate(t)) < 2e-3);
+}
+
+#[test]
+fn record_shorter_than_one_forcing_period_is_too_short() {
+    let a = Motion(vec![(0.1, 0.5, 0.0)]);
+    let h = Motion(vec![(0.01, 0.5, 0.0)]);
+    let mut r = record("short-1", 1.5, &a, &h, (1e-4, 1e-5), 2);
+    r.meta.freq_pitch = Some(0.5);
+    let e = prepare(&r, &PreprocessOptions::default()).unwrap_err();
+    assert!(
+        matches!(&e, Error::TooShort { case, .. } if case == "short-1"),
+        "{e:?}"
+    );
+    assert!(
+        e.to_string().contains("short-1") && e.to_string().contains("0.5 Hz"),
+        "{e}"
+    );
+    // Without the manifest frequency the spectrum finds the same.
+    r.meta.freq_pitch = None;
+    let e = prepare(&r, &PreprocessOptions::default()).unwrap_err();
+    assert!(
+        matches!(&e, Error::TooShort { case, .. } if case == "short-1"),
+        "{e:?}"
+    );
+    // min_periods is honoured.
+    let r = record("short-2", 5.0, &a, &h, (1e-4, 1e-5), 2);
+    let opts = PreprocessOptions {
+        min_periods: 3.0,
+        ..Default::default()
+    };
+    assert!(matches!(prepare(&r, &opts), Err(Error::TooShort { .. })));
+    assert!(prepare(&r, &PreprocessOptions::default()).is_ok());
+}
+
+#[test]
+fn forced_case_without_forces_and_non_finite_input_name_case_and_field() {
+    let (a, h, _, _) = two_freq();
+    let mut r = record("nolift", 5.0, &a, &h, (0.0, 0.0), 3);
+    r.lift = None;
+    let e = prepare(&r, &PreprocessOptions::default()).unwrap_err();
+    assert!(
+        matches!(&e, Error::InvalidData { case, field, .. } if case == "nolift" && field == "lift"),
+        "{e:?}"
+    );
+    let mut r = record("nan", 5.0, &a, &h, (0.0, 0.0), 3);
+    r.h[17] = f64::NAN;
+    let e = prepare(&r, &PreprocessOptions::default()).unwrap_err();
+    assert!(
+        matches!(&e, Error::InvalidData { case, field, .. } if case == "nan" && field == "h"),
+        "{e:?}"
+    );
+    assert!(e.to_string().contains("sample 17"), "{e}");
+}
+
+/// Multi-sine pitch (three frequencies): the harmonic fit at the single forcing frequency
+/// does not explain it, so `Auto` falls back to Savitzky–Golay and keeps the motion;
+/// `Harmonic` reports the residual.
+#[test]
+fn auto_falls_back_to_savitzky_golay_and_harmonic_reports_residual() {
+    let a = Motion(vec![(0.2, 1.1, 0.0), (0.12, 2.3, 1.0), (0.08, 3.7, 2.0)]);
+    let h = Motion(vec![]);
+    let r = record("multi", 10.0, &a, &h, (1e-3, 1e-5), 4);
+    let (p, rep) = prepare_with_report(&r, &PreprocessOptions::default()).unwrap();
+    assert_eq!(
+        rep.pitch_velocity,
+        VelocitySource::SavitzkyGolay {
+            half_window: DEFAULT_SG_HALF_WINDOW,
+            order: DEFAULT_SG_ORDER
+        }
+    );
+    assert_eq!(p.alpha, r.alpha, "measured motion kept");
+    let rms_v = (p.alpha_dot.iter().map(|v| v * v).sum::<f64>() / p.alpha_dot.len() as f64).sqrt();
+    let rms_e = (p
+        .alpha_dot
+        .iter()
+        .enumerate()
+        .map(|(i, v)| (v - a.rate(i as f64 * p.dt)).powi(2))
+        .sum::<f64>()
+        / p.alpha_dot.len() as f64)
+        .sqrt();
+    assert!(rms_e / rms_v < 0.02, "{}", rms_e / rms_v);
+    let opts = PreprocessOptions {
+        velocity: VelocityMethod::Harmonic,
+        ..Default::default()
+    };
+    let e = prepare(&r, &opts).unwrap_err();
+    let msg = e.to_string();
+    assert!(
+        matches!(&e, Error::InvalidData { case, field, .. } if case == "multi" && field == "alpha"),
+        "{e:?}"
+    );
+    assert!(msg.contains("residual"), "{msg}");
+}
+
+#[test]
+fn explicit_savitzky_golay_and_option_checks() {
+    let (a, h, _, _) = two_freq();
+    let r = record("sg", 6.0, &a, &h, (0.0, 0.0), 5);
+    let opts = PreprocessOptions {
+        velocity: VelocityMethod::SavitzkyGolay {
+            half_window: 20,
+            order: 4,
+        },
+        ..Default::default()
+    };
+    let (p, rep) = prepare_with_report(&r, &opts).unwrap();
+    assert_eq!(
+        rep.pitch_velocity,
+        VelocitySource::SavitzkyGolay {
+            half_window: 20,
+            order: 4
+        }
+    );
+    // Noise-free: the error is the polynomial bias, largest in the end windows (a degree-4
+    // fit over 41 samples spanning ω·40·dt ≈ 1 rad, evaluated off-centre).
+    let e = max_rel_err(&p.alpha_dot, p.dt, |t| a.rate(t));
+    assert!(e < 2e-3, "{e:e}");
+    let n = p.alpha_dot.len();
+    let e_in = max_rel_err(&p.alpha_dot[20..n - 20], p.dt, |t| a.rate(t + 20.0 * p.dt));
+    // Centred window: bias ∝ (ω m dt)⁴ ≈ 0.06 times a small constant (measured 1.2e-4).
+    assert!(e_in < 2e-4, "interior {e_in:e}");
+    let bad = PreprocessOptions {
+        velocity: VelocityMethod::SavitzkyGolay {
+            half_window: 2,
+            order: 5,
+        },
+        ..Default::default()
+    };
+    assert!(matches!(bad.check(), Err(Error::InvalidOption { name, .. }) if name == "velocity"));
+    let bad = PreprocessOptions {
+        harmonic_tolerance: f64::NAN,
+        ..Default::default()
+    };
+    assert!(
+        matches!(prepare(&r, &bad), Err(Error::InvalidOption { name, .. }) if name == "harmonic_tolerance")
+    );
+}
+
+#[test]
+fn free_case_uses_savitzky_golay_and_no_forcing() {
+    let a = Motion(vec![(0.05, 2.7, 0.0)]);
+    let h = Motion(vec![(0.004, 2.7, 0.5)]);
+    let mut r = record("free-1", 4.0, &a, &h, (1e-4, 1e-5), 6);
+    r.kind = CaseKind::Free;
+    let (p, rep) = prepare_with_report(&r, &PreprocessOptions::default()).unwrap();
+    assert_eq!(p.forcing, Forcing::default());
+    assert!(matches!(
+        rep.pitch_velocity,
+        VelocitySource::SavitzkyGolay { .. }
+    ));
+}
+
+/// `prepare` with a still-air run: only the overlap is kept and the aerodynamic forces
+/// are recovered.
+#[test]
+fn prepare_subtracts_the_still_air_run() {
+    let (a, h, _, _) = two_freq();
+    let dt = 1.0 / 512.0;
+    let mut wind = record("nw", 12.0, &a, &h, (0.0, 0.0), 7);
+    let shift = 137.37 * dt;
+    let n_s = 9 * 512;
+    let ts: Vec<f64> = (0..n_s).map(|j| j as f64 * dt - shift).collect();
+    let inertial = |t: f64| 0.5 * a.rate(t) * 2.0 * PI * 2.0 + 30.0 * h.at(t);
+    let still = Record {
+        alpha: ts.iter().map(|&t| a.at(t)).collect(),
+        h: ts.iter().map(|&t| h.at(t)).collect(),
+        lift: Some(ts.iter().map(|&t| inertial(t)).collect()),
+        moment: Some(ts.iter().map(|&t| -inertial(t)).collect()),
+        ..wind.clone()
+    };
+    let wl: Vec<f64> = wind.lift.as_ref().unwrap().clone();
+    wind.lift = Some(
+        wl.iter()
+            .enumerate()
+            .map(|(i, l)| l + inertial(i as f64 * dt))
+            .collect(),
+    );
+    wind.nowind = Some(Box::new(still));
+    let (p, rep) = prepare_with_report(&wind, &PreprocessOptions::default()).unwrap();
+    let lag = rep.nowind_lag.unwrap();
+    assert!((lag - shift).abs() < 1e-3 * dt, "{lag} vs {shift}");
+    assert_eq!(p.lift.len(), p.alpha.len());
+    assert_eq!(rep.first_sample, 0);
+    assert!((p.lift.len() as f64 - (n_s as f64 - 137.37)).abs() <= 1.0);
+    let e = p
+        .lift
+        .iter()
+        .enumerate()
+        .map(|(k, l)| (l - wl[k + rep.first_sample]).abs())
+        .fold(0.0, f64::max);
+    assert!(e < 1e-3 * 0.4, "lift error {e}");
+    // Switching the subtraction off keeps the raw forces and the whole record.
+    let opts = PreprocessOptions {
+        subtract_nowind: false,
+        ..Default::default()
+    };
+    let q = prepare(&wind, &opts).unwrap();
+    assert_eq!(q.lift.len(), wind.len());
+}
