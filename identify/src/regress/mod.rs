@@ -1,3 +1,5 @@
 //! Sparse regression (to be written).
 
+pub mod factor;
 pub mod pysindy;
+pub mod small;
