@@ -21,7 +21,8 @@ pub mod metrics;
 pub mod pipeline;
 pub mod preprocess;
 pub mod record;
-pub mod synthetic;
 pub mod regress;
+pub mod synthetic;
+pub mod workflow;
 
 pub use error::{Error, Result};
