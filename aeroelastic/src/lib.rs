@@ -8,6 +8,7 @@
 
 pub mod bessel;
 pub mod error;
+pub mod structure;
 pub mod theodorsen;
 
 pub use error::{Error, Result};
