@@ -6,8 +6,10 @@
 //! axis positive nose-up; C_L = L/(½ρU²B), C_M = M/(½ρU²B²), K = Bω/U with B the full
 //! chord; Theodorsen's k = bω/U uses the semi-chord b = B/2.
 
+pub mod aero;
 pub mod bessel;
 pub mod error;
+pub(crate) mod optim;
 pub mod structure;
 pub mod theodorsen;
 
