@@ -9,8 +9,13 @@
 pub mod aero;
 pub mod bessel;
 pub mod error;
+pub mod flutter;
 pub(crate) mod optim;
+pub mod section;
 pub mod structure;
 pub mod theodorsen;
+
+#[cfg(test)]
+pub(crate) mod testmodels;
 
 pub use error::{Error, Result};
