@@ -9,7 +9,7 @@ use ode_solvers::dop_shared::{OutputType, System};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::aero::{AeroModel, Flow};
+use crate::aero::{AeroModel, Flow, NonlinearAero};
 use crate::section::Section;
 use crate::structure::Structure;
 use crate::{Error, Result};
@@ -677,6 +677,72 @@ impl Section {
     }
 }
 
+/// Result of an LCO run whose nonlinear coefficients were evaluated at the response's own
+/// reduced frequency.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct KIteratedLco {
+    /// The final run.
+    pub result: LcoResult,
+    /// Reduced frequency K = Bω/U at which the coefficients were finally evaluated.
+    pub k_eval: f64,
+    /// Runs performed.
+    pub iterations: usize,
+}
+
+/// LCO run with a [`NonlinearAero`] whose K-dependent coefficients are evaluated at the
+/// current response frequency: run at `model.k_eval()`, measure ω of the limit cycle, set
+/// K = Bω/U, re-run from the last state; stop when K changes by less than `k_tol`
+/// (relative) or after `max_iter` runs, or as soon as the response is not an LCO (then no
+/// response frequency defines K). This is the fixed point "coefficients interpolated in K
+/// at the response frequency" of [`NonlinearAero`].
+///
+/// # Errors
+/// As [`Section::lco_run`]; [`Error::InvalidParameter`] for `max_iter = 0`.
+#[allow(clippy::too_many_arguments)]
+pub fn lco_run_k_iterated(
+    structure: &Structure,
+    model: &NonlinearAero,
+    rho: f64,
+    u: f64,
+    y0: &[f64],
+    opts: &LcoOptions,
+    k_tol: f64,
+    max_iter: usize,
+) -> Result<KIteratedLco> {
+    if max_iter == 0 {
+        return Err(Error::param("max_iter", 0.0, "must be > 0"));
+    }
+    let mut m = model.clone();
+    let mut y = y0.to_vec();
+    let mut it = 0;
+    loop {
+        it += 1;
+        let section = Section::new(structure.clone(), std::sync::Arc::new(m.clone()), rho)?;
+        let r = section.lco_run(u, &y, opts)?;
+        if r.classification != Classification::Lco
+            || !m.depends_on_k()
+            || it >= max_iter
+            || r.omega <= 0.0
+        {
+            return Ok(KIteratedLco {
+                result: r,
+                k_eval: m.k_eval(),
+                iterations: it,
+            });
+        }
+        let k_new = m.chord() * r.omega / u;
+        if ((k_new - m.k_eval()) / m.k_eval()).abs() < k_tol {
+            return Ok(KIteratedLco {
+                result: r,
+                k_eval: m.k_eval(),
+                iterations: it,
+            });
+        }
+        m = m.with_k_eval(k_new)?;
+        y = r.final_state.clone();
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -927,5 +993,45 @@ mod tests {
             assert_eq!(seq.classification, r.classification);
             assert_eq!(seq.amplitude_alpha, r.amplitude_alpha);
         }
+    }
+
+    #[test]
+    fn k_iteration_evaluates_coefficients_at_the_lco_frequency() {
+        use crate::aero::{Channel, Coefficient, NonlinearAero, NonlinearTerm};
+        // Linear Jones/Theodorsen + stabilising cubic aerodynamic damping in C_M,
+        // −K³ N3*(K) (Bα̇/U)³ with N3* tabulated over K (Eq. 19 form).
+        let base = hp1_theodorsen();
+        let uf = jones_flutter_speed(&base);
+        let term = NonlinearTerm {
+            channel: Channel::Moment,
+            powers: [0, 3, 0, 0],
+            coefficient: Coefficient::OverK {
+                k: vec![0.3, 0.9],
+                values: vec![-20.0, -60.0],
+                k_power: 3,
+            },
+        };
+        let model = NonlinearAero::new(base.aero.clone(), vec![term], 0.3).unwrap();
+        let u = 1.03 * uf;
+        let r = lco_run_k_iterated(
+            &base.structure,
+            &model,
+            1.0,
+            u,
+            &base.perturbation(0.05),
+            &LcoOptions::default(),
+            1e-6,
+            10,
+        )
+        .unwrap();
+        assert_eq!(r.result.classification, Classification::Lco);
+        let k_resp = 2.0 * r.result.omega / u;
+        assert!(
+            ((r.k_eval - k_resp) / k_resp).abs() < 1e-4,
+            "K_eval {} vs response K {}",
+            r.k_eval,
+            k_resp
+        );
+        assert!(r.iterations >= 2 && (r.k_eval - 0.3).abs() > 0.1);
     }
 }

@@ -82,7 +82,7 @@ pub struct NonlinearTerm {
 /// **Evaluation away from the identified K.** A coefficient identified under forced
 /// motion at reduced frequency K is, in a free response, evaluated at one reduced
 /// frequency `k_eval` (set with [`NonlinearAero::with_k_eval`]); the LCO solver
-/// ([`crate::lco::LcoOptions::k_iterations`]) updates it to the *current response
+/// ([`crate::lco::lco_run_k_iterated`]) updates it to the *current response
 /// frequency* K = Bω_LCO/U by fixed-point iteration, so coefficients are interpolated in K
 /// where the section actually oscillates, and held at the nearest identified K outside the
 /// identified range (no extrapolation of a fitted coefficient). The nonlinear terms do not
