@@ -344,7 +344,9 @@ impl Section {
     /// eigen-analysis or a p-k iteration fails.
     pub fn flutter(&self, method: FlutterMethod, opts: &FlutterOptions) -> Result<FlutterAnalysis> {
         crate::error::positive("u_min", opts.u_min)?;
-        if !(opts.u_max > opts.u_min) || !opts.u_max.is_finite() {
+        if opts.u_max.partial_cmp(&opts.u_min) != Some(std::cmp::Ordering::Greater)
+            || !opts.u_max.is_finite()
+        {
             return Err(Error::param(
                 "u_max",
                 opts.u_max,
@@ -524,7 +526,7 @@ impl Section {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::testmodels::{flutter_cases, flutter_options, FlutterCase};
+    use crate::reference::{flutter_cases, flutter_options, FlutterCase};
 
     /// Generic checker: measured vs expected with relative errors.
     fn check(case: &FlutterCase) -> std::result::Result<String, String> {
@@ -573,7 +575,7 @@ mod tests {
 
     #[test]
     fn bad_options_name_the_field() {
-        let s = crate::testmodels::hp1_theodorsen();
+        let s = crate::reference::hp1_theodorsen();
         let mut o = flutter_options();
         o.n_speeds = 1;
         let e = s.flutter(FlutterMethod::P, &o).unwrap_err();
@@ -584,7 +586,7 @@ mod tests {
 #[cfg(test)]
 mod rfa_tests {
     use super::*;
-    use crate::testmodels::{flat_plate_table, flutter_options};
+    use crate::reference::{flat_plate_table, flutter_options};
 
     #[test]
     fn rfa_state_space_flutter_within_one_percent_of_table_pk() {
@@ -606,7 +608,7 @@ mod rfa_tests {
 
     #[test]
     fn vg_branches_are_continuous_and_serialisable() {
-        let s = crate::testmodels::hp1_theodorsen();
+        let s = crate::reference::hp1_theodorsen();
         let r = s.flutter(FlutterMethod::Pk, &flutter_options()).unwrap();
         for b in &r.branches {
             for w in b.points.windows(2) {

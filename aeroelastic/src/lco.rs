@@ -748,8 +748,8 @@ mod tests {
     use super::*;
     use crate::aero::{QuasiSteady, QuasiSteadyKind};
     use crate::flutter::{FlutterMethod, FlutterOptions};
+    use crate::reference::{hp1_structure, hp1_theodorsen};
     use crate::structure::PolyTerm;
-    use crate::testmodels::{hp1_structure, hp1_theodorsen};
     use std::sync::Arc;
 
     fn no_obs(_: SweepProgress) {}
@@ -826,7 +826,7 @@ mod tests {
         // Flat plate from the derivative table alone: p-k on the table gives
         // U/(bω_α) = 2.0054; the same table through Roger's RFA in the time domain must
         // decay 1 % below and grow 1 % above (b = 1, ω_α = 1 so U = U/(bω_α)).
-        let s = crate::testmodels::flat_plate_table(4);
+        let s = crate::reference::flat_plate_table(4);
         let r = s
             .lco_run(0.99 * 2.0054, &s.perturbation(0.01), &LcoOptions::default())
             .unwrap();

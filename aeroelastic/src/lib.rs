@@ -12,11 +12,9 @@ pub mod error;
 pub mod flutter;
 pub mod lco;
 pub(crate) mod optim;
+pub mod reference;
 pub mod section;
 pub mod structure;
 pub mod theodorsen;
-
-#[cfg(test)]
-pub(crate) mod testmodels;
 
 pub use error::{Error, Result};

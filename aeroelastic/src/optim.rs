@@ -146,9 +146,10 @@ pub fn nelder_mead<F: FnMut(&[f64]) -> f64>(
                 simplex[n] = xc;
                 vals[n] = fc;
             } else {
+                let best = simplex[0].clone();
                 for i in 1..=n {
-                    for j in 0..n {
-                        simplex[i][j] = simplex[0][j] + 0.5 * (simplex[i][j] - simplex[0][j]);
+                    for (v, b) in simplex[i].iter_mut().zip(&best) {
+                        *v = b + 0.5 * (*v - b);
                     }
                     vals[i] = f(&simplex[i]);
                     evals += 1;

@@ -128,7 +128,7 @@ impl Derivatives {
 /// `k` is K = Bω/U and must be > 0 (the derivatives are singular at K = 0); a
 /// non-positive `k` gives NaN fields.
 pub fn flat_plate_derivatives(k: f64) -> Derivatives {
-    if !(k > 0.0) {
+    if k.is_nan() || k <= 0.0 {
         let n = f64::NAN;
         return Derivatives {
             k,

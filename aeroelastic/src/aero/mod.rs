@@ -240,6 +240,7 @@ pub(crate) fn thin_airfoil_apparent_mass(rho: f64, b: f64, a: f64) -> Matrix2<f6
 
 /// Frequency response of the thin aerofoil with circulation function `c` (C(k) exact,
 /// Jones' approximation or 1) for harmonic motion at ω; `noncirc` adds all πρb² terms.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn thin_airfoil_response(
     rho: f64,
     u: f64,

@@ -1,12 +1,13 @@
-//! Test models with their published or closed-form answers (diffsol style): each model
-//! carries its reference values and tolerance; one generic checker runs them all.
+//! Reference sections with their published or closed-form answers (diffsol style): each
+//! model carries its reference values and tolerance; one generic checker (in the flutter
+//! tests) runs them all. Also the benchmark model of `benches/lco.rs`.
 
 use std::sync::Arc;
 
 use crate::aero::{AeroModel, DerivativeTable, QuasiSteady, QuasiSteadyKind, TheodorsenAero};
 use crate::flutter::{FlutterMethod, FlutterOptions};
 use crate::section::Section;
-use crate::structure::{NondimStructure, Structure};
+use crate::structure::{NondimStructure, PolyTerm, Structure};
 
 /// A flutter test model with its reference answer.
 pub struct FlutterCase {
@@ -130,4 +131,17 @@ pub fn flutter_options() -> FlutterOptions {
         n_speeds: 80,
         tol_rel: 1e-9,
     }
+}
+
+/// Benchmark / LCO model: HP-1 with Theodorsen–Jones aerodynamics and a cubic hardening
+/// pitch spring k_α(α + 10 α³) (supercritical LCO above the Jones flutter speed
+/// U/(bω_α) = 2.1704). b = 1 m, ω_α = 1 rad/s, ρ = 1 kg/m³.
+pub fn hp1_cubic_pitch() -> Section {
+    let mut st = hp1_structure();
+    st.pitch_stiffness_terms.push(PolyTerm {
+        power: 3,
+        coefficient: 10.0 * st.k_alpha,
+    });
+    let aero: Arc<dyn AeroModel> = Arc::new(TheodorsenAero::new(2.0, -0.2).expect("valid"));
+    Section::new(st, aero, 1.0).expect("valid")
 }
