@@ -593,6 +593,13 @@ mod rfa_tests {
         // The time-domain realisation of the table (Roger RFA) analysed by the p-method.
         for n_lag in [2, 3, 4] {
             let s = flat_plate_table(n_lag);
+            let t = crate::aero::DerivativeTable::flat_plate(2.0, &crate::reference::flat_plate_k_grid(), n_lag).unwrap();
+            eprintln!(
+                "RFA {n_lag} lags {:?}: fit error max {:.2e}, rms {:.2e}",
+                t.rfa().lags,
+                t.rfa().max_rel_error,
+                t.rfa().rms_rel_error
+            );
             let r = s.flutter(FlutterMethod::P, &flutter_options()).unwrap();
             let f = r.flutter.unwrap();
             let rel = (f.u_reduced - 2.0054).abs() / 2.0054;
