@@ -593,7 +593,12 @@ mod rfa_tests {
         // The time-domain realisation of the table (Roger RFA) analysed by the p-method.
         for n_lag in [2, 3, 4] {
             let s = flat_plate_table(n_lag);
-            let t = crate::aero::DerivativeTable::flat_plate(2.0, &crate::reference::flat_plate_k_grid(), n_lag).unwrap();
+            let t = crate::aero::DerivativeTable::flat_plate(
+                2.0,
+                &crate::reference::flat_plate_k_grid(),
+                n_lag,
+            )
+            .unwrap();
             eprintln!(
                 "RFA {n_lag} lags {:?}: fit error max {:.2e}, rms {:.2e}",
                 t.rfa().lags,
