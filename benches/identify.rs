@@ -42,29 +42,50 @@ fn synthetic_cases() -> Vec<NondimCase> {
                 let t: Vec<f64> = (0..n).map(|i| i as f64 / FS).collect();
                 let x: [Vec<f64>; 4] = [
                     t.iter().map(|t| amp * (tau * fa * t).sin()).collect(),
-                    t.iter().map(|t| CHORD / wind * amp * tau * fa * (tau * fa * t).cos()).collect(),
-                    t.iter().map(|t| h_amp / CHORD * (tau * fh * t + 0.5).sin()).collect(),
-                    t.iter().map(|t| h_amp / wind * tau * fh * (tau * fh * t + 0.5).cos()).collect(),
+                    t.iter()
+                        .map(|t| CHORD / wind * amp * tau * fa * (tau * fa * t).cos())
+                        .collect(),
+                    t.iter()
+                        .map(|t| h_amp / CHORD * (tau * fh * t + 0.5).sin())
+                        .collect(),
+                    t.iter()
+                        .map(|t| h_amp / wind * tau * fh * (tau * fh * t + 0.5).cos())
+                        .collect(),
                 ];
                 let (ka, kh) = (CHORD * tau * fa / wind, CHORD * tau * fh / wind);
                 // moment: Eq. 19 form with A1..A4, N1, N2; lift: H1..H4 and N1
                 let m: Vec<f64> = (0..n)
                     .map(|i| {
-                        kh * 0.4 * x[3][i] - ka * 0.3 * x[1][i] + ka * ka * 1.2 * x[0][i] + kh * kh * 0.2 * x[2][i]
+                        kh * 0.4 * x[3][i] - ka * 0.3 * x[1][i]
+                            + ka * ka * 1.2 * x[0][i]
+                            + kh * kh * 0.2 * x[2][i]
                             + ka.powi(3) * 0.8 * x[0][i] * x[1][i]
                             - ka.powi(6) * 3.0 * x[0][i].powi(3)
                     })
                     .collect();
                 let l: Vec<f64> = (0..n)
-                    .map(|i| -kh * 2.5 * x[3][i] - ka * 1.5 * x[1][i] - ka * ka * 4.0 * x[0][i] + kh * kh * 0.5 * x[2][i] + ka.powi(3) * 1.5 * x[0][i] * x[1][i])
+                    .map(|i| {
+                        -kh * 2.5 * x[3][i] - ka * 1.5 * x[1][i] - ka * ka * 4.0 * x[0][i]
+                            + kh * kh * 0.5 * x[2][i]
+                            + ka.powi(3) * 1.5 * x[0][i] * x[1][i]
+                    })
                     .collect();
-                let rms = |v: &[f64]| (v.iter().map(|a| a * a).sum::<f64>() / v.len() as f64).sqrt();
-                let (nm, nl) = (Normal::new(0.0, 0.01 * rms(&m)).unwrap(), Normal::new(0.0, 0.01 * rms(&l)).unwrap());
+                let rms =
+                    |v: &[f64]| (v.iter().map(|a| a * a).sum::<f64>() / v.len() as f64).sqrt();
+                let (nm, nl) = (
+                    Normal::new(0.0, 0.01 * rms(&m)).unwrap(),
+                    Normal::new(0.0, 0.01 * rms(&l)).unwrap(),
+                );
                 let c_moment = m.iter().map(|v| v + nm.sample(&mut rng)).collect();
                 let c_lift = l.iter().map(|v| v + nl.sample(&mut rng)).collect();
                 out.push(NondimCase {
                     meta: CaseMeta {
-                        id: format!("{}-A{:02}-U{:02}", (b'A' + c as u8) as char, 3 + 3 * a, 3 + u),
+                        id: format!(
+                            "{}-A{:02}-U{:02}",
+                            (b'A' + c as u8) as char,
+                            3 + 3 * a,
+                            3 + u
+                        ),
                         wind_speed: wind,
                         config: Some(((b'A' + c as u8) as char).to_string()),
                         amplitude: Some(amp),
@@ -97,7 +118,13 @@ fn stage_breakdown(cases: &[NondimCase]) {
         let t0 = Instant::now();
         let theta = lib.evaluate(&c.x);
         let t1 = Instant::now();
-        let f = CaseFactor::new(&c.meta.id, theta.as_ref(), &order, &[&c.c_moment, &c.c_lift]).unwrap();
+        let f = CaseFactor::new(
+            &c.meta.id,
+            theta.as_ref(),
+            &order,
+            &[&c.c_moment, &c.c_lift],
+        )
+        .unwrap();
         let t2 = Instant::now();
         let tones = candidate_tones(&c.forcing, 5, c.len() as f64 * c.dt, c.dt);
         let freqs: Vec<f64> = tones.iter().map(|t| t.freq).collect();
@@ -120,7 +147,9 @@ fn stage_breakdown(cases: &[NondimCase]) {
     let id = identify(cases, &IdentifySettings::default(), "bench", &|_| {}).unwrap();
     println!(
         "one identify() run ({} cores available): {:.3} s; group A moment support {:?}",
-        std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1),
+        std::thread::available_parallelism()
+            .map(|n| n.get())
+            .unwrap_or(1),
         t.elapsed().as_secs_f64(),
         id.groups[0].moment.support
     );
@@ -132,9 +161,10 @@ fn bench(c: &mut Criterion) {
     let settings = IdentifySettings::default();
     let mut g = c.benchmark_group("identify");
     g.sample_size(10);
-    g.bench_function("448 cases x 10 s x 512 Hz, Paper30, group STLSQ, 50 deltas", |b| {
-        b.iter(|| identify(&cases, &settings, "bench", &|_| {}).unwrap())
-    });
+    g.bench_function(
+        "448 cases x 10 s x 512 Hz, Paper30, group STLSQ, 50 deltas",
+        |b| b.iter(|| identify(&cases, &settings, "bench", &|_| {}).unwrap()),
+    );
     g.finish();
 }
 

@@ -18,10 +18,26 @@ use serde::{Deserialize, Serialize};
 use crate::{Error, Result};
 
 /// The seven Eq. 19 terms in the order (d1, d2, d3, d4, N1, N2, N3).
-pub const EQ19_TERMS: [&str; 7] = ["h_dot", "alpha_dot", "alpha", "h", "alpha*alpha_dot", "alpha^3", "alpha_dot^3"];
+pub const EQ19_TERMS: [&str; 7] = [
+    "h_dot",
+    "alpha_dot",
+    "alpha",
+    "h",
+    "alpha*alpha_dot",
+    "alpha^3",
+    "alpha_dot^3",
+];
 
 /// Which reduced frequency and power scale each Eq. 19 term: (uses K_α, power).
-const SCALING: [(bool, i32); 7] = [(false, 1), (true, 1), (true, 2), (false, 2), (true, 3), (true, 6), (true, 3)];
+const SCALING: [(bool, i32); 7] = [
+    (false, 1),
+    (true, 1),
+    (true, 2),
+    (false, 2),
+    (true, 3),
+    (true, 6),
+    (true, 3),
+];
 
 /// The Eq. 19 values of one force in order (d1, d2, d3, d4, N1, N2, N3), where d are
 /// A1*..A4* (moment) or H1*..H4* (lift).
@@ -121,7 +137,15 @@ pub struct LiftEq19 {
 impl From<Eq19Values> for MomentEq19 {
     fn from(v: Eq19Values) -> Self {
         let [a1, a2, a3, a4, n1, n2, n3] = v.0;
-        MomentEq19 { A1: a1, A2: a2, A3: a3, A4: a4, N1: n1, N2: n2, N3: n3 }
+        MomentEq19 {
+            A1: a1,
+            A2: a2,
+            A3: a3,
+            A4: a4,
+            N1: n1,
+            N2: n2,
+            N3: n3,
+        }
     }
 }
 
@@ -134,7 +158,15 @@ impl From<MomentEq19> for Eq19Values {
 impl From<Eq19Values> for LiftEq19 {
     fn from(v: Eq19Values) -> Self {
         let [h1, h2, h3, h4, n1, n2, n3] = v.0;
-        LiftEq19 { H1: h1, H2: h2, H3: h3, H4: h4, N1: n1, N2: n2, N3: n3 }
+        LiftEq19 {
+            H1: h1,
+            H2: h2,
+            H3: h3,
+            H4: h4,
+            N1: n1,
+            N2: n2,
+            N3: n3,
+        }
     }
 }
 
@@ -150,7 +182,15 @@ mod tests {
 
     #[test]
     fn forward_matches_the_formula_and_round_trips() {
-        let xi = [Some(0.3), Some(-0.2), Some(1.1), None, Some(0.05), Some(-0.7), Some(0.0)];
+        let xi = [
+            Some(0.3),
+            Some(-0.2),
+            Some(1.1),
+            None,
+            Some(0.05),
+            Some(-0.7),
+            Some(0.0),
+        ];
         let (ka, kh) = (0.8, 0.35);
         let d = Eq19Values::from_coefficients(xi, Some(ka), Some(kh));
         assert_eq!(d.0[0], Some(0.3 / kh));
@@ -170,7 +210,10 @@ mod tests {
         let m: MomentEq19 = d.into();
         assert_eq!(Eq19Values::from(m), d);
         let json = serde_json::to_string(&m).unwrap();
-        assert!(json.contains("\"A4\":null") && json.contains("\"N3\":0.0"), "{json}");
+        assert!(
+            json.contains("\"A4\":null") && json.contains("\"N3\":0.0"),
+            "{json}"
+        );
         let l: LiftEq19 = d.into();
         assert!(serde_json::to_string(&l).unwrap().contains("\"H1\""));
     }
@@ -182,6 +225,10 @@ mod tests {
         assert_eq!(d.0[0], None);
         assert_eq!(d.0[3], None);
         assert!(d.0[1].is_some() && d.0[4].is_some());
-        assert!(Eq19Values([Some(f64::NAN), None, None, None, None, None, None]).validate().is_err());
+        assert!(
+            Eq19Values([Some(f64::NAN), None, None, None, None, None, None])
+                .validate()
+                .is_err()
+        );
     }
 }

@@ -226,7 +226,12 @@ impl CaseIdentifiability {
 /// # Errors
 /// As [`CaseFactor::new`] (too few samples, non-finite values), and
 /// [`Error::Numerical`] when the SVD does not converge.
-pub fn analyse(case: &str, lib: &Library, theta: MatRef<'_, f64>, opts: &RankOptions) -> Result<CaseIdentifiability> {
+pub fn analyse(
+    case: &str,
+    lib: &Library,
+    theta: MatRef<'_, f64>,
+    opts: &RankOptions,
+) -> Result<CaseIdentifiability> {
     let order = priority_order(lib);
     let factor = CaseFactor::new(case, theta, &order, &[])?;
     analyse_factor(case, lib, &factor, opts)
@@ -236,7 +241,12 @@ pub fn analyse(case: &str, lib: &Library, theta: MatRef<'_, f64>, opts: &RankOpt
 ///
 /// # Errors
 /// [`Error::Numerical`] when the SVD does not converge.
-pub fn analyse_factor(case: &str, lib: &Library, factor: &CaseFactor, opts: &RankOptions) -> Result<CaseIdentifiability> {
+pub fn analyse_factor(
+    case: &str,
+    lib: &Library,
+    factor: &CaseFactor,
+    opts: &RankOptions,
+) -> Result<CaseIdentifiability> {
     let p = factor.n_columns();
     assert_eq!(p, lib.len(), "factor and library sizes differ");
     let sv = singular_values(factor.r.as_ref()).map_err(|message| Error::Numerical {
@@ -255,7 +265,11 @@ pub fn analyse_factor(case: &str, lib: &Library, factor: &CaseFactor, opts: &Ran
     let mut near_dependencies = Vec::new();
     for k in 0..p {
         let j = factor.order[k];
-        let resid = if factor.zero_column[j] { 0.0 } else { factor.r[(k, k)].abs() };
+        let resid = if factor.zero_column[j] {
+            0.0
+        } else {
+            factor.r[(k, k)].abs()
+        };
         let independent = smax > 0.0 && resid > opts.tol * smax;
         if !independent || resid <= opts.near_tol * smax {
             let dep = describe_dependency(lib, factor, k, &basis_pos, resid);
@@ -283,7 +297,13 @@ pub fn analyse_factor(case: &str, lib: &Library, factor: &CaseFactor, opts: &Ran
 }
 
 /// Expresses the column at priority position `k` through the basis columns before it.
-fn describe_dependency(lib: &Library, f: &CaseFactor, k: usize, basis_pos: &[usize], resid: f64) -> Dependency {
+fn describe_dependency(
+    lib: &Library,
+    f: &CaseFactor,
+    k: usize,
+    basis_pos: &[usize],
+    resid: f64,
+) -> Dependency {
     let j = f.order[k];
     let term = lib.terms()[j].name();
     if f.zero_column[j] || basis_pos.is_empty() {
@@ -382,13 +402,18 @@ mod tests {
     use crate::library::LibraryKind;
 
     fn harmonic(n: usize, dt: f64, fa: f64, fh: f64) -> [Vec<f64>; 4] {
-        let (wa, wh) = (2.0 * std::f64::consts::PI * fa, 2.0 * std::f64::consts::PI * fh);
+        let (wa, wh) = (
+            2.0 * std::f64::consts::PI * fa,
+            2.0 * std::f64::consts::PI * fh,
+        );
         let t: Vec<f64> = (0..n).map(|i| i as f64 * dt).collect();
         [
             t.iter().map(|t| 0.2 * (wa * t).sin()).collect(),
             t.iter().map(|t| 0.2 * wa * 0.1 * (wa * t).cos()).collect(),
             t.iter().map(|t| 0.3 * (wh * t + 0.4).sin()).collect(),
-            t.iter().map(|t| 0.3 * wh * 0.1 * (wh * t + 0.4).cos()).collect(),
+            t.iter()
+                .map(|t| 0.3 * wh * 0.1 * (wh * t + 0.4).cos())
+                .collect(),
         ]
     }
 
@@ -396,10 +421,21 @@ mod tests {
     fn priority_order_puts_linear_then_eq19_first() {
         let lib = Library::new(LibraryKind::Paper30, false);
         let names = lib.names();
-        let order: Vec<&str> = priority_order(&lib).iter().map(|&j| names[j].as_str()).collect();
+        let order: Vec<&str> = priority_order(&lib)
+            .iter()
+            .map(|&j| names[j].as_str())
+            .collect();
         assert_eq!(
             &order[..7],
-            &["alpha", "alpha_dot", "h", "h_dot", "alpha*alpha_dot", "alpha^3", "alpha_dot^3"]
+            &[
+                "alpha",
+                "alpha_dot",
+                "h",
+                "h_dot",
+                "alpha*alpha_dot",
+                "alpha^3",
+                "alpha_dot^3"
+            ]
         );
         // degree 2 displacement-type before rate-type
         assert_eq!(&order[7..10], &["alpha^2", "alpha*h", "h^2"]);
@@ -418,14 +454,32 @@ mod tests {
         dropped.sort();
         assert_eq!(
             dropped,
-            ["alpha*h_dot^2", "alpha_dot*h_dot^2", "alpha_dot^2*h", "alpha_dot^2*h_dot", "h_dot^2"]
+            [
+                "alpha*h_dot^2",
+                "alpha_dot*h_dot^2",
+                "alpha_dot^2*h",
+                "alpha_dot^2*h_dot",
+                "h_dot^2"
+            ]
         );
         // α̇'² = K²(A² − α²) with K = 0.1·ω (nondim rate = 0.1 × physical rate here)
         let k2 = (0.1 * 2.0 * std::f64::consts::PI * 1.7f64).powi(2);
-        let d = id.dependencies.iter().find(|d| d.term == "alpha_dot^2*h").unwrap();
+        let d = id
+            .dependencies
+            .iter()
+            .find(|d| d.term == "alpha_dot^2*h")
+            .unwrap();
         let get = |n: &str| d.combination.iter().find(|c| c.0 == n).map(|c| c.1);
-        assert!((get("h").unwrap() - k2 * 0.04).abs() < 1e-8 * k2, "{}", d.describe());
-        assert!((get("alpha^2*h").unwrap() + k2).abs() < 1e-8 * k2, "{}", d.describe());
+        assert!(
+            (get("h").unwrap() - k2 * 0.04).abs() < 1e-8 * k2,
+            "{}",
+            d.describe()
+        );
+        assert!(
+            (get("alpha^2*h").unwrap() + k2).abs() < 1e-8 * k2,
+            "{}",
+            d.describe()
+        );
         assert_eq!(d.combination.len(), 2, "{}", d.describe());
         assert!(id.require_full_rank().is_err());
     }

@@ -353,7 +353,12 @@ mod tests {
         assert_eq!(names[14], "alpha^3");
         assert_eq!(names[15], "alpha^2*alpha_dot");
         assert_eq!(names[33], "h_dot^3");
-        for removed in ["alpha*alpha_dot^2", "alpha^2*alpha_dot", "h*h_dot^2", "h^2*h_dot"] {
+        for removed in [
+            "alpha*alpha_dot^2",
+            "alpha^2*alpha_dot",
+            "h*h_dot^2",
+            "h^2*h_dot",
+        ] {
             assert!(full.index_of(removed).is_ok());
             assert!(paper.index_of(removed).is_err(), "{removed}");
         }
@@ -371,7 +376,10 @@ mod tests {
     fn parse_normalises_and_rejects() {
         let t = Term::parse("h * alpha*alpha").unwrap();
         assert_eq!(t.name(), "alpha^2*h");
-        assert_eq!(Term::parse("h_dot*h*alpha").unwrap().name(), "alpha*h*h_dot");
+        assert_eq!(
+            Term::parse("h_dot*h*alpha").unwrap().name(),
+            "alpha*h*h_dot"
+        );
         assert_eq!(Term::parse("alpha_dot^3").unwrap().n_rate_factors(), 3);
         let e = Term::parse("alpha*beta").unwrap_err().to_string();
         assert!(e.contains("beta") && e.contains("alpha*beta"), "{e}");

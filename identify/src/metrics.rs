@@ -182,12 +182,19 @@ impl HarmonicFit {
         if n < m {
             return Err(fail(format!("{n} samples for {m} harmonic parameters")));
         }
-        let theta: Vec<f64> = freqs.iter().map(|f| 2.0 * std::f64::consts::PI * f * dt).collect();
+        let theta: Vec<f64> = freqs
+            .iter()
+            .map(|f| 2.0 * std::f64::consts::PI * f * dt)
+            .collect();
         // Σ_k e^{iφk}, k = 0..n
         let s = |phi: f64| -> Complex64 {
             let half = 0.5 * phi;
             let den = half.sin();
-            let d = if den.abs() < 1e-300 { n as f64 } else { (n as f64 * half).sin() / den };
+            let d = if den.abs() < 1e-300 {
+                n as f64
+            } else {
+                (n as f64 * half).sin() / den
+            };
             Complex64::from_polar(1.0, half * (n as f64 - 1.0)) * d
         };
         let mut g = vec![0.0; m * m];
@@ -199,7 +206,11 @@ impl HarmonicFit {
             g[si * m] = e.im;
             for (j, &tj) in theta.iter().enumerate().take(i + 1) {
                 let (cj, sj) = (1 + 2 * j, 2 + 2 * j);
-                let dm = if i == j { Complex64::new(n as f64, 0.0) } else { s(ti - tj) };
+                let dm = if i == j {
+                    Complex64::new(n as f64, 0.0)
+                } else {
+                    s(ti - tj)
+                };
                 let sp = s(ti + tj);
                 // Σ cos a cos b, Σ sin a sin b, Σ cos a sin b, Σ sin a cos b
                 g[ci * m + cj] = 0.5 * (dm.re + sp.re);
@@ -291,7 +302,14 @@ impl HarmonicFit {
         let m = self.basis.ncols();
         let p = theta.ncols();
         let mut htv = Mat::<f64>::zeros(m, p);
-        matmul(htv.as_mut(), Accum::Replace, self.basis.transpose(), theta, 1.0, Par::Seq);
+        matmul(
+            htv.as_mut(),
+            Accum::Replace,
+            self.basis.transpose(),
+            theta,
+            1.0,
+            Par::Seq,
+        );
         (0..p)
             .map(|j| {
                 let rhs: Vec<f64> = (0..m).map(|i| htv[(i, j)]).collect();
@@ -432,7 +450,11 @@ pub fn mfwa_phase(a: &[Complex64], a_hat: &[Complex64]) -> f64 {
 }
 
 #[track_caller]
-fn weighted(a: &[Complex64], a_hat: &[Complex64], score: impl Fn(Complex64, Complex64) -> f64) -> f64 {
+fn weighted(
+    a: &[Complex64],
+    a_hat: &[Complex64],
+    score: impl Fn(Complex64, Complex64) -> f64,
+) -> f64 {
     assert_eq!(a.len(), a_hat.len(), "MFWA: lengths differ");
     let total: f64 = a.iter().map(|x| x.norm()).sum();
     if total <= 0.0 {
@@ -459,7 +481,19 @@ mod tests {
     fn tones_cover_combinations_and_merge() {
         let t = candidate_tones(&forcing(2.0, 1.3), 3, 20.0, 1.0 / 512.0);
         let has = |f: f64| t.iter().any(|x| (x.freq - f).abs() < 1e-9);
-        for f in [2.0, 1.3, 0.7, 3.3, 4.0, 2.6, 6.0, 3.9, 2.0 + 2.6, 4.0 - 1.3, 4.0 + 1.3] {
+        for f in [
+            2.0,
+            1.3,
+            0.7,
+            3.3,
+            4.0,
+            2.6,
+            6.0,
+            3.9,
+            2.0 + 2.6,
+            4.0 - 1.3,
+            4.0 + 1.3,
+        ] {
             assert!(has(f), "{f}");
         }
         // 1:1 forcing: f_alpha - f_h = 0 is excluded, 2 f_alpha and f_alpha + f_h merge
@@ -467,11 +501,19 @@ mod tests {
         let freqs: Vec<f64> = t.iter().map(|x| x.freq).collect();
         assert_eq!(freqs, vec![2.0, 4.0, 6.0]);
         assert_eq!(t[0].label(), "f_alpha");
-        let only_pitch = Forcing { pitch: Some(1.5), heave: None };
+        let only_pitch = Forcing {
+            pitch: Some(1.5),
+            heave: None,
+        };
         let t = candidate_tones(&only_pitch, 5, 10.0, 0.01);
         assert_eq!(t.len(), 5);
         assert_eq!(
-            Tone { freq: 0.7, m: 2, n: -1 }.label(),
+            Tone {
+                freq: 0.7,
+                m: 2,
+                n: -1
+            }
+            .label(),
             "2*f_alpha-f_h"
         );
     }
@@ -484,14 +526,22 @@ mod tests {
         let mut g = vec![0.0; m * m];
         for i in 0..m {
             for j in 0..m {
-                g[i * m + j] = (0..777).map(|k| fit.basis[(k, i)] * fit.basis[(k, j)]).sum();
+                g[i * m + j] = (0..777)
+                    .map(|k| fit.basis[(k, i)] * fit.basis[(k, j)])
+                    .sum();
             }
         }
         // L Lᵀ = G
         for i in 0..m {
             for j in 0..m {
-                let llt: f64 = (0..m).map(|k| fit.chol[i * m + k] * fit.chol[j * m + k]).sum();
-                assert!((llt - g[i * m + j]).abs() < 1e-9 * 777.0, "{i} {j}: {llt} {}", g[i * m + j]);
+                let llt: f64 = (0..m)
+                    .map(|k| fit.chol[i * m + k] * fit.chol[j * m + k])
+                    .sum();
+                assert!(
+                    (llt - g[i * m + j]).abs() < 1e-9 * 777.0,
+                    "{i} {j}: {llt} {}",
+                    g[i * m + j]
+                );
             }
         }
     }
@@ -502,7 +552,9 @@ mod tests {
                 let t = k as f64 * dt;
                 mean + parts
                     .iter()
-                    .map(|(f, a)| (a * Complex64::from_polar(1.0, 2.0 * std::f64::consts::PI * f * t)).re)
+                    .map(|(f, a)| {
+                        (a * Complex64::from_polar(1.0, 2.0 * std::f64::consts::PI * f * t)).re
+                    })
                     .sum::<f64>()
             })
             .collect()
@@ -536,7 +588,12 @@ mod tests {
             let key = select_key_frequencies(&tones, &all, 4);
             assert!((key.tones[0].freq - 2.0).abs() < 1e-12);
             // a model 10 % too small on the 2 Hz line
-            let y_hat = signal(n, dt, &[(2.0, parts[0].1 * 0.9), parts[1], parts[2], parts[3]], 0.4);
+            let y_hat = signal(
+                n,
+                dt,
+                &[(2.0, parts[0].1 * 0.9), parts[1], parts[2], parts[3]],
+                0.4,
+            );
             let (_, all_hat) = fit.amplitudes(&y_hat);
             let a_hat: Vec<Complex64> = key.index.iter().map(|&i| all_hat[i]).collect();
             losses.push(key_frequency_loss(&key.amplitudes, &a_hat));
@@ -554,7 +611,15 @@ mod tests {
         // off by more than 0.5 % while the least-squares fit is exact
         let dt = 1.0 / 512.0;
         let n = (20.37f64 / 2.0 / dt).round() as usize;
-        let y = signal(n, dt, &[(2.0, Complex64::new(1.0, 0.0)), (1.3, Complex64::new(0.8, 0.0))], 0.0);
+        let y = signal(
+            n,
+            dt,
+            &[
+                (2.0, Complex64::new(1.0, 0.0)),
+                (1.3, Complex64::new(0.8, 0.0)),
+            ],
+            0.0,
+        );
         let w = 2.0 * std::f64::consts::PI * 2.0 * dt;
         let bin: Complex64 = y
             .iter()
@@ -567,12 +632,17 @@ mod tests {
 
     #[test]
     fn mfwa_bounds_and_reduction() {
-        let a = [Complex64::new(1.0, 0.0), Complex64::new(0.0, 0.5), Complex64::new(0.2, 0.2)];
+        let a = [
+            Complex64::new(1.0, 0.0),
+            Complex64::new(0.0, 0.5),
+            Complex64::new(0.2, 0.2),
+        ];
         assert!((mfwa(&a, &a) - 1.0).abs() < 1e-15);
         assert!((mfwa_phase(&a, &a) - 1.0).abs() < 1e-15);
         // under-prediction of every line: MFWA = Σ|Â| / Σ|A|
         let under: Vec<Complex64> = a.iter().zip([0.5, 0.9, 0.1]).map(|(x, s)| x * s).collect();
-        let ratio = under.iter().map(|x| x.norm()).sum::<f64>() / a.iter().map(|x| x.norm()).sum::<f64>();
+        let ratio =
+            under.iter().map(|x| x.norm()).sum::<f64>() / a.iter().map(|x| x.norm()).sum::<f64>();
         assert!((mfwa(&a, &under) - ratio).abs() < 1e-14);
         // over-prediction is penalised symmetrically, bounded in [0, 1]
         let over: Vec<Complex64> = a.iter().map(|x| x * 3.0).collect();

@@ -22,7 +22,10 @@ use crate::metrics::{self, HarmonicFit};
 use crate::record::NondimCase;
 use crate::regress::adapter::{self, PysindyOptions};
 use crate::regress::path::{self, DeltaPath, KeyProjection, PathOptions};
-use crate::regress::{self, bools_to_mask, CaseFactor, CaseProblem, FitCache, GroupRule, LeastSquares, Mask, Measure, Stlsq};
+use crate::regress::{
+    self, bools_to_mask, CaseFactor, CaseProblem, FitCache, GroupRule, LeastSquares, Mask, Measure,
+    Stlsq,
+};
 use crate::{Error, Result};
 
 /// Format tag of `identification.json`.
@@ -112,7 +115,9 @@ impl Default for IdentifySettings {
             basis: BasisMode::Canonical,
             rank_tol: identifiability::DEFAULT_RANK_TOL,
             near_tol: identifiability::DEFAULT_NEAR_TOL,
-            kept_terms: ["alpha", "alpha_dot", "h", "h_dot"].map(String::from).to_vec(),
+            kept_terms: ["alpha", "alpha_dot", "h", "h_dot"]
+                .map(String::from)
+                .to_vec(),
             measure: Measure::Contribution,
             group_rule: GroupRule::Norm,
             ridge: 0.0,
@@ -251,7 +256,10 @@ impl<'de> Deserialize<'de> for TermMap {
             fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
                 f.write_str("an object of term name → number or null")
             }
-            fn visit_map<A: serde::de::MapAccess<'de>>(self, mut a: A) -> std::result::Result<TermMap, A::Error> {
+            fn visit_map<A: serde::de::MapAccess<'de>>(
+                self,
+                mut a: A,
+            ) -> std::result::Result<TermMap, A::Error> {
                 let mut v = Vec::new();
                 while let Some((k, x)) = a.next_entry::<String, Option<f64>>()? {
                     v.push((k, x));
@@ -429,7 +437,13 @@ impl Identification {
             None => format!("{:>9}", "-"),
         };
         let mut s = String::new();
-        let _ = writeln!(s, "dataset: {}  (library rank {} of {})", self.dataset, self.library.rank, self.library.terms.len());
+        let _ = writeln!(
+            s,
+            "dataset: {}  (library rank {} of {})",
+            self.dataset,
+            self.library.rank,
+            self.library.terms.len()
+        );
         for g in &self.groups {
             for (force, gf) in [("moment", &g.moment), ("lift", &g.lift)] {
                 let _ = writeln!(
@@ -442,17 +456,41 @@ impl Identification {
                     gf.loss_limit,
                     gf.support.join(", ")
                 );
-                let names = if force == "moment" { ["A1", "A2", "A3", "A4"] } else { ["H1", "H2", "H3", "H4"] };
+                let names = if force == "moment" {
+                    ["A1", "A2", "A3", "A4"]
+                } else {
+                    ["H1", "H2", "H3", "H4"]
+                };
                 let _ = writeln!(
                     s,
                     "  {:<20} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}",
-                    "case", names[0], names[1], names[2], names[3], "N1", "N2", "N3", "R2", "MFWA", "loss"
+                    "case",
+                    names[0],
+                    names[1],
+                    names[2],
+                    names[3],
+                    "N1",
+                    "N2",
+                    "N3",
+                    "R2",
+                    "MFWA",
+                    "loss"
                 );
                 for c in self.cases.iter().filter(|c| c.group == g.name) {
                     let (d, r2, mfwa, loss) = if force == "moment" {
-                        (Eq19Values::from(c.moment.eq19).0, c.moment.r2, c.moment.mfwa, c.moment.key_frequency_loss)
+                        (
+                            Eq19Values::from(c.moment.eq19).0,
+                            c.moment.r2,
+                            c.moment.mfwa,
+                            c.moment.key_frequency_loss,
+                        )
                     } else {
-                        (Eq19Values::from(c.lift.eq19).0, c.lift.r2, c.lift.mfwa, c.lift.key_frequency_loss)
+                        (
+                            Eq19Values::from(c.lift.eq19).0,
+                            c.lift.r2,
+                            c.lift.mfwa,
+                            c.lift.key_frequency_loss,
+                        )
                     };
                     let _ = writeln!(
                         s,
@@ -507,15 +545,31 @@ fn check_case(case: &NondimCase) -> Result<()> {
     if !(case.dt.is_finite() && case.dt > 0.0) {
         return Err(bad("dt", format!("{} s must be > 0", case.dt)));
     }
-    for (name, v) in [("alpha", &case.x[0]), ("alpha_dot", &case.x[1]), ("h", &case.x[2]), ("h_dot", &case.x[3]), ("c_moment", &case.c_moment), ("c_lift", &case.c_lift)] {
+    for (name, v) in [
+        ("alpha", &case.x[0]),
+        ("alpha_dot", &case.x[1]),
+        ("h", &case.x[2]),
+        ("h_dot", &case.x[3]),
+        ("c_moment", &case.c_moment),
+        ("c_lift", &case.c_lift),
+    ] {
         if let Some(i) = v.iter().position(|x| !x.is_finite()) {
-            return Err(bad(name, format!("non-finite value {} at sample {i}", v[i])));
+            return Err(bad(
+                name,
+                format!("non-finite value {} at sample {i}", v[i]),
+            ));
         }
     }
     Ok(())
 }
 
-fn prepare_case(case: &NondimCase, lib: &Library, order: &[usize], s: &IdentifySettings, deltas: &[f64]) -> Result<CaseWork> {
+fn prepare_case(
+    case: &NondimCase,
+    lib: &Library,
+    order: &[usize],
+    s: &IdentifySettings,
+    deltas: &[f64],
+) -> Result<CaseWork> {
     check_case(case)?;
     let id = &case.meta.id;
     let theta = lib.evaluate(&case.x);
@@ -549,7 +603,10 @@ fn prepare_case(case: &NondimCase, lib: &Library, order: &[usize], s: &IdentifyS
             let key = metrics::select_key_frequencies(&tones, &all, s.k_key);
             key_freqs[t] = key.tones.iter().map(|t| t.freq).collect();
             keys[t] = Some(KeyProjection {
-                columns: cols.iter().map(|c| key.index.iter().map(|&i| c[i]).collect()).collect(),
+                columns: cols
+                    .iter()
+                    .map(|c| key.index.iter().map(|&i| c[i]).collect())
+                    .collect(),
                 measured: key.amplitudes,
             });
         }
@@ -592,7 +649,14 @@ struct GroupOutcome {
     coefficients: Vec<Vec<f64>>,
 }
 
-fn run_group(work: &[&CaseWork], target: usize, s: &IdentifySettings, basis: Mask, kept: Mask, opts: &PathOptions) -> GroupOutcome {
+fn run_group(
+    work: &[&CaseWork],
+    target: usize,
+    s: &IdentifySettings,
+    basis: Mask,
+    kept: Mask,
+    opts: &PathOptions,
+) -> GroupOutcome {
     let cases: Vec<CaseProblem<'_>> = work
         .iter()
         .map(|w| CaseProblem {
@@ -619,7 +683,13 @@ fn run_group(work: &[&CaseWork], target: usize, s: &IdentifySettings, basis: Mas
         RegressorChoice::LeastSquares => {
             let mut cache = FitCache::default();
             let fit = regress::fit_group(&cases, &LeastSquares, basis, basis, &mut cache);
-            let path = path::summarise(&[0.0], vec![(basis, fit.coefficients.clone())], &cases, &keys, opts);
+            let path = path::summarise(
+                &[0.0],
+                vec![(basis, fit.coefficients.clone())],
+                &cases,
+                &keys,
+                opts,
+            );
             GroupOutcome {
                 path,
                 coefficients: fit.coefficients,
@@ -631,10 +701,18 @@ fn run_group(work: &[&CaseWork], target: usize, s: &IdentifySettings, basis: Mas
                 .map(|d| {
                     let coefs: Vec<Vec<f64>> = work
                         .iter()
-                        .map(|w| w.pysindy.as_ref().map(|p| p[target][d].clone()).unwrap_or_default())
+                        .map(|w| {
+                            w.pysindy
+                                .as_ref()
+                                .map(|p| p[target][d].clone())
+                                .unwrap_or_default()
+                        })
                         .collect();
                     let mask = coefs.iter().fold(0u64, |m, c| {
-                        m | c.iter().enumerate().fold(0u64, |a, (j, &x)| if x != 0.0 { a | 1 << j } else { a })
+                        m | c
+                            .iter()
+                            .enumerate()
+                            .fold(0u64, |a, (j, &x)| if x != 0.0 { a | 1 << j } else { a })
                     });
                     (mask, coefs)
                 })
@@ -680,7 +758,14 @@ fn finite(x: f64) -> Option<f64> {
 }
 
 /// Per-case result of one force.
-fn force_result<E: From<Eq19Values>>(lib: &Library, case: &NondimCase, w: &CaseWork, target: usize, basis: Mask, raw: &[f64]) -> ForceResult<E> {
+fn force_result<E: From<Eq19Values>>(
+    lib: &Library,
+    case: &NondimCase,
+    w: &CaseWork,
+    target: usize,
+    basis: Mask,
+    raw: &[f64],
+) -> ForceResult<E> {
     let names = lib.names();
     let terms = TermMap(
         names
@@ -689,10 +774,17 @@ fn force_result<E: From<Eq19Values>>(lib: &Library, case: &NondimCase, w: &CaseW
             .map(|(j, n)| (n.clone(), (basis >> j & 1 == 1).then_some(raw[j])))
             .collect(),
     );
-    let xi: [Option<f64>; 7] = EQ19_TERMS.map(|t| lib.index_of(t).ok().and_then(|j| (basis >> j & 1 == 1).then_some(raw[j])));
+    let xi: [Option<f64>; 7] = EQ19_TERMS.map(|t| {
+        lib.index_of(t)
+            .ok()
+            .and_then(|j| (basis >> j & 1 == 1).then_some(raw[j]))
+    });
     let eq19 = Eq19Values::from_coefficients(xi, case.k_alpha(), case.k_h());
     let support: Vec<usize> = (0..raw.len()).filter(|&j| raw[j] != 0.0).collect();
-    let scaled: Vec<f64> = support.iter().map(|&j| raw[j] * w.factor.scales[j]).collect();
+    let scaled: Vec<f64> = support
+        .iter()
+        .map(|&j| raw[j] * w.factor.scales[j])
+        .collect();
     let rss = w.factor.rss_of(target, &support, &scaled);
     let r2 = metrics::r_squared_from_sums(rss, w.factor.targets[target].ss_tot());
     let (mfwa, mfwa_phase, loss) = match &w.keys[target] {
@@ -727,7 +819,12 @@ fn force_result<E: From<Eq19Values>>(lib: &Library, case: &NondimCase, w: &CaseW
 /// values or too few samples; [`Error::RankDeficient`] naming the case and its dependencies
 /// when `basis = Full` and a library is rank deficient; [`Error::Numerical`] when an SVD
 /// or a harmonic fit fails.
-pub fn identify(cases: &[NondimCase], settings: &IdentifySettings, dataset_name: &str, observer: &dyn Fn(Progress)) -> Result<Identification> {
+pub fn identify(
+    cases: &[NondimCase],
+    settings: &IdentifySettings,
+    dataset_name: &str,
+    observer: &dyn Fn(Progress),
+) -> Result<Identification> {
     settings.validate()?;
     if cases.is_empty() {
         return Err(Error::InvalidData {
@@ -762,7 +859,10 @@ pub fn identify(cases: &[NondimCase], settings: &IdentifySettings, dataset_name:
     let batch = (4 * rayon::current_num_threads()).max(8);
     let mut work: Vec<CaseWork> = Vec::with_capacity(total);
     for chunk in cases.chunks(batch) {
-        let done: Vec<Result<CaseWork>> = chunk.par_iter().map(|c| prepare_case(c, &lib, &order, settings, &deltas)).collect();
+        let done: Vec<Result<CaseWork>> = chunk
+            .par_iter()
+            .map(|c| prepare_case(c, &lib, &order, settings, &deltas))
+            .collect();
         for w in done {
             work.push(w?);
         }
@@ -775,13 +875,18 @@ pub fn identify(cases: &[NondimCase], settings: &IdentifySettings, dataset_name:
     // 2. groups: sorted by name, cases by id inside
     let mut groups: BTreeMap<String, Vec<usize>> = BTreeMap::new();
     for (i, c) in cases.iter().enumerate() {
-        groups.entry(group_name(c, settings.group_by)).or_default().push(i);
+        groups
+            .entry(group_name(c, settings.group_by))
+            .or_default()
+            .push(i);
     }
     for members in groups.values_mut() {
         members.sort_by(|&a, &b| cases[a].meta.id.cmp(&cases[b].meta.id));
     }
     let group_list: Vec<(String, Vec<usize>)> = groups.into_iter().collect();
-    let tasks: Vec<(usize, usize)> = (0..group_list.len()).flat_map(|g| [(g, 0), (g, 1)]).collect();
+    let tasks: Vec<(usize, usize)> = (0..group_list.len())
+        .flat_map(|g| [(g, 0), (g, 1)])
+        .collect();
     let bases: Vec<Mask> = group_list
         .iter()
         .map(|(_, m)| {
@@ -805,7 +910,10 @@ pub fn identify(cases: &[NondimCase], settings: &IdentifySettings, dataset_name:
             outcomes[k] = Some(r);
         }
         done += chunk.len();
-        observer(Progress::Groups { done, total: n_tasks });
+        observer(Progress::Groups {
+            done,
+            total: n_tasks,
+        });
     }
 
     // 3. assemble
@@ -815,10 +923,12 @@ pub fn identify(cases: &[NondimCase], settings: &IdentifySettings, dataset_name:
     for (g, (name, members)) in group_list.iter().enumerate() {
         let mut forces = Vec::with_capacity(2);
         for target in 0..2 {
-            let o = outcomes[2 * g + target].take().ok_or_else(|| Error::Numerical {
-                context: format!("group `{name}`"),
-                message: "missing path result".to_string(),
-            })?;
+            let o = outcomes[2 * g + target]
+                .take()
+                .ok_or_else(|| Error::Numerical {
+                    context: format!("group `{name}`"),
+                    message: "missing path result".to_string(),
+                })?;
             for (k, &i) in members.iter().enumerate() {
                 case_coefs[i][target] = o.coefficients[k].clone();
                 case_group[i] = g;
@@ -836,7 +946,10 @@ pub fn identify(cases: &[NondimCase], settings: &IdentifySettings, dataset_name:
         group_results.push(GroupResult {
             name: name.clone(),
             cases: members.iter().map(|&i| cases[i].meta.id.clone()).collect(),
-            basis: regress::mask_to_vec(bases[g]).iter().map(|&j| names[j].clone()).collect(),
+            basis: regress::mask_to_vec(bases[g])
+                .iter()
+                .map(|&j| names[j].clone())
+                .collect(),
             moment,
             lift,
         });
@@ -860,7 +973,9 @@ pub fn identify(cases: &[NondimCase], settings: &IdentifySettings, dataset_name:
             }
         })
         .collect();
-    let min_case = (0..total).min_by_key(|&i| (work[i].ident.rank, i)).unwrap_or(0);
+    let min_case = (0..total)
+        .min_by_key(|&i| (work[i].ident.rank, i))
+        .unwrap_or(0);
     Ok(Identification {
         format: FORMAT.to_string(),
         dataset: dataset_name.to_string(),

@@ -5,13 +5,20 @@
 //! nondimensional variables are the physical ones), through the whole pipeline with every
 //! case alone: library, identifiability (rank 25), δ path, selection.
 
-use identify::pipeline::{identify, GroupBy, IdentifySettings, Identification};
+use identify::pipeline::{identify, GroupBy, Identification, IdentifySettings};
 use identify::record::{CaseMeta, Forcing, NondimCase};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 
-const TRUE_TERMS: [&str; 6] = ["alpha", "alpha_dot", "h", "h_dot", "alpha*h*h_dot", "alpha^2*h"];
+const TRUE_TERMS: [&str; 6] = [
+    "alpha",
+    "alpha_dot",
+    "h",
+    "h_dot",
+    "alpha*h*h_dot",
+    "alpha^2*h",
+];
 /// (A1, A2, H1, H2, N1, N2) in the order of TRUE_TERMS: α, α̇, h, ḣ, hḣα, α²h.
 const GROUP1: [f64; 6] = [0.9, 0.1, -0.4, 0.03, 0.05, 0.3];
 const GROUP2: [f64; 6] = [0.1, 0.3, -0.1, 0.2, 0.5, 0.8];
@@ -21,7 +28,10 @@ const SIGMA: f64 = 0.5;
 
 fn motion() -> [Vec<f64>; 4] {
     let n = (FS * DURATION) as usize;
-    let (wa, wh) = (2.0 * std::f64::consts::PI * 2.0, 2.0 * std::f64::consts::PI * 1.3);
+    let (wa, wh) = (
+        2.0 * std::f64::consts::PI * 2.0,
+        2.0 * std::f64::consts::PI * 1.3,
+    );
     let t: Vec<f64> = (0..n).map(|i| i as f64 / FS).collect();
     [
         t.iter().map(|t| (wa * t).sin()).collect(),
@@ -95,7 +105,9 @@ fn standard_errors() -> [f64; 6] {
         row[i] = 1.0;
     }
     for k in 0..6 {
-        let p = (k..6).max_by(|&a, &b| g[a][k].abs().total_cmp(&g[b][k].abs())).unwrap();
+        let p = (k..6)
+            .max_by(|&a, &b| g[a][k].abs().total_cmp(&g[b][k].abs()))
+            .unwrap();
         g.swap(k, p);
         inv.swap(k, p);
         let d = g[k][k];
@@ -140,7 +152,11 @@ fn run(seeds: std::ops::Range<u64>) -> Stats {
     for (g, name) in [(0usize, "moment"), (1, "lift")] {
         for (c, grp) in id.cases.iter().zip(&id.groups) {
             assert_eq!(grp.name, c.id);
-            let support = if g == 0 { &grp.moment.support } else { &grp.lift.support };
+            let support = if g == 0 {
+                &grp.moment.support
+            } else {
+                &grp.lift.support
+            };
             let mut s: Vec<&str> = support.iter().map(String::as_str).collect();
             s.sort();
             let mut t = TRUE_TERMS.to_vec();
@@ -150,7 +166,11 @@ fn run(seeds: std::ops::Range<u64>) -> Stats {
             } else {
                 misses.push(format!("{} {name}: {support:?}", c.id));
             }
-            let terms = if g == 0 { &c.moment.terms } else { &c.lift.terms };
+            let terms = if g == 0 {
+                &c.moment.terms
+            } else {
+                &c.lift.terms
+            };
             for (k, term) in TRUE_TERMS.iter().enumerate() {
                 let v = terms.get(term).unwrap_or(0.0);
                 sum[g][k] += v;
@@ -163,18 +183,35 @@ fn run(seeds: std::ops::Range<u64>) -> Stats {
     for g in 0..2 {
         for k in 0..6 {
             mean[g][k] = sum[g][k] / n as f64;
-            std[g][k] = ((sum2[g][k] - n as f64 * mean[g][k] * mean[g][k]) / (n as f64 - 1.0)).max(0.0).sqrt();
+            std[g][k] = ((sum2[g][k] - n as f64 * mean[g][k] * mean[g][k]) / (n as f64 - 1.0))
+                .max(0.0)
+                .sqrt();
         }
     }
-    Stats { hits, mean, std, n, misses }
+    Stats {
+        hits,
+        mean,
+        std,
+        n,
+        misses,
+    }
 }
 
 fn check(stats: &Stats, min_hits: usize, se_of_mean_factor: f64, ratio: (f64, f64), print: bool) {
     let se = standard_errors();
-    let names = [["A1", "A2", "H1", "H2", "N1", "N2"], ["A1", "A2", "H1", "H2", "N1", "N2"]];
+    let names = [
+        ["A1", "A2", "H1", "H2", "N1", "N2"],
+        ["A1", "A2", "H1", "H2", "N1", "N2"],
+    ];
     if print {
-        println!("Table V reproduction over {} seeds (σ = {SIGMA}, 512 Hz, 20 s)", stats.n);
-        println!("{:<6} {:<4} {:>9} {:>11} {:>10} {:>10} {:>8}", "group", "coef", "truth", "mean", "std", "LS s.e.", "std/se");
+        println!(
+            "Table V reproduction over {} seeds (σ = {SIGMA}, 512 Hz, 20 s)",
+            stats.n
+        );
+        println!(
+            "{:<6} {:<4} {:>9} {:>11} {:>10} {:>10} {:>8}",
+            "group", "coef", "truth", "mean", "std", "LS s.e.", "std/se"
+        );
     }
     for (g, truth) in [GROUP1, GROUP2].iter().enumerate() {
         for k in 0..6 {
@@ -192,19 +229,41 @@ fn check(stats: &Stats, min_hits: usize, se_of_mean_factor: f64, ratio: (f64, f6
                 );
             }
             let tol = (0.01 * truth[k].abs()).max(se_of_mean_factor * s / (stats.n as f64).sqrt());
-            assert!((m - truth[k]).abs() <= tol, "group {} {}: mean {m} vs {} (tol {tol})", g + 1, names[g][k], truth[k]);
+            assert!(
+                (m - truth[k]).abs() <= tol,
+                "group {} {}: mean {m} vs {} (tol {tol})",
+                g + 1,
+                names[g][k],
+                truth[k]
+            );
             let r = s / se[k];
-            assert!(r >= ratio.0 && r <= ratio.1, "group {} {}: std {s} vs LS s.e. {} (ratio {r})", g + 1, names[g][k], se[k]);
+            assert!(
+                r >= ratio.0 && r <= ratio.1,
+                "group {} {}: std {s} vs LS s.e. {} (ratio {r})",
+                g + 1,
+                names[g][k],
+                se[k]
+            );
         }
     }
     if print {
-        println!("exact support: group 1 (moment) {}/{}, group 2 (lift) {}/{}", stats.hits[0], stats.n, stats.hits[1], stats.n);
+        println!(
+            "exact support: group 1 (moment) {}/{}, group 2 (lift) {}/{}",
+            stats.hits[0], stats.n, stats.hits[1], stats.n
+        );
         for m in &stats.misses {
             println!("  miss: {m}");
         }
     }
     for g in 0..2 {
-        assert!(stats.hits[g] >= min_hits, "group {}: exact support in {}/{} seeds; misses {:?}", g + 1, stats.hits[g], stats.n, stats.misses);
+        assert!(
+            stats.hits[g] >= min_hits,
+            "group {}: exact support in {}/{} seeds; misses {:?}",
+            g + 1,
+            stats.hits[g],
+            stats.n,
+            stats.misses
+        );
     }
 }
 

@@ -6,7 +6,10 @@ use identify::library::{Library, LibraryKind};
 use identify::pipeline::{identify, GroupBy, IdentifySettings, RegressorChoice};
 use identify::record::{CaseMeta, Forcing, NondimCase};
 use identify::regress::adapter::PysindyOptions;
-use identify::regress::{fit_group, vec_to_mask, CaseFactor, CaseProblem, FitCache, GroupRule, LeastSquares, Measure, SparseRegressor, Stlsq};
+use identify::regress::{
+    fit_group, vec_to_mask, CaseFactor, CaseProblem, FitCache, GroupRule, LeastSquares, Measure,
+    SparseRegressor, Stlsq,
+};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
@@ -16,7 +19,13 @@ const DT: f64 = 1.0 / 512.0;
 const TAU: f64 = 2.0 * std::f64::consts::PI;
 
 /// The sparse law of the contract: (term, coefficient) — every contribution ≥ ~10 %.
-const LAW: [(&str, f64); 5] = [("alpha", 1.5), ("alpha_dot", -0.8), ("h_dot", 0.6), ("alpha^3", -4.0), ("alpha*h^2", 9.0)];
+const LAW: [(&str, f64); 5] = [
+    ("alpha", 1.5),
+    ("alpha_dot", -0.8),
+    ("h_dot", 0.6),
+    ("alpha^3", -4.0),
+    ("alpha*h^2", 9.0),
+];
 
 fn random_motion(seed: u64) -> [Vec<f64>; 4] {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
@@ -28,9 +37,13 @@ fn harmonic_motion(fa: f64, fh: f64, amp: f64) -> [Vec<f64>; 4] {
     let t: Vec<f64> = (0..N).map(|i| i as f64 * DT).collect();
     [
         t.iter().map(|t| amp * (TAU * fa * t).sin()).collect(),
-        t.iter().map(|t| 0.04 * amp * TAU * fa * (TAU * fa * t).cos()).collect(),
+        t.iter()
+            .map(|t| 0.04 * amp * TAU * fa * (TAU * fa * t).cos())
+            .collect(),
         t.iter().map(|t| 0.5 * amp * (TAU * fh * t).sin()).collect(),
-        t.iter().map(|t| 0.02 * amp * TAU * fh * (TAU * fh * t).cos()).collect(),
+        t.iter()
+            .map(|t| 0.02 * amp * TAU * fh * (TAU * fh * t).cos())
+            .collect(),
     ]
 }
 
@@ -40,12 +53,22 @@ fn law(lib: &Library, x: &[Vec<f64>; 4], noise: f64, seed: u64) -> Vec<f64> {
     let d = Normal::new(0.0, noise.max(1e-300)).unwrap();
     (0..N)
         .map(|i| {
-            LAW.iter().map(|(t, c)| c * theta[(i, lib.index_of(t).unwrap())]).sum::<f64>() + if noise > 0.0 { d.sample(&mut rng) } else { 0.0 }
+            LAW.iter()
+                .map(|(t, c)| c * theta[(i, lib.index_of(t).unwrap())])
+                .sum::<f64>()
+                + if noise > 0.0 { d.sample(&mut rng) } else { 0.0 }
         })
         .collect()
 }
 
-fn case(id: &str, config: &str, x: [Vec<f64>; 4], forcing: Forcing, noise: f64, seed: u64) -> NondimCase {
+fn case(
+    id: &str,
+    config: &str,
+    x: [Vec<f64>; 4],
+    forcing: Forcing,
+    noise: f64,
+    seed: u64,
+) -> NondimCase {
     let lib = Library::new(LibraryKind::Paper30, false);
     let y = law(&lib, &x, noise, seed);
     NondimCase {
@@ -67,10 +90,30 @@ fn case(id: &str, config: &str, x: [Vec<f64>; 4], forcing: Forcing, noise: f64, 
 fn regressors() -> Vec<(&'static str, RegressorChoice, Measure, f64)> {
     vec![
         ("stlsq", RegressorChoice::Stlsq, Measure::Contribution, 0.0),
-        ("stlsq-ridge", RegressorChoice::Stlsq, Measure::Contribution, 1e-3),
-        ("stlsq-coefficient", RegressorChoice::Stlsq, Measure::Coefficient, 0.0),
-        ("least-squares", RegressorChoice::LeastSquares, Measure::Contribution, 0.0),
-        ("pysindy", RegressorChoice::Pysindy(PysindyOptions::default()), Measure::Contribution, 0.0),
+        (
+            "stlsq-ridge",
+            RegressorChoice::Stlsq,
+            Measure::Contribution,
+            1e-3,
+        ),
+        (
+            "stlsq-coefficient",
+            RegressorChoice::Stlsq,
+            Measure::Coefficient,
+            0.0,
+        ),
+        (
+            "least-squares",
+            RegressorChoice::LeastSquares,
+            Measure::Contribution,
+            0.0,
+        ),
+        (
+            "pysindy",
+            RegressorChoice::Pysindy(PysindyOptions::default()),
+            Measure::Contribution,
+            0.0,
+        ),
     ]
 }
 
@@ -80,7 +123,18 @@ fn regressors() -> Vec<(&'static str, RegressorChoice, Measure, f64)> {
 /// R² = 1.
 #[test]
 fn every_regressor_meets_the_contract() {
-    let cases: Vec<NondimCase> = (0..3).map(|s| case(&format!("r{s}"), "R", random_motion(s), Forcing::default(), 0.0, s)).collect();
+    let cases: Vec<NondimCase> = (0..3)
+        .map(|s| {
+            case(
+                &format!("r{s}"),
+                "R",
+                random_motion(s),
+                Forcing::default(),
+                0.0,
+                s,
+            )
+        })
+        .collect();
     for (name, choice, measure, ridge) in regressors() {
         let settings = IdentifySettings {
             regressor: choice,
@@ -100,14 +154,27 @@ fn every_regressor_meets_the_contract() {
         assert_eq!(a.cases, c_cases, "{name}: depends on case order");
         assert_eq!(a.groups, c.groups, "{name}: groups depend on case order");
         for cr in &a.cases {
-            for (force, fr, sign) in [("moment", &cr.moment.terms, 1.0), ("lift", &cr.lift.terms, -1.0)] {
+            for (force, fr, sign) in [
+                ("moment", &cr.moment.terms, 1.0),
+                ("lift", &cr.lift.terms, -1.0),
+            ] {
                 for (term, v) in &fr.0 {
-                    let truth = LAW.iter().find(|l| l.0 == term).map(|l| sign * l.1).unwrap_or(0.0);
+                    let truth = LAW
+                        .iter()
+                        .find(|l| l.0 == term)
+                        .map(|l| sign * l.1)
+                        .unwrap_or(0.0);
                     let v = v.expect("full rank: every term identifiable");
-                    assert!((v - truth).abs() < 1e-8 * truth.abs().max(1.0), "{name} {force} {term}: {v} vs {truth}");
+                    assert!(
+                        (v - truth).abs() < 1e-8 * truth.abs().max(1.0),
+                        "{name} {force} {term}: {v} vs {truth}"
+                    );
                     let kept = ["alpha", "alpha_dot", "h", "h_dot"].contains(&term.as_str());
                     if name != "least-squares" && truth == 0.0 && !kept {
-                        assert_eq!(v, 0.0, "{name} {force} {term}: inactive terms are exactly 0");
+                        assert_eq!(
+                            v, 0.0,
+                            "{name} {force} {term}: inactive terms are exactly 0"
+                        );
                     }
                 }
             }
@@ -135,13 +202,27 @@ fn shared_routine_respects_kept_terms_and_start_support() {
     let y = law(&lib, &x, 0.05, 1);
     let theta = lib.evaluate(&x);
     let f = CaseFactor::new("c", theta.as_ref(), &priority_order(&lib), &[&y]).unwrap();
-    let cases = [CaseProblem { factor: &f, target: 0 }];
+    let cases = [CaseProblem {
+        factor: &f,
+        target: 0,
+    }];
     let start = vec_to_mask(&(0..20).collect::<Vec<_>>());
     let kept = vec_to_mask(&[2, 15]);
     let regs: Vec<Box<dyn SparseRegressor>> = vec![
-        Box::new(Stlsq { threshold: 0.05, ..Stlsq::default() }),
-        Box::new(Stlsq { threshold: 0.05, ridge: 0.1, ..Stlsq::default() }),
-        Box::new(Stlsq { threshold: 2.0, measure: Measure::Coefficient, ..Stlsq::default() }),
+        Box::new(Stlsq {
+            threshold: 0.05,
+            ..Stlsq::default()
+        }),
+        Box::new(Stlsq {
+            threshold: 0.05,
+            ridge: 0.1,
+            ..Stlsq::default()
+        }),
+        Box::new(Stlsq {
+            threshold: 2.0,
+            measure: Measure::Coefficient,
+            ..Stlsq::default()
+        }),
         Box::new(LeastSquares),
     ];
     for r in regs {
@@ -155,11 +236,19 @@ fn shared_routine_respects_kept_terms_and_start_support() {
                 assert_eq!(*v, 0.0, "{}", r.name());
             }
         }
-        assert!(g.history.windows(2).all(|w| w[1].len() < w[0].len()), "{}", r.name());
+        assert!(
+            g.history.windows(2).all(|w| w[1].len() < w[0].len()),
+            "{}",
+            r.name()
+        );
         // final coefficients are the least-squares fit on the final support
         let (xs, _) = f.fit(0, &g.support, 0.0);
         for (k, &j) in g.support.iter().enumerate() {
-            assert!((g.coefficients[0][j] - xs[k] / f.scales[j]).abs() < 1e-10 * (1.0 + xs[k].abs()), "{}", r.name());
+            assert!(
+                (g.coefficients[0][j] - xs[k] / f.scales[j]).abs() < 1e-10 * (1.0 + xs[k].abs()),
+                "{}",
+                r.name()
+            );
         }
     }
 }
@@ -170,7 +259,12 @@ fn shared_routine_respects_kept_terms_and_start_support() {
 /// default) must be exact at least as often as every other rule.
 #[test]
 fn norm_group_rule_is_the_most_reliable() {
-    let rules = [GroupRule::Norm, GroupRule::All, GroupRule::Any, GroupRule::Mean];
+    let rules = [
+        GroupRule::Norm,
+        GroupRule::All,
+        GroupRule::Any,
+        GroupRule::Mean,
+    ];
     let mut hits = [0usize; 4];
     let seeds = 6usize;
     for seed in 0..seeds {
@@ -211,11 +305,23 @@ fn norm_group_rule_is_the_most_reliable() {
                 hits[r] += 1;
             } else {
                 let m = &id.groups[0].moment;
-                println!("{rule:?} seed {seed}: {sup:?} loss {:.2e} limit {:.2e} noise {:.2e} path {:?}", m.loss, m.loss_limit, m.loss_noise, m.path.iter().map(|p| (p.n_terms, p.loss)).collect::<Vec<_>>());
+                println!(
+                    "{rule:?} seed {seed}: {sup:?} loss {:.2e} limit {:.2e} noise {:.2e} path {:?}",
+                    m.loss,
+                    m.loss_limit,
+                    m.loss_noise,
+                    m.path
+                        .iter()
+                        .map(|p| (p.n_terms, p.loss))
+                        .collect::<Vec<_>>()
+                );
             }
         }
     }
-    println!("exact group supports over {seeds} seeds: Norm {}, All {}, Any {}, Mean {}", hits[0], hits[1], hits[2], hits[3]);
+    println!(
+        "exact group supports over {seeds} seeds: Norm {}, All {}, Any {}, Mean {}",
+        hits[0], hits[1], hits[2], hits[3]
+    );
     assert!(hits[0] >= hits.iter().copied().max().unwrap(), "{hits:?}");
     assert!(hits[0] >= seeds - 1, "{hits:?}");
 }
@@ -239,8 +345,14 @@ fn independent_of_thread_count() {
         })
         .collect();
     let s = IdentifySettings::default();
-    let one = rayon::ThreadPoolBuilder::new().num_threads(1).build().unwrap();
-    let two = rayon::ThreadPoolBuilder::new().num_threads(3).build().unwrap();
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap();
+    let two = rayon::ThreadPoolBuilder::new()
+        .num_threads(3)
+        .build()
+        .unwrap();
     let a = one.install(|| identify(&cases, &s, "t", &|_| {}).unwrap());
     let b = two.install(|| identify(&cases, &s, "t", &|_| {}).unwrap());
     if a != b {
@@ -253,7 +365,10 @@ fn independent_of_thread_count() {
         }
         panic!("differ outside JSON");
     }
-    assert_eq!(a.groups.iter().map(|g| g.name.as_str()).collect::<Vec<_>>(), ["A", "B"]);
+    assert_eq!(
+        a.groups.iter().map(|g| g.name.as_str()).collect::<Vec<_>>(),
+        ["A", "B"]
+    );
     assert_eq!(a.groups[0].cases, ["c0", "c2", "c4"]);
     // JSON round trip through the atomic writer
     let dir = tempfile::tempdir().unwrap();
@@ -265,7 +380,10 @@ fn independent_of_thread_count() {
     assert_eq!(back.library, a.library);
     assert_eq!(back.groups.len(), a.groups.len());
     for (x, y) in back.groups.iter().zip(&a.groups) {
-        assert_eq!((&x.name, &x.cases, &x.moment.support, &x.lift.support), (&y.name, &y.cases, &y.moment.support, &y.lift.support));
+        assert_eq!(
+            (&x.name, &x.cases, &x.moment.support, &x.lift.support),
+            (&y.name, &y.cases, &y.moment.support, &y.lift.support)
+        );
     }
     for (x, y) in back.cases.iter().zip(&a.cases) {
         assert_eq!(x.id, y.id);
@@ -281,5 +399,8 @@ fn independent_of_thread_count() {
     let text = std::fs::read_to_string(&p).unwrap();
     assert!(text.contains("\"format\": \"aeroform-identification/1\""));
     let table = a.summary_table();
-    assert!(table.contains("[A] moment") && table.contains("c4"), "{table}");
+    assert!(
+        table.contains("[A] moment") && table.contains("c4"),
+        "{table}"
+    );
 }

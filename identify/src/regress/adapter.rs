@@ -59,12 +59,25 @@ impl PysindyOptions {
 
 /// pysindy fit of `y` on the library columns `basis` of `theta` (n × p raw library) at
 /// `threshold`: the raw coefficients over the whole library (0 outside the basis).
-pub fn fit_case(theta: MatRef<'_, f64>, basis: &[usize], y: &[f64], threshold: f64, opts: &PysindyOptions) -> Vec<f64> {
+pub fn fit_case(
+    theta: MatRef<'_, f64>,
+    basis: &[usize],
+    y: &[f64],
+    threshold: f64,
+    opts: &PysindyOptions,
+) -> Vec<f64> {
     let sub = Mat::from_fn(theta.nrows(), basis.len(), |i, c| theta[(i, basis[c])]);
     fit_sub(sub.as_ref(), theta.ncols(), basis, y, threshold, opts)
 }
 
-fn fit_sub(sub: MatRef<'_, f64>, p: usize, basis: &[usize], y: &[f64], threshold: f64, opts: &PysindyOptions) -> Vec<f64> {
+fn fit_sub(
+    sub: MatRef<'_, f64>,
+    p: usize,
+    basis: &[usize],
+    y: &[f64],
+    threshold: f64,
+    opts: &PysindyOptions,
+) -> Vec<f64> {
     let est = PysindyStlsq {
         threshold,
         alpha: opts.alpha,
@@ -81,7 +94,13 @@ fn fit_sub(sub: MatRef<'_, f64>, p: usize, basis: &[usize], y: &[f64], threshold
 
 /// pysindy fits of one case at every threshold of `deltas` (the basis sub-matrix is built
 /// once): element `[d]` holds the raw coefficients over the library for `deltas[d]`.
-pub fn path_case(theta: MatRef<'_, f64>, basis: &[usize], y: &[f64], deltas: &[f64], opts: &PysindyOptions) -> Vec<Vec<f64>> {
+pub fn path_case(
+    theta: MatRef<'_, f64>,
+    basis: &[usize],
+    y: &[f64],
+    deltas: &[f64],
+    opts: &PysindyOptions,
+) -> Vec<Vec<f64>> {
     let sub = Mat::from_fn(theta.nrows(), basis.len(), |i, c| theta[(i, basis[c])]);
     deltas
         .iter()

@@ -80,7 +80,12 @@ impl CaseFactor {
     /// When `order` is not a permutation of the columns or a target length differs from n
     /// (programming errors).
     #[track_caller]
-    pub fn new(case: &str, theta: MatRef<'_, f64>, order: &[usize], targets: &[&[f64]]) -> Result<Self> {
+    pub fn new(
+        case: &str,
+        theta: MatRef<'_, f64>,
+        order: &[usize],
+        targets: &[&[f64]],
+    ) -> Result<Self> {
         let (n, p) = theta.shape();
         assert_eq!(order.len(), p, "priority order must cover every column");
         let mut pos = vec![usize::MAX; p];
@@ -174,7 +179,11 @@ impl CaseFactor {
         }
         let gram_rhs = targets
             .iter()
-            .map(|t: &TargetFactor| (0..p).map(|j| (0..=j).map(|k| r[(k, j)] * t.qty[k]).sum()).collect())
+            .map(|t: &TargetFactor| {
+                (0..p)
+                    .map(|j| (0..=j).map(|k| r[(k, j)] * t.qty[k]).sum())
+                    .collect()
+            })
             .collect();
         Ok(CaseFactor {
             n,
@@ -209,7 +218,11 @@ impl CaseFactor {
         }
         // order the support by priority position so that the sub-block is as triangular as
         // possible, then keep only the rows that can be nonzero
-        let mut cols: Vec<(usize, usize)> = support.iter().enumerate().map(|(i, &j)| (self.pos[j], i)).collect();
+        let mut cols: Vec<(usize, usize)> = support
+            .iter()
+            .enumerate()
+            .map(|(i, &j)| (self.pos[j], i))
+            .collect();
         cols.sort_unstable();
         let m = cols.last().map(|c| c.0 + 1).unwrap_or(0);
         let q = cols.len();
@@ -257,7 +270,7 @@ impl CaseFactor {
                 }
                 if i == j {
                     let d = self.gram[k[i] * p + k[i]] + ridge;
-                    if !(s > 1e-13 * d) {
+                    if s.is_nan() || s <= 1e-13 * d {
                         return None;
                     }
                     l[i * q + i] = s.sqrt();
@@ -291,7 +304,11 @@ impl CaseFactor {
     /// When the lengths differ or an index is out of range (programming errors).
     #[track_caller]
     pub fn rss_of(&self, t: usize, support: &[usize], scaled: &[f64]) -> f64 {
-        assert_eq!(support.len(), scaled.len(), "one coefficient per support term");
+        assert_eq!(
+            support.len(),
+            scaled.len(),
+            "one coefficient per support term"
+        );
         let tf = &self.targets[t];
         let mut r = tf.qty.iter().map(|v| -v).collect::<Vec<f64>>();
         for (&j, &c) in support.iter().zip(scaled) {
@@ -329,10 +346,20 @@ mod tests {
         let det = g(0, 0) * g(2, 2) - g(0, 2) * g(0, 2);
         let x0 = (g(2, 2) * gy(0) - g(0, 2) * gy(2)) / det;
         let x2 = (g(0, 0) * gy(2) - g(0, 2) * gy(0)) / det;
-        assert!((xs[0] / f.scales[0] - x0).abs() < 1e-10, "{} {}", xs[0] / f.scales[0], x0);
+        assert!(
+            (xs[0] / f.scales[0] - x0).abs() < 1e-10,
+            "{} {}",
+            xs[0] / f.scales[0],
+            x0
+        );
         assert!((xs[1] / f.scales[2] - x2).abs() < 1e-9);
-        let direct: f64 = (0..n).map(|i| (x0 * theta[(i, 0)] + x2 * theta[(i, 2)] - y[i]).powi(2)).sum();
-        assert!((rss - direct).abs() < 1e-10 * direct.max(1e-12), "{rss} {direct}");
+        let direct: f64 = (0..n)
+            .map(|i| (x0 * theta[(i, 0)] + x2 * theta[(i, 2)] - y[i]).powi(2))
+            .sum();
+        assert!(
+            (rss - direct).abs() < 1e-10 * direct.max(1e-12),
+            "{rss} {direct}"
+        );
         let xg = f.fit_gram(0, &[2, 0], 0.0).unwrap();
         assert!((xg[1] - xs[0]).abs() < 1e-9 && (xg[0] - xs[1]).abs() < 1e-9);
         assert!((f.rss_of(0, &[0, 2], &xs) - rss).abs() < 1e-10 * rss);

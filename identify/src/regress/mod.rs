@@ -229,7 +229,10 @@ impl Stlsq {
 
 impl SparseRegressor for Stlsq {
     fn name(&self) -> String {
-        format!("stlsq(δ={}, {:?}, {:?})", self.threshold, self.measure, self.group_rule)
+        format!(
+            "stlsq(δ={}, {:?}, {:?})",
+            self.threshold, self.measure, self.group_rule
+        )
     }
     fn ridge(&self) -> f64 {
         self.ridge
@@ -239,7 +242,10 @@ impl SparseRegressor for Stlsq {
     }
     fn remove(&self, input: &ReductionInput<'_>) -> Vec<bool> {
         (0..input.support.len())
-            .map(|i| self.group_rule.removes(&input.measures(self.measure, i), self.threshold))
+            .map(|i| {
+                self.group_rule
+                    .removes(&input.measures(self.measure, i), self.threshold)
+            })
             .collect()
     }
 }
@@ -280,7 +286,13 @@ impl FitCache {
     /// Fits (or recalls) every case on `mask` with ridge λ. Uses the Gram/Cholesky solve
     /// and falls back to the QR solve per case when it is ill-conditioned; `exact = true`
     /// always uses the QR solve (final coefficients).
-    pub fn fits(&mut self, cases: &[CaseProblem<'_>], mask: Mask, ridge: f64, exact: bool) -> std::rc::Rc<SupportFits> {
+    pub fn fits(
+        &mut self,
+        cases: &[CaseProblem<'_>],
+        mask: Mask,
+        ridge: f64,
+        exact: bool,
+    ) -> std::rc::Rc<SupportFits> {
         let key = (mask, ridge.to_bits() ^ (exact as u64) << 63);
         if let Some(f) = self.map.get(&key) {
             return f.clone();
@@ -295,10 +307,20 @@ impl FitCache {
                 c.factor.fit_gram(c.target, &support, ridge)
             };
             let x = x.unwrap_or_else(|| c.factor.fit(c.target, &support, ridge).0);
-            raw.push(support.iter().zip(&x).map(|(&j, v)| v / c.factor.scales[j]).collect());
+            raw.push(
+                support
+                    .iter()
+                    .zip(&x)
+                    .map(|(&j, v)| v / c.factor.scales[j])
+                    .collect(),
+            );
             scaled.push(x);
         }
-        let f = std::rc::Rc::new(SupportFits { support, scaled, raw });
+        let f = std::rc::Rc::new(SupportFits {
+            support,
+            scaled,
+            raw,
+        });
         self.map.insert(key, f.clone());
         self.n_fits += 1;
         f
@@ -338,7 +360,10 @@ pub fn fit_group(
 ) -> GroupFit {
     assert!(!cases.is_empty(), "a group needs at least one case");
     let p = cases[0].factor.n_columns();
-    assert!(cases.iter().all(|c| c.factor.n_columns() == p), "library sizes differ");
+    assert!(
+        cases.iter().all(|c| c.factor.n_columns() == p),
+        "library sizes differ"
+    );
     let y_norm: Vec<f64> = cases.iter().map(CaseProblem::y_norm).collect();
     let ridge = regressor.ridge();
     let mut support = start;

@@ -79,20 +79,33 @@ impl PathOptions {
         if self.n_delta == 0 {
             return Err(bad("n_delta", "must be ≥ 1".to_string()));
         }
-        if !(self.delta_min > 0.0 && self.delta_max >= self.delta_min && self.delta_max.is_finite()) {
+        if !(self.delta_min > 0.0 && self.delta_max >= self.delta_min && self.delta_max.is_finite())
+        {
             return Err(bad(
                 "delta_range",
-                format!("[{}, {}] must satisfy 0 < min ≤ max < ∞", self.delta_min, self.delta_max),
+                format!(
+                    "[{}, {}] must satisfy 0 < min ≤ max < ∞",
+                    self.delta_min, self.delta_max
+                ),
             ));
         }
         if !(self.loss_rel >= 0.0 && self.loss_rel.is_finite()) {
-            return Err(bad("loss_rel", format!("{} must be finite and ≥ 0", self.loss_rel)));
+            return Err(bad(
+                "loss_rel",
+                format!("{} must be finite and ≥ 0", self.loss_rel),
+            ));
         }
         if !(self.loss_abs >= 0.0 && self.loss_abs.is_finite()) {
-            return Err(bad("loss_abs", format!("{} must be finite and ≥ 0", self.loss_abs)));
+            return Err(bad(
+                "loss_abs",
+                format!("{} must be finite and ≥ 0", self.loss_abs),
+            ));
         }
         if !(self.loss_noise >= 0.0 && self.loss_noise.is_finite()) {
-            return Err(bad("loss_noise", format!("{} must be finite and ≥ 0", self.loss_noise)));
+            return Err(bad(
+                "loss_noise",
+                format!("{} must be finite and ≥ 0", self.loss_noise),
+            ));
         }
         Ok(())
     }
@@ -134,7 +147,11 @@ impl KeyProjection {
     /// When `raw.len()` differs from the number of library columns (a programming error).
     #[track_caller]
     pub fn model(&self, raw: &[f64]) -> Vec<Complex64> {
-        assert_eq!(raw.len(), self.columns.len(), "one coefficient per library column");
+        assert_eq!(
+            raw.len(),
+            self.columns.len(),
+            "one coefficient per library column"
+        );
         let mut out = vec![Complex64::new(0.0, 0.0); self.measured.len()];
         for (x, g) in raw.iter().zip(&self.columns) {
             if *x != 0.0 {
@@ -255,7 +272,13 @@ pub fn summarise(
     }
     // densest: most terms, first along the path on ties
     let dense = (0..supports.len())
-        .max_by(|&a, &b| supports[a].support.len().cmp(&supports[b].support.len()).then(b.cmp(&a)))
+        .max_by(|&a, &b| {
+            supports[a]
+                .support
+                .len()
+                .cmp(&supports[b].support.len())
+                .then(b.cmp(&a))
+        })
         .unwrap_or(0);
     let loss_dense = supports.get(dense).map(|s| s.loss).unwrap_or(0.0);
     let loss_noise = supports
@@ -362,6 +385,11 @@ mod tests {
         let r = g[1] / g[0];
         assert!(g.windows(2).all(|w| (w[1] / w[0] - r).abs() < 1e-9));
         assert!(PathOptions { n_delta: 0, ..o }.validate().is_err());
-        assert!(PathOptions { delta_min: 0.0, ..o }.validate().is_err());
+        assert!(PathOptions {
+            delta_min: 0.0,
+            ..o
+        }
+        .validate()
+        .is_err());
     }
 }

@@ -67,13 +67,20 @@ fn solve(theta: MatRef<'_, f64>, y: &[f64], cols: &[usize], alpha: f64) -> Vec<f
     for (a, &ja) in cols.iter().enumerate() {
         b[a] = theta.col(ja).iter().zip(y).map(|(u, v)| u * v).sum();
         for (c, &jc) in cols.iter().enumerate() {
-            g[a * q + c] = theta.col(ja).iter().zip(theta.col(jc).iter()).map(|(u, v)| u * v).sum();
+            g[a * q + c] = theta
+                .col(ja)
+                .iter()
+                .zip(theta.col(jc).iter())
+                .map(|(u, v)| u * v)
+                .sum();
         }
         g[a * q + a] += alpha;
     }
     // Gaussian elimination with partial pivoting
     for k in 0..q {
-        let piv = (k..q).max_by(|&i, &j| g[i * q + k].abs().total_cmp(&g[j * q + k].abs())).unwrap_or(k);
+        let piv = (k..q)
+            .max_by(|&i, &j| g[i * q + k].abs().total_cmp(&g[j * q + k].abs()))
+            .unwrap_or(k);
         if g[piv * q + k] == 0.0 {
             continue;
         }
@@ -92,7 +99,11 @@ fn solve(theta: MatRef<'_, f64>, y: &[f64], cols: &[usize], alpha: f64) -> Vec<f
     let mut x = vec![0.0; q];
     for k in (0..q).rev() {
         let s: f64 = b[k] - (k + 1..q).map(|c| g[k * q + c] * x[c]).sum::<f64>();
-        x[k] = if g[k * q + k] == 0.0 { 0.0 } else { s / g[k * q + k] };
+        x[k] = if g[k * q + k] == 0.0 {
+            0.0
+        } else {
+            s / g[k * q + k]
+        };
     }
     x
 }

@@ -171,9 +171,7 @@ mod tests {
         let e0 = (14.0 * 16.5 - 6.0 * 34.5) / det;
         let e1 = (4.0 * 34.5 - 6.0 * 16.5) / det;
         assert!((x2[0] - e0).abs() < 1e-12 && (x2[1] - e1).abs() < 1e-12);
-        let manual: f64 = (0..4)
-            .map(|i| (e0 + e1 * i as f64 - b2[i]).powi(2))
-            .sum();
+        let manual: f64 = (0..4).map(|i| (e0 + e1 * i as f64 - b2[i]).powi(2)).sum();
         assert!((rss2 - manual).abs() < 1e-12);
     }
 
