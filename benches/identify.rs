@@ -1,2 +1,172 @@
-//! Criterion benchmarks of identification (to be written).
-fn main() {}
+//! Criterion benchmark of the whole identification (`identify::pipeline::identify`).
+//!
+//! 448 synthetic cases like the paper's Tables I/II: 7 configurations (forcing frequencies
+//! f_α = 1.0 … 2.5 Hz, f_h = 0.7 f_α + 0.13 Hz) × 8 pitch amplitudes (3° … 24°) × 8 wind
+//! speeds (3 … 10 m/s), B = 0.25 m, 10 s at 512 Hz, an Eq. 19-like law plus 1 % noise.
+//! Full `identify()`: 30-term library, identifiability, group STLSQ by configuration, 50-value
+//! δ path and metrics. Before the criterion run, one timed pass of each stage (library,
+//! QR factor, harmonic projection) is printed to show where the time goes.
+//!
+//! Run: `cargo bench --bench identify`.
+
+use std::time::Instant;
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use identify::identifiability::priority_order;
+use identify::library::{Library, LibraryKind};
+use identify::metrics::{candidate_tones, HarmonicFit};
+use identify::pipeline::{identify, IdentifySettings};
+use identify::record::{CaseMeta, Forcing, NondimCase};
+use identify::regress::CaseFactor;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, Normal};
+
+const FS: f64 = 512.0;
+const DURATION: f64 = 10.0;
+const CHORD: f64 = 0.25;
+
+fn synthetic_cases() -> Vec<NondimCase> {
+    let n = (FS * DURATION) as usize;
+    let tau = 2.0 * std::f64::consts::PI;
+    let mut out = Vec::with_capacity(448);
+    for c in 0..7 {
+        let fa = 1.0 + 0.25 * c as f64;
+        let fh = 0.7 * fa + 0.13;
+        for a in 0..8 {
+            let amp = (3.0 + 3.0 * a as f64).to_radians();
+            let h_amp = 0.004 * (1.0 + a as f64); // m
+            for u in 0..8 {
+                let wind = 3.0 + u as f64;
+                let mut rng = ChaCha8Rng::seed_from_u64((c * 64 + a * 8 + u) as u64);
+                let t: Vec<f64> = (0..n).map(|i| i as f64 / FS).collect();
+                let x: [Vec<f64>; 4] = [
+                    t.iter().map(|t| amp * (tau * fa * t).sin()).collect(),
+                    t.iter()
+                        .map(|t| CHORD / wind * amp * tau * fa * (tau * fa * t).cos())
+                        .collect(),
+                    t.iter()
+                        .map(|t| h_amp / CHORD * (tau * fh * t + 0.5).sin())
+                        .collect(),
+                    t.iter()
+                        .map(|t| h_amp / wind * tau * fh * (tau * fh * t + 0.5).cos())
+                        .collect(),
+                ];
+                let (ka, kh) = (CHORD * tau * fa / wind, CHORD * tau * fh / wind);
+                // moment: Eq. 19 form with A1..A4, N1, N2; lift: H1..H4 and N1
+                let m: Vec<f64> = (0..n)
+                    .map(|i| {
+                        kh * 0.4 * x[3][i] - ka * 0.3 * x[1][i]
+                            + ka * ka * 1.2 * x[0][i]
+                            + kh * kh * 0.2 * x[2][i]
+                            + ka.powi(3) * 0.8 * x[0][i] * x[1][i]
+                            - ka.powi(6) * 3.0 * x[0][i].powi(3)
+                    })
+                    .collect();
+                let l: Vec<f64> = (0..n)
+                    .map(|i| {
+                        -kh * 2.5 * x[3][i] - ka * 1.5 * x[1][i] - ka * ka * 4.0 * x[0][i]
+                            + kh * kh * 0.5 * x[2][i]
+                            + ka.powi(3) * 1.5 * x[0][i] * x[1][i]
+                    })
+                    .collect();
+                let rms =
+                    |v: &[f64]| (v.iter().map(|a| a * a).sum::<f64>() / v.len() as f64).sqrt();
+                let (nm, nl) = (
+                    Normal::new(0.0, 0.01 * rms(&m)).unwrap(),
+                    Normal::new(0.0, 0.01 * rms(&l)).unwrap(),
+                );
+                let c_moment = m.iter().map(|v| v + nm.sample(&mut rng)).collect();
+                let c_lift = l.iter().map(|v| v + nl.sample(&mut rng)).collect();
+                out.push(NondimCase {
+                    meta: CaseMeta {
+                        id: format!(
+                            "{}-A{:02}-U{:02}",
+                            (b'A' + c as u8) as char,
+                            3 + 3 * a,
+                            3 + u
+                        ),
+                        wind_speed: wind,
+                        config: Some(((b'A' + c as u8) as char).to_string()),
+                        amplitude: Some(amp),
+                        freq_pitch: Some(fa),
+                        freq_heave: Some(fh),
+                        ..CaseMeta::default()
+                    },
+                    dt: 1.0 / FS,
+                    chord: CHORD,
+                    x,
+                    c_lift,
+                    c_moment,
+                    forcing: Forcing {
+                        pitch: Some(fa),
+                        heave: Some(fh),
+                    },
+                });
+            }
+        }
+    }
+    out
+}
+
+/// One sequential pass of the per-case stages, to show where the time goes.
+fn stage_breakdown(cases: &[NondimCase]) {
+    let lib = Library::new(LibraryKind::Paper30, false);
+    let order = priority_order(&lib);
+    let (mut t_lib, mut t_qr, mut t_harm) = (0.0, 0.0, 0.0);
+    for c in cases {
+        let t0 = Instant::now();
+        let theta = lib.evaluate(&c.x);
+        let t1 = Instant::now();
+        let f = CaseFactor::new(
+            &c.meta.id,
+            theta.as_ref(),
+            &order,
+            &[&c.c_moment, &c.c_lift],
+        )
+        .unwrap();
+        let t2 = Instant::now();
+        let tones = candidate_tones(&c.forcing, 5, c.len() as f64 * c.dt, c.dt);
+        let freqs: Vec<f64> = tones.iter().map(|t| t.freq).collect();
+        let h = HarmonicFit::new(&freqs, c.len(), c.dt).unwrap();
+        let cols = h.column_amplitudes(theta.as_ref());
+        let t3 = Instant::now();
+        std::hint::black_box((&f, &cols));
+        t_lib += (t1 - t0).as_secs_f64();
+        t_qr += (t2 - t1).as_secs_f64();
+        t_harm += (t3 - t2).as_secs_f64();
+    }
+    println!(
+        "sequential per-case stages over {} cases: library {:.3} s, QR factor {:.3} s, harmonic projection {:.3} s",
+        cases.len(),
+        t_lib,
+        t_qr,
+        t_harm
+    );
+    let t = Instant::now();
+    let id = identify(cases, &IdentifySettings::default(), "bench", &|_| {}).unwrap();
+    println!(
+        "one identify() run ({} cores available): {:.3} s; group A moment support {:?}",
+        std::thread::available_parallelism()
+            .map(|n| n.get())
+            .unwrap_or(1),
+        t.elapsed().as_secs_f64(),
+        id.groups[0].moment.support
+    );
+}
+
+fn bench(c: &mut Criterion) {
+    let cases = synthetic_cases();
+    stage_breakdown(&cases);
+    let settings = IdentifySettings::default();
+    let mut g = c.benchmark_group("identify");
+    g.sample_size(10);
+    g.bench_function(
+        "448 cases x 10 s x 512 Hz, Paper30, group STLSQ, 50 deltas",
+        |b| b.iter(|| identify(&cases, &settings, "bench", &|_| {}).unwrap()),
+    );
+    g.finish();
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

@@ -282,23 +282,14 @@ impl HarmonicFit {
     #[track_caller]
     pub fn amplitudes(&self, v: &[f64]) -> (f64, Vec<Complex64>) {
         assert_eq!(v.len(), self.n, "harmonic fit: signal length differs");
-        let m = self.basis.ncols();
-        let mut rhs = vec![0.0; m];
-        for (c, r) in rhs.iter_mut().enumerate() {
-            *r = self.basis.col(c).iter().zip(v).map(|(a, b)| a * b).sum();
-        }
-        let x = chol_solve(&self.chol, m, &rhs);
+        let x = self
+            .solve_columns(MatRef::from_column_major_slice(v, self.n, 1))
+            .remove(0);
         (x[0], to_amplitudes(&x))
     }
 
-    /// Complex amplitudes of every column of `theta` (n × p): element `[j][i]` is the
-    /// amplitude of column j at frequency i. One matrix product Hᵀ Θ, sequential.
-    ///
-    /// # Panics
-    /// When `theta` does not have n rows (a programming error).
-    #[track_caller]
-    pub fn column_amplitudes(&self, theta: MatRef<'_, f64>) -> Vec<Vec<Complex64>> {
-        assert_eq!(theta.nrows(), self.n, "harmonic fit: matrix rows differ");
+    /// Least-squares coefficients (mean, cos, sin, …) of every column of `theta`.
+    fn solve_columns(&self, theta: MatRef<'_, f64>) -> Vec<Vec<f64>> {
         let m = self.basis.ncols();
         let p = theta.ncols();
         let mut htv = Mat::<f64>::zeros(m, p);
@@ -313,8 +304,22 @@ impl HarmonicFit {
         (0..p)
             .map(|j| {
                 let rhs: Vec<f64> = (0..m).map(|i| htv[(i, j)]).collect();
-                to_amplitudes(&chol_solve(&self.chol, m, &rhs))
+                chol_solve(&self.chol, m, &rhs)
             })
+            .collect()
+    }
+
+    /// Complex amplitudes of every column of `theta` (n × p): element `[j][i]` is the
+    /// amplitude of column j at frequency i. One matrix product Hᵀ Θ, sequential.
+    ///
+    /// # Panics
+    /// When `theta` does not have n rows (a programming error).
+    #[track_caller]
+    pub fn column_amplitudes(&self, theta: MatRef<'_, f64>) -> Vec<Vec<Complex64>> {
+        assert_eq!(theta.nrows(), self.n, "harmonic fit: matrix rows differ");
+        self.solve_columns(theta)
+            .iter()
+            .map(|x| to_amplitudes(x))
             .collect()
     }
 }

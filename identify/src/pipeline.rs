@@ -94,6 +94,8 @@ pub struct IdentifySettings {
     pub loss_rel: f64,
     /// Absolute slack of the loss limit.
     pub loss_abs: f64,
+    /// Multiple of the noise loss in the limit.
+    pub loss_noise: f64,
     /// Number of key frequencies.
     pub k_key: usize,
     /// Highest order |m| + |n| of candidate tones.
@@ -124,6 +126,7 @@ impl Default for IdentifySettings {
             delta_range: None,
             loss_rel: path::DEFAULT_LOSS_REL,
             loss_abs: path::DEFAULT_LOSS_ABS,
+            loss_noise: path::DEFAULT_LOSS_NOISE,
             k_key: metrics::DEFAULT_K_KEY,
             max_harmonic_order: metrics::DEFAULT_MAX_ORDER,
             regressor: RegressorChoice::Stlsq,
@@ -153,6 +156,7 @@ impl IdentifySettings {
             delta_max: hi,
             loss_rel: self.loss_rel,
             loss_abs: self.loss_abs,
+            loss_noise: self.loss_noise,
         }
     }
 
@@ -336,6 +340,8 @@ pub struct GroupForce {
     pub loss: f64,
     /// Loss of the densest support on the path.
     pub loss_dense: f64,
+    /// Noise loss k·4σ̂²/(n Σ|A|²) (mean over the group's cases).
+    pub loss_noise: f64,
     /// Loss limit.
     pub loss_limit: f64,
     /// The distinct supports of the path, along increasing δ.
@@ -732,6 +738,7 @@ fn group_force(path: &DeltaPath, names: &[String]) -> GroupForce {
         delta_range: range(&sel.deltas),
         loss: sel.loss,
         loss_dense: path.loss_dense,
+        loss_noise: path.loss_noise,
         loss_limit: path.limit,
         path: path
             .supports

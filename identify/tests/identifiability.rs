@@ -188,7 +188,7 @@ fn full_basis_on_a_rank_deficient_library_is_an_error_naming_the_terms() {
         basis: BasisMode::Full,
         ..IdentifySettings::default()
     };
-    let e = identify(&[c.clone()], &settings, "t", &|_| {}).unwrap_err();
+    let e = identify(std::slice::from_ref(&c), &settings, "t", &|_| {}).unwrap_err();
     match &e {
         Error::RankDeficient {
             case,

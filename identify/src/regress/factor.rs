@@ -4,11 +4,10 @@
 //! 2-norm; an all-zero column keeps scale 1) and its columns are permuted into the
 //! identifiability priority order ([`crate::identifiability::priority_order`]). The targets
 //! are appended as extra columns and the whole n × (p + t) matrix is factorised once,
-//! `[Θ_s P | y_1 … y_t] = Q R_ext` (plain Householder, [`super::small::householder_qr`]:
-//! `faer`'s QR is rank-revealing and skips dependent columns, leaving an echelon form in
-//! which |R_kk| is no longer the greedy residual of column k; ~1.3 ms for 5120 × 32). Then
-//! for any subset S
-//! of columns,
+//! `[Θ_s P | y_1 … y_t] = Q R_ext` (Householder, [`super::small::householder_qr`], row-blocked;
+//! not `faer`'s QR: it is rank-revealing and skips dependent columns, leaving an echelon
+//! form in which |R_kk| is no longer the greedy residual of column k). Then for any subset
+//! S of columns,
 //!
 //! ‖Θ_s[:, S] ξ − y‖² = ‖R[:, S] ξ − Qᵀy‖² + r⊥²,
 //!
@@ -20,6 +19,9 @@
 use faer::{Mat, MatRef};
 
 use crate::{Error, Result};
+
+/// Rows per block of the row-blocked factorisation (at least twice the column count).
+const ROW_BLOCK: usize = 256;
 
 /// Reduced form of one target (one force coefficient) of a case.
 #[derive(Debug, Clone, PartialEq)]
@@ -129,14 +131,6 @@ impl CaseFactor {
             }
         }
         let ncols = p + nt;
-        let mut a = vec![0.0; n * ncols];
-        for (k, &j) in order.iter().enumerate() {
-            let inv = 1.0 / scales[j];
-            let dst = &mut a[k * n..(k + 1) * n];
-            for (d, s) in dst.iter_mut().zip(theta.col(j).iter()) {
-                *d = s * inv;
-            }
-        }
         let mut stats = Vec::with_capacity(nt);
         for (t, y) in targets.iter().enumerate() {
             let mut norm2 = 0.0;
@@ -153,13 +147,52 @@ impl CaseFactor {
                 });
             }
             stats.push((norm2, sum / n as f64));
-            a[(p + t) * n..(p + t + 1) * n].copy_from_slice(y);
         }
-        super::small::householder_qr(&mut a, n, ncols, p);
-        let r = Mat::<f64>::from_fn(p, p, |i, j| if i <= j { a[j * n + i] } else { 0.0 });
+        // Row-blocked ("TSQR") factorisation: each block of rows is triangularised in a
+        // cache-resident buffer (reflectors on every column, targets included, so nothing
+        // of a block is lost but its zero rows), the triangles are stacked and the stack is
+        // factorised again. Same R and Qᵀy as one factorisation of the whole matrix, at
+        // about twice the speed for 5120 × 32 (the whole matrix does not stay in cache).
+        let bs = ROW_BLOCK.max(2 * ncols);
+        let nblocks = n / bs;
+        let rem = n - nblocks * bs;
+        let m = nblocks * ncols + rem;
+        let inv: Vec<f64> = scales.iter().map(|s| 1.0 / s).collect();
+        let fill = |dst: &mut [f64], ld: usize, off: usize, r0: usize, rows: usize| {
+            for (k, &j) in order.iter().enumerate() {
+                let col = theta.col(j).subrows(r0, rows);
+                for (d, v) in dst[k * ld + off..k * ld + off + rows]
+                    .iter_mut()
+                    .zip(col.iter())
+                {
+                    *d = v * inv[j];
+                }
+            }
+            for (t, y) in targets.iter().enumerate() {
+                dst[(p + t) * ld + off..(p + t) * ld + off + rows]
+                    .copy_from_slice(&y[r0..r0 + rows]);
+            }
+        };
+        let mut stack = vec![0.0; m * ncols];
+        let mut buf = vec![0.0; bs * ncols];
+        for b in 0..nblocks {
+            fill(&mut buf, bs, 0, b * bs, bs);
+            super::small::householder_qr(&mut buf, bs, ncols, ncols);
+            for c in 0..ncols {
+                for i in 0..=c {
+                    stack[c * m + b * ncols + i] = buf[c * bs + i];
+                }
+            }
+        }
+        if rem > 0 {
+            fill(&mut stack, m, nblocks * ncols, nblocks * bs, rem);
+        }
+        super::small::householder_qr(&mut stack, m, ncols, p);
+        let a = stack;
+        let r = Mat::<f64>::from_fn(p, p, |i, j| if i <= j { a[j * m + i] } else { 0.0 });
         let targets: Vec<TargetFactor> = (0..nt)
             .map(|t| {
-                let col = &a[(p + t) * n..(p + t + 1) * n];
+                let col = &a[(p + t) * m..(p + t + 1) * m];
                 TargetFactor {
                     qty: col[..p].to_vec(),
                     rss_perp: col[p..].iter().map(|v| v * v).sum(),
@@ -270,7 +303,7 @@ impl CaseFactor {
                 }
                 if i == j {
                     let d = self.gram[k[i] * p + k[i]] + ridge;
-                    if !(s > 1e-13 * d) {
+                    if s.is_nan() || s <= 1e-13 * d {
                         return None;
                     }
                     l[i * q + i] = s.sqrt();

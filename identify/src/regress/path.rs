@@ -6,11 +6,19 @@
 //! distinct supports are scored by their key-frequency loss (Eq. 14, mean over the cases of
 //! the group). The selected support is the sparsest one whose loss is under the limit
 //!
-//! loss ≤ loss_dense·(1 + rel) + abs   (defaults rel = 0.1, abs = 1e-3),
+//! loss ≤ loss_dense·(1 + rel) + abs + c·loss_noise   (defaults rel = 0.1, abs = 1e-4, c = 3),
 //!
 //! loss_dense being the loss of the densest support on the path; ties in size go to the
-//! lower loss. A case without key frequencies (no forcing frequency known) is scored by
-//! its normalised residual 1 − R² instead.
+//! lower loss. loss_noise is the loss that measurement noise alone gives a correct model:
+//! the least-squares amplitude of a tone in white noise of variance σ² over n samples has
+//! E|ΔA|² = 4σ²/n, so loss_noise = k·4σ̂²/(n Σ|A_i|²) with σ̂² = RSS_dense/(n − p_dense)
+//! (mean over the cases of the group). The Eq. 14 loss of a correct model is then ≈
+//! loss_noise·χ²₂ₖ/2k, and c = 3 leaves it out with probability ~3·10⁻⁴ for k = 6.
+//! Under two-frequency harmonic motion the dense loss is ~0 (the library spans every tone
+//! up to order 3, so the dense fit reproduces the measured key amplitudes, noise included),
+//! which is why the limit needs the absolute and noise terms and not only the relative one.
+//! A case without key frequencies (no forcing frequency known) is scored by its normalised
+//! residual 1 − R² instead (noise term 0).
 
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
@@ -31,6 +39,8 @@ pub struct PathOptions {
     pub loss_rel: f64,
     /// Absolute slack of the loss limit.
     pub loss_abs: f64,
+    /// Multiple c of the noise loss added to the limit.
+    pub loss_noise: f64,
 }
 
 /// Default number of δ values.
@@ -38,11 +48,13 @@ pub const DEFAULT_N_DELTA: usize = 50;
 /// Default relative slack of the loss limit.
 pub const DEFAULT_LOSS_REL: f64 = 0.1;
 /// Default absolute slack of the loss limit.
-pub const DEFAULT_LOSS_ABS: f64 = 1e-3;
+pub const DEFAULT_LOSS_ABS: f64 = 1e-4;
+/// Default multiple of the noise loss in the limit.
+pub const DEFAULT_LOSS_NOISE: f64 = 3.0;
 
 impl PathOptions {
     /// Defaults for a measure: 50 values over [1e-4, 1] (contribution) or [1e-3, 10]
-    /// (raw coefficient), loss limit slack rel = 0.1, abs = 1e-3.
+    /// (raw coefficient), loss limit slack rel = 0.1, abs = 1e-4, noise multiple 3.
     pub fn for_measure(measure: Measure) -> Self {
         let (delta_min, delta_max) = default_range(measure);
         PathOptions {
@@ -51,6 +63,7 @@ impl PathOptions {
             delta_max,
             loss_rel: DEFAULT_LOSS_REL,
             loss_abs: DEFAULT_LOSS_ABS,
+            loss_noise: DEFAULT_LOSS_NOISE,
         }
     }
 
@@ -86,6 +99,12 @@ impl PathOptions {
             return Err(bad(
                 "loss_abs",
                 format!("{} must be finite and ≥ 0", self.loss_abs),
+            ));
+        }
+        if !(self.loss_noise >= 0.0 && self.loss_noise.is_finite()) {
+            return Err(bad(
+                "loss_noise",
+                format!("{} must be finite and ≥ 0", self.loss_noise),
             ));
         }
         Ok(())
@@ -177,7 +196,9 @@ pub struct DeltaPath {
     pub supports: Vec<PathSupport>,
     /// Loss of the densest support.
     pub loss_dense: f64,
-    /// Loss limit loss_dense·(1 + rel) + abs.
+    /// Noise loss (mean over cases) k·4σ̂²/(n Σ|A|²).
+    pub loss_noise: f64,
+    /// Loss limit loss_dense·(1 + rel) + abs + c·loss_noise.
     pub limit: f64,
     /// Index of the selected support.
     pub selected: usize,
@@ -260,7 +281,19 @@ pub fn summarise(
         })
         .unwrap_or(0);
     let loss_dense = supports.get(dense).map(|s| s.loss).unwrap_or(0.0);
-    let limit = loss_dense * (1.0 + opts.loss_rel) + opts.loss_abs;
+    let loss_noise = supports
+        .get(dense)
+        .map(|s| {
+            let v: Vec<f64> = cases
+                .iter()
+                .zip(keys)
+                .zip(&s.coefficients)
+                .map(|((c, k), x)| noise_loss(c, *k, x))
+                .collect();
+            v.iter().sum::<f64>() / v.len().max(1) as f64
+        })
+        .unwrap_or(0.0);
+    let limit = loss_dense * (1.0 + opts.loss_rel) + opts.loss_abs + opts.loss_noise * loss_noise;
     let selected = (0..supports.len())
         .filter(|&i| supports[i].loss <= limit || i == dense)
         .min_by(|&a, &b| {
@@ -277,8 +310,28 @@ pub fn summarise(
         support_of,
         supports,
         loss_dense,
+        loss_noise,
         limit,
         selected,
+    }
+}
+
+/// Noise loss of one case for the dense coefficients `raw` (0 without key frequencies).
+fn noise_loss(case: &CaseProblem<'_>, key: Option<&KeyProjection>, raw: &[f64]) -> f64 {
+    let Some(k) = key.filter(|k| !k.measured.is_empty()) else {
+        return 0.0;
+    };
+    let f = case.factor;
+    let support: Vec<usize> = (0..raw.len()).filter(|&j| raw[j] != 0.0).collect();
+    let scaled: Vec<f64> = support.iter().map(|&j| raw[j] * f.scales[j]).collect();
+    let rss = f.rss_of(case.target, &support, &scaled);
+    let dof = f.n.saturating_sub(support.len()).max(1) as f64;
+    let sigma2 = rss / dof;
+    let den: f64 = k.measured.iter().map(|a| a.norm_sqr()).sum();
+    if den > 0.0 {
+        k.measured.len() as f64 * 4.0 * sigma2 / (f.n as f64 * den)
+    } else {
+        0.0
     }
 }
 

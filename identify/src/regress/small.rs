@@ -103,6 +103,29 @@ pub fn lstsq(a: &[f64], m: usize, q: usize, b: &[f64], ridge: f64) -> (Vec<f64>,
 pub fn householder_qr(a: &mut [f64], n: usize, ncols: usize, nref: usize) -> Vec<f64> {
     assert_eq!(a.len(), n * ncols, "matrix storage does not match shape");
     assert!(nref <= n.min(ncols), "more reflectors than rows or columns");
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
+        {
+            // SAFETY: the CPU supports AVX2 and FMA (checked just above); the function
+            // only differs from the portable one by the instructions the compiler may use.
+            return unsafe { householder_qr_avx2(a, n, ncols, nref) };
+        }
+    }
+    householder_qr_body(a, n, ncols, nref)
+}
+
+/// [`householder_qr_body`] compiled with AVX2 + FMA (runtime-dispatched: the release
+/// profile targets baseline x86-64, and the dot/axpy loops are 3–4× faster with 256-bit
+/// fused multiply-adds).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn householder_qr_avx2(a: &mut [f64], n: usize, ncols: usize, nref: usize) -> Vec<f64> {
+    householder_qr_body(a, n, ncols, nref)
+}
+
+#[inline(always)]
+fn householder_qr_body(a: &mut [f64], n: usize, ncols: usize, nref: usize) -> Vec<f64> {
     let mut diag = vec![0.0; nref];
     for k in 0..nref {
         let (left, right) = a.split_at_mut((k + 1) * n);
@@ -133,19 +156,22 @@ pub fn householder_qr(a: &mut [f64], n: usize, ncols: usize, nref: usize) -> Vec
     diag
 }
 
-/// Dot product with four accumulators (lets the compiler vectorise).
-#[inline]
+/// Dot product with sixteen accumulators (lets the compiler keep several vector
+/// registers of partial sums in flight).
+#[inline(always)]
 fn dot(x: &[f64], y: &[f64]) -> f64 {
-    let (mut s0, mut s1, mut s2, mut s3) = (0.0, 0.0, 0.0, 0.0);
-    let mut it = x.chunks_exact(4).zip(y.chunks_exact(4));
+    let mut acc = [0.0f64; 16];
+    let mut it = x.chunks_exact(16).zip(y.chunks_exact(16));
     for (a, b) in &mut it {
-        s0 += a[0] * b[0];
-        s1 += a[1] * b[1];
-        s2 += a[2] * b[2];
-        s3 += a[3] * b[3];
+        for k in 0..16 {
+            acc[k] += a[k] * b[k];
+        }
     }
-    let rem = x.len() / 4 * 4;
-    let mut s = (s0 + s1) + (s2 + s3);
+    let rem = x.len().min(y.len()) / 16 * 16;
+    let mut s = 0.0;
+    for k in 0..4 {
+        s += (acc[k] + acc[k + 4]) + (acc[k + 8] + acc[k + 12]);
+    }
     for i in rem..x.len().min(y.len()) {
         s += x[i] * y[i];
     }
