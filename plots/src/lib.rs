@@ -1,1 +1,43 @@
 //! Every figure of aeroform (plotters, bundled font) and the HTML report.
+//!
+//! Each figure is a plain data struct implementing [`Figure`]; [`save`] renders it to PNG
+//! (bitmap) and SVG with the same drawing code and writes both atomically, returning
+//! [`FigureFiles`] (paths and the SVG text). Text is drawn with the bundled DejaVu Sans
+//! (registered once as `"sans-serif"`); no system font is used. Non-finite values are
+//! skipped; a figure with nothing finite to draw is an [`Error::NoData`], never a panic.
+//! [`Report`] builds a self-contained HTML page with inline SVG figures.
+
+pub mod error;
+pub mod figures;
+pub mod render;
+pub mod report;
+pub mod style;
+
+#[cfg(test)]
+mod samples;
+
+pub use error::{Error, Result};
+pub use figures::time_series::{TimePanel, TimeSeriesFigure};
+pub use figures::{Series, SeriesKind};
+pub use render::{render_png, render_svg, save, FigureFiles, Figure};
+pub use report::Report;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::PathBuf;
+
+    fn preview_dir() -> PathBuf {
+        let d = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../preview");
+        std::fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    /// Renders every sample figure into `preview/` for visual inspection.
+    #[test]
+    #[ignore = "writes preview files for a human to look at"]
+    fn render_previews() {
+        let d = preview_dir();
+        save(&samples::time_series(), &d, "time_series").unwrap();
+    }
+}
