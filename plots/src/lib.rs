@@ -18,6 +18,8 @@ mod samples;
 
 pub use error::{Error, Result};
 pub use figures::time_series::{TimePanel, TimeSeriesFigure};
+pub use figures::delta_path::DeltaPathFigure;
+pub use figures::spectrum::{FreqMarker, SpectrumFigure};
 pub use figures::{Series, SeriesKind};
 pub use render::{render_png, render_svg, save, FigureFiles, Figure};
 pub use report::Report;
@@ -39,5 +41,7 @@ mod tests {
     fn render_previews() {
         let d = preview_dir();
         save(&samples::time_series(), &d, "time_series").unwrap();
+        save(&samples::spectrum(), &d, "spectrum").unwrap();
+        save(&samples::delta_path(), &d, "delta_path").unwrap();
     }
 }

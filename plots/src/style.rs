@@ -104,7 +104,9 @@ pub(crate) fn title<DB: DrawingBackend>(
     text: &str,
     kind: &'static str,
 ) -> Result<DrawingArea<DB, Shift>> {
-    root.titled(text, bold(TITLE_SIZE)).ctx(kind)
+    root.margin(12, 0, 0, 0)
+        .titled(text, bold(TITLE_SIZE))
+        .ctx(kind)
 }
 
 /// Marker shapes; the same shape is drawn in the chart and in the legend.
@@ -200,7 +202,10 @@ pub(crate) fn marker<C: Clone, DB: DrawingBackend>(
     closed.push(pts[0]);
     EmptyElement::at(c)
         + Polygon::new(pts, fill)
-        + PathElement::new(closed, ShapeStyle::from(color).stroke_width(2))
+        + PathElement::new(
+            closed,
+            ShapeStyle::from(color).stroke_width(if filled { 1 } else { 2 }),
+        )
 }
 
 /// What a legend entry shows next to its label.
