@@ -19,6 +19,7 @@ mod samples;
 pub use error::{Error, Result};
 pub use figures::time_series::{TimePanel, TimeSeriesFigure};
 pub use figures::delta_path::DeltaPathFigure;
+pub use figures::heatmap::{diverging, HeatmapGridFigure, HeatmapPanel};
 pub use figures::spectrum::{FreqMarker, SpectrumFigure};
 pub use figures::{Series, SeriesKind};
 pub use render::{render_png, render_svg, save, FigureFiles, Figure};
@@ -43,5 +44,6 @@ mod tests {
         save(&samples::time_series(), &d, "time_series").unwrap();
         save(&samples::spectrum(), &d, "spectrum").unwrap();
         save(&samples::delta_path(), &d, "delta_path").unwrap();
+        save(&samples::heatmap(), &d, "heatmap").unwrap();
     }
 }

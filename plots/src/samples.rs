@@ -122,5 +122,38 @@ pub(crate) fn delta_path() -> DeltaPathFigure {
     }
 }
 
+pub(crate) fn heatmap() -> HeatmapGridFigure {
+    let amps: Vec<f64> = (1..=8).map(|i| i as f64).collect();
+    let speeds: Vec<f64> = (0..8).map(|i| 4.0 + 2.0 * i as f64).collect();
+    let terms = ["H1*", "H2*", "H3*", "H4*", "A1*", "A2*", "A3*", "A4*", "N1*", "N2*"];
+    let panels = terms
+        .iter()
+        .enumerate()
+        .map(|(k, &t)| HeatmapPanel {
+            term: t.into(),
+            values: speeds
+                .iter()
+                .map(|&u| {
+                    amps.iter()
+                        .map(|&a| {
+                            let v = ((k as f64 + 1.0) * 0.3 * a).sin() * (u / 10.0) - 0.2 * k as f64;
+                            // Nonlinear terms inactive at small amplitude.
+                            if k >= 8 && a < 4.0 { None } else if k == 3 && u > 14.0 { Some(0.0) } else { Some(v) }
+                        })
+                        .collect()
+                })
+                .collect(),
+        })
+        .collect();
+    HeatmapGridFigure {
+        title: "Configuration A: Eq. 19 coefficients (moment)".into(),
+        x_label: "amplitude α₀ [deg]".into(),
+        y_label: "U [m/s]".into(),
+        x_values: amps,
+        y_values: speeds,
+        panels,
+    }
+}
+
 #[allow(dead_code)]
 pub(crate) const _PI: f64 = PI;
