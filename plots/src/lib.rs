@@ -18,7 +18,12 @@ mod samples;
 
 pub use error::{Error, Result};
 pub use figures::time_series::{TimePanel, TimeSeriesFigure};
+pub use figures::bifurcation::{BifurcationFigure, BifurcationPoint, ResponseClass, Sweep};
 pub use figures::delta_path::DeltaPathFigure;
+pub use figures::derivatives::{DerivativeFigure, DerivativePanel, DerivativePoints};
+pub use figures::flutter::{FlutterPoint, ModeBranch, VgFigure};
+pub use figures::histogram::{HistogramFigure, HistogramPanel};
+pub use figures::phase::PhasePortraitFigure;
 pub use figures::heatmap::{diverging, HeatmapGridFigure, HeatmapPanel};
 pub use figures::spectrum::{FreqMarker, SpectrumFigure};
 pub use figures::{Series, SeriesKind};
@@ -45,5 +50,10 @@ mod tests {
         save(&samples::spectrum(), &d, "spectrum").unwrap();
         save(&samples::delta_path(), &d, "delta_path").unwrap();
         save(&samples::heatmap(), &d, "heatmap").unwrap();
+        save(&samples::histogram(), &d, "histogram").unwrap();
+        save(&samples::vg(), &d, "vg_vf").unwrap();
+        save(&samples::bifurcation(), &d, "bifurcation").unwrap();
+        save(&samples::phase(), &d, "phase_portrait").unwrap();
+        save(&samples::derivatives(), &d, "derivatives").unwrap();
     }
 }

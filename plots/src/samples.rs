@@ -155,5 +155,153 @@ pub(crate) fn heatmap() -> HeatmapGridFigure {
     }
 }
 
-#[allow(dead_code)]
-pub(crate) const _PI: f64 = PI;
+pub(crate) fn histogram() -> HistogramFigure {
+    // Deterministic spread of values (golden-ratio sequence), one outlier, one NaN.
+    let u: Vec<f64> = (0..64).map(|i| (i as f64 * 0.618_033_988_75).fract()).collect();
+    let mut r2: Vec<f64> = u.iter().map(|x| 1.0 - 0.08 * x * x).collect();
+    r2.push(0.55);
+    r2.push(f64::NAN);
+    let mfwa: Vec<f64> = u.iter().map(|x| 0.85 + 0.15 * x.sqrt()).collect();
+    HistogramFigure {
+        title: "Identification quality over 64 cases".into(),
+        panels: vec![
+            HistogramPanel { x_label: "R² [-]".into(), values: r2, bins: 20, range: Some((0.9, 1.0)) },
+            HistogramPanel { x_label: "MFWA [-]".into(), values: mfwa, bins: 15, range: None },
+        ],
+    }
+}
+
+pub(crate) fn vg() -> VgFigure {
+    let u: Vec<f64> = (0..60).map(|i| 2.0 + 0.5 * i as f64).collect();
+    let uf = 23.4;
+    let heave_g: Vec<f64> = u.iter().map(|u| 0.01 + 0.004 * u).collect();
+    let pitch_g: Vec<f64> = u.iter().map(|u| 0.02 + 0.0006 * u - 0.0001 * (u - 2.0) * (u - 2.0) / 2.2 + 0.0).collect();
+    // Shift pitch damping so that it crosses zero at U_F exactly.
+    let g_at = 0.02 + 0.0006 * uf - 0.0001 * (uf - 2.0) * (uf - 2.0) / 2.2;
+    let pitch_g: Vec<f64> = pitch_g.iter().map(|g| g - g_at).collect();
+    let heave_f: Vec<f64> = u.iter().map(|u| 1.3 + 0.02 * u).collect();
+    let pitch_f: Vec<f64> = u.iter().map(|u| 3.0 - 0.0012 * u * u).collect();
+    VgFigure {
+        title: "Flutter analysis: V–g and V–f".into(),
+        u_label: "U [m/s]".into(),
+        g_label: "damping ratio g [-]".into(),
+        f_label: "f [Hz]".into(),
+        u_unit: "m/s".into(),
+        f_unit: "Hz".into(),
+        modes: vec![
+            ModeBranch { name: "heave mode".into(), u: u.clone(), damping: heave_g, freq: heave_f },
+            ModeBranch { name: "pitch mode".into(), u, damping: pitch_g, freq: pitch_f },
+        ],
+        flutter: Some(FlutterPoint { u: uf, freq: 3.0 - 0.0012 * uf * uf }),
+    }
+}
+
+pub(crate) fn bifurcation() -> BifurcationFigure {
+    let mut points = vec![];
+    let uf = 20.0;
+    let us = 17.0; // subcritical: LCO persists down to 17 m/s on the downward sweep
+    let lco = |u: f64| 4.0 + 6.0 * ((u - us) / 10.0).max(0.0).sqrt();
+    for i in 0..=20 {
+        let u = 10.0 + 0.75 * i as f64;
+        let (class, amp) = if u > 24.5 {
+            (ResponseClass::Divergent, f64::INFINITY)
+        } else if u >= uf {
+            (ResponseClass::Lco, lco(u))
+        } else {
+            (ResponseClass::Decay, 0.0)
+        };
+        points.push(BifurcationPoint { u, amplitude: amp, sweep: Sweep::Up, class });
+    }
+    for i in 0..=18 {
+        let u = 24.0 - 0.75 * i as f64;
+        let (class, amp) = if u >= us { (ResponseClass::Lco, lco(u)) } else { (ResponseClass::Decay, f64::NAN) };
+        points.push(BifurcationPoint { u, amplitude: amp, sweep: Sweep::Down, class });
+    }
+    BifurcationFigure {
+        title: "LCO sweeps: hysteresis".into(),
+        u_label: "U [m/s]".into(),
+        amplitude_label: "LCO amplitude α [deg]".into(),
+        points,
+        flutter_speed: Some(uf),
+    }
+}
+
+pub(crate) fn phase() -> PhasePortraitFigure {
+    let t: Vec<f64> = (0..3000).map(|i| i as f64 / 200.0).collect();
+    // Growing spiral onto a limit cycle of amplitude 5 deg at 3 Hz, and a model at 4.6 deg.
+    let traj = |a_lc: f64| {
+        let a: Vec<f64> = t.iter().map(|&t| a_lc * (1.0 - (-t / 3.0).exp() * 0.9)).collect();
+        let x: Vec<f64> = t.iter().zip(&a).map(|(&t, &a)| a * (TAU * 3.0 * t).cos()).collect();
+        let v: Vec<f64> = t.iter().zip(&a).map(|(&t, &a)| -a * TAU * 3.0 * (TAU * 3.0 * t).sin()).collect();
+        (x, v)
+    };
+    let (x1, v1) = traj(5.0);
+    let (x2, v2) = traj(4.6);
+    PhasePortraitFigure {
+        title: "Phase portrait at U = 22 m/s".into(),
+        x_label: "α [deg]".into(),
+        y_label: "α̇ [deg/s]".into(),
+        trajectories: vec![
+            Series::new("measured (free response)", SeriesKind::Measured, x1, v1),
+            Series::new("model", SeriesKind::Model, x2, v2),
+        ],
+    }
+}
+
+/// Flat-plate derivatives from R. T. Jones' approximation of Theodorsen's function (sample
+/// data only; the real closed forms live in `aeroelastic`).
+fn flat_plate(k_red: f64) -> [f64; 8] {
+    let k = k_red / 2.0;
+    // C(k) ≈ 1 − 0.165/(1 − 0.0455 i/k) − 0.335/(1 − 0.3 i/k)
+    let term = |a: f64, b: f64| {
+        let (re, im) = (1.0, -b / k);
+        let d = re * re + im * im;
+        (a * re / d, -a * im / d)
+    };
+    let (r1, i1) = term(0.165, 0.0455);
+    let (r2, i2) = term(0.335, 0.3);
+    let f = 1.0 - r1 - r2;
+    let g = -i1 - i2;
+    let kk = k_red;
+    [
+        -2.0 * PI * f / kk,
+        -(PI / (2.0 * kk)) * (1.0 + f + 4.0 * g / kk),
+        -(2.0 * PI / (kk * kk)) * (f - kk * g / 4.0),
+        (PI / 2.0) * (1.0 + 4.0 * g / kk),
+        PI * f / (2.0 * kk),
+        -(PI / (8.0 * kk)) * (1.0 - f - 4.0 * g / kk),
+        (PI / (2.0 * kk * kk)) * (kk * kk / 32.0 + f - kk * g / 4.0),
+        -PI * g / (2.0 * kk),
+    ]
+}
+
+pub(crate) fn derivatives() -> DerivativeFigure {
+    let names = ["H1*", "H2*", "H3*", "H4*", "A1*", "A2*", "A3*", "A4*"];
+    let kr: Vec<f64> = (0..60).map(|i| 0.3 + 0.03 * i as f64).collect();
+    let kp: Vec<f64> = (0..8).map(|i| 0.4 + 0.2 * i as f64).collect();
+    let panels = names
+        .iter()
+        .enumerate()
+        .map(|(j, &n)| {
+            let rv: Vec<f64> = kr.iter().map(|&k| flat_plate(k)[j]).collect();
+            let pa: Vec<f64> = kp.iter().enumerate().map(|(i, &k)| flat_plate(k)[j] * (1.0 + 0.06 * ((i + j) as f64).sin())).collect();
+            let pb: Vec<f64> = kp.iter().enumerate().map(|(i, &k)| flat_plate(k + 0.05)[j] * (1.0 - 0.08 * ((i * 3 + j) as f64).cos())).collect();
+            let spread: Vec<f64> = pa.iter().map(|v| 0.05 * v.abs() + 0.02).collect();
+            DerivativePanel {
+                name: n.into(),
+                points: vec![
+                    DerivativePoints { label: "configuration A".into(), k: kp.clone(), value: pa, spread },
+                    DerivativePoints { label: "configuration B".into(), k: kp.iter().map(|k| k + 0.05).collect(), value: pb, spread: vec![] },
+                ],
+                reference_k: kr.clone(),
+                reference_value: rv,
+            }
+        })
+        .collect();
+    DerivativeFigure {
+        title: "Flutter derivatives vs reduced frequency".into(),
+        k_label: "K = Bω/U [-]".into(),
+        reference_label: "flat plate (Theodorsen)".into(),
+        panels,
+    }
+}
