@@ -222,15 +222,16 @@ pub(crate) fn bifurcation() -> BifurcationFigure {
         u_label: "U [m/s]".into(),
         amplitude_label: "LCO amplitude α [deg]".into(),
         points,
+        u_unit: "m/s".into(),
         flutter_speed: Some(uf),
     }
 }
 
 pub(crate) fn phase() -> PhasePortraitFigure {
-    let t: Vec<f64> = (0..3000).map(|i| i as f64 / 200.0).collect();
+    let t: Vec<f64> = (0..1600).map(|i| i as f64 / 200.0).collect();
     // Growing spiral onto a limit cycle of amplitude 5 deg at 3 Hz, and a model at 4.6 deg.
     let traj = |a_lc: f64| {
-        let a: Vec<f64> = t.iter().map(|&t| a_lc * (1.0 - (-t / 3.0).exp() * 0.9)).collect();
+        let a: Vec<f64> = t.iter().map(|&t| a_lc * (1.0 - (-t / 1.2).exp() * 0.9)).collect();
         let x: Vec<f64> = t.iter().zip(&a).map(|(&t, &a)| a * (TAU * 3.0 * t).cos()).collect();
         let v: Vec<f64> = t.iter().zip(&a).map(|(&t, &a)| -a * TAU * 3.0 * (TAU * 3.0 * t).sin()).collect();
         (x, v)

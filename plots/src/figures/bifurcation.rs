@@ -60,6 +60,8 @@ pub struct BifurcationFigure {
     pub amplitude_label: String,
     /// Points of both sweeps.
     pub points: Vec<BifurcationPoint>,
+    /// Unit of U for the legend entry of the flutter speed, e.g. `"m/s"`.
+    pub u_unit: String,
     /// Linear flutter speed (dashed vertical line), if known.
     pub flutter_speed: Option<f64>,
 }
@@ -112,7 +114,7 @@ impl Figure for BifurcationFigure {
             legend.push(LegendEntry::marker("divergent (top row)", MarkerShape::Circle, C_DIV, true));
         }
         if let Some(u) = fs {
-            legend.push(LegendEntry::line(format!("flutter speed U_F = {}", fmt_num(u)), HIGHLIGHT, true));
+            legend.push(LegendEntry::line(format!("flutter speed U_F = {} {}", fmt_num(u), self.u_unit), HIGHLIGHT, true));
         }
         let area = legend_band(&area, &legend, kind)?;
         let mut chart = ChartBuilder::on(&area)

@@ -112,7 +112,7 @@ impl Figure for VgFigure {
                 .chain(fl.map(|p| p.freq)),
         )
         .unwrap_or((0.0, 1.0));
-        let (f0, f1) = padded((fr.0.min(0.0), fr.1), 0.08);
+        let (f0, f1) = padded(fr, 0.08);
 
         let area = title(root, &self.title, kind)?;
         let mut legend: Vec<LegendEntry> = self
@@ -224,9 +224,15 @@ impl Figure for VgFigure {
                         9,
                     )))
                     .ctx(kind)?;
+                // Text on a white box so curves underneath do not hide it.
+                let (tw, th) = root.estimate_text_size(a, &a_style).ctx(kind)?;
+                let (tw, th) = (tw as i32, th as i32);
+                let (bx0, bx1) = if right_side { (dx - tw - 5, dx + 5) } else { (dx - 5, dx + tw + 5) };
                 chart
                     .draw_series(std::iter::once(
-                        EmptyElement::at((p.u, y)) + Text::new(a.clone(), (dx, -10), a_style.pos(anchor)),
+                        EmptyElement::at((p.u, y))
+                            + Rectangle::new([(bx0, -14 - th - 4), (bx1, -10)], WHITE.mix(0.9).filled())
+                            + Text::new(a.clone(), (dx, -14), a_style.pos(anchor)),
                     ))
                     .ctx(kind)?;
             }
