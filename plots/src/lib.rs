@@ -28,32 +28,7 @@ pub use figures::heatmap::{diverging, HeatmapGridFigure, HeatmapPanel};
 pub use figures::spectrum::{FreqMarker, SpectrumFigure};
 pub use figures::{Series, SeriesKind};
 pub use render::{render_png, render_svg, save, FigureFiles, Figure};
-pub use report::Report;
+pub use report::{escape_html, Report};
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use std::path::PathBuf;
-
-    fn preview_dir() -> PathBuf {
-        let d = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../preview");
-        std::fs::create_dir_all(&d).unwrap();
-        d
-    }
-
-    /// Renders every sample figure into `preview/` for visual inspection.
-    #[test]
-    #[ignore = "writes preview files for a human to look at"]
-    fn render_previews() {
-        let d = preview_dir();
-        save(&samples::time_series(), &d, "time_series").unwrap();
-        save(&samples::spectrum(), &d, "spectrum").unwrap();
-        save(&samples::delta_path(), &d, "delta_path").unwrap();
-        save(&samples::heatmap(), &d, "heatmap").unwrap();
-        save(&samples::histogram(), &d, "histogram").unwrap();
-        save(&samples::vg(), &d, "vg_vf").unwrap();
-        save(&samples::bifurcation(), &d, "bifurcation").unwrap();
-        save(&samples::phase(), &d, "phase_portrait").unwrap();
-        save(&samples::derivatives(), &d, "derivatives").unwrap();
-    }
-}
+mod tests;
