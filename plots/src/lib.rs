@@ -17,17 +17,17 @@ pub mod style;
 mod samples;
 
 pub use error::{Error, Result};
-pub use figures::time_series::{TimePanel, TimeSeriesFigure};
 pub use figures::bifurcation::{BifurcationFigure, BifurcationPoint, ResponseClass, Sweep};
 pub use figures::delta_path::DeltaPathFigure;
 pub use figures::derivatives::{DerivativeFigure, DerivativePanel, DerivativePoints};
 pub use figures::flutter::{FlutterPoint, ModeBranch, VgFigure};
+pub use figures::heatmap::{diverging, HeatmapGridFigure, HeatmapPanel};
 pub use figures::histogram::{HistogramFigure, HistogramPanel};
 pub use figures::phase::PhasePortraitFigure;
-pub use figures::heatmap::{diverging, HeatmapGridFigure, HeatmapPanel};
 pub use figures::spectrum::{FreqMarker, SpectrumFigure};
+pub use figures::time_series::{TimePanel, TimeSeriesFigure};
 pub use figures::{Series, SeriesKind};
-pub use render::{render_png, render_svg, save, FigureFiles, Figure};
+pub use render::{render_png, render_svg, save, Figure, FigureFiles};
 pub use report::{escape_html, Report};
 
 #[cfg(test)]

@@ -249,7 +249,12 @@ impl Report {
                         h.push_str(&format!("<th>{}</th>", escape_html(c)));
                     }
                     h.push_str("</tr></thead>\n<tbody>\n");
-                    let width = rows.iter().map(Vec::len).chain([header.len()]).max().unwrap_or(0);
+                    let width = rows
+                        .iter()
+                        .map(Vec::len)
+                        .chain([header.len()])
+                        .max()
+                        .unwrap_or(0);
                     for r in rows {
                         h.push_str("<tr>");
                         for i in 0..width {
@@ -304,7 +309,10 @@ mod tests {
 
     #[test]
     fn csv_table_handles_quotes_and_ragged_rows() {
-        assert_eq!(split_csv_line("a, \"b,c\" ,\"d\"\"e\""), vec!["a", "b,c", "d\"e"]);
+        assert_eq!(
+            split_csv_line("a, \"b,c\" ,\"d\"\"e\""),
+            vec!["a", "b,c", "d\"e"]
+        );
         let mut r = Report::new("t");
         r.csv_table("cases", "case,R2\nA-1,0.98\nA-2\n");
         let h = r.to_html();
@@ -314,8 +322,13 @@ mod tests {
 
     #[test]
     fn inline_svg_gets_viewbox_and_loses_prolog() {
-        let s = inline_svg("<?xml version=\"1.0\"?>\n<svg width=\"10\" height=\"20\" xmlns=\"x\"></svg>");
-        assert!(s.starts_with("<svg width=\"10\" height=\"20\" xmlns=\"x\" viewBox=\"0 0 10 20\">"), "{s}");
+        let s = inline_svg(
+            "<?xml version=\"1.0\"?>\n<svg width=\"10\" height=\"20\" xmlns=\"x\"></svg>",
+        );
+        assert!(
+            s.starts_with("<svg width=\"10\" height=\"20\" xmlns=\"x\" viewBox=\"0 0 10 20\">"),
+            "{s}"
+        );
         let kept = inline_svg("<svg viewBox=\"0 0 1 1\"></svg>");
         assert_eq!(kept, "<svg viewBox=\"0 0 1 1\"></svg>");
     }
@@ -336,7 +349,9 @@ mod tests {
         let p = dir.path().join("r.html");
         Report::new("t").write(&p).unwrap();
         assert!(std::fs::read_to_string(&p).unwrap().contains("<h1>t</h1>"));
-        let e = Report::new("t").write(&dir.path().join("no/r.html")).unwrap_err();
+        let e = Report::new("t")
+            .write(&dir.path().join("no/r.html"))
+            .unwrap_err();
         assert!(e.to_string().contains("r.html"), "{e}");
     }
 }

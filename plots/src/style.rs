@@ -432,15 +432,6 @@ pub(crate) fn segments(x: &[f64], y: &[f64]) -> Vec<Vec<(f64, f64)>> {
     out
 }
 
-/// Finite (x, y) pairs only.
-pub(crate) fn finite_pairs(x: &[f64], y: &[f64]) -> Vec<(f64, f64)> {
-    x.iter()
-        .zip(y)
-        .filter(|(a, b)| a.is_finite() && b.is_finite())
-        .map(|(&a, &b)| (a, b))
-        .collect()
-}
-
 /// Smallest and largest finite value, `None` if there is none.
 pub(crate) fn finite_range(values: impl IntoIterator<Item = f64>) -> Option<(f64, f64)> {
     let mut lo = f64::INFINITY;

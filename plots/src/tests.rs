@@ -29,7 +29,11 @@ fn check_figure<F: Figure>(fig: &F, expected: &[&str]) -> FigureFiles {
         .chunks(3)
         .filter(|p| p.iter().all(|&c| c < 80))
         .count();
-    assert!(dark > 200, "{}: title not drawn in PNG ({dark} dark pixels)", F::KIND);
+    assert!(
+        dark > 200,
+        "{}: title not drawn in PNG ({dark} dark pixels)",
+        F::KIND
+    );
     let svg = std::fs::read_to_string(&files.svg).unwrap();
     assert_eq!(svg, files.svg_text);
     assert!(svg.starts_with("<svg"), "{}", &svg[..40.min(svg.len())]);
@@ -45,7 +49,16 @@ fn check_figure<F: Figure>(fig: &F, expected: &[&str]) -> FigureFiles {
 fn time_series_writes_png_and_svg_with_labels() {
     check_figure(
         &samples::time_series(),
-        &["Case A-3: forced motion and forces", "t [s]", "α [deg]", "h [mm]", "C_L [-]", "C_M [-]", "measured", "model (Eq. 19)"],
+        &[
+            "Case A-3: forced motion and forces",
+            "t [s]",
+            "α [deg]",
+            "h [mm]",
+            "C_L [-]",
+            "C_M [-]",
+            "measured",
+            "model (Eq. 19)",
+        ],
     );
 }
 
@@ -53,7 +66,17 @@ fn time_series_writes_png_and_svg_with_labels() {
 fn spectrum_writes_png_and_svg_with_labels() {
     check_figure(
         &samples::spectrum(),
-        &["spectrum of C_M", "f [Hz]", "|C_M| amplitude [-]", "measured", "model (Eq. 19)", "key frequencies", "f_α", "2f_α", "f_α+f_h"],
+        &[
+            "spectrum of C_M",
+            "f [Hz]",
+            "|C_M| amplitude [-]",
+            "measured",
+            "model (Eq. 19)",
+            "key frequencies",
+            "f_α",
+            "2f_α",
+            "f_α+f_h",
+        ],
     );
 }
 
@@ -61,7 +84,17 @@ fn spectrum_writes_png_and_svg_with_labels() {
 fn delta_path_writes_png_and_svg_with_labels() {
     check_figure(
         &samples::delta_path(),
-        &["δ path", "threshold δ (relative contribution) [-]", "terms [-]", "key-freq. loss [-]", "number of terms", "loss limit", "selected δ = ", "active term", "(Bα̇/U)³"],
+        &[
+            "δ path",
+            "threshold δ (relative contribution) [-]",
+            "terms [-]",
+            "key-freq. loss [-]",
+            "number of terms",
+            "loss limit",
+            "selected δ = ",
+            "active term",
+            "(Bα̇/U)³",
+        ],
     );
 }
 
@@ -69,7 +102,15 @@ fn delta_path_writes_png_and_svg_with_labels() {
 fn heatmap_writes_png_and_svg_with_labels() {
     check_figure(
         &samples::heatmap(),
-        &["Eq. 19 coefficients", "amplitude α₀ [deg]", "U [m/s]", "H1*", "A4*", "N2*", "inactive (term not selected)"],
+        &[
+            "Eq. 19 coefficients",
+            "amplitude α₀ [deg]",
+            "U [m/s]",
+            "H1*",
+            "A4*",
+            "N2*",
+            "inactive (term not selected)",
+        ],
     );
 }
 
@@ -77,7 +118,15 @@ fn heatmap_writes_png_and_svg_with_labels() {
 fn histogram_writes_png_and_svg_with_labels() {
     let f = check_figure(
         &samples::histogram(),
-        &["Identification quality", "R² [-]", "MFWA [-]", "cases [-]", "median", "1 outside range", "1 non-finite"],
+        &[
+            "Identification quality",
+            "R² [-]",
+            "MFWA [-]",
+            "cases [-]",
+            "median",
+            "1 outside range",
+            "1 non-finite",
+        ],
     );
     // Sample MFWA values 0.85 + 0.15·√u, u = frac(0.618·i), i < 64: n = 64 shown.
     assert!(f.svg_text.contains("n = 64"));
@@ -87,7 +136,16 @@ fn histogram_writes_png_and_svg_with_labels() {
 fn vg_writes_png_and_svg_with_labels() {
     check_figure(
         &samples::vg(),
-        &["V–g and V–f", "U [m/s]", "damping ratio g [-]", "f [Hz]", "heave mode", "pitch mode", "U_F = 23.4 m/s", "f_F = 2.343 Hz"],
+        &[
+            "V–g and V–f",
+            "U [m/s]",
+            "damping ratio g [-]",
+            "f [Hz]",
+            "heave mode",
+            "pitch mode",
+            "U_F = 23.4 m/s",
+            "f_F = 2.343 Hz",
+        ],
     );
 }
 
@@ -95,7 +153,17 @@ fn vg_writes_png_and_svg_with_labels() {
 fn bifurcation_writes_png_and_svg_with_labels() {
     check_figure(
         &samples::bifurcation(),
-        &["hysteresis", "U [m/s]", "LCO amplitude α [deg]", "upward sweep", "downward sweep", "decay", "LCO", "divergent", "U_F = 20 m/s"],
+        &[
+            "hysteresis",
+            "U [m/s]",
+            "LCO amplitude α [deg]",
+            "upward sweep",
+            "downward sweep",
+            "decay",
+            "LCO",
+            "divergent",
+            "U_F = 20 m/s",
+        ],
     );
 }
 
@@ -103,7 +171,14 @@ fn bifurcation_writes_png_and_svg_with_labels() {
 fn phase_writes_png_and_svg_with_labels() {
     check_figure(
         &samples::phase(),
-        &["Phase portrait", "α [deg]", "α̇ [deg/s]", "measured (free response)", "model", "start"],
+        &[
+            "Phase portrait",
+            "α [deg]",
+            "α̇ [deg/s]",
+            "measured (free response)",
+            "model",
+            "start",
+        ],
     );
 }
 
@@ -111,7 +186,17 @@ fn phase_writes_png_and_svg_with_labels() {
 fn derivatives_writes_png_and_svg_with_labels() {
     check_figure(
         &samples::derivatives(),
-        &["Flutter derivatives", "K = Bω/U [-]", "H1*", "H4*", "A1*", "A4*", "configuration A", "configuration B", "flat plate (Theodorsen)"],
+        &[
+            "Flutter derivatives",
+            "K = Bω/U [-]",
+            "H1*",
+            "H4*",
+            "A1*",
+            "A4*",
+            "configuration A",
+            "configuration B",
+            "flat plate (Theodorsen)",
+        ],
     );
 }
 
@@ -164,7 +249,12 @@ fn empty_or_all_nan_input_is_an_error_not_a_panic() {
 
     assert_no_data(&VgFigure::default(), "modes");
     let mut vg = samples::vg();
-    vg.modes[1] = ModeBranch { name: "pitch mode".into(), u: x.clone(), damping: nan.clone(), freq: nan.clone() };
+    vg.modes[1] = ModeBranch {
+        name: "pitch mode".into(),
+        u: x.clone(),
+        damping: nan.clone(),
+        freq: nan.clone(),
+    };
     assert_no_data(&vg, "pitch mode");
 
     assert_no_data(&BifurcationFigure::default(), "points");
@@ -185,7 +275,14 @@ fn empty_or_all_nan_input_is_an_error_not_a_panic() {
 fn length_mismatch_and_bad_options_are_errors() {
     let mut ts = samples::time_series();
     ts.panels[0].series[0].y.pop();
-    assert!(matches!(render_svg(&ts), Err(Error::LengthMismatch { left: 2048, right: 2047, .. })));
+    assert!(matches!(
+        render_svg(&ts),
+        Err(Error::LengthMismatch {
+            left: 2048,
+            right: 2047,
+            ..
+        })
+    ));
     let mut dp = samples::delta_path();
     dp.selected = Some(99);
     let e = render_svg(&dp).unwrap_err();
@@ -199,7 +296,10 @@ fn length_mismatch_and_bad_options_are_errors() {
     let mut hm = samples::heatmap();
     hm.panels[3].values[2].pop();
     let e = render_svg(&hm).unwrap_err();
-    assert!(e.to_string().contains("H4*") && e.to_string().contains("values[2]"), "{e}");
+    assert!(
+        e.to_string().contains("H4*") && e.to_string().contains("values[2]"),
+        "{e}"
+    );
     let mut sp = samples::spectrum();
     sp.f_max = Some(f64::NAN);
     assert!(matches!(render_svg(&sp), Err(Error::InvalidInput { .. })));
@@ -217,40 +317,100 @@ fn degenerate_data_draws_without_panic() {
         title: "one point".into(),
         x_label: "t [s]".into(),
         panels: vec![
-            TimePanel { y_label: "a".into(), series: vec![one(0.0)] },
-            TimePanel { y_label: "b".into(), series: vec![Series::new("c", SeriesKind::Model, vec![0.0, 1.0, 2.0], vec![1e300, f64::INFINITY, 1e300])] },
+            TimePanel {
+                y_label: "a".into(),
+                series: vec![one(0.0)],
+            },
+            TimePanel {
+                y_label: "b".into(),
+                series: vec![Series::new(
+                    "c",
+                    SeriesKind::Model,
+                    vec![0.0, 1.0, 2.0],
+                    vec![1e300, f64::INFINITY, 1e300],
+                )],
+            },
         ],
     };
     render_svg(&ts).unwrap();
     render_png(&ts).unwrap();
-    let sp = SpectrumFigure { series: vec![one(1e-30)], markers: vec![FreqMarker { freq: f64::NAN, label: "x".into() }], ..Default::default() };
+    let sp = SpectrumFigure {
+        series: vec![one(1e-30)],
+        markers: vec![FreqMarker {
+            freq: f64::NAN,
+            label: "x".into(),
+        }],
+        ..Default::default()
+    };
     render_png(&sp).unwrap();
-    let dp = DeltaPathFigure { deltas: vec![0.1], n_terms: vec![3], loss: vec![0.0], selected: Some(0), loss_limit: Some(f64::NAN), ..Default::default() };
+    let dp = DeltaPathFigure {
+        deltas: vec![0.1],
+        n_terms: vec![3],
+        loss: vec![0.0],
+        selected: Some(0),
+        loss_limit: Some(f64::NAN),
+        ..Default::default()
+    };
     render_png(&dp).unwrap();
     let hm = HeatmapGridFigure {
         x_values: vec![1.0],
         y_values: vec![2.0],
-        panels: vec![HeatmapPanel { term: "N1*".into(), values: vec![vec![None]] }],
+        panels: vec![HeatmapPanel {
+            term: "N1*".into(),
+            values: vec![vec![None]],
+        }],
         ..Default::default()
     };
     render_png(&hm).unwrap();
-    let hi = HistogramFigure { panels: vec![HistogramPanel { values: vec![0.5; 10], bins: 3, ..Default::default() }], ..Default::default() };
+    let hi = HistogramFigure {
+        panels: vec![HistogramPanel {
+            values: vec![0.5; 10],
+            bins: 3,
+            ..Default::default()
+        }],
+        ..Default::default()
+    };
     render_png(&hi).unwrap();
     let vg = VgFigure {
-        modes: vec![ModeBranch { name: "m".into(), u: vec![5.0], damping: vec![0.0], freq: vec![f64::NAN] }],
-        flutter: Some(FlutterPoint { u: f64::INFINITY, freq: 1.0 }),
+        modes: vec![ModeBranch {
+            name: "m".into(),
+            u: vec![5.0],
+            damping: vec![0.0],
+            freq: vec![f64::NAN],
+        }],
+        flutter: Some(FlutterPoint {
+            u: f64::INFINITY,
+            freq: 1.0,
+        }),
         ..Default::default()
     };
     render_png(&vg).unwrap();
     let bf = BifurcationFigure {
-        points: vec![BifurcationPoint { u: 3.0, amplitude: f64::NAN, sweep: Sweep::Down, class: ResponseClass::Divergent }],
+        points: vec![BifurcationPoint {
+            u: 3.0,
+            amplitude: f64::NAN,
+            sweep: Sweep::Down,
+            class: ResponseClass::Divergent,
+        }],
         ..Default::default()
     };
     render_png(&bf).unwrap();
-    let ph = PhasePortraitFigure { trajectories: vec![one(2.0)], ..Default::default() };
+    let ph = PhasePortraitFigure {
+        trajectories: vec![one(2.0)],
+        ..Default::default()
+    };
     render_png(&ph).unwrap();
     let de = DerivativeFigure {
-        panels: vec![DerivativePanel { name: "H1*".into(), points: vec![DerivativePoints { label: "p".into(), k: vec![1.0], value: vec![-3.0], spread: vec![f64::NAN] }], ..Default::default() }],
+        panels: vec![DerivativePanel {
+            name: "H1*".into(),
+            points: vec![DerivativePoints {
+                label: "p".into(),
+                k: vec![1.0],
+                value: vec![-3.0],
+                spread: vec![f64::NAN],
+            }],
+            ..Default::default()
+        }],
         ..Default::default()
     };
     render_png(&de).unwrap();
@@ -260,18 +420,52 @@ fn sample_report(dir: &Path) -> (Report, usize) {
     let mut r = Report::new("aeroform sample report");
     r.section("Summary")
         .text("Synthetic data; every figure of the plots crate once.\n\nSecond paragraph.")
-        .key_values("Key numbers", &[("cases", "64"), ("flutter speed U_F [m/s]", "23.4"), ("verdict", "time_delay")])
-        .csv_table("Per-case metrics", "case,R2,MFWA\nA-1,0.991,0.97\nA-2,0.985,0.95\n\"B-1, repeat\",0.62,0.81\n");
+        .key_values(
+            "Key numbers",
+            &[
+                ("cases", "64"),
+                ("flutter speed U_F [m/s]", "23.4"),
+                ("verdict", "time_delay"),
+            ],
+        )
+        .csv_table(
+            "Per-case metrics",
+            "case,R2,MFWA\nA-1,0.991,0.97\nA-2,0.985,0.95\n\"B-1, repeat\",0.62,0.81\n",
+        );
     let figs: Vec<(&str, FigureFiles)> = vec![
-        ("Time series", save(&samples::time_series(), dir, "time_series").unwrap()),
-        ("Spectrum", save(&samples::spectrum(), dir, "spectrum").unwrap()),
-        ("δ path", save(&samples::delta_path(), dir, "delta_path").unwrap()),
-        ("Coefficient heat maps", save(&samples::heatmap(), dir, "heatmap").unwrap()),
-        ("Histograms", save(&samples::histogram(), dir, "histogram").unwrap()),
+        (
+            "Time series",
+            save(&samples::time_series(), dir, "time_series").unwrap(),
+        ),
+        (
+            "Spectrum",
+            save(&samples::spectrum(), dir, "spectrum").unwrap(),
+        ),
+        (
+            "δ path",
+            save(&samples::delta_path(), dir, "delta_path").unwrap(),
+        ),
+        (
+            "Coefficient heat maps",
+            save(&samples::heatmap(), dir, "heatmap").unwrap(),
+        ),
+        (
+            "Histograms",
+            save(&samples::histogram(), dir, "histogram").unwrap(),
+        ),
         ("V–g / V–f", save(&samples::vg(), dir, "vg_vf").unwrap()),
-        ("Bifurcation", save(&samples::bifurcation(), dir, "bifurcation").unwrap()),
-        ("Phase portrait", save(&samples::phase(), dir, "phase_portrait").unwrap()),
-        ("Derivatives", save(&samples::derivatives(), dir, "derivatives").unwrap()),
+        (
+            "Bifurcation",
+            save(&samples::bifurcation(), dir, "bifurcation").unwrap(),
+        ),
+        (
+            "Phase portrait",
+            save(&samples::phase(), dir, "phase_portrait").unwrap(),
+        ),
+        (
+            "Derivatives",
+            save(&samples::derivatives(), dir, "derivatives").unwrap(),
+        ),
     ];
     r.section("Figures");
     for (c, f) in &figs {

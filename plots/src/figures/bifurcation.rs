@@ -95,7 +95,8 @@ impl Figure for BifurcationFigure {
             ResponseClass::Decay if !p.amplitude.is_finite() => Some(0.0),
             _ => Some(p.amplitude).filter(|a| a.is_finite()),
         };
-        let (a_lo, a_hi) = finite_range(pts.iter().filter_map(|p| amp(p)).chain([0.0])).expect("has 0");
+        let (a_lo, a_hi) =
+            finite_range(pts.iter().filter_map(|p| amp(p)).chain([0.0])).expect("has 0");
         let has_div = pts.iter().any(|p| p.class == ResponseClass::Divergent);
         let a_hi = if a_hi > a_lo { a_hi } else { a_lo + 1.0 };
         // Divergent points sit on a row above the largest amplitude.
@@ -111,10 +112,19 @@ impl Figure for BifurcationFigure {
             LegendEntry::marker("LCO", MarkerShape::Circle, C_LCO, true),
         ];
         if has_div {
-            legend.push(LegendEntry::marker("divergent (top row)", MarkerShape::Circle, C_DIV, true));
+            legend.push(LegendEntry::marker(
+                "divergent (top row)",
+                MarkerShape::Circle,
+                C_DIV,
+                true,
+            ));
         }
         if let Some(u) = fs {
-            legend.push(LegendEntry::line(format!("flutter speed U_F = {} {}", fmt_num(u), self.u_unit), HIGHLIGHT, true));
+            legend.push(LegendEntry::line(
+                format!("flutter speed U_F = {} {}", fmt_num(u), self.u_unit),
+                HIGHLIGHT,
+                true,
+            ));
         }
         let area = legend_band(&area, &legend, kind)?;
         let mut chart = ChartBuilder::on(&area)
@@ -127,8 +137,15 @@ impl Figure for BifurcationFigure {
             .ctx(kind)?;
         let fx = fmt_tick(u1 - u0);
         let fy = fmt_tick(y1 - y0);
-        mesh!(m = chart, self.u_label.as_str(), self.amplitude_label.as_str());
-        m.x_label_formatter(&fx).y_label_formatter(&fy).draw().ctx(kind)?;
+        mesh!(
+            m = chart,
+            self.u_label.as_str(),
+            self.amplitude_label.as_str()
+        );
+        m.x_label_formatter(&fx)
+            .y_label_formatter(&fy)
+            .draw()
+            .ctx(kind)?;
         if let Some(u) = fs {
             chart
                 .draw_series(DashedLineSeries::new(
@@ -157,7 +174,10 @@ impl Figure for BifurcationFigure {
                 .filter_map(|p| amp(p).map(|a| (p.u, a)))
                 .collect();
             chart
-                .draw_series(LineSeries::new(branch, ShapeStyle::from(C_LCO.mix(0.4)).stroke_width(1)))
+                .draw_series(LineSeries::new(
+                    branch,
+                    ShapeStyle::from(C_LCO.mix(0.4)).stroke_width(1),
+                ))
                 .ctx(kind)?;
         }
         let elems = pts.iter().filter_map(|p| {

@@ -92,7 +92,10 @@ impl Figure for DeltaPathFigure {
         }
         idx.sort_by(|&a, &b| self.deltas[a].total_cmp(&self.deltas[b]));
         let (d0, d1) = log_range(idx.iter().map(|&i| self.deltas[i]), 1.25).expect("non-empty");
-        let sel = self.selected.filter(|&s| idx.contains(&s)).map(|s| self.deltas[s]);
+        let sel = self
+            .selected
+            .filter(|&s| idx.contains(&s))
+            .map(|s| self.deltas[s]);
 
         let area = title(root, &self.title, kind)?;
         let c_terms = PALETTE[0];
@@ -141,19 +144,27 @@ impl Figure for DeltaPathFigure {
         let empty = |_: &f64| String::new();
         let fy = fmt_tick(y1 - y0);
         mesh!(m = chart, "", "terms [-]");
-        m.x_label_formatter(&empty).y_label_formatter(&fy).draw().ctx(kind)?;
+        m.x_label_formatter(&empty)
+            .y_label_formatter(&fy)
+            .draw()
+            .ctx(kind)?;
         chart.draw_series(sel_line(y0, y1)).ctx(kind)?;
         let pts: Vec<(f64, f64)> = idx
             .iter()
             .map(|&i| (self.deltas[i], self.n_terms[i] as f64))
             .collect();
         chart
-            .draw_series(LineSeries::new(pts.clone(), ShapeStyle::from(c_terms).stroke_width(2)))
+            .draw_series(LineSeries::new(
+                pts.clone(),
+                ShapeStyle::from(c_terms).stroke_width(2),
+            ))
             .ctx(kind)?;
         chart
-            .draw_series(pts.iter().map(|&p| {
-                crate::style::marker::<_, DB>(p, MarkerShape::Circle, c_terms, true, 4)
-            }))
+            .draw_series(
+                pts.iter().map(|&p| {
+                    crate::style::marker::<_, DB>(p, MarkerShape::Circle, c_terms, true, 4)
+                }),
+            )
             .ctx(kind)?;
 
         // Panel 2: loss (log axis when it is positive and spans more than two decades).
@@ -263,7 +274,11 @@ impl Figure for DeltaPathFigure {
         // Cell edges: geometric midpoints between neighbouring thresholds.
         let ds: Vec<f64> = idx.iter().map(|&i| self.deltas[i]).collect();
         let edge = |k: usize| -> (f64, f64) {
-            let lo = if k == 0 { d0.max(ds[0] / 1.25) } else { (ds[k - 1] * ds[k]).sqrt() };
+            let lo = if k == 0 {
+                d0.max(ds[0] / 1.25)
+            } else {
+                (ds[k - 1] * ds[k]).sqrt()
+            };
             let hi = if k + 1 == ds.len() {
                 d1.min(ds[k] * 1.25)
             } else {
@@ -278,7 +293,10 @@ impl Figure for DeltaPathFigure {
                 if self.support[i][j] {
                     let r = nt - 1 - j;
                     cells.push(Rectangle::new(
-                        [(lo, SegmentValue::Exact(r)), (hi, SegmentValue::Exact(r + 1))],
+                        [
+                            (lo, SegmentValue::Exact(r)),
+                            (hi, SegmentValue::Exact(r + 1)),
+                        ],
                         c_terms.mix(0.85).filled(),
                     ));
                 }

@@ -91,7 +91,12 @@ impl Figure for DerivativeFigure {
                 }
             }
             let f = format!("panels[{p}] \"{}\" reference", panel.name);
-            check_len(kind, &format!("{f} k/value"), panel.reference_k.len(), panel.reference_value.len())?;
+            check_len(
+                kind,
+                &format!("{f} k/value"),
+                panel.reference_k.len(),
+                panel.reference_value.len(),
+            )?;
             let r = segments(&panel.reference_k, &panel.reference_value);
             any_ref |= !r.is_empty();
             finite += r.iter().map(Vec::len).sum::<usize>();
@@ -99,7 +104,8 @@ impl Figure for DerivativeFigure {
                 return Err(Error::NoData {
                     figure: kind,
                     field: format!("panels[{p}] \"{}\"", panel.name),
-                    len: panel.points.iter().map(|g| g.k.len()).sum::<usize>() + panel.reference_k.len(),
+                    len: panel.points.iter().map(|g| g.k.len()).sum::<usize>()
+                        + panel.reference_k.len(),
                 });
             }
         }
@@ -116,7 +122,11 @@ impl Figure for DerivativeFigure {
             })
             .collect();
         if any_ref {
-            legend.push(LegendEntry::line(self.reference_label.clone(), REFERENCE, false));
+            legend.push(LegendEntry::line(
+                self.reference_label.clone(),
+                REFERENCE,
+                false,
+            ));
         }
         let area = legend_band(&area, &legend, kind)?;
         // Shared K range over all panels.
@@ -135,25 +145,24 @@ impl Figure for DerivativeFigure {
                 .margin(10, 0, 0, 0)
                 .titled(&panel.name, bold(PANEL_TITLE_SIZE))
                 .ctx(kind)?;
+            // y range: points ± spread, reference curve, and zero.
             let vals = panel
                 .points
                 .iter()
                 .flat_map(|g| {
-                    segments(&g.k, &g.value).into_iter().flatten().enumerate().map(move |(_, (kk, v))| {
-                        let s = g
-                            .k
-                            .iter()
-                            .position(|x| *x == kk)
-                            .and_then(|i| g.spread.get(i))
-                            .copied()
-                            .filter(|s| s.is_finite())
-                            .unwrap_or(0.0)
-                            .abs();
-                        [v - s, v + s]
-                    })
+                    (0..g.k.len())
+                        .filter(|&i| g.k[i].is_finite() && g.value[i].is_finite())
+                        .flat_map(|i| {
+                            let s = spread_at(g, i);
+                            [g.value[i] - s, g.value[i] + s]
+                        })
                 })
-                .flatten()
-                .chain(segments(&panel.reference_k, &panel.reference_value).into_iter().flatten().map(|p| p.1))
+                .chain(
+                    segments(&panel.reference_k, &panel.reference_value)
+                        .into_iter()
+                        .flatten()
+                        .map(|p| p.1),
+                )
                 .chain([0.0]);
             let (y0, y1) = padded(finite_range(vals).expect("has 0"), 0.08);
             let mut chart = ChartBuilder::on(&cell)
@@ -180,22 +189,26 @@ impl Figure for DerivativeFigure {
                 .ctx(kind)?;
             for run in segments(&panel.reference_k, &panel.reference_value) {
                 chart
-                    .draw_series(LineSeries::new(run, ShapeStyle::from(REFERENCE).stroke_width(2)))
+                    .draw_series(LineSeries::new(
+                        run,
+                        ShapeStyle::from(REFERENCE).stroke_width(2),
+                    ))
                     .ctx(kind)?;
             }
             for g in &panel.points {
                 let (shape, color) = style_of(&g.label);
                 let pts: Vec<(f64, f64, f64)> = (0..g.k.len())
                     .filter(|&i| g.k[i].is_finite() && g.value[i].is_finite())
-                    .map(|i| {
-                        let s = g.spread.get(i).copied().filter(|s| s.is_finite()).unwrap_or(0.0).abs();
-                        (g.k[i], g.value[i], s)
-                    })
+                    .map(|i| (g.k[i], g.value[i], spread_at(g, i)))
                     .collect();
                 let bar = ShapeStyle::from(color).stroke_width(1);
-                let bars: Vec<(f64, f64, f64)> = pts.iter().copied().filter(|p| p.2 > 0.0).collect();
+                let bars: Vec<(f64, f64, f64)> =
+                    pts.iter().copied().filter(|p| p.2 > 0.0).collect();
                 chart
-                    .draw_series(bars.iter().map(|&(k, v, s)| PathElement::new(vec![(k, v - s), (k, v + s)], bar)))
+                    .draw_series(
+                        bars.iter()
+                            .map(|&(k, v, s)| PathElement::new(vec![(k, v - s), (k, v + s)], bar)),
+                    )
                     .ctx(kind)?;
                 chart
                     .draw_series(bars.iter().flat_map(|&(k, v, s)| {
@@ -206,7 +219,10 @@ impl Figure for DerivativeFigure {
                     }))
                     .ctx(kind)?;
                 chart
-                    .draw_series(pts.iter().map(|&(k, v, _)| marker::<_, DB>((k, v), shape, color, true, 5)))
+                    .draw_series(
+                        pts.iter()
+                            .map(|&(k, v, _)| marker::<_, DB>((k, v), shape, color, true, 5)),
+                    )
                     .ctx(kind)?;
             }
         }
@@ -214,7 +230,20 @@ impl Figure for DerivativeFigure {
     }
 }
 
+/// Half-width of the error bar of point `i` (0 when absent or non-finite).
+fn spread_at(g: &DerivativePoints, i: usize) -> f64 {
+    g.spread
+        .get(i)
+        .copied()
+        .filter(|s| s.is_finite())
+        .unwrap_or(0.0)
+        .abs()
+}
+
 /// Finite K values of (k, value) pairs.
 fn finite_pairs_k<'a>(k: &'a [f64], v: &'a [f64]) -> impl Iterator<Item = f64> + 'a {
-    k.iter().zip(v).filter(|(a, b)| a.is_finite() && b.is_finite()).map(|(a, _)| *a)
+    k.iter()
+        .zip(v)
+        .filter(|(a, b)| a.is_finite() && b.is_finite())
+        .map(|(a, _)| *a)
 }

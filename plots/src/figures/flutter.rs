@@ -76,7 +76,12 @@ impl Figure for VgFigure {
         let mut f_runs = vec![];
         for (i, m) in self.modes.iter().enumerate() {
             let field = format!("modes[{i}] \"{}\"", m.name);
-            check_len(kind, &format!("{field} u/damping"), m.u.len(), m.damping.len())?;
+            check_len(
+                kind,
+                &format!("{field} u/damping"),
+                m.u.len(),
+                m.damping.len(),
+            )?;
             check_len(kind, &format!("{field} u/freq"), m.u.len(), m.freq.len())?;
             let g = segments(&m.u, &m.damping);
             let f = segments(&m.u, &m.freq);
@@ -90,7 +95,9 @@ impl Figure for VgFigure {
             g_runs.push(g);
             f_runs.push(f);
         }
-        let fl = self.flutter.filter(|p| p.u.is_finite() && p.freq.is_finite());
+        let fl = self
+            .flutter
+            .filter(|p| p.u.is_finite() && p.freq.is_finite());
         let all_u = g_runs
             .iter()
             .chain(&f_runs)
@@ -99,7 +106,11 @@ impl Figure for VgFigure {
             .map(|p| p.0)
             .chain(fl.map(|p| p.u));
         let (u0, u1) = finite_range(all_u).expect("validated");
-        let (u0, u1) = if u1 > u0 { (u0, u1) } else { padded((u0, u1), 0.0) };
+        let (u0, u1) = if u1 > u0 {
+            (u0, u1)
+        } else {
+            padded((u0, u1), 0.0)
+        };
         let gr = finite_range(g_runs.iter().flatten().flatten().map(|p| p.1).chain([0.0]))
             .expect("contains 0");
         let (g0, g1) = padded(gr, 0.08);
@@ -119,7 +130,9 @@ impl Figure for VgFigure {
             .modes
             .iter()
             .enumerate()
-            .map(|(i, m)| LegendEntry::marker(m.name.clone(), MarkerShape::nth(i), series_color(i), true))
+            .map(|(i, m)| {
+                LegendEntry::marker(m.name.clone(), MarkerShape::nth(i), series_color(i), true)
+            })
             .collect();
         let annot = fl.map(|p| {
             format!(
@@ -131,7 +144,12 @@ impl Figure for VgFigure {
             )
         });
         if let Some(a) = &annot {
-            legend.push(LegendEntry::marker(format!("flutter: {a}"), MarkerShape::Diamond, HIGHLIGHT, true));
+            legend.push(LegendEntry::marker(
+                format!("flutter: {a}"),
+                MarkerShape::Diamond,
+                HIGHLIGHT,
+                true,
+            ));
         }
         let area = legend_band(&area, &legend, kind)?;
         let h = area.dim_in_pixel().1 as i32;
@@ -201,7 +219,10 @@ impl Figure for VgFigure {
                 let c = series_color(i);
                 for run in mode_runs {
                     chart
-                        .draw_series(LineSeries::new(run.clone(), ShapeStyle::from(c).stroke_width(2)))
+                        .draw_series(LineSeries::new(
+                            run.clone(),
+                            ShapeStyle::from(c).stroke_width(2),
+                        ))
                         .ctx(kind)?;
                     let step = (run.len() / 25).max(1);
                     chart
@@ -227,11 +248,18 @@ impl Figure for VgFigure {
                 // Text on a white box so curves underneath do not hide it.
                 let (tw, th) = root.estimate_text_size(a, &a_style).ctx(kind)?;
                 let (tw, th) = (tw as i32, th as i32);
-                let (bx0, bx1) = if right_side { (dx - tw - 5, dx + 5) } else { (dx - 5, dx + tw + 5) };
+                let (bx0, bx1) = if right_side {
+                    (dx - tw - 5, dx + 5)
+                } else {
+                    (dx - 5, dx + tw + 5)
+                };
                 chart
                     .draw_series(std::iter::once(
                         EmptyElement::at((p.u, y))
-                            + Rectangle::new([(bx0, -14 - th - 4), (bx1, -10)], WHITE.mix(0.9).filled())
+                            + Rectangle::new(
+                                [(bx0, -14 - th - 4), (bx1, -10)],
+                                WHITE.mix(0.9).filled(),
+                            )
                             + Text::new(a.clone(), (dx, -14), a_style.pos(anchor)),
                     ))
                     .ctx(kind)?;

@@ -40,7 +40,7 @@ pub struct HeatmapGridFigure {
     pub panels: Vec<HeatmapPanel>,
 }
 
-const PANEL_W: u32 = 440;
+const PANEL_W: u32 = 400;
 const PANEL_H: u32 = 380;
 const BAR_W: u32 = 100;
 
@@ -62,7 +62,11 @@ pub fn diverging(t: f64) -> RGBColor {
         (0.5, [244.0, 165.0, 130.0]),
         (1.0, [178.0, 24.0, 43.0]),
     ];
-    let t = if t.is_finite() { t.clamp(-1.0, 1.0) } else { 0.0 };
+    let t = if t.is_finite() {
+        t.clamp(-1.0, 1.0)
+    } else {
+        0.0
+    };
     let k = STOPS
         .windows(2)
         .position(|w| t <= w[1].0)
@@ -91,7 +95,11 @@ impl Figure for HeatmapGridFigure {
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()> {
         let kind = Self::KIND;
         let (nx, ny) = (self.x_values.len(), self.y_values.len());
-        for (field, len) in [("panels", self.panels.len()), ("x_values", nx), ("y_values", ny)] {
+        for (field, len) in [
+            ("panels", self.panels.len()),
+            ("x_values", nx),
+            ("y_values", ny),
+        ] {
             if len == 0 {
                 return Err(Error::NoData {
                     figure: kind,
@@ -110,7 +118,12 @@ impl Figure for HeatmapGridFigure {
             }
         }
         for (p, panel) in self.panels.iter().enumerate() {
-            check_len(kind, &format!("panels[{p}] \"{}\" rows/y_values", panel.term), panel.values.len(), ny)?;
+            check_len(
+                kind,
+                &format!("panels[{p}] \"{}\" rows/y_values", panel.term),
+                panel.values.len(),
+                ny,
+            )?;
             for (iy, row) in panel.values.iter().enumerate() {
                 check_len(
                     kind,
@@ -157,10 +170,7 @@ impl Figure for HeatmapGridFigure {
                 .margin(6)
                 .x_label_area_size(58)
                 .y_label_area_size(68)
-                .build_cartesian_2d(
-                    (0..nx - 1).into_segmented(),
-                    (0..ny - 1).into_segmented(),
-                )
+                .build_cartesian_2d((0..nx - 1).into_segmented(), (0..ny - 1).into_segmented())
                 .ctx(kind)?;
             mesh!(m = chart, self.x_label.as_str(), self.y_label.as_str());
             m.disable_mesh()
@@ -220,7 +230,10 @@ impl Figure for HeatmapGridFigure {
             cb.draw_series((0..steps).map(|k| {
                 let a = -vmax + 2.0 * vmax * k as f64 / steps as f64;
                 let b = -vmax + 2.0 * vmax * (k + 1) as f64 / steps as f64;
-                Rectangle::new([(0.0, a), (1.0, b)], diverging((a + b) / (2.0 * vmax)).filled())
+                Rectangle::new(
+                    [(0.0, a), (1.0, b)],
+                    diverging((a + b) / (2.0 * vmax)).filled(),
+                )
             }))
             .ctx(kind)?;
         }

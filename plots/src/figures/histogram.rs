@@ -72,7 +72,12 @@ impl Figure for HistogramFigure {
                     message: "must be at least 1, got 0".into(),
                 });
             }
-            let finite: Vec<f64> = panel.values.iter().copied().filter(|v| v.is_finite()).collect();
+            let finite: Vec<f64> = panel
+                .values
+                .iter()
+                .copied()
+                .filter(|v| v.is_finite())
+                .collect();
             if finite.is_empty() {
                 return Err(Error::NoData {
                     figure: kind,
@@ -154,19 +159,37 @@ impl Figure for HistogramFigure {
                 }
             };
             mesh!(m = chart, panel.x_label.as_str(), "cases [-]");
-            m.x_label_formatter(&fx).y_label_formatter(&fy).draw().ctx(kind)?;
+            m.x_label_formatter(&fx)
+                .y_label_formatter(&fy)
+                .draw()
+                .ctx(kind)?;
             let fill = BAR.filled();
             chart
-                .draw_series(counts.iter().enumerate().filter(|(_, c)| **c > 0).map(|(b, &c)| {
-                    let x0 = lo + *w * b as f64;
-                    Rectangle::new([(x0, 0.0), (x0 + *w, c as f64)], fill)
-                }))
+                .draw_series(
+                    counts
+                        .iter()
+                        .enumerate()
+                        .filter(|(_, c)| **c > 0)
+                        .map(|(b, &c)| {
+                            let x0 = lo + *w * b as f64;
+                            Rectangle::new([(x0, 0.0), (x0 + *w, c as f64)], fill)
+                        }),
+                )
                 .ctx(kind)?;
             chart
-                .draw_series(counts.iter().enumerate().filter(|(_, c)| **c > 0).map(|(b, &c)| {
-                    let x0 = lo + *w * b as f64;
-                    Rectangle::new([(x0, 0.0), (x0 + *w, c as f64)], ShapeStyle::from(WHITE).stroke_width(1))
-                }))
+                .draw_series(
+                    counts
+                        .iter()
+                        .enumerate()
+                        .filter(|(_, c)| **c > 0)
+                        .map(|(b, &c)| {
+                            let x0 = lo + *w * b as f64;
+                            Rectangle::new(
+                                [(x0, 0.0), (x0 + *w, c as f64)],
+                                ShapeStyle::from(WHITE).stroke_width(1),
+                            )
+                        }),
+                )
                 .ctx(kind)?;
             if *med >= *lo && *med <= *hi {
                 chart

@@ -7,8 +7,8 @@ use super::{draw_line, look_of, looks, mesh, Series};
 use crate::error::{DrawResultExt, Error, Result};
 use crate::render::Figure;
 use crate::style::{
-    check_len, finite_range, fmt_tick, legend_band, marker, padded, segments, title,
-    LegendEntry, MarkerShape,
+    check_len, finite_range, fmt_tick, legend_band, marker, padded, segments, title, LegendEntry,
+    MarkerShape,
 };
 
 /// Phase portrait: each trajectory is a [`Series`] with x = displacement, y = velocity
@@ -65,7 +65,12 @@ impl Figure for PhasePortraitFigure {
 
         let area = title(root, &self.title, kind)?;
         let (lk, mut legend) = looks(&self.trajectories);
-        legend.push(LegendEntry::marker("start", MarkerShape::Circle, BLACK, false));
+        legend.push(LegendEntry::marker(
+            "start",
+            MarkerShape::Circle,
+            BLACK,
+            false,
+        ));
         let area = legend_band(&area, &legend, kind)?;
         let mut chart = ChartBuilder::on(&area)
             .margin_left(10)
@@ -78,7 +83,10 @@ impl Figure for PhasePortraitFigure {
         let fx = fmt_tick(x1 - x0);
         let fy = fmt_tick(y1 - y0);
         mesh!(m = chart, self.x_label.as_str(), self.y_label.as_str());
-        m.x_label_formatter(&fx).y_label_formatter(&fy).draw().ctx(kind)?;
+        m.x_label_formatter(&fx)
+            .y_label_formatter(&fy)
+            .draw()
+            .ctx(kind)?;
         for (s, sg) in self.trajectories.iter().zip(&runs) {
             let look = look_of(&lk, &s.label);
             for run in sg {
@@ -92,7 +100,13 @@ impl Figure for PhasePortraitFigure {
             }
             let start = sg[0][0];
             chart
-                .draw_series(std::iter::once(marker::<_, DB>(start, MarkerShape::Circle, look.color, false, 7)))
+                .draw_series(std::iter::once(marker::<_, DB>(
+                    start,
+                    MarkerShape::Circle,
+                    look.color,
+                    false,
+                    7,
+                )))
                 .ctx(kind)?;
         }
         Ok(())

@@ -71,18 +71,17 @@ impl Figure for SpectrumFigure {
             let field = format!("series[{i}] \"{}\"", s.label);
             check_len(kind, &format!("{field} x/y"), s.x.len(), s.y.len())?;
             // Positive amplitudes inside the frequency window; a skipped point breaks the line.
-            let y: Vec<f64> = s
-                .x
-                .iter()
-                .zip(&s.y)
-                .map(|(&f, &a)| {
-                    if a > 0.0 && self.f_max.is_none_or(|m| f <= m) {
-                        a
-                    } else {
-                        f64::NAN
-                    }
-                })
-                .collect();
+            let y: Vec<f64> =
+                s.x.iter()
+                    .zip(&s.y)
+                    .map(|(&f, &a)| {
+                        if a > 0.0 && self.f_max.is_none_or(|m| f <= m) {
+                            a
+                        } else {
+                            f64::NAN
+                        }
+                    })
+                    .collect();
             let sg = crate::style::segments(&s.x, &y);
             if sg.is_empty() {
                 return Err(Error::NoData {
@@ -131,7 +130,10 @@ impl Figure for SpectrumFigure {
         let fx = fmt_tick(f1 - f0);
         let fy = |v: &f64| fmt_num(*v);
         mesh!(m = chart, self.x_label.as_str(), self.y_label.as_str());
-        m.x_label_formatter(&fx).y_label_formatter(&fy).draw().ctx(kind)?;
+        m.x_label_formatter(&fx)
+            .y_label_formatter(&fy)
+            .draw()
+            .ctx(kind)?;
 
         // Key-frequency markers under the data.
         let style = font(16.0).color(&RGBColor(60, 60, 60));

@@ -78,7 +78,11 @@ impl Figure for TimeSeriesFigure {
         }
         let all = || segs.iter().flatten().flatten().flatten();
         let (t0, t1) = finite_range(all().map(|p| p.0)).expect("validated non-empty");
-        let (t0, t1) = if t1 > t0 { (t0, t1) } else { padded((t0, t1), 0.0) };
+        let (t0, t1) = if t1 > t0 {
+            (t0, t1)
+        } else {
+            padded((t0, t1), 0.0)
+        };
 
         let area = title(root, &self.title, kind)?;
         let (lk, legend) = looks(self.panels.iter().flat_map(|p| &p.series));
@@ -92,8 +96,8 @@ impl Figure for TimeSeriesFigure {
 
         for (p, (panel, a)) in self.panels.iter().zip(areas.iter()).enumerate() {
             let last = p + 1 == n;
-            let yr = finite_range(segs[p].iter().flatten().flatten().map(|q| q.1))
-                .expect("validated");
+            let yr =
+                finite_range(segs[p].iter().flatten().flatten().map(|q| q.1)).expect("validated");
             let (y0, y1) = padded(yr, 0.06);
             let mut chart = ChartBuilder::on(a)
                 .margin_left(10)
