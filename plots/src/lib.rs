@@ -7,6 +7,8 @@
 //! skipped; a figure with nothing finite to draw is an [`Error::NoData`], never a panic.
 //! [`Report`] builds a self-contained HTML page with inline SVG figures.
 
+#![warn(missing_docs)]
+
 pub mod error;
 pub mod figures;
 pub mod render;

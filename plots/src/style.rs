@@ -77,15 +77,15 @@ pub fn series_color(i: usize) -> RGBColor {
     PALETTE[i % 7]
 }
 
-/// Title text size [px].
+/// Title text size \[px\].
 pub const TITLE_SIZE: f64 = 30.0;
-/// Panel title text size [px].
+/// Panel title text size \[px\].
 pub const PANEL_TITLE_SIZE: f64 = 22.0;
-/// Axis description text size [px].
+/// Axis description text size \[px\].
 pub const AXIS_SIZE: f64 = 21.0;
-/// Tick label text size [px].
+/// Tick label text size \[px\].
 pub const TICK_SIZE: f64 = 17.0;
-/// Legend text size [px].
+/// Legend text size \[px\].
 pub const LEGEND_SIZE: f64 = 19.0;
 
 /// Regular text style of `size` px in the bundled font.

@@ -22,7 +22,7 @@ pub struct ModeBranch {
     pub u: Vec<f64>,
     /// Damping ratio g [-] (negative = unstable with the usual sign; drawn as given).
     pub damping: Vec<f64>,
-    /// Frequency [Hz].
+    /// Frequency \[Hz\].
     pub freq: Vec<f64>,
 }
 

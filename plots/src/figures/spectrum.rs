@@ -17,7 +17,7 @@ use crate::style::{
 /// `"f_α+f_h"`.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct FreqMarker {
-    /// Frequency [Hz] (same unit as the series' x).
+    /// Frequency \[Hz\] (same unit as the series' x).
     pub freq: f64,
     /// Label drawn at the top of the line.
     pub label: String,

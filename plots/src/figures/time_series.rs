@@ -13,7 +13,7 @@ use crate::style::{check_len, decimate, finite_range, legend_band, padded, segme
 const MAX_POINTS: usize = 4000;
 
 /// One panel of a [`TimeSeriesFigure`]: its y-axis label (with unit) and its curves, whose
-/// `x` is time [s].
+/// `x` is time \[s\].
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct TimePanel {
     /// y-axis description with unit, e.g. `"α [deg]"`, `"C_M [-]"`.
