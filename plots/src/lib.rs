@@ -1,1 +1,36 @@
 //! Every figure of aeroform (plotters, bundled font) and the HTML report.
+//!
+//! Each figure is a plain data struct implementing [`Figure`]; [`save`] renders it to PNG
+//! (bitmap) and SVG with the same drawing code and writes both atomically, returning
+//! [`FigureFiles`] (paths and the SVG text). Text is drawn with the bundled DejaVu Sans
+//! (registered once as `"sans-serif"`); no system font is used. Non-finite values are
+//! skipped; a figure with nothing finite to draw is an [`Error::NoData`], never a panic.
+//! [`Report`] builds a self-contained HTML page with inline SVG figures.
+
+#![warn(missing_docs)]
+
+pub mod error;
+pub mod figures;
+pub mod render;
+pub mod report;
+pub mod style;
+
+#[cfg(test)]
+mod samples;
+
+pub use error::{Error, Result};
+pub use figures::bifurcation::{BifurcationFigure, BifurcationPoint, ResponseClass, Sweep};
+pub use figures::delta_path::DeltaPathFigure;
+pub use figures::derivatives::{DerivativeFigure, DerivativePanel, DerivativePoints};
+pub use figures::flutter::{FlutterPoint, ModeBranch, VgFigure};
+pub use figures::heatmap::{diverging, HeatmapGridFigure, HeatmapPanel};
+pub use figures::histogram::{HistogramFigure, HistogramPanel};
+pub use figures::phase::PhasePortraitFigure;
+pub use figures::spectrum::{FreqMarker, SpectrumFigure};
+pub use figures::time_series::{TimePanel, TimeSeriesFigure};
+pub use figures::{Series, SeriesKind};
+pub use render::{render_png, render_svg, save, Figure, FigureFiles};
+pub use report::{escape_html, Report};
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,85 @@
+//! The one error type of the `plots` crate.
+
+/// Result alias of the `plots` crate.
+pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// Everything that can go wrong while drawing a figure or writing the report.
+///
+/// Every variant names the figure (its kind, e.g. `"time_series"`) and the field concerned,
+/// and carries the offending values where there are any.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// A figure has nothing finite to draw in one of its inputs (empty, or only NaN/∞).
+    #[error("figure `{figure}`: field `{field}`: no finite data to draw ({len} values given)")]
+    NoData {
+        /// Figure kind.
+        figure: &'static str,
+        /// Field or series concerned, e.g. `panels[1].series[0] "model"`.
+        field: String,
+        /// Number of values given (finite or not).
+        len: usize,
+    },
+    /// Two arrays that must pair up element by element have different lengths.
+    #[error("figure `{figure}`: field `{field}`: length mismatch ({left} vs {right})")]
+    LengthMismatch {
+        /// Figure kind.
+        figure: &'static str,
+        /// Fields concerned, e.g. `series[0] x/y`.
+        field: String,
+        /// Length of the first array.
+        left: usize,
+        /// Length of the second array.
+        right: usize,
+    },
+    /// An input value is out of range or inconsistent.
+    #[error("figure `{figure}`: field `{field}`: {message}")]
+    InvalidInput {
+        /// Figure kind.
+        figure: &'static str,
+        /// Field concerned.
+        field: String,
+        /// What is wrong, with the offending values.
+        message: String,
+    },
+    /// plotters reported a drawing failure (font, backend).
+    #[error("figure `{figure}`: drawing failed: {message}")]
+    Drawing {
+        /// Figure kind.
+        figure: &'static str,
+        /// plotters' message.
+        message: String,
+    },
+    /// The bitmap could not be encoded as PNG.
+    #[error("figure `{figure}`: PNG encoding failed: {message}")]
+    Encode {
+        /// Figure kind.
+        figure: &'static str,
+        /// Encoder's message.
+        message: String,
+    },
+    /// The bundled font could not be registered with plotters.
+    #[error("bundled font `{name}` could not be registered")]
+    Font {
+        /// Font file name.
+        name: &'static str,
+    },
+    /// A file could not be written (from [`identify::io::write_atomic`], which names the path).
+    #[error(transparent)]
+    Write(#[from] identify::Error),
+}
+
+/// Turns any displayable plotters error into [`Error::Drawing`] for figure `figure`.
+pub(crate) trait DrawResultExt<T> {
+    /// Maps the error into [`Error::Drawing`].
+    fn ctx(self, figure: &'static str) -> Result<T>;
+}
+
+impl<T, E: std::fmt::Display> DrawResultExt<T> for std::result::Result<T, E> {
+    fn ctx(self, figure: &'static str) -> Result<T> {
+        self.map_err(|e| Error::Drawing {
+            figure,
+            message: e.to_string(),
+        })
+    }
+}

@@ -1,0 +1,103 @@
+//! Rendering a figure to PNG and SVG (the same drawing code runs on both backends) and
+//! writing both files atomically.
+
+use std::path::{Path, PathBuf};
+
+use plotters::coord::Shift;
+use plotters::prelude::*;
+
+use crate::error::{DrawResultExt, Error, Result};
+use crate::style::ensure_fonts;
+
+/// A figure: plain data plus the drawing code, run once per backend.
+///
+/// Implemented by every figure struct of this crate ([`crate::TimeSeriesFigure`] …).
+pub trait Figure {
+    /// Kind of figure, used in file names of tests and in error messages (`"time_series"`).
+    const KIND: &'static str;
+
+    /// Canvas size in pixels (width, height); the SVG uses the same size in user units.
+    fn size(&self) -> (u32, u32);
+
+    /// Draws the figure on `root` (already filled white, fonts registered).
+    ///
+    /// # Errors
+    /// [`Error::NoData`], [`Error::LengthMismatch`], [`Error::InvalidInput`] for unusable
+    /// data (checked before anything is drawn), [`Error::Drawing`] for backend failures.
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()>;
+}
+
+/// Files written for one figure, plus its SVG text for embedding in the HTML report.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct FigureFiles {
+    /// PNG file (bitmap, `size()` pixels).
+    pub png: PathBuf,
+    /// SVG file.
+    pub svg: PathBuf,
+    /// The SVG document as written to `svg` (for [`crate::Report::figure`]).
+    pub svg_text: String,
+}
+
+/// Renders `fig` as an SVG document.
+///
+/// # Errors
+/// As [`Figure::draw`]; [`Error::Font`] if the bundled font cannot be registered.
+pub fn render_svg<F: Figure>(fig: &F) -> Result<String> {
+    ensure_fonts()?;
+    let (w, h) = fig.size();
+    let mut text = String::new();
+    {
+        let root = SVGBackend::with_string(&mut text, (w, h)).into_drawing_area();
+        root.fill(&WHITE).ctx(F::KIND)?;
+        fig.draw(&root)?;
+        root.present().ctx(F::KIND)?;
+    }
+    Ok(text)
+}
+
+/// Renders `fig` as PNG bytes (8-bit RGB).
+///
+/// # Errors
+/// As [`Figure::draw`]; [`Error::Encode`] if PNG encoding fails.
+pub fn render_png<F: Figure>(fig: &F) -> Result<Vec<u8>> {
+    ensure_fonts()?;
+    let (w, h) = fig.size();
+    let mut buf = vec![0u8; w as usize * h as usize * 3];
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        root.fill(&WHITE).ctx(F::KIND)?;
+        fig.draw(&root)?;
+        root.present().ctx(F::KIND)?;
+    }
+    let enc = |e: png::EncodingError| Error::Encode {
+        figure: F::KIND,
+        message: e.to_string(),
+    };
+    let mut out = Vec::new();
+    {
+        let mut encoder = png::Encoder::new(&mut out, w, h);
+        encoder.set_color(png::ColorType::Rgb);
+        encoder.set_depth(png::BitDepth::Eight);
+        let mut writer = encoder.write_header().map_err(enc)?;
+        writer.write_image_data(&buf).map_err(enc)?;
+        writer.finish().map_err(enc)?;
+    }
+    Ok(out)
+}
+
+/// Renders `fig` and writes `<dir>/<stem>.png` and `<dir>/<stem>.svg`, each atomically
+/// (temporary file + rename, [`identify::io::write_atomic`]). Nothing is written when the
+/// data are unusable.
+///
+/// # Errors
+/// As [`render_svg`] and [`render_png`]; [`Error::Write`] naming the file when `dir` is
+/// missing or unwritable.
+pub fn save<F: Figure>(fig: &F, dir: &Path, stem: &str) -> Result<FigureFiles> {
+    let svg_text = render_svg(fig)?;
+    let png_bytes = render_png(fig)?;
+    let png = dir.join(format!("{stem}.png"));
+    let svg = dir.join(format!("{stem}.svg"));
+    identify::io::write_atomic(&png, &png_bytes)?;
+    identify::io::write_atomic(&svg, svg_text.as_bytes())?;
+    Ok(FigureFiles { png, svg, svg_text })
+}

@@ -1,0 +1,357 @@
+//! A minimal self-contained HTML report: sections, paragraphs, key–value tables, data
+//! tables, inline SVG figures. No external resources (no CDN, no web fonts, no scripts).
+
+use std::path::Path;
+
+use crate::error::Result;
+use crate::render::FigureFiles;
+
+/// One block of the report body, in order.
+#[derive(Debug, Clone, PartialEq)]
+enum Block {
+    Section(String),
+    Text(String),
+    KeyValues {
+        caption: String,
+        rows: Vec<(String, String)>,
+    },
+    Table {
+        caption: String,
+        header: Vec<String>,
+        rows: Vec<Vec<String>>,
+    },
+    Figure {
+        caption: String,
+        svg: String,
+    },
+}
+
+/// Builder of a self-contained HTML report.
+///
+/// ```
+/// let mut r = plots::Report::new("Study A");
+/// r.section("Summary").text("Identified 12 cases.").key_values("Metrics", &[("R²", "0.98")]);
+/// assert!(r.to_html().contains("<h2>Summary</h2>"));
+/// ```
+#[derive(Debug, Clone, PartialEq)]
+pub struct Report {
+    title: String,
+    blocks: Vec<Block>,
+}
+
+/// Escapes `&`, `<`, `>`, `"` and `'` for HTML text and attribute values.
+pub fn escape_html(s: &str) -> String {
+    let mut out = String::with_capacity(s.len());
+    for c in s.chars() {
+        match c {
+            '&' => out.push_str("&amp;"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '"' => out.push_str("&quot;"),
+            '\'' => out.push_str("&#39;"),
+            _ => out.push(c),
+        }
+    }
+    out
+}
+
+/// Prepares a plotters SVG document for inline use: drops an XML prolog and adds a
+/// `viewBox` (from `width`/`height`) so CSS can scale it to the page width.
+fn inline_svg(svg: &str) -> String {
+    let s = svg.trim_start();
+    let s = match s.strip_prefix("<?xml") {
+        Some(rest) => rest.split_once("?>").map_or(s, |(_, r)| r.trim_start()),
+        None => s,
+    };
+    let Some(start) = s.find("<svg") else {
+        return s.to_string();
+    };
+    let Some(end) = s[start..].find('>').map(|e| start + e) else {
+        return s.to_string();
+    };
+    let tag = &s[start..end];
+    if tag.contains("viewBox") {
+        return s.to_string();
+    }
+    let attr = |name: &str| -> Option<String> {
+        let key = format!("{name}=\"");
+        let i = tag.find(&key)? + key.len();
+        let j = tag[i..].find('"')? + i;
+        Some(tag[i..j].to_string())
+    };
+    match (attr("width"), attr("height")) {
+        (Some(w), Some(h)) => format!("{} viewBox=\"0 0 {w} {h}\"{}", &s[..end], &s[end..]),
+        _ => s.to_string(),
+    }
+}
+
+/// Splits one CSV line on commas, honouring double-quoted fields with `""` escapes.
+fn split_csv_line(line: &str) -> Vec<String> {
+    let mut out = vec![];
+    let mut cur = String::new();
+    let mut quoted = false;
+    let mut chars = line.chars().peekable();
+    while let Some(c) = chars.next() {
+        match (c, quoted) {
+            ('"', true) if chars.peek() == Some(&'"') => {
+                cur.push('"');
+                chars.next();
+            }
+            ('"', _) => quoted = !quoted,
+            (',', false) => out.push(std::mem::take(&mut cur).trim().to_string()),
+            _ => cur.push(c),
+        }
+    }
+    out.push(cur.trim().to_string());
+    out
+}
+
+const CSS: &str = "body{font-family:sans-serif;max-width:1300px;margin:2em auto;padding:0 1em;\
+color:#222;line-height:1.45}h1{border-bottom:2px solid #0072b2;padding-bottom:.2em}\
+h2{margin-top:1.8em;border-bottom:1px solid #ccc}table{border-collapse:collapse;margin:.8em 0}\
+caption{text-align:left;font-weight:bold;padding:.3em 0}th,td{border:1px solid #ccc;\
+padding:.25em .7em;text-align:left}th{background:#f0f4f8}td.num{text-align:right;\
+font-variant-numeric:tabular-nums}figure{margin:1.2em 0}figure svg{max-width:100%;height:auto;\
+display:block;border:1px solid #eee}figcaption{color:#555;font-size:.95em;margin-top:.3em}";
+
+fn is_number(s: &str) -> bool {
+    !s.is_empty() && s.parse::<f64>().is_ok()
+}
+
+impl Report {
+    /// An empty report with a page title (also the first heading).
+    pub fn new(title: impl Into<String>) -> Self {
+        Report {
+            title: title.into(),
+            blocks: vec![],
+        }
+    }
+
+    /// Starts a section (an `<h2>` heading).
+    pub fn section(&mut self, heading: impl Into<String>) -> &mut Self {
+        self.blocks.push(Block::Section(heading.into()));
+        self
+    }
+
+    /// Adds a paragraph of plain text (escaped; blank lines start new paragraphs).
+    pub fn text(&mut self, paragraph: impl Into<String>) -> &mut Self {
+        self.blocks.push(Block::Text(paragraph.into()));
+        self
+    }
+
+    /// Adds a two-column key–value table.
+    pub fn key_values<K: AsRef<str>, V: AsRef<str>>(
+        &mut self,
+        caption: impl Into<String>,
+        rows: &[(K, V)],
+    ) -> &mut Self {
+        self.blocks.push(Block::KeyValues {
+            caption: caption.into(),
+            rows: rows
+                .iter()
+                .map(|(k, v)| (k.as_ref().to_string(), v.as_ref().to_string()))
+                .collect(),
+        });
+        self
+    }
+
+    /// Adds a table with a header row; numeric cells are right-aligned. Rows shorter than
+    /// the header are padded with empty cells.
+    pub fn table<S: AsRef<str>>(
+        &mut self,
+        caption: impl Into<String>,
+        header: &[S],
+        rows: &[Vec<S>],
+    ) -> &mut Self {
+        self.blocks.push(Block::Table {
+            caption: caption.into(),
+            header: header.iter().map(|s| s.as_ref().to_string()).collect(),
+            rows: rows
+                .iter()
+                .map(|r| r.iter().map(|s| s.as_ref().to_string()).collect())
+                .collect(),
+        });
+        self
+    }
+
+    /// Adds a table from CSV text: the first non-empty line is the header; fields are
+    /// comma-separated, double quotes protect commas (`""` is a literal quote).
+    pub fn csv_table(&mut self, caption: impl Into<String>, csv: &str) -> &mut Self {
+        let mut lines = csv.lines().filter(|l| !l.trim().is_empty());
+        let header = lines.next().map(split_csv_line).unwrap_or_default();
+        let rows: Vec<Vec<String>> = lines.map(split_csv_line).collect();
+        self.blocks.push(Block::Table {
+            caption: caption.into(),
+            header,
+            rows,
+        });
+        self
+    }
+
+    /// Embeds a rendered figure (its SVG text, inline) with a caption.
+    pub fn figure(&mut self, caption: impl Into<String>, files: &FigureFiles) -> &mut Self {
+        self.figure_svg(caption, &files.svg_text)
+    }
+
+    /// Embeds an SVG document inline with a caption. The SVG must be trusted (e.g. from
+    /// [`crate::render_svg`]): it is inserted as markup, not escaped.
+    pub fn figure_svg(&mut self, caption: impl Into<String>, svg: &str) -> &mut Self {
+        self.blocks.push(Block::Figure {
+            caption: caption.into(),
+            svg: inline_svg(svg),
+        });
+        self
+    }
+
+    /// The whole page as HTML5 text (UTF-8, inline CSS, no external resources).
+    pub fn to_html(&self) -> String {
+        let mut h = String::new();
+        h.push_str("<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n");
+        h.push_str("<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">\n");
+        h.push_str(&format!("<title>{}</title>\n", escape_html(&self.title)));
+        h.push_str(&format!("<style>{CSS}</style>\n</head>\n<body>\n"));
+        h.push_str(&format!("<h1>{}</h1>\n", escape_html(&self.title)));
+        let mut n_fig = 0;
+        for b in &self.blocks {
+            match b {
+                Block::Section(s) => h.push_str(&format!("<h2>{}</h2>\n", escape_html(s))),
+                Block::Text(t) => {
+                    for p in t.split("\n\n").filter(|p| !p.trim().is_empty()) {
+                        h.push_str(&format!("<p>{}</p>\n", escape_html(p.trim())));
+                    }
+                }
+                Block::KeyValues { caption, rows } => {
+                    h.push_str("<table>\n");
+                    if !caption.is_empty() {
+                        h.push_str(&format!("<caption>{}</caption>\n", escape_html(caption)));
+                    }
+                    for (k, v) in rows {
+                        let class = if is_number(v) { " class=\"num\"" } else { "" };
+                        h.push_str(&format!(
+                            "<tr><th scope=\"row\">{}</th><td{class}>{}</td></tr>\n",
+                            escape_html(k),
+                            escape_html(v)
+                        ));
+                    }
+                    h.push_str("</table>\n");
+                }
+                Block::Table {
+                    caption,
+                    header,
+                    rows,
+                } => {
+                    h.push_str("<table>\n");
+                    if !caption.is_empty() {
+                        h.push_str(&format!("<caption>{}</caption>\n", escape_html(caption)));
+                    }
+                    h.push_str("<thead><tr>");
+                    for c in header {
+                        h.push_str(&format!("<th>{}</th>", escape_html(c)));
+                    }
+                    h.push_str("</tr></thead>\n<tbody>\n");
+                    let width = rows
+                        .iter()
+                        .map(Vec::len)
+                        .chain([header.len()])
+                        .max()
+                        .unwrap_or(0);
+                    for r in rows {
+                        h.push_str("<tr>");
+                        for i in 0..width {
+                            let c = r.get(i).map_or("", String::as_str);
+                            let class = if is_number(c) { " class=\"num\"" } else { "" };
+                            h.push_str(&format!("<td{class}>{}</td>", escape_html(c)));
+                        }
+                        h.push_str("</tr>\n");
+                    }
+                    h.push_str("</tbody>\n</table>\n");
+                }
+                Block::Figure { caption, svg } => {
+                    n_fig += 1;
+                    h.push_str("<figure>\n");
+                    h.push_str(svg);
+                    h.push_str(&format!(
+                        "\n<figcaption>Figure {n_fig}. {}</figcaption>\n</figure>\n",
+                        escape_html(caption)
+                    ));
+                }
+            }
+        }
+        h.push_str("</body>\n</html>\n");
+        h
+    }
+
+    /// Writes the page to `path` atomically ([`identify::io::write_atomic`]).
+    ///
+    /// # Errors
+    /// [`crate::Error::Write`] naming `path` when its folder is missing or unwritable.
+    pub fn write(&self, path: &Path) -> Result<()> {
+        identify::io::write_atomic(path, self.to_html().as_bytes())?;
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn escapes_text_and_tables() {
+        let mut r = Report::new("a < b & c");
+        r.text("x <script>").table("t", &["h<1>"], &[vec!["1.5"]]);
+        let h = r.to_html();
+        assert!(h.contains("<title>a &lt; b &amp; c</title>"));
+        assert!(h.contains("x &lt;script&gt;"));
+        assert!(!h.contains("<script>"));
+        assert!(h.contains("<th>h&lt;1&gt;</th>"));
+        assert!(h.contains("<td class=\"num\">1.5</td>"));
+    }
+
+    #[test]
+    fn csv_table_handles_quotes_and_ragged_rows() {
+        assert_eq!(
+            split_csv_line("a, \"b,c\" ,\"d\"\"e\""),
+            vec!["a", "b,c", "d\"e"]
+        );
+        let mut r = Report::new("t");
+        r.csv_table("cases", "case,R2\nA-1,0.98\nA-2\n");
+        let h = r.to_html();
+        assert!(h.contains("<th>case</th><th>R2</th>"));
+        assert!(h.contains("<td>A-2</td><td></td>"), "{h}");
+    }
+
+    #[test]
+    fn inline_svg_gets_viewbox_and_loses_prolog() {
+        let s = inline_svg(
+            "<?xml version=\"1.0\"?>\n<svg width=\"10\" height=\"20\" xmlns=\"x\"></svg>",
+        );
+        assert!(
+            s.starts_with("<svg width=\"10\" height=\"20\" xmlns=\"x\" viewBox=\"0 0 10 20\">"),
+            "{s}"
+        );
+        let kept = inline_svg("<svg viewBox=\"0 0 1 1\"></svg>");
+        assert_eq!(kept, "<svg viewBox=\"0 0 1 1\"></svg>");
+    }
+
+    #[test]
+    fn no_external_resources() {
+        let mut r = Report::new("t");
+        r.section("s").key_values("kv", &[("a", "1")]);
+        let h = r.to_html();
+        for bad in ["http://", "https://", "<link", "<script", "@import", "url("] {
+            assert!(!h.contains(bad), "found {bad}");
+        }
+    }
+
+    #[test]
+    fn write_is_atomic_and_reports_missing_folder() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("r.html");
+        Report::new("t").write(&p).unwrap();
+        assert!(std::fs::read_to_string(&p).unwrap().contains("<h1>t</h1>"));
+        let e = Report::new("t")
+            .write(&dir.path().join("no/r.html"))
+            .unwrap_err();
+        assert!(e.to_string().contains("r.html"), "{e}");
+    }
+}
