@@ -251,6 +251,7 @@ fn full_manifest() -> Manifest {
     extra.insert("odd key".into(), toml::Value::Integer(3));
     let mut nested = toml::Table::new();
     nested.insert("x".into(), toml::Value::Float(0.1));
+    nested.insert("note".into(), toml::Value::String("two\nlines 'q' \"d\"".into()));
     nested.insert(
         "list".into(),
         toml::Value::Array(vec![toml::Value::Boolean(true), toml::Value::Float(2.5)]),
@@ -306,6 +307,9 @@ fn full_manifest() -> Manifest {
 fn manifest_to_toml_parse_round_trip_with_extra() {
     let m = full_manifest();
     let text = m.to_toml();
+    if std::env::var_os("SHOW_TOML").is_some() {
+        eprintln!("{text}");
+    }
     let back = Manifest::parse(&text, p()).unwrap_or_else(|e| panic!("{e}\n{text}"));
     assert_eq!(back, m, "{text}");
     // Keys appear in the documented order.
