@@ -251,7 +251,10 @@ fn full_manifest() -> Manifest {
     extra.insert("odd key".into(), toml::Value::Integer(3));
     let mut nested = toml::Table::new();
     nested.insert("x".into(), toml::Value::Float(0.1));
-    nested.insert("note".into(), toml::Value::String("two\nlines 'q' \"d\"".into()));
+    nested.insert(
+        "note".into(),
+        toml::Value::String("two\nlines 'q' \"d\"".into()),
+    );
     nested.insert(
         "list".into(),
         toml::Value::Array(vec![toml::Value::Boolean(true), toml::Value::Float(2.5)]),
