@@ -46,7 +46,9 @@ pub enum Error {
         message: String,
     },
     /// Time stamps are not uniformly spaced.
-    #[error("{path}:{line}: field `t`: non-uniform sampling (step {step} s, median step {median} s)")]
+    #[error(
+        "{path}:{line}: field `t`: non-uniform sampling (step {step} s, median step {median} s)"
+    )]
     NonUniformSampling {
         /// CSV file.
         path: PathBuf,

@@ -22,5 +22,7 @@ pub mod pipeline;
 pub mod preprocess;
 pub mod record;
 pub mod regress;
+pub mod synthetic;
+pub mod workflow;
 
 pub use error::{Error, Result};

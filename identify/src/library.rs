@@ -1,1 +1,414 @@
-//! (to be written)
+//! Polynomial candidate libraries in the four regression variables (DESIGN.md §3).
+//!
+//! The variables are, in this order, `alpha` = α, `alpha_dot` = Bα̇/U, `h` = h/B and
+//! `h_dot` = ḣ/U (all nondimensional, see [`crate::record::NondimCase`]). A term is a
+//! monomial of total degree 1 to 3 (or the constant `1`, degree 0). Its name joins the
+//! factors with `*`, powers as `^2`, `^3`, variables in the order alpha, alpha_dot, h,
+//! h_dot (DATA_FORMAT.md), e.g. `alpha^2*h` or `alpha*h*h_dot`.
+//!
+//! Column order of a library: the constant (when asked for), then degree 1, 2, 3; inside a
+//! degree, lexicographic in the variable order (the order of
+//! `itertools::combinations_with_replacement`): `alpha^2, alpha*alpha_dot, alpha*h, …`.
+
+use faer::Mat;
+use serde::{Deserialize, Serialize};
+
+use crate::{Error, Result};
+
+/// Names of the four regression variables, in library order.
+pub const VARIABLES: [&str; 4] = ["alpha", "alpha_dot", "h", "h_dot"];
+
+/// Which polynomial library to use.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum LibraryKind {
+    /// Every monomial of degree 1–3 in the four variables: 4 + 10 + 20 = 34 terms.
+    Full34,
+    /// The paper's 30-term library: [`LibraryKind::Full34`] without `alpha*alpha_dot^2`,
+    /// `alpha^2*alpha_dot`, `h*h_dot^2`, `h^2*h_dot`.
+    #[default]
+    Paper30,
+}
+
+impl LibraryKind {
+    /// Number of polynomial terms (without the optional constant).
+    pub fn n_terms(self) -> usize {
+        match self {
+            LibraryKind::Full34 => 34,
+            LibraryKind::Paper30 => 30,
+        }
+    }
+}
+
+/// One monomial term: `powers[v]` is the exponent of variable `v` (order of [`VARIABLES`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct Term {
+    /// Exponents of (alpha, alpha_dot, h, h_dot).
+    pub powers: [u8; 4],
+}
+
+impl Term {
+    /// The constant term `1`.
+    pub const ONE: Term = Term { powers: [0; 4] };
+
+    /// Term with the given exponents of (alpha, alpha_dot, h, h_dot).
+    pub const fn new(powers: [u8; 4]) -> Self {
+        Term { powers }
+    }
+
+    /// The linear term of variable `v` (0 = alpha, 1 = alpha_dot, 2 = h, 3 = h_dot).
+    ///
+    /// # Panics
+    /// When `v > 3` (a programming error).
+    #[track_caller]
+    pub fn linear(v: usize) -> Self {
+        assert!(v < 4, "variable index {v} out of range");
+        let mut powers = [0; 4];
+        powers[v] = 1;
+        Term { powers }
+    }
+
+    /// Total degree Σ powers.
+    pub fn degree(&self) -> u32 {
+        self.powers.iter().map(|&p| p as u32).sum()
+    }
+
+    /// Number of rate factors: the exponent of alpha_dot plus that of h_dot.
+    pub fn n_rate_factors(&self) -> u32 {
+        self.powers[1] as u32 + self.powers[3] as u32
+    }
+
+    /// Canonical name (`1` for the constant), e.g. `alpha^2*h`.
+    pub fn name(&self) -> String {
+        if self.degree() == 0 {
+            return "1".to_string();
+        }
+        let mut parts = Vec::with_capacity(4);
+        for (v, &p) in self.powers.iter().enumerate() {
+            match p {
+                0 => {}
+                1 => parts.push(VARIABLES[v].to_string()),
+                _ => parts.push(format!("{}^{p}", VARIABLES[v])),
+            }
+        }
+        parts.join("*")
+    }
+
+    /// Parses a term name; factors may come in any order and repeat (`h*alpha*alpha`
+    /// = `alpha^2*h`); whitespace around factors is ignored; `1` is the constant.
+    ///
+    /// # Errors
+    /// [`Error::InvalidOption`] (option `term`) naming the term when a factor is not one of
+    /// the four variables, a power is not a positive integer, or the degree exceeds 3.
+    pub fn parse(name: &str) -> Result<Term> {
+        let bad = |message: String| Error::InvalidOption {
+            name: "term".to_string(),
+            message: format!("`{name}`: {message}"),
+        };
+        let trimmed = name.trim();
+        if trimmed == "1" {
+            return Ok(Term::ONE);
+        }
+        if trimmed.is_empty() {
+            return Err(bad("empty term name".to_string()));
+        }
+        let mut powers = [0u32; 4];
+        for factor in trimmed.split('*') {
+            let factor = factor.trim();
+            let (var, pow) = match factor.split_once('^') {
+                Some((v, p)) => {
+                    let p: u32 = p.trim().parse().map_err(|_| {
+                        bad(format!("power `{}` is not a positive integer", p.trim()))
+                    })?;
+                    if p == 0 {
+                        return Err(bad("power 0 is not allowed".to_string()));
+                    }
+                    (v.trim(), p)
+                }
+                None => (factor, 1),
+            };
+            let v = VARIABLES.iter().position(|&n| n == var).ok_or_else(|| {
+                bad(format!(
+                    "unknown factor `{var}` (expected one of alpha, alpha_dot, h, h_dot)"
+                ))
+            })?;
+            powers[v] += pow;
+        }
+        let degree: u32 = powers.iter().sum();
+        if degree > 3 {
+            return Err(bad(format!("degree {degree} exceeds 3")));
+        }
+        Ok(Term {
+            powers: powers.map(|p| p as u8),
+        })
+    }
+
+    /// Value of the term at one sample `x = (α, Bα̇/U, h/B, ḣ/U)`.
+    pub fn eval_at(&self, x: [f64; 4]) -> f64 {
+        let mut v = 1.0;
+        for (k, &p) in self.powers.iter().enumerate() {
+            for _ in 0..p {
+                v *= x[k];
+            }
+        }
+        v
+    }
+}
+
+impl std::fmt::Display for Term {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.name())
+    }
+}
+
+/// An ordered set of candidate terms: the columns of the regression matrix Θ.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Library {
+    kind: LibraryKind,
+    constant: bool,
+    terms: Vec<Term>,
+}
+
+/// The four terms the paper's 30-term library leaves out of the 34.
+const PAPER_REMOVED: [[u8; 4]; 4] = [[1, 2, 0, 0], [2, 1, 0, 0], [0, 0, 1, 2], [0, 0, 2, 1]];
+
+impl Library {
+    /// Builds a library; `constant` adds the term `1` as the first column.
+    pub fn new(kind: LibraryKind, constant: bool) -> Self {
+        let mut terms = Vec::with_capacity(35);
+        if constant {
+            terms.push(Term::ONE);
+        }
+        // combinations with replacement of the variable indices, non-decreasing, which is
+        // lexicographic order in the variable order
+        let mut combos: Vec<Vec<usize>> = Vec::with_capacity(34);
+        for a in 0..4 {
+            combos.push(vec![a]);
+        }
+        for a in 0..4 {
+            for b in a..4 {
+                combos.push(vec![a, b]);
+            }
+        }
+        for a in 0..4 {
+            for b in a..4 {
+                for c in b..4 {
+                    combos.push(vec![a, b, c]);
+                }
+            }
+        }
+        for idx in combos {
+            let mut powers = [0u8; 4];
+            for v in idx {
+                powers[v] += 1;
+            }
+            if kind == LibraryKind::Full34 || !PAPER_REMOVED.contains(&powers) {
+                terms.push(Term { powers });
+            }
+        }
+        Library {
+            kind,
+            constant,
+            terms,
+        }
+    }
+
+    /// Library kind.
+    pub fn kind(&self) -> LibraryKind {
+        self.kind
+    }
+
+    /// Whether the constant term `1` is the first column.
+    pub fn has_constant(&self) -> bool {
+        self.constant
+    }
+
+    /// The terms in column order.
+    pub fn terms(&self) -> &[Term] {
+        &self.terms
+    }
+
+    /// Number of terms (columns).
+    pub fn len(&self) -> usize {
+        self.terms.len()
+    }
+
+    /// True for a library without a term (never produced by [`Library::new`]).
+    pub fn is_empty(&self) -> bool {
+        self.terms.is_empty()
+    }
+
+    /// Term names in column order.
+    pub fn names(&self) -> Vec<String> {
+        self.terms.iter().map(Term::name).collect()
+    }
+
+    /// Column index of a term.
+    pub fn index_of_term(&self, term: &Term) -> Option<usize> {
+        self.terms.iter().position(|t| t == term)
+    }
+
+    /// Column index of a term given by name (any factor order, see [`Term::parse`]).
+    ///
+    /// # Errors
+    /// [`Error::InvalidOption`] naming the term when the name does not parse or the term
+    /// is not in this library.
+    pub fn index_of(&self, name: &str) -> Result<usize> {
+        let term = self.parse_term(name)?;
+        self.index_of_term(&term)
+            .ok_or_else(|| Error::InvalidOption {
+                name: "term".to_string(),
+                message: format!(
+                    "`{name}` (= `{}`) is not in the {:?} library{}",
+                    term.name(),
+                    self.kind,
+                    if self.constant { " with constant" } else { "" }
+                ),
+            })
+    }
+
+    /// Parses a term name and normalises it (see [`Term::parse`]).
+    ///
+    /// # Errors
+    /// As [`Term::parse`].
+    pub fn parse_term(&self, name: &str) -> Result<Term> {
+        Term::parse(name)
+    }
+
+    /// Evaluates every term on the samples `x = [α, Bα̇/U, h/B, ḣ/U]`: the n × p matrix Θ
+    /// (column-major, one column per term in library order).
+    ///
+    /// # Panics
+    /// When the four series do not have the same length (a programming error).
+    #[track_caller]
+    pub fn evaluate(&self, x: &[Vec<f64>; 4]) -> Mat<f64> {
+        let n = x[0].len();
+        assert!(
+            x.iter().all(|v| v.len() == n),
+            "regression variables of unequal lengths"
+        );
+        let mut theta = Mat::<f64>::zeros(n, self.terms.len());
+        // powers up to 3 of each variable, reused for every column
+        let pw: Vec<[Vec<f64>; 3]> = x
+            .iter()
+            .map(|v| {
+                let p1 = v.clone();
+                let p2: Vec<f64> = v.iter().map(|a| a * a).collect();
+                let p3: Vec<f64> = v.iter().zip(&p2).map(|(a, b)| a * b).collect();
+                [p1, p2, p3]
+            })
+            .collect();
+        for (j, term) in self.terms.iter().enumerate() {
+            let mut col = theta.col_mut(j);
+            let factors: Vec<&[f64]> = term
+                .powers
+                .iter()
+                .enumerate()
+                .filter(|(_, &p)| p > 0)
+                .map(|(v, &p)| pw[v][p as usize - 1].as_slice())
+                .collect();
+            match factors.len() {
+                0 => col.fill(1.0),
+                1 => {
+                    for (i, c) in col.iter_mut().enumerate() {
+                        *c = factors[0][i];
+                    }
+                }
+                2 => {
+                    for (i, c) in col.iter_mut().enumerate() {
+                        *c = factors[0][i] * factors[1][i];
+                    }
+                }
+                _ => {
+                    for (i, c) in col.iter_mut().enumerate() {
+                        *c = factors[0][i] * factors[1][i] * factors[2][i];
+                    }
+                }
+            }
+        }
+        theta
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sizes_and_order() {
+        let full = Library::new(LibraryKind::Full34, false);
+        assert_eq!(full.len(), 34);
+        let paper = Library::new(LibraryKind::Paper30, false);
+        assert_eq!(paper.len(), 30);
+        let with_one = Library::new(LibraryKind::Paper30, true);
+        assert_eq!(with_one.len(), 31);
+        assert_eq!(with_one.names()[0], "1");
+        let names = full.names();
+        assert_eq!(&names[..4], &["alpha", "alpha_dot", "h", "h_dot"]);
+        assert_eq!(
+            &names[4..8],
+            &["alpha^2", "alpha*alpha_dot", "alpha*h", "alpha*h_dot"]
+        );
+        assert_eq!(names[13], "h_dot^2");
+        assert_eq!(names[14], "alpha^3");
+        assert_eq!(names[15], "alpha^2*alpha_dot");
+        assert_eq!(names[33], "h_dot^3");
+        for removed in [
+            "alpha*alpha_dot^2",
+            "alpha^2*alpha_dot",
+            "h*h_dot^2",
+            "h^2*h_dot",
+        ] {
+            assert!(full.index_of(removed).is_ok());
+            assert!(paper.index_of(removed).is_err(), "{removed}");
+        }
+        // degrees non-decreasing, names unique
+        let mut seen = std::collections::HashSet::new();
+        let mut last = 0;
+        for t in full.terms() {
+            assert!(t.degree() >= last);
+            last = t.degree();
+            assert!(seen.insert(t.name()));
+        }
+    }
+
+    #[test]
+    fn parse_normalises_and_rejects() {
+        let t = Term::parse("h * alpha*alpha").unwrap();
+        assert_eq!(t.name(), "alpha^2*h");
+        assert_eq!(
+            Term::parse("h_dot*h*alpha").unwrap().name(),
+            "alpha*h*h_dot"
+        );
+        assert_eq!(Term::parse("alpha_dot^3").unwrap().n_rate_factors(), 3);
+        let e = Term::parse("alpha*beta").unwrap_err().to_string();
+        assert!(e.contains("beta") && e.contains("alpha*beta"), "{e}");
+        assert!(Term::parse("alpha^4").is_err());
+        assert!(Term::parse("alpha^2*h^2").is_err());
+        assert!(Term::parse("alpha^x").is_err());
+        for t in Library::new(LibraryKind::Full34, true).terms() {
+            assert_eq!(Term::parse(&t.name()).unwrap(), *t);
+        }
+    }
+
+    #[test]
+    fn evaluate_matches_pointwise() {
+        let x = [
+            vec![0.1, -0.2, 0.3],
+            vec![1.0, 2.0, -1.5],
+            vec![-0.5, 0.25, 0.7],
+            vec![0.3, -0.9, 1.1],
+        ];
+        let lib = Library::new(LibraryKind::Full34, true);
+        let theta = lib.evaluate(&x);
+        for i in 0..3 {
+            let xi = [x[0][i], x[1][i], x[2][i], x[3][i]];
+            for (j, t) in lib.terms().iter().enumerate() {
+                let manual: f64 = (0..4).map(|v| xi[v].powi(t.powers[v] as i32)).product();
+                assert!((theta[(i, j)] - manual).abs() < 1e-14);
+            }
+        }
+        let j = lib.index_of("alpha*h*h_dot").unwrap();
+        assert!((theta[(1, j)] - (-0.2 * 0.25 * -0.9)).abs() < 1e-15);
+    }
+}

@@ -1,1 +1,986 @@
-//! (to be written)
+//! The whole identification of a data set, and the `identification.json` result.
+//!
+//! [`identify`] runs, per case (in parallel, `rayon`, sequential linear algebra inside):
+//! library evaluation, one QR factorisation of the column-normalised library with both
+//! targets, identifiability (rank, dependencies, canonical basis), candidate tones and the
+//! least-squares harmonic projection of the targets and of every library column at the key
+//! frequencies. Then per group and target (in parallel): the δ path of (group) STLSQ on the
+//! group basis and the selection of the sparsest support under the loss limit. Results are
+//! deterministic, independent of the thread count and of the case order (groups sorted by
+//! name, cases by id inside a group); cases are reported in input order.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::eq19::{Eq19Values, LiftEq19, MomentEq19, EQ19_TERMS};
+use crate::identifiability::{self, BasisMode, CaseIdentifiability, RankOptions};
+use crate::library::{Library, LibraryKind};
+use crate::metrics::{self, HarmonicFit};
+use crate::record::NondimCase;
+use crate::regress::adapter::{self, PysindyOptions};
+use crate::regress::path::{self, DeltaPath, KeyProjection, PathOptions};
+use crate::regress::{
+    self, bools_to_mask, CaseFactor, CaseProblem, FitCache, GroupRule, LeastSquares, Mask, Measure,
+    Stlsq,
+};
+use crate::{Error, Result};
+
+/// Format tag of `identification.json`.
+pub const FORMAT: &str = "aeroform-identification/1";
+
+/// How cases are grouped for group STLSQ (one support shared by a group).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum GroupBy {
+    /// By motion configuration (`config` in the manifest; cases without one form the group
+    /// `-`).
+    #[default]
+    Config,
+    /// By wind speed (group name `U=<m/s>`).
+    WindSpeed,
+    /// By pitch amplitude (group name `amplitude=<deg>`).
+    Amplitude,
+    /// Every case alone (group name = case id).
+    None,
+}
+
+/// Which sparse optimiser runs along the δ path.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case", tag = "kind")]
+pub enum RegressorChoice {
+    /// (Group) STLSQ on the column-normalised basis (default).
+    #[default]
+    Stlsq,
+    /// pysindy 2.1 STLSQ per case on raw columns (comparison mode; the group support is the
+    /// union of the case supports).
+    Pysindy(PysindyOptions),
+    /// Plain least squares on the whole identifiable basis (no δ path).
+    LeastSquares,
+}
+
+/// Every option of [`identify`] that changes the result.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct IdentifySettings {
+    /// Candidate library.
+    pub library: LibraryKind,
+    /// Add the constant term `1`.
+    pub constant: bool,
+    /// Canonical identifiable basis, or the full library (rank deficiency is an error).
+    pub basis: BasisMode,
+    /// Relative singular-value tolerance of exact dependencies.
+    pub rank_tol: f64,
+    /// Relative singular-value tolerance of reported near dependencies.
+    pub near_tol: f64,
+    /// Terms never removed by the sparse regression (when identifiable).
+    pub kept_terms: Vec<String>,
+    /// Threshold measure.
+    pub measure: Measure,
+    /// Group-removal rule.
+    pub group_rule: GroupRule,
+    /// Ridge λ on the column-normalised matrix (0 = least squares).
+    pub ridge: f64,
+    /// Maximum STLSQ iterations per δ.
+    pub max_iter: usize,
+    /// Number of δ values.
+    pub n_delta: usize,
+    /// δ range [min, max]; `None` = the default of the measure (contribution 1e-4..1,
+    /// raw coefficient and pysindy 1e-3..10).
+    pub delta_range: Option<[f64; 2]>,
+    /// Relative slack of the loss limit.
+    pub loss_rel: f64,
+    /// Absolute slack of the loss limit.
+    pub loss_abs: f64,
+    /// Number of key frequencies.
+    pub k_key: usize,
+    /// Highest order |m| + |n| of candidate tones.
+    pub max_harmonic_order: u32,
+    /// Optimiser.
+    pub regressor: RegressorChoice,
+    /// Grouping of cases.
+    pub group_by: GroupBy,
+}
+
+impl Default for IdentifySettings {
+    fn default() -> Self {
+        let stlsq = Stlsq::default();
+        IdentifySettings {
+            library: LibraryKind::Paper30,
+            constant: false,
+            basis: BasisMode::Canonical,
+            rank_tol: identifiability::DEFAULT_RANK_TOL,
+            near_tol: identifiability::DEFAULT_NEAR_TOL,
+            kept_terms: ["alpha", "alpha_dot", "h", "h_dot"]
+                .map(String::from)
+                .to_vec(),
+            measure: Measure::Contribution,
+            group_rule: GroupRule::Norm,
+            ridge: 0.0,
+            max_iter: stlsq.max_iter,
+            n_delta: path::DEFAULT_N_DELTA,
+            delta_range: None,
+            loss_rel: path::DEFAULT_LOSS_REL,
+            loss_abs: path::DEFAULT_LOSS_ABS,
+            k_key: metrics::DEFAULT_K_KEY,
+            max_harmonic_order: metrics::DEFAULT_MAX_ORDER,
+            regressor: RegressorChoice::Stlsq,
+            group_by: GroupBy::Config,
+        }
+    }
+}
+
+impl IdentifySettings {
+    /// The measure the δ grid applies to (raw coefficients in pysindy mode).
+    pub fn effective_measure(&self) -> Measure {
+        match self.regressor {
+            RegressorChoice::Pysindy(_) => Measure::Coefficient,
+            _ => self.measure,
+        }
+    }
+
+    /// The δ path options these settings imply.
+    pub fn path_options(&self) -> PathOptions {
+        let (lo, hi) = match self.delta_range {
+            Some([a, b]) => (a, b),
+            None => path::default_range(self.effective_measure()),
+        };
+        PathOptions {
+            n_delta: self.n_delta,
+            delta_min: lo,
+            delta_max: hi,
+            loss_rel: self.loss_rel,
+            loss_abs: self.loss_abs,
+        }
+    }
+
+    /// Checks every option once, at the boundary.
+    ///
+    /// # Errors
+    /// [`Error::InvalidOption`] naming the option (e.g. `k_key`, `delta_range`,
+    /// `kept_terms`) and its value.
+    pub fn validate(&self) -> Result<()> {
+        RankOptions {
+            tol: self.rank_tol,
+            near_tol: self.near_tol,
+        }
+        .validate()?;
+        self.path_options().validate()?;
+        Stlsq {
+            threshold: 0.0,
+            measure: self.measure,
+            group_rule: self.group_rule,
+            ridge: self.ridge,
+            max_iter: self.max_iter,
+        }
+        .validate()?;
+        if let RegressorChoice::Pysindy(o) = &self.regressor {
+            o.validate()?;
+        }
+        if self.k_key == 0 {
+            return Err(Error::InvalidOption {
+                name: "k_key".to_string(),
+                message: "must be ≥ 1".to_string(),
+            });
+        }
+        if self.max_harmonic_order == 0 || self.max_harmonic_order > 20 {
+            return Err(Error::InvalidOption {
+                name: "max_harmonic_order".to_string(),
+                message: format!("{} must be in 1..=20", self.max_harmonic_order),
+            });
+        }
+        let lib = Library::new(self.library, self.constant);
+        for t in &self.kept_terms {
+            lib.index_of(t).map_err(|e| Error::InvalidOption {
+                name: "kept_terms".to_string(),
+                message: e.to_string(),
+            })?;
+        }
+        Ok(())
+    }
+}
+
+/// Progress of [`identify`], reported on the calling thread.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Progress {
+    /// Per-case preparation (library, factorisation, identifiability, key frequencies).
+    Cases {
+        /// Cases done.
+        done: usize,
+        /// Total cases.
+        total: usize,
+    },
+    /// δ paths of the groups (one unit per group and force).
+    Groups {
+        /// Paths done.
+        done: usize,
+        /// Total paths.
+        total: usize,
+    },
+}
+
+/// Coefficients of the library terms in library order, serialised as a JSON object that
+/// keeps that order; `None` (null) for a term outside the identifiable basis.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct TermMap(pub Vec<(String, Option<f64>)>);
+
+impl TermMap {
+    /// Value of a term by name (`None` when absent or not identifiable).
+    pub fn get(&self, name: &str) -> Option<f64> {
+        self.0.iter().find(|(n, _)| n == name).and_then(|(_, v)| *v)
+    }
+}
+
+impl Serialize for TermMap {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut m = s.serialize_map(Some(self.0.len()))?;
+        for (k, v) in &self.0 {
+            m.serialize_entry(k, v)?;
+        }
+        m.end()
+    }
+}
+
+impl<'de> Deserialize<'de> for TermMap {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        struct V;
+        impl<'de> serde::de::Visitor<'de> for V {
+            type Value = TermMap;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("an object of term name → number or null")
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(
+                self,
+                mut a: A,
+            ) -> std::result::Result<TermMap, A::Error> {
+                let mut v = Vec::new();
+                while let Some((k, x)) = a.next_entry::<String, Option<f64>>()? {
+                    v.push((k, x));
+                }
+                Ok(TermMap(v))
+            }
+        }
+        d.deserialize_map(V)
+    }
+}
+
+/// Identification of one force of one case.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ForceResult<E> {
+    /// Raw nondimensional coefficient of every library term (null = not identifiable,
+    /// 0 = removed by the sparse regression).
+    pub terms: TermMap,
+    /// Eq. 19 derivatives (null where K or the term is missing).
+    pub eq19: E,
+    /// R² of the fit.
+    pub r2: Option<f64>,
+    /// MFWA (Eq. 18) at the key frequencies (null without key frequencies).
+    pub mfwa: Option<f64>,
+    /// Phase-aware MFWA.
+    pub mfwa_phase: Option<f64>,
+    /// Eq. 14 key-frequency loss.
+    pub key_frequency_loss: Option<f64>,
+    /// The key frequencies [Hz], largest measured amplitude first.
+    pub key_frequencies: Vec<f64>,
+}
+
+/// Identification of one case.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CaseResult {
+    /// Case id.
+    pub id: String,
+    /// Group name.
+    pub group: String,
+    /// Wind speed U [m/s].
+    pub wind_speed: f64,
+    /// K_α = Bω_α/U.
+    pub k_alpha: Option<f64>,
+    /// K_h = Bω_h/U.
+    pub k_h: Option<f64>,
+    /// Numerical rank of the case's library.
+    pub rank: usize,
+    /// Dependencies of the case's library (term names).
+    pub dependencies: Vec<String>,
+    /// Moment.
+    pub moment: ForceResult<MomentEq19>,
+    /// Lift.
+    pub lift: ForceResult<LiftEq19>,
+}
+
+/// One support of a δ path, summarised.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PathEntry {
+    /// Number of terms.
+    pub n_terms: usize,
+    /// Group loss (mean over cases).
+    pub loss: f64,
+    /// Smallest and largest δ of the grid giving this support.
+    pub delta: [f64; 2],
+    /// The terms.
+    pub support: Vec<String>,
+}
+
+/// Group result of one force.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct GroupForce {
+    /// Selected support (term names, library order).
+    pub support: Vec<String>,
+    /// Smallest δ of the grid giving the selected support.
+    pub selected_delta: f64,
+    /// δ interval of the grid giving the selected support.
+    pub delta_range: [f64; 2],
+    /// Group loss of the selected support.
+    pub loss: f64,
+    /// Loss of the densest support on the path.
+    pub loss_dense: f64,
+    /// Loss limit.
+    pub loss_limit: f64,
+    /// The distinct supports of the path, along increasing δ.
+    pub path: Vec<PathEntry>,
+}
+
+/// One group.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct GroupResult {
+    /// Group name.
+    pub name: String,
+    /// Case ids, sorted.
+    pub cases: Vec<String>,
+    /// Terms of the group basis (identifiable in every case of the group).
+    pub basis: Vec<String>,
+    /// Moment.
+    pub moment: GroupForce,
+    /// Lift.
+    pub lift: GroupForce,
+}
+
+/// Library summary.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LibraryInfo {
+    /// Term names in column order.
+    pub terms: Vec<String>,
+    /// Smallest numerical rank over the cases.
+    pub rank: usize,
+    /// Dependencies of the case attaining that rank (first such case).
+    pub dependencies: Vec<String>,
+    /// The case whose dependencies are listed.
+    pub rank_case: Option<String>,
+    /// Priority order of the canonical basis (term names).
+    pub priority: Vec<String>,
+}
+
+/// The content of `identification.json` (DATA_FORMAT.md).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Identification {
+    /// Always [`FORMAT`].
+    pub format: String,
+    /// Data-set name.
+    pub dataset: String,
+    /// Settings used.
+    pub settings: IdentifySettings,
+    /// Library summary.
+    pub library: LibraryInfo,
+    /// Cases in input order.
+    pub cases: Vec<CaseResult>,
+    /// Groups sorted by name.
+    pub groups: Vec<GroupResult>,
+}
+
+impl Identification {
+    /// Reads an `identification.json`.
+    ///
+    /// # Errors
+    /// [`Error::Io`] when the file cannot be read, [`Error::Json`] with serde's line and
+    /// column when it is malformed or its `format` is not [`FORMAT`].
+    pub fn read(path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let id: Identification = serde_json::from_str(&text).map_err(|e| Error::Json {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        })?;
+        if id.format != FORMAT {
+            return Err(Error::Json {
+                path: path.to_path_buf(),
+                message: format!("format `{}` is not `{FORMAT}`", id.format),
+            });
+        }
+        Ok(id)
+    }
+
+    /// Writes it (pretty JSON) atomically.
+    ///
+    /// # Errors
+    /// [`Error::Io`] naming the path; [`Error::Json`] if serialisation fails.
+    pub fn write(&self, path: &Path) -> Result<()> {
+        let text = serde_json::to_string_pretty(self).map_err(|e| Error::Json {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        })?;
+        crate::io::write_atomic(path, text.as_bytes())
+    }
+
+    /// Compact text table: per group and force the selected terms, then per case the Eq. 19
+    /// derivatives, R², MFWA and key-frequency loss.
+    pub fn summary_table(&self) -> String {
+        use std::fmt::Write;
+        let f = |v: Option<f64>| match v {
+            Some(x) => format!("{x:>9.4}"),
+            None => format!("{:>9}", "-"),
+        };
+        let mut s = String::new();
+        let _ = writeln!(
+            s,
+            "dataset: {}  (library rank {} of {})",
+            self.dataset,
+            self.library.rank,
+            self.library.terms.len()
+        );
+        for g in &self.groups {
+            for (force, gf) in [("moment", &g.moment), ("lift", &g.lift)] {
+                let _ = writeln!(
+                    s,
+                    "\n[{}] {force}: {} terms (δ = {:.3e}, loss {:.2e}, limit {:.2e}): {}",
+                    g.name,
+                    gf.support.len(),
+                    gf.selected_delta,
+                    gf.loss,
+                    gf.loss_limit,
+                    gf.support.join(", ")
+                );
+                let names = if force == "moment" {
+                    ["A1", "A2", "A3", "A4"]
+                } else {
+                    ["H1", "H2", "H3", "H4"]
+                };
+                let _ = writeln!(
+                    s,
+                    "  {:<20} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}",
+                    "case",
+                    names[0],
+                    names[1],
+                    names[2],
+                    names[3],
+                    "N1",
+                    "N2",
+                    "N3",
+                    "R2",
+                    "MFWA",
+                    "loss"
+                );
+                for c in self.cases.iter().filter(|c| c.group == g.name) {
+                    let (d, r2, mfwa, loss) = if force == "moment" {
+                        (
+                            Eq19Values::from(c.moment.eq19).0,
+                            c.moment.r2,
+                            c.moment.mfwa,
+                            c.moment.key_frequency_loss,
+                        )
+                    } else {
+                        (
+                            Eq19Values::from(c.lift.eq19).0,
+                            c.lift.r2,
+                            c.lift.mfwa,
+                            c.lift.key_frequency_loss,
+                        )
+                    };
+                    let _ = writeln!(
+                        s,
+                        "  {:<20} {} {} {} {} {} {} {} {} {} {}",
+                        c.id,
+                        f(d[0]),
+                        f(d[1]),
+                        f(d[2]),
+                        f(d[3]),
+                        f(d[4]),
+                        f(d[5]),
+                        f(d[6]),
+                        f(r2),
+                        f(mfwa),
+                        f(loss)
+                    );
+                }
+            }
+        }
+        s
+    }
+}
+
+/// Per-case preparation result.
+struct CaseWork {
+    factor: CaseFactor,
+    ident: CaseIdentifiability,
+    /// Key projections of (moment, lift); `None` without candidate tones.
+    keys: [Option<KeyProjection>; 2],
+    key_freqs: [Vec<f64>; 2],
+    /// pysindy mode: per target, per δ, raw coefficients.
+    pysindy: Option<[Vec<Vec<f64>>; 2]>,
+}
+
+fn check_case(case: &NondimCase) -> Result<()> {
+    let bad = |field: &str, message: String| Error::InvalidData {
+        case: case.meta.id.clone(),
+        field: field.to_string(),
+        message,
+    };
+    let n = case.c_lift.len();
+    if case.c_moment.len() != n || case.x.iter().any(|v| v.len() != n) {
+        return Err(bad(
+            "samples",
+            format!(
+                "series of unequal lengths (x: {:?}, c_moment: {}, c_lift: {n})",
+                case.x.iter().map(Vec::len).collect::<Vec<_>>(),
+                case.c_moment.len()
+            ),
+        ));
+    }
+    if !(case.dt.is_finite() && case.dt > 0.0) {
+        return Err(bad("dt", format!("{} s must be > 0", case.dt)));
+    }
+    for (name, v) in [
+        ("alpha", &case.x[0]),
+        ("alpha_dot", &case.x[1]),
+        ("h", &case.x[2]),
+        ("h_dot", &case.x[3]),
+        ("c_moment", &case.c_moment),
+        ("c_lift", &case.c_lift),
+    ] {
+        if let Some(i) = v.iter().position(|x| !x.is_finite()) {
+            return Err(bad(
+                name,
+                format!("non-finite value {} at sample {i}", v[i]),
+            ));
+        }
+    }
+    Ok(())
+}
+
+fn prepare_case(
+    case: &NondimCase,
+    lib: &Library,
+    order: &[usize],
+    s: &IdentifySettings,
+    deltas: &[f64],
+) -> Result<CaseWork> {
+    check_case(case)?;
+    let id = &case.meta.id;
+    let theta = lib.evaluate(&case.x);
+    let factor = CaseFactor::new(id, theta.as_ref(), order, &[&case.c_moment, &case.c_lift])?;
+    let ident = identifiability::analyse_factor(
+        id,
+        lib,
+        &factor,
+        &RankOptions {
+            tol: s.rank_tol,
+            near_tol: s.near_tol,
+        },
+    )?;
+    if s.basis == BasisMode::Full {
+        ident.require_full_rank()?;
+    }
+    let n = case.len();
+    let duration = n as f64 * case.dt;
+    let tones = metrics::candidate_tones(&case.forcing, s.max_harmonic_order, duration, case.dt);
+    let mut keys = [None, None];
+    let mut key_freqs = [Vec::new(), Vec::new()];
+    if !tones.is_empty() {
+        let freqs: Vec<f64> = tones.iter().map(|t| t.freq).collect();
+        let fit = HarmonicFit::new(&freqs, n, case.dt).map_err(|e| Error::Numerical {
+            context: format!("case `{id}`: key frequencies"),
+            message: e.to_string(),
+        })?;
+        let cols = fit.column_amplitudes(theta.as_ref());
+        for (t, y) in [&case.c_moment, &case.c_lift].into_iter().enumerate() {
+            let (_, all) = fit.amplitudes(y);
+            let key = metrics::select_key_frequencies(&tones, &all, s.k_key);
+            key_freqs[t] = key.tones.iter().map(|t| t.freq).collect();
+            keys[t] = Some(KeyProjection {
+                columns: cols
+                    .iter()
+                    .map(|c| key.index.iter().map(|&i| c[i]).collect())
+                    .collect(),
+                measured: key.amplitudes,
+            });
+        }
+    }
+    let pysindy = match &s.regressor {
+        RegressorChoice::Pysindy(o) => {
+            let basis: Vec<usize> = (0..lib.len()).filter(|&j| ident.in_basis[j]).collect();
+            Some([
+                adapter::path_case(theta.as_ref(), &basis, &case.c_moment, deltas, o),
+                adapter::path_case(theta.as_ref(), &basis, &case.c_lift, deltas, o),
+            ])
+        }
+        _ => None,
+    };
+    Ok(CaseWork {
+        factor,
+        ident,
+        keys,
+        key_freqs,
+        pysindy,
+    })
+}
+
+fn group_name(case: &NondimCase, by: GroupBy) -> String {
+    match by {
+        GroupBy::Config => case.meta.config.clone().unwrap_or_else(|| "-".to_string()),
+        GroupBy::WindSpeed => format!("U={}", case.meta.wind_speed),
+        GroupBy::Amplitude => match case.meta.amplitude {
+            Some(a) => format!("amplitude={}", (a.to_degrees() * 1e6).round() / 1e6),
+            None => "amplitude=-".to_string(),
+        },
+        GroupBy::None => case.meta.id.clone(),
+    }
+}
+
+/// Result of one group and target.
+struct GroupOutcome {
+    path: DeltaPath,
+    /// Per case of the group (in group order), raw coefficients over the library.
+    coefficients: Vec<Vec<f64>>,
+}
+
+fn run_group(
+    work: &[&CaseWork],
+    target: usize,
+    s: &IdentifySettings,
+    basis: Mask,
+    kept: Mask,
+    opts: &PathOptions,
+) -> GroupOutcome {
+    let cases: Vec<CaseProblem<'_>> = work
+        .iter()
+        .map(|w| CaseProblem {
+            factor: &w.factor,
+            target,
+        })
+        .collect();
+    let keys: Vec<Option<&KeyProjection>> = work.iter().map(|w| w.keys[target].as_ref()).collect();
+    match &s.regressor {
+        RegressorChoice::Stlsq => {
+            let template = Stlsq {
+                threshold: 0.0,
+                measure: s.measure,
+                group_rule: s.group_rule,
+                ridge: s.ridge,
+                max_iter: s.max_iter,
+            };
+            let (path, fit) = path::stlsq_path(&cases, &keys, &template, basis, kept, opts);
+            GroupOutcome {
+                path,
+                coefficients: fit.coefficients,
+            }
+        }
+        RegressorChoice::LeastSquares => {
+            let mut cache = FitCache::default();
+            let fit = regress::fit_group(&cases, &LeastSquares, basis, basis, &mut cache);
+            let path = path::summarise(
+                &[0.0],
+                vec![(basis, fit.coefficients.clone())],
+                &cases,
+                &keys,
+                opts,
+            );
+            GroupOutcome {
+                path,
+                coefficients: fit.coefficients,
+            }
+        }
+        RegressorChoice::Pysindy(_) => {
+            let deltas = opts.grid();
+            let per_delta: Vec<(Mask, Vec<Vec<f64>>)> = (0..deltas.len())
+                .map(|d| {
+                    let coefs: Vec<Vec<f64>> = work
+                        .iter()
+                        .map(|w| {
+                            w.pysindy
+                                .as_ref()
+                                .map(|p| p[target][d].clone())
+                                .unwrap_or_default()
+                        })
+                        .collect();
+                    let mask = coefs.iter().fold(0u64, |m, c| {
+                        m | c
+                            .iter()
+                            .enumerate()
+                            .fold(0u64, |a, (j, &x)| if x != 0.0 { a | 1 << j } else { a })
+                    });
+                    (mask, coefs)
+                })
+                .collect();
+            let path = path::summarise(&deltas, per_delta, &cases, &keys, opts);
+            let coefficients = path.selected_support().coefficients.clone();
+            GroupOutcome { path, coefficients }
+        }
+    }
+}
+
+fn group_force(path: &DeltaPath, names: &[String]) -> GroupForce {
+    let sel = path.selected_support();
+    let range = |d: &[f64]| {
+        [
+            d.iter().cloned().fold(f64::INFINITY, f64::min),
+            d.iter().cloned().fold(f64::NEG_INFINITY, f64::max),
+        ]
+    };
+    GroupForce {
+        support: sel.support.iter().map(|&j| names[j].clone()).collect(),
+        selected_delta: range(&sel.deltas)[0],
+        delta_range: range(&sel.deltas),
+        loss: sel.loss,
+        loss_dense: path.loss_dense,
+        loss_limit: path.limit,
+        path: path
+            .supports
+            .iter()
+            .map(|p| PathEntry {
+                n_terms: p.support.len(),
+                loss: p.loss,
+                delta: range(&p.deltas),
+                support: p.support.iter().map(|&j| names[j].clone()).collect(),
+            })
+            .collect(),
+    }
+}
+
+fn finite(x: f64) -> Option<f64> {
+    x.is_finite().then_some(x)
+}
+
+/// Per-case result of one force.
+fn force_result<E: From<Eq19Values>>(
+    lib: &Library,
+    case: &NondimCase,
+    w: &CaseWork,
+    target: usize,
+    basis: Mask,
+    raw: &[f64],
+) -> ForceResult<E> {
+    let names = lib.names();
+    let terms = TermMap(
+        names
+            .iter()
+            .enumerate()
+            .map(|(j, n)| (n.clone(), (basis >> j & 1 == 1).then_some(raw[j])))
+            .collect(),
+    );
+    let xi: [Option<f64>; 7] = EQ19_TERMS.map(|t| {
+        lib.index_of(t)
+            .ok()
+            .and_then(|j| (basis >> j & 1 == 1).then_some(raw[j]))
+    });
+    let eq19 = Eq19Values::from_coefficients(xi, case.k_alpha(), case.k_h());
+    let support: Vec<usize> = (0..raw.len()).filter(|&j| raw[j] != 0.0).collect();
+    let scaled: Vec<f64> = support
+        .iter()
+        .map(|&j| raw[j] * w.factor.scales[j])
+        .collect();
+    let rss = w.factor.rss_of(target, &support, &scaled);
+    let r2 = metrics::r_squared_from_sums(rss, w.factor.targets[target].ss_tot());
+    let (mfwa, mfwa_phase, loss) = match &w.keys[target] {
+        Some(k) if !k.measured.is_empty() => {
+            let model = k.model(raw);
+            (
+                finite(metrics::mfwa(&k.measured, &model)),
+                finite(metrics::mfwa_phase(&k.measured, &model)),
+                finite(metrics::key_frequency_loss(&k.measured, &model)),
+            )
+        }
+        _ => (None, None, None),
+    };
+    ForceResult {
+        terms,
+        eq19: E::from(eq19),
+        r2: finite(r2),
+        mfwa,
+        mfwa_phase,
+        key_frequency_loss: loss,
+        key_frequencies: w.key_freqs[target].clone(),
+    }
+}
+
+/// Identifies the force laws of `cases` (see the module documentation).
+///
+/// `observer` receives [`Progress`] on the calling thread between parallel batches.
+///
+/// # Errors
+/// [`Error::InvalidOption`] for invalid settings; [`Error::InvalidData`] naming the case for
+/// an empty input, duplicate ids, series of unequal length, non-positive dt, non-finite
+/// values or too few samples; [`Error::RankDeficient`] naming the case and its dependencies
+/// when `basis = Full` and a library is rank deficient; [`Error::Numerical`] when an SVD
+/// or a harmonic fit fails.
+pub fn identify(
+    cases: &[NondimCase],
+    settings: &IdentifySettings,
+    dataset_name: &str,
+    observer: &dyn Fn(Progress),
+) -> Result<Identification> {
+    settings.validate()?;
+    if cases.is_empty() {
+        return Err(Error::InvalidData {
+            case: "-".to_string(),
+            field: "cases".to_string(),
+            message: "no case to identify".to_string(),
+        });
+    }
+    let mut seen = std::collections::HashSet::new();
+    for c in cases {
+        if !seen.insert(c.meta.id.as_str()) {
+            return Err(Error::InvalidData {
+                case: c.meta.id.clone(),
+                field: "id".to_string(),
+                message: "duplicate case id".to_string(),
+            });
+        }
+    }
+    let lib = Library::new(settings.library, settings.constant);
+    let names = lib.names();
+    let order = identifiability::priority_order(&lib);
+    let opts = settings.path_options();
+    let deltas = opts.grid();
+    let mut kept_cols = vec![false; lib.len()];
+    for t in &settings.kept_terms {
+        kept_cols[lib.index_of(t)?] = true;
+    }
+    let kept = bools_to_mask(&kept_cols);
+
+    // 1. per case, in batches so that progress is reported on this thread
+    let total = cases.len();
+    let batch = (4 * rayon::current_num_threads()).max(8);
+    let mut work: Vec<CaseWork> = Vec::with_capacity(total);
+    for chunk in cases.chunks(batch) {
+        let done: Vec<Result<CaseWork>> = chunk
+            .par_iter()
+            .map(|c| prepare_case(c, &lib, &order, settings, &deltas))
+            .collect();
+        for w in done {
+            work.push(w?);
+        }
+        observer(Progress::Cases {
+            done: work.len(),
+            total,
+        });
+    }
+
+    // 2. groups: sorted by name, cases by id inside
+    let mut groups: BTreeMap<String, Vec<usize>> = BTreeMap::new();
+    for (i, c) in cases.iter().enumerate() {
+        groups
+            .entry(group_name(c, settings.group_by))
+            .or_default()
+            .push(i);
+    }
+    for members in groups.values_mut() {
+        members.sort_by(|&a, &b| cases[a].meta.id.cmp(&cases[b].meta.id));
+    }
+    let group_list: Vec<(String, Vec<usize>)> = groups.into_iter().collect();
+    let tasks: Vec<(usize, usize)> = (0..group_list.len())
+        .flat_map(|g| [(g, 0), (g, 1)])
+        .collect();
+    let bases: Vec<Mask> = group_list
+        .iter()
+        .map(|(_, m)| {
+            let idents: Vec<&CaseIdentifiability> = m.iter().map(|&i| &work[i].ident).collect();
+            bools_to_mask(&identifiability::group_basis(&idents))
+        })
+        .collect();
+    let mut outcomes: Vec<Option<GroupOutcome>> = (0..tasks.len()).map(|_| None).collect();
+    let n_tasks = tasks.len();
+    let mut done = 0;
+    for chunk in (0..n_tasks).collect::<Vec<_>>().chunks(batch) {
+        let res: Vec<GroupOutcome> = chunk
+            .par_iter()
+            .map(|&k| {
+                let (g, target) = tasks[k];
+                let members: Vec<&CaseWork> = group_list[g].1.iter().map(|&i| &work[i]).collect();
+                run_group(&members, target, settings, bases[g], kept, &opts)
+            })
+            .collect();
+        for (&k, r) in chunk.iter().zip(res) {
+            outcomes[k] = Some(r);
+        }
+        done += chunk.len();
+        observer(Progress::Groups {
+            done,
+            total: n_tasks,
+        });
+    }
+
+    // 3. assemble
+    let mut case_coefs: Vec<[Vec<f64>; 2]> = vec![[Vec::new(), Vec::new()]; total];
+    let mut case_group: Vec<usize> = vec![0; total];
+    let mut group_results = Vec::with_capacity(group_list.len());
+    for (g, (name, members)) in group_list.iter().enumerate() {
+        let mut forces = Vec::with_capacity(2);
+        for target in 0..2 {
+            let o = outcomes[2 * g + target]
+                .take()
+                .ok_or_else(|| Error::Numerical {
+                    context: format!("group `{name}`"),
+                    message: "missing path result".to_string(),
+                })?;
+            for (k, &i) in members.iter().enumerate() {
+                case_coefs[i][target] = o.coefficients[k].clone();
+                case_group[i] = g;
+            }
+            forces.push(group_force(&o.path, &names));
+        }
+        let lift = forces.pop().ok_or_else(|| Error::Numerical {
+            context: format!("group `{name}`"),
+            message: "missing lift".to_string(),
+        })?;
+        let moment = forces.pop().ok_or_else(|| Error::Numerical {
+            context: format!("group `{name}`"),
+            message: "missing moment".to_string(),
+        })?;
+        group_results.push(GroupResult {
+            name: name.clone(),
+            cases: members.iter().map(|&i| cases[i].meta.id.clone()).collect(),
+            basis: regress::mask_to_vec(bases[g])
+                .iter()
+                .map(|&j| names[j].clone())
+                .collect(),
+            moment,
+            lift,
+        });
+    }
+    let case_results: Vec<CaseResult> = cases
+        .iter()
+        .enumerate()
+        .map(|(i, c)| {
+            let w = &work[i];
+            let basis = bases[case_group[i]];
+            CaseResult {
+                id: c.meta.id.clone(),
+                group: group_list[case_group[i]].0.clone(),
+                wind_speed: c.meta.wind_speed,
+                k_alpha: c.k_alpha(),
+                k_h: c.k_h(),
+                rank: w.ident.rank,
+                dependencies: w.ident.dependency_strings(),
+                moment: force_result::<MomentEq19>(&lib, c, w, 0, basis, &case_coefs[i][0]),
+                lift: force_result::<LiftEq19>(&lib, c, w, 1, basis, &case_coefs[i][1]),
+            }
+        })
+        .collect();
+    let min_case = (0..total)
+        .min_by_key(|&i| (work[i].ident.rank, i))
+        .unwrap_or(0);
+    Ok(Identification {
+        format: FORMAT.to_string(),
+        dataset: dataset_name.to_string(),
+        settings: settings.clone(),
+        library: LibraryInfo {
+            terms: names.clone(),
+            rank: work[min_case].ident.rank,
+            dependencies: work[min_case].ident.dependency_strings(),
+            rank_case: Some(cases[min_case].meta.id.clone()),
+            priority: order.iter().map(|&j| names[j].clone()).collect(),
+        },
+        cases: case_results,
+        groups: group_results,
+    })
+}

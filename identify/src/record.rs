@@ -212,7 +212,10 @@ impl PreparedCase {
         }
         let rho = section.air_density;
         if !(rho.is_finite() && rho > 0.0) {
-            return Err(bad("section.air_density", format!("{rho} kg/m^3 must be > 0")));
+            return Err(bad(
+                "section.air_density",
+                format!("{rho} kg/m^3 must be > 0"),
+            ));
         }
         let q = 0.5 * rho * u * u;
         Ok(NondimCase {

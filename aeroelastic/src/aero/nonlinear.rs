@@ -1,0 +1,277 @@
+//! Any linear model plus polynomial terms in the nondimensional variables — how the
+//! identified Eq. 19 law (derivative tables + N* terms) plugs in.
+
+use std::sync::Arc;
+
+use nalgebra::Matrix2;
+use num_complex::Complex64;
+use serde::{Deserialize, Serialize};
+
+use super::{AeroModel, Flow};
+use crate::{Error, Result};
+
+/// Force channel of a nonlinear term.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum Channel {
+    /// Adds to C_L = L / (½ρU²B) (L positive down).
+    Lift,
+    /// Adds to C_M = M / (½ρU²B²) (M positive nose-up).
+    Moment,
+}
+
+/// Coefficient of a nonlinear term.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub enum Coefficient {
+    /// A plain nondimensional coefficient (terms outside Eq. 19).
+    Constant(f64),
+    /// An Eq. 19 coefficient identified at several reduced frequencies: the effective
+    /// coefficient is K^`k_power` · N*(K), N*(K) interpolated linearly in K between the
+    /// identified K and held at the nearest identified K outside their range
+    /// (e.g. N2* multiplies K⁶ α³, so `k_power = 6`).
+    OverK {
+        /// Identified reduced frequencies K, strictly increasing.
+        k: Vec<f64>,
+        /// N* at each K.
+        values: Vec<f64>,
+        /// Power of K multiplying N*.
+        k_power: i32,
+    },
+}
+
+impl Coefficient {
+    /// Effective coefficient at reduced frequency `k` (see the variants).
+    pub fn at(&self, k: f64) -> f64 {
+        match self {
+            Coefficient::Constant(c) => *c,
+            Coefficient::OverK {
+                k: ks,
+                values,
+                k_power,
+            } => {
+                let n = ks.len();
+                let v = if k <= ks[0] {
+                    values[0]
+                } else if k >= ks[n - 1] {
+                    values[n - 1]
+                } else {
+                    let i = ks.partition_point(|&x| x <= k) - 1;
+                    let t = (k - ks[i]) / (ks[i + 1] - ks[i]);
+                    values[i] + t * (values[i + 1] - values[i])
+                };
+                v * k.powi(*k_power)
+            }
+        }
+    }
+}
+
+/// One polynomial term c · α^p₀ (Bα̇/U)^p₁ (h/B)^p₂ (ḣ/U)^p₃ added to C_L or C_M.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct NonlinearTerm {
+    /// Channel (C_L or C_M).
+    pub channel: Channel,
+    /// Powers of (α, Bα̇/U, h/B, ḣ/U); total degree ≥ 2 (linear terms belong to the
+    /// wrapped model).
+    pub powers: [u32; 4],
+    /// Coefficient.
+    pub coefficient: Coefficient,
+}
+
+/// A linear aerodynamic model plus nonlinear polynomial terms.
+///
+/// **Evaluation away from the identified K.** A coefficient identified under forced
+/// motion at reduced frequency K is, in a free response, evaluated at one reduced
+/// frequency `k_eval` (set with [`NonlinearAero::with_k_eval`]); the LCO solver
+/// ([`crate::lco::lco_run_k_iterated`]) updates it to the *current response
+/// frequency* K = Bω_LCO/U by fixed-point iteration, so coefficients are interpolated in K
+/// where the section actually oscillates, and held at the nearest identified K outside the
+/// identified range (no extrapolation of a fitted coefficient). The nonlinear terms do not
+/// enter the frequency response (they vanish on linearisation: degree ≥ 2).
+#[derive(Debug, Clone)]
+pub struct NonlinearAero {
+    inner: Arc<dyn AeroModel>,
+    terms: Vec<NonlinearTerm>,
+    k_eval: f64,
+    resolved: Vec<(usize, [i32; 4], f64)>,
+}
+
+impl NonlinearAero {
+    /// Wraps `inner` with `terms`, evaluated at reduced frequency `k_eval`.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] naming `terms[i].powers` for a degree < 2,
+    /// `terms[i].coefficient` for a malformed table (lengths, K not increasing, non-finite)
+    /// or `k_eval` when it is not finite and > 0.
+    pub fn new(inner: Arc<dyn AeroModel>, terms: Vec<NonlinearTerm>, k_eval: f64) -> Result<Self> {
+        for (i, t) in terms.iter().enumerate() {
+            let deg: u32 = t.powers.iter().sum();
+            if deg < 2 {
+                return Err(Error::param(
+                    format!("terms[{i}].powers"),
+                    deg as f64,
+                    "total degree must be >= 2",
+                ));
+            }
+            match &t.coefficient {
+                Coefficient::Constant(c) => {
+                    crate::error::finite(&format!("terms[{i}].coefficient"), *c)?
+                }
+                Coefficient::OverK { k, values, .. } => {
+                    let ok = !k.is_empty()
+                        && k.len() == values.len()
+                        && k.iter().chain(values.iter()).all(|v| v.is_finite())
+                        && k.windows(2).all(|w| w[1] > w[0])
+                        && k[0] > 0.0;
+                    if !ok {
+                        return Err(Error::param(
+                            format!("terms[{i}].coefficient"),
+                            k.len() as f64,
+                            "K table must be non-empty, positive, strictly increasing, finite, same length as values",
+                        ));
+                    }
+                }
+            }
+        }
+        let mut s = NonlinearAero {
+            inner,
+            terms,
+            k_eval: 1.0,
+            resolved: Vec::new(),
+        };
+        s.set_k_eval(k_eval)?;
+        Ok(s)
+    }
+
+    /// The same model with the coefficients evaluated at reduced frequency `k`.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] for a non-finite or non-positive `k`.
+    pub fn with_k_eval(&self, k: f64) -> Result<Self> {
+        let mut s = self.clone();
+        s.set_k_eval(k)?;
+        Ok(s)
+    }
+
+    fn set_k_eval(&mut self, k: f64) -> Result<()> {
+        crate::error::positive("k_eval", k)?;
+        self.k_eval = k;
+        self.resolved = self
+            .terms
+            .iter()
+            .map(|t| {
+                let ch = match t.channel {
+                    Channel::Lift => 0,
+                    Channel::Moment => 1,
+                };
+                (ch, t.powers.map(|p| p as i32), t.coefficient.at(k))
+            })
+            .collect();
+        Ok(())
+    }
+
+    /// Reduced frequency at which the coefficients are currently evaluated.
+    pub fn k_eval(&self) -> f64 {
+        self.k_eval
+    }
+
+    /// Whether any coefficient depends on K (so that K iteration matters).
+    pub fn depends_on_k(&self) -> bool {
+        self.terms
+            .iter()
+            .any(|t| matches!(t.coefficient, Coefficient::OverK { .. }))
+    }
+
+    /// The wrapped linear model.
+    pub fn inner(&self) -> &Arc<dyn AeroModel> {
+        &self.inner
+    }
+}
+
+impl AeroModel for NonlinearAero {
+    fn name(&self) -> String {
+        format!(
+            "{} + {} nonlinear terms",
+            self.inner.name(),
+            self.terms.len()
+        )
+    }
+    fn chord(&self) -> f64 {
+        self.inner.chord()
+    }
+    fn n_lag(&self) -> usize {
+        self.inner.n_lag()
+    }
+    fn apparent_mass(&self, flow: &Flow) -> Matrix2<f64> {
+        self.inner.apparent_mass(flow)
+    }
+    #[inline]
+    fn forces(&self, flow: &Flow, q: [f64; 2], qd: [f64; 2], lag: &[f64]) -> [f64; 2] {
+        let mut f = self.inner.forces(flow, q, qd, lag);
+        let bb = self.inner.chord();
+        let u = flow.u;
+        let vars = [q[1], bb * qd[1] / u, q[0] / bb, qd[0] / u];
+        let mut c = [0.0; 2];
+        for (ch, p, coef) in &self.resolved {
+            let mut v = *coef;
+            for i in 0..4 {
+                if p[i] != 0 {
+                    v *= vars[i].powi(p[i]);
+                }
+            }
+            c[*ch] += v;
+        }
+        let qdyn = flow.q_dyn();
+        f[0] += qdyn * bb * c[0];
+        f[1] += qdyn * bb * bb * c[1];
+        f
+    }
+    #[inline]
+    fn lag_rates(&self, flow: &Flow, q: [f64; 2], qd: [f64; 2], lag: &[f64], out: &mut [f64]) {
+        self.inner.lag_rates(flow, q, qd, lag, out)
+    }
+    fn frequency_response(&self, flow: &Flow, omega: f64) -> Matrix2<Complex64> {
+        self.inner.frequency_response(flow, omega)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::aero::TheodorsenAero;
+
+    #[test]
+    fn coefficient_interpolates_and_holds_ends() {
+        let c = Coefficient::OverK {
+            k: vec![0.5, 1.0],
+            values: vec![2.0, 4.0],
+            k_power: 3,
+        };
+        assert!((c.at(0.75) - 3.0 * 0.75f64.powi(3)).abs() < 1e-15);
+        assert!((c.at(0.1) - 2.0 * 0.1f64.powi(3)).abs() < 1e-15);
+        assert!((c.at(3.0) - 4.0 * 27.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn cubic_moment_term_adds_expected_force_and_validation_names_term() {
+        let inner: Arc<dyn AeroModel> = Arc::new(TheodorsenAero::new(0.4, 0.0).unwrap());
+        let t = NonlinearTerm {
+            channel: Channel::Moment,
+            powers: [0, 3, 0, 0],
+            coefficient: Coefficient::Constant(-2.0),
+        };
+        let m = NonlinearAero::new(inner.clone(), vec![t], 1.0).unwrap();
+        let flow = Flow { rho: 1.2, u: 10.0 };
+        let (q, qd, lag) = ([0.0, 0.0], [0.0, 5.0], [0.0, 0.0]);
+        let f0 = inner.forces(&flow, q, qd, &lag);
+        let f1 = m.forces(&flow, q, qd, &lag);
+        let want = flow.q_dyn() * 0.16 * (-2.0) * (0.4 * 5.0 / 10.0f64).powi(3);
+        assert!((f1[1] - f0[1] - want).abs() < 1e-12 && f1[0] == f0[0]);
+        let bad = NonlinearTerm {
+            channel: Channel::Lift,
+            powers: [1, 0, 0, 0],
+            coefficient: Coefficient::Constant(1.0),
+        };
+        let e = NonlinearAero::new(inner, vec![bad], 1.0).unwrap_err();
+        assert!(e.to_string().contains("terms[0].powers"), "{e}");
+    }
+}

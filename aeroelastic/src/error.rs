@@ -1,0 +1,93 @@
+//! The one error type of the `aeroelastic` crate.
+
+/// Result alias of the `aeroelastic` crate.
+pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// Everything that can go wrong while building a section model, analysing flutter or
+/// integrating a response.
+///
+/// Every variant names the place (field, model, case) and carries the offending values.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// A parameter is out of its admissible range (non-finite, negative mass…).
+    #[error("field `{field}` = {value}: {message}")]
+    InvalidParameter {
+        /// Dotted field name, e.g. `structure.inertia_alpha`.
+        field: String,
+        /// Offending value.
+        value: f64,
+        /// What is wrong.
+        message: String,
+    },
+    /// A TOML description could not be parsed (unknown key, wrong type…).
+    #[error("{source_name}: {message}")]
+    Toml {
+        /// What was being parsed (file name or `<string>`).
+        source_name: String,
+        /// The parser's message, with line and column.
+        message: String,
+    },
+    /// A table (flutter derivatives, nonlinear coefficient over K) is malformed.
+    #[error("table `{table}`: {message}")]
+    InvalidTable {
+        /// Table name.
+        table: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// A numerical step failed (singular matrix, no convergence…).
+    #[error("{context}: numerical failure: {message}")]
+    Numerical {
+        /// Where it happened.
+        context: String,
+        /// What happened.
+        message: String,
+    },
+}
+
+impl Error {
+    /// Shorthand for [`Error::InvalidParameter`].
+    pub fn param(field: impl Into<String>, value: f64, message: impl Into<String>) -> Self {
+        Error::InvalidParameter {
+            field: field.into(),
+            value,
+            message: message.into(),
+        }
+    }
+
+    /// Shorthand for [`Error::Numerical`].
+    pub fn numerical(context: impl Into<String>, message: impl Into<String>) -> Self {
+        Error::Numerical {
+            context: context.into(),
+            message: message.into(),
+        }
+    }
+}
+
+/// Checks that `value` is finite and `> 0`.
+pub(crate) fn positive(field: &str, value: f64) -> Result<()> {
+    if value.is_finite() && value > 0.0 {
+        Ok(())
+    } else {
+        Err(Error::param(field, value, "must be finite and > 0"))
+    }
+}
+
+/// Checks that `value` is finite and `>= 0`.
+pub(crate) fn non_negative(field: &str, value: f64) -> Result<()> {
+    if value.is_finite() && value >= 0.0 {
+        Ok(())
+    } else {
+        Err(Error::param(field, value, "must be finite and >= 0"))
+    }
+}
+
+/// Checks that `value` is finite.
+pub(crate) fn finite(field: &str, value: f64) -> Result<()> {
+    if value.is_finite() {
+        Ok(())
+    } else {
+        Err(Error::param(field, value, "must be finite"))
+    }
+}

@@ -1,0 +1,640 @@
+//! Linear flutter and divergence: p-method (eigenvalues of the first-order system with lag
+//! states), p-k method (frequency-domain models, k iterated to the eigenvalue's
+//! frequency), mode tracking, critical speed by bracketing + Brent, V–g / V–f data.
+
+use nalgebra::{DMatrix, DVector, Matrix2};
+use num_complex::Complex64;
+use serde::{Deserialize, Serialize};
+
+use crate::optim::brent;
+use crate::section::Section;
+use crate::{Error, Result};
+
+/// Which linear flutter method.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum FlutterMethod {
+    /// p-method: eigenvalues of the state matrix of the time-domain realisation (lag
+    /// states included; Theodorsen → Jones' lags, tables → Roger RFA).
+    P,
+    /// p-k method: det(p² M + p C + K − H(ω)) = 0 with the exact frequency response H
+    /// evaluated at ω = Im p (iterated to convergence).
+    Pk,
+}
+
+/// Options of a flutter analysis.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct FlutterOptions {
+    /// Lowest speed of the scan [m/s] (> 0).
+    pub u_min: f64,
+    /// Highest speed of the scan [m/s].
+    pub u_max: f64,
+    /// Number of speeds of the scan (≥ 2).
+    pub n_speeds: usize,
+    /// Relative tolerance on the critical speed.
+    pub tol_rel: f64,
+}
+
+/// One point of a mode branch (V–g and V–f data).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ModePoint {
+    /// Wind speed U [m/s].
+    pub u: f64,
+    /// Real part of the eigenvalue σ = Re p [1/s] (> 0: unstable).
+    pub sigma: f64,
+    /// Circular frequency ω = Im p [rad/s].
+    pub omega: f64,
+    /// Damping ratio ζ = −Re p / |p|.
+    pub zeta: f64,
+}
+
+/// One tracked aeroelastic mode over U.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ModeBranch {
+    /// Mode label (`mode 0` is the lowest-frequency structural mode at the lowest U).
+    pub label: String,
+    /// Points, in the order of the speed scan.
+    pub points: Vec<ModePoint>,
+}
+
+/// The flutter point.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct FlutterPoint {
+    /// Critical speed U_F [m/s].
+    pub u: f64,
+    /// Flutter frequency ω_F [rad/s].
+    pub omega: f64,
+    /// Index of the branch that goes unstable.
+    pub mode: usize,
+    /// Reduced speed U_F / (b ω_α).
+    pub u_reduced: f64,
+    /// Frequency ratio ω_F / ω_α.
+    pub omega_ratio: f64,
+}
+
+/// Result of a flutter analysis: V–g / V–f branches, flutter point, divergence speed.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FlutterAnalysis {
+    /// Method used.
+    pub method: FlutterMethod,
+    /// Aerodynamic model name.
+    pub model: String,
+    /// Tracked structural modes.
+    pub branches: Vec<ModeBranch>,
+    /// First crossing of zero damping in the scan, refined; `None` if stable throughout.
+    pub flutter: Option<FlutterPoint>,
+    /// Static divergence speed [m/s], `None` if there is none.
+    pub divergence_speed: Option<f64>,
+}
+
+/// Threshold on Re p / |p| above which a mode counts as unstable (robust against
+/// rounding when Re p ≡ 0, e.g. undamped structure with steady aerodynamics).
+const UNSTABLE: f64 = 1e-9;
+
+fn zeta_of(p: Complex64) -> f64 {
+    -p.re / p.norm().max(1e-300)
+}
+
+/// Eigenvalues of a real square matrix (Schur, bounded iterations).
+fn eigenvalues(a: &DMatrix<f64>) -> Result<Vec<Complex64>> {
+    if a.iter().any(|v| !v.is_finite()) {
+        return Err(Error::numerical("eigenvalues", "non-finite state matrix"));
+    }
+    let s = nalgebra::Schur::try_new(a.clone(), f64::EPSILON, 100_000)
+        .ok_or_else(|| Error::numerical("eigenvalues", "Schur decomposition did not converge"))?;
+    Ok(s.complex_eigenvalues().iter().copied().collect())
+}
+
+/// Right eigenvector of `a` for eigenvalue `lambda` by two steps of inverse iteration.
+fn eigenvector(a: &DMatrix<f64>, lambda: Complex64) -> DVector<Complex64> {
+    let n = a.nrows();
+    let shift = lambda + Complex64::new(1e-10, 1e-10) * lambda.norm().max(1.0);
+    let mut m = a.map(|v| Complex64::new(v, 0.0));
+    for i in 0..n {
+        m[(i, i)] -= shift;
+    }
+    let lu = m.lu();
+    let mut v = DVector::from_element(n, Complex64::new(1.0, 0.0));
+    for _ in 0..3 {
+        if let Some(x) = lu.solve(&v) {
+            let nrm = x.norm();
+            if nrm > 0.0 && nrm.is_finite() {
+                v = x / Complex64::new(nrm, 0.0);
+            }
+        }
+    }
+    v
+}
+
+/// Modal assurance criterion of two complex vectors (on the displacement–velocity part).
+fn mac(a: &DVector<Complex64>, b: &DVector<Complex64>) -> f64 {
+    let n = 4.min(a.len());
+    let mut ab = Complex64::new(0.0, 0.0);
+    let (mut aa, mut bb) = (0.0, 0.0);
+    for i in 0..n {
+        ab += a[i].conj() * b[i];
+        aa += a[i].norm_sqr();
+        bb += b[i].norm_sqr();
+    }
+    ab.norm_sqr() / (aa * bb).max(1e-300)
+}
+
+/// Roots of the quartic det(p² M + p C + K − H) in p, with p = ω_ref s for scaling
+/// (Durand–Kerner iteration then Newton polishing).
+fn pk_roots(
+    m: &Matrix2<f64>,
+    c: &Matrix2<f64>,
+    k: &Matrix2<Complex64>,
+    w_ref: f64,
+) -> [Complex64; 4] {
+    // Entries as quadratics in s: a s² + b s + c with p = w s.
+    let q = |i: usize, j: usize| -> [Complex64; 3] {
+        [
+            k[(i, j)],
+            Complex64::new(c[(i, j)] * w_ref, 0.0),
+            Complex64::new(m[(i, j)] * w_ref * w_ref, 0.0),
+        ]
+    };
+    let mul = |x: [Complex64; 3], y: [Complex64; 3]| -> [Complex64; 5] {
+        let mut r = [Complex64::new(0.0, 0.0); 5];
+        for i in 0..3 {
+            for j in 0..3 {
+                r[i + j] += x[i] * y[j];
+            }
+        }
+        r
+    };
+    let d1 = mul(q(0, 0), q(1, 1));
+    let d2 = mul(q(0, 1), q(1, 0));
+    let mut coef = [Complex64::new(0.0, 0.0); 5];
+    for i in 0..5 {
+        coef[i] = d1[i] - d2[i];
+    }
+    let lead = coef[4];
+    for v in coef.iter_mut() {
+        *v /= lead;
+    }
+    let poly = |z: Complex64| ((((z + coef[3]) * z + coef[2]) * z + coef[1]) * z) + coef[0];
+    let dpoly = |z: Complex64| (((4.0 * z + 3.0 * coef[3]) * z + 2.0 * coef[2]) * z) + coef[1];
+    let radius = 1.0 + coef[..4].iter().map(|v| v.norm()).fold(0.0, f64::max);
+    let seed = Complex64::new(0.4, 0.9);
+    let mut z = [Complex64::new(0.0, 0.0); 4];
+    for (i, zi) in z.iter_mut().enumerate() {
+        *zi = seed.powu(i as u32 + 1) * radius.min(10.0);
+    }
+    for _ in 0..500 {
+        let mut change: f64 = 0.0;
+        for i in 0..4 {
+            let mut den = Complex64::new(1.0, 0.0);
+            for j in 0..4 {
+                if j != i {
+                    den *= z[i] - z[j];
+                }
+            }
+            let step = poly(z[i]) / den;
+            z[i] -= step;
+            change = change.max(step.norm());
+        }
+        if change < 1e-15 {
+            break;
+        }
+    }
+    for zi in z.iter_mut() {
+        for _ in 0..3 {
+            let d = dpoly(*zi);
+            if d.norm() > 0.0 {
+                *zi -= poly(*zi) / d;
+            }
+        }
+    }
+    z.map(|s| s * w_ref)
+}
+
+impl Section {
+    fn pk_mode(&self, u: f64, p_start: Complex64) -> Result<Complex64> {
+        let m = self.structure.mass_matrix();
+        let c = self.structure.damping_matrix();
+        let ks = self.structure.stiffness_matrix();
+        let w_ref = self.structure.omega_alpha();
+        let flow = self.flow(u);
+        let mut p = p_start;
+        for _ in 0..200 {
+            let omega = p.im.abs().max(1e-6 * w_ref);
+            let h = self.aero.frequency_response(&flow, omega);
+            let kk = ks.map(|v| Complex64::new(v, 0.0)) - h;
+            let roots = pk_roots(&m, &c, &kk, w_ref);
+            let new = roots
+                .iter()
+                .filter(|r| r.im >= 0.0)
+                .min_by(|a, b| (*a - p).norm().total_cmp(&(*b - p).norm()))
+                .copied()
+                .ok_or_else(|| {
+                    Error::numerical("p-k", format!("no root with Im p ≥ 0 at U = {u}"))
+                })?;
+            let done = (new.im - p.im).abs() < 1e-12 * w_ref && (new - p).norm() < 1e-10 * w_ref;
+            p = new;
+            if done {
+                return Ok(p);
+            }
+        }
+        Err(Error::numerical(
+            "p-k",
+            format!("frequency iteration did not converge at U = {u} (p = {p})"),
+        ))
+    }
+
+    /// Oscillatory eigenvalues (Im p > 1e-6 ω_α) of the state matrix and eigenvectors.
+    fn p_modes(&self, u: f64) -> Result<(DMatrix<f64>, Vec<Complex64>)> {
+        let a = self.state_matrix(u)?;
+        let w_ref = self.structure.omega_alpha();
+        let ev: Vec<Complex64> = eigenvalues(&a)?
+            .into_iter()
+            .filter(|z| z.im > 1e-6 * w_ref)
+            .collect();
+        Ok((a, ev))
+    }
+
+    /// Largest Re p/|p| over the tracked modes at speed `u`, starting each p-k iteration
+    /// (or choosing each p eigenvalue) near `start`.
+    fn max_growth(
+        &self,
+        method: FlutterMethod,
+        u: f64,
+        start: &[Complex64],
+    ) -> Result<(f64, Vec<Complex64>)> {
+        match method {
+            FlutterMethod::Pk => {
+                let ps = start
+                    .iter()
+                    .map(|&p| self.pk_mode(u, p))
+                    .collect::<Result<Vec<_>>>()?;
+                let g = ps
+                    .iter()
+                    .map(|p| -zeta_of(*p))
+                    .fold(f64::NEG_INFINITY, f64::max);
+                Ok((g, ps))
+            }
+            FlutterMethod::P => {
+                let (_, ev) = self.p_modes(u)?;
+                let ps: Vec<Complex64> = start
+                    .iter()
+                    .map(|s| {
+                        ev.iter()
+                            .min_by(|a, b| (*a - s).norm().total_cmp(&(*b - s).norm()))
+                            .copied()
+                            .unwrap_or(*s)
+                    })
+                    .collect();
+                let g = ev
+                    .iter()
+                    .map(|p| -zeta_of(*p))
+                    .fold(f64::NEG_INFINITY, f64::max);
+                Ok((g, ps))
+            }
+        }
+    }
+
+    /// Static divergence speed: the smallest U > 0 with det(K_s − Re H(ω = 0; U)) = 0,
+    /// H(0) ∝ U² (a quadratic in U²). `None` when there is no positive real root.
+    pub fn divergence_speed(&self) -> Option<f64> {
+        let h0 = self
+            .aero
+            .frequency_response(&self.flow(1.0), 0.0)
+            .map(|z| z.re);
+        let k = self.structure.stiffness_matrix();
+        // det(K − λ Q) = det(Q) λ² − (k11 q22 + k22 q11 − k12 q21 − k21 q12) λ + det(K)
+        let a2 = h0.determinant();
+        let a1 = -(k[(0, 0)] * h0[(1, 1)] + k[(1, 1)] * h0[(0, 0)]
+            - k[(0, 1)] * h0[(1, 0)]
+            - k[(1, 0)] * h0[(0, 1)]);
+        let a0 = k.determinant();
+        let roots: Vec<f64> = if a2.abs() < 1e-14 * (a1.abs() + a0.abs()) {
+            if a1 != 0.0 {
+                vec![-a0 / a1]
+            } else {
+                vec![]
+            }
+        } else {
+            let disc = a1 * a1 - 4.0 * a2 * a0;
+            if disc < 0.0 {
+                vec![]
+            } else {
+                let s = disc.sqrt();
+                vec![(-a1 + s) / (2.0 * a2), (-a1 - s) / (2.0 * a2)]
+            }
+        };
+        roots
+            .into_iter()
+            .filter(|l| *l > 0.0 && l.is_finite())
+            .map(f64::sqrt)
+            .min_by(f64::total_cmp)
+    }
+
+    /// Linear flutter analysis over `opts.u_min ..= opts.u_max` with `method`.
+    ///
+    /// Modes: the two structural modes, identified at `u_min` as the two oscillatory
+    /// eigenvalues of highest frequency in the p-method (aerodynamic lag roots are real)
+    /// or from the in-vacuo modes for p-k, then tracked speed by speed — p-k by continuing
+    /// the frequency iteration from the previous eigenvalue, p by eigenvalue proximity to
+    /// a linear prediction combined with eigenvector correlation (MAC). The first speed at
+    /// which a mode's Re p/|p| exceeds 1e-9 brackets the flutter speed, refined by Brent
+    /// to `opts.tol_rel`.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] for bad options; [`Error::Numerical`] when an
+    /// eigen-analysis or a p-k iteration fails.
+    pub fn flutter(&self, method: FlutterMethod, opts: &FlutterOptions) -> Result<FlutterAnalysis> {
+        crate::error::positive("u_min", opts.u_min)?;
+        if opts.u_max.partial_cmp(&opts.u_min) != Some(std::cmp::Ordering::Greater)
+            || !opts.u_max.is_finite()
+        {
+            return Err(Error::param(
+                "u_max",
+                opts.u_max,
+                "must be finite and > u_min",
+            ));
+        }
+        if opts.n_speeds < 2 {
+            return Err(Error::param(
+                "n_speeds",
+                opts.n_speeds as f64,
+                "must be >= 2",
+            ));
+        }
+        crate::error::positive("tol_rel", opts.tol_rel)?;
+        let w_ref = self.structure.omega_alpha();
+        let speeds: Vec<f64> = (0..opts.n_speeds)
+            .map(|i| opts.u_min + (opts.u_max - opts.u_min) * i as f64 / (opts.n_speeds - 1) as f64)
+            .collect();
+        // Initial modes.
+        let mut current: Vec<Complex64> = match method {
+            FlutterMethod::Pk => {
+                let m = self.structure.mass_matrix();
+                let k = self.structure.stiffness_matrix();
+                let c = self.structure.damping_matrix();
+                let roots = pk_roots(&m, &c, &k.map(|v| Complex64::new(v, 0.0)), w_ref);
+                let mut up: Vec<Complex64> = roots.into_iter().filter(|r| r.im >= 0.0).collect();
+                up.sort_by(|a, b| a.im.total_cmp(&b.im));
+                up.truncate(2);
+                up.iter()
+                    .map(|&p| self.pk_mode(speeds[0], p))
+                    .collect::<Result<Vec<_>>>()?
+            }
+            FlutterMethod::P => {
+                let (_, mut ev) = self.p_modes(speeds[0])?;
+                ev.sort_by(|a, b| b.im.total_cmp(&a.im));
+                ev.truncate(2);
+                ev.sort_by(|a, b| a.im.total_cmp(&b.im));
+                ev
+            }
+        };
+        if current.len() < 2 {
+            return Err(Error::numerical(
+                "flutter",
+                format!("fewer than two oscillatory modes at U = {}", speeds[0]),
+            ));
+        }
+        let mut branches: Vec<ModeBranch> = (0..current.len())
+            .map(|i| ModeBranch {
+                label: format!("mode {i}"),
+                points: Vec::new(),
+            })
+            .collect();
+        let mut prev: Vec<Complex64> = current.clone();
+        let mut vecs: Vec<DVector<Complex64>> = Vec::new();
+        let mut flutter = None;
+        for (iu, &u) in speeds.iter().enumerate() {
+            if iu > 0 {
+                let pred: Vec<Complex64> = current
+                    .iter()
+                    .zip(&prev)
+                    .map(|(c, p)| 2.0 * c - p)
+                    .collect();
+                let next = match method {
+                    FlutterMethod::Pk => current
+                        .iter()
+                        .map(|&p| self.pk_mode(u, p))
+                        .collect::<Result<Vec<_>>>()?,
+                    FlutterMethod::P => {
+                        let (a, ev) = self.p_modes(u)?;
+                        let evecs: Vec<DVector<Complex64>> =
+                            ev.iter().map(|&l| eigenvector(&a, l)).collect();
+                        let mut used = vec![false; ev.len()];
+                        let mut out = current.clone();
+                        let mut newvecs = vecs.clone();
+                        for (j, pj) in pred.iter().enumerate() {
+                            let best = (0..ev.len()).filter(|&i| !used[i]).min_by(|&x, &y| {
+                                let cost = |i: usize| {
+                                    let m = vecs.get(j).map(|v| mac(v, &evecs[i])).unwrap_or(1.0);
+                                    (ev[i] - pj).norm() / w_ref + (1.0 - m)
+                                };
+                                cost(x).total_cmp(&cost(y))
+                            });
+                            if let Some(i) = best {
+                                used[i] = true;
+                                out[j] = ev[i];
+                                if j < newvecs.len() {
+                                    newvecs[j] = evecs[i].clone();
+                                }
+                            }
+                        }
+                        vecs = newvecs;
+                        out
+                    }
+                };
+                prev = std::mem::replace(&mut current, next);
+            } else if method == FlutterMethod::P {
+                let a = self.state_matrix(u)?;
+                vecs = current.iter().map(|&l| eigenvector(&a, l)).collect();
+            }
+            for (b, p) in branches.iter_mut().zip(&current) {
+                b.points.push(ModePoint {
+                    u,
+                    sigma: p.re,
+                    omega: p.im,
+                    zeta: zeta_of(*p),
+                });
+            }
+            if flutter.is_none() && iu > 0 {
+                let grow = |ps: &[Complex64]| {
+                    ps.iter()
+                        .map(|p| -zeta_of(*p))
+                        .fold(f64::NEG_INFINITY, f64::max)
+                };
+                let g_now = match method {
+                    FlutterMethod::Pk => grow(&current),
+                    FlutterMethod::P => self.max_growth(method, u, &current)?.0,
+                };
+                if g_now > UNSTABLE {
+                    let u_lo = speeds[iu - 1];
+                    let start = prev.clone();
+                    let f = |uu: f64| -> f64 {
+                        match self.max_growth(method, uu, &start) {
+                            Ok((g, _)) => g - UNSTABLE,
+                            Err(_) => f64::NAN,
+                        }
+                    };
+                    let uf = brent(f, u_lo, u, opts.tol_rel * u, 200).ok_or_else(|| {
+                        Error::numerical(
+                            "flutter",
+                            format!("Brent refinement failed in [{u_lo}, {u}]"),
+                        )
+                    })?;
+                    let (_, ps) = self.max_growth(method, uf, &start)?;
+                    let (mode, pc) = match method {
+                        FlutterMethod::Pk => ps
+                            .iter()
+                            .enumerate()
+                            .max_by(|a, b| (-zeta_of(*a.1)).total_cmp(&(-zeta_of(*b.1))))
+                            .map(|(i, p)| (i, *p))
+                            .unwrap_or((0, ps[0])),
+                        FlutterMethod::P => {
+                            let (_, ev) = self.p_modes(uf)?;
+                            let crit = ev
+                                .iter()
+                                .max_by(|a, b| (-zeta_of(**a)).total_cmp(&(-zeta_of(**b))))
+                                .copied()
+                                .unwrap_or(ps[0]);
+                            let mode = (0..ps.len())
+                                .min_by(|&a, &b| {
+                                    (ps[a] - crit).norm().total_cmp(&(ps[b] - crit).norm())
+                                })
+                                .unwrap_or(0);
+                            (mode, crit)
+                        }
+                    };
+                    let b = self.semi_chord();
+                    flutter = Some(FlutterPoint {
+                        u: uf,
+                        omega: pc.im,
+                        mode,
+                        u_reduced: uf / (b * w_ref),
+                        omega_ratio: pc.im / w_ref,
+                    });
+                }
+            }
+        }
+        Ok(FlutterAnalysis {
+            method,
+            model: self.aero.name(),
+            branches,
+            flutter,
+            divergence_speed: self.divergence_speed(),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::reference::{flutter_cases, flutter_options, FlutterCase};
+
+    /// Generic checker: measured vs expected with relative errors.
+    fn check(case: &FlutterCase) -> std::result::Result<String, String> {
+        let r = case
+            .section
+            .flutter(case.method, &flutter_options())
+            .map_err(|e| format!("{}: {e}", case.name))?;
+        let f = r
+            .flutter
+            .ok_or_else(|| format!("{}: no flutter found", case.name))?;
+        let mut msg = format!(
+            "{}: U_F = {:.5} (want {}), ω/ω_α = {:.5}",
+            case.name, f.u_reduced, case.u_reduced, f.omega_ratio
+        );
+        let rel = |a: f64, b: f64| ((a - b) / b).abs();
+        let mut ok = rel(f.u_reduced, case.u_reduced) <= case.tol;
+        if let Some(w) = case.omega_ratio {
+            msg += &format!(" (want {w})");
+            ok &= rel(f.omega_ratio, w) <= case.tol;
+        }
+        if let Some(d) = case.divergence {
+            let ud = r
+                .divergence_speed
+                .ok_or_else(|| format!("{}: no divergence", case.name))?;
+            msg += &format!(", U_D = {ud:.5} (want {d})");
+            ok &= rel(ud, d) <= case.tol;
+        }
+        if ok {
+            Ok(msg)
+        } else {
+            Err(msg)
+        }
+    }
+
+    #[test]
+    fn reference_flutter_cases() {
+        let mut failures = Vec::new();
+        for case in flutter_cases() {
+            match check(&case) {
+                Ok(m) => eprintln!("{m}"),
+                Err(m) => failures.push(m),
+            }
+        }
+        assert!(failures.is_empty(), "{failures:#?}");
+    }
+
+    #[test]
+    fn bad_options_name_the_field() {
+        let s = crate::reference::hp1_theodorsen();
+        let mut o = flutter_options();
+        o.n_speeds = 1;
+        let e = s.flutter(FlutterMethod::P, &o).unwrap_err();
+        assert!(e.to_string().contains("n_speeds"), "{e}");
+    }
+}
+
+#[cfg(test)]
+mod rfa_tests {
+    use super::*;
+    use crate::reference::{flat_plate_table, flutter_options};
+
+    #[test]
+    fn rfa_state_space_flutter_within_one_percent_of_table_pk() {
+        // The time-domain realisation of the table (Roger RFA) analysed by the p-method.
+        for n_lag in [2, 3, 4] {
+            let s = flat_plate_table(n_lag);
+            let t = crate::aero::DerivativeTable::flat_plate(
+                2.0,
+                &crate::reference::flat_plate_k_grid(),
+                n_lag,
+            )
+            .unwrap();
+            eprintln!(
+                "RFA {n_lag} lags {:?}: fit error max {:.2e}, rms {:.2e}",
+                t.rfa().lags,
+                t.rfa().max_rel_error,
+                t.rfa().rms_rel_error
+            );
+            let r = s.flutter(FlutterMethod::P, &flutter_options()).unwrap();
+            let f = r.flutter.unwrap();
+            let rel = (f.u_reduced - 2.0054).abs() / 2.0054;
+            eprintln!(
+                "RFA {n_lag} lags: U_F = {:.5}, ω/ω_α = {:.5}, rel {rel:.2e}",
+                f.u_reduced, f.omega_ratio
+            );
+            if n_lag >= 3 {
+                assert!(rel < 0.01, "{n_lag} lags: {}", f.u_reduced);
+            }
+        }
+    }
+
+    #[test]
+    fn vg_branches_are_continuous_and_serialisable() {
+        let s = crate::reference::hp1_theodorsen();
+        let r = s.flutter(FlutterMethod::Pk, &flutter_options()).unwrap();
+        for b in &r.branches {
+            for w in b.points.windows(2) {
+                assert!(
+                    (w[1].omega - w[0].omega).abs() < 0.1,
+                    "{}: jump {:?} → {:?}",
+                    b.label,
+                    w[0],
+                    w[1]
+                );
+            }
+        }
+        let json = serde_json::to_string(&r).unwrap();
+        let back: FlutterAnalysis = serde_json::from_str(&json).unwrap();
+        assert_eq!(back.branches.len(), 2);
+    }
+}

@@ -1,0 +1,496 @@
+//! The 2-DOF heave/pitch section per unit span (DESIGN.md §4):
+//!
+//! m ḧ + S_α α̈ + c_h ḣ + F_h(h, ḣ) = L,   S_α ḧ + I_α α̈ + c_α α̇ + M_α(α, α̇) = M,
+//!
+//! h positive down [m], α positive nose-up [rad], L positive down [N/m], M nose-up about the
+//! elastic axis [N·m/m]; S_α = m x_α > 0 when the mass centre is aft of the elastic axis.
+//! The restoring terms are F_h = k_h h + Σ c_p h^p + F_c tanh(ḣ/ε_h) and
+//! M_α = k_α d + Σ c_p d^p + T_c tanh(α̇/ε_α), with the spring deflection d = α for no
+//! freeplay and d = α − δ sign α (|α| > δ), 0 (|α| ≤ δ) for a pitch freeplay of half gap δ.
+
+use nalgebra::Matrix2;
+use serde::{Deserialize, Serialize};
+
+use crate::error::{finite, non_negative, positive};
+use crate::{Error, Result};
+
+/// One polynomial stiffness term c·x^p added to a linear spring.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PolyTerm {
+    /// Power p ≥ 2 (3 = cubic, 5 = quintic…).
+    pub power: u32,
+    /// Coefficient c [N/m^p per unit span for heave, N·m/rad^p per unit span for pitch];
+    /// c > 0 hardens an odd term, c < 0 softens it.
+    pub coefficient: f64,
+}
+
+/// Coulomb (dry) friction, regularised as F_c tanh(v/ε) so that the explicit integrator is
+/// not stiff: near v = 0 it acts as a viscous damper F_c/ε, and that slope is what sets
+/// the stiffness. The default ε ([`Friction::default_smoothing`]) makes that slope equal
+/// to a damping ratio of 5 on the uncoupled mode, which Dop853 integrates at ~30 steps per
+/// cycle while the friction force reaches 99 % of F_c for |v| > 2.6 ε.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Friction {
+    /// Heave friction force F_c [N/m], ≥ 0.
+    #[serde(default)]
+    pub heave_force: f64,
+    /// Pitch friction moment T_c [N·m/m], ≥ 0.
+    #[serde(default)]
+    pub pitch_moment: f64,
+    /// Heave smoothing velocity ε_h [m/s]; `None` = [`Friction::default_smoothing`].
+    #[serde(default)]
+    pub heave_smoothing: Option<f64>,
+    /// Pitch smoothing rate ε_α [rad/s]; `None` = [`Friction::default_smoothing`].
+    #[serde(default)]
+    pub pitch_smoothing: Option<f64>,
+}
+
+impl Friction {
+    /// Default smoothing scale ε = F_c / (2·5·m ω) for a friction force `force` acting on a
+    /// mode of generalised mass `mass` and natural frequency `omega` [rad/s]: the
+    /// regularised slope F_c/ε then equals a viscous damping ratio of 5.
+    pub fn default_smoothing(force: f64, mass: f64, omega: f64) -> f64 {
+        (force / (10.0 * mass * omega)).max(f64::MIN_POSITIVE)
+    }
+}
+
+/// Structural parameters of the section per unit span, SI units.
+///
+/// Loadable from TOML ([`Structure::from_toml_str`]); unknown keys are rejected.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Structure {
+    /// Mass per unit span m [kg/m].
+    pub mass: f64,
+    /// Pitch inertia about the elastic axis I_α [kg·m²/m].
+    pub inertia_alpha: f64,
+    /// Static unbalance S_α = m x_α [kg·m/m], positive when the mass centre is aft of the
+    /// elastic axis.
+    #[serde(default)]
+    pub static_unbalance: f64,
+    /// Heave stiffness k_h [N/m per m span].
+    pub k_h: f64,
+    /// Pitch stiffness k_α [N·m/rad per m span].
+    pub k_alpha: f64,
+    /// Heave viscous damping c_h [N·s/m per m span].
+    #[serde(default)]
+    pub c_h: f64,
+    /// Pitch viscous damping c_α [N·m·s/rad per m span].
+    #[serde(default)]
+    pub c_alpha: f64,
+    /// Extra heave stiffness terms Σ c_p h^p.
+    #[serde(default)]
+    pub heave_stiffness_terms: Vec<PolyTerm>,
+    /// Extra pitch stiffness terms Σ c_p d^p on the spring deflection d.
+    #[serde(default)]
+    pub pitch_stiffness_terms: Vec<PolyTerm>,
+    /// Pitch freeplay half gap δ [rad] (zero stiffness for |α| < δ); 0 = none.
+    #[serde(default)]
+    pub pitch_freeplay: f64,
+    /// Coulomb friction, if any.
+    #[serde(default)]
+    pub friction: Option<Friction>,
+}
+
+/// Nondimensional description of a typical section (Hodges & Pierce notation) plus the
+/// dimensional scales needed to build a [`Structure`].
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct NondimStructure {
+    /// Mass ratio μ = m / (πρb²).
+    pub mu: f64,
+    /// Squared radius of gyration about the elastic axis r² = I_α / (m b²).
+    pub r_alpha2: f64,
+    /// Frequency ratio σ = ω_h / ω_α (uncoupled).
+    pub sigma: f64,
+    /// Mass-centre offset aft of the elastic axis x_α in semi-chords (x_α = e − a).
+    pub x_alpha: f64,
+    /// Semi-chord b = B/2 [m].
+    pub semi_chord: f64,
+    /// Uncoupled pitch natural frequency ω_α = sqrt(k_α/I_α) [rad/s].
+    pub omega_alpha: f64,
+    /// Air density ρ [kg/m³] used in μ.
+    pub rho: f64,
+    /// Heave damping ratio ζ_h (c_h = 2 ζ_h m ω_h).
+    #[serde(default)]
+    pub zeta_h: f64,
+    /// Pitch damping ratio ζ_α (c_α = 2 ζ_α I_α ω_α).
+    #[serde(default)]
+    pub zeta_alpha: f64,
+}
+
+impl Structure {
+    /// Builds a linear structure from SI rig values (mass m, pitch inertia about the elastic
+    /// axis I_α, mass-centre offset x_α [m] aft of the elastic axis, springs and dampers).
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] naming the first bad field (see [`Structure::validate`]).
+    #[allow(clippy::too_many_arguments)]
+    pub fn from_rig(
+        mass: f64,
+        inertia_alpha: f64,
+        x_alpha_m: f64,
+        k_h: f64,
+        k_alpha: f64,
+        c_h: f64,
+        c_alpha: f64,
+    ) -> Result<Self> {
+        finite("x_alpha_m", x_alpha_m)?;
+        let s = Structure {
+            mass,
+            inertia_alpha,
+            static_unbalance: mass * x_alpha_m,
+            k_h,
+            k_alpha,
+            c_h,
+            c_alpha,
+            heave_stiffness_terms: Vec::new(),
+            pitch_stiffness_terms: Vec::new(),
+            pitch_freeplay: 0.0,
+            friction: None,
+        };
+        s.validate()?;
+        Ok(s)
+    }
+
+    /// Builds a linear structure from nondimensional parameters:
+    /// m = μπρb², I_α = r² m b², S_α = m x_α b, k_α = I_α ω_α², k_h = m (σ ω_α)²,
+    /// c_h = 2 ζ_h m σ ω_α, c_α = 2 ζ_α I_α ω_α.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] naming the bad nondimensional field (`mu`, `r_alpha2`…).
+    pub fn from_nondimensional(p: &NondimStructure) -> Result<Self> {
+        positive("mu", p.mu)?;
+        positive("r_alpha2", p.r_alpha2)?;
+        non_negative("sigma", p.sigma)?;
+        finite("x_alpha", p.x_alpha)?;
+        positive("semi_chord", p.semi_chord)?;
+        positive("omega_alpha", p.omega_alpha)?;
+        positive("rho", p.rho)?;
+        non_negative("zeta_h", p.zeta_h)?;
+        non_negative("zeta_alpha", p.zeta_alpha)?;
+        if p.r_alpha2 <= p.x_alpha * p.x_alpha {
+            return Err(Error::param(
+                "r_alpha2",
+                p.r_alpha2,
+                format!(
+                    "must exceed x_alpha² = {} (positive-definite mass matrix)",
+                    p.x_alpha * p.x_alpha
+                ),
+            ));
+        }
+        let b = p.semi_chord;
+        let m = p.mu * std::f64::consts::PI * p.rho * b * b;
+        let i_a = p.r_alpha2 * m * b * b;
+        let w_h = p.sigma * p.omega_alpha;
+        let s = Structure {
+            mass: m,
+            inertia_alpha: i_a,
+            static_unbalance: m * p.x_alpha * b,
+            k_h: m * w_h * w_h,
+            k_alpha: i_a * p.omega_alpha * p.omega_alpha,
+            c_h: 2.0 * p.zeta_h * m * w_h,
+            c_alpha: 2.0 * p.zeta_alpha * i_a * p.omega_alpha,
+            heave_stiffness_terms: Vec::new(),
+            pitch_stiffness_terms: Vec::new(),
+            pitch_freeplay: 0.0,
+            friction: None,
+        };
+        s.validate()?;
+        Ok(s)
+    }
+
+    /// Parses a TOML table with the fields of [`Structure`] (SI), rejecting unknown keys,
+    /// then validates it.
+    ///
+    /// # Errors
+    /// [`Error::Toml`] with the parser's line/column for syntax, type or unknown-key errors;
+    /// [`Error::InvalidParameter`] for values out of range.
+    pub fn from_toml_str(s: &str) -> Result<Self> {
+        let st: Structure = toml::from_str(s).map_err(|e| Error::Toml {
+            source_name: "<structure>".into(),
+            message: e.to_string(),
+        })?;
+        st.validate()?;
+        Ok(st)
+    }
+
+    /// Checks every field: masses and inertia > 0, m I_α > S_α² (positive-definite mass
+    /// matrix), stiffnesses and dampers ≥ 0, polynomial powers ≥ 2 with finite
+    /// coefficients, freeplay ≥ 0, friction forces ≥ 0 and smoothing scales > 0.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] naming the first bad field, e.g.
+    /// `pitch_stiffness_terms[1].power`.
+    pub fn validate(&self) -> Result<()> {
+        positive("mass", self.mass)?;
+        positive("inertia_alpha", self.inertia_alpha)?;
+        finite("static_unbalance", self.static_unbalance)?;
+        if self.mass * self.inertia_alpha <= self.static_unbalance * self.static_unbalance {
+            return Err(Error::param(
+                "static_unbalance",
+                self.static_unbalance,
+                format!(
+                    "S_α² must be < m I_α = {} (positive-definite mass matrix)",
+                    self.mass * self.inertia_alpha
+                ),
+            ));
+        }
+        non_negative("k_h", self.k_h)?;
+        positive("k_alpha", self.k_alpha)?;
+        non_negative("c_h", self.c_h)?;
+        non_negative("c_alpha", self.c_alpha)?;
+        for (name, terms) in [
+            ("heave_stiffness_terms", &self.heave_stiffness_terms),
+            ("pitch_stiffness_terms", &self.pitch_stiffness_terms),
+        ] {
+            for (i, t) in terms.iter().enumerate() {
+                if t.power < 2 {
+                    return Err(Error::param(
+                        format!("{name}[{i}].power"),
+                        t.power as f64,
+                        "must be >= 2 (the linear term is k_h / k_alpha)",
+                    ));
+                }
+                finite(&format!("{name}[{i}].coefficient"), t.coefficient)?;
+            }
+        }
+        non_negative("pitch_freeplay", self.pitch_freeplay)?;
+        if let Some(f) = &self.friction {
+            non_negative("friction.heave_force", f.heave_force)?;
+            non_negative("friction.pitch_moment", f.pitch_moment)?;
+            if let Some(e) = f.heave_smoothing {
+                positive("friction.heave_smoothing", e)?;
+            }
+            if let Some(e) = f.pitch_smoothing {
+                positive("friction.pitch_smoothing", e)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Uncoupled pitch natural frequency ω_α = sqrt(k_α / I_α) [rad/s].
+    pub fn omega_alpha(&self) -> f64 {
+        (self.k_alpha / self.inertia_alpha).sqrt()
+    }
+
+    /// Uncoupled heave natural frequency ω_h = sqrt(k_h / m) [rad/s].
+    pub fn omega_h(&self) -> f64 {
+        (self.k_h / self.mass).sqrt()
+    }
+
+    /// Mass matrix [[m, S_α], [S_α, I_α]].
+    pub fn mass_matrix(&self) -> Matrix2<f64> {
+        Matrix2::new(
+            self.mass,
+            self.static_unbalance,
+            self.static_unbalance,
+            self.inertia_alpha,
+        )
+    }
+
+    /// Linear damping matrix diag(c_h, c_α).
+    pub fn damping_matrix(&self) -> Matrix2<f64> {
+        Matrix2::new(self.c_h, 0.0, 0.0, self.c_alpha)
+    }
+
+    /// Linear stiffness matrix diag(k_h, k_α) about the origin. Flutter analysis uses it:
+    /// polynomial terms vanish there, freeplay and friction are nonsmooth and are ignored
+    /// (the nominal spring k_α is used, i.e. the large-amplitude linear system).
+    pub fn stiffness_matrix(&self) -> Matrix2<f64> {
+        Matrix2::new(self.k_h, 0.0, 0.0, self.k_alpha)
+    }
+
+    /// Whether the restoring forces are exactly linear (no polynomial, freeplay, friction).
+    pub fn is_linear(&self) -> bool {
+        self.heave_stiffness_terms.is_empty()
+            && self.pitch_stiffness_terms.is_empty()
+            && self.pitch_freeplay == 0.0
+            && self
+                .friction
+                .is_none_or(|f| f.heave_force == 0.0 && f.pitch_moment == 0.0)
+    }
+
+    /// Resolved friction (F_c, ε_h, T_c, ε_α) with defaults applied; zeros when absent.
+    pub(crate) fn friction_resolved(&self) -> [f64; 4] {
+        match &self.friction {
+            None => [0.0, 1.0, 0.0, 1.0],
+            Some(f) => {
+                let eh = f.heave_smoothing.unwrap_or_else(|| {
+                    Friction::default_smoothing(f.heave_force, self.mass, self.omega_h().max(1e-12))
+                });
+                let ea = f.pitch_smoothing.unwrap_or_else(|| {
+                    Friction::default_smoothing(
+                        f.pitch_moment,
+                        self.inertia_alpha,
+                        self.omega_alpha(),
+                    )
+                });
+                [f.heave_force, eh, f.pitch_moment, ea]
+            }
+        }
+    }
+
+    /// Total structural restoring forces (F_h, M_α) — damping, springs, polynomial terms,
+    /// freeplay and regularised friction — at displacement `q = (h, α)` and velocity
+    /// `qd = (ḣ, α̇)`; the equations of motion are M q̈ + (F_h, M_α) = (L, M).
+    pub fn restoring(&self, q: [f64; 2], qd: [f64; 2]) -> [f64; 2] {
+        let friction = self.friction_resolved();
+        self.restoring_with(q, qd, &friction)
+    }
+
+    /// [`Structure::restoring`] with friction already resolved (hot path of integration).
+    #[inline]
+    pub(crate) fn restoring_with(&self, q: [f64; 2], qd: [f64; 2], fr: &[f64; 4]) -> [f64; 2] {
+        let h = q[0];
+        let mut fh = self.c_h * qd[0] + self.k_h * h;
+        for t in &self.heave_stiffness_terms {
+            fh += t.coefficient * h.powi(t.power as i32);
+        }
+        let a = q[1];
+        let d = if self.pitch_freeplay > 0.0 {
+            if a > self.pitch_freeplay {
+                a - self.pitch_freeplay
+            } else if a < -self.pitch_freeplay {
+                a + self.pitch_freeplay
+            } else {
+                0.0
+            }
+        } else {
+            a
+        };
+        let mut ma = self.c_alpha * qd[1] + self.k_alpha * d;
+        for t in &self.pitch_stiffness_terms {
+            ma += t.coefficient * d.powi(t.power as i32);
+        }
+        if fr[0] > 0.0 {
+            fh += fr[0] * (qd[0] / fr[1]).tanh();
+        }
+        if fr[2] > 0.0 {
+            ma += fr[2] * (qd[1] / fr[3]).tanh();
+        }
+        [fh, ma]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn hp1() -> NondimStructure {
+        NondimStructure {
+            mu: 20.0,
+            r_alpha2: 6.0 / 25.0,
+            sigma: 0.4,
+            x_alpha: 0.1,
+            semi_chord: 0.5,
+            omega_alpha: 10.0,
+            rho: 1.225,
+            zeta_h: 0.0,
+            zeta_alpha: 0.0,
+        }
+    }
+
+    #[test]
+    fn nondimensional_constructor_reproduces_its_parameters() {
+        let p = hp1();
+        let s = Structure::from_nondimensional(&p).unwrap();
+        let b = p.semi_chord;
+        let mu = s.mass / (std::f64::consts::PI * p.rho * b * b);
+        assert!((mu - 20.0).abs() < 1e-12);
+        assert!((s.inertia_alpha / (s.mass * b * b) - 0.24).abs() < 1e-12);
+        assert!((s.omega_h() / s.omega_alpha() - 0.4).abs() < 1e-12);
+        assert!((s.static_unbalance / (s.mass * b) - 0.1).abs() < 1e-12);
+        assert!((s.omega_alpha() - 10.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn validation_names_the_field() {
+        let mut p = hp1();
+        p.mu = -1.0;
+        let e = Structure::from_nondimensional(&p).unwrap_err();
+        assert!(e.to_string().contains("`mu`"), "{e}");
+        let mut p = hp1();
+        p.x_alpha = 0.6; // x² = 0.36 > r² = 0.24
+        let e = Structure::from_nondimensional(&p).unwrap_err();
+        assert!(e.to_string().contains("r_alpha2"), "{e}");
+        let mut s = Structure::from_nondimensional(&hp1()).unwrap();
+        s.pitch_stiffness_terms.push(PolyTerm {
+            power: 1,
+            coefficient: 3.0,
+        });
+        let e = s.validate().unwrap_err();
+        assert!(
+            e.to_string().contains("pitch_stiffness_terms[0].power"),
+            "{e}"
+        );
+        let e = Structure::from_rig(1.0, 1.0, 0.0, 1.0, f64::NAN, 0.0, 0.0).unwrap_err();
+        assert!(e.to_string().contains("k_alpha"), "{e}");
+    }
+
+    #[test]
+    fn toml_round_trip_and_unknown_key_rejected() {
+        let text = r#"
+            mass = 3.0
+            inertia_alpha = 0.02
+            static_unbalance = 0.01
+            k_h = 1000.0
+            k_alpha = 50.0
+            c_alpha = 0.1
+            pitch_freeplay = 0.01
+            [[pitch_stiffness_terms]]
+            power = 3
+            coefficient = 500.0
+            [friction]
+            pitch_moment = 0.05
+        "#;
+        let s = Structure::from_toml_str(text).unwrap();
+        assert_eq!(s.pitch_stiffness_terms[0].power, 3);
+        assert_eq!(s.c_h, 0.0);
+        let back = Structure::from_toml_str(&toml::to_string(&s).unwrap()).unwrap();
+        assert_eq!(back, s);
+        let e = Structure::from_toml_str(
+            "mass = 1.0\ninertia_alpha = 1.0\nk_h = 1.0\nk_alpha = 1.0\nk_beta = 2.0\n",
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("k_beta"), "{e}");
+        let e = Structure::from_toml_str(
+            "mass = -1.0\ninertia_alpha = 1.0\nk_h = 1.0\nk_alpha = 1.0\n",
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("`mass`"), "{e}");
+    }
+
+    #[test]
+    fn freeplay_polynomial_and_friction_restoring() {
+        let mut s = Structure::from_rig(2.0, 0.1, 0.0, 100.0, 10.0, 0.0, 0.0).unwrap();
+        s.pitch_freeplay = 0.02;
+        s.pitch_stiffness_terms.push(PolyTerm {
+            power: 3,
+            coefficient: 1000.0,
+        });
+        assert_eq!(
+            s.restoring([0.0, 0.015], [0.0, 0.0])[1],
+            0.0,
+            "inside the gap"
+        );
+        let d: f64 = 0.05 - 0.02;
+        let want = 10.0 * d + 1000.0 * d.powi(3);
+        assert!((s.restoring([0.0, 0.05], [0.0, 0.0])[1] - want).abs() < 1e-14);
+        assert!((s.restoring([0.0, -0.05], [0.0, 0.0])[1] + want).abs() < 1e-14);
+        s.friction = Some(Friction {
+            heave_force: 0.0,
+            pitch_moment: 0.3,
+            heave_smoothing: None,
+            pitch_smoothing: None,
+        });
+        assert!(!s.is_linear());
+        let eps = s.friction_resolved()[3];
+        // Default smoothing: slope T_c/ε = 2·5·I_α ω_α.
+        assert!((0.3 / eps - 10.0 * 0.1 * s.omega_alpha()).abs() < 1e-9);
+        let m_fast = s.restoring([0.0, 0.0], [0.0, 100.0 * eps])[1];
+        assert!((m_fast - 0.3).abs() < 1e-9, "saturated friction {m_fast}");
+    }
+}

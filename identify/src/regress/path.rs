@@ -1,0 +1,342 @@
+//! The δ path (paper Alg. 3) and the selection of the sparsest adequate support.
+//!
+//! δ runs over a logarithmic grid (default 50 values from 1e-4 to 1 for the contribution
+//! measure, from 1e-3 to 10 for the raw-coefficient measure). For each δ the (group) STLSQ
+//! support and coefficients are computed from the whole identifiable basis; the path's
+//! distinct supports are scored by their key-frequency loss (Eq. 14, mean over the cases of
+//! the group). The selected support is the sparsest one whose loss is under the limit
+//!
+//! loss ≤ loss_dense·(1 + rel) + abs   (defaults rel = 0.1, abs = 1e-3),
+//!
+//! loss_dense being the loss of the densest support on the path; ties in size go to the
+//! lower loss. A case without key frequencies (no forcing frequency known) is scored by
+//! its normalised residual 1 − R² instead.
+
+use num_complex::Complex64;
+use serde::{Deserialize, Serialize};
+
+use super::{fit_group, mask_to_vec, CaseProblem, FitCache, GroupFit, Mask, Measure, Stlsq};
+use crate::{Error, Result};
+
+/// Options of the δ path.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct PathOptions {
+    /// Number of δ values (log grid).
+    pub n_delta: usize,
+    /// Smallest δ.
+    pub delta_min: f64,
+    /// Largest δ.
+    pub delta_max: f64,
+    /// Relative slack of the loss limit.
+    pub loss_rel: f64,
+    /// Absolute slack of the loss limit.
+    pub loss_abs: f64,
+}
+
+/// Default number of δ values.
+pub const DEFAULT_N_DELTA: usize = 50;
+/// Default relative slack of the loss limit.
+pub const DEFAULT_LOSS_REL: f64 = 0.1;
+/// Default absolute slack of the loss limit.
+pub const DEFAULT_LOSS_ABS: f64 = 1e-3;
+
+impl PathOptions {
+    /// Defaults for a measure: 50 values over [1e-4, 1] (contribution) or [1e-3, 10]
+    /// (raw coefficient), loss limit slack rel = 0.1, abs = 1e-3.
+    pub fn for_measure(measure: Measure) -> Self {
+        let (delta_min, delta_max) = default_range(measure);
+        PathOptions {
+            n_delta: DEFAULT_N_DELTA,
+            delta_min,
+            delta_max,
+            loss_rel: DEFAULT_LOSS_REL,
+            loss_abs: DEFAULT_LOSS_ABS,
+        }
+    }
+
+    /// Checks the options.
+    ///
+    /// # Errors
+    /// [`Error::InvalidOption`] naming `n_delta`, `delta_range`, `loss_rel` or `loss_abs`.
+    pub fn validate(&self) -> Result<()> {
+        let bad = |name: &str, message: String| Error::InvalidOption {
+            name: name.to_string(),
+            message,
+        };
+        if self.n_delta == 0 {
+            return Err(bad("n_delta", "must be ≥ 1".to_string()));
+        }
+        if !(self.delta_min > 0.0 && self.delta_max >= self.delta_min && self.delta_max.is_finite())
+        {
+            return Err(bad(
+                "delta_range",
+                format!(
+                    "[{}, {}] must satisfy 0 < min ≤ max < ∞",
+                    self.delta_min, self.delta_max
+                ),
+            ));
+        }
+        if !(self.loss_rel >= 0.0 && self.loss_rel.is_finite()) {
+            return Err(bad(
+                "loss_rel",
+                format!("{} must be finite and ≥ 0", self.loss_rel),
+            ));
+        }
+        if !(self.loss_abs >= 0.0 && self.loss_abs.is_finite()) {
+            return Err(bad(
+                "loss_abs",
+                format!("{} must be finite and ≥ 0", self.loss_abs),
+            ));
+        }
+        Ok(())
+    }
+
+    /// The δ grid, ascending, log-spaced (a single value `delta_min` when n_delta = 1).
+    pub fn grid(&self) -> Vec<f64> {
+        if self.n_delta == 1 {
+            return vec![self.delta_min];
+        }
+        let (a, b) = (self.delta_min.ln(), self.delta_max.ln());
+        (0..self.n_delta)
+            .map(|i| (a + (b - a) * i as f64 / (self.n_delta - 1) as f64).exp())
+            .collect()
+    }
+}
+
+/// Default δ range of a measure.
+pub fn default_range(measure: Measure) -> (f64, f64) {
+    match measure {
+        Measure::Contribution => (1e-4, 1.0),
+        Measure::Coefficient => (1e-3, 10.0),
+    }
+}
+
+/// Key-frequency data of one case and target: measured amplitudes and the amplitude of
+/// every (raw) library column at the key tones.
+#[derive(Debug, Clone, PartialEq)]
+pub struct KeyProjection {
+    /// Measured complex amplitudes A_i (k values).
+    pub measured: Vec<Complex64>,
+    /// `columns[j][i]`: amplitude of library column j at key tone i.
+    pub columns: Vec<Vec<Complex64>>,
+}
+
+impl KeyProjection {
+    /// Model amplitudes Â_i = Σ_j ξ_j G_ji for raw coefficients over the library.
+    ///
+    /// # Panics
+    /// When `raw.len()` differs from the number of library columns (a programming error).
+    #[track_caller]
+    pub fn model(&self, raw: &[f64]) -> Vec<Complex64> {
+        assert_eq!(
+            raw.len(),
+            self.columns.len(),
+            "one coefficient per library column"
+        );
+        let mut out = vec![Complex64::new(0.0, 0.0); self.measured.len()];
+        for (x, g) in raw.iter().zip(&self.columns) {
+            if *x != 0.0 {
+                for (o, gi) in out.iter_mut().zip(g) {
+                    *o += gi * x;
+                }
+            }
+        }
+        out
+    }
+
+    /// Eq. 14 loss of raw coefficients ([`crate::metrics::key_frequency_loss`]).
+    pub fn loss(&self, raw: &[f64]) -> f64 {
+        crate::metrics::key_frequency_loss(&self.measured, &self.model(raw))
+    }
+}
+
+/// One distinct support on the path.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PathSupport {
+    /// Library columns, ascending.
+    pub support: Vec<usize>,
+    /// The δ values of the grid that gave this support.
+    pub deltas: Vec<f64>,
+    /// Group loss: mean over cases of the per-case loss.
+    pub loss: f64,
+    /// Per-case loss.
+    pub case_losses: Vec<f64>,
+    /// Per case, raw coefficients over the library.
+    #[serde(skip)]
+    pub coefficients: Vec<Vec<f64>>,
+}
+
+/// A whole δ path of one group and target.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DeltaPath {
+    /// The δ grid.
+    pub deltas: Vec<f64>,
+    /// For each δ, the index of its support in `supports`.
+    pub support_of: Vec<usize>,
+    /// Distinct supports, in order of first appearance along increasing δ.
+    pub supports: Vec<PathSupport>,
+    /// Loss of the densest support.
+    pub loss_dense: f64,
+    /// Loss limit loss_dense·(1 + rel) + abs.
+    pub limit: f64,
+    /// Index of the selected support.
+    pub selected: usize,
+}
+
+impl DeltaPath {
+    /// The selected support.
+    pub fn selected_support(&self) -> &PathSupport {
+        &self.supports[self.selected]
+    }
+}
+
+/// Loss of one case for raw coefficients (key-frequency loss, or 1 − R² without keys).
+fn case_loss(case: &CaseProblem<'_>, key: Option<&KeyProjection>, raw: &[f64]) -> f64 {
+    match key {
+        Some(k) if !k.measured.is_empty() => k.loss(raw),
+        _ => {
+            let f = case.factor;
+            let support: Vec<usize> = (0..raw.len()).filter(|&j| raw[j] != 0.0).collect();
+            let scaled: Vec<f64> = support.iter().map(|&j| raw[j] * f.scales[j]).collect();
+            let rss = f.rss_of(case.target, &support, &scaled);
+            let tot = f.targets[case.target].ss_tot();
+            if tot > 0.0 {
+                rss / tot
+            } else {
+                0.0
+            }
+        }
+    }
+}
+
+/// Builds the path summary from the per-δ supports and coefficients, and selects.
+///
+/// # Panics
+/// When the inputs are inconsistent in length (programming errors).
+#[track_caller]
+pub fn summarise(
+    deltas: &[f64],
+    per_delta: Vec<(Mask, Vec<Vec<f64>>)>,
+    cases: &[CaseProblem<'_>],
+    keys: &[Option<&KeyProjection>],
+    opts: &PathOptions,
+) -> DeltaPath {
+    assert_eq!(deltas.len(), per_delta.len(), "one fit per δ");
+    assert_eq!(cases.len(), keys.len(), "one key projection per case");
+    let mut supports: Vec<PathSupport> = Vec::new();
+    let mut masks: Vec<Mask> = Vec::new();
+    let mut support_of = Vec::with_capacity(deltas.len());
+    for (&d, (mask, coefs)) in deltas.iter().zip(per_delta) {
+        if let Some(i) = masks.iter().position(|&m| m == mask) {
+            supports[i].deltas.push(d);
+            support_of.push(i);
+            continue;
+        }
+        let case_losses: Vec<f64> = cases
+            .iter()
+            .zip(keys)
+            .zip(&coefs)
+            .map(|((c, k), x)| case_loss(c, *k, x))
+            .collect();
+        let loss = case_losses.iter().sum::<f64>() / case_losses.len().max(1) as f64;
+        masks.push(mask);
+        support_of.push(supports.len());
+        supports.push(PathSupport {
+            support: mask_to_vec(mask),
+            deltas: vec![d],
+            loss,
+            case_losses,
+            coefficients: coefs,
+        });
+    }
+    // densest: most terms, first along the path on ties
+    let dense = (0..supports.len())
+        .max_by(|&a, &b| {
+            supports[a]
+                .support
+                .len()
+                .cmp(&supports[b].support.len())
+                .then(b.cmp(&a))
+        })
+        .unwrap_or(0);
+    let loss_dense = supports.get(dense).map(|s| s.loss).unwrap_or(0.0);
+    let limit = loss_dense * (1.0 + opts.loss_rel) + opts.loss_abs;
+    let selected = (0..supports.len())
+        .filter(|&i| supports[i].loss <= limit || i == dense)
+        .min_by(|&a, &b| {
+            supports[a]
+                .support
+                .len()
+                .cmp(&supports[b].support.len())
+                .then(supports[a].loss.total_cmp(&supports[b].loss))
+                .then(a.cmp(&b))
+        })
+        .unwrap_or(dense);
+    DeltaPath {
+        deltas: deltas.to_vec(),
+        support_of,
+        supports,
+        loss_dense,
+        limit,
+        selected,
+    }
+}
+
+/// The δ path of (group) STLSQ: for each δ of the grid, [`fit_group`] with
+/// `Stlsq { threshold: δ, ..template }` from the whole `basis`, never removing `kept`.
+/// Returns the path and the group fit of the selected support (coefficients from the exact
+/// QR solve).
+///
+/// # Panics
+/// When `cases` is empty or `keys` has another length (programming errors).
+#[track_caller]
+pub fn stlsq_path(
+    cases: &[CaseProblem<'_>],
+    keys: &[Option<&KeyProjection>],
+    template: &Stlsq,
+    basis: Mask,
+    kept: Mask,
+    opts: &PathOptions,
+) -> (DeltaPath, GroupFit) {
+    let deltas = opts.grid();
+    let mut cache = FitCache::default();
+    let mut fits: Vec<GroupFit> = Vec::with_capacity(deltas.len());
+    for &d in &deltas {
+        let reg = Stlsq {
+            threshold: d,
+            ..*template
+        };
+        fits.push(fit_group(cases, &reg, basis, kept & basis, &mut cache));
+    }
+    let per_delta = fits
+        .iter()
+        .map(|f| (super::vec_to_mask(&f.support), f.coefficients.clone()))
+        .collect();
+    let path = summarise(&deltas, per_delta, cases, keys, opts);
+    let first = path.supports[path.selected].deltas[0];
+    let k = deltas.iter().position(|&d| d == first).unwrap_or(0);
+    let chosen = fits.swap_remove(k);
+    (path, chosen)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn grid_is_log_spaced_and_inclusive() {
+        let o = PathOptions::for_measure(Measure::Contribution);
+        let g = o.grid();
+        assert_eq!(g.len(), 50);
+        assert!((g[0] - 1e-4).abs() < 1e-18 && (g[49] - 1.0).abs() < 1e-12);
+        let r = g[1] / g[0];
+        assert!(g.windows(2).all(|w| (w[1] / w[0] - r).abs() < 1e-9));
+        assert!(PathOptions { n_delta: 0, ..o }.validate().is_err());
+        assert!(PathOptions {
+            delta_min: 0.0,
+            ..o
+        }
+        .validate()
+        .is_err());
+    }
+}

@@ -1,0 +1,279 @@
+//! `aeroform identify DATASET`: read, preprocess, identify, write `identification.json`.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::Context;
+use clap::{Args, ValueEnum};
+use identify::dataset::read_dataset;
+use identify::identifiability::BasisMode;
+use identify::library::LibraryKind;
+use identify::pipeline::{GroupBy, Identification, IdentifySettings, RegressorChoice};
+use identify::preprocess::{PreprocessOptions, VelocityMethod};
+use identify::regress::adapter::PysindyOptions;
+use identify::regress::{GroupRule, Measure};
+use identify::workflow::prepare_dataset;
+
+use crate::progress::IdentifyBar;
+
+/// Flags of `aeroform identify`.
+#[derive(Debug, Args)]
+pub struct IdentifyArgs {
+    /// Data set folder (manifest.toml + case CSV files).
+    pub dataset: PathBuf,
+    /// Output folder (created if missing).
+    #[arg(long, default_value = "out")]
+    pub out: PathBuf,
+    /// How cases share one sparse support.
+    #[arg(long, value_enum, default_value_t = GroupByArg::Config)]
+    pub group_by: GroupByArg,
+    /// Candidate library: the paper's 30 terms or all 34 cubic monomials.
+    #[arg(long, value_enum, default_value_t = LibraryArg::Paper30)]
+    pub library: LibraryArg,
+    /// `canonical`: fit on the canonical identifiable basis; `full`: the whole library
+    /// (a rank-deficient library is then an error).
+    #[arg(long, value_enum, default_value_t = BasisArg::Canonical)]
+    pub basis: BasisArg,
+    /// Sparse optimiser.
+    #[arg(long, value_enum, default_value_t = RegressorArg::Stlsq)]
+    pub regressor: RegressorArg,
+    /// Threshold measure: scale-free contribution ‖ξθ‖/‖y‖ or the paper's raw |ξ|.
+    #[arg(long, value_enum, default_value_t = MeasureArg::Contribution)]
+    pub measure: MeasureArg,
+    /// Group-removal rule of group STLSQ.
+    #[arg(long, value_enum, default_value_t = GroupRuleArg::Norm)]
+    pub group_rule: GroupRuleArg,
+    /// Ridge λ on the column-normalised library (0 = least squares).
+    #[arg(long, default_value_t = 0.0)]
+    pub ridge: f64,
+    /// Number of δ values on the path.
+    #[arg(long)]
+    pub n_delta: Option<usize>,
+    /// Number of key frequencies of the Eq. 14 loss.
+    #[arg(long)]
+    pub k_key: Option<usize>,
+    /// pysindy mode: ridge α of its STLSQ.
+    #[arg(long, default_value_t = 0.05)]
+    pub pysindy_alpha: f64,
+    /// pysindy mode: skip the unbiasing refit.
+    #[arg(long)]
+    pub pysindy_no_unbias: bool,
+    /// How α̇ and ḣ are obtained from the measured motion.
+    #[arg(long, value_enum, default_value_t = VelocityArg::Auto)]
+    pub velocity: VelocityArg,
+    /// Do not subtract still-air runs named by `nowind_file`.
+    #[arg(long)]
+    pub no_nowind: bool,
+    /// Write stage timings (read_s, prepare_s, identify_s, total_s, cases) to this JSON file.
+    #[arg(long)]
+    pub timing_json: Option<PathBuf>,
+    /// Do not print the summary table.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum GroupByArg {
+    Config,
+    WindSpeed,
+    Amplitude,
+    None,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum LibraryArg {
+    Paper30,
+    Full34,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum BasisArg {
+    Canonical,
+    Full,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum RegressorArg {
+    Stlsq,
+    Pysindy,
+    Lsq,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum MeasureArg {
+    Contribution,
+    Coefficient,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum GroupRuleArg {
+    Norm,
+    All,
+    Any,
+    Mean,
+}
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum VelocityArg {
+    Auto,
+    Harmonic,
+    Sg,
+}
+
+impl IdentifyArgs {
+    /// The flags' defaults for a data set and an output folder.
+    pub fn defaults(dataset: PathBuf, out: PathBuf) -> Self {
+        use clap::Parser;
+        #[derive(Parser)]
+        struct Wrap {
+            #[command(flatten)]
+            a: IdentifyArgs,
+        }
+        let mut a = Wrap::parse_from(["identify", "."]).a;
+        a.dataset = dataset;
+        a.out = out;
+        a
+    }
+
+    /// Identification settings these flags select (validated by the library).
+    pub fn settings(&self) -> IdentifySettings {
+        let mut s = IdentifySettings {
+            library: match self.library {
+                LibraryArg::Paper30 => LibraryKind::Paper30,
+                LibraryArg::Full34 => LibraryKind::Full34,
+            },
+            basis: match self.basis {
+                BasisArg::Canonical => BasisMode::Canonical,
+                BasisArg::Full => BasisMode::Full,
+            },
+            measure: match self.measure {
+                MeasureArg::Contribution => Measure::Contribution,
+                MeasureArg::Coefficient => Measure::Coefficient,
+            },
+            group_rule: match self.group_rule {
+                GroupRuleArg::Norm => GroupRule::Norm,
+                GroupRuleArg::All => GroupRule::All,
+                GroupRuleArg::Any => GroupRule::Any,
+                GroupRuleArg::Mean => GroupRule::Mean,
+            },
+            ridge: self.ridge,
+            regressor: match self.regressor {
+                RegressorArg::Stlsq => RegressorChoice::Stlsq,
+                RegressorArg::Lsq => RegressorChoice::LeastSquares,
+                RegressorArg::Pysindy => RegressorChoice::Pysindy(PysindyOptions {
+                    alpha: self.pysindy_alpha,
+                    unbias: !self.pysindy_no_unbias,
+                    ..PysindyOptions::default()
+                }),
+            },
+            group_by: match self.group_by {
+                GroupByArg::Config => GroupBy::Config,
+                GroupByArg::WindSpeed => GroupBy::WindSpeed,
+                GroupByArg::Amplitude => GroupBy::Amplitude,
+                GroupByArg::None => GroupBy::None,
+            },
+            ..IdentifySettings::default()
+        };
+        if let Some(n) = self.n_delta {
+            s.n_delta = n;
+        }
+        if let Some(k) = self.k_key {
+            s.k_key = k;
+        }
+        s
+    }
+
+    /// Preprocessing options these flags select.
+    pub fn preprocess(&self) -> PreprocessOptions {
+        PreprocessOptions {
+            velocity: match self.velocity {
+                VelocityArg::Auto => VelocityMethod::Auto,
+                VelocityArg::Harmonic => VelocityMethod::Harmonic,
+                VelocityArg::Sg => VelocityMethod::SavitzkyGolay {
+                    half_window: identify::preprocess::DEFAULT_SG_HALF_WINDOW,
+                    order: identify::preprocess::DEFAULT_SG_ORDER,
+                },
+            },
+            subtract_nowind: !self.no_nowind,
+            ..PreprocessOptions::default()
+        }
+    }
+}
+
+/// Runs `aeroform identify`; returns the result (also written to `OUT/identification.json`).
+pub fn run(args: &IdentifyArgs) -> anyhow::Result<Identification> {
+    let settings = args.settings();
+    settings
+        .validate()
+        .context("invalid identification option")?;
+    let pre = args.preprocess();
+    pre.check().context("invalid preprocessing option")?;
+    crate::ensure_dir(&args.out)?;
+
+    let t_start = Instant::now();
+    let dataset = read_dataset(&args.dataset)
+        .with_context(|| format!("reading data set {}", args.dataset.display()))?;
+    let read_s = t_start.elapsed().as_secs_f64();
+
+    let t_prep = Instant::now();
+    let prepared = prepare_dataset(&dataset, &pre).context("preprocessing")?;
+    let prepare_s = t_prep.elapsed().as_secs_f64();
+    if prepared.cases.is_empty() {
+        anyhow::bail!(
+            "{}: the data set has no forced-motion case to identify",
+            args.dataset.display()
+        );
+    }
+
+    let t_id = Instant::now();
+    let bar = IdentifyBar::new();
+    let result =
+        identify::pipeline::identify(&prepared.cases, &settings, &dataset.manifest.name, &|p| {
+            bar.observe(p)
+        });
+    bar.finish();
+    let result = result.context("identification")?;
+    let identify_s = t_id.elapsed().as_secs_f64();
+
+    let path = args.out.join("identification.json");
+    result.write(&path)?;
+    let total_s = t_start.elapsed().as_secs_f64();
+    if let Some(t) = &args.timing_json {
+        write_timing(
+            t,
+            read_s,
+            prepare_s,
+            identify_s,
+            total_s,
+            prepared.cases.len(),
+        )?;
+    }
+    if !args.quiet {
+        println!("{}", result.summary_table());
+        println!(
+            "{} cases: read {read_s:.3} s, preprocess {prepare_s:.3} s, identify {identify_s:.3} s; wrote {}",
+            prepared.cases.len(),
+            path.display()
+        );
+    }
+    Ok(result)
+}
+
+fn write_timing(
+    path: &Path,
+    read_s: f64,
+    prepare_s: f64,
+    identify_s: f64,
+    total_s: f64,
+    cases: usize,
+) -> anyhow::Result<()> {
+    let json = serde_json::json!({
+        "read_s": read_s,
+        "prepare_s": prepare_s,
+        "identify_s": identify_s,
+        "total_s": total_s,
+        "cases": cases,
+    });
+    identify::io::write_atomic(path, format!("{json:#}\n").as_bytes())?;
+    Ok(())
+}

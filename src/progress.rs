@@ -1,0 +1,57 @@
+//! Progress bars drawn from the library's progress observers.
+
+use std::sync::Mutex;
+
+use identify::pipeline::Progress;
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+
+/// A progress bar fed by [`identify::pipeline::identify`]'s observer; hidden when stderr is
+/// not a terminal.
+pub struct IdentifyBar {
+    bar: Mutex<Option<(ProgressBar, &'static str)>>,
+}
+
+impl IdentifyBar {
+    /// A new, not yet visible bar.
+    pub fn new() -> Self {
+        IdentifyBar {
+            bar: Mutex::new(None),
+        }
+    }
+
+    /// Observer to hand to the library.
+    pub fn observe(&self, p: Progress) {
+        let (stage, done, total) = match p {
+            Progress::Cases { done, total } => ("cases", done, total),
+            Progress::Groups { done, total } => ("δ paths", done, total),
+        };
+        let Ok(mut guard) = self.bar.lock() else {
+            return;
+        };
+        if guard.as_ref().map(|(_, s)| *s) != Some(stage) {
+            if let Some((b, _)) = guard.take() {
+                b.finish_and_clear();
+            }
+            let b = ProgressBar::with_draw_target(Some(total as u64), ProgressDrawTarget::stderr());
+            b.set_style(
+                ProgressStyle::with_template("{prefix:>8} [{bar:40}] {pos}/{len} {elapsed}")
+                    .unwrap_or_else(|_| ProgressStyle::default_bar())
+                    .progress_chars("=> "),
+            );
+            b.set_prefix(stage);
+            *guard = Some((b, stage));
+        }
+        if let Some((b, _)) = guard.as_ref() {
+            b.set_position(done as u64);
+        }
+    }
+
+    /// Removes the bar from the terminal.
+    pub fn finish(&self) {
+        if let Ok(mut guard) = self.bar.lock() {
+            if let Some((b, _)) = guard.take() {
+                b.finish_and_clear();
+            }
+        }
+    }
+}
