@@ -450,6 +450,45 @@ fn writer_rejects_records_that_do_not_match_the_manifest() {
     assert!(!dir.path().join("manifest.toml").exists());
 }
 
+#[test]
+fn absolute_or_parent_paths_are_rejected_with_field_and_line() {
+    for bad in [
+        "/etc/a.csv",
+        "../a.csv",
+        "cases/../../a.csv",
+        "C:/data/a.csv",
+        "\\\\server\\a.csv",
+        "cases\\..\\a.csv",
+    ] {
+        let text = SMALL.replace("file = \"a.csv\"", &format!("file = '{bad}'"));
+        let (line, field, msg) = manifest_err(&text);
+        assert_eq!((line, field.as_str()), (18, "case[1].file"), "{bad}: {msg}");
+        assert!(msg.contains(bad), "{msg}");
+    }
+    let text = format!("{SMALL}nowind_file = \"../still.csv\"\n");
+    let (line, field, msg) = manifest_err(&text);
+    assert_eq!((line, field.as_str()), (20, "case[1].nowind_file"), "{msg}");
+    assert!(msg.contains("`..`"), "{msg}");
+    // Inner `.` components and dotted names are fine.
+    for ok in ["./a.csv", "cases/./a..b.csv", "..a.csv"] {
+        let text = SMALL.replace("file = \"a.csv\"", &format!("file = \"{ok}\""));
+        assert!(Manifest::parse(&text, p()).is_ok(), "{ok}");
+    }
+    // The writer refuses to write outside the folder.
+    let mut rng = ChaCha8Rng::seed_from_u64(2);
+    let mut m = Manifest::parse(SMALL, p()).unwrap();
+    m.cases[0].file = PathBuf::from("../escape.csv");
+    let r = random_record(&mut rng, "a", CaseKind::Forced, 10, true);
+    let dir = tempfile::tempdir().unwrap();
+    let sub = dir.path().join("ds");
+    let e = write_dataset(&sub, &m, &[r]).unwrap_err();
+    assert!(
+        matches!(&e, Error::InvalidData { field, .. } if field == "file"),
+        "{e:?}"
+    );
+    assert!(!dir.path().join("escape.csv").exists());
+}
+
 fn write_small(dir: &Path, csv: &str) {
     std::fs::write(dir.join("manifest.toml"), SMALL).unwrap();
     std::fs::write(dir.join("a.csv"), csv).unwrap();
