@@ -224,11 +224,7 @@ pub fn harmonic_fit(x: &[f64], dt: f64, freqs: &[f64]) -> Result<HarmonicFit> {
 /// [`harmonic_fit`], also returning the 2 × 2 blocks `[Gₐₐ, Gₐᵦ, Gᵦᵦ]` of `G⁻¹` (`G` the
 /// Gram matrix of the basis) of each component's (cos, sin) coefficients: the coefficient
 /// covariance is `σ² G⁻¹` for white noise of variance σ².
-fn fit_with_covariance(
-    x: &[f64],
-    dt: f64,
-    freqs: &[f64],
-) -> Result<(HarmonicFit, Vec<[f64; 3]>)> {
+fn fit_with_covariance(x: &[f64], dt: f64, freqs: &[f64]) -> Result<(HarmonicFit, Vec<[f64; 3]>)> {
     if !(dt.is_finite() && dt > 0.0) {
         return Err(Error::InvalidOption {
             name: "dt".into(),
