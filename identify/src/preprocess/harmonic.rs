@@ -2,7 +2,16 @@
 //!
 //! Time inside a record is `t = i·dt` (seconds since the first sample): the fits and
 //! their [`HarmonicFit::value`] / [`HarmonicFit::derivative`] use that time base.
+//!
+//! Implementation: sines and cosines of `θᵢ = θ₀ + ω i` come from a rotation re-synchronised
+//! exactly every 64 samples ([`for_each_phase`]). Internally the fits use the centred index
+//! `u = i − (N−1)/2`; on that symmetric grid every odd sum vanishes and the Gram matrix of
+//! the basis `[1, cos ωₖu, sin ωₖu]`, and the moments `Σ u·(…)`, `Σ u²·(…)` needed by the
+//! Gauss–Newton frequency refinement, have closed forms in the Dirichlet kernel
+//! `D(θ) = Σᵤ cos θu = sin(Nθ/2)/sin(θ/2)` and its derivatives ([`dirichlet`]). A fit or a
+//! refinement step therefore reads the record only for `Σ x e^{jωu}` and `Σ u x e^{jωu}`.
 
+use std::cell::RefCell;
 use std::f64::consts::PI;
 
 use realfft::RealFftPlanner;
@@ -10,54 +19,105 @@ use realfft::RealFftPlanner;
 use super::linsolve::cholesky_solve;
 use crate::{Error, Result};
 
-/// `cos(p0 + ω i), sin(p0 + ω i)` (ω in rad per sample) for i = 0, 1, 2, … by rotation, re-synchronised exactly
-/// every 64 samples so that rounding does not drift.
-struct Phasor {
-    w: f64,
-    p0: f64,
-    cd: f64,
-    sd: f64,
-    i: usize,
-    c: f64,
-    s: f64,
+/// Samples between exact re-synchronisations of the rotation in [`for_each_phase`].
+const RESYNC: usize = 64;
+
+/// Calls `f(i, cos θᵢ, sin θᵢ)` for `θᵢ = p0 + w·i`, i = 0..n, by rotation, re-synchronised
+/// with `sin_cos` every [`RESYNC`] samples so that rounding does not drift (error ~1e-15).
+#[inline(always)]
+fn for_each_phase(n: usize, w: f64, p0: f64, mut f: impl FnMut(usize, f64, f64)) {
+    let (sd, cd) = w.sin_cos();
+    let mut start = 0;
+    while start < n {
+        let end = (start + RESYNC).min(n);
+        let (mut s, mut c) = (p0 + w * start as f64).sin_cos();
+        for i in start..end {
+            f(i, c, s);
+            let c2 = c * cd - s * sd;
+            s = s * cd + c * sd;
+            c = c2;
+        }
+        start = end;
+    }
 }
 
-impl Phasor {
-    fn new(w: f64) -> Self {
-        Self::with_phase(w, 0.0)
+/// `[Σ x cos θᵢ, Σ x sin θᵢ, Σ y cos θᵢ, Σ y sin θᵢ]`, `θᵢ = p0 + w·i` (`y` may be empty:
+/// its sums are then 0).
+fn phase_sums(w: f64, p0: f64, x: &[f64], y: &[f64]) -> [f64; 4] {
+    let n = x.len();
+    let mut acc = [0.0; 4];
+    if y.is_empty() {
+        for_each_phase(n, w, p0, |i, c, s| {
+            acc[0] += x[i] * c;
+            acc[1] += x[i] * s;
+        });
+    } else {
+        let y = &y[..n];
+        for_each_phase(n, w, p0, |i, c, s| {
+            acc[0] += x[i] * c;
+            acc[1] += x[i] * s;
+            acc[2] += y[i] * c;
+            acc[3] += y[i] * s;
+        });
     }
+    acc
+}
 
-    /// `cos(p0 + ω i), sin(p0 + ω i)` for i = 0, 1, 2, …
-    fn with_phase(w: f64, p0: f64) -> Self {
-        let (sd, cd) = w.sin_cos();
-        let (s, c) = p0.sin_cos();
-        Phasor {
-            w,
-            p0,
-            cd,
-            sd,
-            i: 0,
-            c,
-            s,
+/// `(D, S₁, C₂)(θ)` on the centred grid `u = i − (N−1)/2`, i = 0..N:
+/// `D = Σ cos θu = sin(Nθ/2)/sin(θ/2)`, `S₁ = Σ u sin θu = −D′(θ)`,
+/// `C₂ = Σ u² cos θu = −D″(θ)` (the odd sums `Σ sin θu`, `Σ u cos θu`, `Σ u² sin θu` are 0).
+/// With `a = θ/2`, `f = sin Na`, `g = sin a`: `dD/da = (N cos Na · g − f cos a)/g²`,
+/// `d²D/da² = f(1 − N²)/g − 2 cos a (dD/da)/g`. Where `|sin θ/2| < 1e-4` (θ near a
+/// multiple of 2π, where the closed form loses digits) the sums are accumulated directly.
+fn dirichlet(n: usize, theta: f64) -> (f64, f64, f64) {
+    let nf = n as f64;
+    if theta == 0.0 {
+        return (nf, 0.0, nf * (nf * nf - 1.0) / 12.0);
+    }
+    let a = 0.5 * theta;
+    let (g, ca) = a.sin_cos();
+    if g.abs() < 1e-4 {
+        let c0 = (nf - 1.0) / 2.0;
+        let (mut d, mut s1, mut c2) = (0.0, 0.0, 0.0);
+        for_each_phase(n, theta, -theta * c0, |i, c, s| {
+            let u = i as f64 - c0;
+            d += c;
+            s1 += u * s;
+            c2 += u * u * c;
+        });
+        return (d, s1, c2);
+    }
+    let (f, cna) = (nf * a).sin_cos();
+    let d = f / g;
+    let da = (nf * cna * g - f * ca) / (g * g);
+    let daa = f * (1.0 - nf * nf) / g - 2.0 * ca * da / g;
+    (d, -0.5 * da, -0.25 * daa)
+}
+
+/// Gram matrix `G = ΦᵀΦ` (`p × p`, row-major, full) of the centred basis
+/// `Φ = [1, cos ω₁u, sin ω₁u, …]` (ω in rad per sample), in closed form:
+/// `Σ cₖ = D(ωₖ)`, `Σ cₖcₗ = ½[D(ωₖ−ωₗ) + D(ωₖ+ωₗ)]`, `Σ sₖsₗ = ½[D(ωₖ−ωₗ) − D(ωₖ+ωₗ)]`,
+/// every sum with an odd integrand 0.
+fn centred_gram(n: usize, omegas: &[f64]) -> Vec<f64> {
+    let kf = omegas.len();
+    let p = 1 + 2 * kf;
+    let mut g = vec![0.0; p * p];
+    g[0] = n as f64;
+    for k in 0..kf {
+        let dk = dirichlet(n, omegas[k]).0;
+        g[(1 + 2 * k) * p] = dk;
+        g[1 + 2 * k] = dk;
+        for l in 0..=k {
+            let dm = dirichlet(n, omegas[k] - omegas[l]).0;
+            let dp = dirichlet(n, omegas[k] + omegas[l]).0;
+            let (cc, ss) = (0.5 * (dm + dp), 0.5 * (dm - dp));
+            for (r, c, v) in [(1 + 2 * k, 1 + 2 * l, cc), (2 + 2 * k, 2 + 2 * l, ss)] {
+                g[r * p + c] = v;
+                g[c * p + r] = v;
+            }
         }
     }
-
-    /// The current (cos, sin), then advance one sample.
-    #[inline]
-    fn next(&mut self) -> (f64, f64) {
-        let out = (self.c, self.s);
-        self.i += 1;
-        if self.i.is_multiple_of(64) {
-            let (s, c) = (self.p0 + self.w * self.i as f64).sin_cos();
-            self.c = c;
-            self.s = s;
-        } else {
-            let c = self.c * self.cd - self.s * self.sd;
-            self.s = self.s * self.cd + self.c * self.sd;
-            self.c = c;
-        }
-        out
-    }
+    g
 }
 
 /// Least-squares fit of `mean + Σₖ cosₖ·cos(2π fₖ t) + sinₖ·sin(2π fₖ t)` to a signal.
@@ -103,15 +163,27 @@ impl HarmonicFit {
         self.cos[k].hypot(self.sin[k])
     }
 
-    /// Values at `t = i·dt`, i = 0..n (by phasor rotation: O(n·K)).
+    /// Values at `t = i·dt`, i = 0..n (by rotation: O(n·K)).
     pub fn values(&self, n: usize, dt: f64) -> Vec<f64> {
         let mut v = vec![self.mean; n];
         for k in 0..self.freqs.len() {
-            let mut ph = Phasor::new(2.0 * PI * self.freqs[k] * dt);
-            for x in v.iter_mut() {
-                let (c, s) = ph.next();
-                *x += self.cos[k] * c + self.sin[k] * s;
-            }
+            let (a, b) = (self.cos[k], self.sin[k]);
+            for_each_phase(n, 2.0 * PI * self.freqs[k] * dt, 0.0, |i, c, s| {
+                v[i] += a * c + b * s;
+            });
+        }
+        v
+    }
+
+    /// Derivatives at `t = i·dt`, i = 0..n (signal units per second).
+    pub fn derivatives(&self, n: usize, dt: f64) -> Vec<f64> {
+        let mut v = vec![0.0; n];
+        for k in 0..self.freqs.len() {
+            let w = 2.0 * PI * self.freqs[k];
+            let (a, b) = (w * self.cos[k], w * self.sin[k]);
+            for_each_phase(n, w * dt, 0.0, |i, c, s| {
+                v[i] += b * c - a * s;
+            });
         }
         v
     }
@@ -121,91 +193,15 @@ impl HarmonicFit {
         if x.is_empty() {
             return 0.0;
         }
-        let mut ph: Vec<Phasor> = self
-            .freqs
-            .iter()
-            .map(|f| Phasor::new(2.0 * PI * f * dt))
-            .collect();
-        let mut ss = 0.0;
-        for xi in x {
-            let mut v = self.mean;
-            for (k, pk) in ph.iter_mut().enumerate() {
-                let (c, s) = pk.next();
-                v += self.cos[k] * c + self.sin[k] * s;
-            }
-            ss += (xi - v) * (xi - v);
-        }
-        (ss / x.len() as f64).sqrt()
-    }
-
-    /// Derivatives at `t = i·dt`, i = 0..n.
-    pub fn derivatives(&self, n: usize, dt: f64) -> Vec<f64> {
-        let mut v = vec![0.0; n];
+        let mut r: Vec<f64> = x.iter().map(|v| v - self.mean).collect();
         for k in 0..self.freqs.len() {
-            let w = 2.0 * PI * self.freqs[k];
-            let mut ph = Phasor::new(w * dt);
-            for x in v.iter_mut() {
-                let (c, s) = ph.next();
-                *x += w * (-self.cos[k] * s + self.sin[k] * c);
-            }
+            let (a, b) = (self.cos[k], self.sin[k]);
+            for_each_phase(r.len(), 2.0 * PI * self.freqs[k] * dt, 0.0, |i, c, s| {
+                r[i] -= a * c + b * s;
+            });
         }
-        v
+        (r.iter().map(|v| v * v).sum::<f64>() / x.len() as f64).sqrt()
     }
-}
-
-/// Normal equations `G β = Φᵀx` of the basis `Φ = [1, cos 2πf₁t, sin 2πf₁t, …]` for
-/// several signals, accumulated in one pass: `G` (`p × p`, row-major, lower triangle
-/// filled) and the right-hand sides `Φᵀxₛ` one after another (`p = 1 + 2K`).
-fn normal_equations(xs: &[&[f64]], dt: f64, freqs: &[f64]) -> (Vec<f64>, Vec<f64>) {
-    let p = 1 + 2 * freqs.len();
-    let n = xs[0].len();
-    let mut g = vec![0.0; p * p];
-    let mut b = vec![0.0; p * xs.len()];
-    let mut phasors: Vec<Phasor> = freqs
-        .iter()
-        .map(|f| Phasor::new(2.0 * PI * f * dt))
-        .collect();
-    let mut phi = vec![0.0; p];
-    phi[0] = 1.0;
-    for i in 0..n {
-        for (k, ph) in phasors.iter_mut().enumerate() {
-            let (c, s) = ph.next();
-            phi[1 + 2 * k] = c;
-            phi[2 + 2 * k] = s;
-        }
-        for r in 0..p {
-            let pr = phi[r];
-            for c in 0..=r {
-                g[r * p + c] += pr * phi[c];
-            }
-        }
-        for (s, x) in xs.iter().enumerate() {
-            let xi = x[i];
-            for r in 0..p {
-                b[s * p + r] += phi[r] * xi;
-            }
-        }
-    }
-    (g, b)
-}
-
-/// Least-squares coefficients of the basis `[1, cos 2πf₁t, sin 2πf₁t, …]` for several
-/// signals and, per signal, the explained sum of squares `βᵀΦᵀx`; `None` when the basis is
-/// numerically dependent (frequencies too close, or below the record's resolution).
-#[cfg_attr(not(test), allow(dead_code))]
-fn fit_basis(xs: &[&[f64]], dt: f64, freqs: &[f64]) -> Option<(Vec<Vec<f64>>, Vec<f64>)> {
-    let p = 1 + 2 * freqs.len();
-    let ns = xs.len();
-    let (mut g, mut b) = normal_equations(xs, dt, freqs);
-    let rhs = b.clone();
-    if !cholesky_solve(&mut g, p, &mut b, ns) {
-        return None;
-    }
-    let betas: Vec<Vec<f64>> = (0..ns).map(|s| b[s * p..(s + 1) * p].to_vec()).collect();
-    let explained = (0..ns)
-        .map(|s| (0..p).map(|r| betas[s][r] * rhs[s * p + r]).sum::<f64>())
-        .collect();
-    Some((betas, explained))
 }
 
 /// Least-squares fit of `mean + Σₖ aₖ cos(2π fₖ t) + bₖ sin(2π fₖ t)` to `x` sampled at
@@ -221,9 +217,10 @@ pub fn harmonic_fit(x: &[f64], dt: f64, freqs: &[f64]) -> Result<HarmonicFit> {
     fit_with_covariance(x, dt, freqs).map(|(fit, _)| fit)
 }
 
-/// [`harmonic_fit`], also returning the 2 × 2 blocks `[Gₐₐ, Gₐᵦ, Gᵦᵦ]` of `G⁻¹` (`G` the
-/// Gram matrix of the basis) of each component's (cos, sin) coefficients: the coefficient
-/// covariance is `σ² G⁻¹` for white noise of variance σ².
+/// [`harmonic_fit`], also returning, per component, the 2 × 2 block `[Cₐₐ, Cₐᵦ, Cᵦᵦ]` of
+/// `G⁻¹` (`G` the Gram matrix of the basis) for its (cos, sin) coefficients in the centred
+/// time base: the coefficient covariance is `σ² G⁻¹` for white noise of variance σ², and
+/// the amplitude's variance is invariant under the change of time origin.
 fn fit_with_covariance(x: &[f64], dt: f64, freqs: &[f64]) -> Result<(HarmonicFit, Vec<[f64; 3]>)> {
     if !(dt.is_finite() && dt > 0.0) {
         return Err(Error::InvalidOption {
@@ -239,11 +236,12 @@ fn fit_with_covariance(x: &[f64], dt: f64, freqs: &[f64]) -> Result<(HarmonicFit
     }
     let kf = freqs.len();
     let p = 1 + 2 * kf;
-    if x.len() < p {
+    let n = x.len();
+    if n < p {
         return Err(Error::InvalidData {
             case: String::new(),
             field: "x".into(),
-            message: format!("{} samples for {p} coefficients", x.len()),
+            message: format!("{n} samples for {p} coefficients"),
         });
     }
     if let Some(i) = x.iter().position(|v| !v.is_finite()) {
@@ -253,11 +251,18 @@ fn fit_with_covariance(x: &[f64], dt: f64, freqs: &[f64]) -> Result<(HarmonicFit
             message: format!("non-finite value {} at sample {i}", x[i]),
         });
     }
-    let (mut g, b) = normal_equations(&[x], dt, freqs);
+    let c0 = (n as f64 - 1.0) / 2.0;
+    let omegas: Vec<f64> = freqs.iter().map(|f| 2.0 * PI * f * dt).collect();
+    let mut g = centred_gram(n, &omegas);
     // Right-hand sides: Φᵀx, then the unit vectors of the cos/sin coefficients (columns
     // of G⁻¹).
     let mut rhs = vec![0.0; p * (1 + 2 * kf)];
-    rhs[..p].copy_from_slice(&b);
+    rhs[0] = x.iter().sum();
+    for (k, &w) in omegas.iter().enumerate() {
+        let [xc, xs, _, _] = phase_sums(w, -w * c0, x, &[]);
+        rhs[1 + 2 * k] = xc;
+        rhs[2 + 2 * k] = xs;
+    }
     for j in 0..2 * kf {
         rhs[p * (1 + j) + 1 + j] = 1.0;
     }
@@ -266,11 +271,10 @@ fn fit_with_covariance(x: &[f64], dt: f64, freqs: &[f64]) -> Result<(HarmonicFit
             context: "harmonic_fit".into(),
             message: format!(
                 "basis at {freqs:?} Hz is numerically dependent over {} s",
-                x.len() as f64 * dt
+                n as f64 * dt
             ),
         });
     }
-    let beta = &rhs[..p];
     let col = |j: usize, r: usize| rhs[p * (1 + j) + r];
     let blocks = (0..kf)
         .map(|k| {
@@ -282,11 +286,20 @@ fn fit_with_covariance(x: &[f64], dt: f64, freqs: &[f64]) -> Result<(HarmonicFit
             ]
         })
         .collect();
+    // Back to t = i·dt: a' cos ω(i − c0) + b' sin ω(i − c0) = a cos ωi + b sin ωi with
+    // (a, b) = R(ωc0)(a', b').
+    let (mut cos, mut sin) = (Vec::with_capacity(kf), Vec::with_capacity(kf));
+    for (k, &w) in omegas.iter().enumerate() {
+        let (a, b) = (rhs[1 + 2 * k], rhs[2 + 2 * k]);
+        let (sp, cp) = (w * c0).sin_cos();
+        cos.push(a * cp - b * sp);
+        sin.push(a * sp + b * cp);
+    }
     let mut fit = HarmonicFit {
-        mean: beta[0],
+        mean: rhs[0],
         freqs: freqs.to_vec(),
-        cos: (0..kf).map(|k| beta[1 + 2 * k]).collect(),
-        sin: (0..kf).map(|k| beta[2 + 2 * k]).collect(),
+        cos,
+        sin,
         rms_residual: 0.0,
     };
     fit.rms_residual = fit.rms_residual_of(x, dt);
@@ -310,11 +323,11 @@ pub struct HarmonicComponent {
     pub kept: bool,
 }
 
-/// Harmonic fit restricted to the significant components (DOCUMENTED RULE, see
-/// docs/DECISIONS.md "exact harmonic motion per degree of freedom"): `x` is first fitted
-/// at all `freqs` ([`harmonic_fit`]); a component is kept when its amplitude `A` is
-/// **both** above `n_se` standard errors ([`HarmonicComponent::std_error`]) **and** at
-/// least `rel_floor` × the largest amplitude of the fit; `x` is then refitted at the kept
+/// Harmonic fit restricted to the significant components (the rule of docs/DECISIONS.md
+/// "exact harmonic motion per degree of freedom"): `x` is first fitted at all `freqs`
+/// ([`harmonic_fit`]); a component is kept when its amplitude `A` is **both** above
+/// `n_se` standard errors ([`HarmonicComponent::std_error`]) **and** at least
+/// `rel_floor` × the largest amplitude of the fit; `x` is then refitted at the kept
 /// frequencies only (the mean alone when none is kept). Dropping a spurious component
 /// (noise fitted at another DOF's frequency) makes the fitted motion exactly single-
 /// frequency, so the exact identities of harmonic motion (e.g. α̇² = ω²(A² − (α − ᾱ)²))
@@ -342,9 +355,13 @@ pub fn significant_harmonic_fit(
     let a_max = (0..freqs.len())
         .map(|k| full.amplitude(k))
         .fold(0.0, f64::max);
+    let c0 = (n as f64 - 1.0) / 2.0;
     let comps: Vec<HarmonicComponent> = (0..freqs.len())
         .map(|k| {
+            // Coefficients in the centred time base of the covariance blocks.
+            let (sp, cp) = (2.0 * PI * freqs[k] * dt * c0).sin_cos();
             let (a, b) = (full.cos[k], full.sin[k]);
+            let (a, b) = (a * cp + b * sp, -a * sp + b * cp);
             let amp = full.amplitude(k);
             let [caa, cab, cbb] = blocks[k];
             let quad = if amp > 0.0 {
@@ -390,69 +407,61 @@ struct VpPoint {
     step: Option<Vec<f64>>,
 }
 
-/// One pass over the record at `omegas` [rad/sample]: the least-squares fit of the centred
-/// signals `xs` (sums of squares `norms`) on `Φ = [1, cos ωₖu, sin ωₖu]` (u = i − (N−1)/2,
-/// centred time, so the derivative columns are nearly orthogonal to Φ), its cost, and the
-/// Gauss–Newton step of the variable-projection (Golub–Pereyra, Kaufman's Jacobian)
-/// problem `min_ω Σₛ wₛ ‖P⊥(ω) xₛ‖²`, `wₛ = 1/normₛ`.
+/// The centred signals of a refinement: `xₛ` (mean removed), `u·xₛ`, `‖xₛ‖²`, `Σ xₛ`.
+struct VpSignals {
+    x: Vec<Vec<f64>>,
+    ux: Vec<Vec<f64>>,
+    norms: Vec<f64>,
+    sums: Vec<f64>,
+}
+
+/// The least-squares fit of the centred signals on `Φ = [1, cos ωₖu, sin ωₖu]` (ω in rad
+/// per sample, u = i − (N−1)/2, so the derivative columns are nearly orthogonal to Φ), its
+/// cost, and the Gauss–Newton step of the variable-projection (Golub–Pereyra, Kaufman's
+/// Jacobian) problem `min_ω Σₛ wₛ ‖P⊥(ω) xₛ‖²`, `wₛ = 1/‖xₛ‖²`.
 ///
-/// With `dₛₖ = ∂(Φβₛ)/∂ωₖ = u(−aₛₖ sin ωₖu + bₛₖ cos ωₖu)`: the gradient is
-/// `∂F/∂ωₖ = −2 Σₛ wₛ dₛₖᵀ rₛ` (exact), the Gauss–Newton matrix
+/// With `dₛₖ = ∂(Φβₛ)/∂ωₖ = aₛₖ qₖ,c + bₛₖ qₖ,s`, `qₖ,c = −u sin ωₖu`, `qₖ,s = u cos ωₖu`: the
+/// gradient is `∂F/∂ωₖ = −2 Σₛ wₛ dₛₖᵀ rₛ` (exact), the Gauss–Newton matrix
 /// `Hₖₗ = Σₛ wₛ dₛₖᵀ P⊥ dₛₗ = Σₛ wₛ (dₛₖᵀdₛₗ − (Φᵀdₛₖ)ᵀ G⁻¹ (Φᵀdₛₗ))`, and the step
-/// `Δω = H⁻¹ g`, `gₖ = Σₛ wₛ (dₛₖᵀxₛ − (Φᵀdₛₖ)ᵀβₛ)`. Every sum is built from the
-/// signal-independent moments `Σ qₘ φᵣ`, `Σ qₘ qₘ'` (qₘ ∈ {−u sin ωₖu, u cos ωₖu}) and
-/// `Σ qₘ xₛ`, accumulated in the same pass as `G` and `Φᵀxₛ`; sin/cos by rotation.
-fn vp_point(xs: &[&[f64]], norms: &[f64], omegas: &[f64]) -> Option<VpPoint> {
-    let n = xs[0].len();
-    let ns = xs.len();
+/// `Δω = H⁻¹ g`, `gₖ = Σₛ wₛ (dₛₖᵀxₛ − (Φᵀdₛₖ)ᵀβₛ)`. `G`, `Φᵀq` and `qᵀq` are closed forms
+/// in [`dirichlet`] (`Σ u sₖcₗ = ½[S₁(ωₖ+ωₗ) + S₁(ωₖ−ωₗ)]`, `Σ u² sₖsₗ = ½[C₂(ωₖ−ωₗ) −
+/// C₂(ωₖ+ωₗ)]`, `Σ u² cₖcₗ = ½[C₂(ωₖ−ωₗ) + C₂(ωₖ+ωₗ)]`, odd sums 0); the record is read
+/// once per frequency for `Σ xₛ e^{jωu}` and `Σ u xₛ e^{jωu}`.
+fn vp_point(sig: &VpSignals, omegas: &[f64]) -> Option<VpPoint> {
+    let n = sig.x[0].len();
+    let ns = sig.x.len();
     let kf = omegas.len();
     let p = 1 + 2 * kf;
     let m2 = 2 * kf;
     let c0 = (n as f64 - 1.0) / 2.0;
-    let mut ph: Vec<Phasor> = omegas
-        .iter()
-        .map(|&w| Phasor::with_phase(w, -w * c0))
-        .collect();
-    let mut g = vec![0.0; p * p];
-    let mut b = vec![0.0; ns * p];
+    let mut g = centred_gram(n, omegas);
+    // Q[m][r] = Σ qₘ φᵣ and QQ[m][m'] = Σ qₘ qₘ'.
     let mut q = vec![0.0; m2 * p];
     let mut qq = vec![0.0; m2 * m2];
+    for k in 0..kf {
+        let s1k = dirichlet(n, omegas[k]).1;
+        q[(2 * k) * p] = -s1k; // Σ (−u sₖ)·1
+        for l in 0..kf {
+            let (_, s1p, c2p) = dirichlet(n, omegas[k] + omegas[l]);
+            let (_, s1m, c2m) = dirichlet(n, omegas[k] - omegas[l]);
+            // Σ (−u sₖ) cₗ = −½[S₁(ωₖ+ωₗ) + S₁(ωₖ−ωₗ)]; Σ (u cₖ) sₗ = ½[S₁(ωₖ+ωₗ) − S₁(ωₖ−ωₗ)].
+            q[(2 * k) * p + 1 + 2 * l] = -0.5 * (s1p + s1m);
+            q[(2 * k + 1) * p + 2 + 2 * l] = 0.5 * (s1p - s1m);
+            qq[(2 * k) * m2 + 2 * l] = 0.5 * (c2m - c2p);
+            qq[(2 * k + 1) * m2 + 2 * l + 1] = 0.5 * (c2m + c2p);
+        }
+    }
+    // Φᵀxₛ and Qᵀxₛ from one pass per frequency and signal.
+    let mut b = vec![0.0; ns * p];
     let mut qx = vec![0.0; ns * m2];
-    let mut phi = vec![0.0; p];
-    let mut dq = vec![0.0; m2];
-    phi[0] = 1.0;
-    for i in 0..n {
-        let u = i as f64 - c0;
-        for (k, pk) in ph.iter_mut().enumerate() {
-            let (c, s) = pk.next();
-            phi[1 + 2 * k] = c;
-            phi[2 + 2 * k] = s;
-            dq[2 * k] = -u * s;
-            dq[2 * k + 1] = u * c;
-        }
-        for r in 0..p {
-            let pr = phi[r];
-            for c in 0..=r {
-                g[r * p + c] += pr * phi[c];
-            }
-        }
-        for m in 0..m2 {
-            let dm = dq[m];
-            for r in 0..p {
-                q[m * p + r] += dm * phi[r];
-            }
-            for m_ in 0..=m {
-                qq[m * m2 + m_] += dm * dq[m_];
-            }
-        }
-        for s in 0..ns {
-            let xi = xs[s][i];
-            for r in 0..p {
-                b[s * p + r] += phi[r] * xi;
-            }
-            for m in 0..m2 {
-                qx[s * m2 + m] += dq[m] * xi;
-            }
+    for s in 0..ns {
+        b[s * p] = sig.sums[s];
+        for (k, &w) in omegas.iter().enumerate() {
+            let [xc, xs, uxc, uxs] = phase_sums(w, -w * c0, &sig.x[s], &sig.ux[s]);
+            b[s * p + 1 + 2 * k] = xc;
+            b[s * p + 2 + 2 * k] = xs;
+            qx[s * m2 + 2 * k] = -uxs;
+            qx[s * m2 + 2 * k + 1] = uxc;
         }
     }
     // G [βₛ | Zₘ] = [Φᵀxₛ | Qₘ].
@@ -466,18 +475,11 @@ fn vp_point(xs: &[&[f64]], norms: &[f64], omegas: &[f64]) -> Option<VpPoint> {
     let z = |m: usize| &rhs[(ns + m) * p..(ns + m + 1) * p];
     let qm = |m: usize| &q[m * p..(m + 1) * p];
     let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
-    let sym = |a: &[f64], i: usize, j: usize| {
-        if i >= j {
-            a[i * m2 + j]
-        } else {
-            a[j * m2 + i]
-        }
-    };
-    // (QQ − QᵀG⁻¹Q)[m][m'] and Qₘᵀβₛ.
+    // (QQ − QᵀG⁻¹Q)[m][m'].
     let mut proj = vec![0.0; m2 * m2];
     for m in 0..m2 {
         for m_ in 0..m2 {
-            proj[m * m2 + m_] = sym(&qq, m, m_) - dot(qm(m), z(m_));
+            proj[m * m2 + m_] = qq[m * m2 + m_] - dot(qm(m), z(m_));
         }
     }
     let mut cost = 0.0;
@@ -485,7 +487,7 @@ fn vp_point(xs: &[&[f64]], norms: &[f64], omegas: &[f64]) -> Option<VpPoint> {
     let mut grad = vec![0.0; kf];
     for s in 0..ns {
         let bs = beta(s);
-        let w = 1.0 / norms[s];
+        let w = 1.0 / sig.norms[s];
         cost += 1.0 - dot(bs, &b[s * p..(s + 1) * p]) * w;
         // dₛₖ = Σ_{m ∈ {2k, 2k+1}} coef[m] qₘ with coef = (aₛₖ, bₛₖ).
         let coef = &bs[1..];
@@ -514,26 +516,39 @@ fn vp_point(xs: &[&[f64]], norms: &[f64], omegas: &[f64]) -> Option<VpPoint> {
 const VP_MAX_STEP: f64 = 0.25;
 /// Convergence of [`refine_vp`]: last step below this many resolution cells `1/T`.
 const VP_TOL: f64 = 1e-9;
+/// Most passes over the record in [`refine_vp`].
+const VP_MAX_PASSES: usize = 60;
 
 /// Frequencies [Hz] minimising `Σₛ ‖P⊥(f) xₛ‖² / ‖xₛ − x̄ₛ‖²` (the unexplained variance
 /// fractions of a least-squares fit of all signals at all frequencies, plus means),
 /// starting from `freqs`: Gauss–Newton on the variable-projection problem ([`vp_point`];
 /// one pass over the record per iteration), each step limited to `VP_MAX_STEP/T` and
-/// halved until the cost does not increase, stopping when a step is below `VP_TOL/T`
-/// (T = n·dt) or after 60 passes. Frequencies stay in `(0.25/T, Nyquist)`.
-fn refine_vp(xs: &[&[f64]], dt: f64, freqs: &[f64]) -> Vec<f64> {
+/// halved until the cost does not increase, stopping when a step is below `tol/T`
+/// (T = n·dt) or after `VP_MAX_PASSES` passes. Frequencies stay in `(0.25/T, Nyquist)`.
+fn refine_vp(xs: &[&[f64]], dt: f64, freqs: &[f64], tol: f64) -> Vec<f64> {
     let n = xs[0].len();
-    let (c, norms) = centred(xs);
-    let views: Vec<&[f64]> = c.iter().map(|v| v.as_slice()).collect();
+    let c0 = (n as f64 - 1.0) / 2.0;
+    let (x, norms) = centred(xs);
+    let ux = x
+        .iter()
+        .map(|v| {
+            v.iter()
+                .enumerate()
+                .map(|(i, a)| (i as f64 - c0) * a)
+                .collect()
+        })
+        .collect();
+    let sums = x.iter().map(|v| v.iter().sum()).collect();
+    let sig = VpSignals { x, ux, norms, sums };
     let cell = 2.0 * PI / n as f64; // 1/T in rad per sample
     let (lo, hi) = (0.25 * cell, PI);
     let mut w: Vec<f64> = freqs.iter().map(|f| 2.0 * PI * f * dt).collect();
     let to_hz = |w: &[f64]| w.iter().map(|x| x / (2.0 * PI * dt)).collect::<Vec<f64>>();
-    let Some(mut cur) = vp_point(&views, &norms, &w) else {
+    let Some(mut cur) = vp_point(&sig, &w) else {
         return freqs.to_vec();
     };
     let mut passes = 1;
-    'outer: while passes < 60 {
+    'outer: while passes < VP_MAX_PASSES {
         let Some(step) = cur.step.take() else {
             break;
         };
@@ -542,20 +557,20 @@ fn refine_vp(xs: &[&[f64]], dt: f64, freqs: &[f64]) -> Vec<f64> {
             .map(|s| s.clamp(-VP_MAX_STEP * cell, VP_MAX_STEP * cell))
             .collect();
         let size = step.iter().fold(0.0f64, |m, s| m.max(s.abs())) / cell;
-        if size < VP_TOL {
+        if size < tol {
             // Quadratic regime: apply without another pass.
             w.iter_mut().zip(&step).for_each(|(x, s)| *x += s);
             break;
         }
         let mut lambda = 1.0;
         loop {
-            if lambda < 1e-3 || passes >= 60 {
+            if lambda < 1e-3 || passes >= VP_MAX_PASSES {
                 break 'outer;
             }
             let trial: Vec<f64> = w.iter().zip(&step).map(|(x, s)| x + lambda * s).collect();
             if trial.iter().all(|x| *x > lo && *x < hi) {
                 passes += 1;
-                if let Some(pt) = vp_point(&views, &norms, &trial) {
+                if let Some(pt) = vp_point(&sig, &trial) {
                     // The cost carries ~1e-16 rounding per signal.
                     if pt.cost <= cur.cost + 1e-14 * xs.len() as f64 {
                         w = trial;
@@ -566,7 +581,7 @@ fn refine_vp(xs: &[&[f64]], dt: f64, freqs: &[f64]) -> Vec<f64> {
             }
             lambda *= 0.5;
         }
-        if lambda * size < VP_TOL {
+        if lambda * size < tol {
             break;
         }
     }
@@ -582,21 +597,27 @@ fn refine_vp(xs: &[&[f64]], dt: f64, freqs: &[f64]) -> Vec<f64> {
 /// Returns `f0` unchanged when the input cannot be refined (`f0` or `dt` not finite and
 /// positive, fewer than 4 samples, non-finite samples).
 pub fn refine_frequency(x: &[f64], dt: f64, f0: f64) -> f64 {
+    refine_frequency_to(x, dt, f0, VP_TOL)
+}
+
+/// [`refine_frequency`] to a last step below `tol/T`.
+pub(crate) fn refine_frequency_to(x: &[f64], dt: f64, f0: f64, tol: f64) -> f64 {
     if !(f0.is_finite() && f0 > 0.0 && dt.is_finite() && dt > 0.0)
         || x.len() < 4
         || x.iter().any(|v| !v.is_finite())
     {
         return f0;
     }
-    refine_vp(&[x], dt, &[f0])[0]
+    refine_vp(&[x], dt, &[f0], tol)[0]
 }
 
 /// Joint refinement of several frequencies for several signals: maximises the summed
 /// explained fraction of a least-squares fit at all `freqs` (each signal normalised by its
-/// variance), all frequencies at once ([`refine_vp`]). Removes the bias that a
-/// single-sinusoid refinement suffers from leakage of the other components.
+/// variance), all frequencies at once ([`refine_vp`], to a last step below 1e-9/T).
+/// Removes the bias that a single-sinusoid refinement suffers from leakage of the other
+/// components.
 pub(crate) fn refine_frequencies(xs: &[&[f64]], dt: f64, freqs: &[f64]) -> Vec<f64> {
-    refine_vp(xs, dt, freqs)
+    refine_vp(xs, dt, freqs, VP_TOL)
 }
 
 /// Fraction of the variance of `x` explained by one sinusoid at `f` (plus the mean), and its
@@ -621,19 +642,18 @@ pub fn dominant_frequency(x: &[f64], dt: f64) -> Option<f64> {
     let m = x.iter().sum::<f64>() / n as f64;
     let len = (4 * n).next_power_of_two();
     let mut buf = vec![0.0; len];
-    for (i, v) in x.iter().enumerate() {
-        let w = 0.5 - 0.5 * (2.0 * PI * i as f64 / (n - 1) as f64).cos();
-        buf[i] = (v - m) * w;
-    }
-    let mut planner = RealFftPlanner::<f64>::new();
-    let fft = planner.plan_fft_forward(len);
+    // Hann window 0.5 − 0.5 cos(2πi/(n−1)).
+    for_each_phase(n, 2.0 * PI / (n - 1) as f64, 0.0, |i, c, _| {
+        buf[i] = (x[i] - m) * (0.5 - 0.5 * c);
+    });
+    let fft = FFT_PLANNER.with(|p| p.borrow_mut().plan_fft_forward(len));
     let mut spec = fft.make_output_vec();
     fft.process(&mut buf, &mut spec).ok()?;
-    let mag: Vec<f64> = spec.iter().map(|c| c.norm()).collect();
+    let power: Vec<f64> = spec.iter().map(|c| c.norm_sqr()).collect();
     let df = 1.0 / (len as f64 * dt);
     let t = n as f64 * dt;
     let k_lo = ((0.5 / t) / df).ceil().max(1.0) as usize;
-    let (k, &peak) = mag
+    let (k, &peak) = power
         .iter()
         .enumerate()
         .skip(k_lo)
@@ -642,14 +662,21 @@ pub fn dominant_frequency(x: &[f64], dt: f64) -> Option<f64> {
         return None;
     }
     let mut off = 0.0;
-    if k > 0 && k + 1 < mag.len() {
-        let (a, b, c) = (mag[k - 1], mag[k], mag[k + 1]);
+    if k > 0 && k + 1 < power.len() {
+        // Parabola through the magnitudes around the peak.
+        let (a, b, c) = (power[k - 1].sqrt(), peak.sqrt(), power[k + 1].sqrt());
         let den = a - 2.0 * b + c;
         if den < 0.0 {
             off = (0.5 * (a - c) / den).clamp(-0.5, 0.5);
         }
     }
     Some((k as f64 + off) * df)
+}
+
+thread_local! {
+    /// FFT plans are cached per thread: planning a 2¹⁵-point transform costs more than
+    /// running it.
+    static FFT_PLANNER: RefCell<RealFftPlanner<f64>> = RefCell::new(RealFftPlanner::new());
 }
 
 /// Robust estimate of the standard deviation of white sensor noise in `x`: the median
@@ -691,13 +718,112 @@ mod tests {
     }
 
     #[test]
-    fn phasor_matches_sin_cos() {
-        let w = 0.0377;
-        let mut ph = Phasor::new(w);
-        for i in 0..5000 {
-            let (c, s) = ph.next();
-            let (se, ce) = (w * i as f64).sin_cos();
+    fn rotation_matches_sin_cos() {
+        let (w, p0) = (0.0377, -3.1);
+        let mut count = 0;
+        for_each_phase(5000, w, p0, |i, c, s| {
+            let (se, ce) = (p0 + w * i as f64).sin_cos();
             assert!((c - ce).abs() < 1e-13 && (s - se).abs() < 1e-13, "{i}");
+            assert_eq!(i, count);
+            count += 1;
+        });
+        assert_eq!(count, 5000);
+    }
+
+    /// Direct accumulation of the normal equations `G`, `Φᵀx` in the centred time base.
+    fn direct_normal_equations(xs: &[&[f64]], omegas: &[f64]) -> (Vec<f64>, Vec<f64>) {
+        let n = xs[0].len();
+        let c0 = (n as f64 - 1.0) / 2.0;
+        let p = 1 + 2 * omegas.len();
+        let mut g = vec![0.0; p * p];
+        let mut b = vec![0.0; p * xs.len()];
+        // Basis columns (rotation checked against sin_cos in `rotation_matches_sin_cos`).
+        let mut cols = vec![vec![1.0; n]];
+        for &w in omegas {
+            let (mut cc, mut ss) = (vec![0.0; n], vec![0.0; n]);
+            for_each_phase(n, w, -w * c0, |i, c, s| {
+                cc[i] = c;
+                ss[i] = s;
+            });
+            cols.push(cc);
+            cols.push(ss);
+        }
+        for i in 0..n {
+            let phi: Vec<f64> = cols.iter().map(|c| c[i]).collect();
+            for r in 0..p {
+                for c in 0..p {
+                    g[r * p + c] += phi[r] * phi[c];
+                }
+                for (s, x) in xs.iter().enumerate() {
+                    b[s * p + r] += phi[r] * x[i];
+                }
+            }
+        }
+        (g, b)
+    }
+
+    /// Least-squares coefficients and explained sums of squares by direct accumulation
+    /// (reference for the closed forms).
+    fn fit_basis(xs: &[&[f64]], dt: f64, freqs: &[f64]) -> Option<(Vec<Vec<f64>>, Vec<f64>)> {
+        let omegas: Vec<f64> = freqs.iter().map(|f| 2.0 * PI * f * dt).collect();
+        let p = 1 + 2 * freqs.len();
+        let ns = xs.len();
+        let (mut g, mut b) = direct_normal_equations(xs, &omegas);
+        let rhs = b.clone();
+        if !cholesky_solve(&mut g, p, &mut b, ns) {
+            return None;
+        }
+        let betas: Vec<Vec<f64>> = (0..ns).map(|s| b[s * p..(s + 1) * p].to_vec()).collect();
+        let explained = (0..ns)
+            .map(|s| (0..p).map(|r| betas[s][r] * rhs[s * p + r]).sum::<f64>())
+            .collect();
+        Some((betas, explained))
+    }
+
+    /// The closed forms of the Dirichlet sums and of the Gram matrix agree with direct
+    /// summation (even and odd N, small and large angles, near 2π).
+    #[test]
+    fn closed_form_sums_match_direct_summation() {
+        for n in [5120usize, 5121, 37] {
+            let c0 = (n as f64 - 1.0) / 2.0;
+            for theta in [
+                0.0,
+                1e-7,
+                2.0 * PI / n as f64,
+                0.0245,
+                0.7,
+                3.0,
+                2.0 * PI - 1e-5,
+            ] {
+                let (d, s1, c2) = dirichlet(n, theta);
+                let (mut ed, mut es1, mut ec2) = (0.0, 0.0, 0.0);
+                for i in 0..n {
+                    let u = i as f64 - c0;
+                    ed += (theta * u).cos();
+                    es1 += u * (theta * u).sin();
+                    ec2 += u * u * (theta * u).cos();
+                }
+                let nf = n as f64;
+                assert!(
+                    (d - ed).abs() < 1e-11 * nf,
+                    "D n={n} θ={theta}: {d} vs {ed}"
+                );
+                assert!(
+                    (s1 - es1).abs() < 1e-11 * nf * nf,
+                    "S1 n={n} θ={theta}: {s1} vs {es1}"
+                );
+                assert!(
+                    (c2 - ec2).abs() < 1e-11 * nf * nf * nf,
+                    "C2 n={n} θ={theta}: {c2} vs {ec2}"
+                );
+            }
+            let omegas = [0.0245, 0.0159, 0.3];
+            let g = centred_gram(n, &omegas);
+            let x: Vec<f64> = (0..n).map(|i| (i as f64 * 0.37).sin()).collect();
+            let (ge, _) = direct_normal_equations(&[&x], &omegas);
+            for (a, b) in g.iter().zip(&ge) {
+                assert!((a - b).abs() < 1e-11 * n as f64, "{a} vs {b}");
+            }
         }
     }
 
