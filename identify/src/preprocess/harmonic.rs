@@ -19,23 +19,46 @@ use realfft::RealFftPlanner;
 use super::linsolve::cholesky_solve;
 use crate::{Error, Result};
 
-/// Samples between exact re-synchronisations of the rotation in [`for_each_phase`].
+/// Samples between exact re-synchronisations of the rotation in [`for_each_phase`] (a
+/// multiple of [`LANES`]).
 const RESYNC: usize = 64;
+/// Independent rotation chains of [`for_each_phase`] (sample `i` is on lane `i % LANES`).
+const LANES: usize = 4;
 
-/// Calls `f(i, cos θᵢ, sin θᵢ)` for `θᵢ = p0 + w·i`, i = 0..n, by rotation, re-synchronised
-/// with `sin_cos` every [`RESYNC`] samples so that rounding does not drift (error ~1e-15).
+/// Calls `f(lane, i, cos θᵢ, sin θᵢ)` for `θᵢ = p0 + w·i`, i = 0..n in increasing order,
+/// `lane = i % 4`. The values come from four interleaved rotations by `4w` (independent
+/// dependency chains, so the loop is not latency-bound; a caller accumulating sums should
+/// keep one accumulator per lane), re-synchronised with `sin_cos` every [`RESYNC`]
+/// samples so that rounding does not drift (error ~1e-15).
 #[inline(always)]
-fn for_each_phase(n: usize, w: f64, p0: f64, mut f: impl FnMut(usize, f64, f64)) {
-    let (sd, cd) = w.sin_cos();
+fn for_each_phase(n: usize, w: f64, p0: f64, mut f: impl FnMut(usize, usize, f64, f64)) {
+    let (s4, c4) = (LANES as f64 * w).sin_cos();
+    let steps: [(f64, f64); LANES] = std::array::from_fn(|l| (l as f64 * w).sin_cos());
     let mut start = 0;
     while start < n {
         let end = (start + RESYNC).min(n);
-        let (mut s, mut c) = (p0 + w * start as f64).sin_cos();
-        for i in start..end {
-            f(i, c, s);
-            let c2 = c * cd - s * sd;
-            s = s * cd + c * sd;
-            c = c2;
+        let (s0, c0) = (p0 + w * start as f64).sin_cos();
+        let mut c = [0.0; LANES];
+        let mut s = [0.0; LANES];
+        for l in 0..LANES {
+            let (sl, cl) = steps[l];
+            c[l] = c0 * cl - s0 * sl;
+            s[l] = s0 * cl + c0 * sl;
+        }
+        let mut i = start;
+        while i + LANES <= end {
+            for l in 0..LANES {
+                f(l, i + l, c[l], s[l]);
+            }
+            for l in 0..LANES {
+                let c2 = c[l] * c4 - s[l] * s4;
+                s[l] = s[l] * c4 + c[l] * s4;
+                c[l] = c2;
+            }
+            i += LANES;
+        }
+        for l in 0..end - i {
+            f(l, i + l, c[l], s[l]);
         }
         start = end;
     }
@@ -45,22 +68,22 @@ fn for_each_phase(n: usize, w: f64, p0: f64, mut f: impl FnMut(usize, f64, f64))
 /// its sums are then 0).
 fn phase_sums(w: f64, p0: f64, x: &[f64], y: &[f64]) -> [f64; 4] {
     let n = x.len();
-    let mut acc = [0.0; 4];
+    let mut acc = [[0.0; 4]; LANES];
     if y.is_empty() {
-        for_each_phase(n, w, p0, |i, c, s| {
-            acc[0] += x[i] * c;
-            acc[1] += x[i] * s;
+        for_each_phase(n, w, p0, |l, i, c, s| {
+            acc[l][0] += x[i] * c;
+            acc[l][1] += x[i] * s;
         });
     } else {
         let y = &y[..n];
-        for_each_phase(n, w, p0, |i, c, s| {
-            acc[0] += x[i] * c;
-            acc[1] += x[i] * s;
-            acc[2] += y[i] * c;
-            acc[3] += y[i] * s;
+        for_each_phase(n, w, p0, |l, i, c, s| {
+            acc[l][0] += x[i] * c;
+            acc[l][1] += x[i] * s;
+            acc[l][2] += y[i] * c;
+            acc[l][3] += y[i] * s;
         });
     }
-    acc
+    std::array::from_fn(|j| acc.iter().map(|a| a[j]).sum())
 }
 
 /// `(D, S₁, C₂)(θ)` on the centred grid `u = i − (N−1)/2`, i = 0..N:
@@ -79,7 +102,7 @@ fn dirichlet(n: usize, theta: f64) -> (f64, f64, f64) {
     if g.abs() < 1e-4 {
         let c0 = (nf - 1.0) / 2.0;
         let (mut d, mut s1, mut c2) = (0.0, 0.0, 0.0);
-        for_each_phase(n, theta, -theta * c0, |i, c, s| {
+        for_each_phase(n, theta, -theta * c0, |_, i, c, s| {
             let u = i as f64 - c0;
             d += c;
             s1 += u * s;
@@ -168,7 +191,7 @@ impl HarmonicFit {
         let mut v = vec![self.mean; n];
         for k in 0..self.freqs.len() {
             let (a, b) = (self.cos[k], self.sin[k]);
-            for_each_phase(n, 2.0 * PI * self.freqs[k] * dt, 0.0, |i, c, s| {
+            for_each_phase(n, 2.0 * PI * self.freqs[k] * dt, 0.0, |_, i, c, s| {
                 v[i] += a * c + b * s;
             });
         }
@@ -181,7 +204,7 @@ impl HarmonicFit {
         for k in 0..self.freqs.len() {
             let w = 2.0 * PI * self.freqs[k];
             let (a, b) = (w * self.cos[k], w * self.sin[k]);
-            for_each_phase(n, w * dt, 0.0, |i, c, s| {
+            for_each_phase(n, w * dt, 0.0, |_, i, c, s| {
                 v[i] += b * c - a * s;
             });
         }
@@ -196,7 +219,7 @@ impl HarmonicFit {
         let mut r: Vec<f64> = x.iter().map(|v| v - self.mean).collect();
         for k in 0..self.freqs.len() {
             let (a, b) = (self.cos[k], self.sin[k]);
-            for_each_phase(r.len(), 2.0 * PI * self.freqs[k] * dt, 0.0, |i, c, s| {
+            for_each_phase(r.len(), 2.0 * PI * self.freqs[k] * dt, 0.0, |_, i, c, s| {
                 r[i] -= a * c + b * s;
             });
         }
@@ -643,7 +666,7 @@ pub fn dominant_frequency(x: &[f64], dt: f64) -> Option<f64> {
     let len = (4 * n).next_power_of_two();
     let mut buf = vec![0.0; len];
     // Hann window 0.5 − 0.5 cos(2πi/(n−1)).
-    for_each_phase(n, 2.0 * PI / (n - 1) as f64, 0.0, |i, c, _| {
+    for_each_phase(n, 2.0 * PI / (n - 1) as f64, 0.0, |_, i, c, _| {
         buf[i] = (x[i] - m) * (0.5 - 0.5 * c);
     });
     let fft = FFT_PLANNER.with(|p| p.borrow_mut().plan_fft_forward(len));
@@ -721,13 +744,14 @@ mod tests {
     fn rotation_matches_sin_cos() {
         let (w, p0) = (0.0377, -3.1);
         let mut count = 0;
-        for_each_phase(5000, w, p0, |i, c, s| {
+        for_each_phase(5003, w, p0, |l, i, c, s| {
+            assert_eq!(l, i % 4);
             let (se, ce) = (p0 + w * i as f64).sin_cos();
             assert!((c - ce).abs() < 1e-13 && (s - se).abs() < 1e-13, "{i}");
             assert_eq!(i, count);
             count += 1;
         });
-        assert_eq!(count, 5000);
+        assert_eq!(count, 5003);
     }
 
     /// Direct accumulation of the normal equations `G`, `Φᵀx` in the centred time base.
@@ -741,7 +765,7 @@ mod tests {
         let mut cols = vec![vec![1.0; n]];
         for &w in omegas {
             let (mut cc, mut ss) = (vec![0.0; n], vec![0.0; n]);
-            for_each_phase(n, w, -w * c0, |i, c, s| {
+            for_each_phase(n, w, -w * c0, |_, i, c, s| {
                 cc[i] = c;
                 ss[i] = s;
             });
