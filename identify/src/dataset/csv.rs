@@ -412,4 +412,36 @@ mod tests {
             "{e:?}"
         );
     }
+
+    /// Reader speed (run with `--ignored --nocapture`, release or test profile): a 10 s,
+    /// 512 Hz, 5-column case.
+    #[test]
+    #[ignore]
+    fn reader_speed() {
+        let mut text = String::from("t,h,alpha,lift,moment\n");
+        for i in 0..5120 {
+            let t = i as f64 / 512.0;
+            let v = (t * 7.3).sin();
+            text.push_str(&format!(
+                "{t},{},{},{},{}\n",
+                v * 1e-3,
+                v * 0.3,
+                v * 12.5,
+                v * 0.77
+            ));
+        }
+        let reps = 200;
+        let start = std::time::Instant::now();
+        for _ in 0..reps {
+            let c = parse_case_csv(&text, p(), true).unwrap();
+            check_sampling(&c.t, p(), 2).unwrap();
+        }
+        let per = start.elapsed().as_secs_f64() / reps as f64;
+        eprintln!(
+            "5120 rows x 5 columns ({} bytes): {:.1} us per file, {:.1} us per 1000 rows",
+            text.len(),
+            per * 1e6,
+            per * 1e6 / 5.12
+        );
+    }
 }

@@ -544,6 +544,30 @@ impl<'a> Cx<'a> {
     }
 }
 
+/// Why a manifest path may not name a file inside the data set folder: `Some` reason when
+/// it is absolute (a root, or a Windows drive/UNC prefix) or has a `..` component.
+pub(crate) fn unsafe_relative_path(path: &Path) -> Option<&'static str> {
+    use std::path::Component;
+    for c in path.components() {
+        match c {
+            Component::Prefix(_) | Component::RootDir => return Some("is absolute"),
+            Component::ParentDir => return Some("has a `..` component"),
+            Component::CurDir | Component::Normal(_) => {}
+        }
+    }
+    // `Path` only recognises Windows prefixes on Windows; reject them everywhere so that a
+    // manifest means the same on every platform.
+    let s = path.to_string_lossy();
+    let b = s.as_bytes();
+    if s.starts_with('\\') || (b.len() >= 2 && b[0].is_ascii_alphabetic() && b[1] == b':') {
+        return Some("is absolute");
+    }
+    if s.split(['/', '\\']).any(|part| part == "..") {
+        return Some("has a `..` component");
+    }
+    None
+}
+
 impl<'c, 'a> Node<'c, 'a> {
     fn field(&self, key: &str) -> String {
         format!("{}{key}", self.prefix)
@@ -674,7 +698,19 @@ impl<'c, 'a> Node<'c, 'a> {
         match self.opt_str(key)? {
             None => Ok(None),
             Some("") => Err(self.err(key, "empty path".to_string())),
-            Some(s) => Ok(Some(PathBuf::from(s))),
+            Some(s) => {
+                let path = PathBuf::from(s);
+                if let Some(why) = unsafe_relative_path(&path) {
+                    return Err(self.err(
+                        key,
+                        format!(
+                            "path \"{s}\" {why}; case files must be named relative to the \
+                             data set folder, inside it"
+                        ),
+                    ));
+                }
+                Ok(Some(path))
+            }
         }
     }
 

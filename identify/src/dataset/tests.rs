@@ -252,6 +252,10 @@ fn full_manifest() -> Manifest {
     let mut nested = toml::Table::new();
     nested.insert("x".into(), toml::Value::Float(0.1));
     nested.insert(
+        "note".into(),
+        toml::Value::String("two\nlines 'q' \"d\"".into()),
+    );
+    nested.insert(
         "list".into(),
         toml::Value::Array(vec![toml::Value::Boolean(true), toml::Value::Float(2.5)]),
     );
@@ -306,6 +310,9 @@ fn full_manifest() -> Manifest {
 fn manifest_to_toml_parse_round_trip_with_extra() {
     let m = full_manifest();
     let text = m.to_toml();
+    if std::env::var_os("SHOW_TOML").is_some() {
+        eprintln!("{text}");
+    }
     let back = Manifest::parse(&text, p()).unwrap_or_else(|e| panic!("{e}\n{text}"));
     assert_eq!(back, m, "{text}");
     // Keys appear in the documented order.
@@ -441,6 +448,45 @@ fn writer_rejects_records_that_do_not_match_the_manifest() {
         "{e:?}"
     );
     assert!(!dir.path().join("manifest.toml").exists());
+}
+
+#[test]
+fn absolute_or_parent_paths_are_rejected_with_field_and_line() {
+    for bad in [
+        "/etc/a.csv",
+        "../a.csv",
+        "cases/../../a.csv",
+        "C:/data/a.csv",
+        "\\\\server\\a.csv",
+        "cases\\..\\a.csv",
+    ] {
+        let text = SMALL.replace("file = \"a.csv\"", &format!("file = '{bad}'"));
+        let (line, field, msg) = manifest_err(&text);
+        assert_eq!((line, field.as_str()), (18, "case[1].file"), "{bad}: {msg}");
+        assert!(msg.contains(bad), "{msg}");
+    }
+    let text = format!("{SMALL}nowind_file = \"../still.csv\"\n");
+    let (line, field, msg) = manifest_err(&text);
+    assert_eq!((line, field.as_str()), (20, "case[1].nowind_file"), "{msg}");
+    assert!(msg.contains("`..`"), "{msg}");
+    // Inner `.` components and dotted names are fine.
+    for ok in ["./a.csv", "cases/./a..b.csv", "..a.csv"] {
+        let text = SMALL.replace("file = \"a.csv\"", &format!("file = \"{ok}\""));
+        assert!(Manifest::parse(&text, p()).is_ok(), "{ok}");
+    }
+    // The writer refuses to write outside the folder.
+    let mut rng = ChaCha8Rng::seed_from_u64(2);
+    let mut m = Manifest::parse(SMALL, p()).unwrap();
+    m.cases[0].file = PathBuf::from("../escape.csv");
+    let r = random_record(&mut rng, "a", CaseKind::Forced, 10, true);
+    let dir = tempfile::tempdir().unwrap();
+    let sub = dir.path().join("ds");
+    let e = write_dataset(&sub, &m, &[r]).unwrap_err();
+    assert!(
+        matches!(&e, Error::InvalidData { field, .. } if field == "file"),
+        "{e:?}"
+    );
+    assert!(!dir.path().join("escape.csv").exists());
 }
 
 fn write_small(dir: &Path, csv: &str) {

@@ -136,7 +136,8 @@ fn write_file(dir: &Path, rel: &Path, text: &str) -> Result<()> {
 /// [`Error::InvalidData`] when the records do not match the manifest's cases (count, id,
 /// still-air run present exactly when `nowind_file` is named), or a record is not
 /// writable (unequal column lengths, non-finite value, forced case without forces, fewer
-/// than 3 samples, invalid time base); [`Error::Io`] when a file or folder cannot be
+/// than 3 samples, invalid time base), or a `file`/`nowind_file` is absolute or has a `..`
+/// component; [`Error::Io`] when a file or folder cannot be
 /// written.
 pub fn write_dataset(dir: &Path, manifest: &Manifest, records: &[Record]) -> Result<()> {
     if records.len() != manifest.cases.len() {
@@ -161,6 +162,21 @@ pub fn write_dataset(dir: &Path, manifest: &Manifest, records: &[Record]) -> Res
                     r.meta.id, c.id
                 ),
             ));
+        }
+        for (field, path) in [
+            ("file", Some(&c.file)),
+            ("nowind_file", c.nowind_file.as_ref()),
+        ] {
+            if let Some(why) = path.and_then(|p| super::manifest::unsafe_relative_path(p)) {
+                return Err(bad(
+                    &c.id,
+                    field,
+                    format!(
+                        "path {} {why}; case files must lie inside the data set folder",
+                        path.map(|p| p.display().to_string()).unwrap_or_default()
+                    ),
+                ));
+            }
         }
         check_record(&c.id, r, "record", c.kind == CaseKind::Forced)?;
         match (&c.nowind_file, &r.nowind) {

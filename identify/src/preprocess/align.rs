@@ -533,6 +533,10 @@ mod tests {
             el = el.max((l[k] - aero_l(t)).abs());
             em = em.max((m[k] - aero_m(t)).abs());
         }
+        eprintln!(
+            "nowind: lag error {:e} samples, max lift error {el:e}, max moment error {em:e}",
+            (lag - d_true) / dt
+        );
         let amp_l = 3.0 * 0.1 + 0.4;
         let amp_m = 0.3 * 0.1 + 0.05;
         assert!(el < 1e-3 * amp_l, "lift error {el}");
