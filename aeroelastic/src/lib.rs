@@ -10,6 +10,7 @@ pub mod aero;
 pub mod bessel;
 pub mod error;
 pub mod flutter;
+pub mod identified;
 pub mod lco;
 pub(crate) mod optim;
 pub mod reference;
