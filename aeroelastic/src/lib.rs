@@ -17,5 +17,6 @@ pub mod reference;
 pub mod section;
 pub mod structure;
 pub mod theodorsen;
+pub mod tunnel;
 
 pub use error::{Error, Result};
