@@ -332,3 +332,81 @@ fn default_identify_settings_recover_h_derivatives() {
         assert!(e < 1e-2, "{name}: worst relative error {e:.3e}");
     }
 }
+
+/// The CLI on the scenario files: flutter speed of the truth (p-method = its time-domain
+/// onset), and a bad structure file ends with an error naming the file and the field.
+#[test]
+fn cli_flutter_on_scenarios_and_bad_structure_file() {
+    use std::process::Command;
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let dir = tempfile::tempdir().unwrap();
+    let rig = root.join("scenarios/plate-rig.structure.toml");
+    let model = root.join("scenarios/plate-truth.model.toml");
+    let out = Command::new(env!("CARGO_BIN_EXE_aeroform"))
+        .args(["flutter", "--structure"])
+        .arg(&rig)
+        .arg("--model")
+        .arg(&model)
+        .args(["--speeds", "3:10:71", "--method", "p", "--out"])
+        .arg(dir.path())
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let json: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.path().join("flutter.json")).unwrap()).unwrap();
+    let uf = json["critical"]["speed"].as_f64().unwrap();
+    // Same structure and truth as the library round trip above.
+    let s = Section::new(plate_rig(), Arc::new(truth()), RHO).unwrap();
+    let fo = FlutterOptions {
+        u_min: 3.0,
+        u_max: 10.0,
+        n_speeds: 71,
+        tol_rel: 1e-10,
+    };
+    let want = s.flutter(FlutterMethod::P, &fo).unwrap().flutter.unwrap().u;
+    assert!((uf - want).abs() < 1e-4 * want, "{uf} vs {want}; {stdout}");
+
+    let bad = dir.path().join("bad.structure.toml");
+    let text = std::fs::read_to_string(&rig)
+        .unwrap()
+        .replace("freq_pitch = 3.5", "freq_pitch = -3.5");
+    std::fs::write(&bad, text).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_aeroform"))
+        .args(["flutter", "--structure"])
+        .arg(&bad)
+        .arg("--model")
+        .arg(&model)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(
+        err.contains("bad.structure.toml") && err.contains("freq_pitch"),
+        "{err}"
+    );
+    let bad_model = dir.path().join("bad.model.toml");
+    std::fs::write(
+        &bad_model,
+        "kind = \"theodorsen\"\nchord = 0.25\nelastic_axes = 0.1\n",
+    )
+    .unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_aeroform"))
+        .args(["lco", "--speed", "7", "--structure"])
+        .arg(&rig)
+        .arg("--model")
+        .arg(&bad_model)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && !err.contains("panicked"), "{err}");
+    assert!(
+        err.contains("bad.model.toml") && err.contains("elastic_axes"),
+        "{err}"
+    );
+}

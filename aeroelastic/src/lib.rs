@@ -9,6 +9,7 @@
 pub mod aero;
 pub mod bessel;
 pub mod error;
+pub mod files;
 pub mod flutter;
 pub mod identified;
 pub mod lco;

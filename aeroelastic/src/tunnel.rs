@@ -211,9 +211,9 @@ impl Campaign {
         c.configurations.retain(|x| x.name == name);
         if c.configurations.is_empty() {
             return Err(Error::param(
-                format!("config `{name}`"),
+                "config",
                 f64::NAN,
-                "no such configuration (A..G)",
+                format!("`{name}` is not a configuration of the paper (A..G)"),
             ));
         }
         Ok(c)
