@@ -1,9 +1,12 @@
 //! aeroform command-line interface: parses flags, builds library objects, draws progress
 //! bars and writes files. No physics lives here.
 
+mod flutter_cmd;
 mod identify_cmd;
+mod lco_cmd;
 mod progress;
 mod run_cmd;
+mod tunnel_cmd;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -25,6 +28,13 @@ enum Command {
     Run(run_cmd::RunArgs),
     /// Identify the nonlinear aerodynamic force law (Eq. 19) of a data set folder.
     Identify(identify_cmd::IdentifyArgs),
+    /// Linear flutter and divergence of a structure with an aerodynamic model.
+    Flutter(flutter_cmd::FlutterArgs),
+    /// Limit-cycle oscillation at one speed or over a sweep (up and down).
+    Lco(lco_cmd::LcoArgs),
+    /// Virtual wind tunnel: forced-motion or free-response data sets.
+    #[command(subcommand)]
+    Tunnel(tunnel_cmd::TunnelCommand),
 }
 
 fn main() -> ExitCode {
@@ -32,6 +42,9 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Run(a) => run_cmd::run(&a),
         Command::Identify(a) => identify_cmd::run(&a).map(|_| ()),
+        Command::Flutter(a) => flutter_cmd::run(&a),
+        Command::Lco(a) => lco_cmd::run(&a),
+        Command::Tunnel(c) => tunnel_cmd::run(&c),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

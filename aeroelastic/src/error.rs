@@ -36,6 +36,31 @@ pub enum Error {
         /// What is wrong.
         message: String,
     },
+    /// A Scanlan derivative of an identified law is not identifiable (`null` in
+    /// `identification.json`) in some cases and no fallback was chosen.
+    #[error("derivative {derivative} is not identifiable (null) in case(s) {cases:?}; choose a fallback (flat plate, zero or skip)")]
+    NotIdentifiable {
+        /// Derivative name, e.g. `A1`.
+        derivative: String,
+        /// Case ids where it is `null`.
+        cases: Vec<String>,
+    },
+    /// An error of the `identify` crate (data-set writing, `identification.json` reading).
+    #[error("{context}: {source}")]
+    Identify {
+        /// What was being done.
+        context: String,
+        /// The underlying error (names file, line, field).
+        source: identify::Error,
+    },
+    /// A file could not be read or written.
+    #[error("{path}: {message}")]
+    Io {
+        /// The file.
+        path: String,
+        /// What happened.
+        message: String,
+    },
     /// A numerical step failed (singular matrix, no convergence…).
     #[error("{context}: numerical failure: {message}")]
     Numerical {

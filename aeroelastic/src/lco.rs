@@ -743,6 +743,71 @@ pub fn lco_run_k_iterated(
     }
 }
 
+/// Upward and downward continuation sweeps (run in parallel) of a [`NonlinearAero`] whose
+/// K-dependent coefficients are evaluated at each limit cycle's own reduced frequency
+/// ([`lco_run_k_iterated`] at every speed, each speed starting from the previous speed's
+/// final state and K when that run ended on a limit cycle, otherwise from the perturbation
+/// and the model's K). Results of both sweeps in increasing U.
+///
+/// # Errors
+/// As [`lco_run_k_iterated`].
+#[allow(clippy::too_many_arguments)]
+pub fn lco_hysteresis_k_iterated(
+    structure: &Structure,
+    model: &NonlinearAero,
+    rho: f64,
+    speeds: &[f64],
+    perturbation_up: &[f64],
+    perturbation_down: &[f64],
+    opts: &LcoOptions,
+    observer: &(dyn Fn(SweepProgress) + Sync),
+) -> Result<Hysteresis> {
+    let sweep = |direction: SweepDirection, pert: &[f64]| -> Result<Vec<LcoResult>> {
+        let mut us = speeds.to_vec();
+        us.sort_by(f64::total_cmp);
+        if direction == SweepDirection::Down {
+            us.reverse();
+        }
+        let mut out: Vec<LcoResult> = Vec::with_capacity(us.len());
+        let mut m = model.clone();
+        for (i, &u) in us.iter().enumerate() {
+            let start = match out.last() {
+                Some(prev) if prev.classification == Classification::Lco => {
+                    prev.final_state.clone()
+                }
+                _ => {
+                    m = model.clone();
+                    pert.to_vec()
+                }
+            };
+            let r = lco_run_k_iterated(structure, &m, rho, u, &start, opts, 1e-4, 8)?;
+            if r.result.classification == Classification::Lco {
+                m = m.with_k_eval(r.k_eval)?;
+            }
+            observer(SweepProgress {
+                direction,
+                done: i + 1,
+                total: us.len(),
+                u,
+                classification: r.result.classification,
+            });
+            out.push(r.result);
+        }
+        if direction == SweepDirection::Down {
+            out.reverse();
+        }
+        Ok(out)
+    };
+    let (up, down) = rayon::join(
+        || sweep(SweepDirection::Up, perturbation_up),
+        || sweep(SweepDirection::Down, perturbation_down),
+    );
+    Ok(Hysteresis {
+        up: up?,
+        down: down?,
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

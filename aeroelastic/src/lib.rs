@@ -9,12 +9,15 @@
 pub mod aero;
 pub mod bessel;
 pub mod error;
+pub mod files;
 pub mod flutter;
+pub mod identified;
 pub mod lco;
 pub(crate) mod optim;
 pub mod reference;
 pub mod section;
 pub mod structure;
 pub mod theodorsen;
+pub mod tunnel;
 
 pub use error::{Error, Result};

@@ -19,7 +19,7 @@ mod quasi_steady;
 mod table;
 mod unsteady;
 
-pub use nonlinear::{Channel, Coefficient, NonlinearAero, NonlinearTerm};
+pub use nonlinear::{term_name, Channel, Coefficient, NonlinearAero, NonlinearTerm};
 pub use quasi_steady::{QuasiSteady, QuasiSteadyKind};
 pub use table::{DerivativeTable, RfaFit};
 pub use unsteady::TheodorsenAero;
@@ -72,6 +72,14 @@ pub trait AeroModel: Send + Sync + std::fmt::Debug {
     /// ω ≥ 0 [rad/s], including apparent-mass and all linear terms (nonlinear terms are
     /// not part of it).
     fn frequency_response(&self, flow: &Flow, omega: f64) -> Matrix2<Complex64>;
+
+    /// The model with its frequency-dependent coefficients evaluated at reduced frequency
+    /// `k` = Bω/U, or `None` when nothing in it depends on K (the default). Used where the
+    /// motion has one dominant frequency (forced motion at K_α; a limit cycle at its own
+    /// frequency) — see [`NonlinearAero`] for identified N* coefficients.
+    fn with_reduced_frequency(&self, _k: f64) -> Option<std::sync::Arc<dyn AeroModel>> {
+        None
+    }
 }
 
 /// Linearisation of a model's time-domain form about the origin:

@@ -24,10 +24,17 @@ pub enum Channel {
 pub enum Coefficient {
     /// A plain nondimensional coefficient (terms outside Eq. 19).
     Constant(f64),
-    /// An Eq. 19 coefficient identified at several reduced frequencies: the effective
-    /// coefficient is K^`k_power` · N*(K), N*(K) interpolated linearly in K between the
-    /// identified K and held at the nearest identified K outside their range
-    /// (e.g. N2* multiplies K⁶ α³, so `k_power = 6`).
+    /// An Eq. 19 coefficient identified at several reduced frequencies: N*(K_i) at the
+    /// identified K_i, multiplying K^`k_power` (e.g. N2* multiplies K⁶ α³, so
+    /// `k_power = 6`).
+    ///
+    /// **Evaluation at K.** What is interpolated is the *effective* nondimensional
+    /// coefficient ξ(K) = K^p N*(K) — the number the regression identified at each K_i —
+    /// linearly in K between the identified K_i, and held at the end values ξ(K_min),
+    /// ξ(K_max) outside their range (a fitted coefficient is never extrapolated). ξ rather
+    /// than N* because N* = ξ/K^p varies like K^−p even when the law itself does not
+    /// depend on frequency (a quasi-steady cubic): linear interpolation of 1/K³ between the
+    /// paper campaign's K_α nodes 0.524 and 0.628 is 4 % off mid-way, of ξ exactly 0.
     OverK {
         /// Identified reduced frequencies K, strictly increasing.
         k: Vec<f64>,
@@ -39,7 +46,8 @@ pub enum Coefficient {
 }
 
 impl Coefficient {
-    /// Effective coefficient at reduced frequency `k` (see the variants).
+    /// Effective coefficient of the nondimensional term at reduced frequency `k`
+    /// (see the variants).
     pub fn at(&self, k: f64) -> f64 {
         match self {
             Coefficient::Constant(c) => *c,
@@ -49,16 +57,16 @@ impl Coefficient {
                 k_power,
             } => {
                 let n = ks.len();
-                let v = if k <= ks[0] {
-                    values[0]
+                let xi = |i: usize| values[i] * ks[i].powi(*k_power);
+                if k <= ks[0] {
+                    xi(0)
                 } else if k >= ks[n - 1] {
-                    values[n - 1]
+                    xi(n - 1)
                 } else {
                     let i = ks.partition_point(|&x| x <= k) - 1;
                     let t = (k - ks[i]) / (ks[i + 1] - ks[i]);
-                    values[i] + t * (values[i + 1] - values[i])
-                };
-                v * k.powi(*k_power)
+                    xi(i) + t * (xi(i + 1) - xi(i))
+                }
             }
         }
     }
@@ -75,6 +83,48 @@ pub struct NonlinearTerm {
     pub powers: [u32; 4],
     /// Coefficient.
     pub coefficient: Coefficient,
+}
+
+impl NonlinearTerm {
+    /// Powers of (α, Bα̇/U, h/B, ḣ/U) of a term named as in DATA_FORMAT.md (`alpha`,
+    /// `alpha_dot`, `h`, `h_dot` joined by `*`, powers `^2`, `^3`; e.g. `alpha*alpha_dot`,
+    /// `alpha_dot^3`).
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] naming `term` when the name does not parse (unknown
+    /// factor, bad power, degree above 3).
+    pub fn powers_of(name: &str) -> Result<[u32; 4]> {
+        identify::library::Term::parse(name)
+            .map(|t| t.powers.map(u32::from))
+            .map_err(|e| Error::param("term", f64::NAN, e.to_string()))
+    }
+
+    /// The DATA_FORMAT.md name of this term's monomial, e.g. `alpha^3`.
+    pub fn name(&self) -> String {
+        term_name(self.powers)
+    }
+}
+
+/// DATA_FORMAT.md name of the monomial α^p₀ α̇^p₁ h^p₂ ḣ^p₃ (`1` for the constant).
+pub fn term_name(powers: [u32; 4]) -> String {
+    const VARS: [&str; 4] = ["alpha", "alpha_dot", "h", "h_dot"];
+    let parts: Vec<String> = powers
+        .iter()
+        .zip(VARS)
+        .filter(|(p, _)| **p > 0)
+        .map(|(p, v)| {
+            if *p == 1 {
+                v.to_string()
+            } else {
+                format!("{v}^{p}")
+            }
+        })
+        .collect();
+    if parts.is_empty() {
+        "1".into()
+    } else {
+        parts.join("*")
+    }
 }
 
 /// A linear aerodynamic model plus nonlinear polynomial terms.
@@ -185,6 +235,11 @@ impl NonlinearAero {
     pub fn inner(&self) -> &Arc<dyn AeroModel> {
         &self.inner
     }
+
+    /// The nonlinear terms.
+    pub fn terms(&self) -> &[NonlinearTerm] {
+        &self.terms
+    }
 }
 
 impl AeroModel for NonlinearAero {
@@ -232,6 +287,14 @@ impl AeroModel for NonlinearAero {
     fn frequency_response(&self, flow: &Flow, omega: f64) -> Matrix2<Complex64> {
         self.inner.frequency_response(flow, omega)
     }
+    fn with_reduced_frequency(&self, k: f64) -> Option<Arc<dyn AeroModel>> {
+        if !self.depends_on_k() {
+            return None;
+        }
+        self.with_k_eval(k)
+            .ok()
+            .map(|m| Arc::new(m) as Arc<dyn AeroModel>)
+    }
 }
 
 #[cfg(test)]
@@ -246,9 +309,34 @@ mod tests {
             values: vec![2.0, 4.0],
             k_power: 3,
         };
-        assert!((c.at(0.75) - 3.0 * 0.75f64.powi(3)).abs() < 1e-15);
-        assert!((c.at(0.1) - 2.0 * 0.1f64.powi(3)).abs() < 1e-15);
-        assert!((c.at(3.0) - 4.0 * 27.0).abs() < 1e-12);
+        // ξ = K³ N*: 0.25 at K = 0.5, 4 at K = 1; linear in between, held outside.
+        assert!((c.at(0.75) - 0.5 * (0.25 + 4.0)).abs() < 1e-15);
+        assert!((c.at(0.1) - 0.25).abs() < 1e-15);
+        assert!((c.at(3.0) - 4.0).abs() < 1e-15);
+        // A frequency-independent ξ tabulated as N* = ξ/K³ is reproduced exactly between
+        // nodes (interpolating N* itself would be 4 % off here).
+        let ks = [0.524, 0.628];
+        let c = Coefficient::OverK {
+            k: ks.to_vec(),
+            values: ks.iter().map(|k| -2.0 / k.powi(3)).collect(),
+            k_power: 3,
+        };
+        assert!((c.at(0.576) + 2.0).abs() < 1e-13);
+    }
+
+    #[test]
+    fn term_names_round_trip() {
+        for (name, p) in [
+            ("alpha*alpha_dot", [1, 1, 0, 0]),
+            ("alpha^3", [3, 0, 0, 0]),
+            ("alpha_dot^3", [0, 3, 0, 0]),
+            ("alpha^2*h", [2, 0, 1, 0]),
+        ] {
+            assert_eq!(NonlinearTerm::powers_of(name).unwrap(), p);
+            assert_eq!(term_name(p), name);
+        }
+        let e = NonlinearTerm::powers_of("alpha*beta").unwrap_err();
+        assert!(e.to_string().contains("beta"), "{e}");
     }
 
     #[test]

@@ -1,0 +1,624 @@
+//! Structure and aerodynamic-model files (TOML), and `identification.json` as a model.
+//!
+//! **Structure file** (`*.structure.toml`, SI per unit span, same key names as a data-set
+//! manifest's `[structure]`):
+//!
+//! ```toml
+//! air_density = 1.225          # [kg/m^3], optional (1.225)
+//! chord = 0.25                 # [m], optional: the chord for an identification.json model
+//! mass = 1.0933                # [kg/m]
+//! inertia = 0.005803           # [kg m^2/m] about the elastic axis
+//! static_unbalance = 0.010933  # [kg m/m], + when the mass centre is aft of the axis
+//! freq_heave = 2.0             # [Hz] uncoupled still-air natural frequencies
+//! freq_pitch = 3.5
+//! damping_heave = 0.005        # ratio of critical, optional (0)
+//! damping_pitch = 0.005
+//! # optional: heave_stiffness_terms / pitch_stiffness_terms = [{ power = 3, coefficient = 10.0 }],
+//! # pitch_freeplay = 0.01 (rad), [friction] heave_force = …, pitch_moment = …
+//! ```
+//!
+//! k_h = m (2πf_h)², k_α = I (2πf_α)², c_h = 2ζ_h m 2πf_h, c_α = 2ζ_α I 2πf_α.
+//!
+//! **Model file** (`*.model.toml`):
+//!
+//! ```toml
+//! kind = "theodorsen"   # | "quasi_steady" | "steady" | "flat_plate_table" | "derivative_table" | "identified"
+//! chord = 0.25          # [m] (all kinds; for "identified" optional when given elsewhere)
+//! elastic_axis = -0.3   # a, semi-chords aft of mid-chord (theodorsen, quasi_steady, steady; default 0)
+//! noncirculatory = true # quasi_steady, steady (default true)
+//! rfa_lags = 3          # flat_plate_table, derivative_table, identified (default 3)
+//! k = [0.1, 0.2, …]     # flat_plate_table: the K grid
+//! # derivative_table: [[derivatives]] k = 0.5, h1 = …, h2, h3, h4, a1, a2, a3, a4
+//! # identified: file = "identification.json" (relative to the model file),
+//! #             groups = ["D"], missing = "error" | "skip" | "flat_plate" | "zero"
+//!
+//! [[nonlinear]]         # any number; names as in DATA_FORMAT.md, degree 2..3
+//! term = "alpha_dot^3"
+//! channel = "moment"    # "lift" | "moment"
+//! coefficient = -100.0  # constant nondimensional coefficient, or an Eq. 19 table:
+//! # k = [0.3, 0.6], values = [N*(0.3), N*(0.6)], k_power = 3
+//! ```
+//!
+//! A path ending in `.json` (or a file starting with `{`) is read as an
+//! `identification.json` ([`IdentifiedLaw`]). Unknown keys are errors naming the key and
+//! the file; a key that the `kind` does not use is an error naming it too.
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use serde::{Deserialize, Serialize};
+
+use crate::aero::{
+    AeroModel, Channel, Coefficient, DerivativeTable, NonlinearAero, NonlinearTerm, QuasiSteady,
+    QuasiSteadyKind, TheodorsenAero,
+};
+use crate::error::{non_negative, positive};
+use crate::identified::{IdentifiedLaw, IdentifiedOptions, IdentifiedTables, MissingDerivative};
+use crate::structure::{Friction, PolyTerm, Structure};
+use crate::theodorsen::Derivatives;
+use crate::{Error, Result};
+
+fn default_rho() -> f64 {
+    1.225
+}
+
+/// A structure file (see the module docs).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StructureFile {
+    /// Air density ρ [kg/m³].
+    #[serde(default = "default_rho")]
+    pub air_density: f64,
+    /// Chord B [m] (used when the model file does not give one).
+    #[serde(default)]
+    pub chord: Option<f64>,
+    /// Mass per unit span [kg/m].
+    pub mass: f64,
+    /// Pitch inertia about the elastic axis [kg·m²/m].
+    pub inertia: f64,
+    /// Static unbalance [kg·m/m], + when the mass centre is aft of the elastic axis.
+    #[serde(default)]
+    pub static_unbalance: f64,
+    /// Uncoupled heave frequency [Hz] (≥ 0; 0 = no heave spring).
+    pub freq_heave: f64,
+    /// Uncoupled pitch frequency [Hz] (> 0).
+    pub freq_pitch: f64,
+    /// Heave damping ratio.
+    #[serde(default)]
+    pub damping_heave: f64,
+    /// Pitch damping ratio.
+    #[serde(default)]
+    pub damping_pitch: f64,
+    /// Extra heave stiffness terms.
+    #[serde(default)]
+    pub heave_stiffness_terms: Vec<PolyTerm>,
+    /// Extra pitch stiffness terms.
+    #[serde(default)]
+    pub pitch_stiffness_terms: Vec<PolyTerm>,
+    /// Pitch freeplay half gap [rad].
+    #[serde(default)]
+    pub pitch_freeplay: f64,
+    /// Coulomb friction.
+    #[serde(default)]
+    pub friction: Option<Friction>,
+}
+
+fn read_text(path: &Path) -> Result<String> {
+    std::fs::read_to_string(path).map_err(|e| Error::Io {
+        path: path.display().to_string(),
+        message: e.to_string(),
+    })
+}
+
+/// Prefixes the field of an [`Error::InvalidParameter`] with the file name.
+fn in_file(path: &str, e: Error) -> Error {
+    match e {
+        Error::InvalidParameter {
+            field,
+            value,
+            message,
+        } => Error::InvalidParameter {
+            field: format!("{path}: {field}"),
+            value,
+            message,
+        },
+        other => other,
+    }
+}
+
+impl StructureFile {
+    /// Parses and validates a structure file's text; `source` names it in errors.
+    ///
+    /// # Errors
+    /// [`Error::Toml`] naming `source` with the parser's message (unknown key, missing
+    /// field, wrong type, with line and column); [`Error::InvalidParameter`] naming
+    /// `source: field` for a value out of range.
+    pub fn parse(text: &str, source: &str) -> Result<Self> {
+        let f: StructureFile = toml::from_str(text).map_err(|e| Error::Toml {
+            source_name: source.to_string(),
+            message: e.to_string(),
+        })?;
+        f.structure().map_err(|e| in_file(source, e))?;
+        Ok(f)
+    }
+
+    /// Reads a structure file.
+    ///
+    /// # Errors
+    /// [`Error::Io`] when it cannot be read; otherwise as [`StructureFile::parse`].
+    pub fn read(path: &Path) -> Result<Self> {
+        Self::parse(&read_text(path)?, &path.display().to_string())
+    }
+
+    /// The structure (see the module docs for the conversion).
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] naming the field (`air_density`, `freq_pitch`,
+    /// `mass`, `pitch_stiffness_terms[1].power`…).
+    pub fn structure(&self) -> Result<Structure> {
+        positive("air_density", self.air_density)?;
+        if let Some(c) = self.chord {
+            positive("chord", c)?;
+        }
+        positive("mass", self.mass)?;
+        positive("inertia", self.inertia)?;
+        non_negative("freq_heave", self.freq_heave)?;
+        positive("freq_pitch", self.freq_pitch)?;
+        non_negative("damping_heave", self.damping_heave)?;
+        non_negative("damping_pitch", self.damping_pitch)?;
+        let tau = 2.0 * std::f64::consts::PI;
+        let (wh, wa) = (tau * self.freq_heave, tau * self.freq_pitch);
+        let s = Structure {
+            mass: self.mass,
+            inertia_alpha: self.inertia,
+            static_unbalance: self.static_unbalance,
+            k_h: self.mass * wh * wh,
+            k_alpha: self.inertia * wa * wa,
+            c_h: 2.0 * self.damping_heave * self.mass * wh,
+            c_alpha: 2.0 * self.damping_pitch * self.inertia * wa,
+            heave_stiffness_terms: self.heave_stiffness_terms.clone(),
+            pitch_stiffness_terms: self.pitch_stiffness_terms.clone(),
+            pitch_freeplay: self.pitch_freeplay,
+            friction: self.friction,
+        };
+        s.validate().map_err(|e| match e {
+            Error::InvalidParameter {
+                field,
+                value,
+                message,
+            } => Error::InvalidParameter {
+                field: match field.as_str() {
+                    "inertia_alpha" => "inertia".into(),
+                    _ => field,
+                },
+                value,
+                message,
+            },
+            other => other,
+        })?;
+        Ok(s)
+    }
+}
+
+/// Kind of a model file.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ModelKind {
+    /// [`TheodorsenAero`].
+    Theodorsen,
+    /// [`QuasiSteady`] with [`QuasiSteadyKind::QuasiSteady`].
+    QuasiSteady,
+    /// [`QuasiSteady`] with [`QuasiSteadyKind::Steady`].
+    Steady,
+    /// [`DerivativeTable::flat_plate`] on the grid `k`.
+    FlatPlateTable,
+    /// [`DerivativeTable`] from `[[derivatives]]` rows.
+    DerivativeTable,
+    /// [`IdentifiedLaw`] from `file`.
+    Identified,
+}
+
+/// One `[[nonlinear]]` entry of a model file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct NonlinearSpec {
+    /// Term name (DATA_FORMAT.md), degree 2 or 3.
+    pub term: String,
+    /// `lift` or `moment`.
+    pub channel: String,
+    /// Constant nondimensional coefficient.
+    #[serde(default)]
+    pub coefficient: Option<f64>,
+    /// Eq. 19 table: reduced frequencies.
+    #[serde(default)]
+    pub k: Option<Vec<f64>>,
+    /// Eq. 19 table: N* values.
+    #[serde(default)]
+    pub values: Option<Vec<f64>>,
+    /// Eq. 19 table: power of K.
+    #[serde(default)]
+    pub k_power: Option<i32>,
+}
+
+/// A model file (see the module docs).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModelFile {
+    /// Model kind.
+    pub kind: ModelKind,
+    /// Chord B [m].
+    #[serde(default)]
+    pub chord: Option<f64>,
+    /// Elastic axis a (semi-chords aft of mid-chord).
+    #[serde(default)]
+    pub elastic_axis: Option<f64>,
+    /// Noncirculatory terms (quasi-steady kinds).
+    #[serde(default)]
+    pub noncirculatory: Option<bool>,
+    /// RFA lag roots.
+    #[serde(default)]
+    pub rfa_lags: Option<usize>,
+    /// K grid of `flat_plate_table`.
+    #[serde(default)]
+    pub k: Option<Vec<f64>>,
+    /// Rows of `derivative_table`.
+    #[serde(default)]
+    pub derivatives: Option<Vec<Derivatives>>,
+    /// `identification.json` of `identified` (relative to the model file).
+    #[serde(default)]
+    pub file: Option<PathBuf>,
+    /// Groups of `identified`.
+    #[serde(default)]
+    pub groups: Option<Vec<String>>,
+    /// Null-derivative fallback of `identified`.
+    #[serde(default)]
+    pub missing: Option<MissingDerivative>,
+    /// Nonlinear terms added to the model.
+    #[serde(default)]
+    pub nonlinear: Vec<NonlinearSpec>,
+}
+
+/// A loaded aerodynamic model.
+#[derive(Debug, Clone)]
+pub struct LoadedModel {
+    /// The model.
+    pub model: Arc<dyn AeroModel>,
+    /// The same model as a [`NonlinearAero`] when it has nonlinear terms (for K-iterated
+    /// LCO runs).
+    pub nonlinear: Option<NonlinearAero>,
+    /// The identified tables when the model came from an identification.
+    pub identified: Option<IdentifiedTables>,
+}
+
+impl LoadedModel {
+    /// Loads a model file or an `identification.json` (by extension `.json` or a leading
+    /// `{`); `chord` is used when the file gives none (an identification never does).
+    ///
+    /// # Errors
+    /// [`Error::Io`] when a file cannot be read; [`Error::Toml`] naming the file and the
+    /// key (unknown, missing, not used by the kind, wrong type); [`Error::InvalidParameter`]
+    /// naming `file: field`; the errors of the model constructors and of
+    /// [`IdentifiedLaw::read`].
+    pub fn load(path: &Path, chord: Option<f64>) -> Result<Self> {
+        let text = read_text(path)?;
+        let is_json =
+            path.extension().is_some_and(|e| e == "json") || text.trim_start().starts_with('{');
+        if is_json {
+            let chord = chord.ok_or_else(|| Error::Toml {
+                source_name: path.display().to_string(),
+                message: "an identification.json holds no chord: give it (--chord or `chord` in the structure file)".into(),
+            })?;
+            let law = IdentifiedLaw::read(path, &IdentifiedOptions::new(chord))?;
+            return Ok(Self::from_law(law));
+        }
+        let base = path.parent().unwrap_or(Path::new("."));
+        Self::parse(&text, &path.display().to_string(), base, chord)
+    }
+
+    fn from_law(law: IdentifiedLaw) -> Self {
+        let nl = law.model().clone();
+        LoadedModel {
+            model: Arc::new(nl.clone()),
+            nonlinear: Some(nl),
+            identified: Some(law.tables.clone()),
+        }
+    }
+
+    /// Parses a model file's text; `source` names it in errors, `base` is the folder
+    /// relative paths are resolved against, `chord` the fallback chord.
+    ///
+    /// # Errors
+    /// As [`LoadedModel::load`].
+    pub fn parse(text: &str, source: &str, base: &Path, chord: Option<f64>) -> Result<Self> {
+        let toml_err = |m: String| Error::Toml {
+            source_name: source.to_string(),
+            message: m,
+        };
+        let f: ModelFile = toml::from_str(text).map_err(|e| toml_err(e.to_string()))?;
+        let kind_name = serde_json::to_string(&f.kind).unwrap_or_default();
+        let used: &[&str] = match f.kind {
+            ModelKind::Theodorsen => &["chord", "elastic_axis"],
+            ModelKind::QuasiSteady | ModelKind::Steady => {
+                &["chord", "elastic_axis", "noncirculatory"]
+            }
+            ModelKind::FlatPlateTable => &["chord", "rfa_lags", "k"],
+            ModelKind::DerivativeTable => &["chord", "rfa_lags", "derivatives"],
+            ModelKind::Identified => &["chord", "rfa_lags", "file", "groups", "missing"],
+        };
+        for (name, present) in [
+            ("chord", f.chord.is_some()),
+            ("elastic_axis", f.elastic_axis.is_some()),
+            ("noncirculatory", f.noncirculatory.is_some()),
+            ("rfa_lags", f.rfa_lags.is_some()),
+            ("k", f.k.is_some()),
+            ("derivatives", f.derivatives.is_some()),
+            ("file", f.file.is_some()),
+            ("groups", f.groups.is_some()),
+            ("missing", f.missing.is_some()),
+        ] {
+            if present && !used.contains(&name) {
+                return Err(toml_err(format!(
+                    "key `{name}` is not used by kind = {kind_name}"
+                )));
+            }
+        }
+        let need = |name: &str| toml_err(format!("missing key `{name}` for kind = {kind_name}"));
+        let chord = f.chord.or(chord);
+        let wrap = |e: Error| in_file(source, e);
+        let a = f.elastic_axis.unwrap_or(0.0);
+        let lags = f.rfa_lags.unwrap_or(3);
+        let (linear, identified): (Arc<dyn AeroModel>, Option<IdentifiedLaw>) = match f.kind {
+            ModelKind::Theodorsen => (
+                Arc::new(
+                    TheodorsenAero::new(chord.ok_or_else(|| need("chord"))?, a).map_err(wrap)?,
+                ),
+                None,
+            ),
+            ModelKind::QuasiSteady | ModelKind::Steady => {
+                let k = if f.kind == ModelKind::Steady {
+                    QuasiSteadyKind::Steady
+                } else {
+                    QuasiSteadyKind::QuasiSteady
+                };
+                (
+                    Arc::new(
+                        QuasiSteady::new(
+                            chord.ok_or_else(|| need("chord"))?,
+                            a,
+                            k,
+                            f.noncirculatory.unwrap_or(true),
+                        )
+                        .map_err(wrap)?,
+                    ),
+                    None,
+                )
+            }
+            ModelKind::FlatPlateTable => (
+                Arc::new(
+                    DerivativeTable::flat_plate(
+                        chord.ok_or_else(|| need("chord"))?,
+                        f.k.as_deref().ok_or_else(|| need("k"))?,
+                        lags,
+                    )
+                    .map_err(wrap)?,
+                ),
+                None,
+            ),
+            ModelKind::DerivativeTable => (
+                Arc::new(
+                    DerivativeTable::new(
+                        chord.ok_or_else(|| need("chord"))?,
+                        f.derivatives.clone().ok_or_else(|| need("derivatives"))?,
+                        lags,
+                    )
+                    .map_err(wrap)?,
+                ),
+                None,
+            ),
+            ModelKind::Identified => {
+                let file = base.join(f.file.as_ref().ok_or_else(|| need("file"))?);
+                let mut o = IdentifiedOptions::new(chord.ok_or_else(|| need("chord"))?);
+                o.groups = f.groups.clone();
+                o.missing = f.missing.unwrap_or_default();
+                o.rfa_lags = lags;
+                let law = IdentifiedLaw::read(&file, &o)?;
+                (law.table().clone() as Arc<dyn AeroModel>, Some(law))
+            }
+        };
+        let mut terms = Vec::new();
+        for (i, n) in f.nonlinear.iter().enumerate() {
+            let field = |x: &str| format!("nonlinear[{}].{x}", i + 1);
+            let powers = NonlinearTerm::powers_of(&n.term)
+                .map_err(|e| toml_err(format!("{}: {e}", field("term"))))?;
+            let channel = match n.channel.as_str() {
+                "lift" => Channel::Lift,
+                "moment" => Channel::Moment,
+                other => {
+                    return Err(toml_err(format!(
+                        "{} = \"{other}\": expected \"lift\" or \"moment\"",
+                        field("channel")
+                    )))
+                }
+            };
+            let coefficient = match (n.coefficient, &n.k, &n.values, n.k_power) {
+                (Some(c), None, None, None) => Coefficient::Constant(c),
+                (None, Some(k), Some(v), Some(p)) => Coefficient::OverK {
+                    k: k.clone(),
+                    values: v.clone(),
+                    k_power: p,
+                },
+                _ => {
+                    return Err(toml_err(format!(
+                        "{}: give either `coefficient` or all of `k`, `values`, `k_power`",
+                        field("coefficient")
+                    )))
+                }
+            };
+            terms.push(NonlinearTerm {
+                channel,
+                powers,
+                coefficient,
+            });
+        }
+        let tables = identified.as_ref().map(|l| l.tables.clone());
+        if let Some(law) = identified {
+            if terms.is_empty() {
+                return Ok(Self::from_law(law));
+            }
+            // Identified terms plus the file's extra terms.
+            let mut all: Vec<NonlinearTerm> = law.model().terms().to_vec();
+            all.extend(terms);
+            let nl = NonlinearAero::new(linear, all, law.model().k_eval()).map_err(wrap)?;
+            return Ok(LoadedModel {
+                model: Arc::new(nl.clone()),
+                nonlinear: Some(nl),
+                identified: tables,
+            });
+        }
+        if terms.is_empty() {
+            return Ok(LoadedModel {
+                model: linear,
+                nonlinear: None,
+                identified: None,
+            });
+        }
+        let k_eval = terms
+            .iter()
+            .filter_map(|t| match &t.coefficient {
+                Coefficient::OverK { k, .. } => k.first().map(|k0| (k0 * k[k.len() - 1]).sqrt()),
+                _ => None,
+            })
+            .next()
+            .unwrap_or(1.0);
+        let nl = NonlinearAero::new(linear, terms, k_eval).map_err(|e| {
+            in_file(
+                source,
+                match e {
+                    Error::InvalidParameter {
+                        field,
+                        value,
+                        message,
+                    } => Error::InvalidParameter {
+                        // terms[i] → nonlinear[i+1]
+                        field: field
+                            .strip_prefix("terms[")
+                            .and_then(|r| r.split_once(']'))
+                            .and_then(|(i, rest)| {
+                                i.parse::<usize>()
+                                    .ok()
+                                    .map(|i| format!("nonlinear[{}]{rest}", i + 1))
+                            })
+                            .unwrap_or(field),
+                        value,
+                        message,
+                    },
+                    other => other,
+                },
+            )
+        })?;
+        Ok(LoadedModel {
+            model: Arc::new(nl.clone()),
+            nonlinear: Some(nl),
+            identified: None,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const RIG: &str = r#"
+mass = 1.0933
+inertia = 0.0058
+static_unbalance = 0.0109
+freq_heave = 2.0
+freq_pitch = 3.5
+damping_heave = 0.005
+damping_pitch = 0.005
+"#;
+
+    #[test]
+    fn structure_file_converts_frequencies_and_names_bad_fields() {
+        let f = StructureFile::parse(RIG, "rig.toml").unwrap();
+        let s = f.structure().unwrap();
+        assert!((s.omega_alpha() - 2.0 * std::f64::consts::PI * 3.5).abs() < 1e-12);
+        assert!((s.c_h - 2.0 * 0.005 * 1.0933 * 4.0 * std::f64::consts::PI).abs() < 1e-12);
+        assert_eq!(f.air_density, 1.225);
+        let e = StructureFile::parse(&format!("{RIG}masss = 1.0\n"), "rig.toml").unwrap_err();
+        let m = e.to_string();
+        assert!(m.contains("rig.toml") && m.contains("masss"), "{m}");
+        let e = StructureFile::parse(
+            &RIG.replace("freq_pitch = 3.5", "freq_pitch = -1"),
+            "rig.toml",
+        )
+        .unwrap_err();
+        let m = e.to_string();
+        assert!(m.contains("rig.toml: freq_pitch"), "{m}");
+        let e = StructureFile::parse(
+            &RIG.replace("static_unbalance = 0.0109", "static_unbalance = 0.1"),
+            "r",
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("static_unbalance"), "{e}");
+    }
+
+    #[test]
+    fn model_files_build_models_and_reject_unused_or_unknown_keys() {
+        let base = Path::new(".");
+        let m = LoadedModel::parse(
+            "kind = \"theodorsen\"\nchord = 0.25\nelastic_axis = -0.3\n\n[[nonlinear]]\nterm = \"alpha_dot^3\"\nchannel = \"moment\"\ncoefficient = -100.0\n",
+            "m.toml",
+            base,
+            None,
+        )
+        .unwrap();
+        assert_eq!(m.model.chord(), 0.25);
+        assert_eq!(m.nonlinear.unwrap().terms()[0].powers, [0, 3, 0, 0]);
+        let e = LoadedModel::parse(
+            "kind = \"theodorsen\"\nchord = 0.25\nk = [0.1]\n",
+            "m.toml",
+            base,
+            None,
+        )
+        .unwrap_err();
+        assert!(
+            e.to_string().contains("m.toml") && e.to_string().contains("`k`"),
+            "{e}"
+        );
+        let e = LoadedModel::parse(
+            "kind = \"theodorsen\"\nchrod = 0.25\n",
+            "m.toml",
+            base,
+            None,
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("chrod"), "{e}");
+        let e = LoadedModel::parse("kind = \"theodorsen\"\n", "m.toml", base, None).unwrap_err();
+        assert!(e.to_string().contains("missing key `chord`"), "{e}");
+        let e = LoadedModel::parse(
+            "kind = \"theodorsen\"\nchord = 0.25\n[[nonlinear]]\nterm = \"alpha\"\nchannel = \"moment\"\ncoefficient = 1.0\n",
+            "m.toml",
+            base,
+            None,
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("m.toml: nonlinear[1].powers"), "{e}");
+        let e = LoadedModel::parse(
+            "kind = \"theodorsen\"\nchord = 0.25\n[[nonlinear]]\nterm = \"alpha^3\"\nchannel = \"pitch\"\ncoefficient = 1.0\n",
+            "m.toml",
+            base,
+            None,
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("nonlinear[1].channel"), "{e}");
+        let ft = LoadedModel::parse(
+            "kind = \"flat_plate_table\"\nchord = 0.25\nk = [0.2, 0.4, 0.6, 0.8, 1.0, 1.2, 1.5]\n",
+            "m.toml",
+            base,
+            None,
+        )
+        .unwrap();
+        assert_eq!(ft.model.n_lag(), 6);
+    }
+}

@@ -1,0 +1,888 @@
+//! The identified Eq. 19 law built directly from an `identification.json`
+//! ([`identify::pipeline::Identification`]).
+//!
+//! **Linear part.** Under two-frequency forced motion the α-derivatives (A2*, A3*, H2*, H3*)
+//! are identified at K_α = Bω_α/U and the h-derivatives (A1*, A4*, H1*, H4*) at K_h =
+//! Bω_h/U, so each derivative is tabulated over its *own* K. Cases at the same K (equal
+//! within `k_merge_tol`, e.g. different amplitudes at one wind speed) are aggregated by the
+//! median, and the spread (min, max, 1.4826·MAD) is reported. The eight tables are then
+//! resampled onto the union of their K values to build one [`DerivativeTable`] (p-k
+//! flutter exactly in the frequency domain; Roger RFA in the time domain): each derivative
+//! d is interpolated as its Q-matrix entry K²d (smooth in K, unlike d) by a natural cubic
+//! spline over its own K, and extrapolated linearly through its two end nodes where the
+//! union grid leaves its range (K²H1* ≈ −2πFK is close to linear at low K). Outside the
+//! union range [`DerivativeTable`] holds the end values. A derivative that is `null` (not
+//! identifiable) is an [`Error::NotIdentifiable`] naming it, unless a
+//! [`MissingDerivative`] fallback is chosen.
+//!
+//! **Nonlinear part.** N1*..N3* of moment and lift, over K_α, aggregated by the median per
+//! K, become [`Coefficient::OverK`] terms on α·(Bα̇/U) (k_power 3), α³ (6) and (Bα̇/U)³ (3).
+//! Terms that are zero in every case (not in the selected support) are omitted.
+//!
+//! **Evaluation away from the identified K.** A nonlinear coefficient is identified at the
+//! forcing frequency K_α of each case. In a free response (LCO) it is evaluated at the
+//! response's own reduced frequency K = Bω/U ([`crate::lco::lco_run_k_iterated`] iterates
+//! K to the limit cycle's frequency); between identified K the effective coefficient
+//! ξ = K^p N* is interpolated linearly, outside the identified K_α range it is held at
+//! the nearest end (never extrapolated) — see [`Coefficient::OverK`]. In a forced run the
+//! model is evaluated at the forcing K_α ([`AeroModel::with_reduced_frequency`]).
+//!
+//! **Terms outside Eq. 19** (e.g. `alpha^2*h` if the regression selected it) are plain
+//! nondimensional coefficients without a K scaling. A term is *included* as a
+//! [`Coefficient::Constant`] (the median over the cases) when it has one sign in every case
+//! where it is non-zero, is non-zero in at least half of the cases, and its robust relative
+//! spread 1.4826·MAD/|median| is at most `outside_max_spread` (default 0.5); otherwise it is
+//! *excluded* and a warning says why. A constant term `1` (static offset) and linear terms
+//! are always excluded with a warning (an offset moves the equilibrium, which the flutter and
+//! LCO analyses about the origin do not model). Rationale: a term that the sparse regression
+//! selects with a consistent value is part of the law, one that flips sign or scatters over
+//! the cases is fitting noise or an unmodelled effect, and adding it to a time integration
+//! can only make the prediction worse.
+
+use std::path::Path;
+use std::sync::Arc;
+
+use identify::pipeline::{CaseResult, Identification};
+use serde::{Deserialize, Serialize};
+
+use crate::aero::{
+    term_name, AeroModel, Channel, Coefficient, DerivativeTable, NonlinearAero, NonlinearTerm,
+    RfaFit,
+};
+use crate::optim::Spline;
+use crate::theodorsen::{flat_plate_derivatives, Derivatives};
+use crate::{Error, Result};
+
+/// What to do with a derivative that is `null` (not identifiable) in a case.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum MissingDerivative {
+    /// Any `null` derivative is an [`Error::NotIdentifiable`] naming it (default).
+    #[default]
+    Error,
+    /// Ignore the cases where it is `null` (an error if no case has a value).
+    Skip,
+    /// Use the flat-plate closed form (exact Theodorsen) at the case's K.
+    FlatPlate,
+    /// Use 0.
+    Zero,
+}
+
+/// Options of [`IdentifiedLaw::from_identification`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct IdentifiedOptions {
+    /// Chord B [m] (`identification.json` does not hold it).
+    pub chord: f64,
+    /// Use only the cases of these groups (`None`: every case).
+    pub groups: Option<Vec<String>>,
+    /// Fallback for `null` derivatives.
+    pub missing: MissingDerivative,
+    /// Two K are the same table point when they differ by less than this, relative.
+    pub k_merge_tol: f64,
+    /// Lag roots of the Roger RFA (time domain).
+    pub rfa_lags: usize,
+    /// Largest robust relative spread 1.4826·MAD/|median| of a term outside Eq. 19 that is
+    /// still included as a constant.
+    pub outside_max_spread: f64,
+}
+
+impl IdentifiedOptions {
+    /// Defaults for chord `chord`: all cases, strict on `null`, K merged within 1e-3,
+    /// 3 RFA lags, outside terms included up to a relative spread of 0.5.
+    pub fn new(chord: f64) -> Self {
+        IdentifiedOptions {
+            chord,
+            groups: None,
+            missing: MissingDerivative::Error,
+            k_merge_tol: 1e-3,
+            rfa_lags: 3,
+            outside_max_spread: 0.5,
+        }
+    }
+}
+
+/// Which reduced frequency a table is over.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ReducedFrequency {
+    /// K_α = Bω_α/U (α-terms).
+    KAlpha,
+    /// K_h = Bω_h/U (h-terms).
+    KH,
+}
+
+/// One aggregated table point: the median over the cases at one K, and its spread.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct TablePoint {
+    /// Reduced frequency (mean of the merged K).
+    pub k: f64,
+    /// Median of the values.
+    pub value: f64,
+    /// Number of values.
+    pub n: usize,
+    /// Smallest value.
+    pub min: f64,
+    /// Largest value.
+    pub max: f64,
+    /// Robust standard deviation 1.4826·MAD (0 for one value).
+    pub spread: f64,
+    /// How many of the values came from the fallback.
+    pub filled: usize,
+}
+
+/// A derivative (H1*..H4*, A1*..A4*) or N* tabulated over its own K.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Series {
+    /// Name: `H1`..`H4`, `A1`..`A4`, or `lift N1`.. `moment N3`.
+    pub name: String,
+    /// The library term it multiplies (`h_dot`, `alpha*alpha_dot`…).
+    pub term: String,
+    /// The K it is tabulated over.
+    pub over: ReducedFrequency,
+    /// Points by increasing K.
+    pub points: Vec<TablePoint>,
+}
+
+/// A term outside Eq. 19 selected by the identification.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct OutsideTerm {
+    /// Force channel.
+    pub channel: Channel,
+    /// Term name.
+    pub term: String,
+    /// Median over the cases where it is non-zero.
+    pub median: f64,
+    /// Robust relative spread 1.4826·MAD/|median|.
+    pub relative_spread: f64,
+    /// Cases where it is non-zero.
+    pub n_nonzero: usize,
+    /// Cases used.
+    pub n_cases: usize,
+    /// Whether it is part of the model (as a constant).
+    pub included: bool,
+}
+
+/// The serialisable description of an identified law (what was built and from what).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct IdentifiedTables {
+    /// Data-set name of the identification.
+    pub dataset: String,
+    /// Chord B [m].
+    pub chord: f64,
+    /// Case ids used.
+    pub cases: Vec<String>,
+    /// H1*..H4*, A1*..A4* over their own K.
+    pub derivatives: Vec<Series>,
+    /// N* terms (non-zero somewhere) over K_α.
+    pub nonlinear: Vec<Series>,
+    /// Terms outside Eq. 19.
+    pub outside: Vec<OutsideTerm>,
+    /// Range of K_α of the cases.
+    pub k_alpha_range: [f64; 2],
+    /// Range of K_h of the cases.
+    pub k_h_range: [f64; 2],
+    /// The RFA of the resampled table (time domain) with its fit error.
+    pub rfa: RfaFit,
+    /// Everything that was dropped or filled in.
+    pub warnings: Vec<String>,
+}
+
+/// An identified Eq. 19 law: derivative table (linear) + N* and outside terms
+/// (nonlinear), usable as an [`AeroModel`] through [`IdentifiedLaw::model`].
+#[derive(Debug, Clone)]
+pub struct IdentifiedLaw {
+    /// What was built.
+    pub tables: IdentifiedTables,
+    table: Arc<DerivativeTable>,
+    model: NonlinearAero,
+}
+
+const LIFT_NAMES: [&str; 4] = ["H1", "H2", "H3", "H4"];
+const MOMENT_NAMES: [&str; 4] = ["A1", "A2", "A3", "A4"];
+/// Terms and K of derivative index 1..4 (d1 = h_dot over K_h, d2 = alpha_dot over K_α…).
+const LINEAR: [(&str, ReducedFrequency); 4] = [
+    ("h_dot", ReducedFrequency::KH),
+    ("alpha_dot", ReducedFrequency::KAlpha),
+    ("alpha", ReducedFrequency::KAlpha),
+    ("h", ReducedFrequency::KH),
+];
+/// N1..N3: term, powers, k_power.
+const NONLINEAR: [(&str, [u32; 4], i32); 3] = [
+    ("alpha*alpha_dot", [1, 1, 0, 0], 3),
+    ("alpha^3", [3, 0, 0, 0], 6),
+    ("alpha_dot^3", [0, 3, 0, 0], 3),
+];
+
+fn median(v: &mut [f64]) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+/// Robust standard deviation 1.4826·MAD around `med`.
+fn robust_sd(v: &[f64], med: f64) -> f64 {
+    if v.len() < 2 {
+        return 0.0;
+    }
+    let mut d: Vec<f64> = v.iter().map(|x| (x - med).abs()).collect();
+    1.4826 * median(&mut d)
+}
+
+/// Groups (K, value, filled) by K within `tol` (relative) and aggregates each group.
+fn aggregate(mut pts: Vec<(f64, f64, bool)>, tol: f64) -> Vec<TablePoint> {
+    pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < pts.len() {
+        let mut j = i + 1;
+        while j < pts.len() && (pts[j].0 - pts[i].0) <= tol * pts[i].0 {
+            j += 1;
+        }
+        let grp = &pts[i..j];
+        let mut vals: Vec<f64> = grp.iter().map(|p| p.1).collect();
+        let med = median(&mut vals);
+        out.push(TablePoint {
+            k: grp.iter().map(|p| p.0).sum::<f64>() / grp.len() as f64,
+            value: med,
+            n: grp.len(),
+            min: vals[0],
+            max: vals[vals.len() - 1],
+            spread: robust_sd(&vals, med),
+            filled: grp.iter().filter(|p| p.2).count(),
+        });
+        i = j;
+    }
+    out
+}
+
+/// Q-entry K²d of a series as a function of K: natural cubic spline inside, linear
+/// through the end nodes outside.
+struct QEntry {
+    ks: Vec<f64>,
+    gs: Vec<f64>,
+    spline: Option<Spline>,
+}
+
+impl QEntry {
+    fn new(points: &[TablePoint]) -> Self {
+        let ks: Vec<f64> = points.iter().map(|p| p.k).collect();
+        let gs: Vec<f64> = points.iter().map(|p| p.k * p.k * p.value).collect();
+        let spline = (ks.len() >= 2).then(|| Spline::new(&ks, &gs));
+        QEntry { ks, gs, spline }
+    }
+
+    fn eval(&self, k: f64) -> f64 {
+        let n = self.ks.len();
+        let Some(s) = &self.spline else {
+            return self.gs[0];
+        };
+        let line = |i: usize, j: usize| {
+            self.gs[i] + (k - self.ks[i]) * (self.gs[j] - self.gs[i]) / (self.ks[j] - self.ks[i])
+        };
+        if k < self.ks[0] {
+            line(0, 1)
+        } else if k > self.ks[n - 1] {
+            line(n - 2, n - 1)
+        } else {
+            s.eval(k)
+        }
+    }
+}
+
+fn flat_plate_value(name: &str, k: f64) -> f64 {
+    let d = flat_plate_derivatives(k);
+    match name {
+        "H1" => d.h1,
+        "H2" => d.h2,
+        "H3" => d.h3,
+        "H4" => d.h4,
+        "A1" => d.a1,
+        "A2" => d.a2,
+        "A3" => d.a3,
+        _ => d.a4,
+    }
+}
+
+fn k_of(c: &CaseResult, over: ReducedFrequency) -> Option<f64> {
+    match over {
+        ReducedFrequency::KAlpha => c.k_alpha,
+        ReducedFrequency::KH => c.k_h,
+    }
+}
+
+/// The four linear derivatives then N1..N3 of one force of one case.
+fn eq19_of(c: &CaseResult, channel: Channel) -> [Option<f64>; 7] {
+    match channel {
+        Channel::Lift => {
+            let e = &c.lift.eq19;
+            [e.H1, e.H2, e.H3, e.H4, e.N1, e.N2, e.N3]
+        }
+        Channel::Moment => {
+            let e = &c.moment.eq19;
+            [e.A1, e.A2, e.A3, e.A4, e.N1, e.N2, e.N3]
+        }
+    }
+}
+
+fn channel_name(ch: Channel) -> &'static str {
+    match ch {
+        Channel::Lift => "lift",
+        Channel::Moment => "moment",
+    }
+}
+
+impl IdentifiedLaw {
+    /// Reads `identification.json` at `path` and builds the law.
+    ///
+    /// # Errors
+    /// [`Error::Identify`] naming the file when it cannot be read or parsed; otherwise as
+    /// [`IdentifiedLaw::from_identification`].
+    pub fn read(path: &Path, opts: &IdentifiedOptions) -> Result<Self> {
+        let id = Identification::read(path).map_err(|e| Error::Identify {
+            context: format!("reading {}", path.display()),
+            source: e,
+        })?;
+        Self::from_identification(&id, opts)
+    }
+
+    /// Builds the law from an identification result (see the module docs).
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] for a bad chord, tolerance or RFA lag count, an unknown
+    /// group or no case left; [`Error::NotIdentifiable`] for a `null` derivative without a
+    /// fallback (or with [`MissingDerivative::Skip`] when no case has it);
+    /// [`Error::InvalidTable`] when the cases span fewer reduced frequencies than the table
+    /// needs (4 distinct K, and 3 + `rfa_lags`).
+    pub fn from_identification(id: &Identification, opts: &IdentifiedOptions) -> Result<Self> {
+        crate::error::positive("chord", opts.chord)?;
+        crate::error::positive("k_merge_tol", opts.k_merge_tol)?;
+        crate::error::non_negative("outside_max_spread", opts.outside_max_spread)?;
+        let cases: Vec<&CaseResult> = match &opts.groups {
+            None => id.cases.iter().collect(),
+            Some(gs) => {
+                for g in gs {
+                    if !id.groups.iter().any(|x| &x.name == g) {
+                        return Err(Error::param(
+                            format!("groups: `{g}`"),
+                            f64::NAN,
+                            format!(
+                                "no such group (have: {})",
+                                id.groups
+                                    .iter()
+                                    .map(|x| x.name.as_str())
+                                    .collect::<Vec<_>>()
+                                    .join(", ")
+                            ),
+                        ));
+                    }
+                }
+                id.cases.iter().filter(|c| gs.contains(&c.group)).collect()
+            }
+        };
+        if cases.is_empty() {
+            return Err(Error::param(
+                "cases",
+                0.0,
+                "no identified case to build a law from",
+            ));
+        }
+        let mut warnings = Vec::new();
+        let range = |over| {
+            let ks: Vec<f64> = cases.iter().filter_map(|c| k_of(c, over)).collect();
+            if ks.is_empty() {
+                [f64::NAN, f64::NAN]
+            } else {
+                [
+                    ks.iter().copied().fold(f64::INFINITY, f64::min),
+                    ks.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+                ]
+            }
+        };
+
+        // Linear derivatives, each over its own K.
+        let mut derivatives = Vec::with_capacity(8);
+        for (channel, names) in [(Channel::Lift, LIFT_NAMES), (Channel::Moment, MOMENT_NAMES)] {
+            for (i, name) in names.iter().enumerate() {
+                let (term, over) = LINEAR[i];
+                let mut pts = Vec::new();
+                let mut missing = Vec::new();
+                for c in &cases {
+                    let k = k_of(c, over);
+                    match (eq19_of(c, channel)[i], k) {
+                        (Some(v), Some(k)) if v.is_finite() && k > 0.0 => pts.push((k, v, false)),
+                        (_, k) => missing.push((c.id.clone(), k)),
+                    }
+                }
+                if !missing.is_empty() {
+                    let ids: Vec<String> = missing.iter().map(|m| m.0.clone()).collect();
+                    match opts.missing {
+                        MissingDerivative::Error => {
+                            return Err(Error::NotIdentifiable {
+                                derivative: name.to_string(),
+                                cases: ids,
+                            })
+                        }
+                        MissingDerivative::Skip => {
+                            if pts.is_empty() {
+                                return Err(Error::NotIdentifiable {
+                                    derivative: name.to_string(),
+                                    cases: ids,
+                                });
+                            }
+                            warnings
+                                .push(format!("{name}: null in {} case(s), skipped", ids.len()));
+                        }
+                        MissingDerivative::FlatPlate | MissingDerivative::Zero => {
+                            let mut n_no_k = 0;
+                            for (_, k) in &missing {
+                                match k {
+                                    Some(k) if *k > 0.0 => {
+                                        let v = if opts.missing == MissingDerivative::Zero {
+                                            0.0
+                                        } else {
+                                            flat_plate_value(name, *k)
+                                        };
+                                        pts.push((*k, v, true));
+                                    }
+                                    _ => n_no_k += 1,
+                                }
+                            }
+                            warnings.push(format!(
+                                "{name}: null in {} case(s), filled with {}{}",
+                                ids.len(),
+                                if opts.missing == MissingDerivative::Zero {
+                                    "0"
+                                } else {
+                                    "the flat-plate value"
+                                },
+                                if n_no_k > 0 {
+                                    format!(" ({n_no_k} without a reduced frequency skipped)")
+                                } else {
+                                    String::new()
+                                }
+                            ));
+                            if pts.is_empty() {
+                                return Err(Error::NotIdentifiable {
+                                    derivative: name.to_string(),
+                                    cases: ids,
+                                });
+                            }
+                        }
+                    }
+                }
+                derivatives.push(Series {
+                    name: name.to_string(),
+                    term: term.to_string(),
+                    over,
+                    points: aggregate(pts, opts.k_merge_tol),
+                });
+            }
+        }
+
+        // Common K grid and the derivative table.
+        let mut grid: Vec<f64> = derivatives
+            .iter()
+            .flat_map(|s| s.points.iter().map(|p| p.k))
+            .collect();
+        grid.sort_by(f64::total_cmp);
+        let mut merged: Vec<f64> = Vec::new();
+        for k in grid {
+            if merged.last().is_none_or(|&l| k - l > opts.k_merge_tol * l) {
+                merged.push(k);
+            }
+        }
+        let q: Vec<QEntry> = derivatives.iter().map(|s| QEntry::new(&s.points)).collect();
+        let rows: Vec<Derivatives> = merged
+            .iter()
+            .map(|&k| {
+                let d = |i: usize| q[i].eval(k) / (k * k);
+                Derivatives {
+                    k,
+                    h1: d(0),
+                    h2: d(1),
+                    h3: d(2),
+                    h4: d(3),
+                    a1: d(4),
+                    a2: d(5),
+                    a3: d(6),
+                    a4: d(7),
+                }
+            })
+            .collect();
+        let n_rows = rows.len();
+        let table = DerivativeTable::new(opts.chord, rows, opts.rfa_lags).map_err(|e| match e {
+            Error::InvalidTable { message, .. } => Error::InvalidTable {
+                table: "identified derivatives".into(),
+                message: format!("the cases span {n_rows} distinct reduced frequencies: {message}"),
+            },
+            other => other,
+        })?;
+
+        // N* terms over K_α.
+        let mut nonlinear = Vec::new();
+        let mut terms = Vec::new();
+        for channel in [Channel::Lift, Channel::Moment] {
+            for (j, (term, powers, k_power)) in NONLINEAR.iter().enumerate() {
+                let mut pts = Vec::new();
+                let mut n_null = 0;
+                for c in &cases {
+                    match (eq19_of(c, channel)[4 + j], c.k_alpha) {
+                        (Some(v), Some(k)) if v.is_finite() && k > 0.0 => pts.push((k, v, false)),
+                        _ => n_null += 1,
+                    }
+                }
+                let name = format!("{} N{}", channel_name(channel), j + 1);
+                if pts.iter().all(|p| p.1 == 0.0) {
+                    if n_null > 0 && !pts.is_empty() {
+                        warnings.push(format!("{name}: null in {n_null} case(s), zero elsewhere"));
+                    }
+                    continue;
+                }
+                if n_null > 0 {
+                    warnings.push(format!("{name}: null in {n_null} case(s), skipped"));
+                }
+                let points = aggregate(pts, opts.k_merge_tol);
+                terms.push(NonlinearTerm {
+                    channel,
+                    powers: *powers,
+                    coefficient: Coefficient::OverK {
+                        k: points.iter().map(|p| p.k).collect(),
+                        values: points.iter().map(|p| p.value).collect(),
+                        k_power: *k_power,
+                    },
+                });
+                nonlinear.push(Series {
+                    name,
+                    term: term.to_string(),
+                    over: ReducedFrequency::KAlpha,
+                    points,
+                });
+            }
+        }
+
+        // Terms outside Eq. 19.
+        let eq19: Vec<&str> = identify::eq19::EQ19_TERMS.to_vec();
+        let mut outside = Vec::new();
+        for channel in [Channel::Lift, Channel::Moment] {
+            let mut names: Vec<String> = Vec::new();
+            for c in &cases {
+                let tm = match channel {
+                    Channel::Lift => &c.lift.terms,
+                    Channel::Moment => &c.moment.terms,
+                };
+                for (n, v) in &tm.0 {
+                    if !eq19.contains(&n.as_str())
+                        && v.is_some_and(|x| x != 0.0)
+                        && !names.contains(n)
+                    {
+                        names.push(n.clone());
+                    }
+                }
+            }
+            for n in names {
+                let mut vals: Vec<f64> = cases
+                    .iter()
+                    .filter_map(|c| match channel {
+                        Channel::Lift => c.lift.terms.get(&n),
+                        Channel::Moment => c.moment.terms.get(&n),
+                    })
+                    .filter(|v| *v != 0.0 && v.is_finite())
+                    .collect();
+                let n_nonzero = vals.len();
+                let med = median(&mut vals);
+                let rel = robust_sd(&vals, med) / med.abs().max(f64::MIN_POSITIVE);
+                let one_sign = vals.iter().all(|v| v.signum() == med.signum());
+                let powers = NonlinearTerm::powers_of(&n).ok();
+                let degree: u32 = powers.map(|p| p.iter().sum()).unwrap_or(0);
+                let reason = if powers.is_none() {
+                    Some("its name does not parse".to_string())
+                } else if degree < 2 {
+                    Some("a constant or linear term outside Eq. 19 is not modelled".to_string())
+                } else if !one_sign {
+                    Some("its sign changes between cases".to_string())
+                } else if 2 * n_nonzero < cases.len() {
+                    Some(format!(
+                        "non-zero in only {n_nonzero} of {} cases",
+                        cases.len()
+                    ))
+                } else if rel > opts.outside_max_spread {
+                    Some(format!(
+                        "relative spread {rel:.3} > {}",
+                        opts.outside_max_spread
+                    ))
+                } else {
+                    None
+                };
+                let included = reason.is_none();
+                match reason {
+                    Some(r) => warnings.push(format!(
+                        "{} term `{n}` (median {med:.4e}) excluded: {r}",
+                        channel_name(channel)
+                    )),
+                    None => {
+                        if let Some(p) = powers {
+                            terms.push(NonlinearTerm {
+                                channel,
+                                powers: p,
+                                coefficient: Coefficient::Constant(med),
+                            });
+                        }
+                    }
+                }
+                outside.push(OutsideTerm {
+                    channel,
+                    term: powers.map(term_name).unwrap_or(n),
+                    median: med,
+                    relative_spread: rel,
+                    n_nonzero,
+                    n_cases: cases.len(),
+                    included,
+                });
+            }
+        }
+
+        let k_alpha_range = range(ReducedFrequency::KAlpha);
+        let k_eval = if k_alpha_range[0].is_finite() {
+            (k_alpha_range[0] * k_alpha_range[1]).sqrt()
+        } else {
+            1.0
+        };
+        let table = Arc::new(table);
+        let model = NonlinearAero::new(table.clone() as Arc<dyn AeroModel>, terms, k_eval)?;
+        let tables = IdentifiedTables {
+            dataset: id.dataset.clone(),
+            chord: opts.chord,
+            cases: cases.iter().map(|c| c.id.clone()).collect(),
+            derivatives,
+            nonlinear,
+            outside,
+            k_alpha_range,
+            k_h_range: range(ReducedFrequency::KH),
+            rfa: table.rfa().clone(),
+            warnings,
+        };
+        Ok(IdentifiedLaw {
+            tables,
+            table,
+            model,
+        })
+    }
+
+    /// The law as an aerodynamic model: derivative table (RFA in time) + nonlinear terms,
+    /// the latter evaluated at the geometric mean of the K_α range until changed with
+    /// [`NonlinearAero::with_k_eval`] (or by [`crate::lco::lco_run_k_iterated`]).
+    pub fn model(&self) -> &NonlinearAero {
+        &self.model
+    }
+
+    /// The linear part alone (resampled derivative table).
+    pub fn table(&self) -> &Arc<DerivativeTable> {
+        &self.table
+    }
+
+    /// A series (derivative `A2`…, or `moment N3`…) by name.
+    pub fn series(&self, name: &str) -> Option<&Series> {
+        self.tables
+            .derivatives
+            .iter()
+            .chain(&self.tables.nonlinear)
+            .find(|s| s.name == name)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use identify::eq19::{LiftEq19, MomentEq19};
+    use identify::pipeline::{ForceResult, TermMap};
+
+    fn force<E>(eq19: E, terms: Vec<(&str, f64)>) -> ForceResult<E> {
+        ForceResult {
+            terms: TermMap(
+                terms
+                    .into_iter()
+                    .map(|(n, v)| (n.to_string(), Some(v)))
+                    .collect(),
+            ),
+            eq19,
+            r2: Some(1.0),
+            mfwa: None,
+            mfwa_phase: None,
+            key_frequency_loss: None,
+            key_frequencies: vec![],
+        }
+    }
+
+    /// A case at wind speed u with flat-plate derivatives at K_α = 3.1416/u, K_h =
+    /// 2.042/u, N3 = ξ/K_α³ with ξ = −2 + `noise`, and an outside term.
+    fn case(u: f64, amp: f64, noise: f64, outside: f64) -> CaseResult {
+        let (ka, kh) = (std::f64::consts::PI / u, 2.042 / u);
+        let da = flat_plate_derivatives(ka);
+        let dh = flat_plate_derivatives(kh);
+        CaseResult {
+            id: format!("D-U{u}-A{amp}"),
+            group: "D".into(),
+            wind_speed: u,
+            k_alpha: Some(ka),
+            k_h: Some(kh),
+            rank: 25,
+            dependencies: vec![],
+            moment: force(
+                MomentEq19 {
+                    A1: Some(dh.a1),
+                    A2: Some(da.a2 + noise),
+                    A3: Some(da.a3),
+                    A4: Some(dh.a4),
+                    N1: Some(0.0),
+                    N2: Some(0.0),
+                    N3: Some((-2.0 + noise) / ka.powi(3)),
+                },
+                vec![("alpha^2*h", outside), ("alpha_dot^3", -2.0 + noise)],
+            ),
+            lift: force(
+                LiftEq19 {
+                    H1: Some(dh.h1),
+                    H2: Some(da.h2),
+                    H3: Some(da.h3),
+                    H4: Some(dh.h4),
+                    N1: Some(0.0),
+                    N2: Some(0.0),
+                    N3: Some(0.0),
+                },
+                vec![],
+            ),
+        }
+    }
+
+    fn identification(cases: Vec<CaseResult>) -> Identification {
+        let text = r#"{"format":"aeroform-identification/1","dataset":"t","settings":{},
+            "library":{"terms":[],"rank":25,"dependencies":[],"rank_case":null,"priority":[]},
+            "cases":[],"groups":[]}"#;
+        let mut id: Identification = serde_json::from_str(text).unwrap();
+        id.cases = cases;
+        id
+    }
+
+    fn grid_cases(outside: impl Fn(usize) -> f64) -> Vec<CaseResult> {
+        let mut v = Vec::new();
+        for (i, u) in (3..=10).enumerate() {
+            for (j, (a, n)) in [(3.0, 0.3), (12.0, -0.01), (24.0, 0.02)].iter().enumerate() {
+                v.push(case(u as f64, *a, *n, outside(3 * i + j)));
+            }
+        }
+        v
+    }
+
+    #[test]
+    fn tables_reproduce_flat_plate_and_median_rejects_outlier() {
+        let id = identification(grid_cases(|_| 0.1));
+        let law = IdentifiedLaw::from_identification(&id, &IdentifiedOptions::new(0.25)).unwrap();
+        // Each derivative over its own K: 8 points each, 3 cases per point.
+        let a2 = law.series("A2").unwrap();
+        assert_eq!(a2.over, ReducedFrequency::KAlpha);
+        assert_eq!(a2.points.len(), 8);
+        assert!(a2.points.iter().all(|p| p.n == 3));
+        // The median ignores the +0.3 outlier at 3° (noise −0.01, 0.02 → median 0.02).
+        for p in &a2.points {
+            let want = flat_plate_derivatives(p.k).a2 + 0.02;
+            assert!((p.value - want).abs() < 1e-12, "{} vs {want}", p.value);
+            assert!((p.max - p.min - 0.31).abs() < 1e-12);
+        }
+        let a1 = law.series("A1").unwrap();
+        assert_eq!(a1.over, ReducedFrequency::KH);
+        assert!((a1.points[0].k - 2.042 / 10.0).abs() < 1e-12);
+        // Resampled table: A1 at a K_α node (between K_h nodes) is the flat plate to
+        // interpolation accuracy.
+        let k = std::f64::consts::PI / 6.0;
+        let d = law.table().derivatives(k);
+        let e = flat_plate_derivatives(k);
+        assert!(
+            (d.a1 - e.a1).abs() < 2e-3 * e.a1.abs(),
+            "{} vs {}",
+            d.a1,
+            e.a1
+        );
+        assert!(
+            (d.h4 - e.h4).abs() < 2e-2 * e.h4.abs().max(0.1),
+            "{} vs {}",
+            d.h4,
+            e.h4
+        );
+        // N3: ξ = −2 + median noise 0.02 at every K; the effective coefficient between
+        // nodes is exactly that constant.
+        let m = law.model();
+        let t = m
+            .terms()
+            .iter()
+            .find(|t| t.powers == [0, 3, 0, 0] && t.channel == Channel::Moment)
+            .unwrap();
+        assert!((t.coefficient.at(0.5) + 1.98).abs() < 1e-12);
+        // N1, N2 are zero everywhere: omitted. Outside term consistent: included.
+        assert_eq!(law.tables.nonlinear.len(), 1);
+        assert_eq!(law.tables.outside.len(), 1);
+        assert!(law.tables.outside[0].included);
+        assert_eq!(m.terms().len(), 2);
+    }
+
+    #[test]
+    fn scattered_outside_term_is_excluded_with_a_warning() {
+        let id = identification(grid_cases(|i| if i % 2 == 0 { 0.1 } else { -0.1 }));
+        let law = IdentifiedLaw::from_identification(&id, &IdentifiedOptions::new(0.25)).unwrap();
+        assert!(!law.tables.outside[0].included);
+        assert!(
+            law.tables
+                .warnings
+                .iter()
+                .any(|w| w.contains("alpha^2*h") && w.contains("sign")),
+            "{:?}",
+            law.tables.warnings
+        );
+        assert_eq!(law.model().terms().len(), 1);
+    }
+
+    #[test]
+    fn null_derivative_is_an_error_naming_it_unless_a_fallback_is_given() {
+        let mut cases = grid_cases(|_| 0.0);
+        cases[4].moment.eq19.A4 = None;
+        let id = identification(cases);
+        let e = IdentifiedLaw::from_identification(&id, &IdentifiedOptions::new(0.25)).unwrap_err();
+        let msg = e.to_string();
+        assert!(msg.contains("A4") && msg.contains("D-U4-A12"), "{msg}");
+        let mut o = IdentifiedOptions::new(0.25);
+        o.missing = MissingDerivative::FlatPlate;
+        let law = IdentifiedLaw::from_identification(&id, &o).unwrap();
+        let a4 = law.series("A4").unwrap();
+        assert_eq!(a4.points.iter().map(|p| p.filled).sum::<usize>(), 1);
+        o.missing = MissingDerivative::Skip;
+        let law = IdentifiedLaw::from_identification(&id, &o).unwrap();
+        assert_eq!(
+            law.series("A4")
+                .unwrap()
+                .points
+                .iter()
+                .map(|p| p.n)
+                .sum::<usize>(),
+            23
+        );
+    }
+
+    #[test]
+    fn unknown_group_and_too_few_frequencies_are_errors() {
+        let id = identification(grid_cases(|_| 0.0));
+        let mut o = IdentifiedOptions::new(0.25);
+        o.groups = Some(vec!["Z".into()]);
+        let e = IdentifiedLaw::from_identification(&id, &o).unwrap_err();
+        assert!(e.to_string().contains("`Z`"), "{e}");
+        let few = identification(vec![case(5.0, 3.0, 0.0, 0.0)]);
+        let e =
+            IdentifiedLaw::from_identification(&few, &IdentifiedOptions::new(0.25)).unwrap_err();
+        assert!(
+            e.to_string().contains("2 distinct reduced frequencies"),
+            "{e}"
+        );
+    }
+}

@@ -1,0 +1,147 @@
+//! `aeroform tunnel forced|free`: the virtual wind tunnel writes data sets.
+
+use std::path::PathBuf;
+
+use aeroelastic::files::LoadedModel;
+use aeroelastic::tunnel::{self, Campaign, ForcedOptions, FreeOptions, TunnelProgress};
+use anyhow::Context;
+use clap::{Args, Subcommand};
+
+use crate::flutter_cmd::{load, parse_speeds};
+use crate::lco_cmd::CountBar;
+
+/// `aeroform tunnel` subcommands.
+#[derive(Debug, Subcommand)]
+pub enum TunnelCommand {
+    /// Prescribed-motion records (paper campaign or one configuration).
+    Forced(ForcedArgs),
+    /// Free response of the section on springs at a list of wind speeds.
+    Free(FreeArgs),
+}
+
+/// Flags of `aeroform tunnel forced`.
+#[derive(Debug, Args)]
+pub struct ForcedArgs {
+    /// Aerodynamic model: a model TOML file or an identification.json.
+    #[arg(long)]
+    pub model: PathBuf,
+    /// `paper` (configurations A–G) or `config=X` (one configuration).
+    #[arg(long, default_value = "paper")]
+    pub campaign: String,
+    /// Output data-set folder.
+    #[arg(long, default_value = "out/forced")]
+    pub out: PathBuf,
+    /// Master seed of every random draw (recorded in the manifest).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Also record still-air runs (inertial forces of the 0.82 kg plate) with random offsets.
+    #[arg(long)]
+    pub still_air: bool,
+    /// Record duration [s].
+    #[arg(long, default_value_t = 10.0)]
+    pub duration: f64,
+    /// Chord B [m] for an identification.json model.
+    #[arg(long)]
+    pub chord: Option<f64>,
+}
+
+/// Flags of `aeroform tunnel free`.
+#[derive(Debug, Args)]
+pub struct FreeArgs {
+    /// Structure file (TOML).
+    #[arg(long)]
+    pub structure: PathBuf,
+    /// Aerodynamic model: a model TOML file or an identification.json.
+    #[arg(long)]
+    pub model: PathBuf,
+    /// Wind speeds `a:b:n` or a comma list [m/s].
+    #[arg(long)]
+    pub speeds: String,
+    /// Output data-set folder.
+    #[arg(long, default_value = "out/free")]
+    pub out: PathBuf,
+    /// Master seed.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Record duration [s].
+    #[arg(long, default_value_t = 20.0)]
+    pub duration: f64,
+    /// Initial pitch [deg].
+    #[arg(long, default_value_t = 2.0)]
+    pub alpha0: f64,
+    /// Do not record lift and moment.
+    #[arg(long)]
+    pub no_forces: bool,
+    /// Chord B [m] for an identification.json model.
+    #[arg(long)]
+    pub chord: Option<f64>,
+}
+
+/// Runs `aeroform tunnel …`.
+pub fn run(cmd: &TunnelCommand) -> anyhow::Result<()> {
+    match cmd {
+        TunnelCommand::Forced(a) => forced(a),
+        TunnelCommand::Free(a) => free(a),
+    }
+}
+
+fn forced(a: &ForcedArgs) -> anyhow::Result<()> {
+    let campaign = match a.campaign.as_str() {
+        "paper" => Campaign::paper(),
+        c => match c.strip_prefix("config=") {
+            Some(x) => Campaign::paper_config(x).context("--campaign")?,
+            None => anyhow::bail!("--campaign `{c}`: expected `paper` or `config=X` (X in A..G)"),
+        },
+    };
+    let m = LoadedModel::load(&a.model, a.chord).context("model file")?;
+    let mut opts = ForcedOptions::paper(a.seed);
+    if a.still_air {
+        opts = opts.with_paper_still_air();
+    }
+    opts.duration = a.duration;
+    opts.section.chord = m.model.chord();
+    let cases = campaign.cases();
+    let bar = CountBar::new(cases.len(), "cases");
+    let obs = |p: TunnelProgress| bar.tick(p.id);
+    let r = tunnel::forced_dataset(m.model.as_ref(), &cases, &opts, &obs);
+    bar.finish();
+    let (manifest, records) = r.context("virtual wind tunnel (forced)")?;
+    tunnel::write(&a.out, &manifest, &records)?;
+    println!(
+        "wrote {} forced cases (model {}, seed {}) to {}",
+        records.len(),
+        m.model.name(),
+        a.seed,
+        a.out.display()
+    );
+    Ok(())
+}
+
+fn free(a: &FreeArgs) -> anyhow::Result<()> {
+    let speeds = parse_speeds(&a.speeds)?;
+    let l = load(&a.structure, &a.model, a.chord)?;
+    let mut opts = FreeOptions::new(a.seed);
+    opts.duration = a.duration;
+    opts.initial = [0.0, a.alpha0.to_radians(), 0.0, 0.0];
+    opts.record_forces = !a.no_forces;
+    let bar = CountBar::new(speeds.len(), "speeds");
+    let obs = |p: TunnelProgress| bar.tick(p.id);
+    let r = tunnel::free_dataset(&l.section, &speeds, &opts, &obs);
+    bar.finish();
+    let (manifest, records, runs) = r.context("virtual wind tunnel (free)")?;
+    tunnel::write(&a.out, &manifest, &records)?;
+    for run in &runs {
+        if let Some(t) = run.left_bound_at {
+            println!(
+                "U = {} m/s: left the bound at t = {t:.3} s (record truncated)",
+                run.u
+            );
+        }
+    }
+    println!(
+        "wrote {} free-response cases to {}",
+        records.len(),
+        a.out.display()
+    );
+    Ok(())
+}
