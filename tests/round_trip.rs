@@ -289,26 +289,11 @@ fn check(o: &Outcome) {
 }
 
 /// The full campaign of the brief: configuration D × 8 amplitudes × 8 wind speeds
-/// (≈ 10 s with the test profile's opt-level 2).
-///
-/// Identification settings: the defaults except `rank_tol = 1e-5` (`near_tol = 1e-4`).
-/// With the default 1e-9 the identification keeps `alpha_dot^2*h` next to `alpha^2*h` and
-/// `h`, with which it is exactly dependent under pure-sine pitch (α̇² = K²(A² − α²) in
-/// nondimensional form); `identify`'s preprocessing fits each degree of freedom at *both*
-/// forcing frequencies, so α carries a noise-level f_h component that turns the exact
-/// dependency into a near one (residual ~1e-6, above 1e-9), and STLSQ then returns huge
-/// cancelling coefficients of `h`, `alpha^2*h`, `alpha_dot^2*h`: H4*, A4* come out as
-/// −330…+160 and −96…+23 instead of −3.5…−0.16 and 0.41…0.74, and p-k does not converge.
-/// See `default_identify_settings_recover_h_derivatives` (ignored until `identify` is
-/// fixed).
+/// (≈ 10 s with the test profile's opt-level 2), default identification settings.
 #[test]
 fn round_trip_configuration_d_full_grid() {
     let dir = tempfile::tempdir().unwrap();
-    let settings = IdentifySettings {
-        rank_tol: 1e-5,
-        near_tol: 1e-4,
-        ..IdentifySettings::default()
-    };
+    let settings = IdentifySettings::default();
     let o = round_trip(dir.path(), &amps(), &speeds(), &[1.05, 1.1, 1.2], &settings);
     check(&o);
 }
@@ -321,10 +306,11 @@ fn speeds() -> Vec<f64> {
     (3..=10).map(f64::from).collect()
 }
 
-/// Regression test of the near-dependency issue described above: with the default
-/// identification settings the h-derivatives H4*, A4* must match the truth too.
+/// Regression test: a noise-level f_h component in the fitted α (harmonic fit at both forcing
+/// frequencies) once turned the exact dependency α̇²h = K²(A²h − α²h) into a near one; STLSQ then
+/// returned cancelling coefficients and H4*, A4* of −330…+160. Preprocessing now keeps only
+/// significant components per degree of freedom; the h-derivatives must match the truth.
 #[test]
-#[ignore = "identify: harmonic fit at all forcing frequencies breaks the exact alpha_dot^2*h dependency (see round_trip_configuration_d_full_grid)"]
 fn default_identify_settings_recover_h_derivatives() {
     let dir = tempfile::tempdir().unwrap();
     let law = identified_law(dir.path(), &amps(), &speeds(), &IdentifySettings::default());
