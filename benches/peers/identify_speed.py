@@ -331,7 +331,11 @@ def time_pysindy(ps, make_lib, data, deltas):
     warnings.simplefilter("ignore")
     t0 = time.perf_counter()
     n_terms = None
-    for x, y, dt in data:
+    for k, (x, y, dt) in enumerate(data):
+        if len(deltas) > 1 and k and k % 32 == 0:
+            el = time.perf_counter() - t0
+            print(f"  {k}/{len(data)} cases, {el:.0f} s, ~{el / k * (len(data) - k):.0f} s left",
+                  file=sys.stderr, flush=True)
         for d in deltas:
             m = ps.SINDy(feature_library=make_lib(), optimizer=ps.STLSQ(threshold=float(d)))
             m.fit(x, t=dt, x_dot=y)
