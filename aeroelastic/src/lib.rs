@@ -16,5 +16,6 @@ pub mod reference;
 pub mod section;
 pub mod structure;
 pub mod theodorsen;
+pub mod trajectory;
 
 pub use error::{Error, Result};
