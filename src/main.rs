@@ -2,8 +2,10 @@
 //! bars and writes files. No physics lives here.
 
 mod identify_cmd;
+mod plot_cmd;
 mod progress;
 mod run_cmd;
+mod study;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -20,11 +22,12 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
-    /// Run the default study (until study files exist: identify a force law from a small
-    /// data set generated on the fly).
+    /// Run a study file end to end (default: the built-in quickstart study).
     Run(run_cmd::RunArgs),
     /// Identify the nonlinear aerodynamic force law (Eq. 19) of a data set folder.
     Identify(identify_cmd::IdentifyArgs),
+    /// Redraw the figures and report of a study output folder from its result files.
+    Plot(plot_cmd::PlotArgs),
 }
 
 fn main() -> ExitCode {
@@ -32,6 +35,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Run(a) => run_cmd::run(&a),
         Command::Identify(a) => identify_cmd::run(&a).map(|_| ()),
+        Command::Plot(a) => plot_cmd::run(&a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
