@@ -112,7 +112,6 @@ pub fn render_all(study: &Study, out: &Path) -> anyhow::Result<Vec<FigureEntry>>
     }
     let mut summary: Vec<(String, String)> = vec![
         ("study".into(), s.name.clone()),
-        ("study file".into(), study.path.display().to_string()),
         ("seed".into(), s.seed.to_string()),
         ("version".into(), version()),
     ];
