@@ -39,7 +39,12 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
         .unwrap_or_else(|| PathBuf::from("out").join(&study.spec.name));
     let t0 = Instant::now();
     let timings = run_study(&study, &out, args.quiet)?;
-    println!("study `{}` done; results in {}", study.spec.name, out.display());
+    println!(
+        "study `{}` ({}) done; results in {}",
+        study.spec.name,
+        study.path.display(),
+        out.display()
+    );
     for (stage, s) in &timings {
         println!("  {stage:<16} {s:>8.2} s");
     }

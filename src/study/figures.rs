@@ -75,6 +75,64 @@ fn safe(s: &str) -> String {
         .collect()
 }
 
+/// A number cell for the report: 5 significant digits (scientific outside 1e-3..1e5);
+/// other cells unchanged.
+fn pretty_cell(c: &str) -> String {
+    match c.parse::<f64>() {
+        Ok(v) if v == 0.0 => "0".into(),
+        Ok(v) if v.is_finite() && (c.contains('.') || c.contains('e')) => {
+            let a = v.abs();
+            if (1e-3..1e5).contains(&a) {
+                let digits = (4 - a.log10().floor() as i32).max(0) as usize;
+                format!("{v:.digits$}")
+            } else {
+                format!("{v:.4e}")
+            }
+        }
+        _ => c.to_string(),
+    }
+}
+
+/// CSV text with its number cells shortened by [`pretty_cell`] (the files keep full
+/// precision).
+fn pretty_csv(text: &str) -> Vec<Vec<String>> {
+    text.lines()
+        .filter(|l| !l.trim().is_empty())
+        .map(|l| split_csv(l).iter().map(|c| pretty_cell(c)).collect())
+        .collect()
+}
+
+/// Splits a CSV line written by [`super::files::Csv`] (double-quote quoting).
+fn split_csv(line: &str) -> Vec<String> {
+    let mut out = vec![];
+    let mut cur = String::new();
+    let mut quoted = false;
+    let mut chars = line.chars().peekable();
+    while let Some(c) = chars.next() {
+        match (c, quoted) {
+            ('"', true) if chars.peek() == Some(&'"') => {
+                cur.push('"');
+                chars.next();
+            }
+            ('"', _) => quoted = !quoted,
+            (',', false) => out.push(std::mem::take(&mut cur)),
+            _ => cur.push(c),
+        }
+    }
+    out.push(cur);
+    out
+}
+
+/// Adds a result CSV file of `out` to the report as a table with shortened numbers.
+fn csv_file_table(report: &mut Report, caption: &str, path: &Path) {
+    if let Ok(t) = std::fs::read_to_string(path) {
+        let rows = pretty_csv(&t);
+        if let Some((header, body)) = rows.split_first() {
+            report.table(caption, header, body);
+        }
+    }
+}
+
 fn version() -> String {
     let v = env!("CARGO_PKG_VERSION");
     let git = std::process::Command::new("git")
@@ -257,16 +315,17 @@ pub fn render_all(study: &Study, out: &Path) -> anyhow::Result<Vec<FigureEntry>>
             .map(String::from),
             &rows,
         );
-        if let Ok(t) = std::fs::read_to_string(out.join(names::TABLE_IV)) {
-            report.csv_table(
-                "Table IV: identified vs true coefficients over the noise realisations",
-                &t,
-            );
-        }
+        csv_file_table(
+            &mut report,
+            "Table IV: identified vs true coefficients over the noise realisations",
+            &out.join(names::TABLE_IV),
+        );
         if id.cases.len() <= 64 {
-            if let Ok(t) = std::fs::read_to_string(out.join(names::DERIVATIVES)) {
-                report.csv_table("Eq. 19 derivatives and metrics per case", &t);
-            }
+            csv_file_table(
+                &mut report,
+                "Eq. 19 derivatives and metrics per case",
+                &out.join(names::DERIVATIVES),
+            );
         } else {
             report.text(format!(
                 "{} cases: the per-case table is in {} and {}.",
@@ -309,9 +368,11 @@ pub fn render_all(study: &Study, out: &Path) -> anyhow::Result<Vec<FigureEntry>>
             }
         }
         report.section("Flutter");
-        if let Ok(t) = std::fs::read_to_string(out.join(names::FLUTTER_POINTS)) {
-            report.csv_table("Flutter and divergence points (reduced: U/(bω_α), ω/ω_α)", &t);
-        }
+        csv_file_table(
+            &mut report,
+            "Flutter and divergence points (reduced: U/(bω_α), ω/ω_α)",
+            &out.join(names::FLUTTER_POINTS),
+        );
         cv.embed(&mut report, "vg");
     }
 
@@ -353,9 +414,7 @@ pub fn render_all(study: &Study, out: &Path) -> anyhow::Result<Vec<FigureEntry>>
             )?;
         }
         report.section("Limit-cycle oscillations");
-        if let Ok(t) = std::fs::read_to_string(out.join(names::LCO_AMPLITUDES)) {
-            report.csv_table("LCO runs", &t);
-        }
+        csv_file_table(&mut report, "LCO runs", &out.join(names::LCO_AMPLITUDES));
         cv.embed(&mut report, "bifurcation");
         cv.embed(&mut report, "phase");
     }
@@ -379,4 +438,23 @@ pub fn render_all(study: &Study, out: &Path) -> anyhow::Result<Vec<FigureEntry>>
         .write(&out.join(names::REPORT))
         .context("writing report.html")?;
     Ok(entries)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn report_numbers_are_shortened_and_text_kept() {
+        assert_eq!(pretty_cell("6.000000000000001"), "6.0000");
+        assert_eq!(pretty_cell("-23.096456178436412"), "-23.096");
+        assert_eq!(pretty_cell("0.000006850861010712863"), "6.8509e-6");
+        assert_eq!(pretty_cell("4"), "4");
+        assert_eq!(pretty_cell("0"), "0");
+        assert_eq!(pretty_cell("D-U4-A6"), "D-U4-A6");
+        assert_eq!(
+            split_csv("a,\"b,c\",\"d\"\"e\""),
+            vec!["a", "b,c", "d\"e"]
+        );
+    }
 }

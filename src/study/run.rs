@@ -178,7 +178,11 @@ fn identify_stage(study: &Study, cases: &build::Cases, out: &Path) -> anyhow::Re
         "loss_moment",
     ]);
     for (c, nc) in id.cases.iter().zip(&cases.cases) {
-        let amp = nc.meta.amplitude.map(f64::to_degrees);
+        // degrees → radians → degrees: round off the last-bit noise (6.000000000000001)
+        let amp = nc
+            .meta
+            .amplitude
+            .map(|a| (a.to_degrees() * 1e9).round() / 1e9);
         for (force, terms) in [("lift", &c.lift.terms), ("moment", &c.moment.terms)] {
             let mut row = vec![
                 c.id.clone(),
