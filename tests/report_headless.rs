@@ -18,7 +18,10 @@ const CHROMIUM: &str = "/usr/bin/chromium";
 /// Runs Chromium headless with the given extra arguments; kills it after 120 s. Output goes
 /// to files next to the profile (a piped stream that nobody drains would block Chromium).
 fn chromium(profile: &Path, extra: &[String]) -> (bool, Vec<u8>, String) {
-    let (out_path, err_path) = (profile.with_extension("stdout"), profile.with_extension("stderr"));
+    let (out_path, err_path) = (
+        profile.with_extension("stdout"),
+        profile.with_extension("stderr"),
+    );
     let mut cmd = Command::new(CHROMIUM);
     cmd.args([
         "--headless",
@@ -89,9 +92,7 @@ fn quickstart_report_renders_in_headless_chromium() {
     if let Ok(dir) = std::env::var("AEROFORM_SCREENSHOT_DIR") {
         std::fs::copy(&shot, Path::new(&dir).join("report_screenshot.png")).unwrap();
     }
-    let decoder = png::Decoder::new(std::io::BufReader::new(
-        std::fs::File::open(&shot).unwrap(),
-    ));
+    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&shot).unwrap()));
     let mut reader = decoder.read_info().unwrap();
     let mut buf = vec![0; reader.output_buffer_size()];
     let info = reader.next_frame(&mut buf).unwrap();
@@ -112,10 +113,7 @@ fn quickstart_report_renders_in_headless_chromium() {
     );
 
     // (b) the DOM after parsing keeps every figure
-    let (ok, dom, err) = chromium(
-        &tmp.path().join("profile-b"),
-        &["--dump-dom".into(), url],
-    );
+    let (ok, dom, err) = chromium(&tmp.path().join("profile-b"), &["--dump-dom".into(), url]);
     assert!(ok, "dump-dom failed: {err}");
     let dom = String::from_utf8_lossy(&dom);
     assert_eq!(

@@ -51,8 +51,18 @@ fn quickstart_is_complete_and_byte_identical_on_a_second_run() {
     let tmp = tempfile::tempdir().unwrap();
     let (a, b) = (tmp.path().join("a"), tmp.path().join("b"));
     let stdout = run_quickstart(&a);
-    for stage in ["data", "identify", "flutter", "lco", "figures+report", "total"] {
-        assert!(stdout.contains(stage), "stage `{stage}` not timed: {stdout}");
+    for stage in [
+        "data",
+        "identify",
+        "flutter",
+        "lco",
+        "figures+report",
+        "total",
+    ] {
+        assert!(
+            stdout.contains(stage),
+            "stage `{stage}` not timed: {stdout}"
+        );
     }
     run_quickstart(&b);
     let (ta, tb) = (tree(&a), tree(&b));
@@ -107,7 +117,10 @@ fn quickstart_is_complete_and_byte_identical_on_a_second_run() {
     let pts = String::from_utf8_lossy(&ta[Path::new("flutter_points.csv")]).into_owned();
     let row = pts.lines().nth(1).unwrap();
     let u_red: f64 = row.split(',').nth(5).unwrap().parse().unwrap();
-    assert!((u_red - 2.0054).abs() < 2e-3 * 2.0054, "U_F/(bω_α) = {u_red}");
+    assert!(
+        (u_red - 2.0054).abs() < 2e-3 * 2.0054,
+        "U_F/(bω_α) = {u_red}"
+    );
 
     // `plot` redraws the same figures and report from the result files alone
     std::fs::remove_dir_all(a.join("figures")).unwrap();
@@ -165,7 +178,10 @@ fn study_fails(text: &str) -> String {
 #[test]
 fn unknown_key_in_a_study_names_key_and_line() {
     let err = study_fails("name = \"x\"\n\n[lco]\nspeeds = [1.0]\nup_dwn = true\n");
-    assert!(err.contains("bad.toml:5") && err.contains("up_dwn"), "{err}");
+    assert!(
+        err.contains("bad.toml:5") && err.contains("up_dwn"),
+        "{err}"
+    );
 }
 
 #[test]
@@ -183,7 +199,10 @@ fn out_of_range_value_names_dotted_key_and_line() {
 #[test]
 fn stages_waiting_for_the_tunnel_are_clear_errors() {
     let err = study_fails("name = \"x\"\n[data.virtual]\nconfig = \"A\"\n");
-    assert!(err.contains("data.virtual") && err.contains("not available"), "{err}");
+    assert!(
+        err.contains("data.virtual") && err.contains("not available"),
+        "{err}"
+    );
     let err = study_fails(
         "name = \"x\"\n[structure]\nmu = 20.0\nr_alpha2 = 0.25\nsigma = 0.5\n[aero]\nmodel = \"identified\"\n",
     );
@@ -205,7 +224,11 @@ fn hp1_study_matches_the_published_flutter_and_divergence_speeds() {
     let (ok, _, err) = aeroform(&["run", study, "--out", tmp.path().to_str().unwrap()]);
     assert!(ok, "{err}");
     let pts = std::fs::read_to_string(tmp.path().join("flutter_points.csv")).unwrap();
-    let rows: Vec<Vec<&str>> = pts.lines().skip(1).map(|l| l.split(',').collect()).collect();
+    let rows: Vec<Vec<&str>> = pts
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
     assert_eq!(rows.len(), 3);
     // published (DESIGN.md §6): 2.1839, 2.1704, 1.8425; divergence 2.8284
     for (r, (uf, ud)) in rows
@@ -214,8 +237,16 @@ fn hp1_study_matches_the_published_flutter_and_divergence_speeds() {
     {
         let got_uf: f64 = r[5].parse().unwrap();
         let got_ud: f64 = r[8].parse().unwrap();
-        assert!((got_uf - uf).abs() < 2e-3 * uf, "{}: {got_uf} vs {uf}", r[0]);
-        assert!((got_ud - ud).abs() < 2e-3 * ud, "{}: {got_ud} vs {ud}", r[0]);
+        assert!(
+            (got_uf - uf).abs() < 2e-3 * uf,
+            "{}: {got_uf} vs {uf}",
+            r[0]
+        );
+        assert!(
+            (got_ud - ud).abs() < 2e-3 * ud,
+            "{}: {got_ud} vs {ud}",
+            r[0]
+        );
     }
 }
 
@@ -233,7 +264,11 @@ fn shipped_studies_parse() {
         let path = format!("{}/scenarios/{s}.toml", env!("CARGO_MANIFEST_DIR"));
         let text = std::fs::read_to_string(&path).unwrap();
         let v: toml::Table = text.parse().unwrap_or_else(|e| panic!("{s}: {e}"));
-        assert_eq!(v["name"].as_str(), Some(s), "{s}: name must match the file name");
+        assert_eq!(
+            v["name"].as_str(),
+            Some(s),
+            "{s}: name must match the file name"
+        );
         let (ok, _, err) = aeroform(&["run", &path, "--out", "/dev/null/x"]);
         assert!(!ok);
         assert!(

@@ -56,7 +56,13 @@ impl Section {
     /// [`Error::InvalidParameter`] for `u ≤ 0`, a non-positive `duration`, `steps = 0`, or
     /// a `y0` of the wrong length or non-finite; [`Error::Numerical`] when M_s − M_a is
     /// singular at `u`.
-    pub fn trajectory(&self, u: f64, y0: &[f64], duration: f64, steps: usize) -> Result<Trajectory> {
+    pub fn trajectory(
+        &self,
+        u: f64,
+        y0: &[f64],
+        duration: f64,
+        steps: usize,
+    ) -> Result<Trajectory> {
         crate::error::positive("u", u)?;
         crate::error::positive("duration", duration)?;
         if steps == 0 {
@@ -91,7 +97,8 @@ impl Section {
             out.alpha_dot.push(z[3]);
         };
         push(&mut out, 0.0, &z);
-        let (mut k1, mut k2, mut k3, mut k4) = (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+        let (mut k1, mut k2, mut k3, mut k4) =
+            (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
         let mut tmp = vec![0.0; n];
         for s in 0..steps {
             self.rate(u, &minv, &z, &mut k1);
@@ -143,7 +150,11 @@ mod tests {
         let tr = sec.trajectory(1e-6, &y0, period, 400).unwrap();
         assert_eq!(tr.t.len(), 401);
         let last = tr.alpha.len() - 1;
-        assert!((tr.alpha[last] - 0.1).abs() < 1e-6, "α(T) = {}", tr.alpha[last]);
+        assert!(
+            (tr.alpha[last] - 0.1).abs() < 1e-6,
+            "α(T) = {}",
+            tr.alpha[last]
+        );
         assert!(tr.alpha_dot[last].abs() < 1e-6);
         let min = tr.alpha.iter().copied().fold(f64::INFINITY, f64::min);
         assert!((min + 0.1).abs() < 1e-6, "min α = {min}");

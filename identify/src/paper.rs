@@ -193,7 +193,8 @@ mod tests {
         let ad = std::f64::consts::TAU * 2.0 * (std::f64::consts::TAU * 2.0 * t).cos();
         let hd = std::f64::consts::TAU * 1.3 * (std::f64::consts::TAU * 1.3 * t).cos();
         let g = TableIvGroup::GROUP1.coefficients;
-        let expect = g[0] * a + g[1] * ad + g[2] * h + g[3] * hd + g[4] * a * h * hd + g[5] * a * a * h;
+        let expect =
+            g[0] * a + g[1] * ad + g[2] * h + g[3] * hd + g[4] * a * h * hd + g[5] * a * a * h;
         assert!((c.c_moment[i] - expect).abs() < 1e-12);
     }
 

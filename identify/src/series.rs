@@ -225,7 +225,12 @@ mod tests {
             },
             dt: 0.1,
             chord: 1.0,
-            x: [vec![1.0, 2.0], vec![3.0, 0.5], vec![0.0, 1.0], vec![1.0, 1.0]],
+            x: [
+                vec![1.0, 2.0],
+                vec![3.0, 0.5],
+                vec![0.0, 1.0],
+                vec![1.0, 1.0],
+            ],
             c_lift: vec![0.0; 2],
             c_moment: vec![0.0; 2],
             forcing: Forcing::default(),

@@ -140,7 +140,10 @@ fn synthetic(study: &Study, sy: &SyntheticSpec, out: &Path) -> anyhow::Result<Da
         }
     }
     let mut extra = toml::Table::new();
-    extra.insert("generator".into(), "aeroform run (synthetic campaign)".into());
+    extra.insert(
+        "generator".into(),
+        "aeroform run (synthetic campaign)".into(),
+    );
     extra.insert("study".into(), study.spec.name.clone().into());
     extra.insert("seed".into(), toml::Value::Integer(study.spec.seed as i64));
     let manifest = Manifest {
@@ -226,7 +229,8 @@ pub fn cases(study: &Study, out: &Path) -> anyhow::Result<Option<Cases>> {
         (ds, src)
     } else if let Some(p) = &d.dataset {
         let dir = study.base.join(p);
-        let ds = read_dataset(&dir).with_context(|| format!("reading data set {}", dir.display()))?;
+        let ds =
+            read_dataset(&dir).with_context(|| format!("reading data set {}", dir.display()))?;
         (ds, format!("data set {}", p.display()))
     } else {
         anyhow::bail!("[data]: no source");
@@ -272,7 +276,11 @@ pub fn structure(s: &StructureSpec) -> anyhow::Result<Structure> {
 ///
 /// # Errors
 /// An unknown model or invalid parameters.
-pub fn linear_aero(model: &str, s: &StructureSpec, a: &AeroSpec) -> anyhow::Result<Arc<dyn AeroModel>> {
+pub fn linear_aero(
+    model: &str,
+    s: &StructureSpec,
+    a: &AeroSpec,
+) -> anyhow::Result<Arc<dyn AeroModel>> {
     let chord = 2.0 * s.semi_chord;
     let m: Arc<dyn AeroModel> = match model {
         "theodorsen" => Arc::new(TheodorsenAero::new(chord, a.elastic_axis)?),
@@ -307,7 +315,11 @@ pub fn linear_section(study: &Study, model: &str) -> anyhow::Result<Section> {
     let (Some(s), Some(a)) = (&study.spec.structure, &study.spec.aero) else {
         anyhow::bail!("[structure] and [aero] are required");
     };
-    Ok(Section::new(structure(s)?, linear_aero(model, s, a)?, s.rho)?)
+    Ok(Section::new(
+        structure(s)?,
+        linear_aero(model, s, a)?,
+        s.rho,
+    )?)
 }
 
 /// The nonlinear section of the LCO stage: `[aero]` plus its nonlinear terms.

@@ -47,9 +47,15 @@ impl Canvas<'_> {
         self.kinds.iter().any(|k| k == kind)
     }
 
-    fn draw<F: Figure>(&mut self, kind: &str, stem: &str, caption: String, fig: &F) -> anyhow::Result<()> {
-        let files = plots::save(fig, self.dir, stem)
-            .with_context(|| format!("drawing figure {stem}"))?;
+    fn draw<F: Figure>(
+        &mut self,
+        kind: &str,
+        stem: &str,
+        caption: String,
+        fig: &F,
+    ) -> anyhow::Result<()> {
+        let files =
+            plots::save(fig, self.dir, stem).with_context(|| format!("drawing figure {stem}"))?;
         self.drawn.push(Drawn {
             entry: FigureEntry {
                 kind: kind.into(),
@@ -71,7 +77,13 @@ impl Canvas<'_> {
 
 fn safe(s: &str) -> String {
     s.chars()
-        .map(|c| if c.is_ascii_alphanumeric() || c == '-' || c == '.' { c } else { '_' })
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '.' {
+                c
+            } else {
+                '_'
+            }
+        })
         .collect()
 }
 
@@ -79,7 +91,7 @@ fn safe(s: &str) -> String {
 /// other cells unchanged.
 fn pretty_cell(c: &str) -> String {
     match c.parse::<f64>() {
-        Ok(v) if v == 0.0 => "0".into(),
+        Ok(0.0) => "0".into(),
         Ok(v) if v.is_finite() && (c.contains('.') || c.contains('e')) => {
             let a = v.abs();
             if (1e-3..1e5).contains(&a) {
@@ -136,7 +148,13 @@ fn csv_file_table(report: &mut Report, caption: &str, path: &Path) {
 fn version() -> String {
     let v = env!("CARGO_PKG_VERSION");
     let git = std::process::Command::new("git")
-        .args(["-C", env!("CARGO_MANIFEST_DIR"), "describe", "--always", "--dirty"])
+        .args([
+            "-C",
+            env!("CARGO_MANIFEST_DIR"),
+            "describe",
+            "--always",
+            "--dirty",
+        ])
         .output()
         .ok()
         .filter(|o| o.status.success())
@@ -177,7 +195,10 @@ pub fn render_all(study: &Study, out: &Path) -> anyhow::Result<Vec<FigureEntry>>
     // ---- identification
     let id_path = out.join(names::IDENTIFICATION);
     let id: Option<Identification> = if s.data.is_some() {
-        Some(Identification::read(&id_path).with_context(|| format!("reading {}", id_path.display()))?)
+        Some(
+            Identification::read(&id_path)
+                .with_context(|| format!("reading {}", id_path.display()))?,
+        )
     } else {
         None
     };
@@ -279,7 +300,7 @@ pub fn render_all(study: &Study, out: &Path) -> anyhow::Result<Vec<FigureEntry>>
             cv.draw(
                 "histogram",
                 "histogram_quality",
-                "R² and MFWA (Eq. 18) of every case, moment and lift.".into(),
+                "Misfit of every case, moment and lift: 1 − R² and |1 − MFWA| (Eq. 18).".into(),
                 &quality_histogram(id),
             )?;
         }
@@ -301,7 +322,11 @@ pub fn render_all(study: &Study, out: &Path) -> anyhow::Result<Vec<FigureEntry>>
                     name.to_string(),
                     g.cases.len().to_string(),
                     gf.support.len().to_string(),
-                    gf.support.iter().map(|t| term_label(t)).collect::<Vec<_>>().join(", "),
+                    gf.support
+                        .iter()
+                        .map(|t| term_label(t))
+                        .collect::<Vec<_>>()
+                        .join(", "),
                     format!("{:.3e}", gf.loss),
                     format!("{:.3e}", gf.loss_limit),
                 ]);
@@ -310,7 +335,13 @@ pub fn render_all(study: &Study, out: &Path) -> anyhow::Result<Vec<FigureEntry>>
         report.table(
             "Selected supports per group",
             &[
-                "group", "force", "cases", "terms", "support", "loss", "loss limit",
+                "group",
+                "force",
+                "cases",
+                "terms",
+                "support",
+                "loss",
+                "loss limit",
             ]
             .map(String::from),
             &rows,
@@ -452,9 +483,6 @@ mod tests {
         assert_eq!(pretty_cell("4"), "4");
         assert_eq!(pretty_cell("0"), "0");
         assert_eq!(pretty_cell("D-U4-A6"), "D-U4-A6");
-        assert_eq!(
-            split_csv("a,\"b,c\",\"d\"\"e\""),
-            vec!["a", "b,c", "d\"e"]
-        );
+        assert_eq!(split_csv("a,\"b,c\",\"d\"\"e\""), vec!["a", "b,c", "d\"e"]);
     }
 }

@@ -114,7 +114,9 @@ pub fn run_study(study: &Study, out: &Path, quiet: bool) -> anyhow::Result<Timin
         if !quiet {
             println!("data: {} cases; {}", cases.cases.len(), cases.source);
         }
-        let id = timed(&mut timings, "identify", || identify_stage(study, cases, out))?;
+        let id = timed(&mut timings, "identify", || {
+            identify_stage(study, cases, out)
+        })?;
         if !quiet {
             println!("{}", id.summary_table());
         }
@@ -148,13 +150,12 @@ pub fn run_study(study: &Study, out: &Path, quiet: bool) -> anyhow::Result<Timin
     Ok(timings)
 }
 
-fn identify_stage(study: &Study, cases: &build::Cases, out: &Path) -> anyhow::Result<Identification> {
-    let settings = study
-        .spec
-        .identify
-        .clone()
-        .unwrap_or_default()
-        .settings;
+fn identify_stage(
+    study: &Study,
+    cases: &build::Cases,
+    out: &Path,
+) -> anyhow::Result<Identification> {
+    let settings = study.spec.identify.clone().unwrap_or_default().settings;
     let bar = IdentifyBar::new();
     let result =
         identify::pipeline::identify(&cases.cases, &settings, &cases.name, &|p| bar.observe(p));
@@ -172,9 +173,31 @@ fn identify_stage(study: &Study, cases: &build::Cases, out: &Path) -> anyhow::Re
             .collect::<Vec<_>>(),
     );
     let mut der = Csv::new(&[
-        "case", "group", "U_m_s", "amplitude_deg", "K_alpha", "K_h", "H1", "H2", "H3", "H4",
-        "N1_lift", "N2_lift", "N3_lift", "A1", "A2", "A3", "A4", "N1_moment", "N2_moment",
-        "N3_moment", "R2_lift", "R2_moment", "MFWA_lift", "MFWA_moment", "loss_lift",
+        "case",
+        "group",
+        "U_m_s",
+        "amplitude_deg",
+        "K_alpha",
+        "K_h",
+        "H1",
+        "H2",
+        "H3",
+        "H4",
+        "N1_lift",
+        "N2_lift",
+        "N3_lift",
+        "A1",
+        "A2",
+        "A3",
+        "A4",
+        "N1_moment",
+        "N2_moment",
+        "N3_moment",
+        "R2_lift",
+        "R2_moment",
+        "MFWA_lift",
+        "MFWA_moment",
+        "loss_lift",
         "loss_moment",
     ]);
     for (c, nc) in id.cases.iter().zip(&cases.cases) {
@@ -330,11 +353,9 @@ fn table_iv(id: &Identification, t: &super::spec::TableIvSpec, out: &Path) -> an
 }
 
 fn flutter_stage(study: &Study, out: &Path) -> anyhow::Result<Vec<FlutterRun>> {
-    let (Some(f), Some(s), Some(a)) = (
-        &study.spec.flutter,
-        &study.spec.structure,
-        &study.spec.aero,
-    ) else {
+    let (Some(f), Some(s), Some(a)) =
+        (&study.spec.flutter, &study.spec.structure, &study.spec.aero)
+    else {
         anyhow::bail!("[flutter] needs [structure] and [aero]");
     };
     let runs: Vec<super::spec::FlutterRunSpec> = if f.run.is_empty() {
@@ -467,7 +488,11 @@ fn lco_stage(study: &Study, out: &Path, flutter_speed: Option<f64>) -> anyhow::R
         ) {
             continue;
         }
-        let omega = if r.omega > 0.0 { r.omega } else { s.omega_alpha };
+        let omega = if r.omega > 0.0 {
+            r.omega
+        } else {
+            s.omega_alpha
+        };
         let period = std::f64::consts::TAU / omega;
         let steps = (l.phase_periods * 400.0).ceil() as usize;
         phase.push(

@@ -466,7 +466,7 @@ pub const FIGURE_KINDS: [&str; 9] = [
 ];
 
 /// `[outputs]`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
 #[serde(deny_unknown_fields)]
 pub struct OutputsSpec {
     /// Figure kinds to draw (default: every kind the stages support).
@@ -478,16 +478,6 @@ pub struct OutputsSpec {
     /// Groups whose δ path is drawn (default: every group, at most 4).
     #[serde(default)]
     pub delta_groups: Vec<String>,
-}
-
-impl Default for OutputsSpec {
-    fn default() -> Self {
-        OutputsSpec {
-            figures: None,
-            series_cases: vec![],
-            delta_groups: vec![],
-        }
-    }
 }
 
 /// A parsed study with its source text and location.
@@ -734,9 +724,18 @@ impl Study {
                             format!("`{}` must match [A-Za-z0-9._-]+", c.name),
                         );
                     }
-                    pos(&format!("data.synthetic.config[{i}].freq_pitch"), c.freq_pitch)?;
-                    pos(&format!("data.synthetic.config[{i}].freq_heave"), c.freq_heave)?;
-                    pos(&format!("data.synthetic.config[{i}].mm_per_deg"), c.mm_per_deg)?;
+                    pos(
+                        &format!("data.synthetic.config[{i}].freq_pitch"),
+                        c.freq_pitch,
+                    )?;
+                    pos(
+                        &format!("data.synthetic.config[{i}].freq_heave"),
+                        c.freq_heave,
+                    )?;
+                    pos(
+                        &format!("data.synthetic.config[{i}].mm_per_deg"),
+                        c.mm_per_deg,
+                    )?;
                 }
                 for (k, vals) in [
                     ("data.synthetic.amplitudes_deg", &sy.amplitudes_deg),
@@ -770,7 +769,10 @@ impl Study {
                 for (ch, terms) in [("lift", &sy.law.lift), ("moment", &sy.law.moment)] {
                     for (i, t) in terms.iter().enumerate() {
                         if let Err(e) = identify::library::Term::parse(&t.term) {
-                            return err(&format!("data.synthetic.law.{ch}[{i}].term"), e.to_string());
+                            return err(
+                                &format!("data.synthetic.law.{ch}[{i}].term"),
+                                e.to_string(),
+                            );
                         }
                     }
                 }
@@ -790,13 +792,19 @@ impl Study {
         if !matches!(id.preprocess.velocity.as_str(), "auto" | "harmonic" | "sg") {
             return err(
                 "identify.preprocess.velocity",
-                format!("`{}`: expected auto, harmonic or sg", id.preprocess.velocity),
+                format!(
+                    "`{}`: expected auto, harmonic or sg",
+                    id.preprocess.velocity
+                ),
             );
         }
-        if (s.flutter.is_some() || s.lco.is_some()) && (s.structure.is_none() || s.aero.is_none())
-        {
+        if (s.flutter.is_some() || s.lco.is_some()) && (s.structure.is_none() || s.aero.is_none()) {
             return err(
-                if s.structure.is_none() { "structure" } else { "aero" },
+                if s.structure.is_none() {
+                    "structure"
+                } else {
+                    "aero"
+                },
                 "the flutter and LCO stages need [structure] and [aero]".into(),
             );
         }
@@ -859,13 +867,19 @@ impl Study {
             pos("flutter.u_min", f.u_min)?;
             pos("flutter.u_max", f.u_max)?;
             if f.u_max <= f.u_min {
-                return err("flutter.u_max", format!("{} must exceed u_min = {}", f.u_max, f.u_min));
+                return err(
+                    "flutter.u_max",
+                    format!("{} must exceed u_min = {}", f.u_max, f.u_min),
+                );
             }
             if f.n_speeds < 2 {
                 return err("flutter.n_speeds", "must be ≥ 2".into());
             }
             if !matches!(f.axes.as_str(), "si" | "reduced") {
-                return err("flutter.axes", format!("`{}`: expected si or reduced", f.axes));
+                return err(
+                    "flutter.axes",
+                    format!("`{}`: expected si or reduced", f.axes),
+                );
             }
             for (i, r) in f.run.iter().enumerate() {
                 if !matches!(r.method.as_str(), "p" | "pk") {

@@ -122,7 +122,11 @@ pub fn bifurcation_figure(
 }
 
 /// Phase portrait α [deg] vs dα/dt [deg/s] of each trajectory (one curve per speed).
-pub fn phase_figure(trajectories: &[Trajectory], title: &str, scale: &AxisScale) -> PhasePortraitFigure {
+pub fn phase_figure(
+    trajectories: &[Trajectory],
+    title: &str,
+    scale: &AxisScale,
+) -> PhasePortraitFigure {
     PhasePortraitFigure {
         title: title.into(),
         x_label: "α [deg]".into(),

@@ -120,7 +120,12 @@ pub fn time_series_figure(s: &CaseSeries) -> TimeSeriesFigure {
             TimePanel {
                 y_label: "C_L [-]".into(),
                 series: vec![
-                    Series::new("measured", SeriesKind::Measured, t.clone(), s.c_lift.clone()),
+                    Series::new(
+                        "measured",
+                        SeriesKind::Measured,
+                        t.clone(),
+                        s.c_lift.clone(),
+                    ),
                     Series::new(model, SeriesKind::Model, t.clone(), s.c_lift_model.clone()),
                 ],
             },
@@ -133,7 +138,12 @@ pub fn time_series_figure(s: &CaseSeries) -> TimeSeriesFigure {
                         t.clone(),
                         s.c_moment.clone(),
                     ),
-                    Series::new(model, SeriesKind::Model, t.clone(), s.c_moment_model.clone()),
+                    Series::new(
+                        model,
+                        SeriesKind::Model,
+                        t.clone(),
+                        s.c_moment_model.clone(),
+                    ),
                 ],
             },
         ],
@@ -210,7 +220,12 @@ pub fn spectrum_figure(s: &CaseSeries, force: Force) -> SpectrumFigure {
         x_label: "f [Hz]".into(),
         y_label: format!("|{}| amplitude [-]", force.symbol()),
         series: vec![
-            Series::new("measured", SeriesKind::Measured, s.freq.clone(), meas.clone()),
+            Series::new(
+                "measured",
+                SeriesKind::Measured,
+                s.freq.clone(),
+                meas.clone(),
+            ),
             Series::new(
                 "identified model",
                 SeriesKind::Model,
@@ -244,7 +259,11 @@ pub fn delta_path_figure(
     }
     let basis = &g.basis;
     let mut fig = DeltaPathFigure {
-        title: format!("Group {group}: δ path of {} ({})", force.symbol(), force.name()),
+        title: format!(
+            "Group {group}: δ path of {} ({})",
+            force.symbol(),
+            force.name()
+        ),
         delta_label: match id.settings.effective_measure() {
             identify::regress::Measure::Contribution => {
                 "threshold δ (relative contribution) [-]".into()
@@ -316,9 +335,10 @@ pub fn heatmap_figures(
                 .map(|(k, n)| {
                     let mut values = vec![vec![None; xs.len()]; ys.len()];
                     for (c, a) in &rows {
-                        let (Ok(ix), Ok(iy)) =
-                            (xs.binary_search(&key(*a)), ys.binary_search(&key(c.wind_speed)))
-                        else {
+                        let (Ok(ix), Ok(iy)) = (
+                            xs.binary_search(&key(*a)),
+                            ys.binary_search(&key(c.wind_speed)),
+                        ) else {
                             continue;
                         };
                         values[iy][ix] = force.eq19(c)[k].1.filter(|v| *v != 0.0);
@@ -345,39 +365,33 @@ pub fn heatmap_figures(
         .collect()
 }
 
-/// Histograms of R² and MFWA (Eq. 18) of every case, moment and lift.
+/// Histograms of the misfit of every case, moment and lift: 1 − R² and |1 − MFWA| (Eq. 18).
+/// Misfits rather than R² and MFWA themselves: good fits crowd R² and MFWA against 1 where
+/// tick labels cannot tell the bins apart, while their misfits spread over decades.
 pub fn quality_histogram(id: &Identification) -> HistogramFigure {
     let col = |f: &dyn Fn(&CaseResult) -> Option<f64>| -> Vec<f64> {
         id.cases.iter().map(|c| f(c).unwrap_or(f64::NAN)).collect()
     };
     let bins = (id.cases.len() / 3).clamp(5, 30);
+    let panel = |x_label: &str, values: Vec<f64>| HistogramPanel {
+        x_label: x_label.into(),
+        values,
+        bins,
+        range: None,
+    };
     HistogramFigure {
-        title: format!("Identification quality over {} cases", id.cases.len()),
+        title: format!("Identification misfit over {} cases", id.cases.len()),
         panels: vec![
-            HistogramPanel {
-                x_label: "R² of C_M [-]".into(),
-                values: col(&|c| c.moment.r2),
-                bins,
-                range: None,
-            },
-            HistogramPanel {
-                x_label: "MFWA of C_M [-]".into(),
-                values: col(&|c| c.moment.mfwa),
-                bins,
-                range: None,
-            },
-            HistogramPanel {
-                x_label: "R² of C_L [-]".into(),
-                values: col(&|c| c.lift.r2),
-                bins,
-                range: None,
-            },
-            HistogramPanel {
-                x_label: "MFWA of C_L [-]".into(),
-                values: col(&|c| c.lift.mfwa),
-                bins,
-                range: None,
-            },
+            panel("1 − R² of C_M [-]", col(&|c| c.moment.r2.map(|r| 1.0 - r))),
+            panel(
+                "|1 − MFWA| of C_M [-]",
+                col(&|c| c.moment.mfwa.map(|m| (1.0 - m).abs())),
+            ),
+            panel("1 − R² of C_L [-]", col(&|c| c.lift.r2.map(|r| 1.0 - r))),
+            panel(
+                "|1 − MFWA| of C_L [-]",
+                col(&|c| c.lift.mfwa.map(|m| (1.0 - m).abs())),
+            ),
         ],
     }
 }
