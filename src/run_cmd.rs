@@ -32,6 +32,7 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     };
     if let Some(s) = args.seed {
         study.spec.seed = s;
+        study.text = with_seed(&study.text, s);
     }
     let out = args
         .out
@@ -50,4 +51,37 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     }
     println!("  {:<16} {:>8.2} s", "total", t0.elapsed().as_secs_f64());
     Ok(())
+}
+
+/// The study text with its top-level `seed` replaced by `seed` (so that `study.toml` in the
+/// output folder, and `aeroform plot`, see the seed actually used).
+fn with_seed(text: &str, seed: u64) -> String {
+    let mut top = true;
+    let mut out = format!("seed = {seed}  # set by `aeroform run --seed`\n");
+    for line in text.lines() {
+        if line.trim_start().starts_with('[') {
+            top = false;
+        }
+        let is_seed = top && line.trim_start().starts_with("seed") && line.contains('=');
+        if !is_seed {
+            out.push_str(line);
+            out.push('\n');
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn seed_override_replaces_only_the_top_level_seed() {
+        let t = "name = \"x\"\nseed = 3\n[data.table_iv]\nrepeats = 2\nseed_like = 1\n";
+        let s = with_seed(t, 7);
+        let v: toml::Table = s.parse().unwrap();
+        assert_eq!(v["seed"].as_integer(), Some(7));
+        assert!(s.contains("seed_like = 1"));
+        assert_eq!(s.matches("seed =").count(), 1);
+    }
 }

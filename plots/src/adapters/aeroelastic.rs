@@ -150,3 +150,87 @@ pub fn phase_figure(
             .collect(),
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use aeroelastic::flutter::{FlutterMethod, ModePoint};
+
+    use super::*;
+
+    fn lco(u: f64, class: Classification, amp_rad: f64) -> LcoResult {
+        LcoResult {
+            u,
+            classification: class,
+            amplitude_alpha: amp_rad,
+            amplitude_h: 0.0,
+            omega: 0.0,
+            cycles: 0,
+            t_end: 0.0,
+            rhs_evals: 0,
+            steps: 0,
+            final_state: vec![],
+        }
+    }
+
+    #[test]
+    fn vg_scales_speed_and_frequency() {
+        let a = FlutterAnalysis {
+            method: FlutterMethod::Pk,
+            model: "m".into(),
+            branches: vec![aeroelastic::flutter::ModeBranch {
+                label: "mode 0".into(),
+                points: vec![ModePoint {
+                    u: 4.0,
+                    sigma: -0.1,
+                    omega: std::f64::consts::TAU,
+                    zeta: 0.05,
+                }],
+            }],
+            flutter: Some(aeroelastic::flutter::FlutterPoint {
+                u: 6.0,
+                omega: 3.0,
+                mode: 0,
+                u_reduced: 0.0,
+                omega_ratio: 0.0,
+            }),
+            divergence_speed: None,
+        };
+        let si = vg_figure(&a, "t", &AxisScale::si());
+        assert_eq!(si.modes[0].freq, vec![1.0]); // ω = 2π rad/s → 1 Hz
+        assert_eq!(si.modes[0].damping, vec![0.05]);
+        let red = vg_figure(&a, "t", &AxisScale::reduced(0.5, 2.0));
+        assert_eq!(red.modes[0].u, vec![4.0]); // U/(bω_α) = 4/(0.5·2)
+        let f = red.flutter.unwrap();
+        assert_eq!((f.u, f.freq), (6.0, 1.5));
+    }
+
+    #[test]
+    fn bifurcation_maps_classes_and_degrees() {
+        let up = vec![
+            lco(1.0, Classification::Decay, 0.0),
+            lco(2.0, Classification::Lco, 0.1),
+            lco(3.0, Classification::Unsettled, 0.2),
+            lco(
+                4.0,
+                Classification::Divergent {
+                    time_left_bound: 1.0,
+                },
+                1.0,
+            ),
+        ];
+        let f = bifurcation_figure(&up, &[], Some(1.5), "t", &AxisScale::si());
+        let classes: Vec<ResponseClass> = f.points.iter().map(|p| p.class).collect();
+        assert_eq!(
+            classes,
+            vec![
+                ResponseClass::Decay,
+                ResponseClass::Lco,
+                ResponseClass::Lco,
+                ResponseClass::Divergent
+            ]
+        );
+        assert!((f.points[1].amplitude - 0.1_f64.to_degrees()).abs() < 1e-12);
+        assert!(f.points.iter().all(|p| p.sweep == Sweep::Up));
+        assert_eq!(f.flutter_speed, Some(1.5));
+    }
+}

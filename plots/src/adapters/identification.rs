@@ -200,7 +200,8 @@ pub fn tone_label(f: f64, f_alpha: Option<f64>, f_h: Option<f64>) -> String {
 }
 
 /// Amplitude spectrum of measured and model C_L or C_M of one case, key frequencies of the
-/// identification marked and named as combination tones of the forcing frequencies.
+/// identification marked and named as combination tones of the forcing frequencies. The
+/// model spectrum is clamped from below at a tenth of the lowest measured amplitude.
 pub fn spectrum_figure(s: &CaseSeries, force: Force) -> SpectrumFigure {
     let (meas, model, keys) = match force {
         Force::Lift => (
@@ -215,6 +216,19 @@ pub fn spectrum_figure(s: &CaseSeries, force: Force) -> SpectrumFigure {
         ),
     };
     let f_max = s.freq.last().copied();
+    // A noise-free model has a floor at rounding level (~1e-16) that would stretch the log
+    // axis over many empty decades: clamp it to a tenth of the lowest measured amplitude.
+    let floor = meas
+        .iter()
+        .copied()
+        .filter(|v| v.is_finite() && *v > 0.0)
+        .fold(f64::INFINITY, f64::min)
+        * 0.1;
+    let model: Vec<f64> = if floor.is_finite() {
+        model.iter().map(|v| v.max(floor)).collect()
+    } else {
+        model.clone()
+    };
     SpectrumFigure {
         title: format!("Case {}: spectrum of {}", case_title(s), force.symbol()),
         x_label: "f [Hz]".into(),
@@ -226,12 +240,7 @@ pub fn spectrum_figure(s: &CaseSeries, force: Force) -> SpectrumFigure {
                 s.freq.clone(),
                 meas.clone(),
             ),
-            Series::new(
-                "identified model",
-                SeriesKind::Model,
-                s.freq.clone(),
-                model.clone(),
-            ),
+            Series::new("identified model", SeriesKind::Model, s.freq.clone(), model),
         ],
         markers: keys
             .iter()
