@@ -122,6 +122,7 @@ pub enum VelocityArg {
 
 impl IdentifyArgs {
     /// The flags' defaults for a data set and an output folder.
+    #[allow(dead_code)] // no caller since `aeroform run` runs study files
     pub fn defaults(dataset: PathBuf, out: PathBuf) -> Self {
         use clap::Parser;
         #[derive(Parser)]

@@ -4,8 +4,10 @@
 mod flutter_cmd;
 mod identify_cmd;
 mod lco_cmd;
+mod plot_cmd;
 mod progress;
 mod run_cmd;
+mod study;
 mod tunnel_cmd;
 
 use std::path::PathBuf;
@@ -23,8 +25,7 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
-    /// Run the default study (until study files exist: identify a force law from a small
-    /// data set generated on the fly).
+    /// Run a study file end to end (default: the built-in quickstart study).
     Run(run_cmd::RunArgs),
     /// Identify the nonlinear aerodynamic force law (Eq. 19) of a data set folder.
     Identify(identify_cmd::IdentifyArgs),
@@ -35,6 +36,8 @@ enum Command {
     /// Virtual wind tunnel: forced-motion or free-response data sets.
     #[command(subcommand)]
     Tunnel(tunnel_cmd::TunnelCommand),
+    /// Redraw the figures and report of a study output folder from its result files.
+    Plot(plot_cmd::PlotArgs),
 }
 
 fn main() -> ExitCode {
@@ -45,6 +48,7 @@ fn main() -> ExitCode {
         Command::Flutter(a) => flutter_cmd::run(&a),
         Command::Lco(a) => lco_cmd::run(&a),
         Command::Tunnel(c) => tunnel_cmd::run(&c),
+        Command::Plot(a) => plot_cmd::run(&a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

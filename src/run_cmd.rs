@@ -1,113 +1,87 @@
-//! `aeroform run`: the default study.
-//!
-//! Until study files exist this generates a small forced-motion data set on the fly
-//! (configuration D of the campaign: f_α = 2.0 Hz, f_h = 1.3 Hz, 1.5 mm/deg; 4 amplitudes ×
-//! 4 wind speeds; a known nonlinear law with rig-like noise), writes it under `OUT/dataset`,
-//! and identifies it.
+//! `aeroform run [STUDY] [--out DIR]`: runs a study end to end (the built-in quickstart
+//! when no file is given) and prints the time of each stage.
 
 use std::path::PathBuf;
+use std::time::Instant;
 
-use anyhow::Context;
 use clap::Args;
-use identify::dataset::{
-    write_dataset, AngleUnit, CaseSpec, ForceUnit, LengthUnit, Manifest, MomentUnit, Units,
-};
-use identify::record::Section;
-use identify::synthetic::{forced_record, HarmonicMotion, PolynomialLaw, Sampling};
 
-use crate::identify_cmd::IdentifyArgs;
+use crate::study::{run::run_study, Study};
 
 /// Flags of `aeroform run`.
 #[derive(Debug, Args)]
 pub struct RunArgs {
-    /// Output folder.
-    #[arg(long, default_value = "out")]
-    pub out: PathBuf,
-    /// Seed of the sensor noise (recorded in the data set manifest).
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
+    /// Study file (TOML); default: the built-in quickstart study.
+    pub study: Option<PathBuf>,
+    /// Output folder (default `out/<study name>`).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Override the study's seed.
+    #[arg(long)]
+    pub seed: Option<u64>,
+    /// Do not print the identification summary.
+    #[arg(long)]
+    pub quiet: bool,
 }
 
-/// Runs the default study.
+/// Runs the study.
 pub fn run(args: &RunArgs) -> anyhow::Result<()> {
-    crate::ensure_dir(&args.out)?;
-    let data = args.out.join("dataset");
-    crate::ensure_dir(&data.join("cases"))?;
-    let section = Section {
-        chord: 0.25,
-        span: 0.75,
-        air_density: 1.225,
+    let mut study = match &args.study {
+        Some(p) => Study::read(p)?,
+        None => Study::quickstart()?,
     };
-    let (f_alpha, f_h, ratio) = (2.0, 1.3, 1.5);
-    let law = PolynomialLaw::demo();
-    let mut cases = Vec::new();
-    let mut records = Vec::new();
-    for (i, u) in [4.0, 6.0, 8.0, 10.0].into_iter().enumerate() {
-        for (j, amp_deg) in [6.0_f64, 12.0, 18.0, 24.0].into_iter().enumerate() {
-            let id = format!("D-U{u}-A{amp_deg}");
-            let mut spec = CaseSpec::forced(&id, format!("cases/{id}.csv"), u);
-            spec.config = Some("D".into());
-            spec.amplitude = Some(amp_deg);
-            spec.amplitude_ratio = Some(ratio);
-            spec.freq_pitch = Some(f_alpha);
-            spec.freq_heave = Some(f_h);
-            let motion = HarmonicMotion {
-                freq_pitch: f_alpha,
-                freq_heave: f_h,
-                amp_pitch: amp_deg.to_radians(),
-                amp_heave: ratio * amp_deg * 1e-3,
-                mean_pitch: 0.0,
-            };
-            let mut meta = identify::record::CaseMeta {
-                id: id.clone(),
-                wind_speed: u,
-                ..Default::default()
-            };
-            meta.config = spec.config.clone();
-            let seed = args
-                .seed
-                .wrapping_mul(1000)
-                .wrapping_add((i * 4 + j) as u64);
-            records.push(forced_record(
-                meta,
-                &section,
-                &motion,
-                &law,
-                &Sampling::default(),
-                seed,
-            )?);
-            cases.push(spec);
+    if let Some(s) = args.seed {
+        study.spec.seed = s;
+        study.text = with_seed(&study.text, s);
+    }
+    let out = args
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("out").join(&study.spec.name));
+    let t0 = Instant::now();
+    let timings = run_study(&study, &out, args.quiet)?;
+    println!(
+        "study `{}` ({}) done; results in {}",
+        study.spec.name,
+        study.path.display(),
+        out.display()
+    );
+    for (stage, s) in &timings {
+        println!("  {stage:<16} {s:>8.2} s");
+    }
+    println!("  {:<16} {:>8.2} s", "total", t0.elapsed().as_secs_f64());
+    Ok(())
+}
+
+/// The study text with its top-level `seed` replaced by `seed` (so that `study.toml` in the
+/// output folder, and `aeroform plot`, see the seed actually used).
+fn with_seed(text: &str, seed: u64) -> String {
+    let mut top = true;
+    let mut out = format!("seed = {seed}  # set by `aeroform run --seed`\n");
+    for line in text.lines() {
+        if line.trim_start().starts_with('[') {
+            top = false;
+        }
+        let is_seed = top && line.trim_start().starts_with("seed") && line.contains('=');
+        if !is_seed {
+            out.push_str(line);
+            out.push('\n');
         }
     }
-    let mut extra = toml::Table::new();
-    extra.insert("generator".into(), "aeroform run (built-in demo)".into());
-    extra.insert("seed".into(), toml::Value::Integer(args.seed as i64));
-    let manifest = Manifest {
-        name: "built-in demo: configuration D, known nonlinear law".into(),
-        description: Some(
-            "Generated by `aeroform run`: C_L, C_M from identify::synthetic::PolynomialLaw::demo, \
-             balance noise 0.1 % of range, laser 8 µm."
-                .into(),
-        ),
-        section,
-        structure: None,
-        units: Units {
-            heave: LengthUnit::Mm,
-            pitch: AngleUnit::Deg,
-            lift: ForceUnit::N,
-            moment: MomentUnit::Nm,
-        },
-        cases,
-        extra: Some(extra),
-    };
-    write_dataset(&data, &manifest, &records)
-        .with_context(|| format!("writing the demo data set to {}", data.display()))?;
-    println!(
-        "wrote demo data set {} (seed {})",
-        data.display(),
-        args.seed
-    );
-    let id_args = IdentifyArgs::defaults(data, args.out.clone());
-    crate::identify_cmd::run(&id_args)?;
-    Ok(())
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn seed_override_replaces_only_the_top_level_seed() {
+        let t = "name = \"x\"\nseed = 3\n[data.table_iv]\nrepeats = 2\nseed_like = 1\n";
+        let s = with_seed(t, 7);
+        let v: toml::Table = s.parse().unwrap();
+        assert_eq!(v["seed"].as_integer(), Some(7));
+        assert!(s.contains("seed_like = 1"));
+        assert_eq!(s.matches("seed =").count(), 1);
+    }
 }

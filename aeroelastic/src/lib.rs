@@ -18,6 +18,7 @@ pub mod reference;
 pub mod section;
 pub mod structure;
 pub mod theodorsen;
+pub mod trajectory;
 pub mod tunnel;
 
 pub use error::{Error, Result};

@@ -18,10 +18,12 @@ pub mod identifiability;
 pub mod io;
 pub mod library;
 pub mod metrics;
+pub mod paper;
 pub mod pipeline;
 pub mod preprocess;
 pub mod record;
 pub mod regress;
+pub mod series;
 pub mod synthetic;
 pub mod workflow;
 

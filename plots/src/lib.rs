@@ -9,6 +9,7 @@
 
 #![warn(missing_docs)]
 
+pub mod adapters;
 pub mod error;
 pub mod figures;
 pub mod render;

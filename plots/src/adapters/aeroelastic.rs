@@ -1,0 +1,236 @@
+//! Flutter and LCO results → figures.
+
+use aeroelastic::flutter::FlutterAnalysis;
+use aeroelastic::lco::{Classification, LcoResult};
+use aeroelastic::trajectory::Trajectory;
+
+use crate::{
+    BifurcationFigure, BifurcationPoint, FlutterPoint, ModeBranch, PhasePortraitFigure,
+    ResponseClass, Series, SeriesKind, Sweep, VgFigure,
+};
+
+/// Axis scaling of speed and frequency in the aeroelastic figures.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AxisScale {
+    /// Displayed speed = U · `u_factor`.
+    pub u_factor: f64,
+    /// Speed axis description.
+    pub u_label: String,
+    /// Speed unit for annotations (may be empty).
+    pub u_unit: String,
+    /// Displayed frequency = ω · `f_factor` (ω in rad/s).
+    pub f_factor: f64,
+    /// Frequency axis description.
+    pub f_label: String,
+    /// Frequency unit for annotations (may be empty).
+    pub f_unit: String,
+}
+
+impl AxisScale {
+    /// SI: U [m/s], f = ω/2π [Hz].
+    pub fn si() -> Self {
+        AxisScale {
+            u_factor: 1.0,
+            u_label: "U [m/s]".into(),
+            u_unit: "m/s".into(),
+            f_factor: 1.0 / std::f64::consts::TAU,
+            f_label: "f [Hz]".into(),
+            f_unit: "Hz".into(),
+        }
+    }
+
+    /// Reduced: U/(bω_α) and ω/ω_α, for semi-chord `b` [m] and pitch frequency
+    /// `omega_alpha` [rad/s].
+    pub fn reduced(b: f64, omega_alpha: f64) -> Self {
+        AxisScale {
+            u_factor: 1.0 / (b * omega_alpha),
+            u_label: "U/(bω_α) [-]".into(),
+            u_unit: String::new(),
+            f_factor: 1.0 / omega_alpha,
+            f_label: "ω/ω_α [-]".into(),
+            f_unit: String::new(),
+        }
+    }
+}
+
+/// V–g / V–f figure of a flutter analysis: damping ratio ζ = −Re p/|p| and frequency of
+/// every tracked branch, the flutter point marked.
+pub fn vg_figure(a: &FlutterAnalysis, title: &str, scale: &AxisScale) -> VgFigure {
+    VgFigure {
+        title: title.into(),
+        u_label: scale.u_label.clone(),
+        g_label: "damping ratio ζ [-]".into(),
+        f_label: scale.f_label.clone(),
+        u_unit: scale.u_unit.clone(),
+        f_unit: scale.f_unit.clone(),
+        modes: a
+            .branches
+            .iter()
+            .map(|b| ModeBranch {
+                name: b.label.clone(),
+                u: b.points.iter().map(|p| p.u * scale.u_factor).collect(),
+                damping: b.points.iter().map(|p| p.zeta).collect(),
+                freq: b.points.iter().map(|p| p.omega * scale.f_factor).collect(),
+            })
+            .collect(),
+        flutter: a.flutter.map(|f| FlutterPoint {
+            u: f.u * scale.u_factor,
+            freq: f.omega * scale.f_factor,
+        }),
+    }
+}
+
+fn class_of(c: Classification) -> ResponseClass {
+    match c {
+        Classification::Decay => ResponseClass::Decay,
+        // An unsettled run still oscillates at its last measured amplitude.
+        Classification::Lco | Classification::Unsettled => ResponseClass::Lco,
+        Classification::Divergent { .. } => ResponseClass::Divergent,
+    }
+}
+
+/// Bifurcation diagram: pitch amplitude [deg] of the upward and downward sweeps against U,
+/// the flutter speed (if given, in m/s) as a vertical line. `Unsettled` runs are drawn as
+/// LCO points at their last measured amplitude.
+pub fn bifurcation_figure(
+    up: &[LcoResult],
+    down: &[LcoResult],
+    flutter_speed: Option<f64>,
+    title: &str,
+    scale: &AxisScale,
+) -> BifurcationFigure {
+    let pts = |rs: &[LcoResult], sweep: Sweep| -> Vec<BifurcationPoint> {
+        rs.iter()
+            .map(|r| BifurcationPoint {
+                u: r.u * scale.u_factor,
+                amplitude: r.amplitude_alpha.to_degrees(),
+                sweep,
+                class: class_of(r.classification),
+            })
+            .collect()
+    };
+    let mut points = pts(up, Sweep::Up);
+    points.extend(pts(down, Sweep::Down));
+    BifurcationFigure {
+        title: title.into(),
+        u_label: scale.u_label.clone(),
+        amplitude_label: "LCO pitch amplitude [deg]".into(),
+        points,
+        u_unit: scale.u_unit.clone(),
+        flutter_speed: flutter_speed.map(|u| u * scale.u_factor),
+    }
+}
+
+/// Phase portrait α [deg] vs dα/dt [deg/s] of each trajectory (one curve per speed).
+pub fn phase_figure(
+    trajectories: &[Trajectory],
+    title: &str,
+    scale: &AxisScale,
+) -> PhasePortraitFigure {
+    PhasePortraitFigure {
+        title: title.into(),
+        x_label: "α [deg]".into(),
+        y_label: "dα/dt [deg/s]".into(),
+        trajectories: trajectories
+            .iter()
+            .map(|t| {
+                let u = crate::style::fmt_num(t.u * scale.u_factor);
+                let label = if scale.u_unit.is_empty() {
+                    format!("{} = {u}", scale.u_label.split(' ').next().unwrap_or("U"))
+                } else {
+                    format!("U = {u} {}", scale.u_unit)
+                };
+                Series::new(
+                    label,
+                    SeriesKind::Other,
+                    t.alpha.iter().map(|a| a.to_degrees()).collect(),
+                    t.alpha_dot.iter().map(|a| a.to_degrees()).collect(),
+                )
+            })
+            .collect(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use aeroelastic::flutter::{FlutterMethod, ModePoint};
+
+    use super::*;
+
+    fn lco(u: f64, class: Classification, amp_rad: f64) -> LcoResult {
+        LcoResult {
+            u,
+            classification: class,
+            amplitude_alpha: amp_rad,
+            amplitude_h: 0.0,
+            omega: 0.0,
+            cycles: 0,
+            t_end: 0.0,
+            rhs_evals: 0,
+            steps: 0,
+            final_state: vec![],
+        }
+    }
+
+    #[test]
+    fn vg_scales_speed_and_frequency() {
+        let a = FlutterAnalysis {
+            method: FlutterMethod::Pk,
+            model: "m".into(),
+            branches: vec![aeroelastic::flutter::ModeBranch {
+                label: "mode 0".into(),
+                points: vec![ModePoint {
+                    u: 4.0,
+                    sigma: -0.1,
+                    omega: std::f64::consts::TAU,
+                    zeta: 0.05,
+                }],
+            }],
+            flutter: Some(aeroelastic::flutter::FlutterPoint {
+                u: 6.0,
+                omega: 3.0,
+                mode: 0,
+                u_reduced: 0.0,
+                omega_ratio: 0.0,
+            }),
+            divergence_speed: None,
+        };
+        let si = vg_figure(&a, "t", &AxisScale::si());
+        assert_eq!(si.modes[0].freq, vec![1.0]); // ω = 2π rad/s → 1 Hz
+        assert_eq!(si.modes[0].damping, vec![0.05]);
+        let red = vg_figure(&a, "t", &AxisScale::reduced(0.5, 2.0));
+        assert_eq!(red.modes[0].u, vec![4.0]); // U/(bω_α) = 4/(0.5·2)
+        let f = red.flutter.unwrap();
+        assert_eq!((f.u, f.freq), (6.0, 1.5));
+    }
+
+    #[test]
+    fn bifurcation_maps_classes_and_degrees() {
+        let up = vec![
+            lco(1.0, Classification::Decay, 0.0),
+            lco(2.0, Classification::Lco, 0.1),
+            lco(3.0, Classification::Unsettled, 0.2),
+            lco(
+                4.0,
+                Classification::Divergent {
+                    time_left_bound: 1.0,
+                },
+                1.0,
+            ),
+        ];
+        let f = bifurcation_figure(&up, &[], Some(1.5), "t", &AxisScale::si());
+        let classes: Vec<ResponseClass> = f.points.iter().map(|p| p.class).collect();
+        assert_eq!(
+            classes,
+            vec![
+                ResponseClass::Decay,
+                ResponseClass::Lco,
+                ResponseClass::Lco,
+                ResponseClass::Divergent
+            ]
+        );
+        assert!((f.points[1].amplitude - 0.1_f64.to_degrees()).abs() < 1e-12);
+        assert!(f.points.iter().all(|p| p.sweep == Sweep::Up));
+        assert_eq!(f.flutter_speed, Some(1.5));
+    }
+}

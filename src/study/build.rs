@@ -1,0 +1,356 @@
+//! Turns the checked study into library objects: the cases to identify (from a data set, a
+//! synthetic campaign or the Table IV verification) and the aeroelastic sections.
+
+use std::path::Path;
+use std::sync::Arc;
+
+use aeroelastic::aero::{
+    AeroModel, Channel, Coefficient, DerivativeTable, NonlinearAero, NonlinearTerm, QuasiSteady,
+    QuasiSteadyKind, TheodorsenAero,
+};
+use aeroelastic::section::Section;
+use aeroelastic::structure::{NondimStructure, PolyTerm, Structure};
+use anyhow::Context;
+use identify::dataset::{
+    read_dataset, write_dataset, AngleUnit, CaseSpec, Dataset, ForceUnit, LengthUnit, Manifest,
+    MomentUnit, Units,
+};
+use identify::library::Term;
+use identify::preprocess::{PreprocessOptions, VelocityMethod};
+use identify::record::{CaseMeta, NondimCase};
+use identify::synthetic::{forced_record, HarmonicMotion, LawTerm, PolynomialLaw, Sampling};
+use identify::workflow::prepare_dataset;
+
+use super::spec::{AeroSpec, PreprocessSpec, StructureSpec, Study, SyntheticSpec};
+
+/// The cases of the identification stage.
+pub struct Cases {
+    /// Name of the data (the `dataset` of `identification.json`).
+    pub name: String,
+    /// One-line description of the source for the report.
+    pub source: String,
+    /// Regression inputs.
+    pub cases: Vec<NondimCase>,
+}
+
+impl Cases {
+    /// Descriptors of every case.
+    pub fn metas(&self) -> Vec<CaseMeta> {
+        self.cases.iter().map(|c| c.meta.clone()).collect()
+    }
+}
+
+/// Preprocessing options of the study.
+pub fn preprocess(p: &PreprocessSpec) -> PreprocessOptions {
+    PreprocessOptions {
+        velocity: match p.velocity.as_str() {
+            "harmonic" => VelocityMethod::Harmonic,
+            "sg" => VelocityMethod::SavitzkyGolay {
+                half_window: p.sg_half_window,
+                order: p.sg_order,
+            },
+            _ => VelocityMethod::Auto,
+        },
+        subtract_nowind: p.subtract_nowind,
+        sg_half_window: p.sg_half_window,
+        sg_order: p.sg_order,
+        ..PreprocessOptions::default()
+    }
+}
+
+fn law(sy: &SyntheticSpec) -> anyhow::Result<PolynomialLaw> {
+    if sy.law.preset == "demo" {
+        return Ok(PolynomialLaw::demo());
+    }
+    let conv = |terms: &[super::spec::LawTermSpec]| -> anyhow::Result<Vec<LawTerm>> {
+        terms
+            .iter()
+            .map(|t| {
+                Ok(LawTerm {
+                    powers: Term::parse(&t.term)?.powers,
+                    coefficient: t.coefficient,
+                })
+            })
+            .collect()
+    };
+    Ok(PolynomialLaw {
+        lift: conv(&sy.law.lift)?,
+        moment: conv(&sy.law.moment)?,
+    })
+}
+
+/// Compact number for case ids: `4`, `7.5`.
+fn id_num(v: f64) -> String {
+    format!("{v}")
+}
+
+fn synthetic(study: &Study, sy: &SyntheticSpec, out: &Path) -> anyhow::Result<Dataset> {
+    let section = identify::record::Section {
+        chord: sy.section.chord,
+        span: sy.section.span,
+        air_density: sy.section.air_density,
+    };
+    let law = law(sy)?;
+    let sampling = Sampling {
+        rate: sy.rate,
+        duration: sy.duration,
+        force_noise: sy.force_noise,
+        heave_noise: sy.heave_noise,
+        pitch_noise: sy.pitch_noise,
+    };
+    let mut cases = Vec::new();
+    let mut records = Vec::new();
+    let mut index: u64 = 0;
+    for c in &sy.config {
+        for &u in &sy.speeds {
+            for &a in &sy.amplitudes_deg {
+                let id = format!("{}-U{}-A{}", c.name, id_num(u), id_num(a));
+                let mut spec = CaseSpec::forced(&id, format!("cases/{id}.csv"), u);
+                spec.config = Some(c.name.clone());
+                spec.amplitude = Some(a);
+                spec.amplitude_ratio = Some(c.mm_per_deg);
+                spec.freq_pitch = Some(c.freq_pitch);
+                spec.freq_heave = Some(c.freq_heave);
+                let motion = HarmonicMotion {
+                    freq_pitch: c.freq_pitch,
+                    freq_heave: c.freq_heave,
+                    amp_pitch: a.to_radians(),
+                    amp_heave: c.mm_per_deg * a * 1e-3,
+                    mean_pitch: 0.0,
+                };
+                let meta = CaseMeta {
+                    id: id.clone(),
+                    wind_speed: u,
+                    config: Some(c.name.clone()),
+                    amplitude: Some(a.to_radians()),
+                    amplitude_ratio: Some(c.mm_per_deg),
+                    freq_pitch: Some(c.freq_pitch),
+                    freq_heave: Some(c.freq_heave),
+                    mean_pitch: None,
+                };
+                // one independent stream per case, derived from the study seed
+                let seed = study.spec.seed.wrapping_mul(1_000_003).wrapping_add(index);
+                index += 1;
+                records.push(
+                    forced_record(meta, &section, &motion, &law, &sampling, seed)
+                        .with_context(|| format!("generating case {id}"))?,
+                );
+                cases.push(spec);
+            }
+        }
+    }
+    let mut extra = toml::Table::new();
+    extra.insert(
+        "generator".into(),
+        "aeroform run (synthetic campaign)".into(),
+    );
+    extra.insert("study".into(), study.spec.name.clone().into());
+    extra.insert("seed".into(), toml::Value::Integer(study.spec.seed as i64));
+    let manifest = Manifest {
+        name: format!("{} (synthetic)", study.spec.name),
+        description: Some(format!(
+            "Synthetic forced-motion campaign: {} configuration(s) × {} speeds × {} amplitudes, \
+             law `{}`, force noise {} of peak, heave noise {} m, pitch noise {} rad.",
+            sy.config.len(),
+            sy.speeds.len(),
+            sy.amplitudes_deg.len(),
+            sy.law.preset,
+            sy.force_noise,
+            sy.heave_noise,
+            sy.pitch_noise
+        )),
+        section,
+        structure: None,
+        units: Units {
+            heave: LengthUnit::Mm,
+            pitch: AngleUnit::Deg,
+            lift: ForceUnit::N,
+            moment: MomentUnit::Nm,
+        },
+        cases,
+        extra: Some(extra),
+    };
+    let root = out.join("dataset");
+    if sy.write_dataset {
+        super::files::ensure_dir(&root.join("cases"))?;
+        write_dataset(&root, &manifest, &records)
+            .with_context(|| format!("writing the data set to {}", root.display()))?;
+    }
+    Ok(Dataset {
+        root,
+        manifest,
+        records,
+    })
+}
+
+/// Builds the cases of `[data]`.
+///
+/// # Errors
+/// Reading or generating the data, or preprocessing a case (the message names it).
+pub fn cases(study: &Study, out: &Path) -> anyhow::Result<Option<Cases>> {
+    let Some(d) = &study.spec.data else {
+        return Ok(None);
+    };
+    let id = study.spec.identify.clone().unwrap_or_default();
+    let pre = preprocess(&id.preprocess);
+    pre.check().context("identify.preprocess")?;
+    if let Some(t) = &d.table_iv {
+        let seeds: Vec<u64> = (0..t.repeats as u64)
+            .map(|i| study.spec.seed.wrapping_add(i))
+            .collect();
+        let cases = identify::paper::table_iv_cases(
+            &identify::paper::TableIvGroup {
+                coefficients: t.moment,
+            },
+            &identify::paper::TableIvGroup {
+                coefficients: t.lift,
+            },
+            &identify::paper::TableIvSampling {
+                rate: t.rate,
+                duration: t.duration,
+                sigma: t.sigma,
+                ..identify::paper::TableIvSampling::default()
+            },
+            &seeds,
+        )
+        .context("data.table_iv")?;
+        return Ok(Some(Cases {
+            name: "paper Table IV (Eq. 15/16)".into(),
+            source: format!(
+                "Eq. 15/16 verification: {} noise realisations, σ = {}, {} s at {} Hz",
+                t.repeats, t.sigma, t.duration, t.rate
+            ),
+            cases,
+        }));
+    }
+    let (dataset, source) = if let Some(sy) = &d.synthetic {
+        let ds = synthetic(study, sy, out)?;
+        let src = ds.manifest.description.clone().unwrap_or_default();
+        (ds, src)
+    } else if let Some(p) = &d.dataset {
+        let dir = study.base.join(p);
+        let ds =
+            read_dataset(&dir).with_context(|| format!("reading data set {}", dir.display()))?;
+        (ds, format!("data set {}", p.display()))
+    } else {
+        anyhow::bail!("[data]: no source");
+    };
+    let prepared = prepare_dataset(&dataset, &pre).context("preprocessing")?;
+    if prepared.cases.is_empty() {
+        anyhow::bail!("the data have no forced-motion case to identify");
+    }
+    Ok(Some(Cases {
+        name: dataset.manifest.name.clone(),
+        source,
+        cases: prepared.cases,
+    }))
+}
+
+/// The linear structure of `[structure]` (nondimensional → SI) with its cubic pitch spring.
+///
+/// # Errors
+/// Out-of-range parameters, naming the field.
+pub fn structure(s: &StructureSpec) -> anyhow::Result<Structure> {
+    let mut st = Structure::from_nondimensional(&NondimStructure {
+        mu: s.mu,
+        r_alpha2: s.r_alpha2,
+        sigma: s.sigma,
+        x_alpha: s.x_alpha,
+        semi_chord: s.semi_chord,
+        omega_alpha: s.omega_alpha,
+        rho: s.rho,
+        zeta_h: s.zeta_h,
+        zeta_alpha: s.zeta_alpha,
+    })
+    .context("[structure]")?;
+    if s.pitch_cubic != 0.0 {
+        st.pitch_stiffness_terms.push(PolyTerm {
+            power: 3,
+            coefficient: s.pitch_cubic * st.k_alpha,
+        });
+    }
+    Ok(st)
+}
+
+/// A linear aerodynamic model by name, chord B = 2b, elastic axis `a`.
+///
+/// # Errors
+/// An unknown model or invalid parameters.
+pub fn linear_aero(
+    model: &str,
+    s: &StructureSpec,
+    a: &AeroSpec,
+) -> anyhow::Result<Arc<dyn AeroModel>> {
+    let chord = 2.0 * s.semi_chord;
+    let m: Arc<dyn AeroModel> = match model {
+        "theodorsen" => Arc::new(TheodorsenAero::new(chord, a.elastic_axis)?),
+        "quasi_steady" => Arc::new(QuasiSteady::new(
+            chord,
+            a.elastic_axis,
+            QuasiSteadyKind::QuasiSteady,
+            true,
+        )?),
+        "steady" => Arc::new(QuasiSteady::new(
+            chord,
+            a.elastic_axis,
+            QuasiSteadyKind::Steady,
+            false,
+        )?),
+        "flat_plate_table" => Arc::new(DerivativeTable::flat_plate(
+            chord,
+            &aeroelastic::reference::flat_plate_k_grid(),
+            a.n_lag,
+        )?),
+        other => anyhow::bail!("aero model `{other}` is not available"),
+    };
+    Ok(m)
+}
+
+/// The section of the flutter stage for `model` (nonlinear terms do not enter a linear
+/// flutter analysis).
+///
+/// # Errors
+/// As [`structure`] and [`linear_aero`].
+pub fn linear_section(study: &Study, model: &str) -> anyhow::Result<Section> {
+    let (Some(s), Some(a)) = (&study.spec.structure, &study.spec.aero) else {
+        anyhow::bail!("[structure] and [aero] are required");
+    };
+    Ok(Section::new(
+        structure(s)?,
+        linear_aero(model, s, a)?,
+        s.rho,
+    )?)
+}
+
+/// The nonlinear section of the LCO stage: `[aero]` plus its nonlinear terms.
+///
+/// # Errors
+/// As [`linear_section`]; invalid nonlinear terms.
+pub fn nonlinear_section(study: &Study) -> anyhow::Result<Section> {
+    let (Some(s), Some(a)) = (&study.spec.structure, &study.spec.aero) else {
+        anyhow::bail!("[structure] and [aero] are required");
+    };
+    let inner = linear_aero(&a.model, s, a)?;
+    let aero: Arc<dyn AeroModel> = if a.nonlinear.is_empty() {
+        inner
+    } else {
+        let terms = a
+            .nonlinear
+            .iter()
+            .map(|t| {
+                Ok(NonlinearTerm {
+                    channel: if t.channel == "lift" {
+                        Channel::Lift
+                    } else {
+                        Channel::Moment
+                    },
+                    powers: Term::parse(&t.term)?.powers.map(u32::from),
+                    coefficient: Coefficient::Constant(t.coefficient),
+                })
+            })
+            .collect::<anyhow::Result<Vec<_>>>()?;
+        // constant coefficients: the evaluation K is irrelevant
+        Arc::new(NonlinearAero::new(inner, terms, 1.0)?)
+    };
+    Ok(Section::new(structure(s)?, aero, s.rho)?)
+}

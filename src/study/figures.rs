@@ -1,0 +1,488 @@
+//! Figures and the HTML report, drawn from the result files of an output folder only (so
+//! `aeroform plot OUTDIR` redraws them without recomputing).
+
+use std::path::Path;
+
+use anyhow::Context;
+use identify::pipeline::Identification;
+use identify::record::CaseMeta;
+use identify::series::CaseSeries;
+use plots::adapters::aeroelastic::{bifurcation_figure, phase_figure, vg_figure, AxisScale};
+use plots::adapters::identification::{
+    delta_path_figure, derivative_figure, heatmap_figures, quality_histogram, spectrum_figure,
+    time_series_figure, Force,
+};
+use plots::adapters::term_label;
+use plots::{Figure, Report};
+use serde::{Deserialize, Serialize};
+
+use super::files::{ensure_dir, read_json, write_json};
+use super::run::{names, FlutterRun, LcoStage};
+use super::spec::Study;
+
+/// One drawn figure, as listed in `figures.json`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FigureEntry {
+    /// Figure kind (one of `spec::FIGURE_KINDS`).
+    pub kind: String,
+    /// File stem under `figures/` (`.png` and `.svg`).
+    pub stem: String,
+    /// Caption in the report.
+    pub caption: String,
+}
+
+struct Drawn {
+    entry: FigureEntry,
+    svg: String,
+}
+
+struct Canvas<'a> {
+    dir: &'a Path,
+    kinds: Vec<String>,
+    drawn: Vec<Drawn>,
+}
+
+impl Canvas<'_> {
+    fn wants(&self, kind: &str) -> bool {
+        self.kinds.iter().any(|k| k == kind)
+    }
+
+    fn draw<F: Figure>(
+        &mut self,
+        kind: &str,
+        stem: &str,
+        caption: String,
+        fig: &F,
+    ) -> anyhow::Result<()> {
+        let files =
+            plots::save(fig, self.dir, stem).with_context(|| format!("drawing figure {stem}"))?;
+        self.drawn.push(Drawn {
+            entry: FigureEntry {
+                kind: kind.into(),
+                stem: stem.into(),
+                caption,
+            },
+            svg: files.svg_text,
+        });
+        Ok(())
+    }
+
+    /// Embeds every figure of `kind` drawn so far into the report.
+    fn embed(&self, report: &mut Report, kind: &str) {
+        for d in self.drawn.iter().filter(|d| d.entry.kind == kind) {
+            report.figure_svg(d.entry.caption.clone(), &d.svg);
+        }
+    }
+}
+
+fn safe(s: &str) -> String {
+    s.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '.' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
+}
+
+/// A number cell for the report: 5 significant digits (scientific outside 1e-3..1e5);
+/// other cells unchanged.
+fn pretty_cell(c: &str) -> String {
+    match c.parse::<f64>() {
+        Ok(0.0) => "0".into(),
+        Ok(v) if v.is_finite() && (c.contains('.') || c.contains('e')) => {
+            let a = v.abs();
+            if (1e-3..1e5).contains(&a) {
+                let digits = (4 - a.log10().floor() as i32).max(0) as usize;
+                format!("{v:.digits$}")
+            } else {
+                format!("{v:.4e}")
+            }
+        }
+        _ => c.to_string(),
+    }
+}
+
+/// CSV text with its number cells shortened by [`pretty_cell`] (the files keep full
+/// precision).
+fn pretty_csv(text: &str) -> Vec<Vec<String>> {
+    text.lines()
+        .filter(|l| !l.trim().is_empty())
+        .map(|l| split_csv(l).iter().map(|c| pretty_cell(c)).collect())
+        .collect()
+}
+
+/// Splits a CSV line written by [`super::files::Csv`] (double-quote quoting).
+fn split_csv(line: &str) -> Vec<String> {
+    let mut out = vec![];
+    let mut cur = String::new();
+    let mut quoted = false;
+    let mut chars = line.chars().peekable();
+    while let Some(c) = chars.next() {
+        match (c, quoted) {
+            ('"', true) if chars.peek() == Some(&'"') => {
+                cur.push('"');
+                chars.next();
+            }
+            ('"', _) => quoted = !quoted,
+            (',', false) => out.push(std::mem::take(&mut cur)),
+            _ => cur.push(c),
+        }
+    }
+    out.push(cur);
+    out
+}
+
+/// Adds a result CSV file of `out` to the report as a table with shortened numbers.
+fn csv_file_table(report: &mut Report, caption: &str, path: &Path) {
+    if let Ok(t) = std::fs::read_to_string(path) {
+        let rows = pretty_csv(&t);
+        if let Some((header, body)) = rows.split_first() {
+            report.table(caption, header, body);
+        }
+    }
+}
+
+fn version() -> String {
+    let v = env!("CARGO_PKG_VERSION");
+    let git = std::process::Command::new("git")
+        .args([
+            "-C",
+            env!("CARGO_MANIFEST_DIR"),
+            "describe",
+            "--always",
+            "--dirty",
+        ])
+        .output()
+        .ok()
+        .filter(|o| o.status.success())
+        .and_then(|o| String::from_utf8(o.stdout).ok())
+        .map(|s| s.trim().to_string())
+        .filter(|s| !s.is_empty());
+    match git {
+        Some(g) => format!("aeroform {v} ({g})"),
+        None => format!("aeroform {v}"),
+    }
+}
+
+/// Draws every figure of the study from the results in `out`, writes `figures.json` and
+/// `report.html`; returns the figure list.
+///
+/// # Errors
+/// A missing or malformed result file, a figure that cannot be drawn, a write failure.
+pub fn render_all(study: &Study, out: &Path) -> anyhow::Result<Vec<FigureEntry>> {
+    let dir = out.join(names::FIGURES);
+    ensure_dir(&dir)?;
+    let mut cv = Canvas {
+        dir: &dir,
+        kinds: study.figure_kinds(),
+        drawn: vec![],
+    };
+    let s = &study.spec;
+    let mut report = Report::new(format!("aeroform study: {}", s.name));
+    report.section("Summary");
+    if !s.description.is_empty() {
+        report.text(s.description.clone());
+    }
+    let mut summary: Vec<(String, String)> = vec![
+        ("study".into(), s.name.clone()),
+        ("seed".into(), s.seed.to_string()),
+        ("version".into(), version()),
+    ];
+
+    // ---- identification
+    let id_path = out.join(names::IDENTIFICATION);
+    let id: Option<Identification> = if s.data.is_some() {
+        Some(
+            Identification::read(&id_path)
+                .with_context(|| format!("reading {}", id_path.display()))?,
+        )
+    } else {
+        None
+    };
+    if let Some(id) = &id {
+        summary.push(("data".into(), id.dataset.clone()));
+        summary.push(("cases identified".into(), id.cases.len().to_string()));
+        summary.push((
+            "library rank".into(),
+            format!("{} of {} terms", id.library.rank, id.library.terms.len()),
+        ));
+    }
+    report.key_values("Study", &summary);
+
+    if let Some(id) = &id {
+        let metas: Vec<CaseMeta> = read_json(&out.join(names::CASES))?;
+        // series figures
+        let mut series: Vec<CaseSeries> = vec![];
+        let sdir = out.join(names::SERIES);
+        let wanted: Vec<String> = if s.outputs.series_cases.is_empty() {
+            let mut v = vec![metas[0].id.clone()];
+            if metas.len() > 1 {
+                v.push(metas[metas.len() - 1].id.clone());
+            }
+            v
+        } else {
+            s.outputs.series_cases.clone()
+        };
+        for w in &wanted {
+            series.push(read_json(&sdir.join(format!("{w}.json")))?);
+        }
+        if cv.wants("time_series") {
+            for x in &series {
+                cv.draw(
+                    "time_series",
+                    &format!("time_series_{}", safe(&x.id)),
+                    format!(
+                        "Case {}: prescribed motion and measured forces (solid) with the identified model (dashed), first {} s.",
+                        x.id,
+                        x.t.last().copied().unwrap_or(0.0).round()
+                    ),
+                    &time_series_figure(x),
+                )?;
+            }
+        }
+        if cv.wants("spectrum") {
+            for x in &series {
+                for f in [Force::Moment, Force::Lift] {
+                    cv.draw(
+                        "spectrum",
+                        &format!("spectrum_{}_{}", safe(&x.id), f.name()),
+                        format!(
+                            "Case {}: amplitude spectrum of {} (Hann window), measured and identified model; the key frequencies of the Eq. 14 loss are marked.",
+                            x.id,
+                            f.symbol()
+                        ),
+                        &spectrum_figure(x, f),
+                    )?;
+                }
+            }
+        }
+        if cv.wants("delta_path") {
+            let groups: Vec<String> = if s.outputs.delta_groups.is_empty() {
+                id.groups.iter().take(4).map(|g| g.name.clone()).collect()
+            } else {
+                s.outputs.delta_groups.clone()
+            };
+            for g in &groups {
+                for f in [Force::Moment, Force::Lift] {
+                    if let Some(fig) = delta_path_figure(id, g, f) {
+                        cv.draw(
+                            "delta_path",
+                            &format!("delta_path_{}_{}", safe(g), f.name()),
+                            format!(
+                                "Group {g}, {}: number of terms and key-frequency loss along the δ path (Alg. 3); the sparsest support under the loss limit is selected.",
+                                f.name()
+                            ),
+                            &fig,
+                        )?;
+                    }
+                }
+            }
+        }
+        if cv.wants("heatmap") {
+            for f in [Force::Moment, Force::Lift] {
+                for (config, fig) in heatmap_figures(id, &metas, f) {
+                    cv.draw(
+                        "heatmap",
+                        &format!("heatmap_{}_{}", safe(&config), f.name()),
+                        format!(
+                            "Configuration {config}: Eq. 19 coefficients of {} over pitch amplitude × wind speed, one layer per coefficient; grey cells: term inactive.",
+                            f.symbol()
+                        ),
+                        &fig,
+                    )?;
+                }
+            }
+        }
+        if cv.wants("histogram") {
+            cv.draw(
+                "histogram",
+                "histogram_quality",
+                "Misfit of every case, moment and lift: 1 − R² and |1 − MFWA| (Eq. 18).".into(),
+                &quality_histogram(id),
+            )?;
+        }
+        if cv.wants("derivatives") {
+            cv.draw(
+                "derivatives",
+                "derivatives",
+                "Identified flutter derivatives against reduced frequency (h-terms at K_h, α-terms at K_α) with the flat-plate closed forms.".into(),
+                &derivative_figure(id),
+            )?;
+        }
+
+        report.section("Identification");
+        let mut rows = vec![];
+        for g in &id.groups {
+            for (name, gf) in [("moment", &g.moment), ("lift", &g.lift)] {
+                rows.push(vec![
+                    g.name.clone(),
+                    name.to_string(),
+                    g.cases.len().to_string(),
+                    gf.support.len().to_string(),
+                    gf.support
+                        .iter()
+                        .map(|t| term_label(t))
+                        .collect::<Vec<_>>()
+                        .join(", "),
+                    format!("{:.3e}", gf.loss),
+                    format!("{:.3e}", gf.loss_limit),
+                ]);
+            }
+        }
+        report.table(
+            "Selected supports per group",
+            &[
+                "group",
+                "force",
+                "cases",
+                "terms",
+                "support",
+                "loss",
+                "loss limit",
+            ]
+            .map(String::from),
+            &rows,
+        );
+        csv_file_table(
+            &mut report,
+            "Table IV: identified vs true coefficients over the noise realisations",
+            &out.join(names::TABLE_IV),
+        );
+        if id.cases.len() <= 64 {
+            csv_file_table(
+                &mut report,
+                "Eq. 19 derivatives and metrics per case",
+                &out.join(names::DERIVATIVES),
+            );
+        } else {
+            report.text(format!(
+                "{} cases: the per-case table is in {} and {}.",
+                id.cases.len(),
+                names::DERIVATIVES,
+                names::COEFFICIENTS
+            ));
+        }
+        for k in [
+            "time_series",
+            "spectrum",
+            "delta_path",
+            "histogram",
+            "heatmap",
+            "derivatives",
+        ] {
+            cv.embed(&mut report, k);
+        }
+    }
+
+    // ---- flutter
+    if let Some(f) = &s.flutter {
+        let runs: Vec<FlutterRun> = read_json(&out.join(names::FLUTTER))?;
+        if cv.wants("vg") {
+            for (i, r) in runs.iter().enumerate() {
+                let scale = if f.axes == "reduced" {
+                    AxisScale::reduced(r.semi_chord, r.omega_alpha)
+                } else {
+                    AxisScale::si()
+                };
+                cv.draw(
+                    "vg",
+                    &format!("vg_{i}"),
+                    format!(
+                        "{}: damping ratio and frequency of the aeroelastic modes against wind speed.",
+                        r.label
+                    ),
+                    &vg_figure(&r.analysis, &format!("V–g / V–f: {}", r.label), &scale),
+                )?;
+            }
+        }
+        report.section("Flutter");
+        csv_file_table(
+            &mut report,
+            "Flutter and divergence points (reduced: U/(bω_α), ω/ω_α)",
+            &out.join(names::FLUTTER_POINTS),
+        );
+        cv.embed(&mut report, "vg");
+    }
+
+    // ---- LCO
+    if let Some(l) = &s.lco {
+        let stage: LcoStage = read_json(&out.join(names::LCO))?;
+        let scale = if s.flutter.as_ref().is_some_and(|f| f.axes == "reduced") {
+            AxisScale::reduced(stage.semi_chord, stage.omega_alpha)
+        } else {
+            AxisScale::si()
+        };
+        if cv.wants("bifurcation") {
+            cv.draw(
+                "bifurcation",
+                "bifurcation",
+                format!(
+                    "LCO pitch amplitude against wind speed, upward (▲) and downward (▼) sweeps{}; model: {}.",
+                    if stage.flutter_speed.is_some() { ", linear flutter speed marked" } else { "" },
+                    stage.model
+                ),
+                &bifurcation_figure(
+                    &stage.up,
+                    &stage.down,
+                    stage.flutter_speed,
+                    "LCO sweeps",
+                    &scale,
+                ),
+            )?;
+        }
+        if cv.wants("phase") && !stage.phase.is_empty() {
+            cv.draw(
+                "phase",
+                "phase",
+                format!(
+                    "Phase portraits of the limit cycles ({} pitch periods from the end of the upward-sweep run).",
+                    l.phase_periods
+                ),
+                &phase_figure(&stage.phase, "Limit cycles: pitch phase portraits", &scale),
+            )?;
+        }
+        report.section("Limit-cycle oscillations");
+        csv_file_table(&mut report, "LCO runs", &out.join(names::LCO_AMPLITUDES));
+        cv.embed(&mut report, "bifurcation");
+        cv.embed(&mut report, "phase");
+    }
+
+    // ---- settings
+    report.section("Settings");
+    if let Some(id) = &id {
+        let v = serde_json::to_value(&id.settings)?;
+        let rows: Vec<(String, String)> = v
+            .as_object()
+            .map(|o| o.iter().map(|(k, v)| (k.clone(), v.to_string())).collect())
+            .unwrap_or_default();
+        report.key_values("Identification settings", &rows);
+    }
+    let lines: Vec<Vec<String>> = study.text.lines().map(|l| vec![l.to_string()]).collect();
+    report.table("Study file as run", &["study.toml".to_string()], &lines);
+
+    let entries: Vec<FigureEntry> = cv.drawn.iter().map(|d| d.entry.clone()).collect();
+    write_json(&out.join(names::FIGURE_LIST), &entries)?;
+    report
+        .write(&out.join(names::REPORT))
+        .context("writing report.html")?;
+    Ok(entries)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn report_numbers_are_shortened_and_text_kept() {
+        assert_eq!(pretty_cell("6.000000000000001"), "6.0000");
+        assert_eq!(pretty_cell("-23.096456178436412"), "-23.096");
+        assert_eq!(pretty_cell("0.000006850861010712863"), "6.8509e-6");
+        assert_eq!(pretty_cell("4"), "4");
+        assert_eq!(pretty_cell("0"), "0");
+        assert_eq!(pretty_cell("D-U4-A6"), "D-U4-A6");
+        assert_eq!(split_csv("a,\"b,c\",\"d\"\"e\""), vec!["a", "b,c", "d\"e"]);
+    }
+}

@@ -1,0 +1,13 @@
+//! Studies: a TOML file that says which data to identify, which aeroelastic analyses to
+//! run and which figures to draw ([`spec`]); the runner ([`run`]) that calls the libraries
+//! stage by stage and writes every result file; the figures and HTML report drawn from
+//! those files alone ([`figures`]), so that `aeroform plot` can redraw them.
+
+pub mod build;
+pub mod figures;
+pub mod files;
+pub mod progress;
+pub mod run;
+pub mod spec;
+
+pub use spec::Study;

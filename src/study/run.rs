@@ -1,0 +1,545 @@
+//! Runs a study end to end: data → identification → flutter → LCO → figures and report.
+//! Orchestration only: every number comes from `identify` / `aeroelastic`.
+
+use std::path::Path;
+use std::time::Instant;
+
+use aeroelastic::flutter::{FlutterAnalysis, FlutterMethod, FlutterOptions};
+use aeroelastic::lco::{Classification, LcoOptions, LcoResult, SweepDirection};
+use aeroelastic::trajectory::Trajectory;
+use anyhow::Context;
+use identify::pipeline::Identification;
+use identify::series::{case_series, SeriesOptions};
+use serde::{Deserialize, Serialize};
+
+use super::build;
+use super::files::{ensure_dir, num, write_json, write_text, Csv};
+use super::progress::CountBar;
+use super::spec::{FlutterReference, Study};
+use crate::progress::IdentifyBar;
+
+/// File names of the results (relative to the output folder).
+pub mod names {
+    /// Copy of the study file.
+    pub const STUDY: &str = "study.toml";
+    /// Case descriptors (JSON list of `identify::record::CaseMeta`).
+    pub const CASES: &str = "cases.json";
+    /// Identification result.
+    pub const IDENTIFICATION: &str = "identification.json";
+    /// Raw coefficients of every library term, per case and force.
+    pub const COEFFICIENTS: &str = "coefficients.csv";
+    /// Eq. 19 derivatives and metrics per case.
+    pub const DERIVATIVES: &str = "derivatives.csv";
+    /// Table IV: identified vs true coefficients.
+    pub const TABLE_IV: &str = "table_iv.csv";
+    /// Folder of the compact case series.
+    pub const SERIES: &str = "series";
+    /// Flutter analyses.
+    pub const FLUTTER: &str = "flutter.json";
+    /// Flutter and divergence points with the published values.
+    pub const FLUTTER_POINTS: &str = "flutter_points.csv";
+    /// LCO sweeps and phase-portrait trajectories.
+    pub const LCO: &str = "lco.json";
+    /// LCO amplitudes per speed and sweep.
+    pub const LCO_AMPLITUDES: &str = "lco_amplitudes.csv";
+    /// Figure folder.
+    pub const FIGURES: &str = "figures";
+    /// List of the figures drawn.
+    pub const FIGURE_LIST: &str = "figures.json";
+    /// The HTML report.
+    pub const REPORT: &str = "report.html";
+}
+
+/// One flutter analysis as saved in `flutter.json`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FlutterRun {
+    /// Label.
+    pub label: String,
+    /// Aerodynamic model name of the study (`theodorsen`, …).
+    pub model: String,
+    /// Semi-chord b [m].
+    pub semi_chord: f64,
+    /// ω_α [rad/s].
+    pub omega_alpha: f64,
+    /// The analysis.
+    pub analysis: FlutterAnalysis,
+    /// Published values.
+    pub reference: Option<FlutterReference>,
+}
+
+/// The LCO stage as saved in `lco.json`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LcoStage {
+    /// Model description.
+    pub model: String,
+    /// Semi-chord b [m].
+    pub semi_chord: f64,
+    /// ω_α [rad/s].
+    pub omega_alpha: f64,
+    /// Linear flutter speed of the same model [m/s], if a flutter run of it exists.
+    pub flutter_speed: Option<f64>,
+    /// Upward sweep, increasing U.
+    pub up: Vec<LcoResult>,
+    /// Downward sweep, increasing U (empty without `up_down`).
+    pub down: Vec<LcoResult>,
+    /// Trajectories of the phase portraits.
+    pub phase: Vec<Trajectory>,
+}
+
+/// Wall time of each stage [s].
+pub type Timings = Vec<(&'static str, f64)>;
+
+fn timed<T>(
+    timings: &mut Timings,
+    stage: &'static str,
+    f: impl FnOnce() -> anyhow::Result<T>,
+) -> anyhow::Result<T> {
+    let t = Instant::now();
+    let r = f()?;
+    timings.push((stage, t.elapsed().as_secs_f64()));
+    Ok(r)
+}
+
+/// Runs `study` and writes everything under `out`; returns the stage timings.
+///
+/// # Errors
+/// The first failing stage, with its context; files written before the failure are
+/// complete (atomic writes), nothing half-written remains.
+pub fn run_study(study: &Study, out: &Path, quiet: bool) -> anyhow::Result<Timings> {
+    ensure_dir(out)?;
+    write_text(&out.join(names::STUDY), &study.text)?;
+    let mut timings = Timings::new();
+    let cases = timed(&mut timings, "data", || build::cases(study, out))?;
+    if let Some(cases) = &cases {
+        if !quiet {
+            println!("data: {} cases; {}", cases.cases.len(), cases.source);
+        }
+        let id = timed(&mut timings, "identify", || {
+            identify_stage(study, cases, out)
+        })?;
+        if !quiet {
+            println!("{}", id.summary_table());
+        }
+    }
+    let mut flutter_speed = None;
+    if study.spec.flutter.is_some() {
+        let runs = timed(&mut timings, "flutter", || flutter_stage(study, out))?;
+        let model = study.spec.aero.as_ref().map(|a| a.model.as_str());
+        flutter_speed = runs
+            .iter()
+            .find(|r| Some(r.model.as_str()) == model)
+            .and_then(|r| r.analysis.flutter.map(|f| f.u));
+        if !quiet {
+            for r in &runs {
+                match r.analysis.flutter {
+                    Some(f) => println!(
+                        "flutter [{}]: U_F = {:.4} m/s (U/(bω_α) = {:.4}), ω_F/ω_α = {:.4}",
+                        r.label, f.u, f.u_reduced, f.omega_ratio
+                    ),
+                    None => println!("flutter [{}]: stable over the scan", r.label),
+                }
+            }
+        }
+    }
+    if study.spec.lco.is_some() {
+        timed(&mut timings, "lco", || lco_stage(study, out, flutter_speed))?;
+    }
+    timed(&mut timings, "figures+report", || {
+        super::figures::render_all(study, out).map(|_| ())
+    })?;
+    Ok(timings)
+}
+
+fn identify_stage(
+    study: &Study,
+    cases: &build::Cases,
+    out: &Path,
+) -> anyhow::Result<Identification> {
+    let settings = study.spec.identify.clone().unwrap_or_default().settings;
+    let bar = IdentifyBar::new();
+    let result =
+        identify::pipeline::identify(&cases.cases, &settings, &cases.name, &|p| bar.observe(p));
+    bar.finish();
+    let id = result.context("identification")?;
+    id.write(&out.join(names::IDENTIFICATION))?;
+    write_json(&out.join(names::CASES), &cases.metas())?;
+
+    // coefficients per case and force (wide: one column per library term)
+    let mut coef = Csv::new(
+        &["case", "group", "force", "U_m_s", "amplitude_deg"]
+            .iter()
+            .map(|s| s.to_string())
+            .chain(id.library.terms.iter().cloned())
+            .collect::<Vec<_>>(),
+    );
+    let mut der = Csv::new(&[
+        "case",
+        "group",
+        "U_m_s",
+        "amplitude_deg",
+        "K_alpha",
+        "K_h",
+        "H1",
+        "H2",
+        "H3",
+        "H4",
+        "N1_lift",
+        "N2_lift",
+        "N3_lift",
+        "A1",
+        "A2",
+        "A3",
+        "A4",
+        "N1_moment",
+        "N2_moment",
+        "N3_moment",
+        "R2_lift",
+        "R2_moment",
+        "MFWA_lift",
+        "MFWA_moment",
+        "loss_lift",
+        "loss_moment",
+    ]);
+    for (c, nc) in id.cases.iter().zip(&cases.cases) {
+        // degrees → radians → degrees: round off the last-bit noise (6.000000000000001)
+        let amp = nc
+            .meta
+            .amplitude
+            .map(|a| (a.to_degrees() * 1e9).round() / 1e9);
+        for (force, terms) in [("lift", &c.lift.terms), ("moment", &c.moment.terms)] {
+            let mut row = vec![
+                c.id.clone(),
+                c.group.clone(),
+                force.to_string(),
+                num(Some(c.wind_speed)),
+                num(amp),
+            ];
+            row.extend(id.library.terms.iter().map(|t| num(terms.get(t))));
+            coef.rows.push(row);
+        }
+        let l = &c.lift.eq19;
+        let m = &c.moment.eq19;
+        der.rows.push(
+            [
+                vec![c.id.clone(), c.group.clone()],
+                [
+                    Some(c.wind_speed),
+                    amp,
+                    c.k_alpha,
+                    c.k_h,
+                    l.H1,
+                    l.H2,
+                    l.H3,
+                    l.H4,
+                    l.N1,
+                    l.N2,
+                    l.N3,
+                    m.A1,
+                    m.A2,
+                    m.A3,
+                    m.A4,
+                    m.N1,
+                    m.N2,
+                    m.N3,
+                    c.lift.r2,
+                    c.moment.r2,
+                    c.lift.mfwa,
+                    c.moment.mfwa,
+                    c.lift.key_frequency_loss,
+                    c.moment.key_frequency_loss,
+                ]
+                .into_iter()
+                .map(num)
+                .collect(),
+            ]
+            .concat(),
+        );
+    }
+    coef.write(&out.join(names::COEFFICIENTS))?;
+    der.write(&out.join(names::DERIVATIVES))?;
+
+    // compact series of the shown cases
+    let wanted: Vec<String> = if study.spec.outputs.series_cases.is_empty() {
+        let mut v = vec![cases.cases[0].meta.id.clone()];
+        if cases.cases.len() > 1 {
+            v.push(cases.cases[cases.cases.len() - 1].meta.id.clone());
+        }
+        v
+    } else {
+        study.spec.outputs.series_cases.clone()
+    };
+    let dir = out.join(names::SERIES);
+    ensure_dir(&dir)?;
+    for w in &wanted {
+        let Some(i) = cases.cases.iter().position(|c| &c.meta.id == w) else {
+            anyhow::bail!("outputs.series_cases: no case `{w}` in the data");
+        };
+        let s = case_series(&cases.cases[i], &id.cases[i], &SeriesOptions::default())
+            .with_context(|| format!("series of case {w}"))?;
+        write_json(&dir.join(format!("{w}.json")), &s)?;
+    }
+
+    if let Some(t) = study.spec.data.as_ref().and_then(|d| d.table_iv.as_ref()) {
+        table_iv(&id, t, out)?;
+    }
+    Ok(id)
+}
+
+/// Table IV: per channel and true term, the true value and the mean and standard deviation
+/// of the identified coefficient over the noise realisations, how often the term was
+/// selected, and how often the whole support was exactly the true one.
+fn table_iv(id: &Identification, t: &super::spec::TableIvSpec, out: &Path) -> anyhow::Result<()> {
+    let mut csv = Csv::new(&[
+        "channel",
+        "term",
+        "true",
+        "mean",
+        "std",
+        "selected_in",
+        "realisations",
+        "exact_support_in",
+    ]);
+    let truth = identify::paper::TABLE_IV_TERMS;
+    for (channel, coefs) in [("moment", t.moment), ("lift", t.lift)] {
+        let n = id.cases.len();
+        let mut exact = 0;
+        for g in &id.groups {
+            let s = if channel == "moment" {
+                &g.moment.support
+            } else {
+                &g.lift.support
+            };
+            let mut s: Vec<&str> = s.iter().map(String::as_str).collect();
+            s.sort_unstable();
+            let mut tr = truth.to_vec();
+            tr.sort_unstable();
+            if s == tr {
+                exact += 1;
+            }
+        }
+        for (k, term) in truth.iter().enumerate() {
+            let vals: Vec<f64> = id
+                .cases
+                .iter()
+                .map(|c| {
+                    let tm = if channel == "moment" {
+                        &c.moment.terms
+                    } else {
+                        &c.lift.terms
+                    };
+                    tm.get(term).unwrap_or(0.0)
+                })
+                .collect();
+            let mean = vals.iter().sum::<f64>() / n as f64;
+            let sd = if n > 1 {
+                (vals.iter().map(|v| (v - mean) * (v - mean)).sum::<f64>() / (n - 1) as f64).sqrt()
+            } else {
+                f64::NAN
+            };
+            let selected = vals.iter().filter(|v| **v != 0.0).count();
+            csv.rows.push(vec![
+                channel.into(),
+                term.to_string(),
+                num(Some(coefs[k])),
+                num(Some(mean)),
+                num(Some(sd)),
+                selected.to_string(),
+                n.to_string(),
+                exact.to_string(),
+            ]);
+        }
+    }
+    csv.write(&out.join(names::TABLE_IV))
+}
+
+fn flutter_stage(study: &Study, out: &Path) -> anyhow::Result<Vec<FlutterRun>> {
+    let (Some(f), Some(s), Some(a)) =
+        (&study.spec.flutter, &study.spec.structure, &study.spec.aero)
+    else {
+        anyhow::bail!("[flutter] needs [structure] and [aero]");
+    };
+    let runs: Vec<super::spec::FlutterRunSpec> = if f.run.is_empty() {
+        vec![super::spec::FlutterRunSpec {
+            label: format!("{} (p-k)", a.model),
+            model: None,
+            method: "pk".into(),
+            reference: None,
+        }]
+    } else {
+        f.run.clone()
+    };
+    let opts = FlutterOptions {
+        u_min: f.u_min,
+        u_max: f.u_max,
+        n_speeds: f.n_speeds,
+        tol_rel: f.tol_rel,
+    };
+    let bar = CountBar::new("flutter", runs.len());
+    let mut results = Vec::new();
+    for r in &runs {
+        let model = r.model.clone().unwrap_or_else(|| a.model.clone());
+        let section = build::linear_section(study, &model)?;
+        let method = if r.method == "p" {
+            FlutterMethod::P
+        } else {
+            FlutterMethod::Pk
+        };
+        let analysis = section
+            .flutter(method, &opts)
+            .with_context(|| format!("flutter run `{}`", r.label))?;
+        bar.inc();
+        results.push(FlutterRun {
+            label: r.label.clone(),
+            model,
+            semi_chord: s.semi_chord,
+            omega_alpha: s.omega_alpha,
+            analysis,
+            reference: r.reference,
+        });
+    }
+    bar.finish();
+    write_json(&out.join(names::FLUTTER), &results)?;
+    let mut csv = Csv::new(&[
+        "run",
+        "model",
+        "method",
+        "U_F_m_s",
+        "omega_F_rad_s",
+        "U_F_reduced",
+        "omega_ratio",
+        "U_D_m_s",
+        "U_D_reduced",
+        "ref_U_F_reduced",
+        "ref_omega_ratio",
+        "ref_U_D_reduced",
+        "rel_err_U_F",
+        "rel_err_U_D",
+    ]);
+    for r in &results {
+        let scale = r.semi_chord * r.omega_alpha;
+        let fl = r.analysis.flutter;
+        let ud = r.analysis.divergence_speed;
+        let rf = r.reference;
+        let rel = |v: Option<f64>, reference: Option<f64>| match (v, reference) {
+            (Some(v), Some(x)) => Some((v - x) / x),
+            _ => None,
+        };
+        csv.rows.push(vec![
+            r.label.clone(),
+            r.model.clone(),
+            format!("{:?}", r.analysis.method),
+            num(fl.map(|f| f.u)),
+            num(fl.map(|f| f.omega)),
+            num(fl.map(|f| f.u_reduced)),
+            num(fl.map(|f| f.omega_ratio)),
+            num(ud),
+            num(ud.map(|u| u / scale)),
+            num(rf.and_then(|x| x.u_reduced)),
+            num(rf.and_then(|x| x.omega_ratio)),
+            num(rf.and_then(|x| x.divergence)),
+            num(rel(fl.map(|f| f.u_reduced), rf.and_then(|x| x.u_reduced))),
+            num(rel(ud.map(|u| u / scale), rf.and_then(|x| x.divergence))),
+        ]);
+    }
+    csv.write(&out.join(names::FLUTTER_POINTS))?;
+    Ok(results)
+}
+
+fn lco_stage(study: &Study, out: &Path, flutter_speed: Option<f64>) -> anyhow::Result<()> {
+    let (Some(l), Some(s)) = (&study.spec.lco, &study.spec.structure) else {
+        anyhow::bail!("[lco] needs [structure]");
+    };
+    let section = build::nonlinear_section(study)?;
+    let opts = LcoOptions {
+        rtol: l.rtol,
+        atol: l.atol,
+        max_periods: l.max_periods,
+        ..LcoOptions::default()
+    };
+    let up0 = section.perturbation(l.perturbation_deg.to_radians());
+    let total = l.speeds.len() * if l.up_down { 2 } else { 1 };
+    let bar = CountBar::new("LCO", total);
+    let observer = |p| bar.observe_sweep(p);
+    let (up, down) = if l.up_down {
+        let down0 = section.perturbation(l.perturbation_down_deg.to_radians());
+        let h = section
+            .lco_hysteresis(&l.speeds, &up0, &down0, &opts, &observer)
+            .context("LCO sweeps")?;
+        (h.up, h.down)
+    } else {
+        let up = section
+            .lco_sweep(&l.speeds, SweepDirection::Up, &up0, &opts, &observer)
+            .context("LCO sweep")?;
+        (up, vec![])
+    };
+    bar.finish();
+    // phase portraits: a few cycles from the final state of the nearest upward run
+    let mut phase = Vec::new();
+    for &u in &l.phase_speeds {
+        let Some(r) = up
+            .iter()
+            .min_by(|a, b| (a.u - u).abs().total_cmp(&(b.u - u).abs()))
+        else {
+            continue;
+        };
+        if !matches!(
+            r.classification,
+            Classification::Lco | Classification::Unsettled
+        ) {
+            continue;
+        }
+        let omega = if r.omega > 0.0 {
+            r.omega
+        } else {
+            s.omega_alpha
+        };
+        let period = std::f64::consts::TAU / omega;
+        let steps = (l.phase_periods * 400.0).ceil() as usize;
+        phase.push(
+            section
+                .trajectory(r.u, &r.final_state, l.phase_periods * period, steps)
+                .with_context(|| format!("phase portrait at U = {}", r.u))?,
+        );
+    }
+    let stage = LcoStage {
+        model: section.aero.name(),
+        semi_chord: s.semi_chord,
+        omega_alpha: s.omega_alpha,
+        flutter_speed,
+        up,
+        down,
+        phase,
+    };
+    write_json(&out.join(names::LCO), &stage)?;
+    let mut csv = Csv::new(&[
+        "sweep",
+        "U_m_s",
+        "class",
+        "amplitude_alpha_deg",
+        "amplitude_h_m",
+        "omega_rad_s",
+        "cycles",
+        "t_end_s",
+    ]);
+    for (name, rs) in [("up", &stage.up), ("down", &stage.down)] {
+        for r in rs.iter() {
+            let class = match r.classification {
+                Classification::Decay => "decay",
+                Classification::Lco => "lco",
+                Classification::Divergent { .. } => "divergent",
+                Classification::Unsettled => "unsettled",
+            };
+            csv.rows.push(vec![
+                name.into(),
+                num(Some(r.u)),
+                class.into(),
+                num(Some(r.amplitude_alpha.to_degrees())),
+                num(Some(r.amplitude_h)),
+                num(Some(r.omega)),
+                r.cycles.to_string(),
+                num(Some(r.t_end)),
+            ]);
+        }
+    }
+    csv.write(&out.join(names::LCO_AMPLITUDES))
+}

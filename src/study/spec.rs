@@ -1,0 +1,964 @@
+//! The study file (TOML): what to compute and draw. Parsed once with `deny_unknown_fields`
+//! everywhere; every error names the file, the line and the dotted key.
+
+use std::path::{Path, PathBuf};
+
+use identify::pipeline::IdentifySettings;
+use serde::{Deserialize, Serialize};
+use toml::de::{DeTable, DeValue};
+
+/// A whole study.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StudySpec {
+    /// Study name (output folder `out/<name>` by default; `[A-Za-z0-9._-]+`).
+    pub name: String,
+    /// Free text shown at the top of the report.
+    #[serde(default)]
+    pub description: String,
+    /// Master seed of every random draw of the study (noise of synthetic data).
+    #[serde(default = "one")]
+    pub seed: u64,
+    /// Where the forced-motion data come from (omit for a study without identification).
+    pub data: Option<DataSpec>,
+    /// Identification settings (defaults when omitted and `[data]` is given).
+    pub identify: Option<IdentifySpec>,
+    /// Structure of the aeroelastic section (flutter / LCO stages).
+    pub structure: Option<StructureSpec>,
+    /// Aerodynamic model of the aeroelastic section.
+    pub aero: Option<AeroSpec>,
+    /// Flutter stage.
+    pub flutter: Option<FlutterSpec>,
+    /// LCO stage.
+    pub lco: Option<LcoSpec>,
+    /// Figures and series to save.
+    #[serde(default)]
+    pub outputs: OutputsSpec,
+}
+
+fn one() -> u64 {
+    1
+}
+
+/// `[data]`: exactly one source.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DataSpec {
+    /// A data-set folder (DATA_FORMAT.md), relative to the study file.
+    pub dataset: Option<PathBuf>,
+    /// A synthetic campaign from a known polynomial law (`identify::synthetic`).
+    pub synthetic: Option<SyntheticSpec>,
+    /// The paper's numerical verification (Table IV/V, Eq. 15/16).
+    pub table_iv: Option<TableIvSpec>,
+    /// Virtual wind tunnel campaign (`aeroelastic::tunnel`): reserved, not available yet.
+    #[serde(rename = "virtual")]
+    pub virtual_tunnel: Option<toml::Table>,
+}
+
+/// Section geometry of synthetic data.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SectionSpec {
+    /// Chord B [m].
+    pub chord: f64,
+    /// Span [m].
+    pub span: f64,
+    /// Air density ρ [kg/m³].
+    pub air_density: f64,
+}
+
+impl Default for SectionSpec {
+    fn default() -> Self {
+        // the paper's quasi-flat plate
+        SectionSpec {
+            chord: 0.25,
+            span: 0.75,
+            air_density: 1.225,
+        }
+    }
+}
+
+/// One motion configuration (paper Table I).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ConfigSpec {
+    /// Label ("A".."G").
+    pub name: String,
+    /// Pitch frequency f_α [Hz].
+    pub freq_pitch: f64,
+    /// Heave frequency f_h [Hz].
+    pub freq_heave: f64,
+    /// Heave amplitude per pitch amplitude [mm/deg].
+    pub mm_per_deg: f64,
+}
+
+/// One term of a synthetic law.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LawTermSpec {
+    /// Library term name, e.g. `alpha*alpha_dot`.
+    pub term: String,
+    /// Nondimensional coefficient.
+    pub coefficient: f64,
+}
+
+/// `[data.synthetic.law]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LawSpec {
+    /// `"demo"` (identify's demonstration law) or `"custom"` (the lists below).
+    #[serde(default = "demo")]
+    pub preset: String,
+    /// Terms of C_L (custom law).
+    #[serde(default)]
+    pub lift: Vec<LawTermSpec>,
+    /// Terms of C_M (custom law).
+    #[serde(default)]
+    pub moment: Vec<LawTermSpec>,
+}
+
+fn demo() -> String {
+    "demo".into()
+}
+
+impl Default for LawSpec {
+    fn default() -> Self {
+        LawSpec {
+            preset: demo(),
+            lift: vec![],
+            moment: vec![],
+        }
+    }
+}
+
+/// `[data.synthetic]`: configurations × amplitudes × speeds of forced motion.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SyntheticSpec {
+    /// Section geometry.
+    #[serde(default)]
+    pub section: SectionSpec,
+    /// Motion configurations.
+    pub config: Vec<ConfigSpec>,
+    /// Pitch amplitudes [deg].
+    pub amplitudes_deg: Vec<f64>,
+    /// Wind speeds [m/s].
+    pub speeds: Vec<f64>,
+    /// Force law.
+    #[serde(default)]
+    pub law: LawSpec,
+    /// Sampling rate [Hz].
+    #[serde(default = "rate")]
+    pub rate: f64,
+    /// Record length [s].
+    #[serde(default = "duration")]
+    pub duration: f64,
+    /// Force noise, fraction of each channel's peak.
+    #[serde(default = "force_noise")]
+    pub force_noise: f64,
+    /// Heave sensor noise [m].
+    #[serde(default = "heave_noise")]
+    pub heave_noise: f64,
+    /// Pitch sensor noise [rad].
+    #[serde(default = "pitch_noise")]
+    pub pitch_noise: f64,
+    /// Also write the data set (manifest + CSV) under `OUT/dataset`.
+    #[serde(default)]
+    pub write_dataset: bool,
+}
+
+fn rate() -> f64 {
+    512.0
+}
+fn duration() -> f64 {
+    10.0
+}
+fn force_noise() -> f64 {
+    1e-3
+}
+fn heave_noise() -> f64 {
+    8e-6
+}
+fn pitch_noise() -> f64 {
+    1e-4
+}
+
+/// `[data.table_iv]`: the paper's Eq. 15/16 verification.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TableIvSpec {
+    /// Number of noise realisations (seeds `seed`, `seed+1`, …).
+    pub repeats: usize,
+    /// Noise standard deviation σ.
+    #[serde(default = "half")]
+    pub sigma: f64,
+    /// Sampling rate [Hz].
+    #[serde(default = "rate")]
+    pub rate: f64,
+    /// Duration [s].
+    #[serde(default = "twenty")]
+    pub duration: f64,
+    /// (A1, A2, H1, H2, N1, N2) of the moment channel (paper group 1).
+    #[serde(default = "group1")]
+    pub moment: [f64; 6],
+    /// (A1, A2, H1, H2, N1, N2) of the lift channel (paper group 2).
+    #[serde(default = "group2")]
+    pub lift: [f64; 6],
+}
+
+fn half() -> f64 {
+    0.5
+}
+fn twenty() -> f64 {
+    20.0
+}
+fn group1() -> [f64; 6] {
+    identify::paper::TableIvGroup::GROUP1.coefficients
+}
+fn group2() -> [f64; 6] {
+    identify::paper::TableIvGroup::GROUP2.coefficients
+}
+
+/// `[identify]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct IdentifySpec {
+    /// Every option of `identify::pipeline::identify` (`[identify.settings]`).
+    #[serde(default)]
+    pub settings: IdentifySettings,
+    /// Preprocessing (`[identify.preprocess]`).
+    #[serde(default)]
+    pub preprocess: PreprocessSpec,
+}
+
+/// `[identify.preprocess]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PreprocessSpec {
+    /// `"auto"`, `"harmonic"` or `"sg"` (Savitzky–Golay).
+    #[serde(default = "auto")]
+    pub velocity: String,
+    /// Subtract still-air runs.
+    #[serde(default = "yes")]
+    pub subtract_nowind: bool,
+    /// Savitzky–Golay half window [samples].
+    #[serde(default = "sg_half")]
+    pub sg_half_window: usize,
+    /// Savitzky–Golay order.
+    #[serde(default = "sg_order")]
+    pub sg_order: usize,
+}
+
+fn auto() -> String {
+    "auto".into()
+}
+fn yes() -> bool {
+    true
+}
+fn sg_half() -> usize {
+    identify::preprocess::DEFAULT_SG_HALF_WINDOW
+}
+fn sg_order() -> usize {
+    identify::preprocess::DEFAULT_SG_ORDER
+}
+
+impl Default for PreprocessSpec {
+    fn default() -> Self {
+        PreprocessSpec {
+            velocity: auto(),
+            subtract_nowind: true,
+            sg_half_window: sg_half(),
+            sg_order: sg_order(),
+        }
+    }
+}
+
+/// `[structure]`: a typical section in Hodges & Pierce's nondimensional form.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StructureSpec {
+    /// Mass ratio μ = m/(πρb²).
+    pub mu: f64,
+    /// r² = I_α/(m b²).
+    pub r_alpha2: f64,
+    /// ω_h/ω_α.
+    pub sigma: f64,
+    /// Mass-centre offset aft of the elastic axis [semi-chords].
+    #[serde(default)]
+    pub x_alpha: f64,
+    /// Semi-chord b [m].
+    #[serde(default = "unit")]
+    pub semi_chord: f64,
+    /// ω_α [rad/s].
+    #[serde(default = "unit")]
+    pub omega_alpha: f64,
+    /// Air density ρ [kg/m³].
+    #[serde(default = "unit")]
+    pub rho: f64,
+    /// Heave damping ratio.
+    #[serde(default)]
+    pub zeta_h: f64,
+    /// Pitch damping ratio.
+    #[serde(default)]
+    pub zeta_alpha: f64,
+    /// Cubic pitch spring k_α3/k_α [1/rad²] (k_α(α + k α³)).
+    #[serde(default)]
+    pub pitch_cubic: f64,
+}
+
+fn unit() -> f64 {
+    1.0
+}
+
+/// A nonlinear aerodynamic term added to a linear model.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AeroTermSpec {
+    /// `"lift"` or `"moment"`.
+    pub channel: String,
+    /// Library term name of degree ≥ 2, e.g. `alpha_dot^3`.
+    pub term: String,
+    /// Nondimensional coefficient.
+    pub coefficient: f64,
+}
+
+/// `[aero]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AeroSpec {
+    /// `theodorsen`, `quasi_steady`, `steady`, `flat_plate_table` (later: `identified`).
+    pub model: String,
+    /// Elastic axis a [semi-chords aft of mid-chord].
+    #[serde(default)]
+    pub elastic_axis: f64,
+    /// Lag roots of the table's rational-function approximation.
+    #[serde(default = "four")]
+    pub n_lag: usize,
+    /// Nonlinear terms.
+    #[serde(default)]
+    pub nonlinear: Vec<AeroTermSpec>,
+}
+
+fn four() -> usize {
+    4
+}
+
+/// Published values a flutter run is compared with.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FlutterReference {
+    /// U_F/(bω_α).
+    pub u_reduced: Option<f64>,
+    /// ω_F/ω_α.
+    pub omega_ratio: Option<f64>,
+    /// U_D/(bω_α).
+    pub divergence: Option<f64>,
+}
+
+/// One flutter analysis of `[flutter]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FlutterRunSpec {
+    /// Label in tables and figures.
+    pub label: String,
+    /// Aerodynamic model (as `[aero].model`; default the study's).
+    pub model: Option<String>,
+    /// `"p"` or `"pk"`.
+    pub method: String,
+    /// Published values.
+    pub reference: Option<FlutterReference>,
+}
+
+/// `[flutter]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FlutterSpec {
+    /// Lowest speed [m/s].
+    pub u_min: f64,
+    /// Highest speed [m/s].
+    pub u_max: f64,
+    /// Speeds of the scan.
+    #[serde(default = "eighty")]
+    pub n_speeds: usize,
+    /// Relative tolerance of the critical speed.
+    #[serde(default = "tol")]
+    pub tol_rel: f64,
+    /// Axes of the figures: `"si"` (m/s, Hz) or `"reduced"` (U/(bω_α), ω/ω_α).
+    #[serde(default = "si")]
+    pub axes: String,
+    /// Analyses (default: one p-k analysis of `[aero]`).
+    #[serde(default)]
+    pub run: Vec<FlutterRunSpec>,
+}
+
+fn eighty() -> usize {
+    80
+}
+fn tol() -> f64 {
+    1e-9
+}
+fn si() -> String {
+    "si".into()
+}
+
+/// `[lco]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LcoSpec {
+    /// Speeds [m/s].
+    pub speeds: Vec<f64>,
+    /// Also sweep down (hysteresis).
+    #[serde(default = "yes")]
+    pub up_down: bool,
+    /// Initial pitch perturbation of the upward sweep [deg].
+    #[serde(default = "one_f")]
+    pub perturbation_deg: f64,
+    /// Initial pitch perturbation of the downward sweep [deg].
+    #[serde(default = "ten")]
+    pub perturbation_down_deg: f64,
+    /// Longest run [pitch periods].
+    #[serde(default = "periods")]
+    pub max_periods: f64,
+    /// Relative tolerance of the integrator.
+    #[serde(default = "rtol")]
+    pub rtol: f64,
+    /// Absolute tolerance of the integrator.
+    #[serde(default = "atol")]
+    pub atol: f64,
+    /// Speeds [m/s] of the phase portraits (nearest LCO speeds of the upward sweep).
+    #[serde(default)]
+    pub phase_speeds: Vec<f64>,
+    /// Length of the phase portraits [pitch periods].
+    #[serde(default = "three")]
+    pub phase_periods: f64,
+}
+
+fn one_f() -> f64 {
+    1.0
+}
+fn ten() -> f64 {
+    10.0
+}
+fn three() -> f64 {
+    3.0
+}
+fn periods() -> f64 {
+    600.0
+}
+fn rtol() -> f64 {
+    1e-8
+}
+fn atol() -> f64 {
+    1e-10
+}
+
+/// Figure kinds a study can draw.
+pub const FIGURE_KINDS: [&str; 9] = [
+    "time_series",
+    "spectrum",
+    "delta_path",
+    "heatmap",
+    "histogram",
+    "derivatives",
+    "vg",
+    "bifurcation",
+    "phase",
+];
+
+/// `[outputs]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct OutputsSpec {
+    /// Figure kinds to draw (default: every kind the stages support).
+    pub figures: Option<Vec<String>>,
+    /// Case ids shown in time-series and spectrum figures (default: the first and the last
+    /// case).
+    #[serde(default)]
+    pub series_cases: Vec<String>,
+    /// Groups whose δ path is drawn (default: every group, at most 4).
+    #[serde(default)]
+    pub delta_groups: Vec<String>,
+}
+
+/// A parsed study with its source text and location.
+#[derive(Debug, Clone)]
+pub struct Study {
+    /// Parsed content.
+    pub spec: StudySpec,
+    /// The TOML text as read (copied to `OUT/study.toml`).
+    pub text: String,
+    /// File it came from (`<built-in quickstart>` for the embedded study).
+    pub path: PathBuf,
+    /// Folder relative paths are resolved against.
+    pub base: PathBuf,
+}
+
+/// The built-in quickstart study.
+pub const QUICKSTART: &str = include_str!("../../scenarios/quickstart.toml");
+
+/// An error in a study file: file, line, key, message.
+#[derive(Debug)]
+pub struct SpecError {
+    /// Study file.
+    pub path: String,
+    /// 1-based line (0 when unknown).
+    pub line: usize,
+    /// Dotted key.
+    pub key: String,
+    /// What is wrong.
+    pub message: String,
+}
+
+impl std::fmt::Display for SpecError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{}:{}: key `{}`: {}",
+            self.path, self.line, self.key, self.message
+        )
+    }
+}
+
+impl std::error::Error for SpecError {}
+
+/// Line index of a text and its span tree, to name the line of a dotted key.
+struct Lines<'a> {
+    starts: Vec<usize>,
+    spans: Option<toml::Spanned<DeTable<'a>>>,
+}
+
+impl<'a> Lines<'a> {
+    fn new(text: &'a str) -> Self {
+        let mut starts = vec![0];
+        starts.extend(text.match_indices('\n').map(|(i, _)| i + 1));
+        Lines {
+            starts,
+            spans: DeTable::parse(text).ok(),
+        }
+    }
+
+    fn line(&self, offset: usize) -> usize {
+        self.starts.partition_point(|&s| s <= offset).max(1)
+    }
+
+    /// Line of a dotted key path (`flutter.run[1].method`); the deepest existing prefix's
+    /// line when the full key is absent; 0 when nothing matches.
+    fn line_of(&self, key: &str) -> usize {
+        let Some(root) = &self.spans else { return 0 };
+        let mut table: Option<&DeTable<'_>> = Some(root.get_ref());
+        let mut line = 0;
+        for part in key.split('.') {
+            let (name, index) = match part.split_once('[') {
+                Some((n, rest)) => (n, rest.trim_end_matches(']').parse::<usize>().ok()),
+                None => (part, None),
+            };
+            let Some(t) = table else { break };
+            let Some(v) = t.get(name) else { break };
+            line = self.line(v.span().start);
+            let mut val: &DeValue<'_> = v.get_ref();
+            if let (Some(i), Some(arr)) = (index, val.as_array()) {
+                match arr.get(i) {
+                    Some(item) => {
+                        line = self.line(item.span().start);
+                        val = item.get_ref();
+                    }
+                    None => break,
+                }
+            }
+            table = val.as_table();
+        }
+        line
+    }
+}
+
+impl Study {
+    /// Parses a study from TOML text.
+    ///
+    /// # Errors
+    /// [`SpecError`] naming the line and key of a syntax error, an unknown key, a value of
+    /// the wrong type or a value out of range.
+    pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Study, SpecError> {
+        let display = path.display().to_string();
+        let lines = Lines::new(text);
+        let spec: StudySpec = toml::from_str(text).map_err(|e| {
+            let line = e.span().map(|s| lines.line(s.start)).unwrap_or(0);
+            let msg = e.message().trim().to_string();
+            // serde names the key in its message (`unknown field `x``, `missing field`)
+            let key = msg
+                .split('`')
+                .nth(1)
+                .filter(|_| msg.contains("field"))
+                .unwrap_or("(syntax)")
+                .to_string();
+            SpecError {
+                path: display.clone(),
+                line,
+                key,
+                message: msg,
+            }
+        })?;
+        let study = Study {
+            spec,
+            text: text.to_string(),
+            path: path.to_path_buf(),
+            base: base.to_path_buf(),
+        };
+        study.validate().map_err(|(key, message)| SpecError {
+            path: display,
+            line: lines.line_of(&key),
+            key,
+            message,
+        })?;
+        Ok(study)
+    }
+
+    /// Reads and parses a study file (relative data paths resolve against its folder).
+    ///
+    /// # Errors
+    /// [`SpecError`] when the file cannot be read (line 0) or does not parse.
+    pub fn read(path: &Path) -> Result<Study, SpecError> {
+        let text = std::fs::read_to_string(path).map_err(|e| SpecError {
+            path: path.display().to_string(),
+            line: 0,
+            key: "(file)".into(),
+            message: e.to_string(),
+        })?;
+        let base = path
+            .parent()
+            .map(Path::to_path_buf)
+            .unwrap_or_else(|| PathBuf::from("."));
+        Study::parse(&text, path, &base)
+    }
+
+    /// The embedded quickstart study.
+    ///
+    /// # Errors
+    /// Never for the committed file (checked by a unit test).
+    pub fn quickstart() -> Result<Study, SpecError> {
+        Study::parse(
+            QUICKSTART,
+            Path::new("<built-in quickstart.toml>"),
+            Path::new("."),
+        )
+    }
+
+    /// Figure kinds this study draws.
+    pub fn figure_kinds(&self) -> Vec<String> {
+        if let Some(f) = &self.spec.outputs.figures {
+            return f.clone();
+        }
+        let s = &self.spec;
+        let mut v: Vec<&str> = vec![];
+        if s.data.is_some() {
+            v.extend(["time_series", "spectrum", "delta_path", "histogram"]);
+            if s.data.as_ref().is_some_and(|d| d.table_iv.is_none()) {
+                v.extend(["heatmap", "derivatives"]);
+            }
+        }
+        if s.flutter.is_some() {
+            v.push("vg");
+        }
+        if let Some(l) = &s.lco {
+            v.push("bifurcation");
+            if !l.phase_speeds.is_empty() {
+                v.push("phase");
+            }
+        }
+        v.into_iter().map(String::from).collect()
+    }
+
+    /// Range and consistency checks; `Err((dotted key, message))`.
+    fn validate(&self) -> Result<(), (String, String)> {
+        let s = &self.spec;
+        let err = |k: &str, m: String| Err((k.to_string(), m));
+        if s.name.is_empty()
+            || !s
+                .name
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || matches!(c, '.' | '_' | '-'))
+        {
+            return err("name", format!("`{}` must match [A-Za-z0-9._-]+", s.name));
+        }
+        let pos = |k: &str, v: f64| -> Result<(), (String, String)> {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err((k.to_string(), format!("{v} must be finite and > 0")))
+            }
+        };
+        if let Some(d) = &s.data {
+            let n = [
+                d.dataset.is_some(),
+                d.synthetic.is_some(),
+                d.table_iv.is_some(),
+                d.virtual_tunnel.is_some(),
+            ]
+            .iter()
+            .filter(|b| **b)
+            .count();
+            if n != 1 {
+                return err(
+                    "data",
+                    format!("give exactly one of dataset, [data.synthetic], [data.table_iv], [data.virtual] ({n} given)"),
+                );
+            }
+            if d.virtual_tunnel.is_some() {
+                return err(
+                    "data.virtual",
+                    "the virtual wind tunnel source is not available in this build yet".into(),
+                );
+            }
+            if let Some(sy) = &d.synthetic {
+                pos("data.synthetic.section.chord", sy.section.chord)?;
+                pos("data.synthetic.section.span", sy.section.span)?;
+                pos("data.synthetic.section.air_density", sy.section.air_density)?;
+                pos("data.synthetic.rate", sy.rate)?;
+                pos("data.synthetic.duration", sy.duration)?;
+                if sy.config.is_empty() {
+                    return err("data.synthetic.config", "at least one configuration".into());
+                }
+                for (i, c) in sy.config.iter().enumerate() {
+                    if !identify::dataset::is_valid_case_id(&c.name) {
+                        return err(
+                            &format!("data.synthetic.config[{i}].name"),
+                            format!("`{}` must match [A-Za-z0-9._-]+", c.name),
+                        );
+                    }
+                    pos(
+                        &format!("data.synthetic.config[{i}].freq_pitch"),
+                        c.freq_pitch,
+                    )?;
+                    pos(
+                        &format!("data.synthetic.config[{i}].freq_heave"),
+                        c.freq_heave,
+                    )?;
+                    pos(
+                        &format!("data.synthetic.config[{i}].mm_per_deg"),
+                        c.mm_per_deg,
+                    )?;
+                }
+                for (k, vals) in [
+                    ("data.synthetic.amplitudes_deg", &sy.amplitudes_deg),
+                    ("data.synthetic.speeds", &sy.speeds),
+                ] {
+                    if vals.is_empty() {
+                        return err(k, "at least one value".into());
+                    }
+                    for v in vals.iter() {
+                        pos(k, *v)?;
+                    }
+                }
+                for (k, v) in [
+                    ("data.synthetic.force_noise", sy.force_noise),
+                    ("data.synthetic.heave_noise", sy.heave_noise),
+                    ("data.synthetic.pitch_noise", sy.pitch_noise),
+                ] {
+                    if !(v.is_finite() && v >= 0.0) {
+                        return err(k, format!("{v} must be finite and ≥ 0"));
+                    }
+                }
+                match sy.law.preset.as_str() {
+                    "demo" | "custom" => {}
+                    p => {
+                        return err(
+                            "data.synthetic.law.preset",
+                            format!("`{p}`: expected `demo` or `custom`"),
+                        )
+                    }
+                }
+                for (ch, terms) in [("lift", &sy.law.lift), ("moment", &sy.law.moment)] {
+                    for (i, t) in terms.iter().enumerate() {
+                        if let Err(e) = identify::library::Term::parse(&t.term) {
+                            return err(
+                                &format!("data.synthetic.law.{ch}[{i}].term"),
+                                e.to_string(),
+                            );
+                        }
+                    }
+                }
+            }
+            if let Some(t) = &d.table_iv {
+                if t.repeats == 0 {
+                    return err("data.table_iv.repeats", "must be ≥ 1".into());
+                }
+                pos("data.table_iv.rate", t.rate)?;
+                pos("data.table_iv.duration", t.duration)?;
+            }
+        }
+        let id = self.spec.identify.clone().unwrap_or_default();
+        if let Err(e) = id.settings.validate() {
+            return err("identify.settings", e.to_string());
+        }
+        if !matches!(id.preprocess.velocity.as_str(), "auto" | "harmonic" | "sg") {
+            return err(
+                "identify.preprocess.velocity",
+                format!(
+                    "`{}`: expected auto, harmonic or sg",
+                    id.preprocess.velocity
+                ),
+            );
+        }
+        if (s.flutter.is_some() || s.lco.is_some()) && (s.structure.is_none() || s.aero.is_none()) {
+            return err(
+                if s.structure.is_none() {
+                    "structure"
+                } else {
+                    "aero"
+                },
+                "the flutter and LCO stages need [structure] and [aero]".into(),
+            );
+        }
+        if let Some(st) = &s.structure {
+            for (k, v) in [
+                ("structure.mu", st.mu),
+                ("structure.r_alpha2", st.r_alpha2),
+                ("structure.semi_chord", st.semi_chord),
+                ("structure.omega_alpha", st.omega_alpha),
+                ("structure.rho", st.rho),
+            ] {
+                pos(k, v)?;
+            }
+        }
+        let models = [
+            "theodorsen",
+            "quasi_steady",
+            "steady",
+            "flat_plate_table",
+            "identified",
+        ];
+        let check_model = |k: &str, m: &str| -> Result<(), (String, String)> {
+            if m == "identified" {
+                return Err((
+                    k.to_string(),
+                    "the identified Eq. 19 model is not available in this build yet".into(),
+                ));
+            }
+            if models.contains(&m) {
+                Ok(())
+            } else {
+                Err((
+                    k.to_string(),
+                    format!("`{m}`: expected one of {}", models[..4].join(", ")),
+                ))
+            }
+        };
+        if let Some(a) = &s.aero {
+            check_model("aero.model", &a.model)?;
+            for (i, t) in a.nonlinear.iter().enumerate() {
+                if !matches!(t.channel.as_str(), "lift" | "moment") {
+                    return err(
+                        &format!("aero.nonlinear[{i}].channel"),
+                        format!("`{}`: expected lift or moment", t.channel),
+                    );
+                }
+                match identify::library::Term::parse(&t.term) {
+                    Ok(term) if term.degree() >= 2 => {}
+                    Ok(_) => {
+                        return err(
+                            &format!("aero.nonlinear[{i}].term"),
+                            format!("`{}`: degree must be ≥ 2", t.term),
+                        )
+                    }
+                    Err(e) => return err(&format!("aero.nonlinear[{i}].term"), e.to_string()),
+                }
+            }
+        }
+        if let Some(f) = &s.flutter {
+            pos("flutter.u_min", f.u_min)?;
+            pos("flutter.u_max", f.u_max)?;
+            if f.u_max <= f.u_min {
+                return err(
+                    "flutter.u_max",
+                    format!("{} must exceed u_min = {}", f.u_max, f.u_min),
+                );
+            }
+            if f.n_speeds < 2 {
+                return err("flutter.n_speeds", "must be ≥ 2".into());
+            }
+            if !matches!(f.axes.as_str(), "si" | "reduced") {
+                return err(
+                    "flutter.axes",
+                    format!("`{}`: expected si or reduced", f.axes),
+                );
+            }
+            for (i, r) in f.run.iter().enumerate() {
+                if !matches!(r.method.as_str(), "p" | "pk") {
+                    return err(
+                        &format!("flutter.run[{i}].method"),
+                        format!("`{}`: expected p or pk", r.method),
+                    );
+                }
+                if let Some(m) = &r.model {
+                    check_model(&format!("flutter.run[{i}].model"), m)?;
+                }
+            }
+        }
+        if let Some(l) = &s.lco {
+            if l.speeds.is_empty() {
+                return err("lco.speeds", "at least one speed".into());
+            }
+            for v in &l.speeds {
+                pos("lco.speeds", *v)?;
+            }
+            pos("lco.max_periods", l.max_periods)?;
+            pos("lco.rtol", l.rtol)?;
+            pos("lco.atol", l.atol)?;
+            pos("lco.phase_periods", l.phase_periods)?;
+            pos("lco.perturbation_deg", l.perturbation_deg)?;
+        }
+        if let Some(f) = &s.outputs.figures {
+            for (i, k) in f.iter().enumerate() {
+                if !FIGURE_KINDS.contains(&k.as_str()) {
+                    return err(
+                        &format!("outputs.figures[{i}]"),
+                        format!("`{k}`: expected one of {}", FIGURE_KINDS.join(", ")),
+                    );
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(text: &str) -> Result<Study, SpecError> {
+        Study::parse(text, Path::new("s.toml"), Path::new("."))
+    }
+
+    #[test]
+    fn quickstart_parses() {
+        let s = Study::quickstart().unwrap();
+        assert_eq!(s.spec.name, "quickstart");
+        assert!(s.figure_kinds().contains(&"bifurcation".to_string()));
+    }
+
+    #[test]
+    fn unknown_key_names_key_and_line() {
+        let e = parse("name = \"x\"\n\n[flutter]\nu_min = 1.0\nu_maxx = 2.0\n").unwrap_err();
+        assert_eq!(e.line, 5, "{e}");
+        assert_eq!(e.key, "u_maxx", "{e}");
+    }
+
+    #[test]
+    fn range_error_names_nested_key_and_line() {
+        let text = "name = \"x\"\n[structure]\nmu = 20.0\nr_alpha2 = 0.25\nsigma = 0.5\n\
+                    [aero]\nmodel = \"theodorsen\"\n[flutter]\nu_min = 1.0\nu_max = 3.0\n\
+                    [[flutter.run]]\nlabel = \"a\"\nmethod = \"pk\"\n[[flutter.run]]\n\
+                    label = \"b\"\nmethod = \"q\"\n";
+        let e = parse(text).unwrap_err();
+        assert_eq!(e.key, "flutter.run[1].method", "{e}");
+        assert_eq!(e.line, 16, "{e}");
+    }
+
+    #[test]
+    fn data_needs_exactly_one_source_and_virtual_is_reserved() {
+        let e = parse("name = \"x\"\n[data]\n").unwrap_err();
+        assert_eq!(e.key, "data");
+        let e = parse("name = \"x\"\n[data.virtual]\nconfig = \"A\"\n").unwrap_err();
+        assert_eq!(e.key, "data.virtual");
+        assert_eq!(e.line, 2, "{e}");
+    }
+}
