@@ -277,3 +277,38 @@ fn shipped_studies_parse() {
         );
     }
 }
+
+#[test]
+fn a_failing_stage_names_its_cause_and_leaves_no_partial_file() {
+    let tmp = tempfile::tempdir().unwrap();
+    let p = tmp.path().join("s.toml");
+    // the series case does not exist: the run fails after identification
+    std::fs::write(
+        &p,
+        "name = \"fails-late\"\n[data.synthetic]\namplitudes_deg = [12.0]\nspeeds = [6.0]\n\
+         duration = 4.0\n[[data.synthetic.config]]\nname = \"D\"\nfreq_pitch = 2.0\n\
+         freq_heave = 1.3\nmm_per_deg = 1.5\n[outputs]\nseries_cases = [\"nope\"]\n",
+    )
+    .unwrap();
+    let out = tmp.path().join("out");
+    let (ok, _, err) = aeroform(&["run", p.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    assert!(!ok);
+    assert!(
+        err.contains("series_cases") && err.contains("nope"),
+        "{err}"
+    );
+    let files = tree(&out);
+    assert!(files.contains_key(Path::new("identification.json")));
+    assert!(!files.contains_key(Path::new("report.html")));
+    for (k, v) in &files {
+        assert!(
+            !k.to_string_lossy().contains(".tmp"),
+            "partial file {}",
+            k.display()
+        );
+        if k.extension().is_some_and(|e| e == "json") {
+            serde_json::from_slice::<serde_json::Value>(v)
+                .unwrap_or_else(|e| panic!("{} is not complete JSON: {e}", k.display()));
+        }
+    }
+}

@@ -235,15 +235,53 @@ pub fn cases(study: &Study, out: &Path) -> anyhow::Result<Option<Cases>> {
     } else {
         anyhow::bail!("[data]: no source");
     };
-    let prepared = prepare_dataset(&dataset, &pre).context("preprocessing")?;
-    if prepared.cases.is_empty() {
+    let name = dataset.manifest.name.clone();
+    let prepared = prepare_with_bar(dataset, &pre)?;
+    if prepared.is_empty() {
         anyhow::bail!("the data have no forced-motion case to identify");
     }
     Ok(Some(Cases {
-        name: dataset.manifest.name.clone(),
+        name,
         source,
-        cases: prepared.cases,
+        cases: prepared,
     }))
+}
+
+/// Preprocesses a data set in chunks (each chunk in parallel inside
+/// [`prepare_dataset`]) so that a progress bar can follow; same result and order as one
+/// call on the whole data set.
+fn prepare_with_bar(dataset: Dataset, pre: &PreprocessOptions) -> anyhow::Result<Vec<NondimCase>> {
+    const CHUNK: usize = 32;
+    let Dataset {
+        root,
+        manifest,
+        records,
+    } = dataset;
+    let bar = super::progress::CountBar::new("prepare", records.len());
+    let mut out = Vec::with_capacity(records.len());
+    let mut rest = records;
+    while !rest.is_empty() {
+        let tail = rest.split_off(rest.len().min(CHUNK));
+        let n = rest.len();
+        let chunk = Dataset {
+            root: root.clone(),
+            manifest: manifest.clone(),
+            records: rest,
+        };
+        let prepared = prepare_dataset(&chunk, pre).context("preprocessing");
+        let prepared = match prepared {
+            Ok(p) => p,
+            Err(e) => {
+                bar.finish();
+                return Err(e);
+            }
+        };
+        out.extend(prepared.cases);
+        bar.inc_by(n);
+        rest = tail;
+    }
+    bar.finish();
+    Ok(out)
 }
 
 /// The linear structure of `[structure]` (nondimensional → SI) with its cubic pitch spring.

@@ -137,10 +137,24 @@ fn split_csv(line: &str) -> Vec<String> {
 
 /// Adds a result CSV file of `out` to the report as a table with shortened numbers.
 fn csv_file_table(report: &mut Report, caption: &str, path: &Path) {
+    csv_file_columns(report, caption, path, None);
+}
+
+/// As [`csv_file_table`], keeping only the columns named in `keep` (in file order).
+fn csv_file_columns(report: &mut Report, caption: &str, path: &Path, keep: Option<&[&str]>) {
     if let Ok(t) = std::fs::read_to_string(path) {
         let rows = pretty_csv(&t);
         if let Some((header, body)) = rows.split_first() {
-            report.table(caption, header, body);
+            let idx: Vec<usize> = (0..header.len())
+                .filter(|&i| keep.is_none_or(|k| k.contains(&header[i].as_str())))
+                .collect();
+            let pick = |r: &Vec<String>| -> Vec<String> {
+                idx.iter()
+                    .map(|&i| r.get(i).cloned().unwrap_or_default())
+                    .collect()
+            };
+            let body: Vec<Vec<String>> = body.iter().map(pick).collect();
+            report.table(caption, &pick(header), &body);
         }
     }
 }
@@ -352,10 +366,30 @@ pub fn render_all(study: &Study, out: &Path) -> anyhow::Result<Vec<FigureEntry>>
             &out.join(names::TABLE_IV),
         );
         if id.cases.len() <= 64 {
-            csv_file_table(
+            csv_file_columns(
                 &mut report,
-                "Eq. 19 derivatives and metrics per case",
+                &format!(
+                    "Eq. 19 flutter derivatives per case (N* and the other metrics in {})",
+                    names::DERIVATIVES
+                ),
                 &out.join(names::DERIVATIVES),
+                Some(&[
+                    "case",
+                    "U_m_s",
+                    "amplitude_deg",
+                    "K_alpha",
+                    "K_h",
+                    "H1",
+                    "H2",
+                    "H3",
+                    "H4",
+                    "A1",
+                    "A2",
+                    "A3",
+                    "A4",
+                    "R2_lift",
+                    "R2_moment",
+                ]),
             );
         } else {
             report.text(format!(
@@ -399,10 +433,48 @@ pub fn render_all(study: &Study, out: &Path) -> anyhow::Result<Vec<FigureEntry>>
             }
         }
         report.section("Flutter");
-        csv_file_table(
-            &mut report,
-            "Flutter and divergence points (reduced: U/(bω_α), ω/ω_α)",
-            &out.join(names::FLUTTER_POINTS),
+        // compact view; every column is in flutter_points.csv
+        let cell = |v: Option<f64>| v.map_or(String::new(), |x| pretty_cell(&format!("{x:e}")));
+        let rows: Vec<Vec<String>> = runs
+            .iter()
+            .map(|r| {
+                let scale = r.semi_chord * r.omega_alpha;
+                let fl = r.analysis.flutter;
+                let ud = r.analysis.divergence_speed.map(|u| u / scale);
+                let rf = r.reference;
+                let rel = match (fl, rf.and_then(|x| x.u_reduced)) {
+                    (Some(f), Some(x)) => Some((f.u_reduced - x) / x),
+                    _ => None,
+                };
+                vec![
+                    r.label.clone(),
+                    cell(fl.map(|f| f.u_reduced)),
+                    cell(fl.map(|f| f.omega_ratio)),
+                    cell(ud),
+                    cell(rf.and_then(|x| x.u_reduced)),
+                    cell(rf.and_then(|x| x.omega_ratio)),
+                    cell(rf.and_then(|x| x.divergence)),
+                    cell(rel),
+                ]
+            })
+            .collect();
+        report.table(
+            format!(
+                "Flutter and divergence (U/(bω_α), ω/ω_α; all columns in {})",
+                names::FLUTTER_POINTS
+            ),
+            &[
+                "run",
+                "U_F",
+                "ω_F/ω_α",
+                "U_D",
+                "published U_F",
+                "published ω_F/ω_α",
+                "published U_D",
+                "rel. error U_F",
+            ]
+            .map(String::from),
+            &rows,
         );
         cv.embed(&mut report, "vg");
     }

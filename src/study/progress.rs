@@ -33,6 +33,11 @@ impl CountBar {
         self.bar.inc(1);
     }
 
+    /// `n` units done.
+    pub fn inc_by(&self, n: usize) {
+        self.bar.inc(n as u64);
+    }
+
     /// Removes the bar.
     pub fn finish(&self) {
         self.bar.finish_and_clear();
