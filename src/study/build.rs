@@ -21,7 +21,10 @@ use identify::record::{CaseMeta, NondimCase};
 use identify::synthetic::{forced_record, HarmonicMotion, LawTerm, PolynomialLaw, Sampling};
 use identify::workflow::prepare_dataset;
 
-use super::spec::{AeroSpec, PreprocessSpec, StructureSpec, Study, SyntheticSpec};
+use aeroelastic::files::LoadedModel;
+use aeroelastic::tunnel::{self, Campaign, ForcedOptions};
+
+use super::spec::{AeroSpec, PreprocessSpec, StructureSpec, Study, SyntheticSpec, VirtualSpec};
 
 /// The cases of the identification stage.
 pub struct Cases {
@@ -183,6 +186,77 @@ fn synthetic(study: &Study, sy: &SyntheticSpec, out: &Path) -> anyhow::Result<Da
     })
 }
 
+/// The model of `[data.virtual]` (file or inline) for the rig chord `chord`.
+///
+/// # Errors
+/// The model file cannot be read or parsed, or the inline model is invalid.
+pub fn virtual_model(
+    study: &Study,
+    v: &VirtualSpec,
+    chord: f64,
+) -> anyhow::Result<Arc<dyn AeroModel>> {
+    if let Some(p) = &v.model {
+        let path = study.base.join(p);
+        let m = LoadedModel::load(&path, Some(chord))
+            .with_context(|| format!("data.virtual.model: {}", path.display()))?;
+        return Ok(m.model);
+    }
+    let Some(a) = &v.aero else {
+        anyhow::bail!("[data.virtual]: no model");
+    };
+    aero_with_terms(linear_aero_chord(&a.model, chord, a)?, a).context("[data.virtual.aero]")
+}
+
+fn virtual_campaign(
+    study: &Study,
+    v: &VirtualSpec,
+    out: &Path,
+) -> anyhow::Result<(Dataset, String)> {
+    let campaign = match v.campaign.strip_prefix("config=") {
+        Some(c) => Campaign::paper_config(c).context("data.virtual.campaign")?,
+        None => Campaign::paper(),
+    };
+    let mut opts = ForcedOptions::paper(study.spec.seed);
+    opts.name = format!("{} (virtual wind tunnel)", study.spec.name);
+    opts.duration = v.duration;
+    if v.still_air {
+        opts = opts.with_paper_still_air();
+    }
+    let model = virtual_model(study, v, opts.section.chord)?;
+    let cases = campaign.cases();
+    let bar = super::progress::CountBar::new("tunnel", cases.len());
+    let r = tunnel::forced_dataset(&*model, &cases, &opts, &|_| bar.inc());
+    bar.finish();
+    let (manifest, records) = r.context("data.virtual: forced campaign")?;
+    let root = out.join("dataset");
+    if v.write_dataset {
+        super::files::ensure_dir(&root.join("cases"))?;
+        tunnel::write(&root, &manifest, &records)
+            .with_context(|| format!("writing the data set to {}", root.display()))?;
+    }
+    let source = format!(
+        "virtual wind tunnel, campaign `{}` ({} cases), model `{}`, {} s at {} Hz, paper noise{}",
+        v.campaign,
+        cases.len(),
+        model.name(),
+        opts.duration,
+        opts.rate,
+        if v.still_air {
+            ", still-air runs subtracted"
+        } else {
+            ""
+        }
+    );
+    Ok((
+        Dataset {
+            root,
+            manifest,
+            records,
+        },
+        source,
+    ))
+}
+
 /// Builds the cases of `[data]`.
 ///
 /// # Errors
@@ -227,6 +301,8 @@ pub fn cases(study: &Study, out: &Path) -> anyhow::Result<Option<Cases>> {
         let ds = synthetic(study, sy, out)?;
         let src = ds.manifest.description.clone().unwrap_or_default();
         (ds, src)
+    } else if let Some(v) = &d.virtual_tunnel {
+        virtual_campaign(study, v, out)?
     } else if let Some(p) = &d.dataset {
         let dir = study.base.join(p);
         let ds =
@@ -319,7 +395,18 @@ pub fn linear_aero(
     s: &StructureSpec,
     a: &AeroSpec,
 ) -> anyhow::Result<Arc<dyn AeroModel>> {
-    let chord = 2.0 * s.semi_chord;
+    linear_aero_chord(model, 2.0 * s.semi_chord, a)
+}
+
+/// A linear aerodynamic model by name for chord `chord` [m].
+///
+/// # Errors
+/// An unknown model or invalid parameters.
+pub fn linear_aero_chord(
+    model: &str,
+    chord: f64,
+    a: &AeroSpec,
+) -> anyhow::Result<Arc<dyn AeroModel>> {
     let m: Arc<dyn AeroModel> = match model {
         "theodorsen" => Arc::new(TheodorsenAero::new(chord, a.elastic_axis)?),
         "quasi_steady" => Arc::new(QuasiSteady::new(
@@ -368,7 +455,18 @@ pub fn nonlinear_section(study: &Study) -> anyhow::Result<Section> {
     let (Some(s), Some(a)) = (&study.spec.structure, &study.spec.aero) else {
         anyhow::bail!("[structure] and [aero] are required");
     };
-    let inner = linear_aero(&a.model, s, a)?;
+    let aero = aero_with_terms(linear_aero(&a.model, s, a)?, a)?;
+    Ok(Section::new(structure(s)?, aero, s.rho)?)
+}
+
+/// `inner` plus the nonlinear terms of `a` (constant coefficients).
+///
+/// # Errors
+/// Invalid nonlinear terms.
+pub fn aero_with_terms(
+    inner: Arc<dyn AeroModel>,
+    a: &AeroSpec,
+) -> anyhow::Result<Arc<dyn AeroModel>> {
     let aero: Arc<dyn AeroModel> = if a.nonlinear.is_empty() {
         inner
     } else {
@@ -390,5 +488,5 @@ pub fn nonlinear_section(study: &Study) -> anyhow::Result<Section> {
         // constant coefficients: the evaluation K is irrelevant
         Arc::new(NonlinearAero::new(inner, terms, 1.0)?)
     };
-    Ok(Section::new(structure(s)?, aero, s.rho)?)
+    Ok(aero)
 }

@@ -50,9 +50,37 @@ pub struct DataSpec {
     pub synthetic: Option<SyntheticSpec>,
     /// The paper's numerical verification (Table IV/V, Eq. 15/16).
     pub table_iv: Option<TableIvSpec>,
-    /// Virtual wind tunnel campaign (`aeroelastic::tunnel`): reserved, not available yet.
+    /// Virtual wind tunnel campaign (`aeroelastic::tunnel`): forced motion of a known
+    /// model, then the same preprocessing and identification as a data set.
     #[serde(rename = "virtual")]
-    pub virtual_tunnel: Option<toml::Table>,
+    pub virtual_tunnel: Option<VirtualSpec>,
+}
+
+/// `[data.virtual]`: a forced-motion campaign of the virtual wind tunnel on the paper's rig
+/// (B = 0.25 m, span 0.75 m, ρ = 1.225 kg/m³, 512 Hz, paper sensor noise).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct VirtualSpec {
+    /// Model TOML file (`aeroelastic::files`), relative to the study file.
+    pub model: Option<PathBuf>,
+    /// Inline model, keys as `[aero]` (chord 0.25 m, the rig's).
+    pub aero: Option<AeroSpec>,
+    /// `"paper"` (Tables I–II, 448 cases) or `"config=X"` (configuration X only, 64 cases).
+    #[serde(default = "paper")]
+    pub campaign: String,
+    /// Still-air runs (0.82 kg uniform plate) subtracted in preprocessing.
+    #[serde(default)]
+    pub still_air: bool,
+    /// Record length [s].
+    #[serde(default = "duration")]
+    pub duration: f64,
+    /// Also write the data set (manifest + CSV) under `OUT/dataset`.
+    #[serde(default)]
+    pub write_dataset: bool,
+}
+
+fn paper() -> String {
+    "paper".into()
 }
 
 /// Section geometry of synthetic data.
@@ -702,11 +730,32 @@ impl Study {
                     format!("give exactly one of dataset, [data.synthetic], [data.table_iv], [data.virtual] ({n} given)"),
                 );
             }
-            if d.virtual_tunnel.is_some() {
-                return err(
-                    "data.virtual",
-                    "the virtual wind tunnel source is not available in this build yet".into(),
-                );
+            if let Some(v) = &d.virtual_tunnel {
+                if v.model.is_some() == v.aero.is_some() {
+                    return err(
+                        "data.virtual",
+                        "give exactly one of `model` (a model file) and [data.virtual.aero]".into(),
+                    );
+                }
+                pos("data.virtual.duration", v.duration)?;
+                if v.campaign != "paper" {
+                    let c = v.campaign.strip_prefix("config=").unwrap_or("");
+                    if !aeroelastic::tunnel::paper_configurations()
+                        .iter()
+                        .any(|x| x.name == c)
+                    {
+                        return err(
+                            "data.virtual.campaign",
+                            format!(
+                                "`{}`: expected `paper` or `config=X`, X in A..G",
+                                v.campaign
+                            ),
+                        );
+                    }
+                }
+                if let Some(a) = &v.aero {
+                    check_aero("data.virtual.aero", a, false)?;
+                }
             }
             if let Some(sy) = &d.synthetic {
                 pos("data.synthetic.section.chord", sy.section.chord)?;
@@ -819,49 +868,8 @@ impl Study {
                 pos(k, v)?;
             }
         }
-        let models = [
-            "theodorsen",
-            "quasi_steady",
-            "steady",
-            "flat_plate_table",
-            "identified",
-        ];
-        let check_model = |k: &str, m: &str| -> Result<(), (String, String)> {
-            if m == "identified" {
-                return Err((
-                    k.to_string(),
-                    "the identified Eq. 19 model is not available in this build yet".into(),
-                ));
-            }
-            if models.contains(&m) {
-                Ok(())
-            } else {
-                Err((
-                    k.to_string(),
-                    format!("`{m}`: expected one of {}", models[..4].join(", ")),
-                ))
-            }
-        };
         if let Some(a) = &s.aero {
-            check_model("aero.model", &a.model)?;
-            for (i, t) in a.nonlinear.iter().enumerate() {
-                if !matches!(t.channel.as_str(), "lift" | "moment") {
-                    return err(
-                        &format!("aero.nonlinear[{i}].channel"),
-                        format!("`{}`: expected lift or moment", t.channel),
-                    );
-                }
-                match identify::library::Term::parse(&t.term) {
-                    Ok(term) if term.degree() >= 2 => {}
-                    Ok(_) => {
-                        return err(
-                            &format!("aero.nonlinear[{i}].term"),
-                            format!("`{}`: degree must be ≥ 2", t.term),
-                        )
-                    }
-                    Err(e) => return err(&format!("aero.nonlinear[{i}].term"), e.to_string()),
-                }
-            }
+            check_aero("aero", a, false)?;
         }
         if let Some(f) = &s.flutter {
             pos("flutter.u_min", f.u_min)?;
@@ -889,7 +897,7 @@ impl Study {
                     );
                 }
                 if let Some(m) = &r.model {
-                    check_model(&format!("flutter.run[{i}].model"), m)?;
+                    check_model(&format!("flutter.run[{i}].model"), m, false)?;
                 }
             }
         }
@@ -918,6 +926,52 @@ impl Study {
         }
         Ok(())
     }
+}
+
+/// Aerodynamic model names of `[aero].model`.
+pub const AERO_MODELS: [&str; 5] = [
+    "theodorsen",
+    "quasi_steady",
+    "steady",
+    "flat_plate_table",
+    "identified",
+];
+
+/// Checks a model name; `identified` only where `allow_identified`.
+fn check_model(k: &str, m: &str, allow_identified: bool) -> Result<(), (String, String)> {
+    let n = if allow_identified { 5 } else { 4 };
+    if AERO_MODELS[..n].contains(&m) {
+        Ok(())
+    } else {
+        Err((
+            k.to_string(),
+            format!("`{m}`: expected one of {}", AERO_MODELS[..n].join(", ")),
+        ))
+    }
+}
+
+/// Checks an `[aero]`-like table whose dotted prefix is `prefix`.
+fn check_aero(prefix: &str, a: &AeroSpec, allow_identified: bool) -> Result<(), (String, String)> {
+    check_model(&format!("{prefix}.model"), &a.model, allow_identified)?;
+    for (i, t) in a.nonlinear.iter().enumerate() {
+        if !matches!(t.channel.as_str(), "lift" | "moment") {
+            return Err((
+                format!("{prefix}.nonlinear[{i}].channel"),
+                format!("`{}`: expected lift or moment", t.channel),
+            ));
+        }
+        match identify::library::Term::parse(&t.term) {
+            Ok(term) if term.degree() >= 2 => {}
+            Ok(_) => {
+                return Err((
+                    format!("{prefix}.nonlinear[{i}].term"),
+                    format!("`{}`: degree must be ≥ 2", t.term),
+                ))
+            }
+            Err(e) => return Err((format!("{prefix}.nonlinear[{i}].term"), e.to_string())),
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -954,11 +1008,27 @@ mod tests {
     }
 
     #[test]
-    fn data_needs_exactly_one_source_and_virtual_is_reserved() {
+    fn data_needs_exactly_one_source_and_virtual_is_checked() {
         let e = parse("name = \"x\"\n[data]\n").unwrap_err();
         assert_eq!(e.key, "data");
-        let e = parse("name = \"x\"\n[data.virtual]\nconfig = \"A\"\n").unwrap_err();
+        // neither a model file nor an inline model
+        let e = parse("name = \"x\"\n[data.virtual]\nstill_air = true\n").unwrap_err();
         assert_eq!(e.key, "data.virtual");
         assert_eq!(e.line, 2, "{e}");
+        let e =
+            parse("name = \"x\"\n[data.virtual]\nmodel = \"m.toml\"\ncampaign = \"config=Q\"\n")
+                .unwrap_err();
+        assert_eq!(e.key, "data.virtual.campaign", "{e}");
+        assert_eq!(e.line, 4, "{e}");
+        let e = parse(
+            "name = \"x\"\n[data.virtual]\n[data.virtual.aero]\nmodel = \"theodorsen\"\n\
+             [[data.virtual.aero.nonlinear]]\nchannel = \"moment\"\nterm = \"alpha\"\ncoefficient = 1.0\n",
+        )
+        .unwrap_err();
+        assert_eq!(e.key, "data.virtual.aero.nonlinear[0].term", "{e}");
+        assert!(parse(
+            "name = \"x\"\n[data.virtual]\nmodel = \"m.toml\"\ncampaign = \"config=D\"\n"
+        )
+        .is_ok());
     }
 }
