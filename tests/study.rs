@@ -211,7 +211,10 @@ fn bad_virtual_source_and_identified_without_data_are_clear_errors() {
     let err = study_fails(
         "name = \"x\"\n[structure]\nmu = 20.0\nr_alpha2 = 0.25\nsigma = 0.5\n[aero]\nmodel = \"identified\"\n",
     );
-    assert!(err.contains("aero.model") && err.contains(":7"), "{err}");
+    assert!(
+        err.contains("aero.model") && err.contains(":7") && err.contains("needs [data]"),
+        "{err}"
+    );
 }
 
 /// Virtual campaign of configuration D on the truth of `scenarios/plate-truth.model.toml`
@@ -283,6 +286,36 @@ fn virtual_campaign_recovers_the_truth_support() {
     }
 }
 
+/// `scenarios/plate-round-trip.toml`: truth → virtual campaign D → identification →
+/// identified Eq. 19 model. Flutter speed within 2 % and LCO amplitudes within 10 % of the
+/// truth's (the tolerances of tests/round_trip.rs, which checks the same chain through the
+/// library API), at least four LCO speeds per sweep.
+#[test]
+fn plate_round_trip_study_matches_the_truth() {
+    let tmp = tempfile::tempdir().unwrap();
+    let study = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenarios/plate-round-trip.toml"
+    );
+    let (ok, _, err) = aeroform(&["run", study, "--out", tmp.path().to_str().unwrap()]);
+    assert!(ok, "{err}");
+    let csv = std::fs::read_to_string(tmp.path().join("round_trip.csv")).unwrap();
+    let mut lco = 0;
+    for row in csv.lines().skip(1) {
+        let c: Vec<&str> = row.split(',').collect();
+        if c[0] == "flutter_speed_m_s" {
+            let e: f64 = c[4].parse().unwrap();
+            assert!(e.abs() < 0.02, "flutter speed error {e}");
+        } else if c[5] == "lco" && c[6] == "lco" {
+            lco += 1;
+            let e: f64 = c[4].parse().unwrap();
+            assert!(e.abs() < 0.10, "LCO amplitude error {e} at U = {}", c[1]);
+        }
+    }
+    assert!(lco >= 8, "only {lco} LCO pairs:\n{csv}");
+    assert!(tmp.path().join("figures/bifurcation-truth.svg").exists());
+}
+
 #[test]
 fn plot_on_a_folder_without_results_is_a_clear_error() {
     let tmp = tempfile::tempdir().unwrap();
@@ -334,6 +367,7 @@ fn shipped_studies_parse() {
         "hp1-flutter",
         "paper-campaign",
         "flat-plate-lco",
+        "plate-round-trip",
     ] {
         let path = format!("{}/scenarios/{s}.toml", env!("CARGO_MANIFEST_DIR"));
         let text = std::fs::read_to_string(&path).unwrap();

@@ -22,7 +22,9 @@ use identify::synthetic::{forced_record, HarmonicMotion, LawTerm, PolynomialLaw,
 use identify::workflow::prepare_dataset;
 
 use aeroelastic::files::LoadedModel;
+use aeroelastic::identified::{IdentifiedLaw, IdentifiedOptions};
 use aeroelastic::tunnel::{self, Campaign, ForcedOptions};
+use identify::pipeline::Identification;
 
 use super::spec::{AeroSpec, PreprocessSpec, StructureSpec, Study, SyntheticSpec, VirtualSpec};
 
@@ -431,18 +433,73 @@ pub fn linear_aero_chord(
     Ok(m)
 }
 
+/// Models derived from the study's own data: the identified law (when `[aero]` or a
+/// flutter run asks for `identified`).
+#[derive(Default)]
+pub struct Derived {
+    /// The identified Eq. 19 law as a nonlinear model (linear part: derivative tables).
+    pub identified: Option<NonlinearAero>,
+}
+
+/// The identified law of `id` for the study's chord 2b.
+///
+/// # Errors
+/// The law cannot be built (too few reduced frequencies, a null derivative, …).
+pub fn identified_model(study: &Study, id: &Identification) -> anyhow::Result<NonlinearAero> {
+    let Some(s) = &study.spec.structure else {
+        anyhow::bail!("the identified model needs [structure] (its chord)");
+    };
+    let law = IdentifiedLaw::from_identification(id, &IdentifiedOptions::new(2.0 * s.semi_chord))
+        .context("building the identified Eq. 19 model")?;
+    Ok(law.model().clone())
+}
+
+/// The truth model of `[data.virtual]` for the study's chord 2b.
+///
+/// # Errors
+/// No virtual source, or as [`virtual_model`].
+pub fn truth_model(study: &Study, s: &StructureSpec) -> anyhow::Result<Arc<dyn AeroModel>> {
+    let Some(v) = study
+        .spec
+        .data
+        .as_ref()
+        .and_then(|d| d.virtual_tunnel.as_ref())
+    else {
+        anyhow::bail!("the `truth` model needs a [data.virtual] source");
+    };
+    virtual_model(study, v, 2.0 * s.semi_chord)
+}
+
+/// A model of the study by name: the linear ones, `identified`, `truth`.
+fn named_aero(
+    study: &Study,
+    model: &str,
+    s: &StructureSpec,
+    a: &AeroSpec,
+    derived: &Derived,
+) -> anyhow::Result<Arc<dyn AeroModel>> {
+    match model {
+        "identified" => match &derived.identified {
+            Some(m) => Ok(Arc::new(m.clone())),
+            None => anyhow::bail!("the identified model is not available (no identification)"),
+        },
+        "truth" => truth_model(study, s),
+        _ => linear_aero(model, s, a),
+    }
+}
+
 /// The section of the flutter stage for `model` (nonlinear terms do not enter a linear
 /// flutter analysis).
 ///
 /// # Errors
 /// As [`structure`] and [`linear_aero`].
-pub fn linear_section(study: &Study, model: &str) -> anyhow::Result<Section> {
+pub fn linear_section(study: &Study, model: &str, derived: &Derived) -> anyhow::Result<Section> {
     let (Some(s), Some(a)) = (&study.spec.structure, &study.spec.aero) else {
         anyhow::bail!("[structure] and [aero] are required");
     };
     Ok(Section::new(
         structure(s)?,
-        linear_aero(model, s, a)?,
+        named_aero(study, model, s, a, derived)?,
         s.rho,
     )?)
 }
@@ -451,11 +508,11 @@ pub fn linear_section(study: &Study, model: &str) -> anyhow::Result<Section> {
 ///
 /// # Errors
 /// As [`linear_section`]; invalid nonlinear terms.
-pub fn nonlinear_section(study: &Study) -> anyhow::Result<Section> {
+pub fn nonlinear_section(study: &Study, derived: &Derived) -> anyhow::Result<Section> {
     let (Some(s), Some(a)) = (&study.spec.structure, &study.spec.aero) else {
         anyhow::bail!("[structure] and [aero] are required");
     };
-    let aero = aero_with_terms(linear_aero(&a.model, s, a)?, a)?;
+    let aero = aero_with_terms(named_aero(study, &a.model, s, a, derived)?, a)?;
     Ok(Section::new(structure(s)?, aero, s.rho)?)
 }
 

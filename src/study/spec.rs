@@ -354,7 +354,9 @@ pub struct AeroTermSpec {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct AeroSpec {
-    /// `theodorsen`, `quasi_steady`, `steady`, `flat_plate_table` (later: `identified`).
+    /// `theodorsen`, `quasi_steady`, `steady`, `flat_plate_table`, or `identified`: the
+    /// Eq. 19 law of this study's own identification (`aeroelastic::identified`; flutter by
+    /// p-k on its derivative tables, LCO by K-iterated time integration).
     pub model: String,
     /// Elastic axis a [semi-chords aft of mid-chord].
     #[serde(default)]
@@ -389,7 +391,8 @@ pub struct FlutterReference {
 pub struct FlutterRunSpec {
     /// Label in tables and figures.
     pub label: String,
-    /// Aerodynamic model (as `[aero].model`; default the study's).
+    /// Aerodynamic model (as `[aero].model`, or `truth`: the model of `[data.virtual]`;
+    /// default the study's).
     pub model: Option<String>,
     /// `"p"` or `"pk"`.
     pub method: String,
@@ -459,6 +462,10 @@ pub struct LcoSpec {
     /// Length of the phase portraits [pitch periods].
     #[serde(default = "three")]
     pub phase_periods: f64,
+    /// Also sweep the truth model of `[data.virtual]` (with the same structure) and write
+    /// the truth-vs-`[aero]` comparison (`round_trip.csv`, a second bifurcation figure).
+    #[serde(default)]
+    pub compare_truth: bool,
 }
 
 fn one_f() -> f64 {
@@ -834,6 +841,7 @@ impl Study {
                 pos("data.table_iv.duration", t.duration)?;
             }
         }
+        let has_virtual = s.data.as_ref().is_some_and(|d| d.virtual_tunnel.is_some());
         let id = self.spec.identify.clone().unwrap_or_default();
         if let Err(e) = id.settings.validate() {
             return err("identify.settings", e.to_string());
@@ -869,7 +877,14 @@ impl Study {
             }
         }
         if let Some(a) = &s.aero {
-            check_aero("aero", a, false)?;
+            check_aero("aero", a, s.data.is_some())?;
+            if a.model == "identified" && !a.nonlinear.is_empty() {
+                return err(
+                    "aero.nonlinear",
+                    "the identified model brings its own nonlinear terms; remove [[aero.nonlinear]]"
+                        .into(),
+                );
+            }
         }
         if let Some(f) = &s.flutter {
             pos("flutter.u_min", f.u_min)?;
@@ -897,7 +912,14 @@ impl Study {
                     );
                 }
                 if let Some(m) = &r.model {
-                    check_model(&format!("flutter.run[{i}].model"), m, false)?;
+                    let k = format!("flutter.run[{i}].model");
+                    if m == "truth" {
+                        if !has_virtual {
+                            return err(&k, "`truth` needs a [data.virtual] source".into());
+                        }
+                    } else {
+                        check_model(&k, m, s.data.is_some())?;
+                    }
                 }
             }
         }
@@ -913,6 +935,12 @@ impl Study {
             pos("lco.atol", l.atol)?;
             pos("lco.phase_periods", l.phase_periods)?;
             pos("lco.perturbation_deg", l.perturbation_deg)?;
+            if l.compare_truth && !has_virtual {
+                return err(
+                    "lco.compare_truth",
+                    "needs a [data.virtual] source (the truth model)".into(),
+                );
+            }
         }
         if let Some(f) = &s.outputs.figures {
             for (i, k) in f.iter().enumerate() {
@@ -937,15 +965,20 @@ pub const AERO_MODELS: [&str; 5] = [
     "identified",
 ];
 
-/// Checks a model name; `identified` only where `allow_identified`.
+/// Checks a model name; `identified` only where `allow_identified` (a study with data).
 fn check_model(k: &str, m: &str, allow_identified: bool) -> Result<(), (String, String)> {
-    let n = if allow_identified { 5 } else { 4 };
-    if AERO_MODELS[..n].contains(&m) {
+    if m == "identified" && !allow_identified {
+        return Err((
+            k.to_string(),
+            "`identified` needs [data] (the model comes from this study's identification)".into(),
+        ));
+    }
+    if AERO_MODELS.contains(&m) {
         Ok(())
     } else {
         Err((
             k.to_string(),
-            format!("`{m}`: expected one of {}", AERO_MODELS[..n].join(", ")),
+            format!("`{m}`: expected one of {}", AERO_MODELS.join(", ")),
         ))
     }
 }
