@@ -197,16 +197,123 @@ fn out_of_range_value_names_dotted_key_and_line() {
 }
 
 #[test]
-fn stages_waiting_for_the_tunnel_are_clear_errors() {
+fn bad_virtual_source_and_identified_without_data_are_clear_errors() {
     let err = study_fails("name = \"x\"\n[data.virtual]\nconfig = \"A\"\n");
     assert!(
-        err.contains("data.virtual") && err.contains("not available"),
+        err.contains("bad.toml:3") && err.contains("config"),
+        "{err}"
+    );
+    let err = study_fails("name = \"x\"\n[data.virtual]\nstill_air = true\n");
+    assert!(
+        err.contains("bad.toml:2") && err.contains("data.virtual") && err.contains("model"),
         "{err}"
     );
     let err = study_fails(
         "name = \"x\"\n[structure]\nmu = 20.0\nr_alpha2 = 0.25\nsigma = 0.5\n[aero]\nmodel = \"identified\"\n",
     );
-    assert!(err.contains("aero.model") && err.contains(":7"), "{err}");
+    assert!(
+        err.contains("aero.model") && err.contains(":7") && err.contains("needs [data]"),
+        "{err}"
+    );
+}
+
+/// Virtual campaign of configuration D on the truth of `scenarios/plate-truth.model.toml`
+/// (C_M += 0.5 α(Bα̇/U) − 2 α³ − 100 (Bα̇/U)³, no lift terms) with still-air runs: the
+/// identification must select exactly the truth's nonlinear moment terms (plus the four
+/// linear ones), none in lift, and recover ξ = K³N1* ≈ 0.5, K⁶N2* ≈ −2, K³N3* ≈ −100.
+#[test]
+fn virtual_campaign_recovers_the_truth_support() {
+    let tmp = tempfile::tempdir().unwrap();
+    let root = env!("CARGO_MANIFEST_DIR");
+    let p = tmp.path().join("v.toml");
+    std::fs::write(
+        &p,
+        format!(
+            "name = \"virtual-d\"\n[data.virtual]\nmodel = \"{root}/scenarios/plate-truth.model.toml\"\n\
+             campaign = \"config=D\"\nstill_air = true\n[outputs]\nfigures = []\n"
+        ),
+    )
+    .unwrap();
+    let out = tmp.path().join("out");
+    let (ok, _, err) = aeroform(&[
+        "run",
+        p.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(ok, "{err}");
+    let id: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("identification.json")).unwrap())
+            .unwrap();
+    let support = |ch: &str| -> Vec<String> {
+        let mut v: Vec<String> = id["groups"][0][ch]["support"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_str().unwrap().to_string())
+            .collect();
+        v.sort_unstable();
+        v
+    };
+    let mut want_m = vec![
+        "alpha",
+        "alpha_dot",
+        "h",
+        "h_dot",
+        "alpha*alpha_dot",
+        "alpha^3",
+        "alpha_dot^3",
+    ];
+    want_m.sort_unstable();
+    let mut want_l = vec!["alpha", "alpha_dot", "h", "h_dot"];
+    want_l.sort_unstable();
+    assert_eq!(support("moment"), want_m);
+    assert_eq!(support("lift"), want_l);
+    assert_eq!(id["cases"].as_array().unwrap().len(), 64);
+    for c in id["cases"].as_array().unwrap() {
+        let k = c["k_alpha"].as_f64().unwrap();
+        let e = &c["moment"]["eq19"];
+        for (name, p, want) in [("N1", 3, 0.5), ("N2", 6, -2.0), ("N3", 3, -100.0)] {
+            let xi = e[name].as_f64().unwrap() * k.powi(p);
+            // balance noise 0.1 % of range: a few per cent on the cubic terms at most
+            assert!(
+                (xi / want - 1.0).abs() < 0.05,
+                "{} {name}: ξ = {xi} vs {want}",
+                c["id"]
+            );
+        }
+    }
+}
+
+/// `scenarios/plate-round-trip.toml`: truth → virtual campaign D → identification →
+/// identified Eq. 19 model. Flutter speed within 2 % and LCO amplitudes within 10 % of the
+/// truth's (the tolerances of tests/round_trip.rs, which checks the same chain through the
+/// library API), at least four LCO speeds per sweep.
+#[test]
+fn plate_round_trip_study_matches_the_truth() {
+    let tmp = tempfile::tempdir().unwrap();
+    let study = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenarios/plate-round-trip.toml"
+    );
+    let (ok, _, err) = aeroform(&["run", study, "--out", tmp.path().to_str().unwrap()]);
+    assert!(ok, "{err}");
+    let csv = std::fs::read_to_string(tmp.path().join("round_trip.csv")).unwrap();
+    let mut lco = 0;
+    for row in csv.lines().skip(1) {
+        let c: Vec<&str> = row.split(',').collect();
+        if c[0] == "flutter_speed_m_s" {
+            let e: f64 = c[4].parse().unwrap();
+            assert!(e.abs() < 0.02, "flutter speed error {e}");
+        } else if c[5] == "lco" && c[6] == "lco" {
+            lco += 1;
+            let e: f64 = c[4].parse().unwrap();
+            assert!(e.abs() < 0.10, "LCO amplitude error {e} at U = {}", c[1]);
+        }
+    }
+    assert!(lco >= 8, "only {lco} LCO pairs:\n{csv}");
+    assert!(tmp.path().join("figures/bifurcation-truth.svg").exists());
 }
 
 #[test]
@@ -260,6 +367,7 @@ fn shipped_studies_parse() {
         "hp1-flutter",
         "paper-campaign",
         "flat-plate-lco",
+        "plate-round-trip",
     ] {
         let path = format!("{}/scenarios/{s}.toml", env!("CARGO_MANIFEST_DIR"));
         let text = std::fs::read_to_string(&path).unwrap();

@@ -21,7 +21,12 @@ use identify::record::{CaseMeta, NondimCase};
 use identify::synthetic::{forced_record, HarmonicMotion, LawTerm, PolynomialLaw, Sampling};
 use identify::workflow::prepare_dataset;
 
-use super::spec::{AeroSpec, PreprocessSpec, StructureSpec, Study, SyntheticSpec};
+use aeroelastic::files::LoadedModel;
+use aeroelastic::identified::{IdentifiedLaw, IdentifiedOptions};
+use aeroelastic::tunnel::{self, Campaign, ForcedOptions};
+use identify::pipeline::Identification;
+
+use super::spec::{AeroSpec, PreprocessSpec, StructureSpec, Study, SyntheticSpec, VirtualSpec};
 
 /// The cases of the identification stage.
 pub struct Cases {
@@ -183,6 +188,77 @@ fn synthetic(study: &Study, sy: &SyntheticSpec, out: &Path) -> anyhow::Result<Da
     })
 }
 
+/// The model of `[data.virtual]` (file or inline) for the rig chord `chord`.
+///
+/// # Errors
+/// The model file cannot be read or parsed, or the inline model is invalid.
+pub fn virtual_model(
+    study: &Study,
+    v: &VirtualSpec,
+    chord: f64,
+) -> anyhow::Result<Arc<dyn AeroModel>> {
+    if let Some(p) = &v.model {
+        let path = study.base.join(p);
+        let m = LoadedModel::load(&path, Some(chord))
+            .with_context(|| format!("data.virtual.model: {}", path.display()))?;
+        return Ok(m.model);
+    }
+    let Some(a) = &v.aero else {
+        anyhow::bail!("[data.virtual]: no model");
+    };
+    aero_with_terms(linear_aero_chord(&a.model, chord, a)?, a).context("[data.virtual.aero]")
+}
+
+fn virtual_campaign(
+    study: &Study,
+    v: &VirtualSpec,
+    out: &Path,
+) -> anyhow::Result<(Dataset, String)> {
+    let campaign = match v.campaign.strip_prefix("config=") {
+        Some(c) => Campaign::paper_config(c).context("data.virtual.campaign")?,
+        None => Campaign::paper(),
+    };
+    let mut opts = ForcedOptions::paper(study.spec.seed);
+    opts.name = format!("{} (virtual wind tunnel)", study.spec.name);
+    opts.duration = v.duration;
+    if v.still_air {
+        opts = opts.with_paper_still_air();
+    }
+    let model = virtual_model(study, v, opts.section.chord)?;
+    let cases = campaign.cases();
+    let bar = super::progress::CountBar::new("tunnel", cases.len());
+    let r = tunnel::forced_dataset(&*model, &cases, &opts, &|_| bar.inc());
+    bar.finish();
+    let (manifest, records) = r.context("data.virtual: forced campaign")?;
+    let root = out.join("dataset");
+    if v.write_dataset {
+        super::files::ensure_dir(&root.join("cases"))?;
+        tunnel::write(&root, &manifest, &records)
+            .with_context(|| format!("writing the data set to {}", root.display()))?;
+    }
+    let source = format!(
+        "virtual wind tunnel, campaign `{}` ({} cases), model `{}`, {} s at {} Hz, paper noise{}",
+        v.campaign,
+        cases.len(),
+        model.name(),
+        opts.duration,
+        opts.rate,
+        if v.still_air {
+            ", still-air runs subtracted"
+        } else {
+            ""
+        }
+    );
+    Ok((
+        Dataset {
+            root,
+            manifest,
+            records,
+        },
+        source,
+    ))
+}
+
 /// Builds the cases of `[data]`.
 ///
 /// # Errors
@@ -227,6 +303,8 @@ pub fn cases(study: &Study, out: &Path) -> anyhow::Result<Option<Cases>> {
         let ds = synthetic(study, sy, out)?;
         let src = ds.manifest.description.clone().unwrap_or_default();
         (ds, src)
+    } else if let Some(v) = &d.virtual_tunnel {
+        virtual_campaign(study, v, out)?
     } else if let Some(p) = &d.dataset {
         let dir = study.base.join(p);
         let ds =
@@ -319,7 +397,18 @@ pub fn linear_aero(
     s: &StructureSpec,
     a: &AeroSpec,
 ) -> anyhow::Result<Arc<dyn AeroModel>> {
-    let chord = 2.0 * s.semi_chord;
+    linear_aero_chord(model, 2.0 * s.semi_chord, a)
+}
+
+/// A linear aerodynamic model by name for chord `chord` [m].
+///
+/// # Errors
+/// An unknown model or invalid parameters.
+pub fn linear_aero_chord(
+    model: &str,
+    chord: f64,
+    a: &AeroSpec,
+) -> anyhow::Result<Arc<dyn AeroModel>> {
     let m: Arc<dyn AeroModel> = match model {
         "theodorsen" => Arc::new(TheodorsenAero::new(chord, a.elastic_axis)?),
         "quasi_steady" => Arc::new(QuasiSteady::new(
@@ -344,18 +433,73 @@ pub fn linear_aero(
     Ok(m)
 }
 
+/// Models derived from the study's own data: the identified law (when `[aero]` or a
+/// flutter run asks for `identified`).
+#[derive(Default)]
+pub struct Derived {
+    /// The identified Eq. 19 law as a nonlinear model (linear part: derivative tables).
+    pub identified: Option<NonlinearAero>,
+}
+
+/// The identified law of `id` for the study's chord 2b.
+///
+/// # Errors
+/// The law cannot be built (too few reduced frequencies, a null derivative, …).
+pub fn identified_model(study: &Study, id: &Identification) -> anyhow::Result<NonlinearAero> {
+    let Some(s) = &study.spec.structure else {
+        anyhow::bail!("the identified model needs [structure] (its chord)");
+    };
+    let law = IdentifiedLaw::from_identification(id, &IdentifiedOptions::new(2.0 * s.semi_chord))
+        .context("building the identified Eq. 19 model")?;
+    Ok(law.model().clone())
+}
+
+/// The truth model of `[data.virtual]` for the study's chord 2b.
+///
+/// # Errors
+/// No virtual source, or as [`virtual_model`].
+pub fn truth_model(study: &Study, s: &StructureSpec) -> anyhow::Result<Arc<dyn AeroModel>> {
+    let Some(v) = study
+        .spec
+        .data
+        .as_ref()
+        .and_then(|d| d.virtual_tunnel.as_ref())
+    else {
+        anyhow::bail!("the `truth` model needs a [data.virtual] source");
+    };
+    virtual_model(study, v, 2.0 * s.semi_chord)
+}
+
+/// A model of the study by name: the linear ones, `identified`, `truth`.
+fn named_aero(
+    study: &Study,
+    model: &str,
+    s: &StructureSpec,
+    a: &AeroSpec,
+    derived: &Derived,
+) -> anyhow::Result<Arc<dyn AeroModel>> {
+    match model {
+        "identified" => match &derived.identified {
+            Some(m) => Ok(Arc::new(m.clone())),
+            None => anyhow::bail!("the identified model is not available (no identification)"),
+        },
+        "truth" => truth_model(study, s),
+        _ => linear_aero(model, s, a),
+    }
+}
+
 /// The section of the flutter stage for `model` (nonlinear terms do not enter a linear
 /// flutter analysis).
 ///
 /// # Errors
 /// As [`structure`] and [`linear_aero`].
-pub fn linear_section(study: &Study, model: &str) -> anyhow::Result<Section> {
+pub fn linear_section(study: &Study, model: &str, derived: &Derived) -> anyhow::Result<Section> {
     let (Some(s), Some(a)) = (&study.spec.structure, &study.spec.aero) else {
         anyhow::bail!("[structure] and [aero] are required");
     };
     Ok(Section::new(
         structure(s)?,
-        linear_aero(model, s, a)?,
+        named_aero(study, model, s, a, derived)?,
         s.rho,
     )?)
 }
@@ -364,11 +508,22 @@ pub fn linear_section(study: &Study, model: &str) -> anyhow::Result<Section> {
 ///
 /// # Errors
 /// As [`linear_section`]; invalid nonlinear terms.
-pub fn nonlinear_section(study: &Study) -> anyhow::Result<Section> {
+pub fn nonlinear_section(study: &Study, derived: &Derived) -> anyhow::Result<Section> {
     let (Some(s), Some(a)) = (&study.spec.structure, &study.spec.aero) else {
         anyhow::bail!("[structure] and [aero] are required");
     };
-    let inner = linear_aero(&a.model, s, a)?;
+    let aero = aero_with_terms(named_aero(study, &a.model, s, a, derived)?, a)?;
+    Ok(Section::new(structure(s)?, aero, s.rho)?)
+}
+
+/// `inner` plus the nonlinear terms of `a` (constant coefficients).
+///
+/// # Errors
+/// Invalid nonlinear terms.
+pub fn aero_with_terms(
+    inner: Arc<dyn AeroModel>,
+    a: &AeroSpec,
+) -> anyhow::Result<Arc<dyn AeroModel>> {
     let aero: Arc<dyn AeroModel> = if a.nonlinear.is_empty() {
         inner
     } else {
@@ -390,5 +545,5 @@ pub fn nonlinear_section(study: &Study) -> anyhow::Result<Section> {
         // constant coefficients: the evaluation K is irrelevant
         Arc::new(NonlinearAero::new(inner, terms, 1.0)?)
     };
-    Ok(Section::new(structure(s)?, aero, s.rho)?)
+    Ok(aero)
 }

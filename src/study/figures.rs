@@ -504,6 +504,20 @@ pub fn render_all(study: &Study, out: &Path) -> anyhow::Result<Vec<FigureEntry>>
                     &scale,
                 ),
             )?;
+            if !stage.truth_up.is_empty() {
+                cv.draw(
+                    "bifurcation",
+                    "bifurcation-truth",
+                    "LCO pitch amplitude against wind speed of the truth model of the virtual campaign (same structure, same sweeps), truth linear flutter speed marked.".to_string(),
+                    &bifurcation_figure(
+                        &stage.truth_up,
+                        &stage.truth_down,
+                        stage.truth_flutter_speed,
+                        "LCO sweeps of the truth model",
+                        &scale,
+                    ),
+                )?;
+            }
         }
         if cv.wants("phase") && !stage.phase.is_empty() {
             cv.draw(
@@ -518,6 +532,13 @@ pub fn render_all(study: &Study, out: &Path) -> anyhow::Result<Vec<FigureEntry>>
         }
         report.section("Limit-cycle oscillations");
         csv_file_table(&mut report, "LCO runs", &out.join(names::LCO_AMPLITUDES));
+        if l.compare_truth {
+            csv_file_table(
+                &mut report,
+                "Truth vs model: flutter speed and LCO amplitudes",
+                &out.join(names::ROUND_TRIP),
+            );
+        }
         cv.embed(&mut report, "bifurcation");
         cv.embed(&mut report, "phase");
     }

@@ -42,6 +42,8 @@ pub mod names {
     pub const LCO: &str = "lco.json";
     /// LCO amplitudes per speed and sweep.
     pub const LCO_AMPLITUDES: &str = "lco_amplitudes.csv";
+    /// Truth vs identified: flutter speed and LCO amplitudes (`lco.compare_truth`).
+    pub const ROUND_TRIP: &str = "round_trip.csv";
     /// Figure folder.
     pub const FIGURES: &str = "figures";
     /// List of the figures drawn.
@@ -84,6 +86,15 @@ pub struct LcoStage {
     pub down: Vec<LcoResult>,
     /// Trajectories of the phase portraits.
     pub phase: Vec<Trajectory>,
+    /// Linear flutter speed of the truth model [m/s] (`compare_truth`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub truth_flutter_speed: Option<f64>,
+    /// Upward sweep of the truth model of `[data.virtual]` (`compare_truth`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub truth_up: Vec<LcoResult>,
+    /// Downward sweep of the truth model, increasing U (`compare_truth`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub truth_down: Vec<LcoResult>,
 }
 
 /// Wall time of each stage [s].
@@ -110,6 +121,7 @@ pub fn run_study(study: &Study, out: &Path, quiet: bool) -> anyhow::Result<Timin
     write_text(&out.join(names::STUDY), &study.text)?;
     let mut timings = Timings::new();
     let cases = timed(&mut timings, "data", || build::cases(study, out))?;
+    let mut derived = build::Derived::default();
     if let Some(cases) = &cases {
         if !quiet {
             println!("data: {} cases; {}", cases.cases.len(), cases.source);
@@ -120,15 +132,33 @@ pub fn run_study(study: &Study, out: &Path, quiet: bool) -> anyhow::Result<Timin
         if !quiet {
             println!("{}", id.summary_table());
         }
+        let s = &study.spec;
+        let wants_identified = s.aero.as_ref().is_some_and(|a| a.model == "identified")
+            || s.flutter.as_ref().is_some_and(|f| {
+                f.run
+                    .iter()
+                    .any(|r| r.model.as_deref() == Some("identified"))
+            });
+        if wants_identified {
+            derived.identified = Some(timed(&mut timings, "identified model", || {
+                build::identified_model(study, &id)
+            })?);
+        }
     }
     let mut flutter_speed = None;
+    let mut truth_flutter_speed = None;
     if study.spec.flutter.is_some() {
-        let runs = timed(&mut timings, "flutter", || flutter_stage(study, out))?;
+        let runs = timed(&mut timings, "flutter", || {
+            flutter_stage(study, out, &derived)
+        })?;
         let model = study.spec.aero.as_ref().map(|a| a.model.as_str());
-        flutter_speed = runs
-            .iter()
-            .find(|r| Some(r.model.as_str()) == model)
-            .and_then(|r| r.analysis.flutter.map(|f| f.u));
+        let speed_of = |m: Option<&str>| {
+            runs.iter()
+                .find(|r| Some(r.model.as_str()) == m)
+                .and_then(|r| r.analysis.flutter.map(|f| f.u))
+        };
+        flutter_speed = speed_of(model);
+        truth_flutter_speed = speed_of(Some("truth"));
         if !quiet {
             for r in &runs {
                 match r.analysis.flutter {
@@ -142,7 +172,9 @@ pub fn run_study(study: &Study, out: &Path, quiet: bool) -> anyhow::Result<Timin
         }
     }
     if study.spec.lco.is_some() {
-        timed(&mut timings, "lco", || lco_stage(study, out, flutter_speed))?;
+        timed(&mut timings, "lco", || {
+            lco_stage(study, out, [flutter_speed, truth_flutter_speed], &derived)
+        })?;
     }
     timed(&mut timings, "figures+report", || {
         super::figures::render_all(study, out).map(|_| ())
@@ -352,7 +384,11 @@ fn table_iv(id: &Identification, t: &super::spec::TableIvSpec, out: &Path) -> an
     csv.write(&out.join(names::TABLE_IV))
 }
 
-fn flutter_stage(study: &Study, out: &Path) -> anyhow::Result<Vec<FlutterRun>> {
+fn flutter_stage(
+    study: &Study,
+    out: &Path,
+    derived: &build::Derived,
+) -> anyhow::Result<Vec<FlutterRun>> {
     let (Some(f), Some(s), Some(a)) =
         (&study.spec.flutter, &study.spec.structure, &study.spec.aero)
     else {
@@ -378,7 +414,7 @@ fn flutter_stage(study: &Study, out: &Path) -> anyhow::Result<Vec<FlutterRun>> {
     let mut results = Vec::new();
     for r in &runs {
         let model = r.model.clone().unwrap_or_else(|| a.model.clone());
-        let section = build::linear_section(study, &model)?;
+        let section = build::linear_section(study, &model, derived)?;
         let method = if r.method == "p" {
             FlutterMethod::P
         } else {
@@ -445,11 +481,17 @@ fn flutter_stage(study: &Study, out: &Path) -> anyhow::Result<Vec<FlutterRun>> {
     Ok(results)
 }
 
-fn lco_stage(study: &Study, out: &Path, flutter_speed: Option<f64>) -> anyhow::Result<()> {
+/// `[flutter_speed, truth_flutter_speed]` of the linear analyses, if any.
+fn lco_stage(
+    study: &Study,
+    out: &Path,
+    [flutter_speed, truth_flutter_speed]: [Option<f64>; 2],
+    derived: &build::Derived,
+) -> anyhow::Result<()> {
     let (Some(l), Some(s)) = (&study.spec.lco, &study.spec.structure) else {
         anyhow::bail!("[lco] needs [structure]");
     };
-    let section = build::nonlinear_section(study)?;
+    let section = build::nonlinear_section(study, derived)?;
     let opts = LcoOptions {
         rtol: l.rtol,
         atol: l.atol,
@@ -458,9 +500,32 @@ fn lco_stage(study: &Study, out: &Path, flutter_speed: Option<f64>) -> anyhow::R
     };
     let up0 = section.perturbation(l.perturbation_deg.to_radians());
     let total = l.speeds.len() * if l.up_down { 2 } else { 1 };
-    let bar = CountBar::new("LCO", total);
+    let bar = CountBar::new("LCO", total * if l.compare_truth { 2 } else { 1 });
     let observer = |p| bar.observe_sweep(p);
-    let (up, down) = if l.up_down {
+    let identified = study
+        .spec
+        .aero
+        .as_ref()
+        .is_some_and(|a| a.model == "identified");
+    let (up, down) = if identified {
+        // the identified law's coefficients depend on K: iterate K to each cycle's own
+        let Some(model) = &derived.identified else {
+            anyhow::bail!("the identified model is not available");
+        };
+        let down0 = section.perturbation(l.perturbation_down_deg.to_radians());
+        let h = aeroelastic::lco::lco_hysteresis_k_iterated(
+            &section.structure,
+            model,
+            section.rho,
+            &l.speeds,
+            &up0,
+            &down0,
+            &opts,
+            &observer,
+        )
+        .context("LCO sweeps (identified model, K-iterated)")?;
+        (h.up, if l.up_down { h.down } else { vec![] })
+    } else if l.up_down {
         let down0 = section.perturbation(l.perturbation_down_deg.to_radians());
         let h = section
             .lco_hysteresis(&l.speeds, &up0, &down0, &opts, &observer)
@@ -471,6 +536,21 @@ fn lco_stage(study: &Study, out: &Path, flutter_speed: Option<f64>) -> anyhow::R
             .lco_sweep(&l.speeds, SweepDirection::Up, &up0, &opts, &observer)
             .context("LCO sweep")?;
         (up, vec![])
+    };
+    let (truth_up, truth_down) = if l.compare_truth {
+        let truth = aeroelastic::section::Section::new(
+            build::structure(s)?,
+            build::truth_model(study, s)?,
+            s.rho,
+        )?;
+        let t_up0 = truth.perturbation(l.perturbation_deg.to_radians());
+        let t_down0 = truth.perturbation(l.perturbation_down_deg.to_radians());
+        let h = truth
+            .lco_hysteresis(&l.speeds, &t_up0, &t_down0, &opts, &observer)
+            .context("LCO sweeps of the truth model")?;
+        (h.up, if l.up_down { h.down } else { vec![] })
+    } else {
+        (vec![], vec![])
     };
     bar.finish();
     // phase portraits: a few cycles from the final state of the nearest upward run
@@ -509,6 +589,9 @@ fn lco_stage(study: &Study, out: &Path, flutter_speed: Option<f64>) -> anyhow::R
         up,
         down,
         phase,
+        truth_flutter_speed,
+        truth_up,
+        truth_down,
     };
     write_json(&out.join(names::LCO), &stage)?;
     let mut csv = Csv::new(&[
@@ -521,7 +604,12 @@ fn lco_stage(study: &Study, out: &Path, flutter_speed: Option<f64>) -> anyhow::R
         "cycles",
         "t_end_s",
     ]);
-    for (name, rs) in [("up", &stage.up), ("down", &stage.down)] {
+    for (name, rs) in [
+        ("up", &stage.up),
+        ("down", &stage.down),
+        ("truth-up", &stage.truth_up),
+        ("truth-down", &stage.truth_down),
+    ] {
         for r in rs.iter() {
             let class = match r.classification {
                 Classification::Decay => "decay",
@@ -541,5 +629,72 @@ fn lco_stage(study: &Study, out: &Path, flutter_speed: Option<f64>) -> anyhow::R
             ]);
         }
     }
-    csv.write(&out.join(names::LCO_AMPLITUDES))
+    csv.write(&out.join(names::LCO_AMPLITUDES))?;
+    if l.compare_truth {
+        round_trip_table(&stage, out)?;
+    }
+    Ok(())
+}
+
+/// `round_trip.csv`: truth vs `[aero]` model, flutter speed and LCO pitch amplitude per
+/// speed and sweep, with the relative error (model/truth − 1).
+fn round_trip_table(stage: &LcoStage, out: &Path) -> anyhow::Result<()> {
+    let mut csv = Csv::new(&[
+        "quantity",
+        "U_m_s",
+        "truth",
+        "model",
+        "rel_err",
+        "truth_class",
+        "model_class",
+    ]);
+    let rel = |t: Option<f64>, m: Option<f64>| match (t, m) {
+        (Some(t), Some(m)) if t != 0.0 => Some(m / t - 1.0),
+        _ => None,
+    };
+    csv.rows.push(vec![
+        "flutter_speed_m_s".into(),
+        String::new(),
+        num(stage.truth_flutter_speed),
+        num(stage.flutter_speed),
+        num(rel(stage.truth_flutter_speed, stage.flutter_speed)),
+        String::new(),
+        String::new(),
+    ]);
+    let class = |r: &LcoResult| {
+        match r.classification {
+            Classification::Decay => "decay",
+            Classification::Lco => "lco",
+            Classification::Divergent { .. } => "divergent",
+            Classification::Unsettled => "unsettled",
+        }
+        .to_string()
+    };
+    for (q, truth, model) in [
+        ("lco_amplitude_deg_up", &stage.truth_up, &stage.up),
+        ("lco_amplitude_deg_down", &stage.truth_down, &stage.down),
+    ] {
+        for (t, m) in truth.iter().zip(model.iter()) {
+            let (ta, ma) = (
+                t.amplitude_alpha.to_degrees(),
+                m.amplitude_alpha.to_degrees(),
+            );
+            let both_lco =
+                t.classification == Classification::Lco && m.classification == Classification::Lco;
+            csv.rows.push(vec![
+                q.into(),
+                num(Some(t.u)),
+                num(Some(ta)),
+                num(Some(ma)),
+                num(if both_lco {
+                    rel(Some(ta), Some(ma))
+                } else {
+                    None
+                }),
+                class(t),
+                class(m),
+            ]);
+        }
+    }
+    csv.write(&out.join(names::ROUND_TRIP))
 }

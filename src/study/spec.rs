@@ -50,9 +50,37 @@ pub struct DataSpec {
     pub synthetic: Option<SyntheticSpec>,
     /// The paper's numerical verification (Table IV/V, Eq. 15/16).
     pub table_iv: Option<TableIvSpec>,
-    /// Virtual wind tunnel campaign (`aeroelastic::tunnel`): reserved, not available yet.
+    /// Virtual wind tunnel campaign (`aeroelastic::tunnel`): forced motion of a known
+    /// model, then the same preprocessing and identification as a data set.
     #[serde(rename = "virtual")]
-    pub virtual_tunnel: Option<toml::Table>,
+    pub virtual_tunnel: Option<VirtualSpec>,
+}
+
+/// `[data.virtual]`: a forced-motion campaign of the virtual wind tunnel on the paper's rig
+/// (B = 0.25 m, span 0.75 m, ρ = 1.225 kg/m³, 512 Hz, paper sensor noise).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct VirtualSpec {
+    /// Model TOML file (`aeroelastic::files`), relative to the study file.
+    pub model: Option<PathBuf>,
+    /// Inline model, keys as `[aero]` (chord 0.25 m, the rig's).
+    pub aero: Option<AeroSpec>,
+    /// `"paper"` (Tables I–II, 448 cases) or `"config=X"` (configuration X only, 64 cases).
+    #[serde(default = "paper")]
+    pub campaign: String,
+    /// Still-air runs (0.82 kg uniform plate) subtracted in preprocessing.
+    #[serde(default)]
+    pub still_air: bool,
+    /// Record length [s].
+    #[serde(default = "duration")]
+    pub duration: f64,
+    /// Also write the data set (manifest + CSV) under `OUT/dataset`.
+    #[serde(default)]
+    pub write_dataset: bool,
+}
+
+fn paper() -> String {
+    "paper".into()
 }
 
 /// Section geometry of synthetic data.
@@ -326,7 +354,9 @@ pub struct AeroTermSpec {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct AeroSpec {
-    /// `theodorsen`, `quasi_steady`, `steady`, `flat_plate_table` (later: `identified`).
+    /// `theodorsen`, `quasi_steady`, `steady`, `flat_plate_table`, or `identified`: the
+    /// Eq. 19 law of this study's own identification (`aeroelastic::identified`; flutter by
+    /// p-k on its derivative tables, LCO by K-iterated time integration).
     pub model: String,
     /// Elastic axis a [semi-chords aft of mid-chord].
     #[serde(default)]
@@ -361,7 +391,8 @@ pub struct FlutterReference {
 pub struct FlutterRunSpec {
     /// Label in tables and figures.
     pub label: String,
-    /// Aerodynamic model (as `[aero].model`; default the study's).
+    /// Aerodynamic model (as `[aero].model`, or `truth`: the model of `[data.virtual]`;
+    /// default the study's).
     pub model: Option<String>,
     /// `"p"` or `"pk"`.
     pub method: String,
@@ -431,6 +462,10 @@ pub struct LcoSpec {
     /// Length of the phase portraits [pitch periods].
     #[serde(default = "three")]
     pub phase_periods: f64,
+    /// Also sweep the truth model of `[data.virtual]` (with the same structure) and write
+    /// the truth-vs-`[aero]` comparison (`round_trip.csv`, a second bifurcation figure).
+    #[serde(default)]
+    pub compare_truth: bool,
 }
 
 fn one_f() -> f64 {
@@ -702,11 +737,32 @@ impl Study {
                     format!("give exactly one of dataset, [data.synthetic], [data.table_iv], [data.virtual] ({n} given)"),
                 );
             }
-            if d.virtual_tunnel.is_some() {
-                return err(
-                    "data.virtual",
-                    "the virtual wind tunnel source is not available in this build yet".into(),
-                );
+            if let Some(v) = &d.virtual_tunnel {
+                if v.model.is_some() == v.aero.is_some() {
+                    return err(
+                        "data.virtual",
+                        "give exactly one of `model` (a model file) and [data.virtual.aero]".into(),
+                    );
+                }
+                pos("data.virtual.duration", v.duration)?;
+                if v.campaign != "paper" {
+                    let c = v.campaign.strip_prefix("config=").unwrap_or("");
+                    if !aeroelastic::tunnel::paper_configurations()
+                        .iter()
+                        .any(|x| x.name == c)
+                    {
+                        return err(
+                            "data.virtual.campaign",
+                            format!(
+                                "`{}`: expected `paper` or `config=X`, X in A..G",
+                                v.campaign
+                            ),
+                        );
+                    }
+                }
+                if let Some(a) = &v.aero {
+                    check_aero("data.virtual.aero", a, false)?;
+                }
             }
             if let Some(sy) = &d.synthetic {
                 pos("data.synthetic.section.chord", sy.section.chord)?;
@@ -785,6 +841,7 @@ impl Study {
                 pos("data.table_iv.duration", t.duration)?;
             }
         }
+        let has_virtual = s.data.as_ref().is_some_and(|d| d.virtual_tunnel.is_some());
         let id = self.spec.identify.clone().unwrap_or_default();
         if let Err(e) = id.settings.validate() {
             return err("identify.settings", e.to_string());
@@ -819,48 +876,14 @@ impl Study {
                 pos(k, v)?;
             }
         }
-        let models = [
-            "theodorsen",
-            "quasi_steady",
-            "steady",
-            "flat_plate_table",
-            "identified",
-        ];
-        let check_model = |k: &str, m: &str| -> Result<(), (String, String)> {
-            if m == "identified" {
-                return Err((
-                    k.to_string(),
-                    "the identified Eq. 19 model is not available in this build yet".into(),
-                ));
-            }
-            if models.contains(&m) {
-                Ok(())
-            } else {
-                Err((
-                    k.to_string(),
-                    format!("`{m}`: expected one of {}", models[..4].join(", ")),
-                ))
-            }
-        };
         if let Some(a) = &s.aero {
-            check_model("aero.model", &a.model)?;
-            for (i, t) in a.nonlinear.iter().enumerate() {
-                if !matches!(t.channel.as_str(), "lift" | "moment") {
-                    return err(
-                        &format!("aero.nonlinear[{i}].channel"),
-                        format!("`{}`: expected lift or moment", t.channel),
-                    );
-                }
-                match identify::library::Term::parse(&t.term) {
-                    Ok(term) if term.degree() >= 2 => {}
-                    Ok(_) => {
-                        return err(
-                            &format!("aero.nonlinear[{i}].term"),
-                            format!("`{}`: degree must be ≥ 2", t.term),
-                        )
-                    }
-                    Err(e) => return err(&format!("aero.nonlinear[{i}].term"), e.to_string()),
-                }
+            check_aero("aero", a, s.data.is_some())?;
+            if a.model == "identified" && !a.nonlinear.is_empty() {
+                return err(
+                    "aero.nonlinear",
+                    "the identified model brings its own nonlinear terms; remove [[aero.nonlinear]]"
+                        .into(),
+                );
             }
         }
         if let Some(f) = &s.flutter {
@@ -889,7 +912,14 @@ impl Study {
                     );
                 }
                 if let Some(m) = &r.model {
-                    check_model(&format!("flutter.run[{i}].model"), m)?;
+                    let k = format!("flutter.run[{i}].model");
+                    if m == "truth" {
+                        if !has_virtual {
+                            return err(&k, "`truth` needs a [data.virtual] source".into());
+                        }
+                    } else {
+                        check_model(&k, m, s.data.is_some())?;
+                    }
                 }
             }
         }
@@ -905,6 +935,12 @@ impl Study {
             pos("lco.atol", l.atol)?;
             pos("lco.phase_periods", l.phase_periods)?;
             pos("lco.perturbation_deg", l.perturbation_deg)?;
+            if l.compare_truth && !has_virtual {
+                return err(
+                    "lco.compare_truth",
+                    "needs a [data.virtual] source (the truth model)".into(),
+                );
+            }
         }
         if let Some(f) = &s.outputs.figures {
             for (i, k) in f.iter().enumerate() {
@@ -918,6 +954,57 @@ impl Study {
         }
         Ok(())
     }
+}
+
+/// Aerodynamic model names of `[aero].model`.
+pub const AERO_MODELS: [&str; 5] = [
+    "theodorsen",
+    "quasi_steady",
+    "steady",
+    "flat_plate_table",
+    "identified",
+];
+
+/// Checks a model name; `identified` only where `allow_identified` (a study with data).
+fn check_model(k: &str, m: &str, allow_identified: bool) -> Result<(), (String, String)> {
+    if m == "identified" && !allow_identified {
+        return Err((
+            k.to_string(),
+            "`identified` needs [data] (the model comes from this study's identification)".into(),
+        ));
+    }
+    if AERO_MODELS.contains(&m) {
+        Ok(())
+    } else {
+        Err((
+            k.to_string(),
+            format!("`{m}`: expected one of {}", AERO_MODELS.join(", ")),
+        ))
+    }
+}
+
+/// Checks an `[aero]`-like table whose dotted prefix is `prefix`.
+fn check_aero(prefix: &str, a: &AeroSpec, allow_identified: bool) -> Result<(), (String, String)> {
+    check_model(&format!("{prefix}.model"), &a.model, allow_identified)?;
+    for (i, t) in a.nonlinear.iter().enumerate() {
+        if !matches!(t.channel.as_str(), "lift" | "moment") {
+            return Err((
+                format!("{prefix}.nonlinear[{i}].channel"),
+                format!("`{}`: expected lift or moment", t.channel),
+            ));
+        }
+        match identify::library::Term::parse(&t.term) {
+            Ok(term) if term.degree() >= 2 => {}
+            Ok(_) => {
+                return Err((
+                    format!("{prefix}.nonlinear[{i}].term"),
+                    format!("`{}`: degree must be ≥ 2", t.term),
+                ))
+            }
+            Err(e) => return Err((format!("{prefix}.nonlinear[{i}].term"), e.to_string())),
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -954,11 +1041,27 @@ mod tests {
     }
 
     #[test]
-    fn data_needs_exactly_one_source_and_virtual_is_reserved() {
+    fn data_needs_exactly_one_source_and_virtual_is_checked() {
         let e = parse("name = \"x\"\n[data]\n").unwrap_err();
         assert_eq!(e.key, "data");
-        let e = parse("name = \"x\"\n[data.virtual]\nconfig = \"A\"\n").unwrap_err();
+        // neither a model file nor an inline model
+        let e = parse("name = \"x\"\n[data.virtual]\nstill_air = true\n").unwrap_err();
         assert_eq!(e.key, "data.virtual");
         assert_eq!(e.line, 2, "{e}");
+        let e =
+            parse("name = \"x\"\n[data.virtual]\nmodel = \"m.toml\"\ncampaign = \"config=Q\"\n")
+                .unwrap_err();
+        assert_eq!(e.key, "data.virtual.campaign", "{e}");
+        assert_eq!(e.line, 4, "{e}");
+        let e = parse(
+            "name = \"x\"\n[data.virtual]\n[data.virtual.aero]\nmodel = \"theodorsen\"\n\
+             [[data.virtual.aero.nonlinear]]\nchannel = \"moment\"\nterm = \"alpha\"\ncoefficient = 1.0\n",
+        )
+        .unwrap_err();
+        assert_eq!(e.key, "data.virtual.aero.nonlinear[0].term", "{e}");
+        assert!(parse(
+            "name = \"x\"\n[data.virtual]\nmodel = \"m.toml\"\ncampaign = \"config=D\"\n"
+        )
+        .is_ok());
     }
 }
