@@ -3,6 +3,7 @@
 
 mod flutter_cmd;
 mod identify_cmd;
+mod interrupt;
 mod lco_cmd;
 mod plot_cmd;
 mod progress;

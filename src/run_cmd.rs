@@ -38,6 +38,7 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from("out").join(&study.spec.name));
+    crate::interrupt::install_cleanup(out.clone());
     let t0 = Instant::now();
     let timings = run_study(&study, &out, args.quiet)?;
     println!(
