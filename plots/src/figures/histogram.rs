@@ -159,7 +159,9 @@ impl Figure for HistogramFigure {
                 }
             };
             mesh!(m = chart, panel.x_label.as_str(), "cases [-]");
-            m.x_label_formatter(&fx)
+            // Few x ticks: scientific-notation labels of narrow panels overlap otherwise.
+            m.x_labels(5)
+                .x_label_formatter(&fx)
                 .y_label_formatter(&fy)
                 .draw()
                 .ctx(kind)?;
