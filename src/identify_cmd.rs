@@ -121,21 +121,6 @@ pub enum VelocityArg {
 }
 
 impl IdentifyArgs {
-    /// The flags' defaults for a data set and an output folder.
-    #[allow(dead_code)] // no caller since `aeroform run` runs study files
-    pub fn defaults(dataset: PathBuf, out: PathBuf) -> Self {
-        use clap::Parser;
-        #[derive(Parser)]
-        struct Wrap {
-            #[command(flatten)]
-            a: IdentifyArgs,
-        }
-        let mut a = Wrap::parse_from(["identify", "."]).a;
-        a.dataset = dataset;
-        a.out = out;
-        a
-    }
-
     /// Identification settings these flags select (validated by the library).
     pub fn settings(&self) -> IdentifySettings {
         let mut s = IdentifySettings {
