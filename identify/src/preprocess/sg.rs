@@ -156,32 +156,42 @@ mod tests {
 
     /// Multi-sine with noise: the derivative error is small against the analytic one,
     /// including the end windows.
+    /// Σ a·sin(2πft + φ) plus seeded Gaussian noise of std `sigma`, and its exact derivative.
+    pub(super) fn noisy_multisine(
+        comps: &[(f64, f64, f64)],
+        sigma: f64,
+        n: usize,
+        dt: f64,
+    ) -> (Vec<f64>, Vec<f64>) {
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let noise = Normal::new(0.0, sigma).unwrap();
+        let t = |i: usize| i as f64 * dt;
+        let x = (0..n)
+            .map(|i| {
+                comps
+                    .iter()
+                    .map(|&(a, f, p)| a * (2.0 * PI * f * t(i) + p).sin())
+                    .sum::<f64>()
+                    + noise.sample(&mut rng)
+            })
+            .collect();
+        let dx = (0..n)
+            .map(|i| {
+                comps
+                    .iter()
+                    .map(|&(a, f, p)| a * 2.0 * PI * f * (2.0 * PI * f * t(i) + p).cos())
+                    .sum::<f64>()
+            })
+            .collect();
+        (x, dx)
+    }
+
     #[test]
     fn multisine_with_noise_including_ends() {
         let dt = 1.0 / 512.0;
         let n = 5120;
         let comps = [(1.0, 0.9, 0.2), (0.6, 2.3, 1.0), (0.3, 4.1, 2.0)];
-        let mut rng = ChaCha8Rng::seed_from_u64(11);
-        let noise = Normal::new(0.0, 0.005).unwrap();
-        let x: Vec<f64> = (0..n)
-            .map(|i| {
-                let t = i as f64 * dt;
-                comps
-                    .iter()
-                    .map(|&(a, f, p)| a * (2.0 * PI * f * t + p).sin())
-                    .sum::<f64>()
-                    + noise.sample(&mut rng)
-            })
-            .collect();
-        let exact: Vec<f64> = (0..n)
-            .map(|i| {
-                let t = i as f64 * dt;
-                comps
-                    .iter()
-                    .map(|&(a, f, p)| a * 2.0 * PI * f * (2.0 * PI * f * t + p).cos())
-                    .sum::<f64>()
-            })
-            .collect();
+        let (x, exact) = noisy_multisine(&comps, 0.005, n, dt);
         let rms_v = (exact.iter().map(|v| v * v).sum::<f64>() / n as f64).sqrt();
         let d = savitzky_golay_derivative(
             &x,
@@ -209,11 +219,8 @@ mod tests {
 
 #[cfg(test)]
 mod sweep {
+    use super::tests::noisy_multisine;
     use super::*;
-    use rand::SeedableRng;
-    use rand_chacha::ChaCha8Rng;
-    use rand_distr::{Distribution, Normal};
-    use std::f64::consts::PI;
 
     /// Evidence for the default window/order: prints rms and end errors for a grid.
     #[test]
@@ -240,27 +247,7 @@ mod sweep {
             ("free 6 Hz, noise 0.5%", vec![(1.0, 6.0, 0.2)], 0.005),
         ] {
             println!("{label}");
-            let mut rng = ChaCha8Rng::seed_from_u64(11);
-            let noise = Normal::new(0.0, sigma).unwrap();
-            let x: Vec<f64> = (0..n)
-                .map(|i| {
-                    let t = i as f64 * dt;
-                    comps
-                        .iter()
-                        .map(|&(a, f, p)| a * (2.0 * PI * f * t + p).sin())
-                        .sum::<f64>()
-                        + noise.sample(&mut rng)
-                })
-                .collect();
-            let ex: Vec<f64> = (0..n)
-                .map(|i| {
-                    let t = i as f64 * dt;
-                    comps
-                        .iter()
-                        .map(|&(a, f, p)| a * 2.0 * PI * f * (2.0 * PI * f * t + p).cos())
-                        .sum::<f64>()
-                })
-                .collect();
+            let (x, ex) = noisy_multisine(&comps, sigma, n, dt);
             let rms_v = (ex.iter().map(|v| v * v).sum::<f64>() / n as f64).sqrt();
             for p in [2usize, 3, 4, 5] {
                 let mut line = format!("  order {p}:");
