@@ -1,1 +1,13 @@
-//! Sim-to-real gap: localisation, effect catalogue, attribution, blind benchmark (DESIGN.md §5).
+//! Sim-to-real gap: localisation, effect catalogue, attribution, blind benchmark
+//! (DESIGN.md §5).
+//!
+//! * [`effect`]: the catalogue names and verdicts;
+//! * [`report`]: the result types and the `diagnosis.json` document.
+
+pub mod effect;
+pub mod error;
+pub mod report;
+
+pub use effect::{Effect, Level, Verdict};
+pub use error::{Error, Result};
+pub use report::{Diagnosis, LevelResult};

@@ -1,0 +1,207 @@
+//! The effect catalogue of DESIGN.md §5 (fixed names) and the verdicts a diagnosis can
+//! reach.
+
+use serde::{Deserialize, Serialize};
+
+use crate::{Error, Result};
+
+/// Level at which an effect acts. `Aerodynamic` effects change the forces the section
+/// feels (or the forces the balance reports); `Structural` effects change only the
+/// structure's restoring forces, so they leave forced-motion residuals clean and show in
+/// free response only.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Level {
+    /// Aerodynamic forces (including balance artefacts such as an imperfect wind–no-wind
+    /// subtraction).
+    Aerodynamic,
+    /// Structural restoring forces (springs, gaps, friction).
+    Structural,
+    /// No effect (verdict `none` or `unexplained`).
+    None,
+}
+
+impl Level {
+    /// The name written in `diagnosis.json`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Level::Aerodynamic => "aerodynamic",
+            Level::Structural => "structural",
+            Level::None => "none",
+        }
+    }
+}
+
+/// A candidate unmodelled effect of the catalogue (DESIGN.md §5, fixed names).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Effect {
+    /// Mean angle offset α₀ (the model sits at α + α₀ when the rig reads α): DC forces and,
+    /// through the nonlinear terms, even harmonics.
+    StaticOffset,
+    /// Acceleration-proportional forces M_a q̈ as left by an imperfect wind–no-wind
+    /// subtraction: absorbed by derivatives at the forcing frequency, visible across
+    /// reduced frequency, as U → 0 and in free response.
+    AddedMass,
+    /// Forces lag the motion by a delay τ: a phase ωτ absorbed by derivatives at the forcing
+    /// frequency, visible across frequencies and in free response.
+    TimeDelay,
+    /// Force terms outside the Eq. 19 library (quintic, cross-DOF…): harmonics beyond the
+    /// third, amplitude dependence steeper than cubic.
+    HigherOrder,
+    /// Flow separation above a critical angle with lag and hysteresis: residuals that
+    /// switch on above an amplitude threshold, many harmonics, loops in (α, C_M).
+    DynamicStall,
+    /// Narrow-band forcing at a Strouhal frequency f = St·U/D that moves with U and is not a
+    /// combination tone of the motion.
+    VortexShedding,
+    /// Cubic structural stiffness (hardening or softening): amplitude-dependent frequency in
+    /// free response, forced residuals clean.
+    StructuralCubic,
+    /// Pitch freeplay (a dead band of the spring): frequency falls at small amplitude.
+    Freeplay,
+    /// Dry (Coulomb) friction in the supports: linear, not exponential, amplitude decay.
+    Friction,
+}
+
+impl Effect {
+    /// The whole catalogue, in the order of DESIGN.md §5.
+    pub const ALL: [Effect; 9] = [
+        Effect::StaticOffset,
+        Effect::AddedMass,
+        Effect::TimeDelay,
+        Effect::HigherOrder,
+        Effect::DynamicStall,
+        Effect::VortexShedding,
+        Effect::StructuralCubic,
+        Effect::Freeplay,
+        Effect::Friction,
+    ];
+
+    /// The fixed catalogue name (`static_offset`, …).
+    pub fn name(self) -> &'static str {
+        match self {
+            Effect::StaticOffset => "static_offset",
+            Effect::AddedMass => "added_mass",
+            Effect::TimeDelay => "time_delay",
+            Effect::HigherOrder => "higher_order",
+            Effect::DynamicStall => "dynamic_stall",
+            Effect::VortexShedding => "vortex_shedding",
+            Effect::StructuralCubic => "structural_cubic",
+            Effect::Freeplay => "freeplay",
+            Effect::Friction => "friction",
+        }
+    }
+
+    /// The level the effect acts at.
+    pub fn level(self) -> Level {
+        match self {
+            Effect::StructuralCubic | Effect::Freeplay | Effect::Friction => Level::Structural,
+            _ => Level::Aerodynamic,
+        }
+    }
+
+    /// The effect of a catalogue name.
+    ///
+    /// # Errors
+    /// [`Error::UnknownEffect`] listing the accepted names.
+    pub fn from_name(name: &str) -> Result<Self> {
+        Effect::ALL
+            .into_iter()
+            .find(|e| e.name() == name)
+            .ok_or_else(|| Error::UnknownEffect {
+                name: name.to_string(),
+                expected: Effect::ALL.map(Effect::name).join(", "),
+            })
+    }
+}
+
+impl std::fmt::Display for Effect {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// The outcome of a diagnosis.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub enum Verdict {
+    /// One catalogue effect explains the gap.
+    Effect(Effect),
+    /// The gap is at noise level.
+    None,
+    /// A significant gap that no candidate removes.
+    Unexplained,
+}
+
+impl Verdict {
+    /// `verdict.effect` of `diagnosis.json`: a catalogue name, `none` or `unexplained`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Verdict::Effect(e) => e.name(),
+            Verdict::None => "none",
+            Verdict::Unexplained => "unexplained",
+        }
+    }
+
+    /// `verdict.level` of `diagnosis.json`.
+    pub fn level(self) -> Level {
+        match self {
+            Verdict::Effect(e) => e.level(),
+            _ => Level::None,
+        }
+    }
+
+    /// The verdict of a `verdict.effect` name.
+    ///
+    /// # Errors
+    /// [`Error::UnknownEffect`] for anything else.
+    pub fn from_name(name: &str) -> Result<Self> {
+        match name {
+            "none" => Ok(Verdict::None),
+            "unexplained" => Ok(Verdict::Unexplained),
+            _ => Effect::from_name(name).map(Verdict::Effect),
+        }
+    }
+}
+
+impl std::fmt::Display for Verdict {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn names_round_trip_and_are_unique() {
+        let mut names: Vec<&str> = Effect::ALL.iter().map(|e| e.name()).collect();
+        for e in Effect::ALL {
+            assert_eq!(Effect::from_name(e.name()).unwrap(), e);
+            assert_eq!(Verdict::from_name(e.name()).unwrap(), Verdict::Effect(e));
+        }
+        names.sort();
+        names.dedup();
+        assert_eq!(names.len(), 9);
+        assert_eq!(Verdict::from_name("none").unwrap(), Verdict::None);
+        assert_eq!(
+            Verdict::from_name("unexplained").unwrap().level(),
+            Level::None
+        );
+        let e = Effect::from_name("stall").unwrap_err().to_string();
+        assert!(e.contains("stall") && e.contains("dynamic_stall"), "{e}");
+    }
+
+    #[test]
+    fn structural_effects_are_the_three_structural_ones() {
+        let s: Vec<Effect> = Effect::ALL
+            .into_iter()
+            .filter(|e| e.level() == Level::Structural)
+            .collect();
+        assert_eq!(
+            s,
+            [Effect::StructuralCubic, Effect::Freeplay, Effect::Friction]
+        );
+    }
+}

@@ -1,0 +1,281 @@
+//! Result types of a diagnosis: what each level (force, system) returns and the
+//! `diagnosis.json` document (DATA_FORMAT.md, format `aeroform-diagnosis/1`).
+//!
+//! Every gap is a *normalised* residual measured on held-out data only: for the force
+//! level sqrt(Σ r²/Σ F²) of the predicted minus measured aerodynamic force over held-out
+//! forced cases (lift and moment each normalised by their own Σ F², then combined as the
+//! root mean square of the two); for the system level the analogous quantity of the free
+//! response (see [`crate::system`]). `noise_level` is the value the same metric takes when
+//! the model is exact and only sensor noise remains, estimated from the data.
+
+use serde::{Deserialize, Serialize};
+
+use crate::effect::{Effect, Level, Verdict};
+
+/// Identifier of the `diagnosis.json` format.
+pub const FORMAT: &str = "aeroform-diagnosis/1";
+
+/// One candidate augmentation fitted on training data and scored on held-out data.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CandidateScore {
+    /// Catalogue effect.
+    pub effect: Effect,
+    /// Level of the data it was scored on (`aerodynamic` = forced records, `structural`
+    /// = free response).
+    pub level: Level,
+    /// Held-out gap of the baseline (same metric as [`LevelResult::before`]).
+    pub before: f64,
+    /// Held-out gap with the augmentation fitted on the training folds.
+    pub after: f64,
+    /// 1 − after/before, or the excess-over-noise version documented by the level.
+    pub shrink: f64,
+    /// Number of fitted parameters the augmentation adds (parsimony penalty).
+    pub n_params: usize,
+    /// Test statistic of the held-out improvement (documented by the level).
+    pub statistic: f64,
+    /// Threshold the statistic must exceed to be significant.
+    pub threshold: f64,
+    /// Whether the held-out improvement is significant after the parsimony penalty.
+    pub significant: bool,
+    /// Score used for ranking (lower is better; documented by the level).
+    pub score: f64,
+    /// Fitted parameter values by name, in SI units (e.g. `alpha0_rad`, `tau_s`).
+    #[serde(default)]
+    pub parameters: Vec<(String, f64)>,
+    /// Why the candidate could not be fitted, when it could not.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub failure: Option<String>,
+}
+
+/// A share of a level's held-out gap (excess residual energy) attributed to one cell of a
+/// split. The shares of one `split` sum to 1.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct WhereShare {
+    /// Which split this cell belongs to: `level`, `channel`, `harmonic`, `region`,
+    /// `state`.
+    pub split: String,
+    /// Level of the cell.
+    pub level: Level,
+    /// Channel: `lift`, `moment` (forced), `heave`, `pitch` (free), or `all`.
+    pub channel: String,
+    /// Harmonic or combination tone (`DC`, `1*f_alpha`, `3*f_alpha`, `2*f_alpha+f_h`,
+    /// `broadband`…), or `all`.
+    pub harmonic: String,
+    /// Wind-speed range [m/s] of the cell.
+    pub wind_speed: [f64; 2],
+    /// Pitch-amplitude range [deg] of the cell (forced cases; free: amplitude of the
+    /// response).
+    pub amplitude: [f64; 2],
+    /// Motion configuration, if the cell is one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub config: Option<String>,
+    /// State-space region (`|alpha| < 0.5 A`, `alpha_dot > 0`…), if the split is `state`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub state: Option<String>,
+    /// Share of the split's total, in [0, 1].
+    pub share: f64,
+}
+
+/// Held-out gap of one case (heat map over U × amplitude).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CaseGap {
+    /// Case id.
+    pub id: String,
+    /// Level (`aerodynamic` = forced case, `structural` = free run).
+    pub level: Level,
+    /// Configuration label, if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub config: Option<String>,
+    /// Wind speed [m/s].
+    pub wind_speed: f64,
+    /// Pitch amplitude [deg] (forced: prescribed; free: initial or mean response).
+    pub amplitude: f64,
+    /// Fold in which the case was held out.
+    pub fold: usize,
+    /// Normalised held-out residual of the baseline.
+    pub before: f64,
+    /// Normalised held-out residual with the level's best candidate.
+    pub after: f64,
+    /// Noise-level value of the same metric for this case.
+    pub noise_level: f64,
+}
+
+/// Mean residual amplitude spectrum of one channel over the held-out cases, before and
+/// after the best candidate, on a frequency axis normalised by each case's pitch
+/// frequency (forced) or in Hz (free).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ResidualSpectrum {
+    /// Level.
+    pub level: Level,
+    /// Channel (`lift`, `moment`, `heave`, `pitch`).
+    pub channel: String,
+    /// Unit of `frequency` (`f/f_alpha` or `Hz`).
+    pub frequency_unit: String,
+    /// Frequency axis.
+    pub frequency: Vec<f64>,
+    /// Residual amplitude before (normalised by the rms of the measured channel).
+    pub before: Vec<f64>,
+    /// Residual amplitude after.
+    pub after: Vec<f64>,
+}
+
+/// A residual signature test (spectral, phase, amplitude, U dependence, whiteness).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SignatureTest {
+    /// Test name (`whiteness`, `dc`, `odd_harmonics`, `even_harmonics`, `off_harmonic_line`,
+    /// `amplitude_threshold`, `u_dependence`, `hysteresis`, …).
+    pub name: String,
+    /// Level.
+    pub level: Level,
+    /// Statistic.
+    pub statistic: f64,
+    /// Threshold.
+    pub threshold: f64,
+    /// `statistic > threshold`.
+    pub detected: bool,
+    /// What the statistic is, in words, with its value where useful.
+    pub detail: String,
+}
+
+/// One observable of the gap, before and after the winning augmentation.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ObservableGap {
+    /// Observable (`force residual`, `pitch frequency`, `LCO pitch amplitude`, `decay
+    /// rate`, `flutter speed`…).
+    pub name: String,
+    /// Level.
+    pub level: Level,
+    /// Unit of `before`/`after` (`-` for normalised residuals).
+    pub unit: String,
+    /// Held-out gap of the baseline.
+    pub before: f64,
+    /// Held-out gap with the augmentation.
+    pub after: f64,
+    /// 1 − |after|/|before| (0 when before = 0).
+    pub shrink: f64,
+}
+
+/// One point of a bifurcation diagram (free response).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct BifurcationPoint {
+    /// Wind speed [m/s].
+    pub wind_speed: f64,
+    /// Pitch amplitude at the end of the record [deg] (LCO amplitude, or the decayed
+    /// amplitude below flutter).
+    pub amplitude: f64,
+    /// Dominant pitch frequency [Hz].
+    pub frequency: f64,
+}
+
+/// Predicted vs measured bifurcation diagram over the free runs.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+pub struct Bifurcation {
+    /// From the measured free response.
+    pub measured: Vec<BifurcationPoint>,
+    /// From the baseline sim.
+    pub predicted_before: Vec<BifurcationPoint>,
+    /// From the sim with the winning augmentation (empty when none was applied).
+    pub predicted_after: Vec<BifurcationPoint>,
+}
+
+/// What one level (force or system) of the diagnosis found.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LevelResult {
+    /// `aerodynamic` (forced records) or `structural` (free response).
+    pub level: Level,
+    /// Name of the gap metric.
+    pub metric: String,
+    /// Held-out gap of the baseline.
+    pub before: f64,
+    /// Noise-level value of the same metric.
+    pub noise_level: f64,
+    /// Whether `before` is significantly above `noise_level` (statistic and threshold in
+    /// `gap_statistic`/`gap_threshold`).
+    pub significant_gap: bool,
+    /// Statistic of the gap test.
+    pub gap_statistic: f64,
+    /// Threshold of the gap test.
+    pub gap_threshold: f64,
+    /// Ids of the held-out cases (every case is held out once).
+    pub held_out_cases: Vec<String>,
+    /// Every candidate of this level, best first.
+    pub candidates: Vec<CandidateScore>,
+    /// Where the gap lies.
+    #[serde(rename = "where")]
+    pub where_: Vec<WhereShare>,
+    /// Per-case gaps.
+    pub cases: Vec<CaseGap>,
+    /// Residual spectra before/after the best candidate.
+    pub spectra: Vec<ResidualSpectrum>,
+    /// Residual signature tests.
+    pub signatures: Vec<SignatureTest>,
+    /// Observables before/after the best candidate.
+    pub observables: Vec<ObservableGap>,
+    /// Bifurcation diagram (system level only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bifurcation: Option<Bifurcation>,
+}
+
+/// `verdict` of `diagnosis.json`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct VerdictReport {
+    /// Catalogue name, `none` or `unexplained`.
+    pub effect: String,
+    /// `aerodynamic`, `structural` or `none`.
+    pub level: Level,
+    /// Confidence in [0, 1] (documented in [`crate::verdict`]).
+    pub confidence: f64,
+    /// One sentence saying why.
+    pub reason: String,
+}
+
+/// `gap` of `diagnosis.json`: the headline gap of the level that decided the verdict.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct GapReport {
+    /// Metric name.
+    pub metric: String,
+    /// Held-out gap before.
+    pub before: f64,
+    /// Held-out gap after the winning augmentation (= before when none).
+    pub after: f64,
+    /// 1 − after/before.
+    pub shrink: f64,
+    /// Noise-level value of the metric.
+    pub noise_level: f64,
+    /// Held-out cases.
+    pub held_out_cases: Vec<String>,
+}
+
+/// The `diagnosis.json` document.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Diagnosis {
+    /// Always [`FORMAT`].
+    pub format: String,
+    /// Verdict.
+    pub verdict: VerdictReport,
+    /// Headline gap.
+    pub gap: GapReport,
+    /// Where the gap lies (all levels).
+    #[serde(rename = "where")]
+    pub where_: Vec<WhereShare>,
+    /// Every candidate scored, best first, all levels.
+    pub candidates: Vec<CandidateScore>,
+    /// Per level details.
+    pub levels: Vec<LevelResult>,
+    /// Seed of every random draw (fold assignment).
+    pub seed: u64,
+    /// aeroform version (`git describe` when known).
+    pub version: String,
+    /// Input data sets (folders or names).
+    pub inputs: Vec<String>,
+}
+
+impl Diagnosis {
+    /// The verdict as a typed value.
+    ///
+    /// # Errors
+    /// [`crate::Error::UnknownEffect`] when `verdict.effect` is not a valid name.
+    pub fn verdict(&self) -> crate::Result<Verdict> {
+        Verdict::from_name(&self.verdict.effect)
+    }
+}
