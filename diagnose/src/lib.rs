@@ -2,11 +2,13 @@
 //! (DESIGN.md §5).
 //!
 //! * [`effect`]: the catalogue names and verdicts;
-//! * [`report`]: the result types and the `diagnosis.json` document.
+//! * [`report`]: the result types and the `diagnosis.json` document;
+//! * [`verdict`]: from the levels' findings to one verdict.
 
 pub mod effect;
 pub mod error;
 pub mod report;
+pub mod verdict;
 
 pub use effect::{Effect, Level, Verdict};
 pub use error::{Error, Result};

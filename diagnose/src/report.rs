@@ -27,7 +27,8 @@ pub struct CandidateScore {
     pub before: f64,
     /// Held-out gap with the augmentation fitted on the training folds.
     pub after: f64,
-    /// 1 − after/before, or the excess-over-noise version documented by the level.
+    /// 1 − after/before (plain; [`crate::verdict::excess_shrink`] gives the share of the
+    /// excess over noise).
     pub shrink: f64,
     /// Number of fitted parameters the augmentation adds (parsimony penalty).
     pub n_params: usize,
@@ -240,6 +241,10 @@ pub struct GapReport {
     pub after: f64,
     /// 1 − after/before.
     pub shrink: f64,
+    /// 1 − e_after/e_before with e = sqrt(max(gap² − noise², 0)): the share of the gap's
+    /// excess over noise that the winning augmentation removes.
+    #[serde(default)]
+    pub excess_shrink: f64,
     /// Noise-level value of the metric.
     pub noise_level: f64,
     /// Held-out cases.

@@ -1,0 +1,471 @@
+//! From the two levels' findings to one verdict (DESIGN.md §5.3).
+//!
+//! Rule, in order:
+//! 1. **Force level first.** When the held-out force gap is significant, the verdict is the
+//!    best force-level candidate if it is significant and removes at least
+//!    [`VerdictRules::min_excess_shrink`] of the gap's excess over noise; otherwise
+//!    `unexplained`. A force-level gap that no aerodynamic candidate removes is not handed
+//!    to the free-response level: structural effects cannot leave forced-motion residuals,
+//!    so naming one would force a name on a gap no candidate explains.
+//! 2. **System level.** With a clean force level, a significant free-response gap is named
+//!    by the best system-level candidate under the same rule, else `unexplained`.
+//! 3. Otherwise `none`.
+//!
+//! Shrink is reported two ways. `shrink` = 1 − after/before (DATA_FORMAT.md), whose best
+//! value is 1 − noise/before because sensor noise cannot be explained; the rule uses the
+//! *excess* shrink 1 − e_after/e_before with e = sqrt(max(gap² − noise², 0)), which is 1
+//! when a candidate leaves only noise.
+
+use crate::effect::{Level, Verdict};
+use crate::report::{
+    CandidateScore, Diagnosis, GapReport, LevelResult, VerdictReport, WhereShare, FORMAT,
+};
+
+/// Thresholds of the verdict rule.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct VerdictRules {
+    /// Least excess shrink for a candidate to name the gap (default 0.5: the candidate
+    /// removes at least half of the excess residual above noise on held-out data).
+    pub min_excess_shrink: f64,
+}
+
+impl Default for VerdictRules {
+    fn default() -> Self {
+        VerdictRules {
+            min_excess_shrink: 0.5,
+        }
+    }
+}
+
+/// Excess of a gap over the noise level: sqrt(max(gap² − noise², 0)).
+pub fn excess(gap: f64, noise: f64) -> f64 {
+    (gap * gap - noise * noise).max(0.0).sqrt()
+}
+
+/// 1 − after/before, 0 when before is not positive.
+pub fn plain_shrink(before: f64, after: f64) -> f64 {
+    if before > 0.0 && before.is_finite() && after.is_finite() {
+        1.0 - after / before
+    } else {
+        0.0
+    }
+}
+
+/// 1 − excess(after)/excess(before), 0 when there is no excess before.
+pub fn excess_shrink(before: f64, after: f64, noise: f64) -> f64 {
+    let eb = excess(before, noise);
+    if eb > 0.0 && after.is_finite() {
+        1.0 - excess(after, noise) / eb
+    } else {
+        0.0
+    }
+}
+
+/// What decided the verdict.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Decision {
+    /// The verdict.
+    pub verdict: Verdict,
+    /// Confidence in [0, 1].
+    pub confidence: f64,
+    /// Why, in one sentence.
+    pub reason: String,
+    /// Index into the levels of the level that decided (None for `none`).
+    pub level: Option<usize>,
+    /// Index of the winning candidate in that level's list.
+    pub candidate: Option<usize>,
+}
+
+/// The best candidate of a level that is significant, with its excess shrink.
+fn best_candidate(level: &LevelResult) -> Option<(usize, &CandidateScore, f64)> {
+    level
+        .candidates
+        .iter()
+        .enumerate()
+        .filter(|(_, c)| c.significant && c.failure.is_none() && c.after.is_finite())
+        .map(|(i, c)| {
+            (
+                i,
+                c,
+                excess_shrink(level.before, c.after, level.noise_level),
+            )
+        })
+        .max_by(|a, b| {
+            // lower score is better; ties by larger shrink
+            b.1.score
+                .partial_cmp(&a.1.score)
+                .unwrap_or(std::cmp::Ordering::Equal)
+                .then(a.2.partial_cmp(&b.2).unwrap_or(std::cmp::Ordering::Equal))
+        })
+}
+
+/// Confidence of naming `best`: its excess shrink, reduced by how much of the same
+/// improvement the runner-up achieves (1 − Δ₂/Δ₁ with Δ = before − after).
+fn effect_confidence(level: &LevelResult, best_idx: usize, shrink: f64) -> f64 {
+    let d1 = level.before - level.candidates[best_idx].after;
+    let d2 = level
+        .candidates
+        .iter()
+        .enumerate()
+        .filter(|(i, c)| *i != best_idx && c.failure.is_none() && c.after.is_finite())
+        .map(|(_, c)| level.before - c.after)
+        .fold(0.0_f64, f64::max);
+    let margin = if d1 > 0.0 {
+        (1.0 - d2.max(0.0) / d1).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (shrink.clamp(0.0, 1.0) * (0.5 + 0.5 * margin)).clamp(0.0, 1.0)
+}
+
+/// Decides one level with a significant gap.
+fn decide_level(levels: &[LevelResult], li: usize, rules: &VerdictRules) -> Decision {
+    let level = &levels[li];
+    match best_candidate(level) {
+        Some((ci, c, shrink)) if shrink >= rules.min_excess_shrink => Decision {
+            verdict: Verdict::Effect(c.effect),
+            confidence: effect_confidence(level, ci, shrink),
+            reason: format!(
+                "{} held-out gap {:.4} is {:.1}× its noise level {:.4}; adding `{}` brings it to \
+                 {:.4} (excess shrink {:.0} %)",
+                level.level.name(),
+                level.before,
+                level.before / level.noise_level.max(f64::MIN_POSITIVE),
+                level.noise_level,
+                c.effect,
+                c.after,
+                100.0 * shrink
+            ),
+            level: Some(li),
+            candidate: Some(ci),
+        },
+        best => {
+            let (what, shrink) = match best {
+                Some((_, c, s)) => (format!("the best candidate `{}`", c.effect), s),
+                None => ("no candidate significantly".to_string(), 0.0),
+            };
+            Decision {
+                verdict: Verdict::Unexplained,
+                confidence: (1.0 - shrink.max(0.0)).clamp(0.0, 1.0),
+                reason: format!(
+                    "{} held-out gap {:.4} is {:.1}× its noise level {:.4}, and {what} removes \
+                     only {:.0} % of its excess",
+                    level.level.name(),
+                    level.before,
+                    level.before / level.noise_level.max(f64::MIN_POSITIVE),
+                    level.noise_level,
+                    100.0 * shrink.max(0.0)
+                ),
+                level: Some(li),
+                candidate: None,
+            }
+        }
+    }
+}
+
+/// Decides the verdict from the levels (force level first, then system level; see the
+/// module docs).
+pub fn decide(levels: &[LevelResult], rules: &VerdictRules) -> Decision {
+    let order = [Level::Aerodynamic, Level::Structural];
+    for want in order {
+        if let Some(li) = levels
+            .iter()
+            .position(|l| l.level == want && l.significant_gap)
+        {
+            return decide_level(levels, li, rules);
+        }
+    }
+    // Confidence of `none`: how far below its threshold the most critical gap test is.
+    let worst = levels
+        .iter()
+        .map(|l| {
+            if l.gap_threshold > 0.0 {
+                l.gap_statistic / l.gap_threshold
+            } else {
+                0.0
+            }
+        })
+        .fold(0.0_f64, f64::max);
+    Decision {
+        verdict: Verdict::None,
+        confidence: (1.0 - worst).clamp(0.0, 1.0),
+        reason: format!(
+            "no level has a held-out gap significantly above its noise level (largest \
+             statistic/threshold {worst:.2})"
+        ),
+        level: None,
+        candidate: None,
+    }
+}
+
+/// The `level` split of the where-table: each level's share of the total excess, the
+/// excess measured in units of its own noise level (e² / noise²), so that levels with
+/// different metrics are comparable.
+pub fn level_shares(levels: &[LevelResult]) -> Vec<WhereShare> {
+    let e: Vec<f64> = levels
+        .iter()
+        .map(|l| {
+            let n = l.noise_level.max(f64::MIN_POSITIVE);
+            (excess(l.before, l.noise_level) / n).powi(2)
+        })
+        .collect();
+    let total: f64 = e.iter().sum();
+    levels
+        .iter()
+        .zip(&e)
+        .map(|(l, &ei)| WhereShare {
+            split: "level".into(),
+            level: l.level,
+            channel: "all".into(),
+            harmonic: "all".into(),
+            wind_speed: speed_range(l),
+            amplitude: amplitude_range(l),
+            config: None,
+            state: None,
+            share: if total > 0.0 {
+                ei / total
+            } else {
+                1.0 / levels.len() as f64
+            },
+        })
+        .collect()
+}
+
+fn speed_range(l: &LevelResult) -> [f64; 2] {
+    range(l.cases.iter().map(|c| c.wind_speed))
+}
+
+fn amplitude_range(l: &LevelResult) -> [f64; 2] {
+    range(l.cases.iter().map(|c| c.amplitude))
+}
+
+fn range(v: impl Iterator<Item = f64>) -> [f64; 2] {
+    let (lo, hi) = v
+        .filter(|x| x.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+            (a.min(x), b.max(x))
+        });
+    if lo <= hi {
+        [lo, hi]
+    } else {
+        [0.0, 0.0]
+    }
+}
+
+/// Assembles the `diagnosis.json` document from the levels (force level first), the seed,
+/// the version string and the input names.
+pub fn assemble(
+    mut levels: Vec<LevelResult>,
+    rules: &VerdictRules,
+    seed: u64,
+    version: &str,
+    inputs: Vec<String>,
+) -> Diagnosis {
+    // Normalise every candidate's plain shrink so that all levels report the same quantity.
+    for l in &mut levels {
+        for c in &mut l.candidates {
+            c.shrink = plain_shrink(c.before, c.after);
+        }
+    }
+    let d = decide(&levels, rules);
+    let gap = match d.level {
+        Some(li) => {
+            let l = &levels[li];
+            let after = d
+                .candidate
+                .map(|ci| l.candidates[ci].after)
+                .unwrap_or(l.before);
+            GapReport {
+                metric: l.metric.clone(),
+                before: l.before,
+                after,
+                shrink: plain_shrink(l.before, after),
+                excess_shrink: excess_shrink(l.before, after, l.noise_level),
+                noise_level: l.noise_level,
+                held_out_cases: l.held_out_cases.clone(),
+            }
+        }
+        None => {
+            let l = &levels[0];
+            GapReport {
+                metric: l.metric.clone(),
+                before: l.before,
+                after: l.before,
+                shrink: 0.0,
+                excess_shrink: 0.0,
+                noise_level: l.noise_level,
+                held_out_cases: l.held_out_cases.clone(),
+            }
+        }
+    };
+    let mut where_ = level_shares(&levels);
+    where_.extend(levels.iter().flat_map(|l| l.where_.iter().cloned()));
+    let mut candidates: Vec<CandidateScore> = levels
+        .iter()
+        .flat_map(|l| l.candidates.iter().cloned())
+        .collect();
+    // Best first overall: the deciding level's order first, then the others.
+    if let Some(li) = d.level {
+        let lvl = levels[li].level;
+        candidates.sort_by_key(|c| c.level != lvl);
+    }
+    Diagnosis {
+        format: FORMAT.into(),
+        verdict: VerdictReport {
+            effect: d.verdict.name().into(),
+            level: d.verdict.level(),
+            confidence: d.confidence,
+            reason: d.reason,
+        },
+        gap,
+        where_,
+        candidates,
+        levels,
+        seed,
+        version: version.into(),
+        inputs,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::effect::Effect;
+
+    fn cand(
+        effect: Effect,
+        before: f64,
+        after: f64,
+        significant: bool,
+        score: f64,
+    ) -> CandidateScore {
+        CandidateScore {
+            effect,
+            level: effect.level(),
+            before,
+            after,
+            shrink: 0.0,
+            n_params: 1,
+            statistic: 0.0,
+            threshold: 0.0,
+            significant,
+            score,
+            parameters: vec![],
+            failure: None,
+        }
+    }
+
+    fn level(
+        level: Level,
+        before: f64,
+        noise: f64,
+        significant: bool,
+        c: Vec<CandidateScore>,
+    ) -> LevelResult {
+        LevelResult {
+            level,
+            metric: "m".into(),
+            before,
+            noise_level: noise,
+            significant_gap: significant,
+            gap_statistic: if significant { 10.0 } else { 0.2 },
+            gap_threshold: 1.0,
+            held_out_cases: vec!["a".into()],
+            candidates: c,
+            where_: vec![],
+            cases: vec![],
+            spectra: vec![],
+            signatures: vec![],
+            observables: vec![],
+            bifurcation: None,
+        }
+    }
+
+    #[test]
+    fn force_gap_named_by_its_best_candidate() {
+        let f = level(
+            Level::Aerodynamic,
+            0.3,
+            0.1,
+            true,
+            vec![
+                cand(Effect::HigherOrder, 0.3, 0.2, true, 5.0),
+                cand(Effect::DynamicStall, 0.3, 0.101, true, 1.0),
+            ],
+        );
+        let d = decide(&[f], &VerdictRules::default());
+        assert_eq!(d.verdict, Verdict::Effect(Effect::DynamicStall));
+        assert!(
+            d.confidence > 0.5 && d.confidence <= 1.0,
+            "{}",
+            d.confidence
+        );
+    }
+
+    #[test]
+    fn a_gap_no_candidate_removes_is_unexplained_not_structural() {
+        let f = level(
+            Level::Aerodynamic,
+            0.3,
+            0.1,
+            true,
+            vec![cand(Effect::VortexShedding, 0.3, 0.28, true, 1.0)],
+        );
+        let s = level(
+            Level::Structural,
+            0.5,
+            0.1,
+            true,
+            vec![cand(Effect::Friction, 0.5, 0.1, true, 1.0)],
+        );
+        let d = decide(&[f, s], &VerdictRules::default());
+        assert_eq!(d.verdict, Verdict::Unexplained);
+    }
+
+    #[test]
+    fn clean_force_level_defers_to_free_response() {
+        let f = level(Level::Aerodynamic, 0.1, 0.1, false, vec![]);
+        let s = level(
+            Level::Structural,
+            0.5,
+            0.1,
+            true,
+            vec![
+                cand(Effect::Freeplay, 0.5, 0.12, true, 2.0),
+                cand(Effect::StructuralCubic, 0.5, 0.3, true, 3.0),
+            ],
+        );
+        let diag = assemble(vec![f, s], &VerdictRules::default(), 7, "v", vec![]);
+        assert_eq!(diag.verdict.effect, "freeplay");
+        assert_eq!(diag.verdict.level, Level::Structural);
+        assert!((diag.gap.shrink - (1.0 - 0.12 / 0.5)).abs() < 1e-12);
+        let shares: f64 = diag
+            .where_
+            .iter()
+            .filter(|w| w.split == "level")
+            .map(|w| w.share)
+            .sum();
+        assert!((shares - 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn quiet_levels_give_none() {
+        let f = level(
+            Level::Aerodynamic,
+            0.1,
+            0.1,
+            false,
+            vec![cand(Effect::HigherOrder, 0.1, 0.09, true, 1.0)],
+        );
+        let d = decide(&[f], &VerdictRules::default());
+        assert_eq!(d.verdict, Verdict::None);
+        assert!((d.confidence - 0.8).abs() < 1e-12);
+    }
+
+    #[test]
+    fn excess_shrink_is_one_when_only_noise_remains() {
+        assert!((excess_shrink(0.3, 0.1, 0.1) - 1.0).abs() < 1e-12);
+        assert!((plain_shrink(0.3, 0.1) - 2.0 / 3.0).abs() < 1e-12);
+        assert_eq!(excess_shrink(0.1, 0.05, 0.1), 0.0);
+    }
+}
