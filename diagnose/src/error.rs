@@ -52,7 +52,7 @@ pub enum Error {
         context: String,
         /// The identify error.
         #[source]
-        source: identify::Error,
+        source: Box<identify::Error>,
     },
     /// A structural or aerodynamic model could not be built or integrated.
     #[error("{context}: {source}")]
@@ -61,7 +61,7 @@ pub enum Error {
         context: String,
         /// The aeroelastic error.
         #[source]
-        source: aeroelastic::Error,
+        source: Box<aeroelastic::Error>,
     },
     /// Writing a result file failed.
     #[error("{context}: {message}")]
@@ -103,7 +103,7 @@ impl Error {
     pub fn identify(context: impl Into<String>, source: identify::Error) -> Self {
         Error::Identify {
             context: context.into(),
-            source,
+            source: Box::new(source),
         }
     }
 
@@ -111,7 +111,7 @@ impl Error {
     pub fn aeroelastic(context: impl Into<String>, source: aeroelastic::Error) -> Self {
         Error::Aeroelastic {
             context: context.into(),
-            source,
+            source: Box::new(source),
         }
     }
 }
