@@ -4,7 +4,9 @@
 //! * [`effect`]: the catalogue names and verdicts;
 //! * [`report`]: the result types and the `diagnosis.json` document;
 //! * [`verdict`]: from the levels' findings to one verdict.
+//! * [`bench`]: the withheld-effect benchmark statistics.
 
+pub mod bench;
 pub mod effect;
 pub mod error;
 pub mod report;

@@ -1,0 +1,438 @@
+//! Withheld-effect benchmark (DESIGN.md §5.5): data sets with a random effect (a catalogue
+//! effect, none, or one outside the catalogue) at random strength, diagnosed without the
+//! label; confusion matrix and shrink statistics.
+//!
+//! The benchmark knows the labels; the diagnosis does not (it receives the two data sets
+//! only). A set counts as *strong* when its true gap is at least [`STRONG_RATIO`] times the
+//! noise-level gap, both measured by the baseline on held-out data: the true gap is the
+//! baseline's held-out gap on the set, the noise-level gap is the same quantity on its twin
+//! (the same seed and noise draws with no effect). The ratio is the larger of the force-
+//! and system-level ratios.
+
+use serde::{Deserialize, Serialize};
+
+use crate::effect::{Effect, Verdict};
+
+/// Least ratio true gap / noise-level gap of a *strong* set (the issue's acceptance bar).
+pub const STRONG_RATIO: f64 = 3.0;
+
+/// Name of the outside-the-catalogue effect of the benchmark.
+pub const OUTSIDE: &str = "buffeting";
+
+/// The truth labels drawn by the benchmark, in table order: the catalogue, `none`, and the
+/// outside effect.
+pub fn truth_labels() -> Vec<String> {
+    Effect::ALL
+        .iter()
+        .map(|e| e.name().to_string())
+        .chain(["none".to_string(), OUTSIDE.to_string()])
+        .collect()
+}
+
+/// The verdict labels, in table order: the catalogue, `none`, `unexplained`.
+pub fn verdict_labels() -> Vec<String> {
+    Effect::ALL
+        .iter()
+        .map(|e| e.name().to_string())
+        .chain(["none".to_string(), "unexplained".to_string()])
+        .collect()
+}
+
+/// One drawn benchmark set.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct BlindSpec {
+    /// Index in the benchmark.
+    pub index: usize,
+    /// Seed of the set (noise, effect parameters), derived from the master seed.
+    pub seed: u64,
+    /// Truth label (one of [`truth_labels`]).
+    pub truth: String,
+    /// Strength in [0, 1] (0 barely detectable, 1 strong; mapped by the generator).
+    pub strength: f64,
+}
+
+/// SplitMix64 step: a well-mixed 64-bit value from a seed and a stream index.
+pub fn mix(seed: u64, index: u64) -> u64 {
+    let mut z = seed.wrapping_add((index + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15));
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+/// Draws `n` sets from the master `seed`: labels uniformly over [`truth_labels`] (a
+/// balanced cyclic assignment, shuffled, so that every label gets ⌊n/11⌋ or ⌈n/11⌉ sets),
+/// strengths uniform in [0, 1]. Each set's seed and strength depend only on (seed, index).
+pub fn draw_specs(n: usize, seed: u64) -> Vec<BlindSpec> {
+    let labels = truth_labels();
+    let mut order: Vec<usize> = (0..n).map(|i| i % labels.len()).collect();
+    // Fisher–Yates with the mixed stream.
+    for i in (1..n).rev() {
+        let j = (mix(seed, 1_000_000 + i as u64) % (i as u64 + 1)) as usize;
+        order.swap(i, j);
+    }
+    (0..n)
+        .map(|i| {
+            let s = mix(seed, i as u64);
+            BlindSpec {
+                index: i,
+                seed: s,
+                truth: labels[order[i]].clone(),
+                strength: (mix(s, 7) >> 11) as f64 / (1u64 << 53) as f64,
+            }
+        })
+        .collect()
+}
+
+/// What the diagnosis of one set gave.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct BlindOutcome {
+    /// The drawn set.
+    pub spec: BlindSpec,
+    /// Verdict name.
+    pub verdict: String,
+    /// Verdict confidence.
+    pub confidence: f64,
+    /// True gap / noise-level gap (max over levels; 1 for effect-free sets).
+    pub gap_ratio: f64,
+    /// Headline plain shrink of the verdict (1 − after/before).
+    pub shrink: f64,
+    /// Headline excess shrink of the verdict.
+    pub excess_shrink: f64,
+    /// Plain held-out shrink of the true effect's own candidate, when it was scored.
+    pub true_candidate_shrink: Option<f64>,
+    /// Effect parameters the generator used (for the weak-cell analysis; never given to
+    /// the diagnosis).
+    #[serde(default)]
+    pub parameters: Vec<(String, f64)>,
+    /// Error message when the set could not be generated or diagnosed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub error: Option<String>,
+    /// Wall time of generation + diagnosis [s].
+    pub seconds: f64,
+}
+
+impl BlindOutcome {
+    /// Whether the true gap is at least [`STRONG_RATIO`] × the noise-level gap.
+    pub fn strong(&self) -> bool {
+        self.gap_ratio >= STRONG_RATIO
+    }
+
+    /// Whether the verdict is the right one (`unexplained` is right for the outside effect).
+    pub fn correct(&self) -> bool {
+        if self.spec.truth == OUTSIDE {
+            self.verdict == "unexplained"
+        } else {
+            self.verdict == self.spec.truth
+        }
+    }
+}
+
+/// Acceptance statistics of a benchmark.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct BlindSummary {
+    /// Sets run.
+    pub n: usize,
+    /// Sets that failed to generate or diagnose.
+    pub failed: usize,
+    /// Strong catalogue sets.
+    pub catalogue_strong: usize,
+    /// Top-1 accuracy on strong catalogue sets.
+    pub catalogue_top1: f64,
+    /// Effect-free sets.
+    pub none_sets: usize,
+    /// Share of effect-free sets diagnosed `none`.
+    pub none_rate: f64,
+    /// Strong outside-effect sets.
+    pub outside_strong: usize,
+    /// Share of strong outside-effect sets diagnosed `unexplained`.
+    pub outside_unexplained: f64,
+    /// Median plain shrink of the verdict on strong catalogue sets named correctly.
+    pub median_shrink_named: f64,
+    /// Median plain shrink of the true effect's candidate on all strong catalogue sets.
+    pub median_shrink_true_candidate: f64,
+    /// Median excess shrink of the verdict on strong catalogue sets named correctly.
+    pub median_excess_shrink_named: f64,
+    /// Top-1 accuracy per catalogue effect on its strong sets (name, correct, total).
+    pub per_effect: Vec<(String, usize, usize)>,
+    /// Mean wall time per set [s].
+    pub mean_seconds: f64,
+}
+
+/// A whole benchmark: settings, every outcome, confusion matrices and the summary.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct BlindReport {
+    /// Always `aeroform-blind/1`.
+    pub format: String,
+    /// Master seed.
+    pub seed: u64,
+    /// Row labels (truth).
+    pub truth_labels: Vec<String>,
+    /// Column labels (verdict).
+    pub verdict_labels: Vec<String>,
+    /// Confusion matrix over all sets: `all[i][j]` = sets of truth i diagnosed j.
+    pub confusion_all: Vec<Vec<usize>>,
+    /// Confusion matrix over strong sets (and every effect-free set).
+    pub confusion_strong: Vec<Vec<usize>>,
+    /// Acceptance statistics.
+    pub summary: BlindSummary,
+    /// Every set.
+    pub outcomes: Vec<BlindOutcome>,
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.retain(|x| x.is_finite());
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+fn ratio(num: usize, den: usize) -> f64 {
+    if den == 0 {
+        f64::NAN
+    } else {
+        num as f64 / den as f64
+    }
+}
+
+/// Confusion matrices and acceptance statistics of a set of outcomes.
+pub fn summarize(seed: u64, outcomes: Vec<BlindOutcome>) -> BlindReport {
+    let tl = truth_labels();
+    let vl = verdict_labels();
+    let mut all = vec![vec![0usize; vl.len()]; tl.len()];
+    let mut strong = vec![vec![0usize; vl.len()]; tl.len()];
+    for o in outcomes.iter().filter(|o| o.error.is_none()) {
+        let (Some(i), Some(j)) = (
+            tl.iter().position(|l| *l == o.spec.truth),
+            vl.iter().position(|l| *l == o.verdict),
+        ) else {
+            continue;
+        };
+        all[i][j] += 1;
+        if o.strong() || o.spec.truth == "none" {
+            strong[i][j] += 1;
+        }
+    }
+    let ok: Vec<&BlindOutcome> = outcomes.iter().filter(|o| o.error.is_none()).collect();
+    let is_cat = |o: &&&BlindOutcome| {
+        Verdict::from_name(&o.spec.truth).is_ok_and(|v| matches!(v, Verdict::Effect(_)))
+    };
+    let cat_strong: Vec<&&BlindOutcome> = ok.iter().filter(|o| o.strong()).filter(is_cat).collect();
+    let none: Vec<&&BlindOutcome> = ok.iter().filter(|o| o.spec.truth == "none").collect();
+    let out_strong: Vec<&&BlindOutcome> = ok
+        .iter()
+        .filter(|o| o.spec.truth == OUTSIDE && o.strong())
+        .collect();
+    let per_effect = Effect::ALL
+        .iter()
+        .map(|e| {
+            let sets: Vec<_> = cat_strong
+                .iter()
+                .filter(|o| o.spec.truth == e.name())
+                .collect();
+            (
+                e.name().to_string(),
+                sets.iter().filter(|o| o.correct()).count(),
+                sets.len(),
+            )
+        })
+        .collect();
+    let summary = BlindSummary {
+        n: outcomes.len(),
+        failed: outcomes.len() - ok.len(),
+        catalogue_strong: cat_strong.len(),
+        catalogue_top1: ratio(
+            cat_strong.iter().filter(|o| o.correct()).count(),
+            cat_strong.len(),
+        ),
+        none_sets: none.len(),
+        none_rate: ratio(none.iter().filter(|o| o.correct()).count(), none.len()),
+        outside_strong: out_strong.len(),
+        outside_unexplained: ratio(
+            out_strong.iter().filter(|o| o.correct()).count(),
+            out_strong.len(),
+        ),
+        median_shrink_named: median(
+            cat_strong
+                .iter()
+                .filter(|o| o.correct())
+                .map(|o| o.shrink)
+                .collect(),
+        ),
+        median_shrink_true_candidate: median(
+            cat_strong
+                .iter()
+                .filter_map(|o| o.true_candidate_shrink)
+                .collect(),
+        ),
+        median_excess_shrink_named: median(
+            cat_strong
+                .iter()
+                .filter(|o| o.correct())
+                .map(|o| o.excess_shrink)
+                .collect(),
+        ),
+        per_effect,
+        mean_seconds: if outcomes.is_empty() {
+            0.0
+        } else {
+            outcomes.iter().map(|o| o.seconds).sum::<f64>() / outcomes.len() as f64
+        },
+    };
+    BlindReport {
+        format: "aeroform-blind/1".into(),
+        seed,
+        truth_labels: tl,
+        verdict_labels: vl,
+        confusion_all: all,
+        confusion_strong: strong,
+        summary,
+        outcomes,
+    }
+}
+
+/// The confusion matrix as a Markdown table (rows truth, columns verdict).
+pub fn confusion_markdown(rows: &[String], cols: &[String], m: &[Vec<usize>]) -> String {
+    let short = |s: &str| -> String {
+        match s {
+            "static_offset" => "offset".into(),
+            "added_mass" => "mass".into(),
+            "time_delay" => "delay".into(),
+            "higher_order" => "h.order".into(),
+            "dynamic_stall" => "stall".into(),
+            "vortex_shedding" => "shed".into(),
+            "structural_cubic" => "s.cubic".into(),
+            "freeplay" => "freepl".into(),
+            "friction" => "frict".into(),
+            "unexplained" => "unexpl".into(),
+            other => other.into(),
+        }
+    };
+    let mut s = String::from("| truth \\ verdict |");
+    for c in cols {
+        s.push_str(&format!(" {} |", short(c)));
+    }
+    s.push_str(" n |\n|---|");
+    for _ in cols {
+        s.push_str("---:|");
+    }
+    s.push_str("---:|\n");
+    for (r, row) in rows.iter().zip(m) {
+        s.push_str(&format!("| {r} |"));
+        for v in row {
+            if *v == 0 {
+                s.push_str(" · |");
+            } else {
+                s.push_str(&format!(" {v} |"));
+            }
+        }
+        s.push_str(&format!(" {} |\n", row.iter().sum::<usize>()));
+    }
+    s
+}
+
+/// The acceptance lines of a report, one per criterion, with PASS/FAIL against the issue's
+/// bars (top-1 ≥ 90 %, none ≥ 95 %, unexplained ≥ 80 %, median shrink ≥ 70 %).
+pub fn acceptance_lines(s: &BlindSummary) -> Vec<String> {
+    let pf = |ok: bool| if ok { "PASS" } else { "FAIL" };
+    vec![
+        format!(
+            "catalogue top-1 on strong sets: {:.1} % of {} (bar 90 %) {}",
+            100.0 * s.catalogue_top1,
+            s.catalogue_strong,
+            pf(s.catalogue_top1 >= 0.9)
+        ),
+        format!(
+            "`none` on effect-free sets: {:.1} % of {} (bar 95 %) {}",
+            100.0 * s.none_rate,
+            s.none_sets,
+            pf(s.none_rate >= 0.95)
+        ),
+        format!(
+            "`unexplained` on strong outside-effect sets: {:.1} % of {} (bar 80 %) {}",
+            100.0 * s.outside_unexplained,
+            s.outside_strong,
+            pf(s.outside_unexplained >= 0.8)
+        ),
+        format!(
+            "median held-out shrink, named effect added (strong, correct): {:.1} % (bar 70 %) {}; \
+             excess shrink {:.1} %; true effect's candidate on all strong sets {:.1} %",
+            100.0 * s.median_shrink_named,
+            pf(s.median_shrink_named >= 0.7),
+            100.0 * s.median_excess_shrink_named,
+            100.0 * s.median_shrink_true_candidate
+        ),
+    ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn outcome(truth: &str, verdict: &str, ratio: f64, shrink: f64) -> BlindOutcome {
+        BlindOutcome {
+            spec: BlindSpec {
+                index: 0,
+                seed: 1,
+                truth: truth.into(),
+                strength: 0.5,
+            },
+            verdict: verdict.into(),
+            confidence: 0.9,
+            gap_ratio: ratio,
+            shrink,
+            excess_shrink: shrink,
+            true_candidate_shrink: Some(shrink),
+            parameters: vec![],
+            error: None,
+            seconds: 0.1,
+        }
+    }
+
+    #[test]
+    fn draws_are_balanced_and_deterministic() {
+        let a = draw_specs(330, 42);
+        assert_eq!(a, draw_specs(330, 42));
+        assert_ne!(a, draw_specs(330, 43));
+        for l in truth_labels() {
+            assert_eq!(a.iter().filter(|s| s.truth == l).count(), 30, "{l}");
+        }
+        let mean = a.iter().map(|s| s.strength).sum::<f64>() / 330.0;
+        assert!((mean - 0.5).abs() < 0.06, "{mean}");
+        assert!(a.iter().all(|s| (0.0..1.0).contains(&s.strength)));
+    }
+
+    #[test]
+    fn summary_counts_only_strong_sets_for_accuracy() {
+        let r = summarize(
+            3,
+            vec![
+                outcome("friction", "friction", 5.0, 0.8),
+                outcome("friction", "none", 1.2, 0.0), // weak: not counted
+                outcome("freeplay", "structural_cubic", 4.0, 0.5),
+                outcome("none", "none", 1.0, 0.0),
+                outcome("none", "higher_order", 1.0, 0.0),
+                outcome(OUTSIDE, "unexplained", 6.0, 0.1),
+            ],
+        );
+        let s = &r.summary;
+        assert_eq!(s.catalogue_strong, 2);
+        assert!((s.catalogue_top1 - 0.5).abs() < 1e-12);
+        assert!((s.none_rate - 0.5).abs() < 1e-12);
+        assert!((s.outside_unexplained - 1.0).abs() < 1e-12);
+        assert!((s.median_shrink_named - 0.8).abs() < 1e-12);
+        let fi = r.truth_labels.iter().position(|l| l == "friction").unwrap();
+        let ni = r.verdict_labels.iter().position(|l| l == "none").unwrap();
+        assert_eq!(r.confusion_all[fi][ni], 1);
+        assert_eq!(r.confusion_strong[fi][ni], 0);
+        let md = confusion_markdown(&r.truth_labels, &r.verdict_labels, &r.confusion_all);
+        assert!(md.contains("| friction |"), "{md}");
+        assert_eq!(acceptance_lines(s).len(), 4);
+    }
+}
