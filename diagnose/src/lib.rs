@@ -4,6 +4,7 @@
 //! * [`effect`]: the catalogue names and verdicts;
 //! * [`report`]: the result types and the `diagnosis.json` document.
 
+pub mod blind;
 pub mod effect;
 pub mod error;
 pub mod report;
