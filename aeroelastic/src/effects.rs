@@ -83,8 +83,8 @@ pub enum Effect {
     AddedMass {
         /// Fraction ε (see above), nondimensional.
         fraction: f64,
-        /// The rig's mass matrix [[m, S], [S, I]] per unit span (primary form).
-        rig: Matrix2<f64>,
+        /// The rig's mass matrix [[m, S], [S, I]] per unit span (primary form), rows.
+        rig: [[f64; 2]; 2],
     },
     /// The force lags the motion by τ [s] (typical 0.5–20 ms: balance or flow latency).
     /// The apparent-mass reaction M_a q̈ stays instantaneous.
@@ -768,7 +768,7 @@ pub fn forced_case_forces(
     for inj in effects {
         if let Effect::AddedMass { fraction, rig } = &inj.effect {
             dm += match inj.form {
-                Form::Primary => rig * *fraction,
+                Form::Primary => Matrix2::new(rig[0][0], rig[0][1], rig[1][0], rig[1][1]) * *fraction,
                 Form::Alternate => -model.apparent_mass(flow) * *fraction,
             };
         }

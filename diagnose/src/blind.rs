@@ -26,7 +26,6 @@ use aeroelastic::section::Section;
 use aeroelastic::tunnel::{self, case_seed, Campaign, FreeOptions, SensorNoise};
 use identify::dataset::{CaseSpec, Dataset, Manifest};
 use identify::record::{CaseKind, Record, Section as DataSection};
-use nalgebra::Matrix2;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
@@ -160,7 +159,7 @@ pub fn parameter_range(effect: BlindEffect, form: Form) -> Option<(&'static str,
     use Effect::*;
     Some(match effect {
         BlindEffect::None => return None,
-        BlindEffect::Buffeting => ("intensity I_w [-]", 0.001, 0.06),
+        BlindEffect::Buffeting => ("intensity I_w [-]", 2e-4, 0.05),
         BlindEffect::Catalogue(e) => match e {
             StaticOffset => ("alpha0 [deg]", 0.02, 2.0),
             AddedMass => match form {
@@ -183,7 +182,7 @@ fn injection(
     strength: f64,
     form: Form,
     sc: &BlindScenario,
-    rig: Matrix2<f64>,
+    rig: [[f64; 2]; 2],
 ) -> (Vec<Injection>, Vec<(String, f64)>) {
     let Some((name, lo, hi)) = parameter_range(effect, form) else {
         return (vec![], vec![]);
@@ -290,7 +289,9 @@ pub fn generate(
     let structure = rig_file.structure().map_err(ae("blind: rig"))?;
     let rho = rig_file.air_density;
     let chord = truth.chord();
-    let (inj, parameters) = injection(effect, strength, form, sc, structure.mass_matrix());
+    let mm = structure.mass_matrix();
+    let rig = [[mm[(0, 0)], mm[(0, 1)]], [mm[(1, 0)], mm[(1, 1)]]];
+    let (inj, parameters) = injection(effect, strength, form, sc, rig);
     let forced = forced_set(&truth, &inj, sc, rho, seed)?;
     let base = Section::new(structure, truth, rho).map_err(ae("blind: section"))?;
     let free = free_set(&base, &inj, sc, chord, seed)?;
@@ -542,7 +543,7 @@ fn rel_rms(a: &Dataset, b: &Dataset, get: impl Fn(&Record) -> Option<&Vec<f64>>)
 /// The size of `set`'s effect against its `None` twin `twin` (same seed and scenario).
 pub fn effect_size(set: &BlindSet, twin: &BlindSet, scenario: &BlindScenario) -> EffectSize {
     let forced_moment = rel_rms(&set.forced, &twin.forced, |r| r.moment.as_ref());
-    let (mut m2, mut n) = (0.0, 0usize);
+    let mut m2 = 0.0;
     let mut noise2 = 0.0;
     for r in &twin.forced.records {
         if let Some(m) = &r.moment {
@@ -550,7 +551,6 @@ pub fn effect_size(set: &BlindSet, twin: &BlindSet, scenario: &BlindScenario) ->
             for v in m {
                 m2 += v * v;
             }
-            n += m.len();
             noise2 += (scenario.noise.balance * pk).powi(2) * m.len() as f64;
         }
     }
@@ -565,7 +565,7 @@ pub fn effect_size(set: &BlindSet, twin: &BlindSet, scenario: &BlindScenario) ->
     EffectSize {
         forced_lift: rel_rms(&set.forced, &twin.forced, |r| r.lift.as_ref()),
         forced_moment,
-        forced_noise: (noise2 / m2.max(f64::MIN_POSITIVE)).sqrt() * (n as f64 / n as f64),
+        forced_noise: (noise2 / m2.max(f64::MIN_POSITIVE)).sqrt(),
         free_alpha: rel_rms(&set.free, &twin.free, |r| Some(&r.alpha)),
         free_noise: scenario.noise.pitch_sd(0.25) / (alpha2 / na.max(1) as f64).sqrt(),
     }

@@ -165,11 +165,18 @@ fn stall_changes_only_cases_above_the_critical_angle() {
             .zip(rn.moment.as_ref().unwrap())
             .map(|(x, y)| (x - y).abs())
             .fold(0.0, f64::max);
+        let pk = rn
+            .moment
+            .as_ref()
+            .unwrap()
+            .iter()
+            .fold(0.0_f64, |m, x| m.max(x.abs()));
+        // Attached flow: only the RK4 error of a differently sub-stepped lag integration.
         if a < 7.0 && rs.meta.wind_speed >= 7.0 {
-            assert_eq!(d, 0.0, "{}", rs.meta.id);
+            assert!(d < 1e-7 * pk, "{}: {d} vs peak {pk}", rs.meta.id);
         }
         if a > 20.0 {
-            assert!(d > 0.0, "{}", rs.meta.id);
+            assert!(d > 0.05 * pk, "{}: {d} vs peak {pk}", rs.meta.id);
         }
     }
 }
