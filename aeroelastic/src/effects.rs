@@ -801,6 +801,20 @@ pub fn forced_case_forces(
     Ok((lift, moment))
 }
 
+/// Largest eigenvalue magnitude [1/s] of the effect states of `effects` in a free run
+/// (Padé delay √12/τ, first-order lag 1/τ; 0 when there are none): an explicit RK4 step h
+/// is stable for h·rate ≲ 2, so a free run needs at least rate·dt/2 steps per sample.
+pub fn stiffest_rate(effects: &[Injection]) -> f64 {
+    effects
+        .iter()
+        .map(|i| match (&i.effect, i.form) {
+            (Effect::TimeDelay { tau }, Form::Primary) => 12f64.sqrt() / tau,
+            (Effect::TimeDelay { tau }, Form::Alternate) => 1.0 / tau,
+            _ => 0.0,
+        })
+        .fold(0.0, f64::max)
+}
+
 /// The section of a free run at wind speed `u` with `effects`: structure with the primary
 /// structural effects (pitch cubic κ k_α d³ or ½κ k_α d³ + 10κ k_α d⁵, freeplay δ,
 /// Coulomb friction T_c with the default regularisation), aerodynamics an [`EffectAero`]

@@ -428,7 +428,10 @@ fn free_set(
     opts.span = sc.span;
     opts.rate = sc.free_rate;
     opts.duration = sc.free_duration;
-    opts.substeps = sc.free_substeps;
+    // RK4 stability of the effect states (a short Padé delay is stiff): h·rate ≤ 1.5.
+    let dt = 1.0 / sc.free_rate;
+    let need = (effects::stiffest_rate(inj) * dt / 1.5).ceil() as usize;
+    opts.substeps = sc.free_substeps.max(need);
     opts.initial = [0.0, sc.free_alpha0_deg.to_radians(), 0.0, 0.0];
     opts.record_forces = false;
     opts.noise = sc.noise;
@@ -437,7 +440,7 @@ fn free_set(
         .iter()
         .map(|f| f * sc.flutter_speed)
         .collect();
-    let fdt = 1.0 / (sc.free_rate * sc.free_substeps as f64);
+    let fdt = dt / opts.substeps as f64;
     let runs: Vec<Result<(String, Record)>> = speeds
         .par_iter()
         .enumerate()

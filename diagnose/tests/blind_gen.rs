@@ -260,3 +260,56 @@ fn write_blind_round_trips_through_read_dataset() {
     let man = std::fs::read_to_string(dir.path().join("forced/manifest.toml")).unwrap();
     assert!(!man.contains("static_offset") && !man.contains("effect"));
 }
+
+/// Calibration table (run with `--ignored --nocapture`, release): for each effect the
+/// parameter at s = 0, 0.5, 1 and its size against the `None` twin.
+#[test]
+#[ignore]
+fn calibration_table() {
+    let sc = BlindScenario::default();
+    let none = gen(BlindEffect::None, 0.0, Form::Primary, 1, &sc);
+    println!("| effect | s | parameter | forced rel rms L | forced rel rms M | free rel rms α |");
+    let n0 = effect_size(&none, &none, &sc);
+    println!(
+        "| noise | - | - | {:.2e} (balance σ / rms M) | | {:.2e} (σ_α / rms α) |",
+        n0.forced_noise, n0.free_noise
+    );
+    for e in Effect::ALL
+        .into_iter()
+        .map(BlindEffect::Catalogue)
+        .chain([BlindEffect::Buffeting])
+    {
+        for s in [0.0, 0.5, 1.0] {
+            let set = gen(e, s, Form::Primary, 1, &sc);
+            let z = effect_size(&set, &none, &sc);
+            let (name, value) = &set.truth.parameters[0];
+            println!(
+                "| {} | {s} | {name} = {value:.3e} | {:.2e} | {:.2e} | {:.2e} |",
+                e.name(),
+                z.forced_lift,
+                z.forced_moment,
+                z.free_alpha
+            );
+        }
+    }
+}
+
+/// Cost of one default blind set (release: well under 1 s).
+#[test]
+#[ignore]
+fn timing_of_one_default_set() {
+    let sc = BlindScenario::default();
+    for e in [
+        BlindEffect::None,
+        BlindEffect::Catalogue(Effect::DynamicStall),
+        BlindEffect::Catalogue(Effect::TimeDelay),
+        BlindEffect::Buffeting,
+    ] {
+        let t = std::time::Instant::now();
+        let _ = gen(e, 1.0, Form::Primary, 1, &sc);
+        let t1 = t.elapsed();
+        let t = std::time::Instant::now();
+        let _ = gen(e, 0.0, Form::Primary, 1, &sc);
+        println!("{}: {:?} (s = 1), {:?} (s = 0)", e.name(), t1, t.elapsed());
+    }
+}
