@@ -662,12 +662,14 @@ fn aero_parts(effects: &[Injection], free: bool) -> Vec<Part> {
                 alpha0: *alpha0,
                 x_ea: 0.35,
             }),
-            (Effect::HigherOrder { c }, Form::Primary) => {
-                parts.push(Part::Polynomial(vec![([5, 0, 0, 0], *c), ([3, 0, 1, 0], *c)]))
-            }
-            (Effect::HigherOrder { c }, Form::Alternate) => {
-                parts.push(Part::Polynomial(vec![([4, 1, 0, 0], *c), ([2, 0, 2, 0], *c)]))
-            }
+            (Effect::HigherOrder { c }, Form::Primary) => parts.push(Part::Polynomial(vec![
+                ([5, 0, 0, 0], *c),
+                ([3, 0, 1, 0], *c),
+            ])),
+            (Effect::HigherOrder { c }, Form::Alternate) => parts.push(Part::Polynomial(vec![
+                ([4, 1, 0, 0], *c),
+                ([2, 0, 2, 0], *c),
+            ])),
             (
                 Effect::DynamicStall {
                     alpha_crit,
@@ -758,7 +760,8 @@ pub fn forced_case_forces(
     } else {
         0.0
     };
-    let (mut lift, mut moment) = forced_forces(model.as_ref(), flow, &m, -tau, dt, n, pre_roll, case)?;
+    let (mut lift, mut moment) =
+        forced_forces(model.as_ref(), flow, &m, -tau, dt, n, pre_roll, case)?;
     let ma = model.apparent_mass(flow);
     let b = truth.chord();
     let mut dm = Matrix2::zeros();
@@ -768,7 +771,9 @@ pub fn forced_case_forces(
     for inj in effects {
         if let Effect::AddedMass { fraction, rig } = &inj.effect {
             dm += match inj.form {
-                Form::Primary => Matrix2::new(rig[0][0], rig[0][1], rig[1][0], rig[1][1]) * *fraction,
+                Form::Primary => {
+                    Matrix2::new(rig[0][0], rig[0][1], rig[1][0], rig[1][1]) * *fraction
+                }
                 Form::Alternate => -model.apparent_mass(flow) * *fraction,
             };
         }
@@ -836,14 +841,17 @@ pub fn free_section(
     let mut st = base.structure.clone();
     let mut parts = aero_parts(effects, true);
     let k_a = st.k_alpha;
-    let eps_default =
-        |t: f64, s: &crate::structure::Structure| Friction::default_smoothing(t, s.inertia_alpha, s.omega_alpha());
+    let eps_default = |t: f64, s: &crate::structure::Structure| {
+        Friction::default_smoothing(t, s.inertia_alpha, s.omega_alpha())
+    };
     for inj in effects {
         match (&inj.effect, inj.form) {
-            (Effect::StructuralCubic { kappa }, Form::Primary) => st.pitch_stiffness_terms.push(PolyTerm {
-                power: 3,
-                coefficient: kappa * k_a,
-            }),
+            (Effect::StructuralCubic { kappa }, Form::Primary) => {
+                st.pitch_stiffness_terms.push(PolyTerm {
+                    power: 3,
+                    coefficient: kappa * k_a,
+                })
+            }
             (Effect::StructuralCubic { kappa }, Form::Alternate) => {
                 st.pitch_stiffness_terms.push(PolyTerm {
                     power: 3,
@@ -912,7 +920,11 @@ mod tests {
             // Unit gain, phase ≈ −ωτ for ωτ ≪ 1.
             assert!((g.norm() - 1.0).abs() < 1e-12);
             if w * tau < 0.5 {
-                assert!((g.arg() + w * tau).abs() < 1e-3 * w * tau, "phase {}", g.arg());
+                assert!(
+                    (g.arg() + w * tau).abs() < 1e-3 * w * tau,
+                    "phase {}",
+                    g.arg()
+                );
             }
             let ss = state_space_response(&m, &flow, w).unwrap();
             let inner = state_space_response(plate().as_ref(), &flow, w).unwrap();
@@ -935,7 +947,10 @@ mod tests {
     #[test]
     fn stall_separation_is_zero_below_alpha_crit_in_the_primary_form() {
         let ac = 10f64.to_radians();
-        assert_eq!(EffectAero::s_ss(9.9f64.to_radians(), ac, Form::Primary), 0.0);
+        assert_eq!(
+            EffectAero::s_ss(9.9f64.to_radians(), ac, Form::Primary),
+            0.0
+        );
         assert!(EffectAero::s_ss(14f64.to_radians(), ac, Form::Primary) > 0.5);
         assert!(EffectAero::s_ss(9f64.to_radians(), ac, Form::Alternate) > 0.0);
         // Attached (s = 0): no force change.

@@ -168,7 +168,7 @@ pub fn parameter_range(effect: BlindEffect, form: Form) -> Option<(&'static str,
             },
             TimeDelay => ("tau [s]", 2e-4, 0.02),
             HigherOrder => ("c [-]", -0.05, -20.0),
-            DynamicStall => ("alpha_crit [deg]", 22.0, 9.0),
+            DynamicStall => ("alpha_crit [deg]", 27.5, 10.0),
             VortexShedding => ("C_L,vs [-]", 0.001, 0.1),
             StructuralCubic => ("kappa [1/rad^2]", 0.5, 200.0),
             Freeplay => ("half gap [deg]", 0.01, 1.0),
@@ -341,8 +341,9 @@ fn forced_set(
             )
             .map_err(ae(format!("forced case {}", c.id)))?;
             let (pl, pm) = if needs_nominal {
-                let (l0, m0) = tunnel::forced_forces(truth.as_ref(), &flow, &c.motion, 0.0, dt, n, 0.0, &c.id)
-                    .map_err(ae(format!("forced case {}", c.id)))?;
+                let (l0, m0) =
+                    tunnel::forced_forces(truth.as_ref(), &flow, &c.motion, 0.0, dt, n, 0.0, &c.id)
+                        .map_err(ae(format!("forced case {}", c.id)))?;
                 (peak(&l0), peak(&m0))
             } else {
                 (peak(&lift), peak(&moment))
@@ -471,7 +472,9 @@ fn free_set(
     }
     let manifest = Manifest {
         name: "blind data set: free response".into(),
-        description: Some("Virtual wind tunnel, free response on springs (blind benchmark).".into()),
+        description: Some(
+            "Virtual wind tunnel, free response on springs (blind benchmark).".into(),
+        ),
         section: DataSection {
             chord,
             span: sc.span,
@@ -522,13 +525,26 @@ pub struct EffectSize {
     pub forced_noise: f64,
     /// Free runs: rms(α − α_twin) / rms(α_twin) over the common length of all runs.
     pub free_alpha: f64,
+    /// Free runs below the flutter speed only: rms(α − α_twin) / rms(α_twin) (above
+    /// flutter a small change shifts the phase of a growing oscillation, which inflates
+    /// [`EffectSize::free_alpha`]).
+    pub free_alpha_subcritical: f64,
     /// Free runs: pitch noise σ_α relative to rms(α_twin).
     pub free_noise: f64,
 }
 
 fn rel_rms(a: &Dataset, b: &Dataset, get: impl Fn(&Record) -> Option<&Vec<f64>>) -> f64 {
+    rel_rms_if(a, b, get, |_| true)
+}
+
+fn rel_rms_if(
+    a: &Dataset,
+    b: &Dataset,
+    get: impl Fn(&Record) -> Option<&Vec<f64>>,
+    keep: impl Fn(&Record) -> bool,
+) -> f64 {
     let (mut d2, mut x2) = (0.0, 0.0);
-    for (ra, rb) in a.records.iter().zip(&b.records) {
+    for (ra, rb) in a.records.iter().zip(&b.records).filter(|(r, _)| keep(r)) {
         if let (Some(va), Some(vb)) = (get(ra), get(rb)) {
             for (x, y) in va.iter().zip(vb) {
                 d2 += (x - y) * (x - y);
@@ -570,6 +586,12 @@ pub fn effect_size(set: &BlindSet, twin: &BlindSet, scenario: &BlindScenario) ->
         forced_moment,
         forced_noise: (noise2 / m2.max(f64::MIN_POSITIVE)).sqrt(),
         free_alpha: rel_rms(&set.free, &twin.free, |r| Some(&r.alpha)),
+        free_alpha_subcritical: rel_rms_if(
+            &set.free,
+            &twin.free,
+            |r| Some(&r.alpha),
+            |r| r.meta.wind_speed < scenario.flutter_speed,
+        ),
         free_noise: scenario.noise.pitch_sd(0.25) / (alpha2 / na.max(1) as f64).sqrt(),
     }
 }
