@@ -653,10 +653,8 @@ fn aero_parts(effects: &[Injection], free: bool) -> Vec<Part> {
     let mut parts = Vec::new();
     for inj in effects {
         match (&inj.effect, inj.form) {
-            (Effect::StaticOffset { alpha0 }, Form::Primary) => {
-                if free {
-                    parts.push(Part::AngleOffset(*alpha0));
-                }
+            (Effect::StaticOffset { alpha0 }, Form::Primary) if free => {
+                parts.push(Part::AngleOffset(*alpha0))
             }
             (Effect::StaticOffset { alpha0 }, Form::Alternate) => parts.push(Part::SteadyOffset {
                 alpha0: *alpha0,
@@ -683,11 +681,7 @@ fn aero_parts(effects: &[Injection], free: bool) -> Vec<Part> {
                 x_ea: *x_ea,
                 form,
             }),
-            (Effect::TimeDelay { tau }, Form::Primary) => {
-                if free {
-                    parts.push(Part::PadeDelay(*tau));
-                }
-            }
+            (Effect::TimeDelay { tau }, Form::Primary) if free => parts.push(Part::PadeDelay(*tau)),
             (Effect::TimeDelay { tau }, Form::Alternate) => parts.push(Part::FirstOrderLag(*tau)),
             _ => {}
         }
