@@ -3,10 +3,12 @@
 //!
 //! * [`effect`]: the catalogue names and verdicts;
 //! * [`report`]: the result types and the `diagnosis.json` document;
-//! * [`verdict`]: from the levels' findings to one verdict.
+//! * [`verdict`]: from the levels' findings to one verdict;
+//! * [`blind`]: the withheld-effect data-set generator (the diagnosis never reads it);
 //! * [`bench`]: the withheld-effect benchmark statistics.
 
 pub mod bench;
+pub mod blind;
 pub mod effect;
 pub mod error;
 pub mod report;

@@ -1,0 +1,600 @@
+//! Blind data sets for the withheld-effect benchmark (issue 5): a forced-motion campaign and
+//! free-response runs of the plate rig with one unmodelled effect (or none, or buffeting
+//! turbulence from outside the catalogue) injected by [`aeroelastic::effects`], at a
+//! strength s ∈ [0, 1] mapped log-uniformly onto the effect's parameter range, with the
+//! truth kept apart ([`BlindTruth`], written to `truth.json` by [`write_blind`]).
+//!
+//! **Twins.** The sensor noise of every case is drawn from the same per-case seed
+//! ([`aeroelastic::tunnel::case_seed`]) whatever the effect, and the balance noise σ is
+//! 0.1 % of the peak of the case's *nominal* (effect-free) force — the balance range is set
+//! by the nominal loads — so a set and its [`BlindEffect::None`] twin of the same seed
+//! differ by the effect only (for free runs: by the effect's response).
+//!
+//! **Base scenario** ([`BlindScenario::default`]): truth `scenarios/plate-truth.model.toml`,
+//! rig `scenarios/plate-rig.structure.toml` (U_F = 6.595 m/s); forced: configurations B
+//! (f_α 1.5 Hz, f_h 0.7 Hz) and D (2.0, 1.3), pitch amplitudes 6, 12, 18, 24°, wind speeds
+//! 4, 5.5, 7, 8.5, 10 m/s, 512 Hz, 8 s, paper noise (40 cases); free: 0.5, 0.7, 0.85,
+//! 0.95, 1.05, 1.15 U_F, 512 Hz, 12 s, released from α₀ = 4°, α and h only, paper noise.
+
+// The crate error (skeleton, `error.rs`) carries identify/aeroelastic errors by value and
+// is large; boxing them is the coordinator's call (see the report).
+
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+use aeroelastic::aero::{AeroModel, Flow};
+use aeroelastic::effects::{self, Effect as Inj, Form, Injection};
+use aeroelastic::files::{LoadedModel, StructureFile};
+use aeroelastic::section::Section;
+use aeroelastic::tunnel::{self, case_seed, Campaign, FreeOptions, SensorNoise};
+use identify::dataset::{CaseSpec, Dataset, Manifest};
+use identify::record::{CaseKind, Record, Section as DataSection};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, Normal};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::effect::Effect;
+use crate::{Error, Result};
+
+/// What a blind set holds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BlindEffect {
+    /// One catalogue effect.
+    Catalogue(Effect),
+    /// No effect (the truth law and the nominal rig only).
+    None,
+    /// Turbulent buffeting: an effect outside the catalogue.
+    Buffeting,
+}
+
+impl BlindEffect {
+    /// Name: the catalogue name, `none` or `buffeting`.
+    pub fn name(self) -> &'static str {
+        match self {
+            BlindEffect::Catalogue(e) => e.name(),
+            BlindEffect::None => "none",
+            BlindEffect::Buffeting => "buffeting",
+        }
+    }
+}
+
+/// The truth of a blind set (never read by the diagnosis).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct BlindTruth {
+    /// The injected effect.
+    pub effect: BlindEffect,
+    /// Strength s ∈ [0, 1].
+    pub strength: f64,
+    /// Functional form.
+    pub form: Form,
+    /// The effect's physical parameters (name with unit, value).
+    pub parameters: Vec<(String, f64)>,
+    /// Master seed.
+    pub seed: u64,
+}
+
+/// A blind data set: forced campaign, free-response runs, truth.
+#[derive(Debug, Clone)]
+pub struct BlindSet {
+    /// Forced-motion records (`root` is the placeholder `<blind>/forced`).
+    pub forced: Dataset,
+    /// Free-response records (`root` is the placeholder `<blind>/free`).
+    pub free: Dataset,
+    /// The truth.
+    pub truth: BlindTruth,
+}
+
+/// The scenario of the blind sets (see the module docs for the default).
+#[derive(Debug, Clone, PartialEq)]
+pub struct BlindScenario {
+    /// Truth aerodynamic model file text (`*.model.toml`).
+    pub truth_model: String,
+    /// Rig structure file text (`*.structure.toml`, linear).
+    pub rig: String,
+    /// Forced campaign.
+    pub campaign: Campaign,
+    /// Forced records: sampling rate [Hz].
+    pub forced_rate: f64,
+    /// Forced records: duration [s].
+    pub forced_duration: f64,
+    /// Flutter speed of the truth section [m/s] (free speeds are multiples of it).
+    pub flutter_speed: f64,
+    /// Free-run speeds as multiples of `flutter_speed`.
+    pub free_speed_factors: Vec<f64>,
+    /// Free runs: sampling rate [Hz].
+    pub free_rate: f64,
+    /// Free runs: duration [s].
+    pub free_duration: f64,
+    /// Free runs: RK4 steps per sample.
+    pub free_substeps: usize,
+    /// Free runs: initial pitch [deg].
+    pub free_alpha0_deg: f64,
+    /// Sensor noise (both data sets).
+    pub noise: SensorNoise,
+    /// Span [m] of the written totals.
+    pub span: f64,
+    /// Plate thickness D [m] (vortex shedding length scale).
+    pub depth: f64,
+}
+
+impl Default for BlindScenario {
+    fn default() -> Self {
+        let mut campaign = Campaign::paper();
+        campaign
+            .configurations
+            .retain(|c| c.name == "B" || c.name == "D");
+        campaign.amplitudes_deg = vec![6.0, 12.0, 18.0, 24.0];
+        campaign.wind_speeds = vec![4.0, 5.5, 7.0, 8.5, 10.0];
+        BlindScenario {
+            truth_model: include_str!("../../scenarios/plate-truth.model.toml").into(),
+            rig: include_str!("../../scenarios/plate-rig.structure.toml").into(),
+            campaign,
+            forced_rate: 512.0,
+            forced_duration: 8.0,
+            flutter_speed: 6.595,
+            free_speed_factors: vec![0.5, 0.7, 0.85, 0.95, 1.05, 1.15],
+            free_rate: 512.0,
+            free_duration: 12.0,
+            free_substeps: 8,
+            free_alpha0_deg: 4.0,
+            noise: SensorNoise::paper(),
+            span: 0.75,
+            depth: 0.02,
+        }
+    }
+}
+
+/// Elastic axis of the truth (a = −0.3 semi-chords) in chords from the leading edge.
+const X_EA: f64 = 0.35;
+
+/// Log-uniform map of s ∈ [0, 1] onto [lo, hi] (lo, hi of the same sign).
+fn log_map(s: f64, lo: f64, hi: f64) -> f64 {
+    lo * (hi / lo).powf(s)
+}
+
+/// The parameter range (value at s = 0, value at s = 1) of an effect in a form, with the
+/// parameter's name and unit. See the module-level calibration in the report of
+/// [`effect_size`].
+pub fn parameter_range(effect: BlindEffect, form: Form) -> Option<(&'static str, f64, f64)> {
+    use Effect::*;
+    Some(match effect {
+        BlindEffect::None => return None,
+        BlindEffect::Buffeting => ("intensity I_w [-]", 2e-4, 0.05),
+        BlindEffect::Catalogue(e) => match e {
+            StaticOffset => ("alpha0 [deg]", 0.02, 2.0),
+            AddedMass => match form {
+                Form::Primary => ("fraction of rig mass [-]", 0.002, 0.2),
+                Form::Alternate => ("fraction of air apparent mass [-]", 0.05, 5.0),
+            },
+            TimeDelay => ("tau [s]", 2e-4, 0.02),
+            HigherOrder => ("c [-]", -0.05, -20.0),
+            DynamicStall => ("alpha_crit [deg]", 27.5, 10.0),
+            VortexShedding => ("C_L,vs [-]", 0.001, 0.1),
+            StructuralCubic => ("kappa [1/rad^2]", 0.5, 200.0),
+            Freeplay => ("half gap [deg]", 0.01, 1.0),
+            Friction => ("T_c [N*m/m]", 1e-5, 3e-3),
+        },
+    })
+}
+
+fn injection(
+    effect: BlindEffect,
+    strength: f64,
+    form: Form,
+    sc: &BlindScenario,
+    rig: [[f64; 2]; 2],
+) -> (Vec<Injection>, Vec<(String, f64)>) {
+    let Some((name, lo, hi)) = parameter_range(effect, form) else {
+        return (vec![], vec![]);
+    };
+    let p = log_map(strength, lo, hi);
+    let mut params = vec![(name.to_string(), p)];
+    use Effect::*;
+    let e = match effect {
+        BlindEffect::None => unreachable!("no range for None"),
+        BlindEffect::Buffeting => {
+            params.push(("length scale L [m]".into(), 0.1));
+            Inj::Buffeting {
+                intensity: p,
+                length_scale: 0.1,
+                x_ea: X_EA,
+            }
+        }
+        BlindEffect::Catalogue(c) => match c {
+            StaticOffset => Inj::StaticOffset {
+                alpha0: p.to_radians(),
+            },
+            AddedMass => Inj::AddedMass { fraction: p, rig },
+            TimeDelay => Inj::TimeDelay { tau: p },
+            HigherOrder => Inj::HigherOrder { c: p },
+            DynamicStall => {
+                params.push(("lag [chords]".into(), 1.5));
+                Inj::DynamicStall {
+                    alpha_crit: p.to_radians(),
+                    lag_chords: 1.5,
+                    x_ea: X_EA,
+                }
+            }
+            VortexShedding => {
+                params.push(("depth D [m]".into(), sc.depth));
+                params.push((
+                    "Strouhal [-]".into(),
+                    effects::shedding_frequency(1.0, 1.0, form),
+                ));
+                Inj::VortexShedding {
+                    c_lift: p,
+                    depth: sc.depth,
+                }
+            }
+            StructuralCubic => Inj::StructuralCubic { kappa: p },
+            Freeplay => Inj::Freeplay {
+                half_gap: p.to_radians(),
+            },
+            Friction => Inj::Friction { moment: p },
+        },
+    };
+    (vec![Injection { effect: e, form }], params)
+}
+
+fn ae(context: impl Into<String>) -> impl FnOnce(aeroelastic::Error) -> Error {
+    let c = context.into();
+    move |e| Error::aeroelastic(c, e)
+}
+
+fn peak(v: &[f64]) -> f64 {
+    v.iter().fold(0.0_f64, |m, x| m.max(x.abs()))
+}
+
+fn add_noise(rng: &mut ChaCha8Rng, v: &mut [f64], sd: f64) {
+    if sd > 0.0 && sd.is_finite() {
+        if let Ok(n) = Normal::new(0.0, sd) {
+            for x in v.iter_mut() {
+                *x += n.sample(rng);
+            }
+        }
+    }
+}
+
+/// Seed of the free runs' noise (independent of the forced cases').
+fn free_seed(seed: u64) -> u64 {
+    case_seed(seed ^ 0xF4EE_F4EE_F4EE_F4EE, 0)
+}
+
+/// Seed of the effects' own random parts (phases, turbulence) of case `i`.
+fn effect_seed(seed: u64, i: usize, free: bool) -> u64 {
+    case_seed(seed ^ if free { 0xEFFE_C7F4 } else { 0xEFFE_C7F0 }, i)
+}
+
+/// Generates a blind set: `effect` at `strength` ∈ [0, 1] (log-uniform over
+/// [`parameter_range`]) in `form`, every random draw from `seed`, on `scenario`.
+///
+/// # Errors
+/// [`Error::Setting`] for a strength outside [0, 1]; [`Error::Aeroelastic`] when the
+/// scenario's files do not parse or a record cannot be computed (naming the case).
+pub fn generate(
+    effect: BlindEffect,
+    strength: f64,
+    form: Form,
+    seed: u64,
+    scenario: &BlindScenario,
+) -> Result<BlindSet> {
+    if !(0.0..=1.0).contains(&strength) {
+        return Err(Error::setting("strength", strength, "must be in [0, 1]"));
+    }
+    let sc = scenario;
+    let loaded = LoadedModel::parse(&sc.truth_model, "truth model", Path::new("."), None)
+        .map_err(ae("blind: truth model"))?;
+    let truth: Arc<dyn AeroModel> = loaded.model;
+    let rig_file = StructureFile::parse(&sc.rig, "rig structure").map_err(ae("blind: rig"))?;
+    let structure = rig_file.structure().map_err(ae("blind: rig"))?;
+    let rho = rig_file.air_density;
+    let chord = truth.chord();
+    let mm = structure.mass_matrix();
+    let rig = [[mm[(0, 0)], mm[(0, 1)]], [mm[(1, 0)], mm[(1, 1)]]];
+    let (inj, parameters) = injection(effect, strength, form, sc, rig);
+    let forced = forced_set(&truth, &inj, sc, rho, seed)?;
+    let base = Section::new(structure, truth, rho).map_err(ae("blind: section"))?;
+    let free = free_set(&base, &inj, sc, chord, seed)?;
+    Ok(BlindSet {
+        forced,
+        free,
+        truth: BlindTruth {
+            effect,
+            strength,
+            form,
+            parameters,
+            seed,
+        },
+    })
+}
+
+fn forced_set(
+    truth: &Arc<dyn AeroModel>,
+    inj: &[Injection],
+    sc: &BlindScenario,
+    rho: f64,
+    seed: u64,
+) -> Result<Dataset> {
+    let cases = sc.campaign.cases();
+    let dt = 1.0 / sc.forced_rate;
+    let n = (sc.forced_rate * sc.forced_duration).round() as usize;
+    let units = tunnel::paper_units();
+    let chord = truth.chord();
+    let needs_nominal = !inj.is_empty();
+    let recs: Vec<Result<Record>> = cases
+        .par_iter()
+        .enumerate()
+        .map(|(i, c)| {
+            let flow = Flow {
+                rho,
+                u: c.wind_speed,
+            };
+            let (mut lift, mut moment) = effects::forced_case_forces(
+                truth,
+                inj,
+                &flow,
+                &c.motion,
+                dt,
+                n,
+                effect_seed(seed, i, false),
+                &c.id,
+            )
+            .map_err(ae(format!("forced case {}", c.id)))?;
+            let (pl, pm) = if needs_nominal {
+                let (l0, m0) =
+                    tunnel::forced_forces(truth.as_ref(), &flow, &c.motion, 0.0, dt, n, 0.0, &c.id)
+                        .map_err(ae(format!("forced case {}", c.id)))?;
+                (peak(&l0), peak(&m0))
+            } else {
+                (peak(&lift), peak(&moment))
+            };
+            let mut h = Vec::with_capacity(n);
+            let mut alpha = Vec::with_capacity(n);
+            for k in 0..n {
+                let (q, _, _) = c.motion.eval(k as f64 * dt);
+                h.push(q[0]);
+                alpha.push(q[1]);
+            }
+            let mut rng = ChaCha8Rng::seed_from_u64(case_seed(seed, i));
+            add_noise(&mut rng, &mut lift, sc.noise.balance * pl);
+            add_noise(&mut rng, &mut moment, sc.noise.balance * pm);
+            add_noise(&mut rng, &mut h, sc.noise.laser);
+            add_noise(&mut rng, &mut alpha, sc.noise.pitch_sd(chord));
+            Ok(Record {
+                kind: CaseKind::Forced,
+                meta: Default::default(),
+                t0: 0.0,
+                dt,
+                h,
+                alpha,
+                lift: Some(lift),
+                moment: Some(moment),
+                nowind: None,
+            })
+        })
+        .collect();
+    let mut records = Vec::with_capacity(cases.len());
+    let mut specs = Vec::with_capacity(cases.len());
+    let mut manifest = Manifest {
+        name: "blind data set: forced motion".into(),
+        description: Some("Virtual wind tunnel, forced motion (blind benchmark).".into()),
+        section: DataSection {
+            chord,
+            span: sc.span,
+            air_density: rho,
+        },
+        structure: None,
+        units,
+        cases: vec![],
+        extra: None,
+    };
+    for (c, r) in cases.iter().zip(recs) {
+        let mut rec = r?;
+        let mut spec = CaseSpec::forced(&c.id, format!("cases/{}.csv", c.id), c.wind_speed);
+        spec.config = c.config.clone();
+        spec.amplitude_ratio = c.amplitude_ratio;
+        if let (Some(p), Some(hv)) = (c.motion.dominant_pitch(), c.motion.heave.first()) {
+            spec.freq_pitch = Some(p.freq);
+            spec.amplitude = Some(units.pitch.from_si(p.amplitude.abs()));
+            spec.freq_heave = Some(hv.freq);
+        }
+        rec.meta = manifest.case_meta(&spec);
+        specs.push(spec);
+        records.push(rec);
+    }
+    manifest.cases = specs;
+    manifest.extra = Some(extra_table(seed));
+    Ok(Dataset {
+        root: PathBuf::from("<blind>/forced"),
+        manifest,
+        records,
+    })
+}
+
+fn extra_table(seed: u64) -> toml::Table {
+    let mut t = toml::Table::new();
+    t.insert("generator".into(), "diagnose::blind".into());
+    t.insert("seed".into(), seed.to_string().into());
+    t
+}
+
+fn free_set(
+    base: &Section,
+    inj: &[Injection],
+    sc: &BlindScenario,
+    chord: f64,
+    seed: u64,
+) -> Result<Dataset> {
+    let mut opts = FreeOptions::new(free_seed(seed));
+    opts.span = sc.span;
+    opts.rate = sc.free_rate;
+    opts.duration = sc.free_duration;
+    // RK4 stability of the effect states (a short Padé delay is stiff): h·rate ≤ 1.5.
+    let dt = 1.0 / sc.free_rate;
+    let need = (effects::stiffest_rate(inj) * dt / 1.5).ceil() as usize;
+    opts.substeps = sc.free_substeps.max(need);
+    opts.initial = [0.0, sc.free_alpha0_deg.to_radians(), 0.0, 0.0];
+    opts.record_forces = false;
+    opts.noise = sc.noise;
+    let speeds: Vec<f64> = sc
+        .free_speed_factors
+        .iter()
+        .map(|f| f * sc.flutter_speed)
+        .collect();
+    let fdt = dt / opts.substeps as f64;
+    let runs: Vec<Result<(String, Record)>> = speeds
+        .par_iter()
+        .enumerate()
+        .map(|(i, &u)| {
+            let id = format!("free-{}", i + 1);
+            let sec = effects::free_section(
+                base,
+                inj,
+                u,
+                fdt,
+                sc.free_duration,
+                effect_seed(seed, i, true),
+            )
+            .map_err(ae(format!("free run {id}")))?;
+            let (rec, _) = tunnel::free_record(&sec, u, &id, &opts, case_seed(opts.seed, i))
+                .map_err(ae(format!("free run {id}")))?;
+            Ok((id, rec))
+        })
+        .collect();
+    let mut records = Vec::new();
+    let mut specs = Vec::new();
+    for (r, &u) in runs.into_iter().zip(&speeds) {
+        let (id, rec) = r?;
+        let mut spec = CaseSpec::forced(&id, format!("cases/{id}.csv"), u);
+        spec.kind = CaseKind::Free;
+        specs.push(spec);
+        records.push(rec);
+    }
+    let manifest = Manifest {
+        name: "blind data set: free response".into(),
+        description: Some(
+            "Virtual wind tunnel, free response on springs (blind benchmark).".into(),
+        ),
+        section: DataSection {
+            chord,
+            span: sc.span,
+            air_density: base.rho,
+        },
+        structure: Some(tunnel::structure_spec(&base.structure).map_err(ae("blind: rig"))?),
+        units: tunnel::paper_units(),
+        cases: specs,
+        extra: Some(extra_table(seed)),
+    };
+    Ok(Dataset {
+        root: PathBuf::from("<blind>/free"),
+        manifest,
+        records,
+    })
+}
+
+/// Writes `dir/forced/` and `dir/free/` (data sets, DATA_FORMAT.md) and `dir/truth.json`.
+///
+/// # Errors
+/// [`Error::Aeroelastic`] naming the data-set folder when a data set cannot be written;
+/// [`Error::Io`] naming `truth.json`.
+pub fn write_blind(dir: &Path, set: &BlindSet) -> Result<()> {
+    for (name, ds) in [("forced", &set.forced), ("free", &set.free)] {
+        let d = dir.join(name);
+        tunnel::write(&d, &ds.manifest, &ds.records)
+            .map_err(ae(format!("writing blind set {}", d.display())))?;
+    }
+    let p = dir.join("truth.json");
+    let text = serde_json::to_string_pretty(&set.truth).map_err(|e| Error::Io {
+        context: format!("serialising {}", p.display()),
+        message: e.to_string(),
+    })?;
+    identify::io::write_atomic(&p, text.as_bytes()).map_err(|e| Error::Io {
+        context: format!("writing {}", p.display()),
+        message: e.to_string(),
+    })
+}
+
+/// Size of an effect measured against the [`BlindEffect::None`] twin of the same seed.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct EffectSize {
+    /// Forced records: rms(L − L_twin) / rms(L_twin) over all cases.
+    pub forced_lift: f64,
+    /// Forced records: rms(M − M_twin) / rms(M_twin) over all cases.
+    pub forced_moment: f64,
+    /// Forced records: the balance noise σ relative to the rms force (moment channel).
+    pub forced_noise: f64,
+    /// Free runs: rms(α − α_twin) / rms(α_twin) over the common length of all runs.
+    pub free_alpha: f64,
+    /// Free runs below the flutter speed only: rms(α − α_twin) / rms(α_twin) (above
+    /// flutter a small change shifts the phase of a growing oscillation, which inflates
+    /// [`EffectSize::free_alpha`]).
+    pub free_alpha_subcritical: f64,
+    /// Free runs: pitch noise σ_α relative to rms(α_twin).
+    pub free_noise: f64,
+}
+
+fn rel_rms(a: &Dataset, b: &Dataset, get: impl Fn(&Record) -> Option<&Vec<f64>>) -> f64 {
+    rel_rms_if(a, b, get, |_| true)
+}
+
+fn rel_rms_if(
+    a: &Dataset,
+    b: &Dataset,
+    get: impl Fn(&Record) -> Option<&Vec<f64>>,
+    keep: impl Fn(&Record) -> bool,
+) -> f64 {
+    let (mut d2, mut x2) = (0.0, 0.0);
+    for (ra, rb) in a.records.iter().zip(&b.records).filter(|(r, _)| keep(r)) {
+        if let (Some(va), Some(vb)) = (get(ra), get(rb)) {
+            for (x, y) in va.iter().zip(vb) {
+                d2 += (x - y) * (x - y);
+                x2 += y * y;
+            }
+        }
+    }
+    if x2 > 0.0 {
+        (d2 / x2).sqrt()
+    } else {
+        f64::NAN
+    }
+}
+
+/// The size of `set`'s effect against its `None` twin `twin` (same seed and scenario).
+pub fn effect_size(set: &BlindSet, twin: &BlindSet, scenario: &BlindScenario) -> EffectSize {
+    let forced_moment = rel_rms(&set.forced, &twin.forced, |r| r.moment.as_ref());
+    let mut m2 = 0.0;
+    let mut noise2 = 0.0;
+    for r in &twin.forced.records {
+        if let Some(m) = &r.moment {
+            let pk = peak(m);
+            for v in m {
+                m2 += v * v;
+            }
+            noise2 += (scenario.noise.balance * pk).powi(2) * m.len() as f64;
+        }
+    }
+    let alpha2: f64 = twin
+        .free
+        .records
+        .iter()
+        .flat_map(|r| r.alpha.iter())
+        .map(|v| v * v)
+        .sum();
+    let na: usize = twin.free.records.iter().map(|r| r.alpha.len()).sum();
+    EffectSize {
+        forced_lift: rel_rms(&set.forced, &twin.forced, |r| r.lift.as_ref()),
+        forced_moment,
+        forced_noise: (noise2 / m2.max(f64::MIN_POSITIVE)).sqrt(),
+        free_alpha: rel_rms(&set.free, &twin.free, |r| Some(&r.alpha)),
+        free_alpha_subcritical: rel_rms_if(
+            &set.free,
+            &twin.free,
+            |r| Some(&r.alpha),
+            |r| r.meta.wind_speed < scenario.flutter_speed,
+        ),
+        free_noise: scenario.noise.pitch_sd(0.25) / (alpha2 / na.max(1) as f64).sqrt(),
+    }
+}
