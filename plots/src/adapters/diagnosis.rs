@@ -238,7 +238,8 @@ fn clip(s: &str, n: usize) -> String {
 
 /// Predicted vs measured bifurcation diagram of the first level that carries one: pitch
 /// amplitude vs U and dominant frequency vs U; measured markers, baseline prediction
-/// dashed, prediction with the winning augmentation solid.
+/// dashed, prediction with the winning augmentation (the verdict's effect, else the
+/// level's best candidate) solid.
 ///
 /// `None` when no level has a bifurcation diagram with a point.
 pub fn bifurcation_figure(diag: &Diagnosis) -> Option<ComparisonFigure> {
@@ -249,8 +250,13 @@ pub fn bifurcation_figure(diag: &Diagnosis) -> Option<ComparisonFigure> {
     if b.measured.is_empty() && b.predicted_before.is_empty() && b.predicted_after.is_empty() {
         return None;
     }
-    let after_label = match best_candidate(lv) {
-        Some(c) => format!("predicted + {}", c.effect.name()),
+    // The free-response sim "after" carries the winning augmentation: the verdict's effect
+    // when it names one, else the level's best candidate.
+    let winner = diagnose::Effect::from_name(&diag.verdict.effect)
+        .ok()
+        .or_else(|| best_candidate(lv).map(|c| c.effect));
+    let after_label = match winner {
+        Some(e) => format!("predicted + {}", e.name()),
         None => "predicted with augmentation".into(),
     };
     let series = |label: &str,
@@ -286,6 +292,7 @@ pub fn bifurcation_figure(diag: &Diagnosis) -> Option<ComparisonFigure> {
         }
         ComparisonPanel {
             y_label: y_label.into(),
+            include_zero: amp,
             measured: series("measured", SeriesKind::Measured, &b.measured, amp),
             predicted,
         }
@@ -350,9 +357,11 @@ pub fn shares_figure(diag: &Diagnosis) -> Option<SharesFigure> {
     } else {
         diag.where_.iter().collect()
     };
-    let mut groups: Vec<((Level, String), Vec<&WhereShare>)> = vec![];
+    // The `level` split compares levels: one bar over all of them.
+    let mut groups: Vec<((Option<Level>, String), Vec<&WhereShare>)> = vec![];
     for w in source {
-        let k = (w.level, w.split.clone());
+        let lv = (w.split != "level").then_some(w.level);
+        let k = (lv, w.split.clone());
         match groups.iter_mut().find(|(g, _)| *g == k) {
             Some((_, v)) => v.push(w),
             None => groups.push((k, vec![w])),
@@ -385,7 +394,10 @@ pub fn shares_figure(diag: &Diagnosis) -> Option<SharesFigure> {
                 });
             }
             ShareBar {
-                label: format!("{}: {split}", level.name()),
+                label: match level {
+                    Some(l) => format!("{}: {split}", l.name()),
+                    None => split,
+                },
                 segments,
             }
         })

@@ -18,6 +18,8 @@ use crate::style::{
 pub struct ComparisonPanel {
     /// y-axis description, e.g. `"pitch amplitude [deg]"`.
     pub y_label: String,
+    /// Whether the y-axis range includes 0 (amplitudes: yes; frequencies: no).
+    pub include_zero: bool,
     /// Measured points (label used in the legend); non-finite points are skipped.
     pub measured: Series,
     /// Predicted curves (drawn in x order; style from their [`crate::SeriesKind`]).
@@ -97,7 +99,11 @@ impl Figure for ComparisonFigure {
             let all = || meas.iter().chain(preds.iter().flat_map(|(_, p)| p));
             let (Some(xr), Some(yr)) = (
                 finite_range(all().map(|p| p.0)),
-                finite_range(all().map(|p| p.1).chain([0.0])),
+                finite_range(
+                    all()
+                        .map(|p| p.1)
+                        .chain(panel.include_zero.then_some(0.0)),
+                ),
             ) else {
                 no_data(&cell.margin(8, 0, 0, 0), "no data", kind)?;
                 continue;

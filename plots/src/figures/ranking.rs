@@ -59,6 +59,26 @@ const PLAIN: RGBColor = RGBColor(160, 178, 196);
 const ROW: u32 = 44;
 const LABEL_W: u32 = 230;
 
+/// White box behind a 15 px left-anchored, vertically centred label at `pos`, so that
+/// reference lines do not run through it.
+fn backdrop<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    text: &str,
+    pos: (i32, i32),
+    kind: &'static str,
+) -> Result<()> {
+    let (w, h) = area
+        .estimate_text_size(text, &crate::style::font(15.0))
+        .ctx(kind)?;
+    let (w, h) = (w as i32, h as i32);
+    area.draw(&Rectangle::new(
+        [(pos.0 - 3, pos.1 - h / 2 - 2), (pos.0 + w + 3, pos.1 + h / 2 + 2)],
+        WHITE.filled(),
+    ))
+    .ctx(kind)?;
+    Ok(())
+}
+
 fn panel_height(p: &RankingPanel) -> u32 {
     50 + 90 + ROW * p.bars.len().max(2) as u32
 }
@@ -129,6 +149,19 @@ impl Figure for RankingFigure {
                 .x_label_formatter(&fx)
                 .draw()
                 .ctx(kind)?;
+            // Reference lines first: bars and their labels are drawn over them.
+            for (v, c) in [(base, BLACK), (noise, HIGHLIGHT)] {
+                if let Some(v) = v {
+                    chart
+                        .draw_series(DashedLineSeries::new(
+                            vec![(v, -(n as f64)), (v, 0.0)],
+                            8,
+                            5,
+                            ShapeStyle::from(c).stroke_width(2),
+                        ))
+                        .ctx(kind)?;
+                }
+            }
             for (i, b) in panel.bars.iter().enumerate() {
                 let yc = -(i as f64) - 0.5;
                 let (y0, y1) = (yc - 0.32, yc + 0.32);
@@ -152,6 +185,7 @@ impl Figure for RankingFigure {
                         )))
                         .ctx(kind)?;
                     let (ex, ey) = relative(&cell, chart.backend_coord(&(b.value, yc)));
+                    backdrop(&cell, &fmt_num(b.value), (ex + 6, ey), kind)?;
                     text_at(
                         &cell,
                         &fmt_num(b.value),
@@ -167,6 +201,7 @@ impl Figure for RankingFigure {
                     } else {
                         b.note.clone()
                     };
+                    backdrop(&cell, &note, (px + 8, py), kind)?;
                     text_at(
                         &cell,
                         &note,
@@ -176,18 +211,6 @@ impl Figure for RankingFigure {
                         (HPos::Left, VPos::Center),
                         kind,
                     )?;
-                }
-            }
-            for (v, c) in [(base, BLACK), (noise, HIGHLIGHT)] {
-                if let Some(v) = v {
-                    chart
-                        .draw_series(DashedLineSeries::new(
-                            vec![(v, -(n as f64)), (v, 0.0)],
-                            8,
-                            5,
-                            ShapeStyle::from(c).stroke_width(2),
-                        ))
-                        .ctx(kind)?;
                 }
             }
         }
@@ -226,7 +249,7 @@ impl Figure for SharesFigure {
     const KIND: &'static str = "where_shares";
 
     fn size(&self) -> (u32, u32) {
-        (1300, 220 + 62 * self.bars.len().max(2) as u32)
+        (1300, 220 + 84 * self.bars.len().max(2) as u32)
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<()> {
@@ -256,8 +279,8 @@ impl Figure for SharesFigure {
             .ctx(kind)?;
         for (i, b) in self.bars.iter().enumerate() {
             let yc = -(i as f64) - 0.5;
-            let (y0, y1) = (yc - 0.36, yc + 0.36);
-            let (px, py) = relative(&area, chart.backend_coord(&(0.0, yc)));
+            let (y0, y1) = (yc - 0.22, yc + 0.34);
+            let (px, py) = relative(&area, chart.backend_coord(&(0.0, (y0 + y1) / 2.0)));
             text_at(
                 &area,
                 &b.label,
@@ -285,6 +308,8 @@ impl Figure for SharesFigure {
                 continue;
             }
             let mut x = 0.0;
+            // Segments whose name does not fit inside: listed under the bar.
+            let mut unnamed: Vec<String> = vec![];
             for (k, s) in segs.iter().enumerate() {
                 let w = 100.0 * s.share;
                 let x_end = (x + w).min(100.0);
@@ -303,8 +328,9 @@ impl Figure for SharesFigure {
                     ])
                     .ctx(kind)?;
                 // Label inside when it fits: "name 62 %", else "62 %", else nothing.
-                let (ax, ay) = relative(&area, chart.backend_coord(&(x, yc)));
-                let (bx, _) = relative(&area, chart.backend_coord(&(x_end, yc)));
+                let ym = (y0 + y1) / 2.0;
+                let (ax, ay) = relative(&area, chart.backend_coord(&(x, ym)));
+                let (bx, _) = relative(&area, chart.backend_coord(&(x_end, ym)));
                 let room = bx - ax - 8;
                 let pct = format!("{:.0} %", 100.0 * s.share);
                 let full = format!("{} {pct}", s.label);
@@ -316,8 +342,10 @@ impl Figure for SharesFigure {
                 let text = if fits(&full)? {
                     Some(full)
                 } else if fits(&pct)? {
+                    unnamed.push(s.label.clone());
                     Some(pct)
                 } else {
+                    unnamed.push(format!("{} {pct}", s.label));
                     None
                 };
                 if let Some(t) = text {
@@ -333,6 +361,28 @@ impl Figure for SharesFigure {
                     )?;
                 }
                 x = x_end;
+            }
+            if !unnamed.is_empty() {
+                let (lx, ly) = relative(&area, chart.backend_coord(&(0.0, yc - 0.35)));
+                let mut line = format!("left to right: {}", unnamed.join(", "));
+                let room = relative(&area, chart.backend_coord(&(100.0, yc))).0 - lx;
+                let style = crate::style::font(14.0);
+                while line.chars().count() > 8
+                    && area.estimate_text_size(&line, &style).ctx(kind)?.0 as i32 > room
+                {
+                    let keep = line.chars().count() - 2;
+                    line = format!("{}…", line.chars().take(keep).collect::<String>());
+                    line = line.replace("……", "…");
+                }
+                text_at(
+                    &area,
+                    &line,
+                    (lx + 2, ly),
+                    14.0,
+                    NOTE,
+                    (HPos::Left, VPos::Center),
+                    kind,
+                )?;
             }
         }
         Ok(())
