@@ -149,16 +149,31 @@ fn num(v: f64) -> String {
     }
 }
 
+/// A compact number (up to 4 significant digits, no trailing zeros) for ranges and
+/// parameters; `–` when not finite.
+fn short(v: f64) -> String {
+    if v.is_finite() {
+        crate::style::fmt_num(v)
+    } else {
+        "–".into()
+    }
+}
+
+/// A percentage with a non-breaking space before `%`.
 fn pct(v: f64) -> String {
     if v.is_finite() {
-        format!("{:.1} %", 100.0 * v)
+        format!("{:.1}\u{a0}%", 100.0 * v)
     } else {
         "–".into()
     }
 }
 
 fn range(r: [f64; 2]) -> String {
-    format!("{} – {}", num(r[0]), num(r[1]))
+    if r[0] == r[1] {
+        short(r[0])
+    } else {
+        format!("{}–{}", short(r[0]), short(r[1]))
+    }
 }
 
 fn yes(b: bool) -> String {
@@ -306,12 +321,15 @@ pub fn diagnosis_section(report: &mut Report, diag: &Diagnosis, figures: &[Diagn
                     num(c.threshold),
                     yes(c.significant),
                     num(c.score),
-                    c.parameters
-                        .iter()
-                        .map(|(k, v)| format!("{k} = {}", num(*v)))
-                        .collect::<Vec<_>>()
-                        .join("; "),
-                    c.failure.clone().unwrap_or_default(),
+                    match &c.failure {
+                        Some(f) => format!("not fitted: {f}"),
+                        None => c
+                            .parameters
+                            .iter()
+                            .map(|(k, v)| format!("{k}\u{a0}=\u{a0}{}", short(*v)))
+                            .collect::<Vec<_>>()
+                            .join(", "),
+                    },
                 ]
             })
             .collect();
@@ -329,8 +347,7 @@ pub fn diagnosis_section(report: &mut Report, diag: &Diagnosis, figures: &[Diagn
                 "threshold",
                 "significant",
                 "score",
-                "fitted parameters (SI)",
-                "failure",
+                "fitted parameters (SI) or failure",
             ]
             .map(String::from),
             &rows,

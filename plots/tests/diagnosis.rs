@@ -540,7 +540,8 @@ fn full_diagnosis_writes_every_figure_and_a_wellformed_report() {
         "LCO pitch amplitude",
         "2*f_alpha+f_h",
         "|alpha| &gt; 0.5 A",
-        "tau_s = 0.002500",
+        "tau_s\u{a0}=\u{a0}0.0025",
+        "not fitted: no off-harmonic line",
     ] {
         assert!(html.contains(s), "report lacks {s:?}");
     }
