@@ -10,8 +10,8 @@ use std::path::{Path, PathBuf};
 use diagnose::Diagnosis;
 
 use crate::adapters::diagnosis::{
-    bifurcation_figure, gap_heatmap_figure, ranking_figure, residual_spectra_figure,
-    shares_figure, where_cell_label,
+    bifurcation_figure, gap_heatmap_figure, ranking_figure, residual_spectra_figure, shares_figure,
+    where_cell_label,
 };
 use crate::error::Result;
 use crate::render::{save, FigureFiles};
@@ -399,7 +399,15 @@ pub fn diagnosis_section(report: &mut Report, diag: &Diagnosis, figures: &[Diagn
             .collect();
         report.table(
             "Residual signature tests (detected = statistic > threshold)",
-            &["test", "level", "statistic", "threshold", "detected", "detail"].map(String::from),
+            &[
+                "test",
+                "level",
+                "statistic",
+                "threshold",
+                "detected",
+                "detail",
+            ]
+            .map(String::from),
             &rows,
         );
     }

@@ -20,14 +20,18 @@ pub mod style;
 #[cfg(test)]
 mod samples;
 
+pub use diagnosis_report::{
+    diagnosis_report, diagnosis_section, save_diagnosis_figures, write_diagnosis_outputs,
+    DiagnosisFigure,
+};
 pub use error::{Error, Result};
 pub use figures::bifurcation::{BifurcationFigure, BifurcationPoint, ResponseClass, Sweep};
-pub use figures::delta_path::DeltaPathFigure;
 pub use figures::comparison::{ComparisonFigure, ComparisonPanel};
+pub use figures::delta_path::DeltaPathFigure;
 pub use figures::derivatives::{DerivativeFigure, DerivativePanel, DerivativePoints};
 pub use figures::flutter::{FlutterPoint, ModeBranch, VgFigure};
-pub use figures::heatmap::{diverging, HeatmapGridFigure, HeatmapPanel};
 pub use figures::gap_heatmap::{GapHeatmapFigure, GapHeatmapPanel};
+pub use figures::heatmap::{diverging, HeatmapGridFigure, HeatmapPanel};
 pub use figures::histogram::{HistogramFigure, HistogramPanel};
 pub use figures::phase::PhasePortraitFigure;
 pub use figures::ranking::{
@@ -38,10 +42,6 @@ pub use figures::spectrum::{FreqMarker, SpectrumFigure};
 pub use figures::time_series::{TimePanel, TimeSeriesFigure};
 pub use figures::{Series, SeriesKind};
 pub use render::{render_png, render_svg, save, Figure, FigureFiles};
-pub use diagnosis_report::{
-    diagnosis_report, diagnosis_section, save_diagnosis_figures, write_diagnosis_outputs,
-    DiagnosisFigure,
-};
 pub use report::{escape_html, Report};
 
 #[cfg(test)]

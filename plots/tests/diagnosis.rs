@@ -10,8 +10,8 @@ use diagnose::report::{
 };
 use diagnose::{Diagnosis, Effect, Level, LevelResult};
 use plots::adapters::diagnosis::{
-    bifurcation_figure, gap_heatmap_figure, ranking_figure, residual_spectra_figure,
-    shares_figure, MAX_SEGMENTS,
+    bifurcation_figure, gap_heatmap_figure, ranking_figure, residual_spectra_figure, shares_figure,
+    MAX_SEGMENTS,
 };
 use plots::write_diagnosis_outputs;
 
@@ -104,7 +104,13 @@ fn aero_level() -> LevelResult {
         candidate(Effect::TimeDelay, Level::Aerodynamic, 0.12, 0.118, false),
         candidate(Effect::AddedMass, Level::Aerodynamic, 0.12, 0.121, false),
     ];
-    let mut failed = candidate(Effect::VortexShedding, Level::Aerodynamic, 0.12, f64::NAN, false);
+    let mut failed = candidate(
+        Effect::VortexShedding,
+        Level::Aerodynamic,
+        0.12,
+        f64::NAN,
+        false,
+    );
     failed.failure = Some("no off-harmonic line above the floor in any training case".into());
     candidates.push(failed);
 
@@ -239,7 +245,13 @@ fn structural_level() -> LevelResult {
         gap_threshold: 3.0,
         held_out_cases: (0..6).map(|i| format!("free-{i}")).collect(),
         candidates: vec![
-            candidate(Effect::StructuralCubic, Level::Structural, 0.05, 0.045, false),
+            candidate(
+                Effect::StructuralCubic,
+                Level::Structural,
+                0.05,
+                0.045,
+                false,
+            ),
             candidate(Effect::Freeplay, Level::Structural, 0.05, 0.049, false),
             candidate(Effect::Friction, Level::Structural, 0.05, 0.051, false),
         ],
@@ -429,8 +441,11 @@ fn check_markup(text: &str, void: &[&str]) -> Result<usize, String> {
                 let self_closing = tag.ends_with('/');
                 let body = tag.trim_end_matches('/');
                 let name = body.split_whitespace().next().ok_or("empty tag")?;
-                if body.matches('"').count() % 2 != 0 {
-                    return Err(format!("unbalanced quotes in <{}>", &body[..body.len().min(60)]));
+                if !body.matches('"').count().is_multiple_of(2) {
+                    return Err(format!(
+                        "unbalanced quotes in <{}>",
+                        &body[..body.len().min(60)]
+                    ));
                 }
                 n += 1;
                 if !self_closing && !void.contains(&name.to_ascii_lowercase().as_str()) {
@@ -442,7 +457,8 @@ fn check_markup(text: &str, void: &[&str]) -> Result<usize, String> {
                 let end = rest.find(';').ok_or("open entity")?;
                 let ent = &rest[1..end];
                 let ok = matches!(ent, "amp" | "lt" | "gt" | "quot" | "apos" | "#39")
-                    || (ent.starts_with('#') && ent[1..].chars().all(|c| c.is_ascii_alphanumeric()));
+                    || (ent.starts_with('#')
+                        && ent[1..].chars().all(|c| c.is_ascii_alphanumeric()));
                 if !ok {
                     return Err(format!("unknown entity &{ent};"));
                 }
@@ -493,7 +509,10 @@ fn full_diagnosis_writes_every_figure_and_a_wellformed_report() {
         "diagnosis_where_shares",
     ] {
         for ext in ["png", "svg"] {
-            assert!(n.contains(&format!("{stem}.{ext}")), "{stem}.{ext} in {n:?}");
+            assert!(
+                n.contains(&format!("{stem}.{ext}")),
+                "{stem}.{ext} in {n:?}"
+            );
         }
     }
     assert_eq!(n.last().unwrap(), "diagnosis.html");
@@ -549,7 +568,10 @@ fn full_diagnosis_writes_every_figure_and_a_wellformed_report() {
         assert!(!html.contains(bad), "external resource marker {bad}");
     }
     // Gap table: before / noise of the aerodynamic level = 0.12 / 0.02.
-    assert!(html.contains("<td class=\"num\">6.000</td>"), "before/noise ratio");
+    assert!(
+        html.contains("<td class=\"num\">6.000</td>"),
+        "before/noise ratio"
+    );
 }
 
 #[test]
@@ -585,9 +607,16 @@ fn nan_and_empty_inputs_draw_notes_not_panics() {
     let paths = write_diagnosis_outputs(&d, dir.path()).unwrap();
     assert_eq!(paths.len(), 11, "{:?}", names(&paths));
     let svg = read(&dir.path().join("figures/diagnosis_gap_heatmap.svg"));
-    assert!(svg.matches("no data").count() >= 4, "one note per empty panel");
+    assert!(
+        svg.matches("no data").count() >= 4,
+        "one note per empty panel"
+    );
     let svg = read(&dir.path().join("figures/diagnosis_residual_spectra.svg"));
-    assert_eq!(svg.matches("no data").count(), 5, "every spectrum panel empty");
+    assert_eq!(
+        svg.matches("no data").count(),
+        5,
+        "every spectrum panel empty"
+    );
     let svg = read(&dir.path().join("figures/diagnosis_candidate_ranking.svg"));
     assert!(svg.contains("no value") && svg.contains("not fitted"));
     for p in &paths {

@@ -13,8 +13,8 @@ use diagnose::{Diagnosis, Level};
 use crate::style::fmt_num;
 use crate::{
     ComparisonFigure, ComparisonPanel, GapHeatmapFigure, GapHeatmapPanel, RankingBar,
-    RankingFigure, RankingPanel, ResidualSpectraFigure, Series, SeriesKind, ShareBar,
-    ShareSegment, SharesFigure, SpectraPanel,
+    RankingFigure, RankingPanel, ResidualSpectraFigure, Series, SeriesKind, ShareBar, ShareSegment,
+    SharesFigure, SpectraPanel,
 };
 
 /// Most segments drawn per where-bar; smaller cells are merged into "other".
@@ -185,10 +185,9 @@ pub fn ranking_figure(diag: &Diagnosis) -> Option<RankingFigure> {
         label: format!("{} ({}p)", c.effect.name(), c.n_params),
         value: c.after,
         highlight: c.significant,
-        note: c
-            .failure
-            .as_ref()
-            .map_or("no value".into(), |f| format!("not fitted: {}", clip(f, 60))),
+        note: c.failure.as_ref().map_or("no value".into(), |f| {
+            format!("not fitted: {}", clip(f, 60))
+        }),
     };
     let x_label = "held-out gap after the candidate [-]".to_string();
     let mut panels: Vec<RankingPanel> = diag
@@ -259,19 +258,17 @@ pub fn bifurcation_figure(diag: &Diagnosis) -> Option<ComparisonFigure> {
         Some(e) => format!("predicted + {}", e.name()),
         None => "predicted with augmentation".into(),
     };
-    let series = |label: &str,
-                  kind: SeriesKind,
-                  pts: &[diagnose::report::BifurcationPoint],
-                  amp: bool| {
-        Series::new(
-            label,
-            kind,
-            pts.iter().map(|p| p.wind_speed).collect(),
-            pts.iter()
-                .map(|p| if amp { p.amplitude } else { p.frequency })
-                .collect(),
-        )
-    };
+    let series =
+        |label: &str, kind: SeriesKind, pts: &[diagnose::report::BifurcationPoint], amp: bool| {
+            Series::new(
+                label,
+                kind,
+                pts.iter().map(|p| p.wind_speed).collect(),
+                pts.iter()
+                    .map(|p| if amp { p.amplitude } else { p.frequency })
+                    .collect(),
+            )
+        };
     let panel = |amp: bool, y_label: &str| {
         let mut predicted = vec![];
         if !b.predicted_before.is_empty() {
@@ -347,6 +344,9 @@ pub fn where_cell_label(w: &WhereShare) -> String {
     }
 }
 
+/// (level, split) of a where-bar; `None` level for the `level` split.
+type SplitKey = (Option<Level>, String);
+
 /// Where-shares: one stacked bar per (level, split) in order of first appearance, cells
 /// sorted by share, at most [`MAX_SEGMENTS`] drawn (the rest merged into "other").
 ///
@@ -358,7 +358,7 @@ pub fn shares_figure(diag: &Diagnosis) -> Option<SharesFigure> {
         diag.where_.iter().collect()
     };
     // The `level` split compares levels: one bar over all of them.
-    let mut groups: Vec<((Option<Level>, String), Vec<&WhereShare>)> = vec![];
+    let mut groups: Vec<(SplitKey, Vec<&WhereShare>)> = vec![];
     for w in source {
         let lv = (w.split != "level").then_some(w.level);
         let k = (lv, w.split.clone());
@@ -386,11 +386,7 @@ pub fn shares_figure(diag: &Diagnosis) -> Option<SharesFigure> {
                 let rest = &cells[MAX_SEGMENTS..];
                 segments.push(ShareSegment {
                     label: format!("other ({})", rest.len()),
-                    share: rest
-                        .iter()
-                        .map(|w| w.share)
-                        .filter(|s| s.is_finite())
-                        .sum(),
+                    share: rest.iter().map(|w| w.share).filter(|s| s.is_finite()).sum(),
                 });
             }
             ShareBar {

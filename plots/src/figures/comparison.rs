@@ -38,13 +38,12 @@ pub struct ComparisonFigure {
 }
 
 fn sorted_points(s: &Series) -> Vec<(f64, f64)> {
-    let mut p: Vec<(f64, f64)> = s
-        .x
-        .iter()
-        .zip(&s.y)
-        .filter(|(x, y)| x.is_finite() && y.is_finite())
-        .map(|(&x, &y)| (x, y))
-        .collect();
+    let mut p: Vec<(f64, f64)> =
+        s.x.iter()
+            .zip(&s.y)
+            .filter(|(x, y)| x.is_finite() && y.is_finite())
+            .map(|(&x, &y)| (x, y))
+            .collect();
     p.sort_by(|a, b| a.0.total_cmp(&b.0));
     p
 }
@@ -99,11 +98,7 @@ impl Figure for ComparisonFigure {
             let all = || meas.iter().chain(preds.iter().flat_map(|(_, p)| p));
             let (Some(xr), Some(yr)) = (
                 finite_range(all().map(|p| p.0)),
-                finite_range(
-                    all()
-                        .map(|p| p.1)
-                        .chain(panel.include_zero.then_some(0.0)),
-                ),
+                finite_range(all().map(|p| p.1).chain(panel.include_zero.then_some(0.0))),
             ) else {
                 no_data(&cell.margin(8, 0, 0, 0), "no data", kind)?;
                 continue;

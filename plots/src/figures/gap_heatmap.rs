@@ -211,12 +211,12 @@ impl Figure for GapHeatmapFigure {
                         Text::new(
                             text,
                             (SegmentValue::CenterOf(ix), SegmentValue::CenterOf(iy)),
-                            crate::style::font(size).color(if tc == WHITE { &WHITE } else { &BLACK }).pos(
-                                plotters::style::text_anchor::Pos::new(
+                            crate::style::font(size)
+                                .color(if tc == WHITE { &WHITE } else { &BLACK })
+                                .pos(plotters::style::text_anchor::Pos::new(
                                     HPos::Center,
                                     VPos::Center,
-                                ),
-                            ),
+                                )),
                         )
                     }))
                     .ctx(kind)?;
@@ -297,7 +297,10 @@ mod tests {
     #[test]
     fn log_ticks_are_within_range_and_include_one() {
         let t = log_ticks(1.0);
-        assert!(t.contains(&1.0) && t.contains(&10.0) && t.contains(&0.1), "{t:?}");
+        assert!(
+            t.contains(&1.0) && t.contains(&10.0) && t.contains(&0.1),
+            "{t:?}"
+        );
         assert!(t.iter().all(|v| v.log10().abs() <= 1.0 + 1e-9));
         let wide = log_ticks(4.0);
         assert!(wide.len() <= 9, "{wide:?}");

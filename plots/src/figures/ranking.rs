@@ -72,7 +72,10 @@ fn backdrop<DB: DrawingBackend>(
         .ctx(kind)?;
     let (w, h) = (w as i32, h as i32);
     area.draw(&Rectangle::new(
-        [(pos.0 - 3, pos.1 - h / 2 - 2), (pos.0 + w + 3, pos.1 + h / 2 + 2)],
+        [
+            (pos.0 - 3, pos.1 - h / 2 - 2),
+            (pos.0 + w + 3, pos.1 + h / 2 + 2),
+        ],
         WHITE.filled(),
     ))
     .ctx(kind)?;

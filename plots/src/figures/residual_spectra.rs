@@ -86,11 +86,10 @@ impl Figure for ResidualSpectraFigure {
                 .series
                 .iter()
                 .map(|s| {
-                    let y: Vec<f64> = s
-                        .y
-                        .iter()
-                        .map(|&a| if a > 0.0 { a } else { f64::NAN })
-                        .collect();
+                    let y: Vec<f64> =
+                        s.y.iter()
+                            .map(|&a| if a > 0.0 { a } else { f64::NAN })
+                            .collect();
                     crate::style::segments(&s.x, &y)
                 })
                 .collect();
