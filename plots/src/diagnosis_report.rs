@@ -464,3 +464,20 @@ pub fn write_diagnosis_outputs(diag: &Diagnosis, out_dir: &Path) -> Result<Vec<P
     paths.push(html);
     Ok(paths)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn table_numbers_are_short_and_nan_is_a_dash() {
+        assert_eq!(num(0.025), "0.02500");
+        assert_eq!(num(6.0), "6.000");
+        assert_eq!(num(1.5e6), "1.500e6");
+        assert_eq!(num(f64::NAN), "–");
+        assert_eq!(pct(0.7917), "79.2\u{a0}%");
+        assert_eq!(pct(f64::INFINITY), "–");
+        assert_eq!(range([4.0, 10.0]), "4–10");
+        assert_eq!(range([7.0, 7.0]), "7");
+    }
+}

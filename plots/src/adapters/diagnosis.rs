@@ -403,3 +403,34 @@ pub fn shares_figure(diag: &Diagnosis) -> Option<SharesFigure> {
         bars,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn w(split: &str) -> WhereShare {
+        WhereShare {
+            split: split.into(),
+            level: Level::Aerodynamic,
+            channel: "moment".into(),
+            harmonic: "3*f_alpha".into(),
+            wind_speed: [4.0, 5.5],
+            amplitude: [6.0, 6.0],
+            config: Some("B".into()),
+            state: Some("alpha_dot > 0".into()),
+            share: 0.5,
+        }
+    }
+
+    #[test]
+    fn where_cells_are_named_by_their_split() {
+        assert_eq!(where_cell_label(&w("level")), "aerodynamic");
+        assert_eq!(where_cell_label(&w("channel")), "moment");
+        assert_eq!(where_cell_label(&w("harmonic")), "moment 3*f_alpha");
+        assert_eq!(where_cell_label(&w("region")), "B, U 4–5.5, A 6");
+        assert_eq!(where_cell_label(&w("state")), "alpha_dot > 0");
+        let mut h = w("harmonic");
+        h.channel = "all".into();
+        assert_eq!(where_cell_label(&h), "3*f_alpha");
+    }
+}

@@ -141,3 +141,44 @@ impl Figure for ComparisonFigure {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::SeriesKind;
+
+    #[test]
+    fn sorted_points_drop_non_finite_and_sort_by_x() {
+        let s = Series::new(
+            "m",
+            SeriesKind::Measured,
+            vec![3.0, f64::NAN, 1.0, 2.0],
+            vec![30.0, 5.0, 10.0, f64::INFINITY],
+        );
+        assert_eq!(sorted_points(&s), vec![(1.0, 10.0), (3.0, 30.0)]);
+    }
+
+    #[test]
+    fn frequency_panel_need_not_include_zero() {
+        let panel = |include_zero| ComparisonPanel {
+            y_label: "f".into(),
+            include_zero,
+            measured: Series::new("m", SeriesKind::Measured, vec![1.0, 2.0], vec![3.0, 3.1]),
+            predicted: vec![],
+        };
+        for (z, expect_zero_tick) in [(true, true), (false, false)] {
+            let svg = crate::render_svg(&ComparisonFigure {
+                title: "t".into(),
+                x_label: "U".into(),
+                panels: vec![panel(z)],
+            })
+            .unwrap();
+            // The y tick "0" appears only when the range is forced to include zero.
+            assert_eq!(
+                svg.contains("\n0\n</text>"),
+                expect_zero_tick,
+                "include_zero={z}"
+            );
+        }
+    }
+}
