@@ -10,6 +10,7 @@
 #![warn(missing_docs)]
 
 pub mod adapters;
+pub mod diagnosis_report;
 pub mod error;
 pub mod figures;
 pub mod render;
@@ -19,14 +20,24 @@ pub mod style;
 #[cfg(test)]
 mod samples;
 
+pub use diagnosis_report::{
+    diagnosis_report, diagnosis_section, save_diagnosis_figures, write_diagnosis_outputs,
+    DiagnosisFigure,
+};
 pub use error::{Error, Result};
 pub use figures::bifurcation::{BifurcationFigure, BifurcationPoint, ResponseClass, Sweep};
+pub use figures::comparison::{ComparisonFigure, ComparisonPanel};
 pub use figures::delta_path::DeltaPathFigure;
 pub use figures::derivatives::{DerivativeFigure, DerivativePanel, DerivativePoints};
 pub use figures::flutter::{FlutterPoint, ModeBranch, VgFigure};
+pub use figures::gap_heatmap::{GapHeatmapFigure, GapHeatmapPanel};
 pub use figures::heatmap::{diverging, HeatmapGridFigure, HeatmapPanel};
 pub use figures::histogram::{HistogramFigure, HistogramPanel};
 pub use figures::phase::PhasePortraitFigure;
+pub use figures::ranking::{
+    RankingBar, RankingFigure, RankingPanel, ShareBar, ShareSegment, SharesFigure,
+};
+pub use figures::residual_spectra::{ResidualSpectraFigure, SpectraPanel};
 pub use figures::spectrum::{FreqMarker, SpectrumFigure};
 pub use figures::time_series::{TimePanel, TimeSeriesFigure};
 pub use figures::{Series, SeriesKind};

@@ -13,6 +13,7 @@
 //! a time derivative is written with a prime, `Bα'/U`, `h'/U`, `dα/dt`.
 
 pub mod aeroelastic;
+pub mod diagnosis;
 pub mod identification;
 
 /// Display label of a library term name (`alpha`, `alpha_dot`, `h`, `h_dot` joined by `*`,

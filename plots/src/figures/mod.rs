@@ -1,12 +1,17 @@
 //! The figure structs (plain data) and their drawing code, one file per figure.
 
 pub mod bifurcation;
+pub mod comparison;
 pub mod delta_path;
 pub mod derivatives;
+pub(crate) mod diag_util;
 pub mod flutter;
+pub mod gap_heatmap;
 pub mod heatmap;
 pub mod histogram;
 pub mod phase;
+pub mod ranking;
+pub mod residual_spectra;
 pub mod spectrum;
 pub mod time_series;
 
