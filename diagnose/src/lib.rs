@@ -7,6 +7,7 @@
 pub mod effect;
 pub mod error;
 pub mod report;
+pub mod system;
 
 pub use effect::{Effect, Level, Verdict};
 pub use error::{Error, Result};
