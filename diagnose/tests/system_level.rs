@@ -122,7 +122,7 @@ fn free_set(seed: u64, inject: Inject) -> Dataset {
 fn explore() {
     for inject in [
         Inject::None,
-        Inject::Cubic(0.5),
+        Inject::Cubic(30.0),
         Inject::Freeplay(0.5f64.to_radians()),
         Inject::Friction(0.002),
         Inject::AddedMass(0.05, 2e-4),
@@ -134,11 +134,29 @@ fn explore() {
         let t = std::time::Instant::now();
         let res = system_level(&forced, &free, &SystemOptions::default()).unwrap();
         eprintln!(
-            "{inject:?}: gen {tg:.2}s diag {:.2}s before {:.4} noise {:.4}",
+            "{inject:?}: gen {tg:.2}s diag {:.2}s before {:.4} noise {:.4} stat {:.2}",
             t.elapsed().as_secs_f64(),
             res.before,
-            res.noise_level
+            res.noise_level,
+            res.gap_statistic
         );
+        for c in &res.candidates {
+            eprintln!(
+                "   {:>16} after {:.4} stat {:.3} thr {:.3} sig {} {:?}",
+                c.effect.name(),
+                c.after,
+                c.statistic,
+                c.threshold,
+                c.significant,
+                c.parameters
+            );
+        }
+        for c in &res.cases {
+            eprintln!(
+                "   case {} U {:.2} amp {:.2} before {:.4} after {:.4} noise {:.4}",
+                c.id, c.wind_speed, c.amplitude, c.before, c.after, c.noise_level
+            );
+        }
         let _ = Effect::ALL;
     }
 }

@@ -31,6 +31,7 @@ pub(crate) type Column = [Vec<f64>; 2];
 
 /// A variant of a candidate: grid parameters and the columns of every run.
 pub(crate) struct Variant {
+    #[allow(dead_code)]
     pub grid: Vec<(String, f64)>,
     pub names: Vec<String>,
     /// `moments[run]`.
@@ -200,26 +201,41 @@ fn columns(effect: Effect, grid: &[f64], run: &RunResidual, rho: f64, chord: f64
             vec![[d(&run.force[0]), d(&run.force[1])]]
         }
         Effect::StructuralCubic => vec![
-            [kept(run, &run.q[0]).iter().map(|v| v.powi(3)).collect(), z()],
-            [z(), kept(run, &run.q[1]).iter().map(|v| v.powi(3)).collect()],
+            [
+                kept(run, &run.q[0]).iter().map(|v| v.powi(3)).collect(),
+                z(),
+            ],
+            [
+                z(),
+                kept(run, &run.q[1]).iter().map(|v| v.powi(3)).collect(),
+            ],
         ],
         Effect::Freeplay => {
             let d = grid[0];
             vec![[
                 z(),
-                kept(run, &run.q[1]).iter().map(|a| a.clamp(-d, d)).collect(),
+                kept(run, &run.q[1])
+                    .iter()
+                    .map(|a| a.clamp(-d, d))
+                    .collect(),
             ]]
         }
         Effect::Friction => {
             let (eh, ea) = (grid[0], grid[1]);
             vec![
                 [
-                    kept(run, &run.qd[0]).iter().map(|v| (v / eh).tanh()).collect(),
+                    kept(run, &run.qd[0])
+                        .iter()
+                        .map(|v| (v / eh).tanh())
+                        .collect(),
                     z(),
                 ],
                 [
                     z(),
-                    kept(run, &run.qd[1]).iter().map(|v| (v / ea).tanh()).collect(),
+                    kept(run, &run.qd[1])
+                        .iter()
+                        .map(|v| (v / ea).tanh())
+                        .collect(),
                 ],
             ]
         }
@@ -237,7 +253,7 @@ fn columns(effect: Effect, grid: &[f64], run: &RunResidual, rho: f64, chord: f64
 }
 
 /// Names of the coefficients of a candidate.
-fn coefficient_names(effect: Effect) -> Vec<String> {
+pub(crate) fn coefficient_names(effect: Effect) -> Vec<String> {
     let v: &[&str] = match effect {
         Effect::AddedMass => &["dM_hh_kg_per_m", "dM_ha_kg", "dM_ah_kg", "dM_aa_kg_m"],
         Effect::TimeDelay => &["tau_s"],
@@ -280,12 +296,23 @@ pub(crate) fn n_params(effect: Effect) -> usize {
     }
 }
 
-/// All variants of a candidate over the runs.
-pub(crate) fn variants(effect: Effect, runs: &[RunResidual], rho: f64, chord: f64) -> Vec<Variant> {
-    let grids: Vec<(Vec<(String, f64)>, Vec<f64>)> = match effect {
+/// Grid parameters of every variant of a candidate (names and SI values).
+pub(crate) fn variants_grid(effect: Effect, runs: &[RunResidual]) -> Vec<Vec<(String, f64)>> {
+    grids(effect, runs).into_iter().map(|g| g.0).collect()
+}
+
+type Grid = Vec<(Vec<(String, f64)>, Vec<f64>)>;
+
+fn grids(effect: Effect, runs: &[RunResidual]) -> Grid {
+    match effect {
         Effect::Freeplay => FREEPLAY_GRID_DEG
             .iter()
-            .map(|d| (vec![("half_gap_rad".into(), d.to_radians())], vec![d.to_radians()]))
+            .map(|d| {
+                (
+                    vec![("half_gap_rad".into(), d.to_radians())],
+                    vec![d.to_radians()],
+                )
+            })
             .collect(),
         Effect::Friction => {
             let rms = |c: usize| {
@@ -316,8 +343,12 @@ pub(crate) fn variants(effect: Effect, runs: &[RunResidual], rho: f64, chord: f6
             (vec![("proportional_to_q_dyn".into(), 1.0)], vec![1.0]),
         ],
         _ => vec![(Vec::new(), Vec::new())],
-    };
-    grids
+    }
+}
+
+/// All variants of a candidate over the runs.
+pub(crate) fn variants(effect: Effect, runs: &[RunResidual], rho: f64, chord: f64) -> Vec<Variant> {
+    grids(effect, runs)
         .into_iter()
         .map(|(grid, g)| Variant {
             grid,

@@ -10,17 +10,19 @@
 //!
 //! r_c(t) = (M_s q̈ + C_s q̇ + K_s q − F)_c,
 //!
-//! normalised by the rms of the structural restoring force (K_s q)_c of the run over the
-//! kept samples. The first `warmup` seconds (lag states) and the Savitzky–Golay edges
+//! normalised by the rms of the structural inertial + restoring force
+//! (M_s q̈ + C_s q̇ + K_s q)_c of the run over the kept samples (what the aerodynamic force
+//! must balance: the metric is the relative equation error). The first `warmup` seconds (lag states) and the Savitzky–Golay edges
 //! (2·half-window samples each side, where the asymmetric end windows are less
 //! accurate) are trimmed.
 
 use std::sync::Arc;
 
-use aeroelastic::aero::{AeroModel, Flow};
+use aeroelastic::aero::{linearize, AeroModel, Flow};
 use identify::preprocess::{noise_sigma, savitzky_golay_derivative};
 use identify::record::Record;
-use nalgebra::Matrix2;
+use nalgebra::{DMatrix, Matrix2};
+use realfft::num_complex::Complex64;
 
 use crate::{Error, Result};
 
@@ -62,8 +64,11 @@ pub struct ResidualSettings {
     pub half_window: usize,
     /// Savitzky–Golay polynomial degree.
     pub order: usize,
-    /// Seconds trimmed at the start (lag-state warm-up) besides the SG edges.
+    /// Seconds trimmed at the start (aerodynamic start-up transient) besides the SG edges.
     pub warmup: f64,
+    /// Seconds of padding of the frequency-domain force evaluation (≥ the memory of the
+    /// aerodynamic law).
+    pub pad: f64,
 }
 
 /// One measured run prepared for the equation-error residual.
@@ -87,9 +92,12 @@ pub struct RunResidual {
     pub qdd: [Vec<f64>; 2],
     /// Sim aerodynamic forces (L [N/m], M [N·m/m]) along the measured motion.
     pub force: [Vec<f64>; 2],
+    /// Lag states of the sim at sample `i0` (integrated along the measured motion).
+    pub lag0: Vec<f64>,
     /// Residual per DOF (kept samples only, index k ↔ sample i0 + k).
     pub r: [Vec<f64>; 2],
-    /// Normaliser per DOF: rms of (K_s q)_c over the kept samples.
+    /// Normaliser per DOF: rms of the structural force (M_s q̈ + C_s q̇ + K_s q)_c over
+    /// the kept samples.
     pub norm: [f64; 2],
     /// Dominant pitch frequency [Hz].
     pub freq: f64,
@@ -120,8 +128,9 @@ impl RunResidual {
     }
 }
 
-/// Dominant frequency [Hz] of `x` (mean removed, Hann window, parabolic peak
-/// interpolation on the magnitude spectrum, zero-padded to ≥ 4× the length); 0 when flat.
+/// Dominant frequency [Hz] of `x` (mean removed, rectangular window, zero-padded to ≥ 4×
+/// the length, parabolic peak interpolation on the magnitude spectrum, bins below two
+/// cycles per record ignored); 0 when flat.
 pub fn dominant_frequency(x: &[f64], dt: f64) -> f64 {
     let n = x.len();
     if n < 8 {
@@ -132,19 +141,22 @@ pub fn dominant_frequency(x: &[f64], dt: f64) -> f64 {
     let mut planner = realfft::RealFftPlanner::<f64>::new();
     let fft = planner.plan_fft_forward(nfft);
     let mut buf = fft.make_input_vec();
+    // Rectangular window: a decaying transient lives at the start of the record, where a
+    // taper would remove it.
     for (i, v) in x.iter().enumerate() {
-        let w = 0.5 - 0.5 * (2.0 * std::f64::consts::PI * i as f64 / (n - 1) as f64).cos();
-        buf[i] = (v - mean) * w;
+        buf[i] = v - mean;
     }
     let mut spec = fft.make_output_vec();
     if fft.process(&mut buf, &mut spec).is_err() {
         return 0.0;
     }
     let mag: Vec<f64> = spec.iter().map(|c| c.norm()).collect();
+    // Bins below two cycles per record are trends, not oscillations.
+    let k_min = (2 * nfft / n).max(1);
     let (k, peak) = mag
         .iter()
         .enumerate()
-        .skip(1)
+        .skip(k_min)
         .fold((0, 0.0), |a, (i, &m)| if m > a.1 { (i, m) } else { a });
     if k == 0 || peak <= 0.0 {
         return 0.0;
@@ -160,56 +172,155 @@ pub fn dominant_frequency(x: &[f64], dt: f64) -> f64 {
     (k as f64 + off) / (nfft as f64 * dt)
 }
 
-/// Lag states of `model` integrated along the motion (RK4 per sample, velocities
-/// linearly interpolated at the half step), x(0) = 0; returns the forces
-/// F = M_a q̈ + f(q, q̇, x) at every sample.
+/// Exact discretisation of the model's lag dynamics, linearised about the origin
+/// (ẋ = E q + F q̇ + G x, exact for every model of `aeroelastic`, whose lag dynamics are
+/// linear) for inputs u = (q, q̇) linear over a step of `dt`: x⁺ = Φ x + Γ₀ u + Γ₁ Δu/dt.
+/// Unconditionally stable, whatever the stiffness of the lags (an identified law's
+/// rational-function approximation can hold a lag root thousands of times faster than
+/// the motion).
+#[allow(dead_code)]
+pub(crate) struct LagStep {
+    n: usize,
+    phi: Vec<f64>,
+    g0: Vec<f64>,
+    g1: Vec<f64>,
+}
+
+#[allow(dead_code)]
+impl LagStep {
+    pub(crate) fn new(model: &dyn AeroModel, flow: &Flow, dt: f64) -> Self {
+        let n = model.n_lag();
+        if n == 0 {
+            return LagStep {
+                n,
+                phi: Vec::new(),
+                g0: Vec::new(),
+                g1: Vec::new(),
+            };
+        }
+        let lin = linearize(model, flow);
+        let m = n + 8;
+        let mut a = DMatrix::<f64>::zeros(m, m);
+        for i in 0..n {
+            for j in 0..n {
+                a[(i, j)] = lin.g[(i, j)] * dt;
+            }
+            for j in 0..2 {
+                a[(i, n + j)] = lin.e[(i, j)] * dt;
+                a[(i, n + 2 + j)] = lin.f[(i, j)] * dt;
+            }
+        }
+        for j in 0..4 {
+            a[(n + j, n + 4 + j)] = dt;
+        }
+        let e = a.exp();
+        let mut phi = vec![0.0; n * n];
+        let mut g0 = vec![0.0; n * 4];
+        let mut g1 = vec![0.0; n * 4];
+        for i in 0..n {
+            for j in 0..n {
+                phi[i * n + j] = e[(i, j)];
+            }
+            for j in 0..4 {
+                g0[i * 4 + j] = e[(i, n + j)];
+                g1[i * 4 + j] = e[(i, n + 4 + j)];
+            }
+        }
+        LagStep { n, phi, g0, g1 }
+    }
+
+    /// One step from x with inputs u (start) and u⁺ (end), u = (h, α, ḣ, α̇).
+    #[inline]
+    pub(crate) fn step(&self, x: &mut [f64], u: [f64; 4], un: [f64; 4], tmp: &mut [f64]) {
+        let n = self.n;
+        let du = [un[0] - u[0], un[1] - u[1], un[2] - u[2], un[3] - u[3]];
+        for i in 0..n {
+            let mut v = 0.0;
+            for j in 0..n {
+                v += self.phi[i * n + j] * x[j];
+            }
+            for j in 0..4 {
+                v += self.g0[i * 4 + j] * u[j] + self.g1[i * 4 + j] * du[j];
+            }
+            tmp[i] = v;
+        }
+        x[..n].copy_from_slice(&tmp[..n]);
+    }
+}
+
+/// Forces of `model` along a measured motion (see the module docs): the linear part
+/// from the model's *frequency response* H(ω) (the identified derivative table itself,
+/// not its time-domain rational approximation, whose fitted lag roots can be stiff and
+/// whose coefficients can cancel by orders of magnitude), applied by FFT to the motion
+/// extended by `pad` samples of its initial value before (held before release) and a
+/// cosine blend back to it after (so the periodic extension is continuous); plus the
+/// nonlinear remainder f(q, q̇, 0) − K_q q − C_q q̇ in the time domain (exact for a
+/// linear model plus polynomial terms, which is what an identified law is).
 pub fn forces_along(
     model: &dyn AeroModel,
     flow: &Flow,
     q: &[Vec<f64>; 2],
     qd: &[Vec<f64>; 2],
-    qdd: &[Vec<f64>; 2],
     dt: f64,
+    pad: usize,
 ) -> [Vec<f64>; 2] {
     let n = q[0].len();
-    let nl = model.n_lag();
-    let ma = model.apparent_mass(flow);
-    let mut x = vec![0.0; nl];
-    let mut k1 = vec![0.0; nl];
-    let mut k2 = vec![0.0; nl];
-    let mut k3 = vec![0.0; nl];
-    let mut k4 = vec![0.0; nl];
-    let mut tmp = vec![0.0; nl];
+    let nfft = (n + 2 * pad).next_power_of_two();
+    let mut planner = realfft::RealFftPlanner::<f64>::new();
+    let fwd = planner.plan_fft_forward(nfft);
+    let inv = planner.plan_fft_inverse(nfft);
+    let mut spec: [Vec<Complex64>; 2] = [fwd.make_output_vec(), fwd.make_output_vec()];
+    for j in 0..2 {
+        let mut buf = fwd.make_input_vec();
+        let (first, last) = (q[j][0], q[j][n - 1]);
+        for (k, v) in buf.iter_mut().enumerate() {
+            *v = if k < pad {
+                first
+            } else if k < pad + n {
+                q[j][k - pad]
+            } else {
+                let m = nfft - pad - n;
+                let t = (k - pad - n) as f64 / m.max(1) as f64;
+                let w = 0.5 - 0.5 * (std::f64::consts::PI * t).cos();
+                last + (first - last) * w
+            };
+        }
+        // The FFT only fails on a length mismatch (a bug).
+        fwd.process(&mut buf, &mut spec[j]).expect("FFT length");
+    }
+    let nb = spec[0].len();
+    let mut out_spec = [fwd.make_output_vec(), fwd.make_output_vec()];
+    for m in 0..nb {
+        let w = 2.0 * std::f64::consts::PI * m as f64 / (nfft as f64 * dt);
+        let h = model.frequency_response(flow, w);
+        for c in 0..2 {
+            let mut v = h[(c, 0)] * spec[0][m] + h[(c, 1)] * spec[1][m];
+            if m == 0 || m + 1 == nb {
+                v = Complex64::new(v.re, 0.0);
+            }
+            out_spec[c][m] = v;
+        }
+    }
+    let lin = linearize(model, flow);
+    let zeros = vec![0.0; model.n_lag()];
     let mut out = [vec![0.0; n], vec![0.0; n]];
+    for c in 0..2 {
+        let mut buf = inv.make_output_vec();
+        inv.process(&mut out_spec[c], &mut buf).expect("FFT length");
+        for i in 0..n {
+            out[c][i] = buf[pad + i] / nfft as f64;
+        }
+    }
     for i in 0..n {
         let qi = [q[0][i], q[1][i]];
         let qdi = [qd[0][i], qd[1][i]];
-        let f = model.forces(flow, qi, qdi, &x);
+        let f = model.forces(flow, qi, qdi, &zeros);
         for c in 0..2 {
-            out[c][i] = f[c] + ma[(c, 0)] * qdd[0][i] + ma[(c, 1)] * qdd[1][i];
-        }
-        if i + 1 == n || nl == 0 {
-            continue;
-        }
-        let qn = [q[0][i + 1], q[1][i + 1]];
-        let qdn = [qd[0][i + 1], qd[1][i + 1]];
-        let qm = [0.5 * (qi[0] + qn[0]), 0.5 * (qi[1] + qn[1])];
-        let qdm = [0.5 * (qdi[0] + qdn[0]), 0.5 * (qdi[1] + qdn[1])];
-        model.lag_rates(flow, qi, qdi, &x, &mut k1);
-        for j in 0..nl {
-            tmp[j] = x[j] + 0.5 * dt * k1[j];
-        }
-        model.lag_rates(flow, qm, qdm, &tmp, &mut k2);
-        for j in 0..nl {
-            tmp[j] = x[j] + 0.5 * dt * k2[j];
-        }
-        model.lag_rates(flow, qm, qdm, &tmp, &mut k3);
-        for j in 0..nl {
-            tmp[j] = x[j] + dt * k3[j];
-        }
-        model.lag_rates(flow, qn, qdn, &tmp, &mut k4);
-        for j in 0..nl {
-            x[j] += dt / 6.0 * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j]);
+            let l = lin.k_q[(c, 0)] * qi[0]
+                + lin.k_q[(c, 1)] * qi[1]
+                + lin.c_q[(c, 0)] * qdi[0]
+                + lin.c_q[(c, 1)] * qdi[1];
+            out[c][i] += f[c] - l;
         }
     }
     out
@@ -287,10 +398,7 @@ pub fn prepare_run(
         ));
     }
     let q = [rec.h.clone(), rec.alpha.clone()];
-    let qd = [
-        sg(&q[0], dt, s, id, "h")?,
-        sg(&q[1], dt, s, id, "alpha")?,
-    ];
+    let qd = [sg(&q[0], dt, s, id, "h")?, sg(&q[1], dt, s, id, "alpha")?];
     let qdd = [
         sg(&qd[0], dt, s, id, "h_dot")?,
         sg(&qd[1], dt, s, id, "alpha_dot")?,
@@ -302,17 +410,21 @@ pub fn prepare_run(
     } else {
         1.0
     };
-    let run_model = model.with_reduced_frequency(k).unwrap_or_else(|| model.clone());
+    let run_model = model
+        .with_reduced_frequency(k)
+        .unwrap_or_else(|| model.clone());
     let flow = Flow { rho, u };
-    let force = forces_along(run_model.as_ref(), &flow, &q, &qd, &qdd, dt);
+    let pad = (s.pad / dt).ceil() as usize;
+    let force = forces_along(run_model.as_ref(), &flow, &q, &qd, dt, pad);
+    let lag0 = vec![0.0; run_model.n_lag()];
     let mut r = [Vec::with_capacity(i1 - i0), Vec::with_capacity(i1 - i0)];
     let mut ss = [0.0; 2];
     for i in i0..i1 {
         let v = residual_at(st, &q, &qd, &qdd, &force, i);
         for c in 0..2 {
             r[c].push(v[c]);
-            let kq = st.stiffness[(c, 0)] * q[0][i] + st.stiffness[(c, 1)] * q[1][i];
-            ss[c] += kq * kq;
+            let sf = v[c] + force[c][i];
+            ss[c] += sf * sf;
         }
     }
     let norm = ss.map(|v| (v / (i1 - i0) as f64).sqrt());
@@ -320,7 +432,10 @@ pub fn prepare_run(
         if !(norm[c] > 0.0 && norm[c].is_finite()) {
             return Err(Error::data(
                 dataset,
-                format!("free run `{id}`: no {name} motion (rms restoring force {})", norm[c]),
+                format!(
+                    "free run `{id}`: no {name} motion (rms structural force {})",
+                    norm[c]
+                ),
             ));
         }
     }
@@ -339,6 +454,7 @@ pub fn prepare_run(
         qd,
         qdd,
         force,
+        lag0,
         r,
         norm,
         freq,
@@ -380,7 +496,7 @@ fn noise_kernels(
             sg(&qd[0], dt, s, id, "noise kernel")?,
             sg(&qd[1], dt, s, id, "noise kernel")?,
         ];
-        let f = forces_along(model, flow, &q, &qd, &qdd, dt);
+        let f = forces_along(model, flow, &q, &qd, dt, (s.pad / dt).ceil() as usize);
         for i in 2 * m..n - 2 * m {
             let r = residual_at(st, &q, &qd, &qdd, &f, i);
             for c in 0..2 {
