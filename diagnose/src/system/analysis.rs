@@ -9,6 +9,9 @@ use super::residual::RunResidual;
 
 const CHANNELS: [&str; 2] = ["heave", "pitch"];
 
+/// The best candidate: effect, grid parameters, coefficients.
+pub(crate) type Best = (Effect, Vec<(String, f64)>, Vec<f64>);
+
 /// Shares of the excess normalised residual energy (energy minus its noise expectation,
 /// clipped at 0; raw energy when nothing exceeds the noise) by channel, by response
 /// amplitude band (|α| below/above half the run's largest |α|), by wind speed (one cell
@@ -140,7 +143,7 @@ pub(crate) fn where_shares(runs: &[RunResidual], noise: &[[f64; 2]]) -> Vec<Wher
 /// effect, grid, coefficients fitted on all runs).
 pub(crate) fn spectra(
     runs: &[RunResidual],
-    best: Option<&(Effect, Vec<(String, f64)>, Vec<f64>)>,
+    best: Option<&Best>,
     rho: f64,
     chord: f64,
 ) -> Vec<ResidualSpectrum> {

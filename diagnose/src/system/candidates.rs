@@ -95,7 +95,7 @@ pub(crate) fn solve(g: &[f64], b: &[f64]) -> Option<Vec<f64>> {
         for k in 0..j {
             d -= a[j * p + k] * a[j * p + k];
         }
-        if !(d > 1e-13 * scale) || !d.is_finite() {
+        if d.is_nan() || d <= 1e-13 * scale || !d.is_finite() {
             return None;
         }
         let d = d.sqrt();

@@ -21,7 +21,7 @@ use std::sync::Arc;
 use aeroelastic::aero::{linearize, AeroModel, Flow};
 use identify::preprocess::{noise_sigma, savitzky_golay_derivative};
 use identify::record::Record;
-use nalgebra::{DMatrix, Matrix2};
+use nalgebra::Matrix2;
 use realfft::num_complex::Complex64;
 
 use crate::{Error, Result};
@@ -170,82 +170,6 @@ pub fn dominant_frequency(x: &[f64], dt: f64) -> f64 {
         }
     }
     (k as f64 + off) / (nfft as f64 * dt)
-}
-
-/// Exact discretisation of the model's lag dynamics, linearised about the origin
-/// (ẋ = E q + F q̇ + G x, exact for every model of `aeroelastic`, whose lag dynamics are
-/// linear) for inputs u = (q, q̇) linear over a step of `dt`: x⁺ = Φ x + Γ₀ u + Γ₁ Δu/dt.
-/// Unconditionally stable, whatever the stiffness of the lags (an identified law's
-/// rational-function approximation can hold a lag root thousands of times faster than
-/// the motion).
-#[allow(dead_code)]
-pub(crate) struct LagStep {
-    n: usize,
-    phi: Vec<f64>,
-    g0: Vec<f64>,
-    g1: Vec<f64>,
-}
-
-#[allow(dead_code)]
-impl LagStep {
-    pub(crate) fn new(model: &dyn AeroModel, flow: &Flow, dt: f64) -> Self {
-        let n = model.n_lag();
-        if n == 0 {
-            return LagStep {
-                n,
-                phi: Vec::new(),
-                g0: Vec::new(),
-                g1: Vec::new(),
-            };
-        }
-        let lin = linearize(model, flow);
-        let m = n + 8;
-        let mut a = DMatrix::<f64>::zeros(m, m);
-        for i in 0..n {
-            for j in 0..n {
-                a[(i, j)] = lin.g[(i, j)] * dt;
-            }
-            for j in 0..2 {
-                a[(i, n + j)] = lin.e[(i, j)] * dt;
-                a[(i, n + 2 + j)] = lin.f[(i, j)] * dt;
-            }
-        }
-        for j in 0..4 {
-            a[(n + j, n + 4 + j)] = dt;
-        }
-        let e = a.exp();
-        let mut phi = vec![0.0; n * n];
-        let mut g0 = vec![0.0; n * 4];
-        let mut g1 = vec![0.0; n * 4];
-        for i in 0..n {
-            for j in 0..n {
-                phi[i * n + j] = e[(i, j)];
-            }
-            for j in 0..4 {
-                g0[i * 4 + j] = e[(i, n + j)];
-                g1[i * 4 + j] = e[(i, n + 4 + j)];
-            }
-        }
-        LagStep { n, phi, g0, g1 }
-    }
-
-    /// One step from x with inputs u (start) and u⁺ (end), u = (h, α, ḣ, α̇).
-    #[inline]
-    pub(crate) fn step(&self, x: &mut [f64], u: [f64; 4], un: [f64; 4], tmp: &mut [f64]) {
-        let n = self.n;
-        let du = [un[0] - u[0], un[1] - u[1], un[2] - u[2], un[3] - u[3]];
-        for i in 0..n {
-            let mut v = 0.0;
-            for j in 0..n {
-                v += self.phi[i * n + j] * x[j];
-            }
-            for j in 0..4 {
-                v += self.g0[i * 4 + j] * u[j] + self.g1[i * 4 + j] * du[j];
-            }
-            tmp[i] = v;
-        }
-        x[..n].copy_from_slice(&tmp[..n]);
-    }
 }
 
 /// Forces of `model` along a measured motion (see the module docs): the linear part

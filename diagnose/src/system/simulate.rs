@@ -150,7 +150,7 @@ pub(crate) fn simulate(
             for j in 0..nz {
                 y[j] += h / 6.0 * (k[0][j] + 2.0 * k[1][j] + 2.0 * k[2][j] + k[3][j]);
             }
-            if !(y[1].abs() < 1.5) || !y.iter().all(|v| v.is_finite()) {
+            if y[1].abs() >= 1.5 || !y.iter().all(|v| v.is_finite()) {
                 break 'outer;
             }
         }
@@ -183,7 +183,7 @@ pub(crate) struct Observables {
 /// Per-period amplitude windows of `a`: (centre time [s], half peak-to-peak, mean,
 /// zero-crossing frequency [Hz]).
 fn windows(a: &[f64], dt: f64, f: f64) -> Vec<(f64, f64, f64, f64)> {
-    if !(f > 0.0) {
+    if f.is_nan() || f <= 0.0 {
         return Vec::new();
     }
     let w = ((1.0 / f) / dt).round().max(4.0) as usize;
