@@ -11,13 +11,14 @@
 //! differ by the effect only (for free runs: by the effect's response).
 //!
 //! **Base scenario** ([`BlindScenario::default`]): truth `scenarios/plate-truth.model.toml`,
-//! rig `scenarios/plate-rig.structure.toml` (U_F = 6.595 m/s); forced: configurations B
-//! (f_α 1.5 Hz, f_h 0.7 Hz) and D (2.0, 1.3), pitch amplitudes 6, 12, 18, 24°, wind speeds
-//! 4, 5.5, 7, 8.5, 10 m/s, 512 Hz, 8 s, paper noise (40 cases); free: 0.5, 0.7, 0.85,
+//! rig `scenarios/plate-rig.structure.toml` (U_F = 6.595 m/s); forced: configurations D
+//! (f_α 2.0 Hz, f_h 1.3 Hz) and G (3.0, 1.7), pitch amplitudes 6, 12, 18, 24°, wind speeds
+//! 4, 5.5, 7, 8.5, 10 m/s, 512 Hz, 8 s, paper noise (40 cases); free: 0.7, 0.8, 0.9,
 //! 0.95, 1.05, 1.15 U_F, 512 Hz, 12 s, released from α₀ = 4°, α and h only, paper noise.
-
-// The crate error (skeleton, `error.rs`) carries identify/aeroelastic errors by value and
-// is large; boxing them is the coordinator's call (see the report).
+//! The forced campaign covers K_α 0.31–1.18, the reduced frequencies of the free runs
+//! (pitch-dominated motion at 2.7–3.3 Hz and 4.6–7.6 m/s: K ≈ 0.56–1.1), so the sim is
+//! not extrapolated in K (configuration B with these speeds stopped at K_α 0.59, and free
+//! runs at 0.5 U_F reached K 1.6: the effect-free gap was then model error, not noise).
 
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -125,7 +126,7 @@ impl Default for BlindScenario {
         let mut campaign = Campaign::paper();
         campaign
             .configurations
-            .retain(|c| c.name == "B" || c.name == "D");
+            .retain(|c| c.name == "D" || c.name == "G");
         campaign.amplitudes_deg = vec![6.0, 12.0, 18.0, 24.0];
         campaign.wind_speeds = vec![4.0, 5.5, 7.0, 8.5, 10.0];
         BlindScenario {
@@ -135,7 +136,7 @@ impl Default for BlindScenario {
             forced_rate: 512.0,
             forced_duration: 8.0,
             flutter_speed: 6.595,
-            free_speed_factors: vec![0.5, 0.7, 0.85, 0.95, 1.05, 1.15],
+            free_speed_factors: vec![0.7, 0.8, 0.9, 0.95, 1.05, 1.15],
             free_rate: 512.0,
             free_duration: 12.0,
             free_substeps: 8,

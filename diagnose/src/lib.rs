@@ -3,6 +3,7 @@
 //!
 //! * [`effect`]: the catalogue names and verdicts;
 //! * [`report`]: the result types and the `diagnosis.json` document;
+//! * [`system`]: the system level (free-response records);
 //! * [`verdict`]: from the levels' findings to one verdict;
 //! * [`blind`]: the withheld-effect data-set generator (the diagnosis never reads it);
 //! * [`bench`]: the withheld-effect benchmark statistics.
@@ -12,6 +13,7 @@ pub mod blind;
 pub mod effect;
 pub mod error;
 pub mod report;
+pub mod system;
 pub mod verdict;
 
 pub use effect::{Effect, Level, Verdict};

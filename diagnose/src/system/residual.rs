@@ -1,0 +1,432 @@
+//! Equation-error residual of the sim along measured free-response runs.
+//!
+//! For a run with measured motion q = (h, α) the velocities and accelerations come from a
+//! Savitzky–Golay smoothing differentiator (q̇ = D q, q̈ = D D q); the sim's aerodynamic
+//! forces F(t) = M_a q̈ + f(q, q̇, x) are evaluated along the measured motion, with the
+//! model's lag states x integrated along it (RK4, one step per sample, q̇ linearly
+//! interpolated; x(0) = 0, i.e. a release from rest) and the nonlinear N* coefficients
+//! evaluated at the run's reduced frequency K = Bω/U (ω: dominant pitch frequency of
+//! the run). The residual per degree of freedom c (heave, pitch) is
+//!
+//! r_c(t) = (M_s q̈ + C_s q̇ + K_s q − F)_c,
+//!
+//! normalised by the rms of the structural inertial + restoring force
+//! (M_s q̈ + C_s q̇ + K_s q)_c of the run over the kept samples (what the aerodynamic force
+//! must balance: the metric is the relative equation error). The first `warmup` seconds (lag states) and the Savitzky–Golay edges
+//! (2·half-window samples each side, where the asymmetric end windows are less
+//! accurate) are trimmed.
+
+use std::sync::Arc;
+
+use aeroelastic::aero::{linearize, AeroModel, Flow};
+use identify::preprocess::{noise_sigma, savitzky_golay_derivative};
+use identify::record::Record;
+use nalgebra::Matrix2;
+use realfft::num_complex::Complex64;
+
+use crate::{Error, Result};
+
+/// Nominal linear structure of the free data set (manifest `[structure]`), SI per unit
+/// span: mass, damping and stiffness matrices.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LinearStructure {
+    /// Mass matrix [[m, S_α], [S_α, I_α]].
+    pub mass: Matrix2<f64>,
+    /// Damping matrix diag(c_h, c_α).
+    pub damping: Matrix2<f64>,
+    /// Stiffness matrix diag(k_h, k_α).
+    pub stiffness: Matrix2<f64>,
+}
+
+impl LinearStructure {
+    /// From the manifest's `[structure]`: k = m ω², c = 2 ζ m ω per DOF (m → I_α for
+    /// pitch), ω = 2π f.
+    pub fn from_spec(s: &identify::dataset::StructureSpec) -> Self {
+        let tau = 2.0 * std::f64::consts::PI;
+        let (wh, wa) = (tau * s.freq_heave, tau * s.freq_pitch);
+        LinearStructure {
+            mass: Matrix2::new(s.mass, s.static_unbalance, s.static_unbalance, s.inertia),
+            damping: Matrix2::new(
+                2.0 * s.damping_heave * s.mass * wh,
+                0.0,
+                0.0,
+                2.0 * s.damping_pitch * s.inertia * wa,
+            ),
+            stiffness: Matrix2::new(s.mass * wh * wh, 0.0, 0.0, s.inertia * wa * wa),
+        }
+    }
+}
+
+/// Settings of the residual computation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ResidualSettings {
+    /// Savitzky–Golay half window [samples].
+    pub half_window: usize,
+    /// Savitzky–Golay polynomial degree.
+    pub order: usize,
+    /// Seconds trimmed at the start (aerodynamic start-up transient) besides the SG edges.
+    pub warmup: f64,
+    /// Seconds of padding of the frequency-domain force evaluation (≥ the memory of the
+    /// aerodynamic law).
+    pub pad: f64,
+}
+
+/// One measured run prepared for the equation-error residual.
+#[derive(Debug, Clone)]
+pub struct RunResidual {
+    /// Case id.
+    pub id: String,
+    /// Wind speed [m/s].
+    pub u: f64,
+    /// Sample interval [s].
+    pub dt: f64,
+    /// First kept sample.
+    pub i0: usize,
+    /// One past the last kept sample.
+    pub i1: usize,
+    /// Measured displacement (h [m], α [rad]), whole run.
+    pub q: [Vec<f64>; 2],
+    /// SG velocity, whole run.
+    pub qd: [Vec<f64>; 2],
+    /// SG acceleration, whole run.
+    pub qdd: [Vec<f64>; 2],
+    /// Sim aerodynamic forces (L [N/m], M [N·m/m]) along the measured motion.
+    pub force: [Vec<f64>; 2],
+    /// Lag states of the sim at sample `i0` (integrated along the measured motion).
+    pub lag0: Vec<f64>,
+    /// Residual per DOF (kept samples only, index k ↔ sample i0 + k).
+    pub r: [Vec<f64>; 2],
+    /// Normaliser per DOF: rms of the structural force (M_s q̈ + C_s q̇ + K_s q)_c over
+    /// the kept samples.
+    pub norm: [f64; 2],
+    /// Dominant pitch frequency [Hz].
+    pub freq: f64,
+    /// Reduced frequency K = B·2πf/U the nonlinear terms were evaluated at.
+    pub k: f64,
+    /// Displacement noise estimates σ̂ (h [m], α [rad]).
+    pub sigma: [f64; 2],
+    /// Expected normalised residual energy per sample due to displacement noise, per DOF
+    /// (noise level² of the metric).
+    pub noise_energy: [f64; 2],
+}
+
+impl RunResidual {
+    /// Number of kept samples.
+    pub fn len(&self) -> usize {
+        self.i1 - self.i0
+    }
+
+    /// True when no sample is kept.
+    pub fn is_empty(&self) -> bool {
+        self.i1 <= self.i0
+    }
+
+    /// Normalised residual energy per sample, per DOF: mean((r_c/norm_c)²).
+    pub fn energy(&self) -> [f64; 2] {
+        let n = self.len().max(1) as f64;
+        [0, 1].map(|c| self.r[c].iter().map(|v| v * v).sum::<f64>() / (n * self.norm[c].powi(2)))
+    }
+}
+
+/// Dominant frequency [Hz] of `x` (mean removed, rectangular window, zero-padded to ≥ 4×
+/// the length, parabolic peak interpolation on the magnitude spectrum, bins below two
+/// cycles per record ignored); 0 when flat.
+pub fn dominant_frequency(x: &[f64], dt: f64) -> f64 {
+    let n = x.len();
+    if n < 8 {
+        return 0.0;
+    }
+    let mean = x.iter().sum::<f64>() / n as f64;
+    let nfft = (4 * n).next_power_of_two();
+    let mut planner = realfft::RealFftPlanner::<f64>::new();
+    let fft = planner.plan_fft_forward(nfft);
+    let mut buf = fft.make_input_vec();
+    // Rectangular window: a decaying transient lives at the start of the record, where a
+    // taper would remove it.
+    for (i, v) in x.iter().enumerate() {
+        buf[i] = v - mean;
+    }
+    let mut spec = fft.make_output_vec();
+    if fft.process(&mut buf, &mut spec).is_err() {
+        return 0.0;
+    }
+    let mag: Vec<f64> = spec.iter().map(|c| c.norm()).collect();
+    // Bins below two cycles per record are trends, not oscillations.
+    let k_min = (2 * nfft / n).max(1);
+    let (k, peak) = mag
+        .iter()
+        .enumerate()
+        .skip(k_min)
+        .fold((0, 0.0), |a, (i, &m)| if m > a.1 { (i, m) } else { a });
+    if k == 0 || peak <= 0.0 {
+        return 0.0;
+    }
+    let mut off = 0.0;
+    if k + 1 < mag.len() {
+        let (a, b, c) = (mag[k - 1], mag[k], mag[k + 1]);
+        let den = a - 2.0 * b + c;
+        if den < 0.0 {
+            off = (0.5 * (a - c) / den).clamp(-0.5, 0.5);
+        }
+    }
+    (k as f64 + off) / (nfft as f64 * dt)
+}
+
+/// Forces of `model` along a measured motion (see the module docs): the linear part
+/// from the model's *frequency response* H(ω) (the identified derivative table itself,
+/// not its time-domain rational approximation, whose fitted lag roots can be stiff and
+/// whose coefficients can cancel by orders of magnitude), applied by FFT to the motion
+/// extended by `pad` samples of its initial value before (held before release) and a
+/// cosine blend back to it after (so the periodic extension is continuous); plus the
+/// nonlinear remainder f(q, q̇, 0) − K_q q − C_q q̇ in the time domain (exact for a
+/// linear model plus polynomial terms, which is what an identified law is).
+pub fn forces_along(
+    model: &dyn AeroModel,
+    flow: &Flow,
+    q: &[Vec<f64>; 2],
+    qd: &[Vec<f64>; 2],
+    dt: f64,
+    pad: usize,
+) -> [Vec<f64>; 2] {
+    let n = q[0].len();
+    let nfft = (n + 2 * pad).next_power_of_two();
+    let mut planner = realfft::RealFftPlanner::<f64>::new();
+    let fwd = planner.plan_fft_forward(nfft);
+    let inv = planner.plan_fft_inverse(nfft);
+    let mut spec: [Vec<Complex64>; 2] = [fwd.make_output_vec(), fwd.make_output_vec()];
+    for j in 0..2 {
+        let mut buf = fwd.make_input_vec();
+        let (first, last) = (q[j][0], q[j][n - 1]);
+        for (k, v) in buf.iter_mut().enumerate() {
+            *v = if k < pad {
+                first
+            } else if k < pad + n {
+                q[j][k - pad]
+            } else {
+                let m = nfft - pad - n;
+                let t = (k - pad - n) as f64 / m.max(1) as f64;
+                let w = 0.5 - 0.5 * (std::f64::consts::PI * t).cos();
+                last + (first - last) * w
+            };
+        }
+        // The FFT only fails on a length mismatch (a bug).
+        fwd.process(&mut buf, &mut spec[j]).expect("FFT length");
+    }
+    let nb = spec[0].len();
+    let mut out_spec = [fwd.make_output_vec(), fwd.make_output_vec()];
+    for m in 0..nb {
+        let w = 2.0 * std::f64::consts::PI * m as f64 / (nfft as f64 * dt);
+        let h = model.frequency_response(flow, w);
+        for c in 0..2 {
+            let mut v = h[(c, 0)] * spec[0][m] + h[(c, 1)] * spec[1][m];
+            if m == 0 || m + 1 == nb {
+                v = Complex64::new(v.re, 0.0);
+            }
+            out_spec[c][m] = v;
+        }
+    }
+    let lin = linearize(model, flow);
+    let zeros = vec![0.0; model.n_lag()];
+    let mut out = [vec![0.0; n], vec![0.0; n]];
+    for c in 0..2 {
+        let mut buf = inv.make_output_vec();
+        inv.process(&mut out_spec[c], &mut buf).expect("FFT length");
+        for i in 0..n {
+            out[c][i] = buf[pad + i] / nfft as f64;
+        }
+    }
+    for i in 0..n {
+        let qi = [q[0][i], q[1][i]];
+        let qdi = [qd[0][i], qd[1][i]];
+        let f = model.forces(flow, qi, qdi, &zeros);
+        for c in 0..2 {
+            let l = lin.k_q[(c, 0)] * qi[0]
+                + lin.k_q[(c, 1)] * qi[1]
+                + lin.c_q[(c, 0)] * qdi[0]
+                + lin.c_q[(c, 1)] * qdi[1];
+            out[c][i] += f[c] - l;
+        }
+    }
+    out
+}
+
+fn sg(x: &[f64], dt: f64, s: &ResidualSettings, id: &str, what: &str) -> Result<Vec<f64>> {
+    savitzky_golay_derivative(x, dt, s.half_window, s.order)
+        .map_err(|e| Error::identify(format!("free run `{id}`: derivative of {what}"), e))
+}
+
+/// Structural residual M_s q̈ + C_s q̇ + K_s q − F at sample i, per DOF.
+#[inline]
+fn residual_at(
+    st: &LinearStructure,
+    q: &[Vec<f64>; 2],
+    qd: &[Vec<f64>; 2],
+    qdd: &[Vec<f64>; 2],
+    f: &[Vec<f64>; 2],
+    i: usize,
+) -> [f64; 2] {
+    [0, 1].map(|c| {
+        let mut v = -f[c][i];
+        for j in 0..2 {
+            v += st.mass[(c, j)] * qdd[j][i]
+                + st.damping[(c, j)] * qd[j][i]
+                + st.stiffness[(c, j)] * q[j][i];
+        }
+        v
+    })
+}
+
+/// Prepares one free run: derivatives, sim forces, residual, normalisers, noise level.
+///
+/// # Errors
+/// [`Error::Data`] naming the data set and run when the run is too short for the
+/// trimming, has (nearly) no motion, or has unequal h and α lengths; wrapped identify
+/// errors from the differentiator.
+pub fn prepare_run(
+    dataset: &str,
+    rec: &Record,
+    model: &Arc<dyn AeroModel>,
+    rho: f64,
+    st: &LinearStructure,
+    s: &ResidualSettings,
+) -> Result<RunResidual> {
+    let id = rec.meta.id.as_str();
+    let n = rec.len();
+    let dt = rec.dt;
+    if rec.h.len() != n {
+        return Err(Error::data(
+            dataset,
+            format!("free run `{id}`: h has {} samples, alpha {n}", rec.h.len()),
+        ));
+    }
+    let edge = 2 * s.half_window;
+    let i0 = edge.max((s.warmup / dt).ceil() as usize);
+    let min_kept = 4 * (2 * s.half_window + 1);
+    if n < i0 + edge + min_kept {
+        return Err(Error::data(
+            dataset,
+            format!(
+                "free run `{id}` is too short: {n} samples ({:.3} s); the residual needs at \
+                 least {} (warm-up {i0}, edge {edge}, {min_kept} kept)",
+                n as f64 * dt,
+                i0 + edge + min_kept
+            ),
+        ));
+    }
+    let i1 = n - edge;
+    let u = rec.meta.wind_speed;
+    if !(u.is_finite() && u > 0.0) {
+        return Err(Error::data(
+            dataset,
+            format!("free run `{id}`: wind speed {u} m/s must be > 0"),
+        ));
+    }
+    let q = [rec.h.clone(), rec.alpha.clone()];
+    let qd = [sg(&q[0], dt, s, id, "h")?, sg(&q[1], dt, s, id, "alpha")?];
+    let qdd = [
+        sg(&qd[0], dt, s, id, "h_dot")?,
+        sg(&qd[1], dt, s, id, "alpha_dot")?,
+    ];
+    let freq = dominant_frequency(&q[1][i0..i1], dt);
+    let b = model.chord();
+    let k = if freq > 0.0 {
+        b * 2.0 * std::f64::consts::PI * freq / u
+    } else {
+        1.0
+    };
+    let run_model = model
+        .with_reduced_frequency(k)
+        .unwrap_or_else(|| model.clone());
+    let flow = Flow { rho, u };
+    let pad = (s.pad / dt).ceil() as usize;
+    let force = forces_along(run_model.as_ref(), &flow, &q, &qd, dt, pad);
+    let lag0 = vec![0.0; run_model.n_lag()];
+    let mut r = [Vec::with_capacity(i1 - i0), Vec::with_capacity(i1 - i0)];
+    let mut ss = [0.0; 2];
+    for i in i0..i1 {
+        let v = residual_at(st, &q, &qd, &qdd, &force, i);
+        for c in 0..2 {
+            r[c].push(v[c]);
+            let sf = v[c] + force[c][i];
+            ss[c] += sf * sf;
+        }
+    }
+    let norm = ss.map(|v| (v / (i1 - i0) as f64).sqrt());
+    for (c, name) in ["heave", "pitch"].iter().enumerate() {
+        if !(norm[c] > 0.0 && norm[c].is_finite()) {
+            return Err(Error::data(
+                dataset,
+                format!(
+                    "free run `{id}`: no {name} motion (rms structural force {})",
+                    norm[c]
+                ),
+            ));
+        }
+    }
+    let sigma = [noise_sigma(&q[0]), noise_sigma(&q[1])];
+    let kernels = noise_kernels(run_model.as_ref(), &flow, st, s, dt, id)?;
+    let noise_energy = [0, 1].map(|c| {
+        (sigma[0].powi(2) * kernels[c][0] + sigma[1].powi(2) * kernels[c][1]) / norm[c].powi(2)
+    });
+    Ok(RunResidual {
+        id: id.to_string(),
+        u,
+        dt,
+        i0,
+        i1,
+        q,
+        qd,
+        qdd,
+        force,
+        lag0,
+        r,
+        norm,
+        freq,
+        k,
+        sigma,
+        noise_energy,
+    })
+}
+
+/// Squared ℓ² norms ‖k_cj‖² of the residual operator's impulse responses from white
+/// displacement noise on DOF j to the residual of DOF c (interior of a run): the expected
+/// residual energy per sample is Σ_j σ_j² ‖k_cj‖². Computed by passing an impulse of
+/// 1e-7 (m or rad; small enough that nonlinear terms do not matter) through the same
+/// differentiator, lag integration and residual.
+fn noise_kernels(
+    model: &dyn AeroModel,
+    flow: &Flow,
+    st: &LinearStructure,
+    s: &ResidualSettings,
+    dt: f64,
+    id: &str,
+) -> Result<[[f64; 2]; 2]> {
+    let m = s.half_window;
+    // Lag memory: the impulse's lag response decays within ~2 s for any sensible law;
+    // its energy is small next to the q̈ term anyway.
+    let tail = (2.0 / dt).ceil() as usize;
+    let n = 8 * m + 4 + tail;
+    let at = 4 * m + 2;
+    let eps = 1e-7;
+    let mut out = [[0.0; 2]; 2];
+    for j in 0..2 {
+        let mut q = [vec![0.0; n], vec![0.0; n]];
+        q[j][at] = eps;
+        let qd = [
+            sg(&q[0], dt, s, id, "noise kernel")?,
+            sg(&q[1], dt, s, id, "noise kernel")?,
+        ];
+        let qdd = [
+            sg(&qd[0], dt, s, id, "noise kernel")?,
+            sg(&qd[1], dt, s, id, "noise kernel")?,
+        ];
+        let f = forces_along(model, flow, &q, &qd, dt, (s.pad / dt).ceil() as usize);
+        for i in 2 * m..n - 2 * m {
+            let r = residual_at(st, &q, &qd, &qdd, &f, i);
+            for c in 0..2 {
+                out[c][j] += (r[c] / eps).powi(2);
+            }
+        }
+    }
+    Ok(out)
+}

@@ -1,0 +1,355 @@
+//! Simulation of the sim (optionally augmented by a fitted candidate) from a run's
+//! measured state, and the observables of a response: dominant pitch frequency, decay or
+//! growth rate of the pitch amplitude, final (LCO) amplitude.
+
+use std::sync::Arc;
+
+use aeroelastic::aero::{AeroModel, Flow};
+
+use crate::effect::Effect;
+
+use super::residual::{dominant_frequency, LinearStructure, RunResidual};
+
+/// A fitted augmentation used in a simulation: effect, grid values, coefficients.
+#[derive(Debug, Clone)]
+pub(crate) struct Augment {
+    pub effect: Effect,
+    pub grid: Vec<f64>,
+    pub theta: Vec<f64>,
+}
+
+impl Augment {
+    /// Extra structural force Φ(q, q̇)θ (not the added-mass or delay parts).
+    fn force(&self, q: [f64; 2], qd: [f64; 2], q_dyn: f64, chord: f64) -> [f64; 2] {
+        let t = &self.theta;
+        match self.effect {
+            Effect::StructuralCubic => [t[0] * q[0].powi(3), t[1] * q[1].powi(3)],
+            Effect::Freeplay => {
+                let d = self.grid[0];
+                [0.0, t[0] * q[1].clamp(-d, d)]
+            }
+            Effect::Friction => [
+                t[0] * (qd[0] / self.grid[0]).tanh(),
+                t[1] * (qd[1] / self.grid[1]).tanh(),
+            ],
+            Effect::StaticOffset => {
+                let s = if self.grid[0] > 0.5 { q_dyn } else { 1.0 };
+                [t[0] * s * chord, t[1] * s * chord * chord]
+            }
+            _ => [0.0, 0.0],
+        }
+    }
+
+    fn added_mass(&self) -> [[f64; 2]; 2] {
+        match self.effect {
+            Effect::AddedMass => [
+                [self.theta[0], self.theta[1]],
+                [self.theta[2], self.theta[3]],
+            ],
+            _ => [[0.0; 2]; 2],
+        }
+    }
+
+    fn delay(&self) -> f64 {
+        match self.effect {
+            Effect::TimeDelay => self.theta[0],
+            _ => 0.0,
+        }
+    }
+}
+
+/// Simulated pitch and heave from sample `run.i0` to the end of the run, RK4 with
+/// `substeps` steps per sample, from the measured state at `i0` (SG velocities) and the
+/// lag states integrated along the measured motion up to `i0`. The run stops early when
+/// |α| > 1.5 rad or the state is not finite.
+pub(crate) fn simulate(
+    model: &Arc<dyn AeroModel>,
+    rho: f64,
+    st: &LinearStructure,
+    run: &RunResidual,
+    aug: Option<&Augment>,
+    substeps: usize,
+) -> [Vec<f64>; 2] {
+    let model = model
+        .with_reduced_frequency(run.k)
+        .unwrap_or_else(|| model.clone());
+    let flow = Flow { rho, u: run.u };
+    let chord = model.chord();
+    let q_dyn = flow.q_dyn();
+    let ma = model.apparent_mass(&flow);
+    let dm = aug.map(|a| a.added_mass()).unwrap_or([[0.0; 2]; 2]);
+    let tau = aug.map(|a| a.delay()).unwrap_or(0.0);
+    let mut mt = st.mass - ma;
+    for i in 0..2 {
+        for j in 0..2 {
+            mt[(i, j)] += dm[i][j];
+        }
+    }
+    let Some(minv) = mt.try_inverse() else {
+        return [Vec::new(), Vec::new()];
+    };
+    let nl = model.n_lag();
+    let nz = 4 + nl;
+    let n_out = run.q[0].len() - run.i0;
+    let dt = run.dt;
+    let h = dt / substeps as f64;
+    let mut y = vec![0.0; nz];
+    y[0] = run.q[0][run.i0];
+    y[1] = run.q[1][run.i0];
+    y[2] = run.qd[0][run.i0];
+    y[3] = run.qd[1][run.i0];
+    y[4..].copy_from_slice(&run.lag0);
+    // Delay: F(t − τ) ≈ F − τ Ḟ with Ḟ from the previous step (explicit).
+    let mut f_prev: Option<[f64; 2]> = None;
+    let mut fdot = [0.0; 2];
+    let rhs = |y: &[f64], dy: &mut [f64], fdot: [f64; 2]| -> [f64; 2] {
+        let q = [y[0], y[1]];
+        let qd = [y[2], y[3]];
+        let f = model.forces(&flow, q, qd, &y[4..]);
+        let extra = aug
+            .map(|a| a.force(q, qd, q_dyn, chord))
+            .unwrap_or([0.0; 2]);
+        let mut g = [0.0; 2];
+        for c in 0..2 {
+            g[c] = f[c] - tau * fdot[c] - extra[c];
+            for j in 0..2 {
+                g[c] -= st.damping[(c, j)] * qd[j] + st.stiffness[(c, j)] * q[j];
+            }
+        }
+        dy[0] = qd[0];
+        dy[1] = qd[1];
+        dy[2] = minv[(0, 0)] * g[0] + minv[(0, 1)] * g[1];
+        dy[3] = minv[(1, 0)] * g[0] + minv[(1, 1)] * g[1];
+        model.lag_rates(&flow, q, qd, &y[4..], &mut dy[4..]);
+        f
+    };
+    let mut k: [Vec<f64>; 4] = std::array::from_fn(|_| vec![0.0; nz]);
+    let mut tmp = vec![0.0; nz];
+    let mut out = [Vec::with_capacity(n_out), Vec::with_capacity(n_out)];
+    'outer: for _ in 0..n_out {
+        out[0].push(y[0]);
+        out[1].push(y[1]);
+        for _ in 0..substeps {
+            let f0 = rhs(&y, &mut k[0], fdot);
+            if let Some(fp) = f_prev {
+                fdot = [(f0[0] - fp[0]) / h, (f0[1] - fp[1]) / h];
+            }
+            f_prev = Some(f0);
+            for j in 0..nz {
+                tmp[j] = y[j] + 0.5 * h * k[0][j];
+            }
+            rhs(&tmp, &mut k[1], fdot);
+            for j in 0..nz {
+                tmp[j] = y[j] + 0.5 * h * k[1][j];
+            }
+            rhs(&tmp, &mut k[2], fdot);
+            for j in 0..nz {
+                tmp[j] = y[j] + h * k[2][j];
+            }
+            rhs(&tmp, &mut k[3], fdot);
+            for j in 0..nz {
+                y[j] += h / 6.0 * (k[0][j] + 2.0 * k[1][j] + 2.0 * k[2][j] + k[3][j]);
+            }
+            if y[1].abs() >= 1.5 || !y.iter().all(|v| v.is_finite()) {
+                break 'outer;
+            }
+        }
+    }
+    out
+}
+
+/// Observables of a pitch response sampled every `dt`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Observables {
+    /// Dominant pitch frequency [Hz].
+    pub freq: f64,
+    /// Exponential growth rate of the pitch amplitude σ [1/s] (< 0: decay), from a
+    /// least-squares line through ln A(t) of the per-period amplitudes above the noise.
+    pub rate: f64,
+    /// Pitch amplitude over the last 2 s (half peak-to-peak) [deg].
+    pub final_amp_deg: f64,
+    /// Linear decay rate of the amplitude dA/dt [rad/s] (least-squares line through A(t)).
+    pub linear_slope: f64,
+    /// Relative misfit of the exponential envelope over that of the linear envelope
+    /// (> 1: the decay is closer to linear, as Coulomb friction makes it).
+    pub exp_over_lin: f64,
+    /// Relative frequency change between the large- and small-amplitude halves of the
+    /// record, (f_large − f_small)/f (amplitude-dependent frequency).
+    pub freq_shift: f64,
+    /// Mean α over the last half of the record [rad].
+    pub mean_late: f64,
+}
+
+/// Per-period amplitude windows of `a`: (centre time [s], half peak-to-peak, mean,
+/// zero-crossing frequency [Hz]).
+fn windows(a: &[f64], dt: f64, f: f64) -> Vec<(f64, f64, f64, f64)> {
+    if f.is_nan() || f <= 0.0 {
+        return Vec::new();
+    }
+    let w = ((1.0 / f) / dt).round().max(4.0) as usize;
+    let mut out = Vec::new();
+    let mut s = 0;
+    while s + w <= a.len() {
+        let seg = &a[s..s + w];
+        let (mn, mx) = seg
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| {
+                (l.min(v), h.max(v))
+            });
+        let mean = seg.iter().sum::<f64>() / w as f64;
+        out.push(((s as f64 + 0.5 * w as f64) * dt, 0.5 * (mx - mn), mean, f));
+        s += w;
+    }
+    out
+}
+
+fn line_fit(x: &[f64], y: &[f64]) -> (f64, f64, f64) {
+    let n = x.len() as f64;
+    if x.len() < 2 {
+        return (0.0, y.first().copied().unwrap_or(0.0), 0.0);
+    }
+    let mx = x.iter().sum::<f64>() / n;
+    let my = y.iter().sum::<f64>() / n;
+    let sxx: f64 = x.iter().map(|v| (v - mx).powi(2)).sum();
+    let sxy: f64 = x.iter().zip(y).map(|(a, b)| (a - mx) * (b - my)).sum();
+    let slope = if sxx > 0.0 { sxy / sxx } else { 0.0 };
+    let icpt = my - slope * mx;
+    let sse: f64 = x
+        .iter()
+        .zip(y)
+        .map(|(a, b)| (b - icpt - slope * a).powi(2))
+        .sum();
+    (slope, icpt, sse)
+}
+
+/// Observables of the pitch series `a` (rad) sampled every `dt`; `floor` is the
+/// amplitude [rad] below which windows are ignored (noise).
+pub(crate) fn observables(a: &[f64], dt: f64, floor: f64) -> Observables {
+    let freq = dominant_frequency(a, dt);
+    let win = windows(a, dt, freq);
+    let good: Vec<&(f64, f64, f64, f64)> = win.iter().filter(|w| w.1 > floor).collect();
+    let t: Vec<f64> = good.iter().map(|w| w.0).collect();
+    let amp: Vec<f64> = good.iter().map(|w| w.1).collect();
+    let lnamp: Vec<f64> = amp.iter().map(|v| v.ln()).collect();
+    let (rate, c_exp, _) = line_fit(&t, &lnamp);
+    let (lin_slope, lin_icpt, sse_lin) = line_fit(&t, &amp);
+    let sse_exp: f64 = t
+        .iter()
+        .zip(&amp)
+        .map(|(ti, ai)| (ai - (c_exp + rate * ti).exp()).powi(2))
+        .sum();
+    let _ = lin_icpt;
+    let exp_over_lin = if sse_lin > 0.0 {
+        sse_exp / sse_lin
+    } else {
+        1.0
+    };
+    let n = a.len();
+    let tail = ((2.0 / dt) as usize).min(n);
+    let final_amp = if tail > 0 {
+        let seg = &a[n - tail..];
+        let (mn, mx) = seg
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| {
+                (l.min(v), h.max(v))
+            });
+        0.5 * (mx - mn)
+    } else {
+        0.0
+    };
+    // Amplitude-dependent frequency: dominant frequency of the large- vs small-amplitude
+    // halves (split at the median window amplitude), by zero-crossing counts.
+    let freq_shift = {
+        let mut amps: Vec<f64> = good.iter().map(|w| w.1).collect();
+        if amps.len() >= 6 {
+            amps.sort_by(f64::total_cmp);
+            let med = amps[amps.len() / 2];
+            let zc = |big: bool| -> f64 {
+                let mut crossings = 0usize;
+                let mut span = 0.0;
+                let w = ((1.0 / freq) / dt).round().max(4.0) as usize;
+                for (k, wd) in win.iter().enumerate() {
+                    if wd.1 <= floor || (wd.1 > med) != big {
+                        continue;
+                    }
+                    let seg = &a[k * w..((k + 1) * w + 1).min(n)];
+                    let m = wd.2;
+                    crossings += seg
+                        .windows(2)
+                        .filter(|p| (p[0] - m) * (p[1] - m) < 0.0)
+                        .count();
+                    span += (seg.len() - 1) as f64 * dt;
+                }
+                if span > 0.0 {
+                    crossings as f64 / (2.0 * span)
+                } else {
+                    0.0
+                }
+            };
+            let (fl, fs) = (zc(true), zc(false));
+            if fl > 0.0 && fs > 0.0 && freq > 0.0 {
+                (fl - fs) / freq
+            } else {
+                0.0
+            }
+        } else {
+            0.0
+        }
+    };
+    let late = &a[n / 2..];
+    let mean_late = late.iter().sum::<f64>() / late.len().max(1) as f64;
+    Observables {
+        freq,
+        rate,
+        final_amp_deg: final_amp.to_degrees(),
+        linear_slope: lin_slope,
+        exp_over_lin,
+        freq_shift,
+        mean_late,
+    }
+}
+
+/// Flutter speed from growth rates over U: the first sign change from decay to growth
+/// (sorted by U), linearly interpolated; `None` when the runs do not bracket it.
+pub(crate) fn flutter_speed(points: &[(f64, f64)]) -> Option<f64> {
+    let mut p = points.to_vec();
+    p.sort_by(|a, b| a.0.total_cmp(&b.0));
+    p.windows(2).find_map(|w| {
+        let ((u0, s0), (u1, s1)) = (w[0], w[1]);
+        (s0 < 0.0 && s1 >= 0.0 && u1 > u0).then(|| u0 + (u1 - u0) * (-s0) / (s1 - s0))
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn observables_of_a_decaying_sine() {
+        let dt = 1.0 / 512.0;
+        let a: Vec<f64> = (0..6144)
+            .map(|i| {
+                let t = i as f64 * dt;
+                0.07 * (-0.3 * t).exp() * (2.0 * std::f64::consts::PI * 3.0 * t).cos()
+            })
+            .collect();
+        let o = observables(&a, dt, 1e-4);
+        assert!((o.freq - 3.0).abs() < 0.01, "{}", o.freq);
+        assert!((o.rate + 0.3).abs() < 0.02, "{}", o.rate);
+        assert!(o.exp_over_lin < 0.2, "{}", o.exp_over_lin);
+        assert!(o.freq_shift.abs() < 0.02, "{}", o.freq_shift);
+        // Linear (friction-like) decay.
+        let b: Vec<f64> = (0..6144)
+            .map(|i| {
+                let t = i as f64 * dt;
+                (0.07 - 0.005 * t) * (2.0 * std::f64::consts::PI * 3.0 * t).cos()
+            })
+            .collect();
+        assert!(observables(&b, dt, 1e-4).exp_over_lin > 2.0);
+        assert_eq!(
+            flutter_speed(&[(3.0, -1.0), (5.0, 1.0), (4.0, -0.5)]),
+            Some(4.0 + 1.0 / 3.0)
+        );
+        assert_eq!(flutter_speed(&[(3.0, -1.0), (5.0, -1.0)]), None);
+    }
+}
