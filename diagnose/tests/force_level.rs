@@ -1,0 +1,212 @@
+//! Force level of the diagnosis on virtual forced campaigns (the base scenario of the
+//! blind data sets: truth `scenarios/plate-truth.model.toml`, configurations B and D, pitch
+//! amplitudes 6–24°, U = 4–10 m/s, 512 Hz, 8 s, paper noise) with test-only perturbations
+//! of the recorded forces. The perturbation forms here are deliberately different from the
+//! candidates' forms in `diagnose::force`.
+
+use std::f64::consts::PI;
+use std::path::{Path, PathBuf};
+
+use aeroelastic::files::LoadedModel;
+use aeroelastic::tunnel::{self, Campaign, ForcedOptions, TunnelProgress};
+use diagnose::force::{force_level, ForceOptions};
+use diagnose::{Effect, LevelResult};
+use identify::dataset::Dataset;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, Normal};
+
+fn no_obs(_: TunnelProgress) {}
+
+fn truth() -> LoadedModel {
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios/plate-truth.model.toml");
+    LoadedModel::load(&p, None).unwrap()
+}
+
+/// The base forced campaign: configurations B and D, 4 amplitudes, 5 wind speeds.
+fn campaign() -> Campaign {
+    let mut c = Campaign::paper();
+    c.configurations.retain(|x| x.name == "B" || x.name == "D");
+    c.amplitudes_deg = vec![6.0, 12.0, 18.0, 24.0];
+    c.wind_speeds = vec![4.0, 5.5, 7.0, 8.5, 10.0];
+    c
+}
+
+/// Test-only perturbations of the recorded forces.
+#[derive(Debug, Clone, Copy)]
+enum Perturb {
+    /// ΔC_L = c_l, ΔC_M = c_m (a DC force per dynamic pressure).
+    Dc(f64, f64),
+    /// ΔC_M = k α⁵.
+    Quintic(f64),
+    /// Moment loss above a smooth critical angle, lagged: ΔC_M = −c·s_lag·sign(α) with
+    /// s = tanh((|α| − α_s)/w)₊ and a first-order lag of τ = T·B/U.
+    Stall { c: f64, alpha_s_deg: f64, lag_chords: f64 },
+    /// ΔC_L = a·sin(2π St U/B t + φ_case) (a line moving with U).
+    Shedding { amp: f64, strouhal: f64 },
+    /// Low-pass (5 Hz, 2nd-order) noise of rms `cl`, `cm` in C_L, C_M.
+    Broadband { cl: f64, cm: f64 },
+    /// Forces delayed by τ [s].
+    Delay(f64),
+    /// ΔM = ΔI α̈, ΔL = Δm ḧ (kg·m²/m, kg/m).
+    AddedMass { di: f64, dm: f64 },
+}
+
+fn dataset(seed: u64, p: Option<Perturb>) -> Dataset {
+    let m = truth();
+    let mut opts = ForcedOptions::paper(seed);
+    opts.duration = 8.0;
+    let cases = campaign().cases();
+    let (manifest, mut records) =
+        tunnel::forced_dataset(m.model.as_ref(), &cases, &opts, &no_obs).unwrap();
+    let (rho, b) = (opts.section.air_density, opts.section.chord);
+    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0xD1A6);
+    let normal = Normal::new(0.0, 1.0).unwrap();
+    if let Some(p) = p {
+        for (rec, case) in records.iter_mut().zip(&cases) {
+            let u = case.wind_speed;
+            let q = 0.5 * rho * u * u;
+            let (sl, sm) = (q * b, q * b * b);
+            let n = rec.len();
+            let dt = rec.dt;
+            let t = |i: usize| rec.t0 + i as f64 * dt;
+            let motion = &case.motion;
+            let mut dl = vec![0.0; n];
+            let mut dm = vec![0.0; n];
+            match p {
+                Perturb::Dc(cl, cm) => {
+                    dl.iter_mut().for_each(|v| *v = cl * sl);
+                    dm.iter_mut().for_each(|v| *v = cm * sm);
+                }
+                Perturb::Quintic(k) => {
+                    for i in 0..n {
+                        let a = motion.eval(t(i)).0[1];
+                        dm[i] = k * a.powi(5) * sm;
+                    }
+                }
+                Perturb::Stall {
+                    c,
+                    alpha_s_deg,
+                    lag_chords,
+                } => {
+                    let tau = lag_chords * b / u;
+                    let w = 2f64.to_radians();
+                    let s_of = |tt: f64| {
+                        let a = motion.eval(tt).0[1];
+                        a.signum() * ((a.abs() - alpha_s_deg.to_radians()) / w).tanh().max(0.0)
+                    };
+                    // warm up over 10 lag times before the record
+                    let mut y = 0.0;
+                    let n_warm = (10.0 * tau / dt).ceil() as usize;
+                    for k in (1..=n_warm).rev() {
+                        let tt = t(0) - k as f64 * dt;
+                        y += (dt / tau).min(1.0) * (s_of(tt) - y);
+                    }
+                    for i in 0..n {
+                        y += (dt / tau).min(1.0) * (s_of(t(i)) - y);
+                        dm[i] = -c * y * sm;
+                    }
+                }
+                Perturb::Shedding { amp, strouhal } => {
+                    let f = strouhal * u / b;
+                    let ph = 2.0 * PI * rand::Rng::random::<f64>(&mut rng);
+                    for i in 0..n {
+                        dl[i] = amp * (2.0 * PI * f * t(i) + ph).sin() * sl;
+                        dm[i] = 0.2 * amp * (2.0 * PI * f * t(i) + ph + 0.7).sin() * sm;
+                    }
+                }
+                Perturb::Broadband { cl, cm } => {
+                    for (d, s, rms) in [(&mut dl, sl, cl), (&mut dm, sm, cm)] {
+                        // 2nd-order low-pass at 5 Hz of white noise, scaled to rms
+                        let wc = 2.0 * PI * 5.0 * dt;
+                        let a = (-wc).exp();
+                        let (mut y1, mut y2) = (0.0, 0.0);
+                        let raw: Vec<f64> = (0..n + 2000)
+                            .map(|_| {
+                                y1 = a * y1 + (1.0 - a) * normal.sample(&mut rng);
+                                y2 = a * y2 + (1.0 - a) * y1;
+                                y2
+                            })
+                            .skip(2000)
+                            .collect();
+                        let r = (raw.iter().map(|v| v * v).sum::<f64>() / n as f64).sqrt();
+                        for i in 0..n {
+                            d[i] = rms * raw[i] / r * s;
+                        }
+                    }
+                }
+                Perturb::Delay(tau) => {
+                    let shift = |v: &[f64]| -> Vec<f64> {
+                        (0..n)
+                            .map(|i| {
+                                let x = (i as f64 - tau / dt).max(0.0);
+                                let k = (x.floor() as usize).min(n - 2);
+                                let w = x - k as f64;
+                                v[k] * (1.0 - w) + v[k + 1] * w
+                            })
+                            .collect()
+                    };
+                    // delay the noise-free part only approximately: shift the whole record
+                    let l = rec.lift.as_ref().unwrap();
+                    let mm = rec.moment.as_ref().unwrap();
+                    let (ls, ms) = (shift(l), shift(mm));
+                    for i in 0..n {
+                        dl[i] = ls[i] - l[i];
+                        dm[i] = ms[i] - mm[i];
+                    }
+                }
+                Perturb::AddedMass { di, dm: dmass } => {
+                    for i in 0..n {
+                        let (_, _, acc) = motion.eval(t(i));
+                        dl[i] = dmass * acc[0];
+                        dm[i] = di * acc[1];
+                    }
+                }
+            }
+            let l = rec.lift.as_mut().unwrap();
+            l.iter_mut().zip(&dl).for_each(|(a, b)| *a += b);
+            let mm = rec.moment.as_mut().unwrap();
+            mm.iter_mut().zip(&dm).for_each(|(a, b)| *a += b);
+        }
+    }
+    Dataset {
+        root: PathBuf::from("virtual"),
+        manifest,
+        records,
+    }
+}
+
+fn summary(r: &LevelResult) -> String {
+    let mut s = format!(
+        "gap {:.5} noise {:.5} stat {:.3} (thr {:.3}) significant {}\n",
+        r.before, r.noise_level, r.gap_statistic, r.gap_threshold, r.significant_gap
+    );
+    for c in &r.candidates {
+        s += &format!(
+            "  {:<16} after {:.5} shrink {:.3} stat {:.2} thr {:.2} sig {} score {:.3} {:?}\n",
+            c.effect.name(),
+            c.after,
+            c.shrink,
+            c.statistic,
+            c.threshold,
+            c.significant,
+            c.score,
+            c.parameters
+        );
+    }
+    s
+}
+
+#[test]
+fn explore_effect_free() {
+    let t0 = std::time::Instant::now();
+    let ds = dataset(1, None);
+    eprintln!("generate {:?}", t0.elapsed());
+    let t0 = std::time::Instant::now();
+    let r = force_level(&ds, &ForceOptions::default()).unwrap();
+    eprintln!("diagnose {:?}\n{}", t0.elapsed(), summary(&r));
+    for c in &r.cases {
+        eprintln!("{} {:.5} {:.5}", c.id, c.before, c.noise_level);
+    }
+    let _ = Effect::StaticOffset;
+}
