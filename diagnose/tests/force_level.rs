@@ -210,3 +210,23 @@ fn explore_effect_free() {
     }
     let _ = Effect::StaticOffset;
 }
+
+#[test]
+#[ignore]
+fn explore_effects() {
+    let list = [
+        ("dc", Perturb::Dc(0.02, 0.01)),
+        ("quintic", Perturb::Quintic(8.0)),
+        ("stall", Perturb::Stall { c: 0.15, alpha_s_deg: 14.0, lag_chords: 3.0 }),
+        ("shedding", Perturb::Shedding { amp: 0.03, strouhal: 0.2 }),
+        ("broadband", Perturb::Broadband { cl: 0.02, cm: 0.005 }),
+        ("delay", Perturb::Delay(0.02)),
+        ("added_mass", Perturb::AddedMass { di: 2e-4, dm: 0.05 }),
+    ];
+    for (name, p) in list {
+        let ds = dataset(3, Some(p));
+        let t0 = std::time::Instant::now();
+        let r = force_level(&ds, &ForceOptions::default()).unwrap();
+        eprintln!("== {name} ({:?})\n{}", t0.elapsed(), summary(&r));
+    }
+}

@@ -221,9 +221,115 @@ pub(crate) fn interpolate_scalar(xy: &[(f64, f64)], x: f64) -> f64 {
     }
 }
 
-/// Held-out prediction of case `i`, channel `c`: support columns × coefficients
-/// interpolated from the training nodes of the same configuration, plus the shared
-/// augmentation columns × β.
+/// Lag poles of the rational function of the linear terms, in units of K (generic, not
+/// the truth's: a Jones approximation of Theodorsen's function has 0.091 and 0.6).
+pub(crate) const RFA_POLES: [f64; 3] = [0.08, 0.3, 1.0];
+
+/// Complex basis of the transfer of a linear term pair (displacement d, rate d′) at reduced
+/// frequency K: T(K) = ξ_d + iK ξ_d′ ≈ c₀ + c₁ iK + c₂ (iK)² + Σⱼ dⱼ iK/(iK + bⱼ) (Roger's
+/// rational-function form; real coefficients, so T is realisable in time).
+fn rfa_basis(k: f64) -> Vec<(f64, f64)> {
+    let mut v = vec![(1.0, 0.0), (0.0, k), (-k * k, 0.0)];
+    for b in RFA_POLES {
+        // iK/(iK + b) = (K² + i K b)/(K² + b²)
+        let d = k * k + b * b;
+        v.push((k * k / d, k * b / d));
+    }
+    v
+}
+
+/// Fits the rational form of [`rfa_basis`] to (K, ξ_d, ξ_d′) nodes (least squares on real
+/// and imaginary parts, a small relative ridge) and evaluates ξ_d, ξ_d′ at `k`. Falls back
+/// to the per-configuration interpolation (None) with fewer than 4 nodes.
+pub(crate) fn rfa_predict(nodes: &[(f64, f64, f64)], k: f64) -> Option<(f64, f64)> {
+    if nodes.len() < 4 {
+        return None;
+    }
+    let m = 3 + RFA_POLES.len();
+    let mut g = vec![vec![0.0; m]; m];
+    let mut b = vec![0.0; m];
+    for &(kn, xd, xr) in nodes {
+        let phi = rfa_basis(kn);
+        let (re, im) = (xd, kn * xr);
+        for j in 0..m {
+            b[j] += phi[j].0 * re + phi[j].1 * im;
+            for l in 0..m {
+                g[j][l] += phi[j].0 * phi[l].0 + phi[j].1 * phi[l].1;
+            }
+        }
+    }
+    let c = solve_spd(&g, &b, 1e-10)?;
+    let phi = rfa_basis(k);
+    let re: f64 = phi.iter().zip(&c).map(|(p, c)| p.0 * c).sum();
+    let im: f64 = phi.iter().zip(&c).map(|(p, c)| p.1 * c).sum();
+    Some((re, im / k))
+}
+
+/// Node coefficient vector of case `i`'s node for channel `c`, predicted from the training
+/// nodes: the linear terms (α, Bα̇/U) over K_α and (h/B, ḣ/U) over K_h by the rational
+/// form [`rfa_predict`] pooled over every configuration (a linear law's transfer depends on
+/// its own reduced frequency only); every other term over K_α inside its configuration
+/// ([`interpolate`]).
+pub(crate) fn node_coefficients(
+    cases: &[CaseData],
+    nodes: &[Node],
+    supports: &Supports,
+    law: &ChannelLaw,
+    i: usize,
+    c: usize,
+) -> Vec<f64> {
+    let case = &cases[i];
+    let cfg = &nodes[case.node].config;
+    let pts: Vec<(f64, &[f64])> = law
+        .nodes
+        .iter()
+        .filter(|(n, _, _)| &nodes[*n].config == cfg)
+        .map(|(_, k, a)| (*k, a.as_slice()))
+        .collect();
+    let mut a = interpolate(&pts, nodes[case.node].k_alpha);
+    let sup = &supports[cfg][c];
+    for (d, r) in [(0usize, 1usize), (2, 3)] {
+        let td = Term::linear(d);
+        let tr = Term::linear(r);
+        let (Some(jd), Some(jr)) = (
+            sup.iter().position(|t| *t == td),
+            sup.iter().position(|t| *t == tr),
+        ) else {
+            continue;
+        };
+        let kf = |n: usize| -> Option<f64> {
+            let nd = &nodes[n];
+            let ci = nd.cases.first()?;
+            if d == 0 {
+                Some(nd.k_alpha)
+            } else {
+                let cs = &cases[*ci];
+                cs.f_h.map(|f| cs.nd.chord * 2.0 * std::f64::consts::PI * f / cs.u)
+            }
+        };
+        let Some(k_here) = kf(case.node) else {
+            continue;
+        };
+        let pts: Vec<(f64, f64, f64)> = law
+            .nodes
+            .iter()
+            .filter_map(|(n, _, a)| {
+                let s = &supports[&nodes[*n].config][c];
+                let pd = s.iter().position(|t| *t == td)?;
+                let pr = s.iter().position(|t| *t == tr)?;
+                Some((kf(*n)?, a[pd], a[pr]))
+            })
+            .collect();
+        if let Some((xd, xr)) = rfa_predict(&pts, k_here) {
+            a[jd] = xd;
+            a[jr] = xr;
+        }
+    }
+    a
+}
+
+/// Held-out prediction of case `i`, channel `c`: support columns × node coefficients
+/// predicted by [`node_coefficients`], plus the shared augmentation columns × β.
 pub(crate) fn predict(
     cases: &[CaseData],
     nodes: &[Node],
@@ -235,13 +341,7 @@ pub(crate) fn predict(
 ) -> Vec<f64> {
     let case = &cases[i];
     let cfg = &nodes[case.node].config;
-    let pts: Vec<(f64, &[f64])> = law
-        .nodes
-        .iter()
-        .filter(|(n, _, _)| &nodes[*n].config == cfg)
-        .map(|(_, k, a)| (*k, a.as_slice()))
-        .collect();
-    let a = interpolate(&pts, nodes[case.node].k_alpha);
+    let a = node_coefficients(cases, nodes, supports, law, i, c);
     let mut out = vec![0.0; case.n];
     for (t, &aj) in supports[cfg][c].iter().zip(&a) {
         if aj != 0.0 {

@@ -211,17 +211,30 @@ pub(crate) fn held_out_residuals(
     let mut out: Vec<[Vec<f64>; 2]> = vec![[Vec::new(), Vec::new()]; cases.len()];
     for f in folds {
         for c in 0..2 {
-            let lawc = law::fit_channel(cases, nodes, &f.fits, c, extra);
-            for &n in &f.test {
-                for &i in &nodes[n].cases {
-                    let z = extra(i, c);
-                    let p = law::predict(cases, nodes, &f.supports, &lawc, i, c, &z);
-                    out[i][c] = cases[i].y[c].iter().zip(&p).map(|(y, p)| y - p).collect();
-                }
-            }
+            fold_residuals(cases, nodes, f, c, extra, &mut out);
         }
     }
     out
+}
+
+/// Held-out residuals of one fold and channel into `out`; returns the fitted law.
+pub(crate) fn fold_residuals(
+    cases: &[CaseData],
+    nodes: &[Node],
+    f: &Fold,
+    c: usize,
+    extra: law::Extra<'_>,
+    out: &mut [[Vec<f64>; 2]],
+) -> law::ChannelLaw {
+    let lawc = law::fit_channel(cases, nodes, &f.fits, c, extra);
+    for &n in &f.test {
+        for &i in &nodes[n].cases {
+            let z = extra(i, c);
+            let p = law::predict(cases, nodes, &f.supports, &lawc, i, c, &z);
+            out[i][c] = cases[i].y[c].iter().zip(&p).map(|(y, p)| y - p).collect();
+        }
+    }
+    lawc
 }
 
 /// Held-out gap metrics of a set of residuals.
