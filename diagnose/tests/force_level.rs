@@ -41,7 +41,11 @@ enum Perturb {
     Quintic(f64),
     /// Moment loss above a smooth critical angle, lagged: ΔC_M = −c·s_lag·sign(α) with
     /// s = tanh((|α| − α_s)/w)₊ and a first-order lag of τ = T·B/U.
-    Stall { c: f64, alpha_s_deg: f64, lag_chords: f64 },
+    Stall {
+        c: f64,
+        alpha_s_deg: f64,
+        lag_chords: f64,
+    },
     /// ΔC_L = a·sin(2π St U/B t + φ_case) (a line moving with U).
     Shedding { amp: f64, strouhal: f64 },
     /// Low-pass (5 Hz, 2nd-order) noise of rms `cl`, `cm` in C_L, C_M.
@@ -198,6 +202,7 @@ fn summary(r: &LevelResult) -> String {
 }
 
 #[test]
+#[ignore]
 fn explore_effect_free() {
     let t0 = std::time::Instant::now();
     let ds = dataset(1, None);
@@ -217,9 +222,28 @@ fn explore_effects() {
     let list = [
         ("dc", Perturb::Dc(0.02, 0.01)),
         ("quintic", Perturb::Quintic(8.0)),
-        ("stall", Perturb::Stall { c: 0.15, alpha_s_deg: 14.0, lag_chords: 3.0 }),
-        ("shedding", Perturb::Shedding { amp: 0.03, strouhal: 0.2 }),
-        ("broadband", Perturb::Broadband { cl: 0.02, cm: 0.005 }),
+        (
+            "stall",
+            Perturb::Stall {
+                c: 0.15,
+                alpha_s_deg: 14.0,
+                lag_chords: 3.0,
+            },
+        ),
+        (
+            "shedding",
+            Perturb::Shedding {
+                amp: 0.03,
+                strouhal: 0.2,
+            },
+        ),
+        (
+            "broadband",
+            Perturb::Broadband {
+                cl: 0.02,
+                cm: 0.005,
+            },
+        ),
         ("delay", Perturb::Delay(0.02)),
         ("added_mass", Perturb::AddedMass { di: 2e-4, dm: 0.05 }),
     ];
@@ -229,4 +253,139 @@ fn explore_effects() {
         let r = force_level(&ds, &ForceOptions::default()).unwrap();
         eprintln!("== {name} ({:?})\n{}", t0.elapsed(), summary(&r));
     }
+}
+
+fn rank_of(r: &LevelResult, e: Effect) -> usize {
+    r.candidates.iter().position(|c| c.effect == e).unwrap()
+}
+
+fn check_effect(p: Perturb, e: Effect, seed: u64) {
+    let r = force_level(&dataset(seed, Some(p)), &ForceOptions::default()).unwrap();
+    eprintln!("{e}: {}", summary(&r));
+    assert!(r.significant_gap, "{e}: gap not significant");
+    assert_eq!(rank_of(&r, e), 0, "{e}: not ranked first");
+    let c = &r.candidates[0];
+    assert!(c.significant, "{e}: not significant");
+    assert!(c.shrink >= 0.7, "{e}: shrink {}", c.shrink);
+}
+
+#[test]
+fn effect_free_has_no_significant_gap_and_no_significant_candidate() {
+    let r = force_level(&dataset(11, None), &ForceOptions::default()).unwrap();
+    eprintln!("{}", summary(&r));
+    assert!(!r.significant_gap, "stat {}", r.gap_statistic);
+    assert!(r.candidates.iter().all(|c| !c.significant));
+    // every case held out once, shares of every split sum to 1
+    assert_eq!(r.held_out_cases.len(), 40);
+    for split in ["channel", "region", "state", "harmonic"] {
+        let s: f64 = r
+            .where_
+            .iter()
+            .filter(|w| w.split == split)
+            .map(|w| w.share)
+            .sum();
+        assert!((s - 1.0).abs() < 1e-9, "{split}: {s}");
+    }
+    assert!(r.noise_level > 0.0 && r.before >= r.noise_level);
+}
+
+#[test]
+fn static_offset_is_found() {
+    check_effect(Perturb::Dc(0.02, 0.01), Effect::StaticOffset, 5);
+}
+
+#[test]
+fn quintic_moment_is_higher_order() {
+    check_effect(Perturb::Quintic(8.0), Effect::HigherOrder, 6);
+}
+
+#[test]
+#[ignore]
+fn stall_is_dynamic_stall() {
+    check_effect(
+        Perturb::Stall {
+            c: 0.15,
+            alpha_s_deg: 14.0,
+            lag_chords: 3.0,
+        },
+        Effect::DynamicStall,
+        7,
+    );
+}
+
+#[test]
+#[ignore]
+fn shedding_line_is_vortex_shedding() {
+    check_effect(
+        Perturb::Shedding {
+            amp: 0.03,
+            strouhal: 0.2,
+        },
+        Effect::VortexShedding,
+        8,
+    );
+}
+
+#[test]
+fn broadband_noise_is_a_gap_no_candidate_removes() {
+    let r = force_level(
+        &dataset(
+            9,
+            Some(Perturb::Broadband {
+                cl: 0.02,
+                cm: 0.005,
+            }),
+        ),
+        &ForceOptions::default(),
+    )
+    .unwrap();
+    eprintln!("{}", summary(&r));
+    assert!(r.significant_gap);
+    assert!(r
+        .candidates
+        .iter()
+        .all(|c| !c.significant || c.shrink < 0.3));
+}
+
+#[test]
+fn too_few_groups_is_a_data_error() {
+    let mut ds = dataset(1, None);
+    let keep: Vec<usize> = (0..ds.records.len())
+        .filter(|&i| ds.records[i].meta.wind_speed < 6.0)
+        .collect();
+    ds.records = keep.iter().map(|&i| ds.records[i].clone()).collect();
+    ds.manifest.cases = keep.iter().map(|&i| ds.manifest.cases[i].clone()).collect();
+    let e = force_level(&ds, &ForceOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("groups") || e.contains("one wind speed"), "{e}");
+}
+
+/// Effect-free calibration of the gap test: 20 seeds.
+#[test]
+#[ignore]
+fn calibration_effect_free() {
+    let mut stats = Vec::new();
+    let mut false_cands = 0;
+    for seed in 100..120 {
+        let r = force_level(
+            &dataset(seed, None),
+            &ForceOptions {
+                seed,
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        eprintln!(
+            "seed {seed}: stat {:.4} best {} sig {}",
+            r.gap_statistic, r.candidates[0].effect, r.candidates[0].significant
+        );
+        stats.push(r.gap_statistic);
+        false_cands += usize::from(r.candidates.iter().any(|c| c.significant));
+    }
+    stats.sort_by(f64::total_cmp);
+    let thr = ForceOptions::default().gap_threshold;
+    let alarms = stats.iter().filter(|&&s| s > thr).count();
+    eprintln!("stats {stats:?}\nalarms {alarms}/20, significant candidates {false_cands}/20");
+    assert!(alarms <= 1);
 }

@@ -202,7 +202,10 @@ fn locate(
         cases.iter().map(|c| c.u).fold(0.0, f64::max),
     ];
     let a_rng = [
-        cases.iter().map(|c| c.amp_deg).fold(f64::INFINITY, f64::min),
+        cases
+            .iter()
+            .map(|c| c.amp_deg)
+            .fold(f64::INFINITY, f64::min),
         cases.iter().map(|c| c.amp_deg).fold(0.0, f64::max),
     ];
     let mut out = Vec::new();
@@ -211,7 +214,8 @@ fn locate(
     for (c, r) in cases.iter().zip(before) {
         for k in 0..2 {
             let s2 = c.scale[k] * c.scale[k];
-            e_ch[k] += s2 * (r[k].iter().map(|v| v * v).sum::<f64>() - c.n as f64 * c.sigma[k] * c.sigma[k]);
+            e_ch[k] += s2
+                * (r[k].iter().map(|v| v * v).sum::<f64>() - c.n as f64 * c.sigma[k] * c.sigma[k]);
         }
     }
     let mut v: Vec<WhereShare> = (0..2)
@@ -251,10 +255,19 @@ fn locate(
     ];
     let mut e_state = [0.0; 6];
     for (c, r) in cases.iter().zip(before) {
-        let amp = c.nd.x[0].iter().fold(0.0f64, |m, v| m.max(v.abs())).max(1e-12);
+        let amp = c.nd.x[0]
+            .iter()
+            .fold(0.0f64, |m, v| m.max(v.abs()))
+            .max(1e-12);
         for i in 0..c.n {
             let a = c.nd.x[0][i].abs() / amp;
-            let band = if a < 0.5 { 0 } else if a < 0.85 { 1 } else { 2 };
+            let band = if a < 0.5 {
+                0
+            } else if a < 0.85 {
+                1
+            } else {
+                2
+            };
             let up = usize::from(c.nd.x[1][i] <= 0.0);
             for k in 0..2 {
                 e_state[2 * band + up] +=
@@ -268,7 +281,11 @@ fn locate(
             s.state = Some(format!(
                 "{}, {}",
                 labels[j / 2],
-                if j % 2 == 0 { "alpha_dot > 0" } else { "alpha_dot <= 0" }
+                if j % 2 == 0 {
+                    "alpha_dot > 0"
+                } else {
+                    "alpha_dot <= 0"
+                }
             ));
             s
         })
@@ -334,7 +351,9 @@ fn locate(
                 None
             };
             if let Some(bi) = band {
-                amp_hi_lo[bi] += (e_tot - noise_e).max(0.0) / (c.n as f64 * c.y[k].iter().map(|v| v * v).sum::<f64>() / c.n as f64).max(1e-300);
+                amp_hi_lo[bi] += (e_tot - noise_e).max(0.0)
+                    / (c.n as f64 * c.y[k].iter().map(|v| v * v).sum::<f64>() / c.n as f64)
+                        .max(1e-300);
                 n_hi_lo[bi] += 1;
             }
         }
@@ -347,7 +366,10 @@ fn locate(
         .collect();
     normalise(&mut v, &vals);
     let hshare = |pred: &dyn Fn(&str) -> bool| -> f64 {
-        v.iter().filter(|s| pred(&s.harmonic)).map(|s| s.share).sum()
+        v.iter()
+            .filter(|s| pred(&s.harmonic))
+            .map(|s| s.share)
+            .sum()
     };
     let dc = hshare(&|h| h == "DC");
     let parse_m = |h: &str| -> Option<(i32, i32)> {
@@ -374,7 +396,8 @@ fn locate(
         }
         Some((m, n))
     };
-    let odd = hshare(&|h| parse_m(h).is_some_and(|(m, n)| (m + n).abs() % 2 == 1 && (m + n).abs() >= 3));
+    let odd =
+        hshare(&|h| parse_m(h).is_some_and(|(m, n)| (m + n).abs() % 2 == 1 && (m + n).abs() >= 3));
     let even = hshare(&|h| h != "DC" && parse_m(h).is_some_and(|(m, n)| (m + n).abs() % 2 == 0));
     let off = hshare(&|h| h == "off-harmonic line");
     let broad = hshare(&|h| h == "broadband");
@@ -399,7 +422,10 @@ fn locate(
         .zip(before)
         .filter_map(|(c, r)| {
             let e: f64 = (0..2)
-                .map(|k| (r[k].iter().map(|v| v * v).sum::<f64>() / c.n as f64 - c.sigma[k].powi(2)).max(0.0))
+                .map(|k| {
+                    (r[k].iter().map(|v| v * v).sum::<f64>() / c.n as f64 - c.sigma[k].powi(2))
+                        .max(0.0)
+                })
                 .sum();
             (e > 0.0).then(|| (c.u.ln(), e.ln()))
         })
@@ -409,7 +435,11 @@ fn locate(
         let my = pts.iter().map(|p| p.1).sum::<f64>() / pts.len() as f64;
         let sxx: f64 = pts.iter().map(|p| (p.0 - mx).powi(2)).sum();
         let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
-        if sxx > 0.0 { sxy / sxx } else { 0.0 }
+        if sxx > 0.0 {
+            sxy / sxx
+        } else {
+            0.0
+        }
     } else {
         0.0
     };
@@ -431,7 +461,9 @@ fn locate(
             let mut sb = vec![0.0; nb];
             let mut sa = vec![0.0; nb];
             for (i, c) in cases.iter().enumerate() {
-                let rms = (c.y[k].iter().map(|v| v * v).sum::<f64>() / c.n as f64).sqrt().max(1e-300);
+                let rms = (c.y[k].iter().map(|v| v * v).sum::<f64>() / c.n as f64)
+                    .sqrt()
+                    .max(1e-300);
                 let m = c.n.next_power_of_two();
                 let df = 1.0 / (m as f64 * c.dt);
                 for (dst, r) in [(&mut sb, &before[i][k]), (&mut sa, &after[i][k])] {
@@ -440,7 +472,10 @@ fn locate(
                         let x = b as f64 * df / c.f_alpha;
                         let j = (x / fmax * nb as f64) as usize;
                         if j < nb {
-                            dst[j] = f64::max(dst[j], (2.0 * pb / c.n as f64).sqrt() / rms / cases.len() as f64 + 0.0) ;
+                            dst[j] = f64::max(
+                                dst[j],
+                                (2.0 * pb / c.n as f64).sqrt() / rms / cases.len() as f64 + 0.0,
+                            );
                         }
                     }
                 }
@@ -449,7 +484,9 @@ fn locate(
                 level: Level::Aerodynamic,
                 channel: CHANNELS[k].into(),
                 frequency_unit: "f/f_alpha".into(),
-                frequency: (0..nb).map(|j| (j as f64 + 0.5) * fmax / nb as f64).collect(),
+                frequency: (0..nb)
+                    .map(|j| (j as f64 + 0.5) * fmax / nb as f64)
+                    .collect(),
                 before: sb,
                 after: sa,
             }

@@ -291,12 +291,13 @@ fn pool_stats(
     let mut g = vec![vec![0.0; m]; m];
     let mut b = vec![0.0; m];
     for f in fits {
-        let w = 1.0 / nodes[f.node]
-            .cases
-            .iter()
-            .map(|&i| cases[i].sigma[c])
-            .sum::<f64>()
-            .max(1e-300)
+        let w = 1.0
+            / nodes[f.node]
+                .cases
+                .iter()
+                .map(|&i| cases[i].sigma[c])
+                .sum::<f64>()
+                .max(1e-300)
             * nodes[f.node].cases.len() as f64;
         let w2 = w * w;
         let zt: Vec<Vec<f64>> = (0..m)
@@ -352,7 +353,11 @@ fn sparse(
     } else {
         MAX_SPARSE
     };
-    let hyper = if kind == CandidateKind::DynamicStall { 2 } else { 1 };
+    let hyper = if kind == CandidateKind::DynamicStall {
+        2
+    } else {
+        1
+    };
     for f in folds {
         for c in 0..2 {
             let ps = pool_stats(cases, nodes, &f.fits, c, &cols);
@@ -380,7 +385,12 @@ fn sparse(
             let l = fold_residuals(cases, nodes, f, c, &extra, &mut res);
             for (&j, b) in set.iter().zip(&l.beta) {
                 chosen_names.push((
-                    format!("fold{}_{}_{}", f.index, super::data::CHANNELS[c], pool[j].name()),
+                    format!(
+                        "fold{}_{}_{}",
+                        f.index,
+                        super::data::CHANNELS[c],
+                        pool[j].name()
+                    ),
                     *b,
                 ));
             }
@@ -407,7 +417,17 @@ fn time_delay(cases: &[CaseData], nodes: &[Node], folds: &[Fold]) -> Scored {
             let mut deriv: Vec<Vec<f64>> = vec![Vec::new(); cases.len()];
             for n in f.train.iter().chain(&f.test) {
                 for &i in &nodes[*n].cases {
-                    let p = law::predict(cases, nodes, &f.supports, &base, i, c, &[]);
+                    // nonlinear part only: the linear part of a delay is absorbed by the
+                    // node coefficients (a phase at the forcing frequency)
+                    let cfg = &nodes[*n].config;
+                    let a = law::node_coefficients(cases, nodes, &f.supports, &base, i, c);
+                    let mut p = vec![0.0; cases[i].n];
+                    for (t, &aj) in f.supports[cfg][c].iter().zip(&a) {
+                        if aj != 0.0 && t.degree() >= 2 {
+                            let col = cases[i].column(t);
+                            p.iter_mut().zip(&col).for_each(|(o, v)| *o += aj * v);
+                        }
+                    }
                     deriv[i] = time_derivative(&p, cases[i].dt);
                 }
             }
@@ -417,7 +437,7 @@ fn time_delay(cases: &[CaseData], nodes: &[Node], folds: &[Fold]) -> Scored {
                 for &i in &nodes[nf.node].cases {
                     let mut p = vec![0.0; cases[i].n];
                     for (t, &aj) in f.supports[cfg][c].iter().zip(a) {
-                        if aj != 0.0 {
+                        if aj != 0.0 && t.degree() >= 2 {
                             let col = cases[i].column(t);
                             p.iter_mut().zip(&col).for_each(|(o, v)| *o += aj * v);
                         }
@@ -522,12 +542,7 @@ fn near_tone(c: &CaseData, f: f64) -> bool {
 }
 
 /// `vortex_shedding`: S from the training residuals, amplitude/phase per held-out case.
-fn vortex(
-    cases: &[CaseData],
-    nodes: &[Node],
-    folds: &[Fold],
-    before: &[[Vec<f64>; 2]],
-) -> Scored {
+fn vortex(cases: &[CaseData], nodes: &[Node], folds: &[Fold], before: &[[Vec<f64>; 2]]) -> Scored {
     let mut res = before.to_vec();
     let mut ss = Vec::new();
     for f in folds {

@@ -139,7 +139,9 @@ pub(crate) fn prepare(forced: &Dataset) -> Result<(Vec<CaseData>, Vec<Node>)> {
         let Some(f_alpha) = nd.forcing.pitch else {
             return Err(Error::data(
                 &name,
-                format!("case `{id}`: no pitch forcing frequency (the force level needs pitch motion)"),
+                format!(
+                    "case `{id}`: no pitch forcing frequency (the force level needs pitch motion)"
+                ),
             ));
         };
         let q = 0.5 * section.air_density * u * u;
@@ -198,7 +200,8 @@ pub(crate) fn prepare(forced: &Dataset) -> Result<(Vec<CaseData>, Vec<Node>)> {
         nodes[j].cases.push(i);
     }
     for nd in &mut nodes {
-        nd.k_alpha = nd.cases.iter().map(|&i| cases[i].k_alpha).sum::<f64>() / nd.cases.len() as f64;
+        nd.k_alpha =
+            nd.cases.iter().map(|&i| cases[i].k_alpha).sum::<f64>() / nd.cases.len() as f64;
     }
     Ok((cases, nodes))
 }

@@ -72,12 +72,7 @@ pub(crate) fn node_fits(
                     })
                     .collect()
             });
-            NodeFit {
-                node: n,
-                qr,
-                y,
-                w,
-            }
+            NodeFit { node: n, qr, y, w }
         })
         .collect()
 }
@@ -126,7 +121,19 @@ pub(crate) fn fit_channel(
             // weighted by the node's noise level so that quiet and noisy nodes count alike
             let wn = mean(&f.w[c]);
             let w2 = wn * wn;
-            let zt: Vec<Vec<f64>> = zn.iter().map(|col| f.qr[c].residual(col)).collect();
+            // a column the node's support spans (projection below 1e-6 of its norm) is
+            // absorbed by the node coefficients: it gets no weight (β = 0 by the ridge)
+            let zt: Vec<Vec<f64>> = zn
+                .iter()
+                .map(|col| {
+                    let r = f.qr[c].residual(col);
+                    if dot(&r, &r) <= 1e-12 * dot(col, col) {
+                        vec![0.0; r.len()]
+                    } else {
+                        r
+                    }
+                })
+                .collect();
             let yt = f.qr[c].residual(&f.y[c]);
             for j in 0..m {
                 b[j] += w2 * dot(&zt[j], &yt);
@@ -197,7 +204,11 @@ pub(crate) fn interpolate_scalar(xy: &[(f64, f64)], x: f64) -> f64 {
         _ => {
             let (x0, xl) = (xy[0].0, xy[n - 1].0);
             if x < x0 || x > xl {
-                let (a, b) = if x < x0 { (xy[0], xy[1]) } else { (xy[n - 1], xy[n - 2]) };
+                let (a, b) = if x < x0 {
+                    (xy[0], xy[1])
+                } else {
+                    (xy[n - 1], xy[n - 2])
+                };
                 let span = (b.0 - a.0).abs();
                 let d = (x - a.0).clamp(-span, span);
                 let slope = (b.1 - a.1) / (b.0 - a.0);
@@ -304,7 +315,8 @@ pub(crate) fn node_coefficients(
                 Some(nd.k_alpha)
             } else {
                 let cs = &cases[*ci];
-                cs.f_h.map(|f| cs.nd.chord * 2.0 * std::f64::consts::PI * f / cs.u)
+                cs.f_h
+                    .map(|f| cs.nd.chord * 2.0 * std::f64::consts::PI * f / cs.u)
             }
         };
         let Some(k_here) = kf(case.node) else {

@@ -47,7 +47,7 @@ pub use candidates::CandidateKind;
 ///
 /// Calibrated on effect-free virtual data (`calibration_effect_free` in
 /// `tests/force_level.rs`): see docs/DECISIONS.md (force level) for the numbers.
-pub const DEFAULT_GAP_THRESHOLD: f64 = 1.5;
+pub const DEFAULT_GAP_THRESHOLD: f64 = 1.8;
 
 /// Options of [`force_level`].
 #[derive(Debug, Clone, PartialEq)]
@@ -101,7 +101,12 @@ pub(crate) struct Fold {
 /// [`Error::Setting`] for k < 2; [`Error::Data`] naming the data set when there are fewer
 /// nodes than folds or a configuration has a single wind speed (no node to interpolate
 /// from once it is held out).
-pub(crate) fn assign_folds(nodes: &[Node], k: usize, seed: u64, dataset: &str) -> Result<Vec<usize>> {
+pub(crate) fn assign_folds(
+    nodes: &[Node],
+    k: usize,
+    seed: u64,
+    dataset: &str,
+) -> Result<Vec<usize>> {
     if k < 2 {
         return Err(Error::setting("folds", k as f64, "need at least 2 folds"));
     }
@@ -151,8 +156,12 @@ fn build_fold(
         .iter()
         .flat_map(|&n| nodes[n].cases.iter().map(|&i| cases[i].nd.clone()))
         .collect();
-    let id = identify(&train_cases, settings, dataset, &|_| {})
-        .map_err(|e| Error::identify(format!("data set `{dataset}`, fold {index}: baseline identification"), e))?;
+    let id = identify(&train_cases, settings, dataset, &|_| {}).map_err(|e| {
+        Error::identify(
+            format!("data set `{dataset}`, fold {index}: baseline identification"),
+            e,
+        )
+    })?;
     let mut supports: Supports = BTreeMap::new();
     for case in &id.cases {
         let Some(nd) = train_cases.iter().find(|c| c.meta.id == case.id) else {
@@ -160,7 +169,9 @@ fn build_fold(
         };
         let cfg = nd.meta.config.clone().unwrap_or_else(|| "-".to_string());
         let g = id.groups.iter().find(|g| g.name == case.group);
-        let entry = supports.entry(cfg).or_insert_with(|| [Vec::new(), Vec::new()]);
+        let entry = supports
+            .entry(cfg)
+            .or_insert_with(|| [Vec::new(), Vec::new()]);
         if let Some(g) = g {
             for (c, names) in [&g.lift.support, &g.moment.support].into_iter().enumerate() {
                 for name in names {
@@ -257,7 +268,13 @@ pub(crate) fn gaps(cases: &[CaseData], res: &[[Vec<f64>; 2]]) -> Gaps {
             den[c] += s2 * case.y[c].iter().map(|v| v * v).sum::<f64>();
         }
     }
-    let channel = [0, 1].map(|c| if den[c] > 0.0 { (num[c] / den[c]).sqrt() } else { 0.0 });
+    let channel = [0, 1].map(|c| {
+        if den[c] > 0.0 {
+            (num[c] / den[c]).sqrt()
+        } else {
+            0.0
+        }
+    });
     Gaps {
         channel,
         combined: ((channel[0].powi(2) + channel[1].powi(2)) / 2.0).sqrt(),
@@ -283,7 +300,11 @@ pub(crate) fn noise_gaps(cases: &[CaseData]) -> Gaps {
 /// pitch forcing; [`Error::Setting`] for `folds < 2` or a non-positive threshold.
 pub fn force_level(forced: &Dataset, opts: &ForceOptions) -> Result<LevelResult> {
     if !(opts.gap_threshold.is_finite() && opts.gap_threshold > 0.0) {
-        return Err(Error::setting("gap_threshold", opts.gap_threshold, "must be > 0"));
+        return Err(Error::setting(
+            "gap_threshold",
+            opts.gap_threshold,
+            "must be > 0",
+        ));
     }
     let name = forced.manifest.name.clone();
     let (cases, nodes) = data::prepare(forced)?;
@@ -293,7 +314,9 @@ pub fn force_level(forced: &Dataset, opts: &ForceOptions) -> Result<LevelResult>
         .collect::<Result<_>>()?;
     let before = held_out_residuals(&cases, &nodes, &folds, &|_, _| Vec::new());
     let scored = candidates::score_all(&cases, &nodes, &folds, &before, opts);
-    Ok(analysis::assemble(&cases, &nodes, &fold_of, &before, scored, opts))
+    Ok(analysis::assemble(
+        &cases, &nodes, &fold_of, &before, scored, opts,
+    ))
 }
 
 /// The level a force-level result reports.
