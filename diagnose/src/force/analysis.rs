@@ -259,6 +259,7 @@ fn locate(
             .iter()
             .fold(0.0f64, |m, v| m.max(v.abs()))
             .max(1e-12);
+        #[allow(clippy::needless_range_loop)]
         for i in 0..c.n {
             let a = c.nd.x[0][i].abs() / amp;
             let band = if a < 0.5 {

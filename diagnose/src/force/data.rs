@@ -10,10 +10,6 @@ use identify::workflow::prepare_dataset;
 
 use crate::{Error, Result};
 
-/// Channel index of lift in the per-channel arrays.
-pub(crate) const LIFT: usize = 0;
-/// Channel index of moment.
-pub(crate) const MOMENT: usize = 1;
 /// Channel names in index order.
 pub(crate) const CHANNELS: [&str; 2] = ["lift", "moment"];
 
@@ -51,22 +47,6 @@ impl CaseData {
         column_of(&self.nd.x, t)
     }
 
-    /// The four variables at t − τ (τ in seconds), from the harmonic representation.
-    pub fn shifted(&self, tau: f64) -> [Vec<f64>; 4] {
-        std::array::from_fn(|k| match &self.rep[k] {
-            Some(f) => {
-                // residual of the fit kept unshifted (exact motion in the harmonic case)
-                (0..self.n)
-                    .map(|i| {
-                        let t = i as f64 * self.dt;
-                        self.nd.x[k][i] - f.value(t) + f.value(t - tau)
-                    })
-                    .collect()
-            }
-            None => shift_linear(&self.nd.x[k], tau / self.dt),
-        })
-    }
-
     /// Nondimensional accelerations (B²α̈/U², Bḧ/U²) = (B/U)·d/dt(Bα̇/U, ḣ/U).
     pub fn accelerations(&self) -> [Vec<f64>; 2] {
         let c = self.nd.chord / self.u;
@@ -87,18 +67,6 @@ pub(crate) fn column_of(x: &[Vec<f64>; 4], t: &Term) -> Vec<f64> {
     let n = x[0].len();
     (0..n)
         .map(|i| t.eval_at([x[0][i], x[1][i], x[2][i], x[3][i]]))
-        .collect()
-}
-
-fn shift_linear(x: &[f64], s: f64) -> Vec<f64> {
-    let n = x.len();
-    (0..n)
-        .map(|i| {
-            let p = (i as f64 - s).clamp(0.0, (n - 1) as f64);
-            let k = (p.floor() as usize).min(n.saturating_sub(2));
-            let w = p - k as f64;
-            x[k] * (1.0 - w) + x[(k + 1).min(n - 1)] * w
-        })
         .collect()
 }
 

@@ -85,6 +85,7 @@ pub(crate) struct ChannelLaw {
     /// (node index, K_α, coefficients on the configuration's support).
     pub nodes: Vec<(usize, f64, Vec<f64>)>,
     /// Training residual sum of squares in noise units Σ (r/σ̂)².
+    #[allow(dead_code)]
     pub rss_w: f64,
 }
 
@@ -94,7 +95,7 @@ pub(crate) type Extra<'a> = &'a (dyn Fn(usize, usize) -> Vec<Vec<f64>> + Sync);
 /// Fits channel `c` with shared columns `extra` on the training nodes. `targets` replaces
 /// the measured targets when given (per node fit, stacked), e.g. for shifted data.
 pub(crate) fn fit_channel(
-    cases: &[CaseData],
+    _cases: &[CaseData],
     nodes: &[Node],
     fits: &[NodeFit],
     c: usize,
