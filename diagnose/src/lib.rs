@@ -3,15 +3,19 @@
 //!
 //! * [`effect`]: the catalogue names and verdicts;
 //! * [`report`]: the result types and the `diagnosis.json` document;
+//! * [`force`]: the force level (forced-motion records);
 //! * [`system`]: the system level (free-response records);
 //! * [`verdict`]: from the levels' findings to one verdict;
 //! * [`blind`]: the withheld-effect data-set generator (the diagnosis never reads it);
 //! * [`bench`]: the withheld-effect benchmark statistics.
 
 pub mod bench;
+pub mod bench_run;
 pub mod blind;
 pub mod effect;
 pub mod error;
+pub mod force;
+pub mod pipeline;
 pub mod report;
 pub mod system;
 pub mod verdict;

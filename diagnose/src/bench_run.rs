@@ -1,0 +1,145 @@
+//! Running the withheld-effect benchmark: generate, diagnose without the label, compare.
+
+use std::time::Instant;
+
+use aeroelastic::effects::Form;
+use rayon::prelude::*;
+
+use crate::bench::{draw_specs, summarize, BlindOutcome, BlindReport, BlindSpec, OUTSIDE};
+use crate::blind::{generate, BlindEffect, BlindScenario};
+use crate::effect::Effect;
+use crate::pipeline::{diagnose, DiagnoseOptions};
+use crate::report::Diagnosis;
+use crate::{Error, Result};
+
+/// Settings of a benchmark run.
+#[derive(Debug, Clone)]
+pub struct BlindOptions {
+    /// Number of data sets.
+    pub n: usize,
+    /// Master seed (labels, strengths, each set's seed); recorded in the report.
+    pub seed: u64,
+    /// Functional form of the injected effects.
+    pub form: Form,
+    /// Scenario of every set.
+    pub scenario: BlindScenario,
+    /// Diagnosis settings (their seed is replaced by each set's seed).
+    pub diagnose: DiagnoseOptions,
+}
+
+impl BlindOptions {
+    /// `n` sets from `seed`, primary forms, default scenario and diagnosis.
+    pub fn new(n: usize, seed: u64) -> Self {
+        BlindOptions {
+            n,
+            seed,
+            form: Form::Primary,
+            scenario: BlindScenario::default(),
+            diagnose: DiagnoseOptions::new(seed),
+        }
+    }
+}
+
+/// The blind effect of a truth label.
+///
+/// # Errors
+/// [`Error::UnknownEffect`] for a label that is neither a catalogue name, `none` nor
+/// [`OUTSIDE`].
+pub fn blind_effect(label: &str) -> Result<BlindEffect> {
+    match label {
+        "none" => Ok(BlindEffect::None),
+        OUTSIDE => Ok(BlindEffect::Buffeting),
+        other => Effect::from_name(other).map(BlindEffect::Catalogue),
+    }
+}
+
+/// Ratio of each level's held-out gap in `diag` to the same level's gap in `twin`; the
+/// larger one.
+pub fn gap_ratio(diag: &Diagnosis, twin: &Diagnosis) -> f64 {
+    diag.levels
+        .iter()
+        .filter_map(|l| {
+            let t = twin.levels.iter().find(|t| t.level == l.level)?;
+            (t.before > 0.0).then(|| l.before / t.before)
+        })
+        .fold(f64::NAN, f64::max)
+}
+
+/// Generates and diagnoses one set (and its effect-free twin for the gap ratio).
+///
+/// # Errors
+/// Generation or diagnosis errors of the set or its twin.
+pub fn run_one(spec: &BlindSpec, opts: &BlindOptions) -> Result<(BlindOutcome, Diagnosis)> {
+    let t = Instant::now();
+    let effect = blind_effect(&spec.truth)?;
+    let mut dopts = opts.diagnose.clone();
+    dopts.seed = spec.seed;
+    dopts.force.seed = spec.seed;
+    dopts.system.seed = spec.seed;
+    let set = generate(effect, spec.strength, opts.form, spec.seed, &opts.scenario)?;
+    let diag = diagnose(&set.forced, Some(&set.free), &dopts, "blind")?;
+    let ratio = if effect == BlindEffect::None {
+        1.0
+    } else {
+        let twin = generate(BlindEffect::None, 0.0, opts.form, spec.seed, &opts.scenario)?;
+        // Baseline gaps only: no candidates are needed for the twin.
+        let mut topts = dopts.clone();
+        topts.force.candidates.clear();
+        let twin_diag = diagnose(&twin.forced, Some(&twin.free), &topts, "blind twin")?;
+        gap_ratio(&diag, &twin_diag)
+    };
+    let true_candidate_shrink = diag
+        .candidates
+        .iter()
+        .filter(|c| c.effect.name() == spec.truth && c.failure.is_none())
+        .map(|c| crate::verdict::plain_shrink(c.before, c.after))
+        .fold(None, |a: Option<f64>, s| Some(a.map_or(s, |a| a.max(s))));
+    let outcome = BlindOutcome {
+        spec: spec.clone(),
+        verdict: diag.verdict.effect.clone(),
+        confidence: diag.verdict.confidence,
+        gap_ratio: ratio,
+        shrink: diag.gap.shrink,
+        excess_shrink: diag.gap.excess_shrink,
+        true_candidate_shrink,
+        parameters: set.truth.parameters.clone(),
+        error: None,
+        seconds: t.elapsed().as_secs_f64(),
+    };
+    Ok((outcome, diag))
+}
+
+/// Runs the benchmark: `opts.n` sets drawn by [`draw_specs`], in parallel; a set that fails
+/// to generate or diagnose is recorded with its error (and counted as failed), never
+/// dropped. `observer` is called after each set.
+pub fn run_blind(opts: &BlindOptions, observer: &(dyn Fn(&BlindOutcome) + Sync)) -> BlindReport {
+    let specs = draw_specs(opts.n, opts.seed);
+    let outcomes: Vec<BlindOutcome> = specs
+        .par_iter()
+        .map(|s| {
+            let t = Instant::now();
+            let o = match run_one(s, opts) {
+                Ok((o, _)) => o,
+                Err(e) => failed(s, &e, t.elapsed().as_secs_f64()),
+            };
+            observer(&o);
+            o
+        })
+        .collect();
+    summarize(opts.seed, outcomes)
+}
+
+fn failed(spec: &BlindSpec, e: &Error, seconds: f64) -> BlindOutcome {
+    BlindOutcome {
+        spec: spec.clone(),
+        verdict: "error".into(),
+        confidence: 0.0,
+        gap_ratio: f64::NAN,
+        shrink: f64::NAN,
+        excess_shrink: f64::NAN,
+        true_candidate_shrink: None,
+        parameters: vec![],
+        error: Some(e.to_string()),
+        seconds,
+    }
+}

@@ -1,0 +1,653 @@
+//! Candidate augmentations of the force level. Each is a generic form (not the virtual
+//! generator's), fitted on the training folds and scored on the held-out folds.
+//!
+//! **Fitting.** An augmentation adds columns Z (nondimensional regressors) to every case
+//! with coefficients β *shared by all nodes* (so they carry across wind speeds,
+//! amplitudes and configurations), fitted jointly with the per-node law
+//! ([`super::law::fit_channel`]). Hyperparameters (critical angle, lag, Strouhal number,
+//! sparse term choice) are chosen per fold on the training nodes only, by the training
+//! residual in noise units.
+//! * `static_offset`: Z = [1, α², (Bα̇/U)², α·Bα̇/U] (a DC force per dynamic pressure and
+//!   the even terms an angle offset induces through odd nonlinear terms).
+//! * `added_mass`: Z = [B²α̈/U², Bḧ/U²] (acceleration forces with a mass shared across U).
+//! * `time_delay`: Z = [(B/U)·dŷ/dt] with ŷ the fold's baseline law (first-order shift
+//!   ŷ(t − τ) ≈ ŷ − τ dŷ/dt with one τ·U/B… shared in seconds: the column is dŷ/dt).
+//! * `higher_order`: forward selection of up to [`MAX_SPARSE`] terms from a pool of
+//!   degree-4 and degree-5 monomials outside the cubic library (quintic in α, Bα̇/U;
+//!   quartic cross-DOF), each step kept only when it lowers the training residual by more
+//!   than [`STEP_GAIN`] noise units.
+//! * `dynamic_stall`: forward selection (≤ 2) among lagged dead-zone regressors
+//!   y = L_τ[sign(α)·max(|α| − α_c, 0)] over a grid of α_c and lags τ = T·B/U (first-order
+//!   lag L_τ started on its periodic solution from the harmonic motion).
+//! * `vortex_shedding`: a sinusoid at f = S·U/B. S is fitted on the training residuals (sum
+//!   over training cases of the power at S·U/B, forcing tones masked); on each held-out
+//!   case the amplitude and phase are fitted on its residual (nuisance parameters, 2 per
+//!   case and channel, counted in the penalty).
+//!
+//! **Score and significance.** E = Σ (r/σ̂)² over held-out samples and channels (noise
+//! units). With p shared parameters (β and hyperparameters) and q nuisance parameters:
+//! * score (ranking, lower is better) = (E_after + 2(p + q)) / N, N the number of samples
+//!   (an AIC-like parsimony penalty in noise units);
+//! * statistic z = (E_before − E_after − q) / √(2(p + q) + 2·N·0.0) … see
+//!   [`significance`]: the improvement beyond what q fitted nuisance parameters give on
+//!   pure noise, in standard deviations of that null improvement (√(2q) for χ²_q), with
+//!   2p added for the shared parameters;
+//! * significant ⇔ z > `opts.significance` **and** the candidate removes at least
+//!   `opts.min_shrink` of the excess energy E_before − N (the baseline's own interpolation
+//!   error is systematic, so a test in noise units alone would call tiny improvements
+//!   significant).
+
+use crate::effect::Effect;
+
+use super::data::{CaseData, Node};
+use super::law::{self, NodeFit};
+use super::linalg::{dot, solve_spd};
+use super::{fold_residuals, Fold, ForceOptions};
+use identify::library::Term;
+
+/// Default significance threshold (z, standard deviations of the null improvement).
+pub const DEFAULT_SIGNIFICANCE: f64 = 4.0;
+/// Default minimum share of the excess residual energy a significant candidate removes.
+pub const DEFAULT_MIN_SHRINK: f64 = 0.3;
+/// Largest number of terms of a sparse selection.
+pub const MAX_SPARSE: usize = 3;
+/// Minimum training improvement (noise units) of a forward-selection step.
+pub const STEP_GAIN: f64 = 50.0;
+
+/// The candidate augmentations of the force level.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum CandidateKind {
+    /// DC force per dynamic pressure plus even terms, shared across wind speeds.
+    StaticOffset,
+    /// Shared acceleration terms.
+    AddedMass,
+    /// A shared time shift of the forces.
+    TimeDelay,
+    /// Sparse terms outside the library (quintic, quartic cross-DOF).
+    HigherOrder,
+    /// Threshold-activated regressors with a first-order lag.
+    DynamicStall,
+    /// A line at f = S·U/B.
+    VortexShedding,
+}
+
+impl CandidateKind {
+    /// Every candidate.
+    pub const ALL: [CandidateKind; 6] = [
+        CandidateKind::StaticOffset,
+        CandidateKind::AddedMass,
+        CandidateKind::TimeDelay,
+        CandidateKind::HigherOrder,
+        CandidateKind::DynamicStall,
+        CandidateKind::VortexShedding,
+    ];
+
+    /// The catalogue effect the candidate stands for.
+    pub fn effect(self) -> Effect {
+        match self {
+            CandidateKind::StaticOffset => Effect::StaticOffset,
+            CandidateKind::AddedMass => Effect::AddedMass,
+            CandidateKind::TimeDelay => Effect::TimeDelay,
+            CandidateKind::HigherOrder => Effect::HigherOrder,
+            CandidateKind::DynamicStall => Effect::DynamicStall,
+            CandidateKind::VortexShedding => Effect::VortexShedding,
+        }
+    }
+}
+
+/// A scored candidate: its held-out residuals and fitted parameters.
+#[derive(Debug, Clone)]
+pub(crate) struct Scored {
+    pub kind: CandidateKind,
+    pub residuals: Vec<[Vec<f64>; 2]>,
+    /// Shared parameters (β and hyperparameters, summed over channels, mean over folds).
+    pub n_params: usize,
+    /// Nuisance parameters fitted on held-out data.
+    pub n_nuisance: usize,
+    pub parameters: Vec<(String, f64)>,
+    pub failure: Option<String>,
+}
+
+/// Scores every candidate of `opts`.
+pub(crate) fn score_all(
+    cases: &[CaseData],
+    nodes: &[Node],
+    folds: &[Fold],
+    before: &[[Vec<f64>; 2]],
+    opts: &ForceOptions,
+) -> Vec<Scored> {
+    use rayon::prelude::*;
+    opts.candidates
+        .par_iter()
+        .map(|&k| match k {
+            CandidateKind::StaticOffset => shared(cases, nodes, folds, k, &static_offset_cols),
+            CandidateKind::AddedMass => shared(cases, nodes, folds, k, &|c: &CaseData, _| {
+                c.accelerations().to_vec()
+            }),
+            CandidateKind::TimeDelay => time_delay(cases, nodes, folds),
+            CandidateKind::HigherOrder => sparse(cases, nodes, folds, k, &higher_order_pool()),
+            CandidateKind::DynamicStall => sparse(cases, nodes, folds, k, &stall_pool()),
+            CandidateKind::VortexShedding => vortex(cases, nodes, folds, before),
+        })
+        .collect()
+}
+
+fn static_offset_cols(c: &CaseData, _ch: usize) -> Vec<Vec<f64>> {
+    let x = &c.nd.x;
+    vec![
+        vec![1.0; c.n],
+        x[0].iter().map(|a| a * a).collect(),
+        x[1].iter().map(|a| a * a).collect(),
+        x[0].iter().zip(&x[1]).map(|(a, b)| a * b).collect(),
+    ]
+}
+
+/// A candidate whose columns are fixed (no hyperparameter).
+fn shared(
+    cases: &[CaseData],
+    nodes: &[Node],
+    folds: &[Fold],
+    kind: CandidateKind,
+    cols: &(dyn Fn(&CaseData, usize) -> Vec<Vec<f64>> + Sync),
+) -> Scored {
+    let mut res = vec![[Vec::new(), Vec::new()]; cases.len()];
+    let extra = |i: usize, c: usize| cols(&cases[i], c);
+    let mut betas: Vec<Vec<f64>> = vec![Vec::new(); 2];
+    for f in folds {
+        for c in 0..2 {
+            let l = fold_residuals(cases, nodes, f, c, &extra, &mut res);
+            if betas[c].is_empty() {
+                betas[c] = vec![0.0; l.beta.len()];
+            }
+            for (a, b) in betas[c].iter_mut().zip(&l.beta) {
+                *a += b / folds.len() as f64;
+            }
+        }
+    }
+    let m = betas[0].len() + betas[1].len();
+    let mut parameters = Vec::new();
+    for (c, name) in ["lift", "moment"].iter().enumerate() {
+        for (j, b) in betas[c].iter().enumerate() {
+            parameters.push((format!("{name}_beta{j}"), *b));
+        }
+    }
+    Scored {
+        kind,
+        residuals: res,
+        n_params: m,
+        n_nuisance: 0,
+        parameters,
+        failure: None,
+    }
+}
+
+/// Pool of the `higher_order` forward selection: monomials of degree 4–5 outside the cubic
+/// library (quintic in α, Bα̇/U; quartic cross-DOF; odd in the pitch variables).
+fn higher_order_pool() -> Vec<Pool> {
+    let p = |a, b, c, d| Pool::Mono(Term::new([a, b, c, d]));
+    vec![
+        p(5, 0, 0, 0),
+        p(4, 1, 0, 0),
+        p(3, 2, 0, 0),
+        p(2, 3, 0, 0),
+        p(1, 4, 0, 0),
+        p(0, 5, 0, 0),
+        p(3, 0, 1, 0),
+        p(3, 0, 0, 1),
+        p(2, 1, 1, 0),
+        p(2, 1, 0, 1),
+        p(1, 0, 3, 0),
+        p(1, 2, 1, 0),
+    ]
+}
+
+/// Pool of the `dynamic_stall` selection: lagged dead-zone regressors.
+fn stall_pool() -> Vec<Pool> {
+    let mut v = Vec::new();
+    for ac in [4.0f64, 7.0, 10.0, 13.0, 16.0, 19.0, 22.0] {
+        for lag in [0.0, 2.0, 6.0] {
+            v.push(Pool::Stall {
+                alpha_c: ac.to_radians(),
+                lag_chords: lag,
+            });
+        }
+    }
+    v
+}
+
+/// A column of a selection pool.
+#[derive(Debug, Clone, Copy)]
+enum Pool {
+    Mono(Term),
+    Stall { alpha_c: f64, lag_chords: f64 },
+}
+
+impl Pool {
+    fn name(&self) -> String {
+        match self {
+            Pool::Mono(t) => t.name(),
+            Pool::Stall {
+                alpha_c,
+                lag_chords,
+            } => format!(
+                "stall(alpha_c={:.0}deg,lag={lag_chords}B/U)",
+                alpha_c.to_degrees()
+            ),
+        }
+    }
+
+    fn column(&self, c: &CaseData) -> Vec<f64> {
+        match *self {
+            Pool::Mono(t) => c.column(&t),
+            Pool::Stall {
+                alpha_c,
+                lag_chords,
+            } => stall_column(c, alpha_c, lag_chords),
+        }
+    }
+}
+
+/// y = L_τ[dz(α)], dz(α) = sign(α)·max(|α| − α_c, 0), first-order lag τ = T·B/U started
+/// from 10 τ of the harmonic motion before the record.
+fn stall_column(c: &CaseData, alpha_c: f64, lag_chords: f64) -> Vec<f64> {
+    let dz = |a: f64| a.signum() * (a.abs() - alpha_c).max(0.0);
+    let x = &c.nd.x[0];
+    if lag_chords <= 0.0 {
+        return x.iter().map(|&a| dz(a)).collect();
+    }
+    let tau = lag_chords * c.nd.chord / c.u;
+    let a = (-c.dt / tau).exp();
+    let mut y = 0.0;
+    if let Some(rep) = &c.rep[0] {
+        let n_warm = (10.0 * tau / c.dt).ceil() as usize;
+        for k in (1..=n_warm).rev() {
+            y = a * y + (1.0 - a) * dz(rep.value(-(k as f64) * c.dt));
+        }
+    } else {
+        y = dz(x[0]);
+    }
+    x.iter()
+        .map(|&v| {
+            y = a * y + (1.0 - a) * dz(v);
+            y
+        })
+        .collect()
+}
+
+/// Projected Gram statistics of a pool on one fold and channel (noise-weighted).
+struct PoolStats {
+    g: Vec<Vec<f64>>,
+    b: Vec<f64>,
+}
+
+fn pool_stats(
+    cases: &[CaseData],
+    nodes: &[Node],
+    fits: &[NodeFit],
+    c: usize,
+    cols: &[Vec<Vec<f64>>],
+) -> PoolStats {
+    let m = cols.first().map_or(0, |v| v.len());
+    let mut g = vec![vec![0.0; m]; m];
+    let mut b = vec![0.0; m];
+    for f in fits {
+        let w = 1.0
+            / nodes[f.node]
+                .cases
+                .iter()
+                .map(|&i| cases[i].sigma[c])
+                .sum::<f64>()
+                .max(1e-300)
+            * nodes[f.node].cases.len() as f64;
+        let w2 = w * w;
+        let zt: Vec<Vec<f64>> = (0..m)
+            .map(|j| {
+                let col: Vec<f64> = nodes[f.node]
+                    .cases
+                    .iter()
+                    .flat_map(|&i| cols[i][j].iter().copied())
+                    .collect();
+                f.qr[c].residual(&col)
+            })
+            .collect();
+        let yt = f.qr[c].residual(&f.y[c]);
+        for j in 0..m {
+            b[j] += w2 * dot(&zt[j], &yt);
+            for k in j..m {
+                let v = w2 * dot(&zt[j], &zt[k]);
+                g[j][k] += v;
+                g[k][j] = g[j][k];
+            }
+        }
+    }
+    PoolStats { g, b }
+}
+
+/// Training improvement (noise units) of a subset: bᵀ G⁻¹ b.
+fn gain(ps: &PoolStats, set: &[usize]) -> f64 {
+    let g: Vec<Vec<f64>> = set
+        .iter()
+        .map(|&i| set.iter().map(|&j| ps.g[i][j]).collect())
+        .collect();
+    let b: Vec<f64> = set.iter().map(|&i| ps.b[i]).collect();
+    solve_spd(&g, &b, law::BETA_RIDGE).map_or(0.0, |x| dot(&x, &b))
+}
+
+/// Forward selection from a pool per fold and channel, then held-out scoring.
+fn sparse(
+    cases: &[CaseData],
+    nodes: &[Node],
+    folds: &[Fold],
+    kind: CandidateKind,
+    pool: &[Pool],
+) -> Scored {
+    let cols: Vec<Vec<Vec<f64>>> = cases
+        .iter()
+        .map(|c| pool.iter().map(|p| p.column(c)).collect())
+        .collect();
+    let mut res = vec![[Vec::new(), Vec::new()]; cases.len()];
+    let mut n_params = 0usize;
+    let mut chosen_names: Vec<(String, f64)> = Vec::new();
+    let max_terms = if kind == CandidateKind::DynamicStall {
+        2
+    } else {
+        MAX_SPARSE
+    };
+    let hyper = if kind == CandidateKind::DynamicStall {
+        2
+    } else {
+        1
+    };
+    for f in folds {
+        for c in 0..2 {
+            let ps = pool_stats(cases, nodes, &f.fits, c, &cols);
+            let mut set: Vec<usize> = Vec::new();
+            let mut cur = 0.0;
+            while set.len() < max_terms {
+                let best = (0..pool.len())
+                    .filter(|j| !set.contains(j))
+                    .map(|j| {
+                        let mut s = set.clone();
+                        s.push(j);
+                        (j, gain(&ps, &s))
+                    })
+                    .max_by(|a, b| a.1.total_cmp(&b.1));
+                match best {
+                    Some((j, gn)) if gn - cur > STEP_GAIN => {
+                        set.push(j);
+                        cur = gn;
+                    }
+                    _ => break,
+                }
+            }
+            n_params += set.len() * (1 + hyper);
+            let extra = |i: usize, _c: usize| set.iter().map(|&j| cols[i][j].clone()).collect();
+            let l = fold_residuals(cases, nodes, f, c, &extra, &mut res);
+            for (&j, b) in set.iter().zip(&l.beta) {
+                chosen_names.push((
+                    format!(
+                        "fold{}_{}_{}",
+                        f.index,
+                        super::data::CHANNELS[c],
+                        pool[j].name()
+                    ),
+                    *b,
+                ));
+            }
+        }
+    }
+    Scored {
+        kind,
+        residuals: res,
+        n_params: n_params.div_ceil(folds.len().max(1)),
+        n_nuisance: 0,
+        parameters: chosen_names,
+        failure: None,
+    }
+}
+
+/// `time_delay`: column dŷ/dt of the fold's baseline law on every case (training cases:
+/// the node fit; held-out cases: the held-out prediction), shared coefficient −τ [s].
+fn time_delay(cases: &[CaseData], nodes: &[Node], folds: &[Fold]) -> Scored {
+    let mut res = vec![[Vec::new(), Vec::new()]; cases.len()];
+    let mut taus = Vec::new();
+    for f in folds {
+        for c in 0..2 {
+            let base = law::fit_channel(cases, nodes, &f.fits, c, &|_, _| Vec::new());
+            let mut deriv: Vec<Vec<f64>> = vec![Vec::new(); cases.len()];
+            for n in f.train.iter().chain(&f.test) {
+                for &i in &nodes[*n].cases {
+                    // nonlinear part only: the linear part of a delay is absorbed by the
+                    // node coefficients (a phase at the forcing frequency)
+                    let cfg = &nodes[*n].config;
+                    let a = law::node_coefficients(cases, nodes, &f.supports, &base, i, c);
+                    let mut p = vec![0.0; cases[i].n];
+                    for (t, &aj) in f.supports[cfg][c].iter().zip(&a) {
+                        if aj != 0.0 && t.degree() >= 2 {
+                            let col = cases[i].column(t);
+                            p.iter_mut().zip(&col).for_each(|(o, v)| *o += aj * v);
+                        }
+                    }
+                    deriv[i] = time_derivative(&p, cases[i].dt);
+                }
+            }
+            // training cases: in-sample node fit values instead of the interpolation
+            for (nf, (_, _, a)) in f.fits.iter().zip(&base.nodes) {
+                let cfg = &nodes[nf.node].config;
+                for &i in &nodes[nf.node].cases {
+                    let mut p = vec![0.0; cases[i].n];
+                    for (t, &aj) in f.supports[cfg][c].iter().zip(a) {
+                        if aj != 0.0 && t.degree() >= 2 {
+                            let col = cases[i].column(t);
+                            p.iter_mut().zip(&col).for_each(|(o, v)| *o += aj * v);
+                        }
+                    }
+                    deriv[i] = time_derivative(&p, cases[i].dt);
+                }
+            }
+            let extra = |i: usize, _c: usize| vec![deriv[i].clone()];
+            let l = fold_residuals(cases, nodes, f, c, &extra, &mut res);
+            taus.push(-l.beta.first().copied().unwrap_or(0.0));
+        }
+    }
+    let tau = taus.iter().sum::<f64>() / taus.len().max(1) as f64;
+    Scored {
+        kind: CandidateKind::TimeDelay,
+        residuals: res,
+        n_params: 2,
+        n_nuisance: 0,
+        parameters: vec![("tau_s".into(), tau)],
+        failure: None,
+    }
+}
+
+fn time_derivative(x: &[f64], dt: f64) -> Vec<f64> {
+    let n = x.len();
+    (0..n)
+        .map(|i| {
+            if n < 3 {
+                0.0
+            } else if i == 0 {
+                (-3.0 * x[0] + 4.0 * x[1] - x[2]) / (2.0 * dt)
+            } else if i == n - 1 {
+                (3.0 * x[n - 1] - 4.0 * x[n - 2] + x[n - 3]) / (2.0 * dt)
+            } else {
+                (x[i + 1] - x[i - 1]) / (2.0 * dt)
+            }
+        })
+        .collect()
+}
+
+/// Sine/cosine least-squares fit at frequency f removed from r; returns the new residual.
+fn remove_line(r: &[f64], dt: f64, f: f64) -> Vec<f64> {
+    let w = 2.0 * std::f64::consts::PI * f * dt;
+    let (mut cc, mut ss, mut cs, mut rc, mut rs) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    for (i, &v) in r.iter().enumerate() {
+        let (s, c) = (w * i as f64).sin_cos();
+        cc += c * c;
+        ss += s * s;
+        cs += c * s;
+        rc += v * c;
+        rs += v * s;
+    }
+    let det = cc * ss - cs * cs;
+    if det.abs() < 1e-12 * (cc * ss).max(1e-300) {
+        return r.to_vec();
+    }
+    let a = (rc * ss - rs * cs) / det;
+    let b = (rs * cc - rc * cs) / det;
+    r.iter()
+        .enumerate()
+        .map(|(i, &v)| {
+            let (s, c) = (w * i as f64).sin_cos();
+            v - a * c - b * s
+        })
+        .collect()
+}
+
+/// |DFT|²·2/n of x zero-padded to m points (≈ the energy a least-squares line at a bin
+/// frequency removes).
+fn periodogram(x: &[f64], m: usize) -> Vec<f64> {
+    let mut planner = realfft::RealFftPlanner::<f64>::new();
+    let fft = planner.plan_fft_forward(m);
+    let mut input = vec![0.0; m];
+    input[..x.len()].copy_from_slice(x);
+    let mut out = fft.make_output_vec();
+    if fft.process(&mut input, &mut out).is_err() {
+        return vec![0.0; m / 2 + 1];
+    }
+    let n = x.len() as f64;
+    out.iter().map(|z| 2.0 * z.norm_sqr() / n).collect()
+}
+
+/// True when f is within 1.5/T of a forcing tone |m f_α + n f_h| of order ≤ 9 (or DC).
+fn near_tone(c: &CaseData, f: f64) -> bool {
+    let tol = 1.5 / (c.n as f64 * c.dt);
+    if f < tol {
+        return true;
+    }
+    let fh = c.f_h.unwrap_or(0.0);
+    for m in 0..=9i32 {
+        for n in -9..=9i32 {
+            if m.abs() + n.abs() > 9 || (c.f_h.is_none() && n != 0) {
+                continue;
+            }
+            let t = (m as f64 * c.f_alpha + n as f64 * fh).abs();
+            if (t - f).abs() < tol {
+                return true;
+            }
+        }
+    }
+    false
+}
+
+/// `vortex_shedding`: S from the training residuals, amplitude/phase per held-out case.
+fn vortex(cases: &[CaseData], nodes: &[Node], folds: &[Fold], before: &[[Vec<f64>; 2]]) -> Scored {
+    let mut res = before.to_vec();
+    let mut ss = Vec::new();
+    for f in folds {
+        // training residuals of the baseline node fits, noise weighted, both channels
+        let mut train_res: Vec<(usize, [Vec<f64>; 2])> = Vec::new();
+        for nf in &f.fits {
+            let r: [Vec<f64>; 2] = [0, 1].map(|c| nf.qr[c].residual(&nf.y[c]));
+            let mut off = 0;
+            for &i in &nodes[nf.node].cases {
+                let n = cases[i].n;
+                let rc = [0, 1].map(|c| {
+                    r[c][off..off + n]
+                        .iter()
+                        .map(|v| v / cases[i].sigma[c].max(1e-300))
+                        .collect::<Vec<f64>>()
+                });
+                off += n;
+                train_res.push((i, rc));
+            }
+        }
+        // periodograms (4× zero padding) of every training residual, both channels summed
+        let spectra: Vec<(usize, Vec<f64>, f64)> = train_res
+            .iter()
+            .map(|(i, r)| {
+                let c = &cases[*i];
+                let m = (4 * c.n).next_power_of_two();
+                let mut p = vec![0.0; m / 2 + 1];
+                for ch in r.iter() {
+                    for (k, v) in periodogram(ch, m).into_iter().enumerate() {
+                        p[k] += v;
+                    }
+                }
+                (*i, p, 1.0 / (m as f64 * c.dt))
+            })
+            .collect();
+        let total = |s: f64| -> f64 {
+            spectra
+                .iter()
+                .map(|(i, p, df)| {
+                    let c = &cases[*i];
+                    let fq = s * c.u / c.nd.chord;
+                    let k = (fq / df).round() as usize;
+                    if fq >= 0.45 / c.dt || k >= p.len() || near_tone(c, fq) {
+                        0.0
+                    } else {
+                        p[k]
+                    }
+                })
+                .sum()
+        };
+        let u_max = cases.iter().map(|c| c.u).fold(0.0, f64::max);
+        let t_len = cases[0].n as f64 * cases[0].dt;
+        let b = cases[0].nd.chord;
+        // step: an eighth of the spectral resolution at the highest speed
+        let step = 0.125 * b / (t_len * u_max);
+        let (s_min, s_max) = (0.02, 1.0);
+        let mut best = (0.0, s_min);
+        let mut s = s_min;
+        while s <= s_max {
+            let p = total(s);
+            if p > best.0 {
+                best = (p, s);
+            }
+            s += step;
+        }
+        let s_hat = best.1;
+        ss.push(s_hat);
+        for &n in &f.test {
+            for &i in &nodes[n].cases {
+                let c = &cases[i];
+                let fq = s_hat * c.u / c.nd.chord;
+                if fq < 0.45 / c.dt {
+                    for ch in 0..2 {
+                        res[i][ch] = remove_line(&before[i][ch], c.dt, fq);
+                    }
+                }
+            }
+        }
+    }
+    let s_mean = ss.iter().sum::<f64>() / ss.len().max(1) as f64;
+    Scored {
+        kind: CandidateKind::VortexShedding,
+        residuals: res,
+        n_params: 1,
+        n_nuisance: 4 * cases.len(),
+        parameters: vec![("strouhal_chord".into(), s_mean)],
+        failure: None,
+    }
+}
+
+/// Significance of a candidate: (statistic z, threshold, significant, excess share removed,
+/// score). `e_before`, `e_after` in noise units, `n` samples.
+pub(crate) fn significance(
+    e_before: f64,
+    e_after: f64,
+    n: f64,
+    p: usize,
+    q: usize,
+    opts: &ForceOptions,
+) -> (f64, f64, bool, f64, f64) {
+    let (p, q) = (p as f64, q as f64);
+    let z = (e_before - e_after - q) / (2.0 * (p + q)).max(1.0).sqrt();
+    let excess = (e_before - n).max(1e-300);
+    let share = (e_before - e_after - q) / excess;
+    let sig = z > opts.significance && share >= opts.min_shrink;
+    let score = (e_after + 2.0 * (p + q)) / n;
+    (z, opts.significance, sig, share, score)
+}

@@ -1,0 +1,175 @@
+//! Per-case data of the force level: nondimensional regressors and targets, scales back to
+//! forces, noise estimates, a harmonic representation of the motion (for shifted and
+//! differentiated regressors), and the (configuration, wind speed) nodes.
+
+use identify::dataset::Dataset;
+use identify::library::Term;
+use identify::preprocess::{harmonic_fit, noise_sigma, HarmonicFit, PreprocessOptions};
+use identify::record::NondimCase;
+use identify::workflow::prepare_dataset;
+
+use crate::{Error, Result};
+
+/// Channel names in index order.
+pub(crate) const CHANNELS: [&str; 2] = ["lift", "moment"];
+
+/// One forced case ready for the force level.
+#[derive(Debug, Clone)]
+pub(crate) struct CaseData {
+    pub nd: NondimCase,
+    pub config: String,
+    pub u: f64,
+    pub amp_deg: f64,
+    pub n: usize,
+    pub dt: f64,
+    /// C_L, C_M.
+    pub y: [Vec<f64>; 2],
+    /// C → force per unit span: qB (lift), qB² (moment).
+    pub scale: [f64; 2],
+    /// Sensor-noise σ̂ of C_L, C_M ([`noise_sigma`]).
+    pub sigma: [f64; 2],
+    /// Pitch / heave forcing frequency [Hz].
+    pub f_alpha: f64,
+    pub f_h: Option<f64>,
+    /// K_α = Bω_α/U.
+    pub k_alpha: f64,
+    /// Harmonic fits of the four regression variables at the forcing frequencies (None
+    /// when a fit fails: the shifted and differentiated regressors then fall back to finite
+    /// differences and interpolation).
+    pub rep: [Option<HarmonicFit>; 4],
+    /// Node index (configuration, wind speed).
+    pub node: usize,
+}
+
+impl CaseData {
+    /// Column of a monomial on this case's samples.
+    pub fn column(&self, t: &Term) -> Vec<f64> {
+        column_of(&self.nd.x, t)
+    }
+
+    /// Nondimensional accelerations (B²α̈/U², Bḧ/U²) = (B/U)·d/dt(Bα̇/U, ḣ/U).
+    pub fn accelerations(&self) -> [Vec<f64>; 2] {
+        let c = self.nd.chord / self.u;
+        [1, 3].map(|k| match &self.rep[k] {
+            Some(f) => (0..self.n)
+                .map(|i| c * f.derivative(i as f64 * self.dt))
+                .collect(),
+            None => central_difference(&self.nd.x[k], self.dt)
+                .into_iter()
+                .map(|v| c * v)
+                .collect(),
+        })
+    }
+}
+
+/// Column of a monomial (any degree) on four variable series.
+pub(crate) fn column_of(x: &[Vec<f64>; 4], t: &Term) -> Vec<f64> {
+    let n = x[0].len();
+    (0..n)
+        .map(|i| t.eval_at([x[0][i], x[1][i], x[2][i], x[3][i]]))
+        .collect()
+}
+
+fn central_difference(x: &[f64], dt: f64) -> Vec<f64> {
+    let n = x.len();
+    (0..n)
+        .map(|i| {
+            let (a, b) = (i.saturating_sub(1), (i + 1).min(n - 1));
+            (x[b] - x[a]) / ((b - a).max(1) as f64 * dt)
+        })
+        .collect()
+}
+
+/// A (configuration, wind speed) node: one fold group.
+#[derive(Debug, Clone)]
+pub(crate) struct Node {
+    pub config: String,
+    pub u: f64,
+    /// Mean K_α of its cases.
+    pub k_alpha: f64,
+    pub cases: Vec<usize>,
+}
+
+/// Prepares the forced cases of a data set (identify's preprocessing) and groups them into
+/// nodes (sorted by configuration then wind speed).
+pub(crate) fn prepare(forced: &Dataset) -> Result<(Vec<CaseData>, Vec<Node>)> {
+    let name = forced.manifest.name.clone();
+    let prepared = prepare_dataset(forced, &PreprocessOptions::default())
+        .map_err(|e| Error::identify(format!("data set `{name}`: preprocessing"), e))?;
+    if prepared.cases.is_empty() {
+        return Err(Error::data(&name, "no forced case"));
+    }
+    let section = forced.manifest.section;
+    let mut cases = Vec::with_capacity(prepared.cases.len());
+    for nd in prepared.cases {
+        let id = nd.meta.id.clone();
+        let u = nd.meta.wind_speed;
+        let Some(f_alpha) = nd.forcing.pitch else {
+            return Err(Error::data(
+                &name,
+                format!(
+                    "case `{id}`: no pitch forcing frequency (the force level needs pitch motion)"
+                ),
+            ));
+        };
+        let q = 0.5 * section.air_density * u * u;
+        let b = section.chord;
+        let scale = [q * b, q * b * b];
+        let y = [nd.c_lift.clone(), nd.c_moment.clone()];
+        let sigma = [noise_sigma(&y[0]), noise_sigma(&y[1])];
+        let freqs = nd.forcing.frequencies();
+        let rep = std::array::from_fn(|k| harmonic_fit(&nd.x[k], nd.dt, &freqs).ok());
+        let amp_deg = match nd.meta.amplitude {
+            Some(a) => a.to_degrees(),
+            None => {
+                let (lo, hi) = nd.x[0]
+                    .iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| {
+                        (l.min(v), h.max(v))
+                    });
+                0.5 * (hi - lo).to_degrees()
+            }
+        };
+        cases.push(CaseData {
+            config: nd.meta.config.clone().unwrap_or_else(|| "-".to_string()),
+            u,
+            amp_deg,
+            n: nd.len(),
+            dt: nd.dt,
+            y,
+            scale,
+            sigma,
+            f_alpha,
+            f_h: nd.forcing.heave,
+            k_alpha: b * 2.0 * std::f64::consts::PI * f_alpha / u,
+            rep,
+            node: 0,
+            nd,
+        });
+    }
+    let mut keys: Vec<(String, f64)> = cases.iter().map(|c| (c.config.clone(), c.u)).collect();
+    keys.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)));
+    keys.dedup_by(|a, b| a.0 == b.0 && (a.1 - b.1).abs() <= 1e-9 * b.1.abs().max(1.0));
+    let mut nodes: Vec<Node> = keys
+        .iter()
+        .map(|(c, u)| Node {
+            config: c.clone(),
+            u: *u,
+            k_alpha: 0.0,
+            cases: Vec::new(),
+        })
+        .collect();
+    for (i, c) in cases.iter_mut().enumerate() {
+        let j = nodes
+            .iter()
+            .position(|nd| nd.config == c.config && (nd.u - c.u).abs() <= 1e-9 * c.u.max(1.0))
+            .unwrap_or(0);
+        c.node = j;
+        nodes[j].cases.push(i);
+    }
+    for nd in &mut nodes {
+        nd.k_alpha =
+            nd.cases.iter().map(|&i| cases[i].k_alpha).sum::<f64>() / nd.cases.len() as f64;
+    }
+    Ok((cases, nodes))
+}

@@ -1,0 +1,334 @@
+//! The force level of the diagnosis: held-out gap of the identified Eq. 19 law on
+//! forced-motion records, where it lies, and which generic augmentation removes it.
+//!
+//! [`force_level`] runs:
+//! 1. **Folds.** Forced cases are grouped by (configuration, wind speed) — the *nodes*; the
+//!    nodes are shuffled with `ChaCha8Rng::seed_from_u64(opts.seed)` and dealt to
+//!    `opts.folds` folds in turn, so every case is held out exactly once and never shares a
+//!    node with a training case.
+//! 2. **Baseline.** Per fold, `identify` (default [`IdentifySettings`]) on the training
+//!    cases selects each configuration's support (union of its groups' supports, lift and
+//!    moment); the law is then one coefficient vector per node, fitted by least squares on
+//!    the node's amplitudes together (the identified law depends on K only, as
+//!    `aeroelastic::identified` aggregates it). A held-out case is predicted from its
+//!    preprocessed motion with the node coefficients of its configuration interpolated at
+//!    its K_α ([`law::interpolate_scalar`]: quadratic through the three nearest nodes inside
+//!    the range, a line through the end nodes outside, held beyond one node spacing).
+//! 3. **Gap** ([`gaps`]): sqrt(Σr²/ΣF²) per channel in forces per unit span over the
+//!    held-out cases, combined as the rms of the channels; the noise level is the same
+//!    metric with Σr² replaced by Σ n σ̂² (σ̂ = `noise_sigma` of each force channel).
+//!
+//! Candidates (fit, score, significance): the `candidates` submodule; `where`, signatures
+//! and spectra: the `analysis` submodule.
+
+// The crate's error enum carries an identify::Error (large); boxing it is the skeleton's
+// decision, not this module's.
+// Index loops over channels and small dense matrices read more clearly than iterators.
+#![allow(clippy::needless_range_loop)]
+
+mod analysis;
+mod candidates;
+mod data;
+mod law;
+mod linalg;
+
+use std::collections::BTreeMap;
+
+use identify::dataset::Dataset;
+use identify::library::Term;
+use identify::pipeline::{identify, IdentifySettings};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use crate::effect::{Effect, Level};
+use crate::report::LevelResult;
+use crate::{Error, Result};
+
+use data::{CaseData, Node};
+use law::{NodeFit, Supports};
+
+pub use candidates::CandidateKind;
+
+/// Default threshold of the gap test (statistic = held-out gap / noise level).
+///
+/// Calibrated on effect-free virtual data (`calibration_effect_free` in
+/// `tests/force_level.rs`): see docs/DECISIONS.md (force level) for the numbers.
+pub const DEFAULT_GAP_THRESHOLD: f64 = 1.8;
+
+/// Options of [`force_level`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct ForceOptions {
+    /// Number of folds over the (configuration, wind speed) groups (default 5, ≥ 2).
+    pub folds: usize,
+    /// Seed of the fold assignment.
+    pub seed: u64,
+    /// Identification settings of the baseline law (default: `IdentifySettings::default()`).
+    pub identify: IdentifySettings,
+    /// Threshold of the gap statistic held-out gap / noise level (default
+    /// [`DEFAULT_GAP_THRESHOLD`]).
+    pub gap_threshold: f64,
+    /// Candidate augmentations to score (default: all of [`CandidateKind::ALL`]).
+    pub candidates: Vec<CandidateKind>,
+    /// Significance threshold of a candidate's held-out improvement (see
+    /// [`candidates`]; default [`candidates::DEFAULT_SIGNIFICANCE`]).
+    pub significance: f64,
+    /// Minimum share of the excess (above-noise) held-out residual energy a significant
+    /// candidate must remove (default [`candidates::DEFAULT_MIN_SHRINK`]).
+    pub min_shrink: f64,
+}
+
+impl Default for ForceOptions {
+    fn default() -> Self {
+        ForceOptions {
+            folds: 5,
+            seed: 0,
+            identify: IdentifySettings::default(),
+            gap_threshold: DEFAULT_GAP_THRESHOLD,
+            candidates: CandidateKind::ALL.to_vec(),
+            significance: candidates::DEFAULT_SIGNIFICANCE,
+            min_shrink: candidates::DEFAULT_MIN_SHRINK,
+        }
+    }
+}
+
+/// One fold: its training and held-out nodes, the supports identified on its training
+/// cases and the training nodes' factorisations.
+pub(crate) struct Fold {
+    pub index: usize,
+    pub train: Vec<usize>,
+    pub test: Vec<usize>,
+    pub supports: Supports,
+    pub fits: Vec<NodeFit>,
+}
+
+/// Deals the nodes to `k` folds after a seeded shuffle.
+///
+/// # Errors
+/// [`Error::Setting`] for k < 2; [`Error::Data`] naming the data set when there are fewer
+/// nodes than folds or a configuration has a single wind speed (no node to interpolate
+/// from once it is held out).
+pub(crate) fn assign_folds(
+    nodes: &[Node],
+    k: usize,
+    seed: u64,
+    dataset: &str,
+) -> Result<Vec<usize>> {
+    if k < 2 {
+        return Err(Error::setting("folds", k as f64, "need at least 2 folds"));
+    }
+    if nodes.len() < k {
+        return Err(Error::data(
+            dataset,
+            format!(
+                "{} (configuration, wind speed) groups of forced cases; {k} folds need at least {k}",
+                nodes.len()
+            ),
+        ));
+    }
+    let mut per_config: BTreeMap<&str, usize> = BTreeMap::new();
+    for n in nodes {
+        *per_config.entry(n.config.as_str()).or_default() += 1;
+    }
+    if let Some((c, _)) = per_config.iter().find(|(_, &m)| m < 2) {
+        return Err(Error::data(
+            dataset,
+            format!("configuration `{c}` has forced cases at one wind speed only; held-out prediction needs at least 2"),
+        ));
+    }
+    let mut order: Vec<usize> = (0..nodes.len()).collect();
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    for i in (1..order.len()).rev() {
+        let j = rng.random_range(0..=i);
+        order.swap(i, j);
+    }
+    let mut fold = vec![0; nodes.len()];
+    for (pos, &n) in order.iter().enumerate() {
+        fold[n] = pos % k;
+    }
+    Ok(fold)
+}
+
+fn build_fold(
+    index: usize,
+    fold_of: &[usize],
+    cases: &[CaseData],
+    nodes: &[Node],
+    settings: &IdentifySettings,
+    dataset: &str,
+) -> Result<Fold> {
+    let train: Vec<usize> = (0..nodes.len()).filter(|&n| fold_of[n] != index).collect();
+    let test: Vec<usize> = (0..nodes.len()).filter(|&n| fold_of[n] == index).collect();
+    let train_cases: Vec<identify::record::NondimCase> = train
+        .iter()
+        .flat_map(|&n| nodes[n].cases.iter().map(|&i| cases[i].nd.clone()))
+        .collect();
+    let id = identify(&train_cases, settings, dataset, &|_| {}).map_err(|e| {
+        Error::identify(
+            format!("data set `{dataset}`, fold {index}: baseline identification"),
+            e,
+        )
+    })?;
+    let mut supports: Supports = BTreeMap::new();
+    for case in &id.cases {
+        let Some(nd) = train_cases.iter().find(|c| c.meta.id == case.id) else {
+            continue;
+        };
+        let cfg = nd.meta.config.clone().unwrap_or_else(|| "-".to_string());
+        let g = id.groups.iter().find(|g| g.name == case.group);
+        let entry = supports
+            .entry(cfg)
+            .or_insert_with(|| [Vec::new(), Vec::new()]);
+        if let Some(g) = g {
+            for (c, names) in [&g.lift.support, &g.moment.support].into_iter().enumerate() {
+                for name in names {
+                    let t = Term::parse(name).map_err(|e| {
+                        Error::identify(format!("fold {index}: support term `{name}`"), e)
+                    })?;
+                    if !entry[c].contains(&t) {
+                        entry[c].push(t);
+                    }
+                }
+            }
+        }
+    }
+    for s in supports.values_mut() {
+        for c in s.iter_mut() {
+            c.sort_by_key(|t| (t.degree(), std::cmp::Reverse(t.powers)));
+        }
+    }
+    for &n in &test {
+        if !supports.contains_key(&nodes[n].config) {
+            return Err(Error::data(
+                dataset,
+                format!(
+                    "fold {index}: configuration `{}` has no training case",
+                    nodes[n].config
+                ),
+            ));
+        }
+    }
+    let fits = law::node_fits(cases, nodes, &train, &supports);
+    Ok(Fold {
+        index,
+        train,
+        test,
+        supports,
+        fits,
+    })
+}
+
+/// Held-out residuals r = measured − predicted, `[case][channel]` in C units, for the
+/// augmentation given by `extra` (no augmentation: `&|_, _| vec![]`).
+pub(crate) fn held_out_residuals(
+    cases: &[CaseData],
+    nodes: &[Node],
+    folds: &[Fold],
+    extra: law::Extra<'_>,
+) -> Vec<[Vec<f64>; 2]> {
+    let mut out: Vec<[Vec<f64>; 2]> = vec![[Vec::new(), Vec::new()]; cases.len()];
+    for f in folds {
+        for c in 0..2 {
+            fold_residuals(cases, nodes, f, c, extra, &mut out);
+        }
+    }
+    out
+}
+
+/// Held-out residuals of one fold and channel into `out`; returns the fitted law.
+pub(crate) fn fold_residuals(
+    cases: &[CaseData],
+    nodes: &[Node],
+    f: &Fold,
+    c: usize,
+    extra: law::Extra<'_>,
+    out: &mut [[Vec<f64>; 2]],
+) -> law::ChannelLaw {
+    let lawc = law::fit_channel(cases, nodes, &f.fits, c, extra);
+    for &n in &f.test {
+        for &i in &nodes[n].cases {
+            let z = extra(i, c);
+            let p = law::predict(cases, nodes, &f.supports, &lawc, i, c, &z);
+            out[i][c] = cases[i].y[c].iter().zip(&p).map(|(y, p)| y - p).collect();
+        }
+    }
+    lawc
+}
+
+/// Held-out gap metrics of a set of residuals.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Gaps {
+    /// sqrt(Σr²/ΣF²) of lift, moment (forces per unit span).
+    pub channel: [f64; 2],
+    /// rms of the two channels.
+    pub combined: f64,
+}
+
+/// Gap of residuals `res[case][channel]` (C units) in forces: Σ(r·scale)²/Σ(F)².
+pub(crate) fn gaps(cases: &[CaseData], res: &[[Vec<f64>; 2]]) -> Gaps {
+    let mut num = [0.0; 2];
+    let mut den = [0.0; 2];
+    for (case, r) in cases.iter().zip(res) {
+        for c in 0..2 {
+            let s2 = case.scale[c] * case.scale[c];
+            num[c] += s2 * r[c].iter().map(|v| v * v).sum::<f64>();
+            den[c] += s2 * case.y[c].iter().map(|v| v * v).sum::<f64>();
+        }
+    }
+    let channel = [0, 1].map(|c| {
+        if den[c] > 0.0 {
+            (num[c] / den[c]).sqrt()
+        } else {
+            0.0
+        }
+    });
+    Gaps {
+        channel,
+        combined: ((channel[0].powi(2) + channel[1].powi(2)) / 2.0).sqrt(),
+    }
+}
+
+/// Noise level of the gap: Σr² replaced by Σ n σ̂².
+pub(crate) fn noise_gaps(cases: &[CaseData]) -> Gaps {
+    let res: Vec<[Vec<f64>; 2]> = cases
+        .iter()
+        .map(|c| [0, 1].map(|k| vec![c.sigma[k]; c.n]))
+        .collect();
+    gaps(cases, &res)
+}
+
+/// The force level of the diagnosis on a forced-motion data set (see the module
+/// documentation for the method; every number is measured on held-out cases).
+///
+/// # Errors
+/// [`Error::Identify`] when preprocessing or a fold's identification fails (naming the
+/// fold); [`Error::Data`] naming the data set when there are too few (configuration, wind
+/// speed) groups for the folds, a configuration has a single wind speed, or a case has no
+/// pitch forcing; [`Error::Setting`] for `folds < 2` or a non-positive threshold.
+pub fn force_level(forced: &Dataset, opts: &ForceOptions) -> Result<LevelResult> {
+    if !(opts.gap_threshold.is_finite() && opts.gap_threshold > 0.0) {
+        return Err(Error::setting(
+            "gap_threshold",
+            opts.gap_threshold,
+            "must be > 0",
+        ));
+    }
+    let name = forced.manifest.name.clone();
+    let (cases, nodes) = data::prepare(forced)?;
+    let fold_of = assign_folds(&nodes, opts.folds, opts.seed, &name)?;
+    let folds: Vec<Fold> = (0..opts.folds)
+        .map(|k| build_fold(k, &fold_of, &cases, &nodes, &opts.identify, &name))
+        .collect::<Result<_>>()?;
+    let before = held_out_residuals(&cases, &nodes, &folds, &|_, _| Vec::new());
+    let scored = candidates::score_all(&cases, &nodes, &folds, &before, opts);
+    Ok(analysis::assemble(
+        &cases, &nodes, &fold_of, &before, scored, opts,
+    ))
+}
+
+/// The level a force-level result reports.
+pub const LEVEL: Level = Level::Aerodynamic;
+
+/// Catalogue effect of a candidate kind.
+pub fn effect_of(kind: CandidateKind) -> Effect {
+    kind.effect()
+}

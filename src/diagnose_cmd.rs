@@ -1,0 +1,217 @@
+//! `aeroform diagnose`: where predictions and measurements differ, which unmodelled effect
+//! causes it and how far the gap shrinks once it is added (`diagnosis.json`, figures,
+//! `diagnosis.html`); `--blind N` runs the withheld-effect benchmark instead.
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use anyhow::{bail, Context};
+use clap::Args;
+use diagnose::bench::{acceptance_lines, confusion_markdown, BlindReport, STRONG_RATIO};
+use diagnose::bench_run::{run_blind, BlindOptions};
+use diagnose::pipeline::{diagnose, DiagnoseOptions};
+use diagnose::Diagnosis;
+use identify::dataset::read_dataset;
+use identify::io::write_atomic;
+
+use crate::progress::CountBar;
+
+/// Flags of `aeroform diagnose`.
+#[derive(Debug, Args)]
+pub struct DiagnoseArgs {
+    /// Forced-motion data-set folder (DATA_FORMAT.md).
+    #[arg(required_unless_present = "blind")]
+    pub dataset: Option<PathBuf>,
+    /// Free-response data-set folder of the same section (enables the system level).
+    #[arg(long)]
+    pub free: Option<PathBuf>,
+    /// Output folder (created if missing); default `out/diagnosis` or `out/blind`.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Master seed of every random draw (fold assignment; benchmark labels, strengths and
+    /// noise).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Run the withheld-effect benchmark on N generated data sets instead.
+    #[arg(long, conflicts_with_all = ["dataset", "free"])]
+    pub blind: Option<usize>,
+}
+
+/// Runs `aeroform diagnose`.
+pub fn run(args: &DiagnoseArgs) -> anyhow::Result<()> {
+    if let Some(n) = args.blind {
+        let out = args.out.clone().unwrap_or_else(|| PathBuf::from("out/blind"));
+        return blind(n, args.seed, &out);
+    }
+    let Some(dir) = &args.dataset else {
+        bail!("give a data-set folder or --blind N");
+    };
+    let out = args
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("out/diagnosis"));
+    let forced = read_dataset(dir).with_context(|| format!("reading {}", dir.display()))?;
+    let free = match &args.free {
+        Some(f) => Some(read_dataset(f).with_context(|| format!("reading {}", f.display()))?),
+        None => None,
+    };
+    crate::ensure_dir(&out)?;
+    let opts = DiagnoseOptions::new(args.seed);
+    let t = std::time::Instant::now();
+    let diag = diagnose(&forced, free.as_ref(), &opts, &crate::study::figures::version())?;
+    let secs = t.elapsed().as_secs_f64();
+    write_json(&out.join("diagnosis.json"), &diag)?;
+    let files = plots::write_diagnosis_outputs(&diag, &out)?;
+    print_diagnosis(&diag, secs);
+    println!(
+        "wrote {} and {} figure/report files to {}",
+        out.join("diagnosis.json").display(),
+        files.len(),
+        out.display()
+    );
+    Ok(())
+}
+
+fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> anyhow::Result<()> {
+    let mut text = serde_json::to_string_pretty(value)?;
+    text.push('\n');
+    write_atomic(path, text.as_bytes())?;
+    Ok(())
+}
+
+fn print_diagnosis(d: &Diagnosis, secs: f64) {
+    println!(
+        "verdict: {} (level {}, confidence {:.2})",
+        d.verdict.effect,
+        d.verdict.level.name(),
+        d.verdict.confidence
+    );
+    println!("  {}", d.verdict.reason);
+    println!(
+        "gap ({}): before {:.4}, after {:.4}, noise level {:.4}, shrink {:.1} % (excess {:.1} %)",
+        d.gap.metric,
+        d.gap.before,
+        d.gap.after,
+        d.gap.noise_level,
+        100.0 * d.gap.shrink,
+        100.0 * d.gap.excess_shrink
+    );
+    for l in &d.levels {
+        println!(
+            "level {}: held-out gap {:.4} vs noise {:.4} ({}significant)",
+            l.level.name(),
+            l.before,
+            l.noise_level,
+            if l.significant_gap { "" } else { "not " }
+        );
+        for c in l.candidates.iter().take(4) {
+            println!(
+                "    {:<17} after {:.4}  shrink {:>6.1} %  {}",
+                c.effect.name(),
+                c.after,
+                100.0 * c.shrink,
+                if c.significant { "significant" } else { "" }
+            );
+        }
+    }
+    println!("diagnosed in {secs:.2} s");
+}
+
+fn blind(n: usize, seed: u64, out: &Path) -> anyhow::Result<()> {
+    if n == 0 {
+        bail!("--blind needs at least one data set");
+    }
+    crate::ensure_dir(&out.to_path_buf())?;
+    let opts = BlindOptions::new(n, seed);
+    let bar = CountBar::new(n, "blind");
+    let wrong = AtomicUsize::new(0);
+    let t = std::time::Instant::now();
+    let report = run_blind(&opts, &|o| {
+        if !o.correct() {
+            wrong.fetch_add(1, Ordering::Relaxed);
+        }
+        bar.tick(format!("{} → {}", o.spec.truth, o.verdict));
+    });
+    bar.finish();
+    let secs = t.elapsed().as_secs_f64();
+    write_json(&out.join("blind.json"), &report)?;
+    let text = blind_text(&report, secs);
+    write_atomic(&out.join("confusion.md"), text.as_bytes())?;
+    print!("{text}");
+    println!("wrote {} and {}", out.join("blind.json").display(), out.join("confusion.md").display());
+    Ok(())
+}
+
+/// The printed and saved summary of a benchmark.
+fn blind_text(r: &BlindReport, secs: f64) -> String {
+    let s = &r.summary;
+    let mut t = format!(
+        "# Withheld-effect benchmark\n\n{} data sets, master seed {}, {} failed, {:.1} s \
+         ({:.2} s per set on {} threads).\n\n",
+        s.n,
+        r.seed,
+        s.failed,
+        secs,
+        s.mean_seconds,
+        rayon::current_num_threads()
+    );
+    t.push_str(&format!(
+        "## Strong sets (true gap ≥ {STRONG_RATIO}× the noise-level gap) and every effect-free set\n\n"
+    ));
+    t.push_str(&confusion_markdown(
+        &r.truth_labels,
+        &r.verdict_labels,
+        &r.confusion_strong,
+    ));
+    t.push_str("\n## All sets\n\n");
+    t.push_str(&confusion_markdown(
+        &r.truth_labels,
+        &r.verdict_labels,
+        &r.confusion_all,
+    ));
+    t.push_str("\n## Acceptance\n\n");
+    for l in acceptance_lines(s) {
+        t.push_str(&format!("- {l}\n"));
+    }
+    t.push_str("\n## Per effect (strong sets)\n\n| effect | correct | strong sets |\n|---|---:|---:|\n");
+    for (e, c, n) in &s.per_effect {
+        t.push_str(&format!("| {e} | {c} | {n} |\n"));
+    }
+    let mut weak: Vec<String> = r
+        .outcomes
+        .iter()
+        .filter(|o| o.error.is_none() && (o.strong() || o.spec.truth == "none") && !o.correct())
+        .map(|o| {
+            format!(
+                "- set {} (seed {}): {} at strength {:.2}, gap ratio {:.1} → {} (confidence {:.2})",
+                o.spec.index,
+                o.spec.seed,
+                o.spec.truth,
+                o.spec.strength,
+                o.gap_ratio,
+                o.verdict,
+                o.confidence
+            )
+        })
+        .collect();
+    if !weak.is_empty() {
+        t.push_str("\n## Wrong verdicts on strong sets\n\n");
+        weak.truncate(40);
+        for w in weak {
+            t.push_str(&w);
+            t.push('\n');
+        }
+    }
+    let errors: Vec<&str> = r
+        .outcomes
+        .iter()
+        .filter_map(|o| o.error.as_deref())
+        .collect();
+    if !errors.is_empty() {
+        t.push_str("\n## Failed sets\n\n");
+        for e in errors.iter().take(20) {
+            t.push_str(&format!("- {e}\n"));
+        }
+    }
+    t
+}
