@@ -14,7 +14,7 @@ use diagnose::Diagnosis;
 use identify::dataset::read_dataset;
 use identify::io::write_atomic;
 
-use crate::progress::CountBar;
+use crate::lco_cmd::CountBar;
 
 /// Flags of `aeroform diagnose`.
 #[derive(Debug, Args)]
@@ -40,7 +40,10 @@ pub struct DiagnoseArgs {
 /// Runs `aeroform diagnose`.
 pub fn run(args: &DiagnoseArgs) -> anyhow::Result<()> {
     if let Some(n) = args.blind {
-        let out = args.out.clone().unwrap_or_else(|| PathBuf::from("out/blind"));
+        let out = args
+            .out
+            .clone()
+            .unwrap_or_else(|| PathBuf::from("out/blind"));
         return blind(n, args.seed, &out);
     }
     let Some(dir) = &args.dataset else {
@@ -58,7 +61,12 @@ pub fn run(args: &DiagnoseArgs) -> anyhow::Result<()> {
     crate::ensure_dir(&out)?;
     let opts = DiagnoseOptions::new(args.seed);
     let t = std::time::Instant::now();
-    let diag = diagnose(&forced, free.as_ref(), &opts, &crate::study::figures::version())?;
+    let diag = diagnose(
+        &forced,
+        free.as_ref(),
+        &opts,
+        &crate::study::figures::version(),
+    )?;
     let secs = t.elapsed().as_secs_f64();
     write_json(&out.join("diagnosis.json"), &diag)?;
     let files = plots::write_diagnosis_outputs(&diag, &out)?;
@@ -138,7 +146,11 @@ fn blind(n: usize, seed: u64, out: &Path) -> anyhow::Result<()> {
     let text = blind_text(&report, secs);
     write_atomic(&out.join("confusion.md"), text.as_bytes())?;
     print!("{text}");
-    println!("wrote {} and {}", out.join("blind.json").display(), out.join("confusion.md").display());
+    println!(
+        "wrote {} and {}",
+        out.join("blind.json").display(),
+        out.join("confusion.md").display()
+    );
     Ok(())
 }
 
@@ -173,7 +185,9 @@ fn blind_text(r: &BlindReport, secs: f64) -> String {
     for l in acceptance_lines(s) {
         t.push_str(&format!("- {l}\n"));
     }
-    t.push_str("\n## Per effect (strong sets)\n\n| effect | correct | strong sets |\n|---|---:|---:|\n");
+    t.push_str(
+        "\n## Per effect (strong sets)\n\n| effect | correct | strong sets |\n|---|---:|---:|\n",
+    );
     for (e, c, n) in &s.per_effect {
         t.push_str(&format!("| {e} | {c} | {n} |\n"));
     }

@@ -1,6 +1,7 @@
 //! aeroform command-line interface: parses flags, builds library objects, draws progress
 //! bars and writes files. No physics lives here.
 
+mod diagnose_cmd;
 mod flutter_cmd;
 mod identify_cmd;
 mod interrupt;
@@ -39,6 +40,9 @@ enum Command {
     Tunnel(tunnel_cmd::TunnelCommand),
     /// Redraw the figures and report of a study output folder from its result files.
     Plot(plot_cmd::PlotArgs),
+    /// Sim-to-real gap: where predictions and measurements differ, which unmodelled effect
+    /// causes it, how far it shrinks (`--blind N`: the withheld-effect benchmark).
+    Diagnose(diagnose_cmd::DiagnoseArgs),
 }
 
 fn main() -> ExitCode {
@@ -50,6 +54,7 @@ fn main() -> ExitCode {
         Command::Lco(a) => lco_cmd::run(&a),
         Command::Tunnel(c) => tunnel_cmd::run(&c),
         Command::Plot(a) => plot_cmd::run(&a),
+        Command::Diagnose(a) => diagnose_cmd::run(&a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -162,7 +162,7 @@ fn shedding_adds_a_line_at_strouhal_frequency_moving_with_u() {
         &sc,
     );
     for u in ["4", "7"] {
-        let id = format!("B-U{u}-A12");
+        let id = format!("D-U{u}-A12");
         let a = s.forced.record(&id).unwrap().lift.as_ref().unwrap();
         let b = none.forced.record(&id).unwrap().lift.as_ref().unwrap();
         let d: Vec<f64> = a.iter().zip(b).map(|(x, y)| x - y).collect();
@@ -217,7 +217,8 @@ fn stall_changes_only_cases_above_the_critical_angle() {
         if a < 7.0 && rs.meta.wind_speed >= 7.0 {
             assert!(d < 1e-7 * pk, "{}: {d} vs peak {pk}", rs.meta.id);
         }
-        if a > 20.0 {
+        // Configuration D (2 Hz): the separation lag 1.5 B/U is short against the period.
+        if a > 20.0 && rs.meta.config.as_deref() == Some("D") {
             assert!(d > 0.05 * pk, "{}: {d} vs peak {pk}", rs.meta.id);
         }
     }
@@ -227,7 +228,10 @@ fn stall_changes_only_cases_above_the_critical_angle() {
 fn friction_gives_near_linear_decay() {
     // Below flutter (0.5 U_F) with strong Coulomb friction the pitch envelope falls in a
     // straight line: the peak drop per cycle is nearly constant.
-    let sc = small();
+    let sc = BlindScenario {
+        free_speed_factors: vec![0.5],
+        ..small()
+    };
     let s = gen(
         BlindEffect::Catalogue(Effect::Friction),
         1.0,

@@ -159,7 +159,8 @@ fn csv_file_columns(report: &mut Report, caption: &str, path: &Path, keep: Optio
     }
 }
 
-fn version() -> String {
+/// `aeroform <version> (<git describe>)`, or without the git part outside a checkout.
+pub(crate) fn version() -> String {
     let v = env!("CARGO_PKG_VERSION");
     let git = std::process::Command::new("git")
         .args([
