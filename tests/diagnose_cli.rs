@@ -1,0 +1,111 @@
+//! End-to-end tests of `aeroform diagnose` on data sets written to disk in the public format
+//! (DATA_FORMAT.md), as another program would hand them over: the blind generator writes
+//! `forced/`, `free/` and a separate `truth.json` that the command never reads.
+
+use std::path::Path;
+use std::process::Command;
+
+use aeroelastic::effects::Form;
+use diagnose::blind::{generate, write_blind, BlindEffect, BlindScenario};
+use diagnose::Effect;
+
+fn aeroform(args: &[&str]) -> (bool, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_aeroform"))
+        .args(args)
+        .output()
+        .expect("run aeroform");
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn write_set(dir: &Path, effect: BlindEffect, strength: f64, seed: u64) {
+    let set = generate(
+        effect,
+        strength,
+        Form::Primary,
+        seed,
+        &BlindScenario::default(),
+    )
+    .unwrap();
+    write_blind(dir, &set).unwrap();
+}
+
+#[test]
+fn diagnose_writes_a_complete_diagnosis_from_folders() {
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("set");
+    write_set(
+        &data,
+        BlindEffect::Catalogue(Effect::StaticOffset),
+        0.9,
+        21,
+    );
+    let out = tmp.path().join("out");
+    let (ok, stdout, stderr) = aeroform(&[
+        "diagnose",
+        data.join("forced").to_str().unwrap(),
+        "--free",
+        data.join("free").to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--seed",
+        "5",
+    ]);
+    assert!(ok, "{stdout}\n{stderr}");
+    let text = std::fs::read_to_string(out.join("diagnosis.json")).unwrap();
+    let d: diagnose::Diagnosis = serde_json::from_str(&text).unwrap();
+    assert_eq!(d.format, "aeroform-diagnosis/1");
+    assert_eq!(d.seed, 5);
+    assert_eq!(d.levels.len(), 2);
+    assert_eq!(d.verdict.effect, "static_offset", "{stdout}");
+    assert!(d.gap.after < d.gap.before);
+    // Every forced case is held out exactly once.
+    let held = &d.levels[0].held_out_cases;
+    let mut sorted = held.clone();
+    sorted.sort();
+    sorted.dedup();
+    assert_eq!(sorted.len(), held.len());
+    assert_eq!(held.len(), 40);
+    assert!(out.join("diagnosis.html").is_file());
+    assert!(out.join("figures/diagnosis_gap_heatmap.png").is_file());
+    assert!(stdout.contains("verdict: static_offset"), "{stdout}");
+    // The truth file exists beside the data sets, and the diagnosis never names it.
+    assert!(data.join("truth.json").is_file());
+    assert!(!text.contains("truth.json"));
+}
+
+#[test]
+fn diagnose_bad_inputs_are_clear_errors() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("out");
+    let missing = tmp.path().join("nope");
+    let (ok, _, stderr) = aeroform(&[
+        "diagnose",
+        missing.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!ok);
+    assert!(stderr.contains("nope"), "{stderr}");
+    assert!(!out.join("diagnosis.json").exists());
+
+    // A free data set given as the forced one: no forced cases.
+    let data = tmp.path().join("set");
+    write_set(&data, BlindEffect::None, 0.0, 3);
+    let (ok, _, stderr) = aeroform(&[
+        "diagnose",
+        data.join("free").to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!ok);
+    assert!(stderr.contains("forced"), "{stderr}");
+    assert!(!out.join("diagnosis.json").exists());
+
+    let (ok, _, stderr) = aeroform(&["diagnose", "--blind", "0", "--out", out.to_str().unwrap()]);
+    assert!(!ok);
+    assert!(stderr.contains("at least one"), "{stderr}");
+}
