@@ -152,7 +152,12 @@ fn case_spec(id: String, shape: &CaseShape) -> impl Strategy<Value = CaseSpec> {
 fn record(shape: &CaseShape, n: usize, forces: bool, values: BoxedStrategy<f64>) -> impl Strategy<Value = Record> {
     let (t0, dt, free) = (shape.t0, shape.dt, shape.free);
     let col = move || prop::collection::vec(values.clone(), n);
-    (col(), col(), prop::option::weighted(if forces { 1.0 } else { 0.0 }, (col(), col()))).prop_map(
+    let forces = if forces {
+        (col(), col()).prop_map(Some).boxed()
+    } else {
+        Just(None).boxed()
+    };
+    (col(), col(), forces).prop_map(
         move |(h, alpha, f)| Record {
             kind: if free { CaseKind::Free } else { CaseKind::Forced },
             meta: Default::default(),
@@ -227,7 +232,11 @@ fn dataset() -> impl Strategy<Value = (Manifest, Vec<Record>)> {
                     damping_heave: zh,
                     damping_pitch: zp,
                 });
-            let structure = prop::option::weighted(if any_free { 1.0 } else { 0.5 }, structure);
+            let structure = if any_free {
+                structure.prop_map(Some).boxed()
+            } else {
+                prop::option::of(structure).boxed()
+            };
             (specs, recs, structure).prop_map(move |(cases, records, structure)| {
                 (
                     Manifest {
