@@ -152,7 +152,11 @@ fn write_case_rows(w: &mut impl std::io::Write, rows: usize) {
 fn one_case_dataset(dir: &Path, rows: usize) -> std::path::PathBuf {
     let root = dir.join("ds");
     std::fs::create_dir_all(root.join("cases")).unwrap();
-    std::fs::write(root.join("manifest.toml"), format!("{MANIFEST_HEAD}{ONE_CASE}")).unwrap();
+    std::fs::write(
+        root.join("manifest.toml"),
+        format!("{MANIFEST_HEAD}{ONE_CASE}"),
+    )
+    .unwrap();
     let f = std::fs::File::create(root.join("cases/D-U6-A12.csv")).unwrap();
     let mut w = std::io::BufWriter::new(f);
     write_case_rows(&mut w, rows);
@@ -194,13 +198,21 @@ fn identify_into_a_path_blocked_by_a_file_is_a_clear_error() {
     std::fs::write(&file, b"x").unwrap();
     let out = file.join("out");
     let o = bin()
-        .args(["identify", root.to_str().unwrap(), "--out", out.to_str().unwrap()])
+        .args([
+            "identify",
+            root.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
         .output()
         .unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success());
     assert!(!err.contains("panicked"), "{err}");
-    assert!(err.contains("cannot create output folder") && err.contains("a-file"), "{err}");
+    assert!(
+        err.contains("cannot create output folder") && err.contains("a-file"),
+        "{err}"
+    );
     assert_eq!(std::fs::read(&file).unwrap(), b"x", "nothing overwritten");
 }
 
@@ -215,20 +227,31 @@ fn identify_whose_result_cannot_be_renamed_into_place_leaves_no_partial_file() {
     let out = tmp.path().join("out");
     std::fs::create_dir_all(out.join("identification.json/keep")).unwrap();
     let o = bin()
-        .args(["identify", root.to_str().unwrap(), "--out", out.to_str().unwrap(), "--quiet"])
+        .args([
+            "identify",
+            root.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--quiet",
+        ])
         .output()
         .unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success());
     assert!(!err.contains("panicked"), "{err}");
     assert!(err.contains("identification.json"), "{err}");
-    assert_eq!(files_in(&out), Vec::<String>::new(), "only the blocking folder remains");
+    assert_eq!(
+        files_in(&out),
+        Vec::<String>::new(),
+        "only the blocking folder remains"
+    );
     assert!(out.join("identification.json/keep").is_dir());
 }
 
 /// A full output device, simulated with RLIMIT_FSIZE (`ulimit -f`, 512-byte blocks) and
 /// SIGXFSZ ignored so that a write past the limit fails with EFBIG as on a full disk:
-/// `identify` writes ≈ 40 kB of JSON, the limit is 8 kB. The run fails with a message
+/// `identify` writes ≈ 8 kB of JSON for this case, the limit is 4 blocks (2 kB with dash's
+/// 512-byte blocks, 4 kB with 1 kB blocks). The run fails with a message
 /// naming the file and the cause; no result file and no temporary file remain.
 #[test]
 fn identify_into_a_full_output_folder_leaves_no_partial_file() {
@@ -236,8 +259,14 @@ fn identify_into_a_full_output_folder_leaves_no_partial_file() {
     let root = one_case_dataset(tmp.path(), 5120);
     let out = tmp.path().join("out");
     let (ok, _, err) = sh(
-        "trap '' XFSZ; ulimit -f 16",
-        &["identify", root.to_str().unwrap(), "--out", out.to_str().unwrap(), "--quiet"],
+        "trap '' XFSZ; ulimit -f 4",
+        &[
+            "identify",
+            root.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--quiet",
+        ],
     );
     assert!(!ok, "expected failure");
     assert!(!err.contains("panicked"), "{err}");
@@ -249,11 +278,22 @@ fn identify_into_a_full_output_folder_leaves_no_partial_file() {
     // Same data set without the limit: the result is written, so the limit was the cause.
     let (ok, _, err) = sh(
         "true",
-        &["identify", root.to_str().unwrap(), "--out", out.to_str().unwrap(), "--quiet"],
+        &[
+            "identify",
+            root.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--quiet",
+        ],
     );
     assert!(ok, "{err}");
-    let len = std::fs::metadata(out.join("identification.json")).unwrap().len();
-    assert!(len > 16 * 512, "result of {len} bytes fits under the limit: test is void");
+    let len = std::fs::metadata(out.join("identification.json"))
+        .unwrap()
+        .len();
+    assert!(
+        len > 4 * 1024,
+        "result of {len} bytes fits under the limit: test is void"
+    );
 }
 
 /// A whole study (`aeroform run`, quickstart: JSON, CSV, PNG, SVG, HTML) with a 64 kB file
@@ -281,13 +321,21 @@ fn manifest_without_cases_is_a_clear_error() {
     std::fs::write(root.join("manifest.toml"), MANIFEST_HEAD).unwrap();
     let out = tmp.path().join("out");
     let o = bin()
-        .args(["identify", root.to_str().unwrap(), "--out", out.to_str().unwrap()])
+        .args([
+            "identify",
+            root.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
         .output()
         .unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success());
     assert!(!err.contains("panicked"), "{err}");
-    assert!(err.contains("manifest.toml") && err.contains("case"), "{err}");
+    assert!(
+        err.contains("manifest.toml") && err.contains("case"),
+        "{err}"
+    );
     assert_eq!(files_in(&out), Vec::<String>::new());
 }
 
@@ -297,23 +345,39 @@ fn case_with_zero_rows_is_a_clear_error() {
     let root = one_case_dataset(tmp.path(), 0);
     let out = tmp.path().join("out");
     let o = bin()
-        .args(["identify", root.to_str().unwrap(), "--out", out.to_str().unwrap()])
+        .args([
+            "identify",
+            root.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
         .output()
         .unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success());
     assert!(!err.contains("panicked"), "{err}");
-    assert!(err.contains("D-U6-A12.csv") && err.contains("0 data rows"), "{err}");
+    assert!(
+        err.contains("D-U6-A12.csv") && err.contains("0 data rows"),
+        "{err}"
+    );
     assert_eq!(files_in(&out), Vec::<String>::new());
     // An empty file (no header either).
     std::fs::write(root.join("cases/D-U6-A12.csv"), b"").unwrap();
     let o = bin()
-        .args(["identify", root.to_str().unwrap(), "--out", out.to_str().unwrap()])
+        .args([
+            "identify",
+            root.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
         .output()
         .unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success());
-    assert!(err.contains("D-U6-A12.csv:1") && err.contains("header"), "{err}");
+    assert!(
+        err.contains("D-U6-A12.csv:1") && err.contains("header"),
+        "{err}"
+    );
     assert_eq!(files_in(&out), Vec::<String>::new());
 }
 
@@ -329,7 +393,12 @@ fn data_set_without_forced_cases_is_a_clear_error() {
     std::fs::write(root.join("manifest.toml"), manifest).unwrap();
     let out = tmp.path().join("out");
     let o = bin()
-        .args(["identify", root.to_str().unwrap(), "--out", out.to_str().unwrap()])
+        .args([
+            "identify",
+            root.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
         .output()
         .unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
@@ -346,7 +415,11 @@ fn data_set_without_forced_cases_is_a_clear_error() {
 fn lco_above_flutter_with_a_linear_model_ends_classified_divergent() {
     let tmp = tempfile::tempdir().unwrap();
     let model = tmp.path().join("linear.model.toml");
-    std::fs::write(&model, "kind = \"theodorsen\"\nchord = 0.25\nelastic_axis = -0.3\n").unwrap();
+    std::fs::write(
+        &model,
+        "kind = \"theodorsen\"\nchord = 0.25\nelastic_axis = -0.3\n",
+    )
+    .unwrap();
     let out = tmp.path().join("out");
     let structure = format!("{SCENARIOS}/plate-rig.structure.toml");
     let o = bin()
@@ -367,7 +440,10 @@ fn lco_above_flutter_with_a_linear_model_ends_classified_divergent() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!err.contains("panicked"), "{err}");
     assert!(o.status.success(), "{err}");
-    assert!(stdout.contains("divergent (left the bound at t ="), "{stdout}");
+    assert!(
+        stdout.contains("divergent (left the bound at t ="),
+        "{stdout}"
+    );
     assert_complete(&out);
     let json: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("lco.json")).unwrap()).unwrap();
@@ -401,7 +477,10 @@ fn flutter_scan_without_flutter_in_range_says_none() {
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!err.contains("panicked"), "{err}");
     assert!(o.status.success(), "{err}");
-    assert!(stdout.contains("flutter: none between 1 and 5 m/s"), "{stdout}");
+    assert!(
+        stdout.contains("flutter: none between 1 and 5 m/s"),
+        "{stdout}"
+    );
     assert_complete(&out);
     let json: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("flutter.json")).unwrap()).unwrap();
@@ -414,14 +493,27 @@ fn long_case(rows: usize, limit_mb: usize) {
     let tmp = tempfile::tempdir().unwrap();
     let root = one_case_dataset(tmp.path(), rows);
     let out = tmp.path().join("out");
-    let csv_bytes = std::fs::metadata(root.join("cases/D-U6-A12.csv")).unwrap().len();
+    let csv_bytes = std::fs::metadata(root.join("cases/D-U6-A12.csv"))
+        .unwrap()
+        .len();
     let (ok, stdout, err) = sh(
         &format!("ulimit -v {}", limit_mb * 1024),
-        &["identify", root.to_str().unwrap(), "--out", out.to_str().unwrap(), "--quiet"],
+        &[
+            "identify",
+            root.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--quiet",
+        ],
     );
-    eprintln!("{rows} rows ({csv_bytes} bytes of CSV), limit {limit_mb} MB: ok = {ok}\n{stdout}{err}");
+    eprintln!(
+        "{rows} rows ({csv_bytes} bytes of CSV), limit {limit_mb} MB: ok = {ok}\n{stdout}{err}"
+    );
     assert!(!err.contains("panicked"), "{err}");
-    assert!(ok, "{rows} rows under a {limit_mb} MB address-space limit: {err}");
+    assert!(
+        ok,
+        "{rows} rows under a {limit_mb} MB address-space limit: {err}"
+    );
     assert_complete(&out);
     let id: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("identification.json")).unwrap()).unwrap();

@@ -8,11 +8,14 @@ mod props_common;
 
 use identify::pipeline::{Identification, IdentifySettings};
 use identify::synthetic::{PolynomialLaw, Sampling};
-use proptest::prelude::*;
 use props_common::*;
+use proptest::prelude::*;
 
 /// Eight synthetic cases (two configurations × four amplitudes/speeds), demo law.
-fn small_campaign(seed: u64, span: f64) -> (identify::dataset::Manifest, Vec<identify::record::Record>) {
+fn small_campaign(
+    seed: u64,
+    span: f64,
+) -> (identify::dataset::Manifest, Vec<identify::record::Record>) {
     campaign(
         &case_defs(2, 4),
         &PolynomialLaw::demo(),

@@ -9,8 +9,8 @@ use std::sync::OnceLock;
 use identify::library::Term;
 use identify::pipeline::IdentifySettings;
 use identify::synthetic::{LawTerm, PolynomialLaw, Sampling};
-use proptest::prelude::*;
 use props_common::*;
+use proptest::prelude::*;
 
 /// One configuration, four (amplitude, wind speed) cases, one group.
 fn defs() -> Vec<CaseDef> {
@@ -105,7 +105,9 @@ fn law_channel(
         .collect();
     let lin_rms = rms_of(&terms, x);
     let cands = candidates();
-    let mut names: Vec<String> = ["alpha", "alpha_dot", "h", "h_dot"].map(String::from).to_vec();
+    let mut names: Vec<String> = ["alpha", "alpha_dot", "h", "h_dot"]
+        .map(String::from)
+        .to_vec();
     for &(k, share, neg) in picks {
         let name = &cands[k % cands.len()];
         if names.contains(name) {

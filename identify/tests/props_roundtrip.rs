@@ -9,8 +9,8 @@
 //! (checked at 1e-14 relative); the time base is refitted by least squares (1e-9).
 
 use identify::dataset::{
-    read_dataset, write_dataset, AngleUnit, CaseSpec, ForceUnit, LengthUnit, Manifest,
-    MomentUnit, StructureSpec, Units,
+    read_dataset, write_dataset, AngleUnit, CaseSpec, ForceUnit, LengthUnit, Manifest, MomentUnit,
+    StructureSpec, Units,
 };
 use identify::record::{CaseKind, Record, Section};
 use proptest::prelude::*;
@@ -73,7 +73,11 @@ fn units_strategy() -> impl Strategy<Value = Units> {
         heave: if a { LengthUnit::Mm } else { LengthUnit::M },
         pitch: if b { AngleUnit::Deg } else { AngleUnit::Rad },
         lift: if c { ForceUnit::N } else { ForceUnit::NPerM },
-        moment: if d { MomentUnit::Nm } else { MomentUnit::NmPerM },
+        moment: if d {
+            MomentUnit::Nm
+        } else {
+            MomentUnit::NmPerM
+        },
     })
 }
 
@@ -149,7 +153,12 @@ fn case_spec(id: String, shape: &CaseShape) -> impl Strategy<Value = CaseSpec> {
         )
 }
 
-fn record(shape: &CaseShape, n: usize, forces: bool, values: BoxedStrategy<f64>) -> impl Strategy<Value = Record> {
+fn record(
+    shape: &CaseShape,
+    n: usize,
+    forces: bool,
+    values: BoxedStrategy<f64>,
+) -> impl Strategy<Value = Record> {
     let (t0, dt, free) = (shape.t0, shape.dt, shape.free);
     let col = move || prop::collection::vec(values.clone(), n);
     let forces = if forces {
@@ -157,19 +166,21 @@ fn record(shape: &CaseShape, n: usize, forces: bool, values: BoxedStrategy<f64>)
     } else {
         Just(None).boxed()
     };
-    (col(), col(), forces).prop_map(
-        move |(h, alpha, f)| Record {
-            kind: if free { CaseKind::Free } else { CaseKind::Forced },
-            meta: Default::default(),
-            t0,
-            dt,
-            h,
-            alpha,
-            lift: f.as_ref().map(|f| f.0.clone()),
-            moment: f.map(|f| f.1),
-            nowind: None,
+    (col(), col(), forces).prop_map(move |(h, alpha, f)| Record {
+        kind: if free {
+            CaseKind::Free
+        } else {
+            CaseKind::Forced
         },
-    )
+        meta: Default::default(),
+        t0,
+        dt,
+        h,
+        alpha,
+        lift: f.as_ref().map(|f| f.0.clone()),
+        moment: f.map(|f| f.1),
+        nowind: None,
+    })
 }
 
 /// A manifest and its records (values in SI per span).
@@ -183,79 +194,107 @@ fn dataset() -> impl Strategy<Value = (Manifest, Vec<Record>)> {
         prop::option::of(toml_table(2)),
         any::<bool>(),
     )
-        .prop_flat_map(|(ids, units, name, description, (chord, span, rho), extra, exact)| {
-            let ids: Vec<String> = ids.into_iter().collect();
-            let shapes = prop::collection::vec(case_shape(), ids.len());
-            (Just(ids), Just(units), Just(name), Just(description), Just((chord, span, rho)), Just(extra), Just(exact), shapes)
-        })
-        .prop_flat_map(|(ids, units, name, description, (chord, span, rho), extra, exact, shapes)| {
-            let si = Units::default();
-            let units = if exact { si } else { units };
-            let values = move || if exact { any_finite().boxed() } else { scaled_finite().boxed() };
-            let specs: Vec<_> = ids.iter().zip(&shapes).map(|(id, s)| case_spec(id.clone(), s)).collect();
-            let recs: Vec<_> = ids
-                .iter()
-                .zip(&shapes)
-                .map(|(id, s)| {
-                    let id = id.clone();
-                    let still = s.still;
-                    let still_shape = CaseShape { n: s.still_n, ..s.clone() };
-                    (
-                        record(s, s.n, s.forces, values()),
-                        record(&still_shape, s.still_n, true, values()),
-                    )
-                        .prop_map(move |(mut r, st)| {
-                            r.meta.id = id.clone();
-                            if still {
-                                r.nowind = Some(Box::new(st));
-                            }
-                            r
-                        })
-                })
-                .collect();
-            let any_free = shapes.iter().any(|s| s.free);
-            let structure = (
-                magnitude(-3, 3),
-                magnitude(-3, 3),
-                -10.0f64..10.0,
-                magnitude(-2, 2),
-                magnitude(-2, 2),
-                0.0f64..1.0,
-                0.0f64..1.0,
-            )
-                .prop_map(|(mass, inertia, su, fh, fp, zh, zp)| StructureSpec {
-                    mass,
-                    inertia,
-                    static_unbalance: su,
-                    freq_heave: fh,
-                    freq_pitch: fp,
-                    damping_heave: zh,
-                    damping_pitch: zp,
-                });
-            let structure = if any_free {
-                structure.prop_map(Some).boxed()
-            } else {
-                prop::option::of(structure).boxed()
-            };
-            (specs, recs, structure).prop_map(move |(cases, records, structure)| {
+        .prop_flat_map(
+            |(ids, units, name, description, (chord, span, rho), extra, exact)| {
+                let ids: Vec<String> = ids.into_iter().collect();
+                let shapes = prop::collection::vec(case_shape(), ids.len());
                 (
-                    Manifest {
-                        name: name.clone(),
-                        description: description.clone(),
-                        section: Section {
-                            chord,
-                            span,
-                            air_density: rho,
-                        },
-                        structure,
-                        units,
-                        cases,
-                        extra: extra.clone(),
-                    },
-                    records,
+                    Just(ids),
+                    Just(units),
+                    Just(name),
+                    Just(description),
+                    Just((chord, span, rho)),
+                    Just(extra),
+                    Just(exact),
+                    shapes,
                 )
-            })
-        })
+            },
+        )
+        .prop_flat_map(
+            |(ids, units, name, description, (chord, span, rho), extra, exact, shapes)| {
+                let si = Units::default();
+                let units = if exact { si } else { units };
+                let values = move || {
+                    if exact {
+                        any_finite().boxed()
+                    } else {
+                        scaled_finite().boxed()
+                    }
+                };
+                let specs: Vec<_> = ids
+                    .iter()
+                    .zip(&shapes)
+                    .map(|(id, s)| case_spec(id.clone(), s))
+                    .collect();
+                let recs: Vec<_> = ids
+                    .iter()
+                    .zip(&shapes)
+                    .map(|(id, s)| {
+                        let id = id.clone();
+                        let still = s.still;
+                        let still_shape = CaseShape {
+                            n: s.still_n,
+                            ..s.clone()
+                        };
+                        (
+                            record(s, s.n, s.forces, values()),
+                            record(&still_shape, s.still_n, true, values()),
+                        )
+                            .prop_map(move |(mut r, st)| {
+                                r.meta.id = id.clone();
+                                if still {
+                                    r.nowind = Some(Box::new(st));
+                                }
+                                r
+                            })
+                    })
+                    .collect();
+                let any_free = shapes.iter().any(|s| s.free);
+                let structure = (
+                    magnitude(-3, 3),
+                    magnitude(-3, 3),
+                    -10.0f64..10.0,
+                    magnitude(-2, 2),
+                    magnitude(-2, 2),
+                    0.0f64..1.0,
+                    0.0f64..1.0,
+                )
+                    .prop_map(|(mass, inertia, su, fh, fp, zh, zp)| {
+                        StructureSpec {
+                            mass,
+                            inertia,
+                            static_unbalance: su,
+                            freq_heave: fh,
+                            freq_pitch: fp,
+                            damping_heave: zh,
+                            damping_pitch: zp,
+                        }
+                    });
+                let structure = if any_free {
+                    structure.prop_map(Some).boxed()
+                } else {
+                    prop::option::of(structure).boxed()
+                };
+                (specs, recs, structure).prop_map(move |(cases, records, structure)| {
+                    (
+                        Manifest {
+                            name: name.clone(),
+                            description: description.clone(),
+                            section: Section {
+                                chord,
+                                span,
+                                air_density: rho,
+                            },
+                            structure,
+                            units,
+                            cases,
+                            extra: extra.clone(),
+                        },
+                        records,
+                    )
+                })
+            },
+        )
 }
 
 fn same(a: f64, b: f64, exact: bool) -> bool {
@@ -269,7 +308,14 @@ fn same(a: f64, b: f64, exact: bool) -> bool {
 fn check_column(what: &str, a: &[f64], b: &[f64], exact: bool) -> Result<(), TestCaseError> {
     prop_assert_eq!(a.len(), b.len(), "{}: length", what);
     for (i, (x, y)) in a.iter().zip(b).enumerate() {
-        prop_assert!(same(*x, *y, exact), "{}[{}]: wrote {:e}, read {:e}", what, i, x, y);
+        prop_assert!(
+            same(*x, *y, exact),
+            "{}[{}]: wrote {:e}, read {:e}",
+            what,
+            i,
+            x,
+            y
+        );
     }
     Ok(())
 }
@@ -277,7 +323,13 @@ fn check_column(what: &str, a: &[f64], b: &[f64], exact: bool) -> Result<(), Tes
 fn check_record(id: &str, a: &Record, b: &Record, exact: bool) -> Result<(), TestCaseError> {
     prop_assert_eq!(a.kind, b.kind);
     let n = a.len() as f64;
-    prop_assert!((a.dt - b.dt).abs() <= 1e-9 * a.dt, "{}: dt {} vs {}", id, a.dt, b.dt);
+    prop_assert!(
+        (a.dt - b.dt).abs() <= 1e-9 * a.dt,
+        "{}: dt {} vs {}",
+        id,
+        a.dt,
+        b.dt
+    );
     prop_assert!(
         (a.t0 - b.t0).abs() <= 1e-9 * a.t0.abs().max(n * a.dt),
         "{}: t0 {} vs {}",
@@ -305,7 +357,8 @@ fn check_record(id: &str, a: &Record, b: &Record, exact: bool) -> Result<(), Tes
 fn round_trip(manifest: &Manifest, records: &[Record]) -> Result<(), TestCaseError> {
     let dir = tempfile::tempdir().unwrap();
     let root = dir.path().join("ds");
-    write_dataset(&root, manifest, records).map_err(|e| TestCaseError::fail(format!("write: {e}")))?;
+    write_dataset(&root, manifest, records)
+        .map_err(|e| TestCaseError::fail(format!("write: {e}")))?;
     let ds = read_dataset(&root).map_err(|e| {
         let text = std::fs::read_to_string(root.join("manifest.toml")).unwrap_or_default();
         TestCaseError::fail(format!("read: {e}\n--- manifest ---\n{text}"))

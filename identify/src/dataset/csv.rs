@@ -102,7 +102,9 @@ fn parse_case_reader(
     let header_owned = std::str::from_utf8(&buf)
         .map_err(|e| not_utf8(1, e))?
         .to_string();
-    let header = header_owned.strip_prefix('\u{feff}').unwrap_or(&header_owned);
+    let header = header_owned
+        .strip_prefix('\u{feff}')
+        .unwrap_or(&header_owned);
     let header = header.strip_suffix('\r').unwrap_or(header);
     if header.trim().is_empty() {
         return Err(csv_err(
@@ -522,7 +524,10 @@ mod tests {
     #[test]
     fn missing_file_is_an_io_error_naming_it() {
         let e = read_case_csv(Path::new("/no/such/case.csv"), false).unwrap_err();
-        assert!(matches!(&e, Error::Io { .. }) && msg(&e).contains("case.csv"), "{e}");
+        assert!(
+            matches!(&e, Error::Io { .. }) && msg(&e).contains("case.csv"),
+            "{e}"
+        );
     }
 
     /// Reader speed (run with `--ignored --nocapture`, release or test profile): a 10 s,

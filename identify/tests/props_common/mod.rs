@@ -172,12 +172,24 @@ pub fn rel_close(a: f64, b: f64, tol: f64) -> bool {
 /// Every Eq. 19 derivative, R², MFWA, key-frequency loss and raw term coefficient of two
 /// identifications, matched by case id: supports identical, numbers within `tol` relative.
 /// Returns the first mismatch as text.
-pub fn compare_identifications(a: &Identification, b: &Identification, tol: f64) -> Result<(), String> {
+pub fn compare_identifications(
+    a: &Identification,
+    b: &Identification,
+    tol: f64,
+) -> Result<(), String> {
     if a.cases.len() != b.cases.len() {
         return Err(format!("{} vs {} cases", a.cases.len(), b.cases.len()));
     }
-    let ga: Vec<_> = a.groups.iter().map(|g| (&g.name, &g.moment.support, &g.lift.support)).collect();
-    let gb: Vec<_> = b.groups.iter().map(|g| (&g.name, &g.moment.support, &g.lift.support)).collect();
+    let ga: Vec<_> = a
+        .groups
+        .iter()
+        .map(|g| (&g.name, &g.moment.support, &g.lift.support))
+        .collect();
+    let gb: Vec<_> = b
+        .groups
+        .iter()
+        .map(|g| (&g.name, &g.moment.support, &g.lift.support))
+        .collect();
     if ga != gb {
         return Err(format!("supports differ:\n{ga:?}\n{gb:?}"));
     }
@@ -188,8 +200,16 @@ pub fn compare_identifications(a: &Identification, b: &Identification, tol: f64)
             .find(|c| c.id == ca.id)
             .ok_or_else(|| format!("case {} missing", ca.id))?;
         let pairs = [
-            ("moment", serde_json::to_value(&ca.moment).unwrap(), serde_json::to_value(&cb.moment).unwrap()),
-            ("lift", serde_json::to_value(&ca.lift).unwrap(), serde_json::to_value(&cb.lift).unwrap()),
+            (
+                "moment",
+                serde_json::to_value(&ca.moment).unwrap(),
+                serde_json::to_value(&cb.moment).unwrap(),
+            ),
+            (
+                "lift",
+                serde_json::to_value(&ca.lift).unwrap(),
+                serde_json::to_value(&cb.lift).unwrap(),
+            ),
         ];
         for (force, va, vb) in pairs {
             compare_json(&va, &vb, tol, &format!("{}.{force}", ca.id))?;
@@ -199,7 +219,12 @@ pub fn compare_identifications(a: &Identification, b: &Identification, tol: f64)
 }
 
 /// Numbers within `tol` relative, everything else equal.
-fn compare_json(a: &serde_json::Value, b: &serde_json::Value, tol: f64, at: &str) -> Result<(), String> {
+fn compare_json(
+    a: &serde_json::Value,
+    b: &serde_json::Value,
+    tol: f64,
+    at: &str,
+) -> Result<(), String> {
     use serde_json::Value;
     match (a, b) {
         (Value::Number(x), Value::Number(y)) => {
@@ -207,7 +232,10 @@ fn compare_json(a: &serde_json::Value, b: &serde_json::Value, tol: f64, at: &str
             if rel_close(x, y, tol) {
                 Ok(())
             } else {
-                Err(format!("{at}: {x} vs {y} (rel {:.3e})", (x - y).abs() / x.abs().max(y.abs())))
+                Err(format!(
+                    "{at}: {x} vs {y} (rel {:.3e})",
+                    (x - y).abs() / x.abs().max(y.abs())
+                ))
             }
         }
         (Value::Array(x), Value::Array(y)) if x.len() == y.len() => {
