@@ -10,8 +10,9 @@
 //! * `static_offset`: Z = [1, α², (Bα̇/U)², α·Bα̇/U] (a DC force per dynamic pressure and
 //!   the even terms an angle offset induces through odd nonlinear terms).
 //! * `added_mass`: Z = [B²α̈/U², Bḧ/U²] (acceleration forces with a mass shared across U).
-//! * `time_delay`: Z = [(B/U)·dŷ/dt] with ŷ the fold's baseline law (first-order shift
-//!   ŷ(t − τ) ≈ ŷ − τ dŷ/dt with one τ·U/B… shared in seconds: the column is dŷ/dt).
+//! * `time_delay`: no extra column: the law is identified on the motion delayed by τ
+//!   (forces lagging the motion by τ), τ chosen per fold on the training nodes by the
+//!   consistency of the linear transfers across configurations (see [`time_delay`]).
 //! * `higher_order`: forward selection of up to [`MAX_SPARSE`] terms from a pool of
 //!   degree-4 and degree-5 monomials outside the cubic library (quintic in α, Bα̇/U;
 //!   quartic cross-DOF), each step kept only when it lowers the training residual by more
@@ -116,10 +117,9 @@ pub(crate) fn score_all(
     before: &[[Vec<f64>; 2]],
     opts: &ForceOptions,
 ) -> Vec<Scored> {
-    use rayon::prelude::*;
     opts.candidates
-        .par_iter()
-        .map(|&k| match k {
+        .iter()
+        .map(|&k| { let t0 = std::time::Instant::now(); let r = match k {
             CandidateKind::StaticOffset => shared(cases, nodes, folds, k, &static_offset_cols),
             CandidateKind::AddedMass => shared(cases, nodes, folds, k, &|c: &CaseData, _| {
                 c.accelerations().to_vec()
@@ -128,7 +128,7 @@ pub(crate) fn score_all(
             CandidateKind::HigherOrder => sparse(cases, nodes, folds, k, &higher_order_pool()),
             CandidateKind::DynamicStall => sparse(cases, nodes, folds, k, &stall_pool()),
             CandidateKind::VortexShedding => vortex(cases, nodes, folds, before),
-        })
+        }; if std::env::var("FORCE_TIMING").is_ok() { eprintln!("TIMING {k:?} {:?}", t0.elapsed()); } r })
         .collect()
 }
 
@@ -406,76 +406,191 @@ fn sparse(
     }
 }
 
-/// `time_delay`: column dŷ/dt of the fold's baseline law on every case (training cases:
-/// the node fit; held-out cases: the held-out prediction), shared coefficient −τ [s].
+/// Grid of the `time_delay` search [s]: 0 to [`DELAY_MAX`] in steps of [`DELAY_STEP`],
+/// refined by a parabola through the best grid point and its neighbours.
+pub const DELAY_STEP: f64 = 2.5e-4;
+/// Largest delay of the `time_delay` search [s].
+pub const DELAY_MAX: f64 = 0.04;
+
+/// Copy of the cases whose regressors are the motion delayed by `tau` [s]: each variable's
+/// harmonic part (its fit at the forcing frequencies) is replaced by the same harmonics
+/// shifted by τ, x'(t) = x(t) + x̂(t − τ) − x̂(t), so noise and the non-harmonic remainder
+/// are those of the baseline and τ = 0 reproduces it exactly. Without a harmonic fit the
+/// series is shifted by linear interpolation (held at the start).
+pub(crate) fn delayed_cases(cases: &[CaseData], tau: f64) -> Vec<CaseData> {
+    cases
+        .iter()
+        .map(|c| {
+            let mut d = c.clone();
+            if tau == 0.0 {
+                return d;
+            }
+            for k in 0..4 {
+                match &c.rep[k] {
+                    Some(h) => {
+                        let mut diff = h.clone();
+                        diff.mean = 0.0;
+                        for j in 0..h.freqs.len() {
+                            let (s, co) = (2.0 * std::f64::consts::PI * h.freqs[j] * tau).sin_cos();
+                            let (a, b) = (h.cos[j], h.sin[j]);
+                            diff.cos[j] = a * co - b * s - a;
+                            diff.sin[j] = a * s + b * co - b;
+                        }
+                        let v = diff.values(c.n, c.dt);
+                        d.nd.x[k].iter_mut().zip(&v).for_each(|(x, v)| *x += v);
+                    }
+                    None => {
+                        let x = &c.nd.x[k];
+                        let n = x.len();
+                        d.nd.x[k] = (0..n)
+                            .map(|i| {
+                                let p = (i as f64 - tau / c.dt).max(0.0);
+                                let j = (p.floor() as usize).min(n.saturating_sub(2));
+                                let w = p - j as f64;
+                                x[j] * (1.0 - w) + x[(j + 1).min(n - 1)] * w
+                            })
+                            .collect();
+                    }
+                }
+            }
+            d
+        })
+        .collect()
+}
+
+/// Leave-one-node-out misfit (noise units) of the linear transfers of a fold's training
+/// nodes rotated by a delay τ: for each channel and linear pair (α, Bα̇/U; h/B, ḣ/U) with
+/// node transfers Tₙ = ξ_d + iKξ_d′ of the baseline law, Tₙ(τ) = Tₙ e^{iωₙτ} (what a law
+/// on motion delayed by τ identifies) is predicted from the other training nodes by the
+/// pooled rational form ([`law::rfa_predict`]); the misfit |ΔT|² is weighted by the node's
+/// displacement energy Σx_d²/σ̂². Returns one closure over τ.
+fn delay_criterion<'a>(
+    cases: &'a [CaseData],
+    nodes: &'a [Node],
+    f: &'a Fold,
+    laws: &'a [law::ChannelLaw; 2],
+) -> impl Fn(f64) -> f64 + 'a {
+    // per channel and pair: (K, ω, T re, T im, weight)
+    let mut pts: Vec<Vec<(f64, f64, f64, f64, f64)>> = Vec::new();
+    for c in 0..2 {
+        for (d, r) in [(0usize, 1usize), (2, 3)] {
+            let (td, tr) = (Term::linear(d), Term::linear(r));
+            let mut v = Vec::new();
+            for (n, _, a) in &laws[c].nodes {
+                let nd = &nodes[*n];
+                let s = &f.supports[&nd.config][c];
+                let (Some(pd), Some(pr)) = (
+                    s.iter().position(|t| *t == td),
+                    s.iter().position(|t| *t == tr),
+                ) else {
+                    continue;
+                };
+                let Some(&i0) = nd.cases.first() else {
+                    continue;
+                };
+                let freq = if d == 0 {
+                    Some(cases[i0].f_alpha)
+                } else {
+                    cases[i0].f_h
+                };
+                let Some(freq) = freq else { continue };
+                let w = 2.0 * std::f64::consts::PI * freq;
+                let k = cases[i0].nd.chord * w / cases[i0].u;
+                let weight: f64 = nd
+                    .cases
+                    .iter()
+                    .map(|&i| {
+                        let s = cases[i].sigma[c].max(1e-300);
+                        cases[i].nd.x[d].iter().map(|x| x * x).sum::<f64>() / (s * s)
+                    })
+                    .sum();
+                v.push((k, w, a[pd], k * a[pr], weight));
+            }
+            if v.len() >= 5 {
+                pts.push(v);
+            }
+        }
+    }
+    move |tau: f64| {
+        let mut e = 0.0;
+        for v in &pts {
+            let rot: Vec<(f64, f64, f64)> = v
+                .iter()
+                .map(|&(k, w, re, im, _)| {
+                    let (s, co) = (w * tau).sin_cos();
+                    (k, re * co - im * s, (re * s + im * co) / k)
+                })
+                .collect();
+            for j in 0..rot.len() {
+                let others: Vec<(f64, f64, f64)> = rot
+                    .iter()
+                    .enumerate()
+                    .filter(|(l, _)| *l != j)
+                    .map(|(_, p)| *p)
+                    .collect();
+                let (k, xd, xr) = rot[j];
+                if let Some((pd, pr)) = law::rfa_predict(&others, k) {
+                    let dre = pd - xd;
+                    let dim = k * (pr - xr);
+                    e += v[j].4 * (dre * dre + dim * dim);
+                }
+            }
+        }
+        e
+    }
+}
+
+/// `time_delay`: the law of every node is identified on the motion delayed by τ
+/// ([`delayed_cases`]), τ ∈ [0, [`DELAY_MAX`]] chosen per fold on the training nodes by
+/// the cross-configuration consistency of the linear transfers ([`delay_criterion`]: a
+/// delay is a phase ωτ that depends on U as well as K, which the pooled prediction over K
+/// cannot absorb), then scored on the held-out nodes. One shared parameter (τ).
 fn time_delay(cases: &[CaseData], nodes: &[Node], folds: &[Fold]) -> Scored {
     let mut res = vec![[Vec::new(), Vec::new()]; cases.len()];
     let mut taus = Vec::new();
     for f in folds {
+        let laws: [law::ChannelLaw; 2] =
+            std::array::from_fn(|c| law::fit_channel(cases, nodes, &f.fits, c, &|_, _| Vec::new()));
+        let crit = delay_criterion(cases, nodes, f, &laws);
+        let n_grid = (DELAY_MAX / DELAY_STEP).round() as usize;
+        let vals: Vec<f64> = (0..=n_grid).map(|k| crit(k as f64 * DELAY_STEP)).collect();
+        let kbest = (0..vals.len())
+            .min_by(|&a, &b| vals[a].total_cmp(&vals[b]))
+            .unwrap_or(0);
+        let mut tau = kbest as f64 * DELAY_STEP;
+        if kbest > 0 && kbest < n_grid {
+            let (a, b, c) = (vals[kbest - 1], vals[kbest], vals[kbest + 1]);
+            let den = a - 2.0 * b + c;
+            if den > 0.0 {
+                tau += 0.5 * DELAY_STEP * (a - c) / den;
+            }
+        }
+        taus.push(tau);
+        let shifted = delayed_cases(cases, tau);
+        let fold = Fold {
+            index: f.index,
+            train: f.train.clone(),
+            test: f.test.clone(),
+            supports: f.supports.clone(),
+            fits: law::node_fits(&shifted, nodes, &f.train, &f.supports),
+        };
         for c in 0..2 {
-            let base = law::fit_channel(cases, nodes, &f.fits, c, &|_, _| Vec::new());
-            let mut deriv: Vec<Vec<f64>> = vec![Vec::new(); cases.len()];
-            for n in f.train.iter().chain(&f.test) {
-                for &i in &nodes[*n].cases {
-                    // nonlinear part only: the linear part of a delay is absorbed by the
-                    // node coefficients (a phase at the forcing frequency)
-                    let cfg = &nodes[*n].config;
-                    let a = law::node_coefficients(cases, nodes, &f.supports, &base, i, c);
-                    let mut p = vec![0.0; cases[i].n];
-                    for (t, &aj) in f.supports[cfg][c].iter().zip(&a) {
-                        if aj != 0.0 && t.degree() >= 2 {
-                            let col = cases[i].column(t);
-                            p.iter_mut().zip(&col).for_each(|(o, v)| *o += aj * v);
-                        }
-                    }
-                    deriv[i] = time_derivative(&p, cases[i].dt);
-                }
-            }
-            // training cases: in-sample node fit values instead of the interpolation
-            for (nf, (_, _, a)) in f.fits.iter().zip(&base.nodes) {
-                let cfg = &nodes[nf.node].config;
-                for &i in &nodes[nf.node].cases {
-                    let mut p = vec![0.0; cases[i].n];
-                    for (t, &aj) in f.supports[cfg][c].iter().zip(a) {
-                        if aj != 0.0 && t.degree() >= 2 {
-                            let col = cases[i].column(t);
-                            p.iter_mut().zip(&col).for_each(|(o, v)| *o += aj * v);
-                        }
-                    }
-                    deriv[i] = time_derivative(&p, cases[i].dt);
-                }
-            }
-            let extra = |i: usize, _c: usize| vec![deriv[i].clone()];
-            let l = fold_residuals(cases, nodes, f, c, &extra, &mut res);
-            taus.push(-l.beta.first().copied().unwrap_or(0.0));
+            fold_residuals(&shifted, nodes, &fold, c, &|_, _| Vec::new(), &mut res);
         }
     }
     let tau = taus.iter().sum::<f64>() / taus.len().max(1) as f64;
+    let mut parameters = vec![("tau_s".into(), tau)];
+    for (k, t) in taus.iter().enumerate() {
+        parameters.push((format!("fold{k}_tau_s"), *t));
+    }
     Scored {
         kind: CandidateKind::TimeDelay,
         residuals: res,
-        n_params: 2,
+        n_params: 1,
         n_nuisance: 0,
-        parameters: vec![("tau_s".into(), tau)],
+        parameters,
         failure: None,
     }
-}
-
-fn time_derivative(x: &[f64], dt: f64) -> Vec<f64> {
-    let n = x.len();
-    (0..n)
-        .map(|i| {
-            if n < 3 {
-                0.0
-            } else if i == 0 {
-                (-3.0 * x[0] + 4.0 * x[1] - x[2]) / (2.0 * dt)
-            } else if i == n - 1 {
-                (3.0 * x[n - 1] - 4.0 * x[n - 2] + x[n - 3]) / (2.0 * dt)
-            } else {
-                (x[i + 1] - x[i - 1]) / (2.0 * dt)
-            }
-        })
-        .collect()
 }
 
 /// Sine/cosine least-squares fit at frequency f removed from r; returns the new residual.
@@ -541,10 +656,57 @@ fn near_tone(c: &CaseData, f: f64) -> bool {
     false
 }
 
-/// `vortex_shedding`: S from the training residuals, amplitude/phase per held-out case.
+/// Relative half-widths of the `vortex_shedding` band (around f = S·U/B) tried on the
+/// training residuals.
+pub const SHEDDING_BANDS: [f64; 6] = [0.0, 0.005, 0.01, 0.02, 0.04, 0.08];
+
+/// DFT bins of an n-sample record within the band f(1 ± b) (at least the two bins around
+/// f), excluding DC, Nyquist and bins near a forcing tone.
+fn band_bins(c: &CaseData, f: f64, b: f64) -> Vec<usize> {
+    let t = c.n as f64 * c.dt;
+    let lo = ((f * (1.0 - b)) * t).floor().min((f * t).floor()) as usize;
+    let hi = ((f * (1.0 + b)) * t).ceil().max((f * t).ceil()) as usize;
+    (lo.max(1)..=hi.min(c.n / 2 - 1))
+        .filter(|&k| !near_tone(c, k as f64 / t))
+        .collect()
+}
+
+/// Removes the content of DFT bins `bins` from r (least-squares projection on those
+/// sinusoids: they are orthogonal on the record).
+fn remove_bins(r: &[f64], bins: &[usize]) -> Vec<f64> {
+    let n = r.len();
+    let mut planner = realfft::RealFftPlanner::<f64>::new();
+    let fwd = planner.plan_fft_forward(n);
+    let inv = planner.plan_fft_inverse(n);
+    let mut input = r.to_vec();
+    let mut spec = fwd.make_output_vec();
+    if fwd.process(&mut input, &mut spec).is_err() {
+        return r.to_vec();
+    }
+    for &k in bins {
+        if k < spec.len() {
+            spec[k] = realfft::num_complex::Complex::new(0.0, 0.0);
+        }
+    }
+    let mut out = inv.make_output_vec();
+    if inv.process(&mut spec, &mut out).is_err() {
+        return r.to_vec();
+    }
+    out.iter().map(|v| v / n as f64).collect()
+}
+
+/// `vortex_shedding`: a narrow band at f = S·U/B. Per fold on the training residuals: S
+/// maximises the summed power at S·U/B (forcing tones masked), refined to a twentieth of
+/// the resolution at the highest speed; the relative band half-width b ∈
+/// [`SHEDDING_BANDS`] maximises the removed power minus 4 noise units per bin and channel
+/// (2 for the fitted noise, 2 as a parsimony margin). On each held-out case the band's
+/// content is removed (b = 0: one sinusoid at f, else the DFT bins in f(1 ± b)); its
+/// amplitudes and phases are nuisance parameters (2 per bin and channel) in the penalty.
 fn vortex(cases: &[CaseData], nodes: &[Node], folds: &[Fold], before: &[[Vec<f64>; 2]]) -> Scored {
     let mut res = before.to_vec();
     let mut ss = Vec::new();
+    let mut bands = Vec::new();
+    let mut q = 0usize;
     for f in folds {
         // training residuals of the baseline node fits, noise weighted, both channels
         let mut train_res: Vec<(usize, [Vec<f64>; 2])> = Vec::new();
@@ -563,25 +725,30 @@ fn vortex(cases: &[CaseData], nodes: &[Node], folds: &[Fold], before: &[[Vec<f64
                 train_res.push((i, rc));
             }
         }
-        // periodograms (4× zero padding) of every training residual, both channels summed
-        let spectra: Vec<(usize, Vec<f64>, f64)> = train_res
+        // periodograms (4× zero padding, and unpadded) of every training residual, both
+        // channels summed
+        let spectra: Vec<(usize, Vec<f64>, f64, Vec<f64>)> = train_res
             .iter()
             .map(|(i, r)| {
                 let c = &cases[*i];
                 let m = (4 * c.n).next_power_of_two();
                 let mut p = vec![0.0; m / 2 + 1];
+                let mut p1 = vec![0.0; c.n / 2 + 1];
                 for ch in r.iter() {
                     for (k, v) in periodogram(ch, m).into_iter().enumerate() {
                         p[k] += v;
                     }
+                    for (k, v) in periodogram(ch, c.n).into_iter().enumerate() {
+                        p1[k] += v;
+                    }
                 }
-                (*i, p, 1.0 / (m as f64 * c.dt))
+                (*i, p, 1.0 / (m as f64 * c.dt), p1)
             })
             .collect();
         let total = |s: f64| -> f64 {
             spectra
                 .iter()
-                .map(|(i, p, df)| {
+                .map(|(i, p, df, _)| {
                     let c = &cases[*i];
                     let fq = s * c.u / c.nd.chord;
                     let k = (fq / df).round() as usize;
@@ -596,9 +763,9 @@ fn vortex(cases: &[CaseData], nodes: &[Node], folds: &[Fold], before: &[[Vec<f64
         let u_max = cases.iter().map(|c| c.u).fold(0.0, f64::max);
         let t_len = cases[0].n as f64 * cases[0].dt;
         let b = cases[0].nd.chord;
-        // step: an eighth of the spectral resolution at the highest speed
-        let step = 0.125 * b / (t_len * u_max);
-        let (s_min, s_max) = (0.02, 1.0);
+        // coarse: a quarter of the resolution at the highest speed, up to 0.45 f_s there
+        let step = 0.25 * b / (t_len * u_max);
+        let (s_min, s_max) = (0.02, 0.45 / cases[0].dt * b / u_max);
         let mut best = (0.0, s_min);
         let mut s = s_min;
         while s <= s_max {
@@ -608,27 +775,73 @@ fn vortex(cases: &[CaseData], nodes: &[Node], folds: &[Fold], before: &[[Vec<f64
             }
             s += step;
         }
+        // refine around the best coarse value
+        let mut s = best.1 - step;
+        while s <= best.1 + step {
+            let p = total(s);
+            if p > best.0 {
+                best = (p, s);
+            }
+            s += 0.1 * step;
+        }
         let s_hat = best.1;
         ss.push(s_hat);
+        // band half-width
+        let mut best_b = (f64::NEG_INFINITY, 0.0);
+        for &bw in &SHEDDING_BANDS {
+            let g: f64 = spectra
+                .iter()
+                .map(|(i, p4, df, p1)| {
+                    let c = &cases[*i];
+                    let fq = s_hat * c.u / c.nd.chord;
+                    if fq >= 0.45 / c.dt {
+                        return 0.0;
+                    }
+                    if bw == 0.0 {
+                        // one off-bin sinusoid ≈ the padded peak
+                        let k = (fq / df).round() as usize;
+                        return p4.get(k).copied().unwrap_or(0.0) - 8.0;
+                    }
+                    band_bins(c, fq, bw).iter().map(|&k| p1[k] - 8.0).sum::<f64>()
+                })
+                .sum();
+            if g > best_b.0 {
+                best_b = (g, bw);
+            }
+        }
+        let bw = best_b.1;
+        bands.push(bw);
         for &n in &f.test {
             for &i in &nodes[n].cases {
                 let c = &cases[i];
                 let fq = s_hat * c.u / c.nd.chord;
                 if fq < 0.45 / c.dt {
-                    for ch in 0..2 {
-                        res[i][ch] = remove_line(&before[i][ch], c.dt, fq);
+                    if bw == 0.0 {
+                        for ch in 0..2 {
+                            res[i][ch] = remove_line(&before[i][ch], c.dt, fq);
+                        }
+                        q += 4;
+                    } else {
+                        let bins = band_bins(c, fq, bw);
+                        for ch in 0..2 {
+                            res[i][ch] = remove_bins(&before[i][ch], &bins);
+                        }
+                        q += 4 * bins.len();
                     }
                 }
             }
         }
     }
-    let s_mean = ss.iter().sum::<f64>() / ss.len().max(1) as f64;
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
     Scored {
         kind: CandidateKind::VortexShedding,
         residuals: res,
-        n_params: 1,
-        n_nuisance: 4 * cases.len(),
-        parameters: vec![("strouhal_chord".into(), s_mean)],
+        n_params: 2,
+        n_nuisance: q,
+        parameters: vec![
+            ("strouhal_chord".into(), mean(&ss)),
+            ("band_half_width".into(), mean(&bands)),
+        ],
         failure: None,
     }
 }

@@ -313,13 +313,20 @@ pub fn force_level(forced: &Dataset, opts: &ForceOptions) -> Result<LevelResult>
         ));
     }
     let name = forced.manifest.name.clone();
+    let tm = std::time::Instant::now();
     let (cases, nodes) = data::prepare(forced)?;
+    let t_prep = tm.elapsed();
     let fold_of = assign_folds(&nodes, opts.folds, opts.seed, &name)?;
     let folds: Vec<Fold> = (0..opts.folds)
         .map(|k| build_fold(k, &fold_of, &cases, &nodes, &opts.identify, &name))
         .collect::<Result<_>>()?;
+    let t_folds = tm.elapsed();
     let before = held_out_residuals(&cases, &nodes, &folds, &|_, _| Vec::new());
+    let t_before = tm.elapsed();
     let scored = candidates::score_all(&cases, &nodes, &folds, &before, opts);
+    if std::env::var("FORCE_TIMING").is_ok() {
+        eprintln!("TIMING prep {t_prep:?} folds {t_folds:?} before {t_before:?} cands {:?}", tm.elapsed());
+    }
     Ok(analysis::assemble(
         &cases, &nodes, &fold_of, &before, scored, opts,
     ))
