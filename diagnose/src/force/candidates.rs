@@ -406,11 +406,6 @@ fn sparse(
     }
 }
 
-/// Grid of the `time_delay` search [s]: 0 to [`DELAY_MAX`] in steps of [`DELAY_STEP`],
-/// refined by a parabola through the best grid point and its neighbours.
-pub const DELAY_STEP: f64 = 2.5e-4;
-/// Largest delay of the `time_delay` search [s].
-pub const DELAY_MAX: f64 = 0.04;
 
 /// Copy of the cases whose regressors are the motion delayed by `tau` [s]: each variable's
 /// harmonic part (its fit at the forcing frequencies) is replaced by the same harmonics
@@ -458,90 +453,49 @@ pub(crate) fn delayed_cases(cases: &[CaseData], tau: f64) -> Vec<CaseData> {
         .collect()
 }
 
-/// Leave-one-node-out misfit (noise units) of the linear transfers of a fold's training
-/// nodes rotated by a delay τ: for each channel and linear pair (α, Bα̇/U; h/B, ḣ/U) with
-/// node transfers Tₙ = ξ_d + iKξ_d′ of the baseline law, Tₙ(τ) = Tₙ e^{iωₙτ} (what a law
-/// on motion delayed by τ identifies) is predicted from the other training nodes by the
-/// pooled rational form ([`law::rfa_predict`]); the misfit |ΔT|² is weighted by the node's
-/// displacement energy Σx_d²/σ̂². Returns one closure over τ.
-fn delay_criterion<'a>(
-    cases: &'a [CaseData],
-    nodes: &'a [Node],
-    f: &'a Fold,
-    laws: &'a [law::ChannelLaw; 2],
-) -> impl Fn(f64) -> f64 + 'a {
-    // per channel and pair: (K, ω, T re, T im, weight)
-    let mut pts: Vec<Vec<(f64, f64, f64, f64, f64)>> = Vec::new();
+/// Leave-one-node-out energy (noise units) on a fold's training nodes of the law
+/// identified on the motion delayed by τ: each training node's coefficients are predicted
+/// from the other training nodes by the held-out rule ([`law::node_coefficients`]) and its
+/// residual energy is ‖r_n‖² + ‖R_n(â_n − a_n)‖² (a_n the node's own least-squares fit,
+/// X_n = Q_n R_n; dependent columns ignored), weighted by the node's mean 1/σ̂².
+fn delay_criterion(cases: &[CaseData], nodes: &[Node], f: &Fold, tau: f64) -> f64 {
+    let sh = delayed_cases(cases, tau);
+    let fits = law::node_fits(&sh, nodes, &f.train, &f.supports);
+    let mut e = 0.0;
     for c in 0..2 {
-        for (d, r) in [(0usize, 1usize), (2, 3)] {
-            let (td, tr) = (Term::linear(d), Term::linear(r));
-            let mut v = Vec::new();
-            for (n, _, a) in &laws[c].nodes {
-                let nd = &nodes[*n];
-                let s = &f.supports[&nd.config][c];
-                let (Some(pd), Some(pr)) = (
-                    s.iter().position(|t| *t == td),
-                    s.iter().position(|t| *t == tr),
-                ) else {
-                    continue;
-                };
-                let Some(&i0) = nd.cases.first() else {
-                    continue;
-                };
-                let freq = if d == 0 {
-                    Some(cases[i0].f_alpha)
-                } else {
-                    cases[i0].f_h
-                };
-                let Some(freq) = freq else { continue };
-                let w = 2.0 * std::f64::consts::PI * freq;
-                let k = cases[i0].nd.chord * w / cases[i0].u;
-                let weight: f64 = nd
-                    .cases
-                    .iter()
-                    .map(|&i| {
-                        let s = cases[i].sigma[c].max(1e-300);
-                        cases[i].nd.x[d].iter().map(|x| x * x).sum::<f64>() / (s * s)
-                    })
-                    .sum();
-                v.push((k, w, a[pd], k * a[pr], weight));
-            }
-            if v.len() >= 5 {
-                pts.push(v);
-            }
-        }
-    }
-    move |tau: f64| {
-        let mut e = 0.0;
-        for v in &pts {
-            let rot: Vec<(f64, f64, f64)> = v
-                .iter()
-                .map(|&(k, w, re, im, _)| {
-                    let (s, co) = (w * tau).sin_cos();
-                    (k, re * co - im * s, (re * s + im * co) / k)
-                })
-                .collect();
-            for j in 0..rot.len() {
-                let others: Vec<(f64, f64, f64)> = rot
-                    .iter()
-                    .enumerate()
-                    .filter(|(l, _)| *l != j)
-                    .map(|(_, p)| *p)
-                    .collect();
-                let (k, xd, xr) = rot[j];
-                if let Some((pd, pr)) = law::rfa_predict(&others, k) {
-                    let dre = pd - xd;
-                    let dim = k * (pr - xr);
-                    e += v[j].4 * (dre * dre + dim * dim);
+        let full = law::fit_channel(&sh, nodes, &fits, c, &|_, _| Vec::new());
+        for (j, nf) in fits.iter().enumerate() {
+            let mut loo = full.clone();
+            loo.nodes.remove(j);
+            let Some(&i0) = nodes[nf.node].cases.first() else {
+                continue;
+            };
+            let ahat = law::node_coefficients(&sh, nodes, &f.supports, &loo, i0, c);
+            let a = &full.nodes[j].2;
+            let qr = &nf.qr[c];
+            let r = qr.residual(&nf.y[c]);
+            let mut en = dot(&r, &r);
+            for k in 0..qr.kept.len() {
+                let mut v = 0.0;
+                for l in k..qr.kept.len() {
+                    let col = qr.kept[l];
+                    v += qr.r[k][l - k] * (ahat[col] - a[col]);
                 }
+                en += v * v;
             }
+            let w = nf.w[c].iter().sum::<f64>() / nf.w[c].len().max(1) as f64;
+            e += w * w * en;
         }
-        e
     }
+    e
 }
 
+/// Delays tried by the `time_delay` search [s] (coarse; refined by one parabola through
+/// the best one and its neighbours).
+pub const DELAY_GRID: [f64; 6] = [0.0, 1e-3, 3e-3, 8e-3, 0.02, 0.05];
+
 /// `time_delay`: the law of every node is identified on the motion delayed by τ
-/// ([`delayed_cases`]), τ ∈ [0, [`DELAY_MAX`]] chosen per fold on the training nodes by
+/// ([`delayed_cases`]), τ ∈ [0, 50 ms] chosen per fold on the training nodes ([`DELAY_GRID`], parabolic refinement) by
 /// the cross-configuration consistency of the linear transfers ([`delay_criterion`]: a
 /// delay is a phase ωτ that depends on U as well as K, which the pooled prediction over K
 /// cannot absorb), then scored on the held-out nodes. One shared parameter (τ).
@@ -549,22 +503,30 @@ fn time_delay(cases: &[CaseData], nodes: &[Node], folds: &[Fold]) -> Scored {
     let mut res = vec![[Vec::new(), Vec::new()]; cases.len()];
     let mut taus = Vec::new();
     for f in folds {
-        let laws: [law::ChannelLaw; 2] =
-            std::array::from_fn(|c| law::fit_channel(cases, nodes, &f.fits, c, &|_, _| Vec::new()));
-        let crit = delay_criterion(cases, nodes, f, &laws);
-        let n_grid = (DELAY_MAX / DELAY_STEP).round() as usize;
-        let vals: Vec<f64> = (0..=n_grid).map(|k| crit(k as f64 * DELAY_STEP)).collect();
-        let kbest = (0..vals.len())
+        let crit = |t: f64| delay_criterion(cases, nodes, f, t);
+        let vals: Vec<f64> = DELAY_GRID.iter().map(|&t| crit(t)).collect();
+        let kb = (0..vals.len())
             .min_by(|&a, &b| vals[a].total_cmp(&vals[b]))
             .unwrap_or(0);
-        let mut tau = kbest as f64 * DELAY_STEP;
-        if kbest > 0 && kbest < n_grid {
-            let (a, b, c) = (vals[kbest - 1], vals[kbest], vals[kbest + 1]);
-            let den = a - 2.0 * b + c;
-            if den > 0.0 {
-                tau += 0.5 * DELAY_STEP * (a - c) / den;
+        let (mut tau, mut best) = (DELAY_GRID[kb], vals[kb]);
+        // one parabola through the best grid point and its neighbours (unequal spacing)
+        if kb > 0 && kb + 1 < DELAY_GRID.len() {
+            let (x0, x1, x2) = (DELAY_GRID[kb - 1], DELAY_GRID[kb], DELAY_GRID[kb + 1]);
+            let (y0, y1, y2) = (vals[kb - 1], vals[kb], vals[kb + 1]);
+            let num = (x1 - x0).powi(2) * (y1 - y2) - (x1 - x2).powi(2) * (y1 - y0);
+            let den = (x1 - x0) * (y1 - y2) - (x1 - x2) * (y1 - y0);
+            if den.abs() > 0.0 {
+                let xv = x1 - 0.5 * num / den;
+                if xv > x0 && xv < x2 {
+                    let v = crit(xv);
+                    if v < best {
+                        best = v;
+                        tau = xv;
+                    }
+                }
             }
         }
+        let _ = best;
         taus.push(tau);
         let shifted = delayed_cases(cases, tau);
         let fold = Fold {
