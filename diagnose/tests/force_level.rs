@@ -3,10 +3,10 @@
 //! 6–24°, U = 4–10 m/s, 512 Hz, 8 s, paper noise). Only the forced records are used; the
 //! generator's forms differ from the candidates' forms in `diagnose::force`.
 
+use aeroelastic::effects::Form;
 use diagnose::blind::{generate, BlindEffect, BlindScenario};
 use diagnose::force::{force_level, ForceOptions};
 use diagnose::{Effect, LevelResult};
-use aeroelastic::effects::Form;
 use identify::dataset::Dataset;
 
 fn blind(effect: BlindEffect, strength: f64, form: Form, seed: u64) -> Dataset {
@@ -107,5 +107,154 @@ fn explore() {
             t0.elapsed(),
             summary(&r)
         );
+    }
+}
+
+/// Effect-free gap statistics over seeds (candidates off: the benchmark's twin runs).
+#[test]
+#[ignore]
+fn calibration_effect_free() {
+    let n: u64 = std::env::var("FORCE_CAL_N")
+        .ok()
+        .map_or(8, |s| s.parse().unwrap());
+    let mut stats = Vec::new();
+    for seed in 100..100 + n {
+        let ds = blind(BlindEffect::None, 0.0, Form::Primary, seed);
+        let t0 = std::time::Instant::now();
+        let r = force_level(
+            &ds,
+            &ForceOptions {
+                seed,
+                candidates: vec![],
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        eprintln!(
+            "seed {seed}: gap {:.5} noise {:.5} stat {:.3} ({:?})",
+            r.before,
+            r.noise_level,
+            r.gap_statistic,
+            t0.elapsed()
+        );
+        stats.push(r.gap_statistic);
+    }
+    stats.sort_by(f64::total_cmp);
+    let thr = ForceOptions::default().gap_threshold;
+    let alarms = stats.iter().filter(|&&s| s > thr).count();
+    eprintln!("stats {stats:?} alarms {alarms}/{n}");
+    assert!(alarms * 10 <= n as usize);
+}
+
+#[test]
+fn effect_free_has_no_significant_gap_and_no_significant_candidate() {
+    for seed in [11, 12] {
+        let r = run(&blind(BlindEffect::None, 0.0, Form::Primary, seed));
+        eprintln!("seed {seed}: {}", summary(&r));
+        assert!(!r.significant_gap, "seed {seed}: stat {}", r.gap_statistic);
+        assert!(r.candidates.iter().all(|c| !c.significant));
+        assert_eq!(r.held_out_cases.len(), 40);
+        for split in ["channel", "region", "state", "harmonic"] {
+            let s: f64 = r
+                .where_
+                .iter()
+                .filter(|w| w.split == split)
+                .map(|w| w.share)
+                .sum();
+            assert!((s - 1.0).abs() < 1e-9, "{split}: {s}");
+        }
+    }
+}
+
+#[test]
+fn static_offset_is_named() {
+    check_named(
+        &run(&cat(Effect::StaticOffset, 0.7, 5)),
+        Effect::StaticOffset,
+    );
+}
+
+#[test]
+fn higher_order_is_named() {
+    check_named(&run(&cat(Effect::HigherOrder, 0.7, 6)), Effect::HigherOrder);
+}
+
+#[test]
+fn time_delay_is_named() {
+    check_named(&run(&cat(Effect::TimeDelay, 0.6, 10)), Effect::TimeDelay);
+}
+
+#[test]
+fn dynamic_stall_is_named() {
+    check_named(
+        &run(&cat(Effect::DynamicStall, 0.8, 7)),
+        Effect::DynamicStall,
+    );
+}
+
+#[test]
+fn vortex_shedding_is_named() {
+    check_named(
+        &run(&cat(Effect::VortexShedding, 0.7, 8)),
+        Effect::VortexShedding,
+    );
+}
+
+#[test]
+fn buffeting_is_a_gap_no_candidate_explains() {
+    let r = run(&blind(BlindEffect::Buffeting, 0.7, Form::Primary, 9));
+    eprintln!("{}", summary(&r));
+    assert!(r.significant_gap);
+    assert!(r
+        .candidates
+        .iter()
+        .all(|c| !c.significant || c.shrink < 0.5));
+}
+
+#[test]
+fn added_mass_is_absorbed() {
+    let r = run(&cat(Effect::AddedMass, 0.7, 12));
+    eprintln!("{}", summary(&r));
+    assert!(!r.significant_gap, "stat {}", r.gap_statistic);
+}
+
+/// One `Form::Alternate` set per force-level effect: own candidate first and significant.
+#[test]
+#[ignore]
+fn alternate_forms_are_named() {
+    for e in FORCE_EFFECTS {
+        let r = run(&blind(BlindEffect::Catalogue(e), 0.7, Form::Alternate, 21));
+        eprintln!("{e} (alternate): {}", summary(&r));
+    }
+    for e in FORCE_EFFECTS {
+        let r = run(&blind(BlindEffect::Catalogue(e), 0.7, Form::Alternate, 21));
+        check_named(&r, e);
+    }
+}
+
+/// Strength at which each force-level effect's gap reaches 3× the effect-free gap (same
+/// seed), and whether it is named there.
+#[test]
+#[ignore]
+fn detectability_sweep() {
+    let seed = 31;
+    let free = run(&blind(BlindEffect::None, 0.0, Form::Primary, seed)).before;
+    for e in FORCE_EFFECTS {
+        for k in 0..=10 {
+            let s = 0.1 * k as f64;
+            let r = run(&cat(e, s, seed));
+            if r.before >= 3.0 * free {
+                let c = &r.candidates[0];
+                eprintln!(
+                    "SWEEP {e}: s={s:.1} gap {:.5} (3x free {:.5}) best {} sig {} shrink {:.3}",
+                    r.before,
+                    3.0 * free,
+                    c.effect,
+                    c.significant,
+                    c.shrink
+                );
+                break;
+            }
+        }
     }
 }

@@ -117,9 +117,10 @@ pub(crate) fn score_all(
     before: &[[Vec<f64>; 2]],
     opts: &ForceOptions,
 ) -> Vec<Scored> {
+    use rayon::prelude::*;
     opts.candidates
-        .iter()
-        .map(|&k| { let t0 = std::time::Instant::now(); let r = match k {
+        .par_iter()
+        .map(|&k| match k {
             CandidateKind::StaticOffset => shared(cases, nodes, folds, k, &static_offset_cols),
             CandidateKind::AddedMass => shared(cases, nodes, folds, k, &|c: &CaseData, _| {
                 c.accelerations().to_vec()
@@ -128,7 +129,7 @@ pub(crate) fn score_all(
             CandidateKind::HigherOrder => sparse(cases, nodes, folds, k, &higher_order_pool()),
             CandidateKind::DynamicStall => sparse(cases, nodes, folds, k, &stall_pool()),
             CandidateKind::VortexShedding => vortex(cases, nodes, folds, before),
-        }; if std::env::var("FORCE_TIMING").is_ok() { eprintln!("TIMING {k:?} {:?}", t0.elapsed()); } r })
+        })
         .collect()
 }
 
@@ -405,7 +406,6 @@ fn sparse(
         failure: None,
     }
 }
-
 
 /// Copy of the cases whose regressors are the motion delayed by `tau` [s]: each variable's
 /// harmonic part (its fit at the forcing frequencies) is replaced by the same harmonics
@@ -764,7 +764,10 @@ fn vortex(cases: &[CaseData], nodes: &[Node], folds: &[Fold], before: &[[Vec<f64
                         let k = (fq / df).round() as usize;
                         return p4.get(k).copied().unwrap_or(0.0) - 8.0;
                     }
-                    band_bins(c, fq, bw).iter().map(|&k| p1[k] - 8.0).sum::<f64>()
+                    band_bins(c, fq, bw)
+                        .iter()
+                        .map(|&k| p1[k] - 8.0)
+                        .sum::<f64>()
                 })
                 .sum();
             if g > best_b.0 {

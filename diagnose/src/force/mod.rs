@@ -51,9 +51,10 @@ pub use candidates::CandidateKind;
 
 /// Default threshold of the gap test (statistic = held-out gap / noise level).
 ///
-/// Calibrated on effect-free virtual data (`calibration_effect_free` in
-/// `tests/force_level.rs`): see docs/DECISIONS.md (force level) for the numbers.
-pub const DEFAULT_GAP_THRESHOLD: f64 = 1.8;
+/// Calibrated on effect-free blind sets of the D/G scenario (`calibration_effect_free` in
+/// `tests/force_level.rs`): statistics 1.29–1.61 on 7 of 8 seeds with an upper tail at
+/// 2.43 and 2.49 (seeds 100 and 3), so 1.8 (the B/D calibration) alarmed; provisional.
+pub const DEFAULT_GAP_THRESHOLD: f64 = 2.7;
 
 /// Options of [`force_level`].
 #[derive(Debug, Clone, PartialEq)]
@@ -313,20 +314,13 @@ pub fn force_level(forced: &Dataset, opts: &ForceOptions) -> Result<LevelResult>
         ));
     }
     let name = forced.manifest.name.clone();
-    let tm = std::time::Instant::now();
     let (cases, nodes) = data::prepare(forced)?;
-    let t_prep = tm.elapsed();
     let fold_of = assign_folds(&nodes, opts.folds, opts.seed, &name)?;
     let folds: Vec<Fold> = (0..opts.folds)
         .map(|k| build_fold(k, &fold_of, &cases, &nodes, &opts.identify, &name))
         .collect::<Result<_>>()?;
-    let t_folds = tm.elapsed();
     let before = held_out_residuals(&cases, &nodes, &folds, &|_, _| Vec::new());
-    let t_before = tm.elapsed();
     let scored = candidates::score_all(&cases, &nodes, &folds, &before, opts);
-    if std::env::var("FORCE_TIMING").is_ok() {
-        eprintln!("TIMING prep {t_prep:?} folds {t_folds:?} before {t_before:?} cands {:?}", tm.elapsed());
-    }
     Ok(analysis::assemble(
         &cases, &nodes, &fold_of, &before, scored, opts,
     ))
