@@ -10,8 +10,9 @@
 //! * `static_offset`: Z = [1, α², (Bα̇/U)², α·Bα̇/U] (a DC force per dynamic pressure and
 //!   the even terms an angle offset induces through odd nonlinear terms).
 //! * `added_mass`: Z = [B²α̈/U², Bḧ/U²] (acceleration forces with a mass shared across U).
-//! * `time_delay`: Z = [(B/U)·dŷ/dt] with ŷ the fold's baseline law (first-order shift
-//!   ŷ(t − τ) ≈ ŷ − τ dŷ/dt with one τ·U/B… shared in seconds: the column is dŷ/dt).
+//! * `time_delay`: no extra column: the law is identified on the motion delayed by τ
+//!   (forces lagging the motion by τ), τ chosen per fold on the training nodes by the
+//!   consistency of the linear transfers across configurations (see [`time_delay`]).
 //! * `higher_order`: forward selection of up to [`MAX_SPARSE`] terms from a pool of
 //!   degree-4 and degree-5 monomials outside the cubic library (quintic in α, Bα̇/U;
 //!   quartic cross-DOF), each step kept only when it lowers the training residual by more
@@ -406,76 +407,152 @@ fn sparse(
     }
 }
 
-/// `time_delay`: column dŷ/dt of the fold's baseline law on every case (training cases:
-/// the node fit; held-out cases: the held-out prediction), shared coefficient −τ [s].
+/// Copy of the cases whose regressors are the motion delayed by `tau` [s]: each variable's
+/// harmonic part (its fit at the forcing frequencies) is replaced by the same harmonics
+/// shifted by τ, x'(t) = x(t) + x̂(t − τ) − x̂(t), so noise and the non-harmonic remainder
+/// are those of the baseline and τ = 0 reproduces it exactly. Without a harmonic fit the
+/// series is shifted by linear interpolation (held at the start).
+pub(crate) fn delayed_cases(cases: &[CaseData], tau: f64) -> Vec<CaseData> {
+    cases
+        .iter()
+        .map(|c| {
+            let mut d = c.clone();
+            if tau == 0.0 {
+                return d;
+            }
+            for k in 0..4 {
+                match &c.rep[k] {
+                    Some(h) => {
+                        let mut diff = h.clone();
+                        diff.mean = 0.0;
+                        for j in 0..h.freqs.len() {
+                            let (s, co) = (2.0 * std::f64::consts::PI * h.freqs[j] * tau).sin_cos();
+                            let (a, b) = (h.cos[j], h.sin[j]);
+                            diff.cos[j] = a * co - b * s - a;
+                            diff.sin[j] = a * s + b * co - b;
+                        }
+                        let v = diff.values(c.n, c.dt);
+                        d.nd.x[k].iter_mut().zip(&v).for_each(|(x, v)| *x += v);
+                    }
+                    None => {
+                        let x = &c.nd.x[k];
+                        let n = x.len();
+                        d.nd.x[k] = (0..n)
+                            .map(|i| {
+                                let p = (i as f64 - tau / c.dt).max(0.0);
+                                let j = (p.floor() as usize).min(n.saturating_sub(2));
+                                let w = p - j as f64;
+                                x[j] * (1.0 - w) + x[(j + 1).min(n - 1)] * w
+                            })
+                            .collect();
+                    }
+                }
+            }
+            d
+        })
+        .collect()
+}
+
+/// Leave-one-node-out energy (noise units) on a fold's training nodes of the law
+/// identified on the motion delayed by τ: each training node's coefficients are predicted
+/// from the other training nodes by the held-out rule ([`law::node_coefficients`]) and its
+/// residual energy is ‖r_n‖² + ‖R_n(â_n − a_n)‖² (a_n the node's own least-squares fit,
+/// X_n = Q_n R_n; dependent columns ignored), weighted by the node's mean 1/σ̂².
+fn delay_criterion(cases: &[CaseData], nodes: &[Node], f: &Fold, tau: f64) -> f64 {
+    let sh = delayed_cases(cases, tau);
+    let fits = law::node_fits(&sh, nodes, &f.train, &f.supports);
+    let mut e = 0.0;
+    for c in 0..2 {
+        let full = law::fit_channel(&sh, nodes, &fits, c, &|_, _| Vec::new());
+        for (j, nf) in fits.iter().enumerate() {
+            let mut loo = full.clone();
+            loo.nodes.remove(j);
+            let Some(&i0) = nodes[nf.node].cases.first() else {
+                continue;
+            };
+            let ahat = law::node_coefficients(&sh, nodes, &f.supports, &loo, i0, c);
+            let a = &full.nodes[j].2;
+            let qr = &nf.qr[c];
+            let r = qr.residual(&nf.y[c]);
+            let mut en = dot(&r, &r);
+            for k in 0..qr.kept.len() {
+                let mut v = 0.0;
+                for l in k..qr.kept.len() {
+                    let col = qr.kept[l];
+                    v += qr.r[k][l - k] * (ahat[col] - a[col]);
+                }
+                en += v * v;
+            }
+            let w = nf.w[c].iter().sum::<f64>() / nf.w[c].len().max(1) as f64;
+            e += w * w * en;
+        }
+    }
+    e
+}
+
+/// Delays tried by the `time_delay` search [s] (coarse; refined by one parabola through
+/// the best one and its neighbours).
+pub const DELAY_GRID: [f64; 6] = [0.0, 1e-3, 3e-3, 8e-3, 0.02, 0.05];
+
+/// `time_delay`: the law of every node is identified on the motion delayed by τ
+/// ([`delayed_cases`]), τ ∈ [0, 50 ms] chosen per fold on the training nodes ([`DELAY_GRID`], parabolic refinement) by
+/// the cross-configuration consistency of the linear transfers ([`delay_criterion`]: a
+/// delay is a phase ωτ that depends on U as well as K, which the pooled prediction over K
+/// cannot absorb), then scored on the held-out nodes. One shared parameter (τ).
 fn time_delay(cases: &[CaseData], nodes: &[Node], folds: &[Fold]) -> Scored {
     let mut res = vec![[Vec::new(), Vec::new()]; cases.len()];
     let mut taus = Vec::new();
     for f in folds {
+        let crit = |t: f64| delay_criterion(cases, nodes, f, t);
+        let vals: Vec<f64> = DELAY_GRID.iter().map(|&t| crit(t)).collect();
+        let kb = (0..vals.len())
+            .min_by(|&a, &b| vals[a].total_cmp(&vals[b]))
+            .unwrap_or(0);
+        let (mut tau, mut best) = (DELAY_GRID[kb], vals[kb]);
+        // one parabola through the best grid point and its neighbours (unequal spacing)
+        if kb > 0 && kb + 1 < DELAY_GRID.len() {
+            let (x0, x1, x2) = (DELAY_GRID[kb - 1], DELAY_GRID[kb], DELAY_GRID[kb + 1]);
+            let (y0, y1, y2) = (vals[kb - 1], vals[kb], vals[kb + 1]);
+            let num = (x1 - x0).powi(2) * (y1 - y2) - (x1 - x2).powi(2) * (y1 - y0);
+            let den = (x1 - x0) * (y1 - y2) - (x1 - x2) * (y1 - y0);
+            if den.abs() > 0.0 {
+                let xv = x1 - 0.5 * num / den;
+                if xv > x0 && xv < x2 {
+                    let v = crit(xv);
+                    if v < best {
+                        best = v;
+                        tau = xv;
+                    }
+                }
+            }
+        }
+        let _ = best;
+        taus.push(tau);
+        let shifted = delayed_cases(cases, tau);
+        let fold = Fold {
+            index: f.index,
+            train: f.train.clone(),
+            test: f.test.clone(),
+            supports: f.supports.clone(),
+            fits: law::node_fits(&shifted, nodes, &f.train, &f.supports),
+        };
         for c in 0..2 {
-            let base = law::fit_channel(cases, nodes, &f.fits, c, &|_, _| Vec::new());
-            let mut deriv: Vec<Vec<f64>> = vec![Vec::new(); cases.len()];
-            for n in f.train.iter().chain(&f.test) {
-                for &i in &nodes[*n].cases {
-                    // nonlinear part only: the linear part of a delay is absorbed by the
-                    // node coefficients (a phase at the forcing frequency)
-                    let cfg = &nodes[*n].config;
-                    let a = law::node_coefficients(cases, nodes, &f.supports, &base, i, c);
-                    let mut p = vec![0.0; cases[i].n];
-                    for (t, &aj) in f.supports[cfg][c].iter().zip(&a) {
-                        if aj != 0.0 && t.degree() >= 2 {
-                            let col = cases[i].column(t);
-                            p.iter_mut().zip(&col).for_each(|(o, v)| *o += aj * v);
-                        }
-                    }
-                    deriv[i] = time_derivative(&p, cases[i].dt);
-                }
-            }
-            // training cases: in-sample node fit values instead of the interpolation
-            for (nf, (_, _, a)) in f.fits.iter().zip(&base.nodes) {
-                let cfg = &nodes[nf.node].config;
-                for &i in &nodes[nf.node].cases {
-                    let mut p = vec![0.0; cases[i].n];
-                    for (t, &aj) in f.supports[cfg][c].iter().zip(a) {
-                        if aj != 0.0 && t.degree() >= 2 {
-                            let col = cases[i].column(t);
-                            p.iter_mut().zip(&col).for_each(|(o, v)| *o += aj * v);
-                        }
-                    }
-                    deriv[i] = time_derivative(&p, cases[i].dt);
-                }
-            }
-            let extra = |i: usize, _c: usize| vec![deriv[i].clone()];
-            let l = fold_residuals(cases, nodes, f, c, &extra, &mut res);
-            taus.push(-l.beta.first().copied().unwrap_or(0.0));
+            fold_residuals(&shifted, nodes, &fold, c, &|_, _| Vec::new(), &mut res);
         }
     }
     let tau = taus.iter().sum::<f64>() / taus.len().max(1) as f64;
+    let mut parameters = vec![("tau_s".into(), tau)];
+    for (k, t) in taus.iter().enumerate() {
+        parameters.push((format!("fold{k}_tau_s"), *t));
+    }
     Scored {
         kind: CandidateKind::TimeDelay,
         residuals: res,
-        n_params: 2,
+        n_params: 1,
         n_nuisance: 0,
-        parameters: vec![("tau_s".into(), tau)],
+        parameters,
         failure: None,
     }
-}
-
-fn time_derivative(x: &[f64], dt: f64) -> Vec<f64> {
-    let n = x.len();
-    (0..n)
-        .map(|i| {
-            if n < 3 {
-                0.0
-            } else if i == 0 {
-                (-3.0 * x[0] + 4.0 * x[1] - x[2]) / (2.0 * dt)
-            } else if i == n - 1 {
-                (3.0 * x[n - 1] - 4.0 * x[n - 2] + x[n - 3]) / (2.0 * dt)
-            } else {
-                (x[i + 1] - x[i - 1]) / (2.0 * dt)
-            }
-        })
-        .collect()
 }
 
 /// Sine/cosine least-squares fit at frequency f removed from r; returns the new residual.
@@ -541,10 +618,57 @@ fn near_tone(c: &CaseData, f: f64) -> bool {
     false
 }
 
-/// `vortex_shedding`: S from the training residuals, amplitude/phase per held-out case.
+/// Relative half-widths of the `vortex_shedding` band (around f = S·U/B) tried on the
+/// training residuals.
+pub const SHEDDING_BANDS: [f64; 6] = [0.0, 0.005, 0.01, 0.02, 0.04, 0.08];
+
+/// DFT bins of an n-sample record within the band f(1 ± b) (at least the two bins around
+/// f), excluding DC, Nyquist and bins near a forcing tone.
+fn band_bins(c: &CaseData, f: f64, b: f64) -> Vec<usize> {
+    let t = c.n as f64 * c.dt;
+    let lo = ((f * (1.0 - b)) * t).floor().min((f * t).floor()) as usize;
+    let hi = ((f * (1.0 + b)) * t).ceil().max((f * t).ceil()) as usize;
+    (lo.max(1)..=hi.min(c.n / 2 - 1))
+        .filter(|&k| !near_tone(c, k as f64 / t))
+        .collect()
+}
+
+/// Removes the content of DFT bins `bins` from r (least-squares projection on those
+/// sinusoids: they are orthogonal on the record).
+fn remove_bins(r: &[f64], bins: &[usize]) -> Vec<f64> {
+    let n = r.len();
+    let mut planner = realfft::RealFftPlanner::<f64>::new();
+    let fwd = planner.plan_fft_forward(n);
+    let inv = planner.plan_fft_inverse(n);
+    let mut input = r.to_vec();
+    let mut spec = fwd.make_output_vec();
+    if fwd.process(&mut input, &mut spec).is_err() {
+        return r.to_vec();
+    }
+    for &k in bins {
+        if k < spec.len() {
+            spec[k] = realfft::num_complex::Complex::new(0.0, 0.0);
+        }
+    }
+    let mut out = inv.make_output_vec();
+    if inv.process(&mut spec, &mut out).is_err() {
+        return r.to_vec();
+    }
+    out.iter().map(|v| v / n as f64).collect()
+}
+
+/// `vortex_shedding`: a narrow band at f = S·U/B. Per fold on the training residuals: S
+/// maximises the summed power at S·U/B (forcing tones masked), refined to a twentieth of
+/// the resolution at the highest speed; the relative band half-width b ∈
+/// [`SHEDDING_BANDS`] maximises the removed power minus 4 noise units per bin and channel
+/// (2 for the fitted noise, 2 as a parsimony margin). On each held-out case the band's
+/// content is removed (b = 0: one sinusoid at f, else the DFT bins in f(1 ± b)); its
+/// amplitudes and phases are nuisance parameters (2 per bin and channel) in the penalty.
 fn vortex(cases: &[CaseData], nodes: &[Node], folds: &[Fold], before: &[[Vec<f64>; 2]]) -> Scored {
     let mut res = before.to_vec();
     let mut ss = Vec::new();
+    let mut bands = Vec::new();
+    let mut q = 0usize;
     for f in folds {
         // training residuals of the baseline node fits, noise weighted, both channels
         let mut train_res: Vec<(usize, [Vec<f64>; 2])> = Vec::new();
@@ -563,25 +687,30 @@ fn vortex(cases: &[CaseData], nodes: &[Node], folds: &[Fold], before: &[[Vec<f64
                 train_res.push((i, rc));
             }
         }
-        // periodograms (4× zero padding) of every training residual, both channels summed
-        let spectra: Vec<(usize, Vec<f64>, f64)> = train_res
+        // periodograms (4× zero padding, and unpadded) of every training residual, both
+        // channels summed
+        let spectra: Vec<(usize, Vec<f64>, f64, Vec<f64>)> = train_res
             .iter()
             .map(|(i, r)| {
                 let c = &cases[*i];
                 let m = (4 * c.n).next_power_of_two();
                 let mut p = vec![0.0; m / 2 + 1];
+                let mut p1 = vec![0.0; c.n / 2 + 1];
                 for ch in r.iter() {
                     for (k, v) in periodogram(ch, m).into_iter().enumerate() {
                         p[k] += v;
                     }
+                    for (k, v) in periodogram(ch, c.n).into_iter().enumerate() {
+                        p1[k] += v;
+                    }
                 }
-                (*i, p, 1.0 / (m as f64 * c.dt))
+                (*i, p, 1.0 / (m as f64 * c.dt), p1)
             })
             .collect();
         let total = |s: f64| -> f64 {
             spectra
                 .iter()
-                .map(|(i, p, df)| {
+                .map(|(i, p, df, _)| {
                     let c = &cases[*i];
                     let fq = s * c.u / c.nd.chord;
                     let k = (fq / df).round() as usize;
@@ -596,9 +725,9 @@ fn vortex(cases: &[CaseData], nodes: &[Node], folds: &[Fold], before: &[[Vec<f64
         let u_max = cases.iter().map(|c| c.u).fold(0.0, f64::max);
         let t_len = cases[0].n as f64 * cases[0].dt;
         let b = cases[0].nd.chord;
-        // step: an eighth of the spectral resolution at the highest speed
-        let step = 0.125 * b / (t_len * u_max);
-        let (s_min, s_max) = (0.02, 1.0);
+        // coarse: a quarter of the resolution at the highest speed, up to 0.45 f_s there
+        let step = 0.25 * b / (t_len * u_max);
+        let (s_min, s_max) = (0.02, 0.45 / cases[0].dt * b / u_max);
         let mut best = (0.0, s_min);
         let mut s = s_min;
         while s <= s_max {
@@ -608,27 +737,76 @@ fn vortex(cases: &[CaseData], nodes: &[Node], folds: &[Fold], before: &[[Vec<f64
             }
             s += step;
         }
+        // refine around the best coarse value
+        let mut s = best.1 - step;
+        while s <= best.1 + step {
+            let p = total(s);
+            if p > best.0 {
+                best = (p, s);
+            }
+            s += 0.1 * step;
+        }
         let s_hat = best.1;
         ss.push(s_hat);
+        // band half-width
+        let mut best_b = (f64::NEG_INFINITY, 0.0);
+        for &bw in &SHEDDING_BANDS {
+            let g: f64 = spectra
+                .iter()
+                .map(|(i, p4, df, p1)| {
+                    let c = &cases[*i];
+                    let fq = s_hat * c.u / c.nd.chord;
+                    if fq >= 0.45 / c.dt {
+                        return 0.0;
+                    }
+                    if bw == 0.0 {
+                        // one off-bin sinusoid ≈ the padded peak
+                        let k = (fq / df).round() as usize;
+                        return p4.get(k).copied().unwrap_or(0.0) - 8.0;
+                    }
+                    band_bins(c, fq, bw)
+                        .iter()
+                        .map(|&k| p1[k] - 8.0)
+                        .sum::<f64>()
+                })
+                .sum();
+            if g > best_b.0 {
+                best_b = (g, bw);
+            }
+        }
+        let bw = best_b.1;
+        bands.push(bw);
         for &n in &f.test {
             for &i in &nodes[n].cases {
                 let c = &cases[i];
                 let fq = s_hat * c.u / c.nd.chord;
                 if fq < 0.45 / c.dt {
-                    for ch in 0..2 {
-                        res[i][ch] = remove_line(&before[i][ch], c.dt, fq);
+                    if bw == 0.0 {
+                        for ch in 0..2 {
+                            res[i][ch] = remove_line(&before[i][ch], c.dt, fq);
+                        }
+                        q += 4;
+                    } else {
+                        let bins = band_bins(c, fq, bw);
+                        for ch in 0..2 {
+                            res[i][ch] = remove_bins(&before[i][ch], &bins);
+                        }
+                        q += 4 * bins.len();
                     }
                 }
             }
         }
     }
-    let s_mean = ss.iter().sum::<f64>() / ss.len().max(1) as f64;
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
     Scored {
         kind: CandidateKind::VortexShedding,
         residuals: res,
-        n_params: 1,
-        n_nuisance: 4 * cases.len(),
-        parameters: vec![("strouhal_chord".into(), s_mean)],
+        n_params: 2,
+        n_nuisance: q,
+        parameters: vec![
+            ("strouhal_chord".into(), mean(&ss)),
+            ("band_half_width".into(), mean(&bands)),
+        ],
         failure: None,
     }
 }

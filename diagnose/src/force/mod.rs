@@ -51,9 +51,10 @@ pub use candidates::CandidateKind;
 
 /// Default threshold of the gap test (statistic = held-out gap / noise level).
 ///
-/// Calibrated on effect-free virtual data (`calibration_effect_free` in
-/// `tests/force_level.rs`): see docs/DECISIONS.md (force level) for the numbers.
-pub const DEFAULT_GAP_THRESHOLD: f64 = 1.8;
+/// Calibrated on effect-free blind sets of the D/G scenario (`calibration_effect_free` in
+/// `tests/force_level.rs`): statistics 1.29–1.61 on 7 of 8 seeds with an upper tail at
+/// 2.43 and 2.49 (seeds 100 and 3), so 1.8 (the B/D calibration) alarmed; provisional.
+pub const DEFAULT_GAP_THRESHOLD: f64 = 2.7;
 
 /// Options of [`force_level`].
 #[derive(Debug, Clone, PartialEq)]
