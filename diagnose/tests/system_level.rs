@@ -153,7 +153,12 @@ fn explore_segments() {
     let truth = LoadedModel::parse(&sc.truth_model, "truth", std::path::Path::new("."), None)
         .unwrap()
         .model;
-    let b = set(BlindEffect::None, 0.0, Form::Primary, 0);
+    let b = set(
+        parse_effect(&env_or("SYS_EFFECTS", "none".to_string())),
+        env_or("SYS_STRENGTHS", 0.6),
+        Form::Primary,
+        0,
+    );
     let o = opts();
     let law = sim_law(&b.forced, &o).unwrap();
     let ident: Arc<dyn aeroelastic::aero::AeroModel> = Arc::new(law.model().clone());
@@ -183,5 +188,47 @@ fn explore_segments() {
             }
             eprintln!("{line}");
         }
+    }
+}
+
+/// Exploration: the first seconds of run 1 of a set against its effect-free twin.
+#[test]
+#[ignore]
+fn explore_twin_start() {
+    let e = parse_effect(&env_or("SYS_EFFECTS", "time_delay".to_string()));
+    let b = set(e, env_or("SYS_STRENGTHS", 0.6), Form::Primary, 0);
+    let t = set(BlindEffect::None, 0.0, Form::Primary, 0);
+    let (r, r0) = (&b.free.records[0], &t.free.records[0]);
+    for i in (0..1024).step_by(16) {
+        eprintln!(
+            "t {:.3} alpha {:+.5} twin {:+.5} diff {:+.6} h {:+.6} twin {:+.6}",
+            i as f64 * r.dt,
+            r.alpha[i].to_degrees(),
+            r0.alpha[i].to_degrees(),
+            (r.alpha[i] - r0.alpha[i]).to_degrees(),
+            r.h[i],
+            r0.h[i]
+        );
+    }
+}
+
+/// Exploration: the whole pipeline's force level on a set (which level decides).
+#[test]
+#[ignore]
+fn explore_force_level() {
+    let e = parse_effect(&env_or("SYS_EFFECTS", "time_delay".to_string()));
+    for s in env_or("SYS_STRENGTHS", "0.6".to_string()).split(',') {
+        let b = set(e, s.parse().unwrap(), Form::Primary, 0);
+        let f = diagnose::force::force_level(&b.forced, &Default::default()).unwrap();
+        eprintln!(
+            "{} s={s}: force before {:.4} noise {:.4} stat {:.2} sig {} best {} sig {}",
+            e.name(),
+            f.before,
+            f.noise_level,
+            f.gap_statistic,
+            f.significant_gap,
+            f.candidates[0].effect.name(),
+            f.candidates[0].significant
+        );
     }
 }

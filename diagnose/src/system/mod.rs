@@ -69,7 +69,7 @@ impl Default for SystemOptions {
             warmup: 0.5,
             pad: 4.0,
             min_runs: 3,
-            gap_ratio: 12.0,
+            gap_ratio: 1.25,
             min_gain: 0.05,
             gain_per_param: 0.02,
             preprocess: PreprocessOptions::default(),
@@ -341,7 +341,8 @@ pub fn system_level_with_model(
             let after = comb(mean2(&sc.after_runs));
             let eb = before * before;
             let ea = after * after;
-            let statistic = if eb > 0.0 { (eb - ea) / eb } else { 0.0 };
+            let en = noise_level * noise_level;
+            let statistic = if en > 0.0 { (eb - ea) / en } else { 0.0 };
             let n_params = candidates::n_params(effect);
             let threshold = opts.min_gain + opts.gain_per_param * n_params as f64;
             let vars_grid = candidates::variants_grid(effect, runs);
