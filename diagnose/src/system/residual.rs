@@ -108,6 +108,8 @@ pub struct RunResidual {
     /// Expected normalised residual energy per sample due to displacement noise, per DOF
     /// (noise level² of the metric).
     pub noise_energy: [f64; 2],
+    /// Savitzky–Golay half window [samples] and degree of the derivatives.
+    pub sg: (usize, usize),
 }
 
 impl RunResidual {
@@ -119,6 +121,28 @@ impl RunResidual {
     /// True when no sample is kept.
     pub fn is_empty(&self) -> bool {
         self.i1 <= self.i0
+    }
+
+    /// A force series `x` (whole run) as it appears in the residual when it acts on the
+    /// structure: through the Savitzky–Golay acceleration q̈ = D D q, i.e. smoothed by
+    /// S = D D I I (I: cumulative trapezoidal integral). Smooth series pass unchanged;
+    /// a friction step is spread over the differentiator's window, as in the residual.
+    /// Returns the kept samples; `None` when the differentiator fails (too short a run).
+    pub fn as_acceleration_term(&self, x: &[f64]) -> Option<Vec<f64>> {
+        let integ = |v: &[f64]| -> Vec<f64> {
+            let mut out = Vec::with_capacity(v.len());
+            let mut acc = 0.0;
+            out.push(0.0);
+            for w in v.windows(2) {
+                acc += 0.5 * (w[0] + w[1]) * self.dt;
+                out.push(acc);
+            }
+            out
+        };
+        let ii = integ(&integ(x));
+        let d1 = savitzky_golay_derivative(&ii, self.dt, self.sg.0, self.sg.1).ok()?;
+        let d2 = savitzky_golay_derivative(&d1, self.dt, self.sg.0, self.sg.1).ok()?;
+        Some(d2[self.i0..self.i1].to_vec())
     }
 
     /// Normalised residual energy per sample, per DOF: mean((r_c/norm_c)²).
@@ -419,6 +443,7 @@ pub fn prepare_run(
         k,
         sigma,
         noise_energy,
+        sg: (s.half_window, s.order),
     })
 }
 
