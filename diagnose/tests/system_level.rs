@@ -82,6 +82,26 @@ fn explore() {
                     r.candidates[1].effect.name(),
                     r.candidates[1].statistic,
                 );
+                if verbose > 1 {
+                    for o in &r.observables {
+                        eprintln!("   obs {} [{}] before {:.4} after {:.4}", o.name, o.unit, o.before, o.after);
+                    }
+                    for g in &r.signatures {
+                        eprintln!("   sig {} {:.3} > {:.3}: {}", g.name, g.statistic, g.threshold, g.detected);
+                    }
+                    if let Some(b) = &r.bifurcation {
+                        for (k, m) in b.measured.iter().enumerate() {
+                            eprintln!(
+                                "   bif U {:.2} meas {:.3}° {:.3} Hz | before {:?} | after {:?}",
+                                m.wind_speed,
+                                m.amplitude,
+                                m.frequency,
+                                b.predicted_before.get(k).map(|p| (p.amplitude, p.frequency)),
+                                b.predicted_after.get(k).map(|p| (p.amplitude, p.frequency))
+                            );
+                        }
+                    }
+                }
                 if verbose > 0 {
                     for c in &r.candidates {
                         eprintln!(
@@ -230,5 +250,22 @@ fn explore_force_level() {
             f.candidates[0].effect.name(),
             f.candidates[0].significant
         );
+    }
+}
+
+/// Exploration: cost of the parts (identification vs the rest).
+#[test]
+#[ignore]
+fn explore_timing() {
+    let b = set(BlindEffect::None, 0.0, Form::Primary, 0);
+    let o = opts();
+    for _ in 0..3 {
+        let t = std::time::Instant::now();
+        let law = diagnose::system::sim_law(&b.forced, &o).unwrap();
+        let ti = t.elapsed().as_secs_f64();
+        let m: std::sync::Arc<dyn aeroelastic::aero::AeroModel> = std::sync::Arc::new(law.model().clone());
+        let t = std::time::Instant::now();
+        let _ = diagnose::system::system_level_with_model(&m, &b.free, &o).unwrap();
+        eprintln!("identify {ti:.3}s rest {:.3}s", t.elapsed().as_secs_f64());
     }
 }

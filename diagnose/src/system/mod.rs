@@ -10,7 +10,6 @@ pub mod residual;
 
 mod analysis;
 mod candidates;
-#[allow(dead_code)] // observables and re-simulation: not wired into system_level yet
 mod simulate;
 
 use std::sync::Arc;
@@ -57,6 +56,9 @@ pub struct SystemOptions {
     pub preprocess: PreprocessOptions,
     /// Identification settings (default: identify's defaults).
     pub identify: IdentifySettings,
+    /// Re-simulate every run with the sim (and the best candidate) for the observables
+    /// and the bifurcation diagram (default true; off saves the simulations' time).
+    pub simulate: bool,
 }
 
 impl Default for SystemOptions {
@@ -74,6 +76,7 @@ impl Default for SystemOptions {
             gain_per_param: 0.02,
             preprocess: PreprocessOptions::default(),
             identify: IdentifySettings::default(),
+            simulate: true,
         }
     }
 }
@@ -146,7 +149,6 @@ pub fn sim_law(forced: &Dataset, opts: &SystemOptions) -> Result<IdentifiedLaw> 
 /// Prepared free runs of a data set for a given aerodynamic model.
 pub(crate) struct Prepared {
     pub runs: Vec<RunResidual>,
-    #[allow(dead_code)] // for the re-simulation (observables), not wired yet
     pub structure: LinearStructure,
 }
 
@@ -403,6 +405,18 @@ pub fn system_level_with_model(
     });
     let where_ = analysis::where_shares(runs, &noise_runs);
     let spectra = analysis::spectra(runs, best_cols.as_ref(), rho, chord);
+    let signatures = simulate::signatures(runs, gap_statistic, opts.gap_ratio);
+    let (observables, bifurcation) = if opts.simulate {
+        let aug = best_cols.as_ref().map(|(e, g, t)| simulate::Augment {
+            effect: *e,
+            grid: g.iter().map(|x| x.1).collect(),
+            theta: t.clone(),
+        });
+        let sim = simulate::compare(model, rho, &p.structure, runs, aug.as_ref());
+        (sim.observables, Some(sim.bifurcation))
+    } else {
+        (vec![], None)
+    };
     Ok(LevelResult {
         level: Level::Structural,
         metric: "held-out normalised equation error of the free response".into(),
@@ -416,8 +430,8 @@ pub fn system_level_with_model(
         where_,
         cases,
         spectra,
-        signatures: vec![],
-        observables: vec![],
-        bifurcation: None,
+        signatures,
+        observables,
+        bifurcation,
     })
 }
