@@ -458,11 +458,12 @@ pub(crate) fn compare(
 }
 
 /// Signature tests on the measured runs (no simulation): amplitude-dependent
-/// frequency (largest |relative frequency change| between the large- and small-amplitude
-/// halves of a run; threshold 2 %), linear decay (largest exponential-over-linear
-/// envelope misfit ratio among decaying runs; threshold 2), mean shift (largest
-/// |mean α| over whole periods of a run's last half, in standard errors of the
-/// per-period means; threshold 5), and whiteness (held-out gap over
+/// frequency (largest |relative change| of the FFT pitch frequency between the halves
+/// of a run whose amplitude changes ≥ 1.5× between them, both above 20 σ̂_α; threshold
+/// 2 %), linear decay (largest exponential-over-linear envelope misfit ratio among
+/// decaying runs; threshold 2), mean shift (largest |mean α| of the last half of a run
+/// that has decayed below 10 σ̂_α, in standard errors σ̂_α/√n; threshold 5), and
+/// whiteness (held-out gap over
 /// noise level; threshold: the gap test's).
 pub(crate) fn signatures(
     runs: &[RunResidual],
@@ -473,29 +474,37 @@ pub(crate) fn signatures(
     let mut lin: f64 = 0.0;
     let mut mean_z: f64 = 0.0;
     for r in runs {
-        let a = &r.q[1][r.i0..];
-        // Zero crossings need a clean signal: amplitudes above 20 σ̂ only.
-        let o = observables(a, r.dt, 20.0 * r.sigma[1]);
-        if o.freq_shift.is_finite() && o.freq_shift.abs() > fshift.abs() {
-            fshift = o.freq_shift;
+        let a = &r.q[1][r.i0..r.i1];
+        let n = a.len();
+        // Peak deviation from the segment's mean (an offset is not an oscillation).
+        let peak = |x: &[f64]| {
+            let m = x.iter().sum::<f64>() / x.len().max(1) as f64;
+            x.iter().fold(0.0_f64, |p, v| p.max((v - m).abs()))
+        };
+        let clean = 20.0 * r.sigma[1];
+        // Amplitude-dependent frequency: FFT frequency of the first vs the second half
+        // of a run whose amplitude changes by ≥ 1.5× between them, both well above noise.
+        let (h1, h2) = a.split_at(n / 2);
+        let (p1, p2) = (peak(h1), peak(h2));
+        if p1.min(p2) > clean && p1.max(p2) > 1.5 * p1.min(p2) {
+            let (f1, f2) = (dominant_frequency(h1, r.dt), dominant_frequency(h2, r.dt));
+            if f1 > 0.0 && f2 > 0.0 {
+                let (fl, fs) = if p1 > p2 { (f1, f2) } else { (f2, f1) };
+                let d = (fl - fs) / (0.5 * (fl + fs));
+                if d.abs() > fshift.abs() {
+                    fshift = d;
+                }
+            }
         }
         let o3 = observables(a, r.dt, 3.0 * r.sigma[1]);
         if o3.rate < 0.0 && o3.exp_over_lin.is_finite() {
             lin = lin.max(o3.exp_over_lin);
         }
-        // Mean over whole periods of the last half: per-period means, their mean and its
-        // standard error from their scatter (or the noise, whichever is larger).
-        let win = windows(&a[a.len() / 2..], r.dt, o3.freq);
-        if win.len() >= 3 {
-            let m: Vec<f64> = win.iter().map(|w| w.2).collect();
-            let n = m.len() as f64;
-            let mean = m.iter().sum::<f64>() / n;
-            let sd = (m.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
-            let per = (1.0 / o3.freq / r.dt).max(1.0);
-            let se = (sd / n.sqrt()).max(r.sigma[1] / (n * per).sqrt());
-            if se > 0.0 && mean.is_finite() {
-                mean_z = mean_z.max(mean.abs() / se);
-            }
+        // Mean shift: runs that have decayed into the noise over their last half; the
+        // mean of white noise has standard error σ̂/√n.
+        if p2 < 10.0 * r.sigma[1] && r.sigma[1] > 0.0 {
+            let mean = h2.iter().sum::<f64>() / h2.len().max(1) as f64;
+            mean_z = mean_z.max(mean.abs() / (r.sigma[1] / (h2.len() as f64).sqrt()));
         }
     }
     let sig = |name: &str, statistic: f64, threshold: f64, detail: String| {
@@ -513,7 +522,7 @@ pub(crate) fn signatures(
             "amplitude_dependent_frequency",
             fshift.abs(),
             0.02,
-            format!("largest relative pitch-frequency change large vs small amplitude: {fshift:+.4}"),
+            format!("largest relative pitch-frequency change, large- vs small-amplitude half of a run: {fshift:+.4}"),
         ),
         sig(
             "linear_decay",
@@ -525,7 +534,7 @@ pub(crate) fn signatures(
             "mean_shift",
             mean_z,
             5.0,
-            format!("largest |mean pitch| over the last half of a run in standard errors: {mean_z:.1}"),
+            format!("largest |mean pitch| of a decayed run's last half in standard errors: {mean_z:.1}"),
         ),
         sig(
             "whiteness",
