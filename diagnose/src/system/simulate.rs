@@ -396,7 +396,11 @@ pub(crate) fn compare(
             }
             let os = observables(&sim[1], r.dt, floor);
             pts.push(point(r.u, &os));
-            let resp = (sim[1].iter().zip(a).map(|(x, y)| (x - y).powi(2)).sum::<f64>()
+            let resp = (sim[1]
+                .iter()
+                .zip(a)
+                .map(|(x, y)| (x - y).powi(2))
+                .sum::<f64>()
                 / a.len() as f64)
                 .sqrt()
                 / rms_meas.max(f64::MIN_POSITIVE);
@@ -432,7 +436,11 @@ pub(crate) fn compare(
         .map(|(&(name, unit), a)| {
             let rms = |s: f64, n: f64| if n > 0.0 { (s / n).sqrt() } else { f64::NAN };
             let before = rms(a[0], a[2]);
-            let after = if aug.is_some() { rms(a[1], a[3]) } else { before };
+            let after = if aug.is_some() {
+                rms(a[1], a[3])
+            } else {
+                before
+            };
             crate::report::ObservableGap {
                 name: name.into(),
                 level: crate::effect::Level::Structural,
@@ -507,16 +515,15 @@ pub(crate) fn signatures(
             mean_z = mean_z.max(mean.abs() / (r.sigma[1] / (h2.len() as f64).sqrt()));
         }
     }
-    let sig = |name: &str, statistic: f64, threshold: f64, detail: String| {
-        crate::report::SignatureTest {
+    let sig =
+        |name: &str, statistic: f64, threshold: f64, detail: String| crate::report::SignatureTest {
             name: name.into(),
             level: crate::effect::Level::Structural,
             statistic,
             threshold,
             detected: statistic > threshold,
             detail,
-        }
-    };
+        };
     vec![
         sig(
             "amplitude_dependent_frequency",
