@@ -268,8 +268,8 @@ pub fn forces_along(
         let f = m as f64 / (nfft as f64 * dt);
         let lp = lowpass(f);
         if lp == 0.0 {
-            for c in 0..2 {
-                out_spec[c][m] = Complex64::new(0.0, 0.0);
+            for o in out_spec.iter_mut() {
+                o[m] = Complex64::new(0.0, 0.0);
             }
             continue;
         }

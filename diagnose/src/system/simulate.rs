@@ -362,9 +362,11 @@ fn point(u: f64, o: &Observables) -> crate::report::BifurcationPoint {
 /// Simulates every run from its measured state at `i0` with the sim (and with `aug`),
 /// and compares observables with the measured ones: pitch frequency [Hz], growth rate
 /// [1/s], final (LCO) amplitude [deg] — each as the rms over runs of sim − measured —
-/// and the response gap rms(α_sim − α_meas)/rms(α_meas) [-] (mean over runs). Runs whose
-/// simulation is not possible (stiff law) or stops early (divergence) are left out of
-/// the comparison; when none is left, the observables are NaN.
+/// the response gap rms(α_sim − α_meas)/rms(α_meas) [-] (rms over runs), and — when the
+/// measured growth rates change sign over U — |flutter speed sim − measured| [m/s]
+/// ([`flutter_speed`]). Runs whose simulation is not possible (stiff law) or stops early
+/// (divergence) are left out of the comparison; an observable no run (or no bracketing
+/// of the flutter speed) supports is left out of the list.
 pub(crate) fn compare(
     model: &Arc<dyn AeroModel>,
     rho: f64,
@@ -377,11 +379,14 @@ pub(crate) fn compare(
     let mut after_pts = Vec::new();
     // (sum of squares before, after, count before, count after) per observable.
     let mut acc = [[0.0; 4]; 4];
+    // (U, growth rate): measured, sim before, sim after.
+    let mut rates: [Vec<(f64, f64)>; 3] = Default::default();
     for r in runs {
         let a = &r.q[1][r.i0..];
         let floor = 3.0 * r.sigma[1];
         let om = observables(a, r.dt, floor);
         meas_pts.push(point(r.u, &om));
+        rates[0].push((r.u, om.rate));
         let run_model = model
             .with_reduced_frequency(r.k)
             .unwrap_or_else(|| model.clone());
@@ -396,6 +401,7 @@ pub(crate) fn compare(
             }
             let os = observables(&sim[1], r.dt, floor);
             pts.push(point(r.u, &os));
+            rates[1 + which].push((r.u, os.rate));
             let resp = (sim[1]
                 .iter()
                 .zip(a)
@@ -430,7 +436,7 @@ pub(crate) fn compare(
         ("final pitch amplitude", "deg"),
         ("simulated pitch response gap", "-"),
     ];
-    let observables = names
+    let mut observables: Vec<crate::report::ObservableGap> = names
         .iter()
         .zip(acc)
         .map(|(&(name, unit), a)| {
@@ -455,6 +461,26 @@ pub(crate) fn compare(
             }
         })
         .collect();
+    // Flutter speed: where the growth rate changes sign over U (measured vs sim).
+    if let Some(fm) = flutter_speed(&rates[0]) {
+        let gap = |k: usize| flutter_speed(&rates[k]).map_or(f64::NAN, |f| (f - fm).abs());
+        let before = gap(1);
+        let after = if aug.is_some() { gap(2) } else { before };
+        observables.push(crate::report::ObservableGap {
+            name: "flutter speed".into(),
+            level: crate::effect::Level::Structural,
+            unit: "m/s".into(),
+            before,
+            after,
+            shrink: if before > 0.0 && after.is_finite() {
+                1.0 - after / before
+            } else {
+                0.0
+            },
+        });
+    }
+    // JSON has no NaN: an observable the sims could not give is left out.
+    observables.retain(|o| o.before.is_finite() && o.after.is_finite());
     SimResult {
         observables,
         bifurcation: crate::report::Bifurcation {
