@@ -493,3 +493,27 @@ fn explore_timing() {
         eprintln!("identify {ti:.3}s rest {:.3}s", t.elapsed().as_secs_f64());
     }
 }
+
+/// Exploration: the whole pipeline's verdict on a set.
+#[test]
+#[ignore]
+fn explore_pipeline() {
+    let e = parse_effect(&env_or("SYS_EFFECTS", "freeplay".to_string()));
+    for s in env_or("SYS_STRENGTHS", "0.6".to_string()).split(',') {
+        let b = set(e, s.parse().unwrap(), Form::Primary, 0);
+        let d = diagnose::pipeline::diagnose(
+            &b.forced,
+            Some(&b.free),
+            &diagnose::pipeline::DiagnoseOptions::new(0),
+            "test",
+        )
+        .unwrap();
+        eprintln!("{} s={s}: verdict {:?}", e.name(), d.verdict);
+        for l in &d.levels {
+            eprintln!(
+                "   level {:?} stat {:.2} thr {:.2} sig {}",
+                l.level, l.gap_statistic, l.gap_threshold, l.significant_gap
+            );
+        }
+    }
+}
