@@ -45,12 +45,13 @@ pub struct SystemOptions {
     pub pad: f64,
     /// Fewest free runs accepted (default 3).
     pub min_runs: usize,
-    /// Gap test: the gap is significant when before/noise_level exceeds this (calibrated
-    /// on effect-free virtual data, see the crate's tests).
+    /// Gap test: the gap is significant when before/noise_level exceeds this (default
+    /// 1.25; effect-free blind sets give 1.01–1.09, see `tests/system_level.rs`).
     pub gap_ratio: f64,
-    /// Smallest held-out fraction of residual energy a candidate must remove.
+    /// Smallest held-out residual energy a candidate must remove, in units of the noise
+    /// energy (default 0.05; effect-free sets: at most 0.02).
     pub min_gain: f64,
-    /// Parsimony penalty: extra fraction per fitted parameter.
+    /// Parsimony penalty: extra noise energies per fitted parameter (default 0.02).
     pub gain_per_param: f64,
     /// Preprocessing of the forced records for the identification.
     pub preprocess: PreprocessOptions,
@@ -293,13 +294,12 @@ fn score_candidate(
 /// residual operator's impulse responses (differentiator, aerodynamic filter).
 ///
 /// **Gap test.** statistic = before / noise_level; significant when it exceeds
-/// [`SystemOptions::gap_ratio`] (calibrated on effect-free virtual data: the sim's own
-/// extrapolation and identification errors keep the effect-free gap above the noise
-/// level).
+/// [`SystemOptions::gap_ratio`] (default 1.25; on effect-free blind sets the statistic is
+/// 1.01–1.09 over 20 seeds, 0 false alarms).
 ///
 /// **Candidates.** Fitted on the training folds (least squares, grid for nonlinear
-/// parameters), scored on the held-out runs. statistic = held-out fraction of residual
-/// energy removed, (E_before − E_after)/E_before; parsimony: threshold =
+/// parameters), scored on the held-out runs. statistic = held-out residual energy
+/// removed in units of the noise energy, (E_before − E_after)/E_noise; parsimony: threshold =
 /// [`SystemOptions::min_gain`] + [`SystemOptions::gain_per_param`] × parameters; a candidate
 /// is significant when the gap is significant and the statistic exceeds its threshold.
 /// Ranking score = threshold − statistic (lower is better).
