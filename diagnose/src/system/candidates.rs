@@ -179,6 +179,13 @@ fn kept(run: &RunResidual, x: &[f64]) -> Vec<f64> {
     x[run.i0..run.i1].to_vec()
 }
 
+/// A non-smooth structural force series (whole run) as the residual sees it
+/// ([`RunResidual::as_acceleration_term`]); the raw kept samples if that fails.
+fn acc_term(run: &RunResidual, x: &[f64]) -> Vec<f64> {
+    run.as_acceleration_term(x)
+        .unwrap_or_else(|| x[run.i0..run.i1].to_vec())
+}
+
 /// Columns of one candidate variant for one run.
 fn columns(effect: Effect, grid: &[f64], run: &RunResidual, rho: f64, chord: f64) -> Vec<Column> {
     let z = Vec::new;
@@ -212,32 +219,14 @@ fn columns(effect: Effect, grid: &[f64], run: &RunResidual, rho: f64, chord: f64
         ],
         Effect::Freeplay => {
             let d = grid[0];
-            vec![[
-                z(),
-                kept(run, &run.q[1])
-                    .iter()
-                    .map(|a| a.clamp(-d, d))
-                    .collect(),
-            ]]
+            let x: Vec<f64> = run.q[1].iter().map(|a| a.clamp(-d, d)).collect();
+            vec![[z(), acc_term(run, &x)]]
         }
         Effect::Friction => {
             let (eh, ea) = (grid[0], grid[1]);
-            vec![
-                [
-                    kept(run, &run.qd[0])
-                        .iter()
-                        .map(|v| (v / eh).tanh())
-                        .collect(),
-                    z(),
-                ],
-                [
-                    z(),
-                    kept(run, &run.qd[1])
-                        .iter()
-                        .map(|v| (v / ea).tanh())
-                        .collect(),
-                ],
-            ]
+            let xh: Vec<f64> = run.qd[0].iter().map(|v| (v / eh).tanh()).collect();
+            let xa: Vec<f64> = run.qd[1].iter().map(|v| (v / ea).tanh()).collect();
+            vec![[acc_term(run, &xh), z()], [z(), acc_term(run, &xa)]]
         }
         Effect::StaticOffset => {
             let s = if grid[0] > 0.5 {

@@ -108,6 +108,8 @@ pub struct RunResidual {
     /// Expected normalised residual energy per sample due to displacement noise, per DOF
     /// (noise level² of the metric).
     pub noise_energy: [f64; 2],
+    /// Savitzky–Golay half window [samples] and degree of the derivatives.
+    pub sg: (usize, usize),
 }
 
 impl RunResidual {
@@ -119,6 +121,28 @@ impl RunResidual {
     /// True when no sample is kept.
     pub fn is_empty(&self) -> bool {
         self.i1 <= self.i0
+    }
+
+    /// A force series `x` (whole run) as it appears in the residual when it acts on the
+    /// structure: through the Savitzky–Golay acceleration q̈ = D D q, i.e. smoothed by
+    /// S = D D I I (I: cumulative trapezoidal integral). Smooth series pass unchanged;
+    /// a friction step is spread over the differentiator's window, as in the residual.
+    /// Returns the kept samples; `None` when the differentiator fails (too short a run).
+    pub fn as_acceleration_term(&self, x: &[f64]) -> Option<Vec<f64>> {
+        let integ = |v: &[f64]| -> Vec<f64> {
+            let mut out = Vec::with_capacity(v.len());
+            let mut acc = 0.0;
+            out.push(0.0);
+            for w in v.windows(2) {
+                acc += 0.5 * (w[0] + w[1]) * self.dt;
+                out.push(acc);
+            }
+            out
+        };
+        let ii = integ(&integ(x));
+        let d1 = savitzky_golay_derivative(&ii, self.dt, self.sg.0, self.sg.1).ok()?;
+        let d2 = savitzky_golay_derivative(&d1, self.dt, self.sg.0, self.sg.1).ok()?;
+        Some(d2[self.i0..self.i1].to_vec())
     }
 
     /// Normalised residual energy per sample, per DOF: mean((r_c/norm_c)²).
@@ -172,14 +196,36 @@ pub fn dominant_frequency(x: &[f64], dt: f64) -> f64 {
     (k as f64 + off) / (nfft as f64 * dt)
 }
 
+/// Pass band [Hz] of the frequency-domain force evaluation: full up to
+/// [`LOWPASS_HZ`].0, cosine taper to zero at [`LOWPASS_HZ`].1.
+pub const LOWPASS_HZ: (f64, f64) = (20.0, 30.0);
+
+/// Weight of the low-pass at frequency `f` [Hz] (see [`LOWPASS_HZ`]).
+fn lowpass(f: f64) -> f64 {
+    let (a, b) = LOWPASS_HZ;
+    if f <= a {
+        1.0
+    } else if f >= b {
+        0.0
+    } else {
+        0.5 + 0.5 * (std::f64::consts::PI * (f - a) / (b - a)).cos()
+    }
+}
+
 /// Forces of `model` along a measured motion (see the module docs): the linear part
 /// from the model's *frequency response* H(ω) (the identified derivative table itself,
 /// not its time-domain rational approximation, whose fitted lag roots can be stiff and
 /// whose coefficients can cancel by orders of magnitude), applied by FFT to the motion
-/// extended by `pad` samples of its initial value before (held before release) and a
-/// cosine blend back to it after (so the periodic extension is continuous); plus the
+/// extended by `pad` samples of rest (q = 0) before — the wake starts at release, as with
+/// lag states x(0) = 0; a held pre-release position would put a large low-frequency
+/// component into the padding, where an identified table's H(ω) is extrapolated — and by
+/// its tapered even reflection after; plus the
 /// nonlinear remainder f(q, q̇, 0) − K_q q − C_q q̇ in the time domain (exact for a
-/// linear model plus polynomial terms, which is what an identified law is).
+/// linear model plus polynomial terms, which is what an identified law is). The linear
+/// part is low-passed ([`LOWPASS_HZ`], far above the rig's modes and their first
+/// harmonics): H(ω) of a law with apparent mass grows like ω², and applied to raw
+/// displacements it would turn sensor noise near the Nyquist frequency into a residual
+/// far above the signal.
 pub fn forces_along(
     model: &dyn AeroModel,
     flow: &Flow,
@@ -196,17 +242,21 @@ pub fn forces_along(
     let mut spec: [Vec<Complex64>; 2] = [fwd.make_output_vec(), fwd.make_output_vec()];
     for j in 0..2 {
         let mut buf = fwd.make_input_vec();
-        let (first, last) = (q[j][0], q[j][n - 1]);
+        // After the run: its even reflection about the last sample, tapered to zero over
+        // at most `pad` samples (an oscillation under a slow taper has little
+        // low-frequency content; the table's H(ω) at ω → 0 is the least reliable part).
+        let m = (nfft - pad - n).min(pad).min(n - 1).max(1);
         for (k, v) in buf.iter_mut().enumerate() {
             *v = if k < pad {
-                first
+                0.0
             } else if k < pad + n {
                 q[j][k - pad]
+            } else if k - pad - n < m {
+                let s = k - pad - n + 1;
+                let w = 0.5 + 0.5 * (std::f64::consts::PI * s as f64 / m as f64).cos();
+                q[j][n - 1 - s] * w
             } else {
-                let m = nfft - pad - n;
-                let t = (k - pad - n) as f64 / m.max(1) as f64;
-                let w = 0.5 - 0.5 * (std::f64::consts::PI * t).cos();
-                last + (first - last) * w
+                0.0
             };
         }
         // The FFT only fails on a length mismatch (a bug).
@@ -215,10 +265,18 @@ pub fn forces_along(
     let nb = spec[0].len();
     let mut out_spec = [fwd.make_output_vec(), fwd.make_output_vec()];
     for m in 0..nb {
-        let w = 2.0 * std::f64::consts::PI * m as f64 / (nfft as f64 * dt);
+        let f = m as f64 / (nfft as f64 * dt);
+        let lp = lowpass(f);
+        if lp == 0.0 {
+            for o in out_spec.iter_mut() {
+                o[m] = Complex64::new(0.0, 0.0);
+            }
+            continue;
+        }
+        let w = 2.0 * std::f64::consts::PI * f;
         let h = model.frequency_response(flow, w);
         for c in 0..2 {
-            let mut v = h[(c, 0)] * spec[0][m] + h[(c, 1)] * spec[1][m];
+            let mut v = (h[(c, 0)] * spec[0][m] + h[(c, 1)] * spec[1][m]) * lp;
             if m == 0 || m + 1 == nb {
                 v = Complex64::new(v.re, 0.0);
             }
@@ -385,6 +443,7 @@ pub fn prepare_run(
         k,
         sigma,
         noise_energy,
+        sg: (s.half_window, s.order),
     })
 }
 
