@@ -28,14 +28,18 @@ pub struct BlindOptions {
 }
 
 impl BlindOptions {
-    /// `n` sets from `seed`, primary forms, default scenario and diagnosis.
+    /// `n` sets from `seed`, primary forms, default scenario and diagnosis, without the
+    /// free-response re-simulation (its observables and bifurcation diagram are not used
+    /// by the verdict; it costs about as much as the rest of the system level).
     pub fn new(n: usize, seed: u64) -> Self {
+        let mut diagnose = DiagnoseOptions::new(seed);
+        diagnose.system.simulate = false;
         BlindOptions {
             n,
             seed,
             form: Form::Primary,
             scenario: BlindScenario::default(),
-            diagnose: DiagnoseOptions::new(seed),
+            diagnose,
         }
     }
 }
