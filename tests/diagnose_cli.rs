@@ -37,12 +37,7 @@ fn write_set(dir: &Path, effect: BlindEffect, strength: f64, seed: u64) {
 fn diagnose_writes_a_complete_diagnosis_from_folders() {
     let tmp = tempfile::tempdir().unwrap();
     let data = tmp.path().join("set");
-    write_set(
-        &data,
-        BlindEffect::Catalogue(Effect::StaticOffset),
-        0.9,
-        21,
-    );
+    write_set(&data, BlindEffect::Catalogue(Effect::StaticOffset), 0.9, 21);
     let out = tmp.path().join("out");
     let (ok, stdout, stderr) = aeroform(&[
         "diagnose",

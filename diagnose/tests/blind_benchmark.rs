@@ -26,7 +26,10 @@ fn run(n: usize, seed: u64) -> BlindReport {
             o.verdict,
             o.confidence,
             o.shrink,
-            o.error.as_deref().map(|e| format!(" ERROR {e}")).unwrap_or_default()
+            o.error
+                .as_deref()
+                .map(|e| format!(" ERROR {e}"))
+                .unwrap_or_default()
         );
     }
     r
