@@ -321,7 +321,11 @@ impl Library {
             x.iter().all(|v| v.len() == n),
             "regression variables of unequal lengths"
         );
-        assert!(r0 + rows <= n, "rows {r0}..{} past the {n} samples", r0 + rows);
+        assert!(
+            r0 + rows <= n,
+            "rows {r0}..{} past the {n} samples",
+            r0 + rows
+        );
         assert_eq!(out.ncols(), self.terms.len(), "one output column per term");
         // powers 1..3 of each variable on the block: pw[(3·v + p − 1)·rows + i]
         let mut pw = vec![0.0; 12 * rows];
@@ -475,8 +479,7 @@ mod tests {
                 let xi = [x[0][r0 + i], x[1][r0 + i], x[2][r0 + i], x[3][r0 + i]];
                 for (j, t) in lib.terms().iter().enumerate() {
                     assert_eq!(out[(i, j)].to_bits(), theta[(r0 + i, j)].to_bits());
-                    let manual: f64 =
-                        (0..4).map(|v| xi[v].powi(t.powers[v] as i32)).product();
+                    let manual: f64 = (0..4).map(|v| xi[v].powi(t.powers[v] as i32)).product();
                     assert!(
                         (out[(i, j)] - manual).abs() <= 1e-14 * manual.abs().max(1e-300),
                         "row {} term {}",

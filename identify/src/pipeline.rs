@@ -577,14 +577,8 @@ fn prepare_case(
     let n = case.len();
     let p = lib.len();
     let eval = |r0: usize, out: faer::MatMut<'_, f64>| lib.evaluate_rows(&case.x, r0, out);
-    let factor = CaseFactor::from_row_blocks(
-        id,
-        n,
-        p,
-        order,
-        &[&case.c_moment, &case.c_lift],
-        eval,
-    )?;
+    let factor =
+        CaseFactor::from_row_blocks(id, n, p, order, &[&case.c_moment, &case.c_lift], eval)?;
     let ident = identifiability::analyse_factor(
         id,
         lib,
