@@ -45,33 +45,7 @@ enum Command {
     Diagnose(diagnose_cmd::DiagnoseArgs),
 }
 
-/// Heap retention fix (docs/SCALE.md finding 1): glibc's dynamic mmap threshold rises to
-/// the size of the largest freed block (up to 32 MB), after which the large per-case
-/// temporaries of identification are served from the thread arenas, interleave with the
-/// long-lived columns and are never returned: 448 cases × 60 s peaked at 7.3 GB instead of
-/// 1.2 GB. A fixed 1 MiB threshold (which also disables the dynamic adjustment) serves every
-/// block of 1 MiB or more by `mmap` and returns it on free. An explicit
-/// `MALLOC_MMAP_THRESHOLD_` in the environment is respected, and
-/// `AEROFORM_MALLOC_DEFAULTS=1` keeps glibc's defaults (for measurements,
-/// benches/scale/run.sh).
-#[cfg(all(target_os = "linux", target_env = "gnu"))]
-fn bound_heap_retention() {
-    let keep = std::env::var_os("MALLOC_MMAP_THRESHOLD_").is_some()
-        || std::env::var_os("AEROFORM_MALLOC_DEFAULTS").is_some_and(|v| v == "1");
-    if !keep {
-        // SAFETY: `mallopt` only changes allocator parameters; it is called first thing in
-        // `main`, before any other thread exists.
-        unsafe {
-            libc::mallopt(libc::M_MMAP_THRESHOLD, 1 << 20);
-        }
-    }
-}
-
-#[cfg(not(all(target_os = "linux", target_env = "gnu")))]
-fn bound_heap_retention() {}
-
 fn main() -> ExitCode {
-    bound_heap_retention();
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Run(a) => run_cmd::run(&a),
