@@ -572,8 +572,13 @@ fn prepare_case(
 ) -> Result<CaseWork> {
     check_case(case)?;
     let id = &case.meta.id;
-    let theta = lib.evaluate(&case.x);
-    let factor = CaseFactor::new(id, theta.as_ref(), order, &[&case.c_moment, &case.c_lift])?;
+    // Θ is evaluated block by block (never held whole: n × p × 8 B would be 6× the raw
+    // data): twice for the factorisation, once for the key-frequency projection.
+    let n = case.len();
+    let p = lib.len();
+    let eval = |r0: usize, out: faer::MatMut<'_, f64>| lib.evaluate_rows(&case.x, r0, out);
+    let factor =
+        CaseFactor::from_row_blocks(id, n, p, order, &[&case.c_moment, &case.c_lift], eval)?;
     let ident = identifiability::analyse_factor(
         id,
         lib,
@@ -586,7 +591,6 @@ fn prepare_case(
     if s.basis == BasisMode::Full {
         ident.require_full_rank()?;
     }
-    let n = case.len();
     let duration = n as f64 * case.dt;
     let tones = metrics::candidate_tones(&case.forcing, s.max_harmonic_order, duration, case.dt);
     let mut keys = [None, None];
@@ -597,7 +601,7 @@ fn prepare_case(
             context: format!("case `{id}`: key frequencies"),
             message: e.to_string(),
         })?;
-        let cols = fit.column_amplitudes(theta.as_ref());
+        let cols = fit.column_amplitudes_with(p, eval);
         for (t, y) in [&case.c_moment, &case.c_lift].into_iter().enumerate() {
             let (_, all) = fit.amplitudes(y);
             let key = metrics::select_key_frequencies(&tones, &all, s.k_key);
@@ -614,6 +618,8 @@ fn prepare_case(
     let pysindy = match &s.regressor {
         RegressorChoice::Pysindy(o) => {
             let basis: Vec<usize> = (0..lib.len()).filter(|&j| ident.in_basis[j]).collect();
+            // comparison mode: pysindy works on the whole matrix
+            let theta = lib.evaluate(&case.x);
             Some([
                 adapter::path_case(theta.as_ref(), &basis, &case.c_moment, deltas, o),
                 adapter::path_case(theta.as_ref(), &basis, &case.c_lift, deltas, o),

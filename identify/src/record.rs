@@ -188,6 +188,52 @@ impl NondimCase {
 }
 
 impl PreparedCase {
+    /// As [`PreparedCase::nondimensional`], consuming the case: the six series are
+    /// converted in place (the same floating-point operations, so the result is bit for bit
+    /// the same), so that peak memory holds one set of series instead of two.
+    ///
+    /// # Errors
+    /// As [`PreparedCase::nondimensional`].
+    pub fn into_nondimensional(self, section: &Section) -> Result<NondimCase> {
+        let b = section.chord;
+        let u = self.meta.wind_speed;
+        let rho = section.air_density;
+        // the checks of `nondimensional` (on an empty view: they read no series)
+        let check = PreparedCase {
+            meta: self.meta.clone(),
+            dt: self.dt,
+            alpha: Vec::new(),
+            alpha_dot: Vec::new(),
+            h: Vec::new(),
+            h_dot: Vec::new(),
+            lift: Vec::new(),
+            moment: Vec::new(),
+            forcing: self.forcing,
+        };
+        check.nondimensional(section)?;
+        let q = 0.5 * rho * u * u;
+        let map = |mut v: Vec<f64>, f: &dyn Fn(f64) -> f64| {
+            for x in v.iter_mut() {
+                *x = f(*x);
+            }
+            v
+        };
+        Ok(NondimCase {
+            meta: self.meta,
+            dt: self.dt,
+            chord: b,
+            x: [
+                self.alpha,
+                map(self.alpha_dot, &|v| b * v / u),
+                map(self.h, &|v| v / b),
+                map(self.h_dot, &|v| v / u),
+            ],
+            c_lift: map(self.lift, &|v| v / (q * b)),
+            c_moment: map(self.moment, &|v| v / (q * b * b)),
+            forcing: self.forcing,
+        })
+    }
+
     /// Converts to the nondimensional regression form.
     ///
     /// # Errors

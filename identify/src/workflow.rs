@@ -33,7 +33,10 @@ pub fn prepare_dataset(dataset: &Dataset, opts: &PreprocessOptions) -> Result<Pr
         .filter(|r| r.kind == CaseKind::Forced)
         .map(|r| {
             let (prepared, report) = prepare_with_report(r, opts)?;
-            Ok((prepared.nondimensional(&dataset.manifest.section)?, report))
+            Ok((
+                prepared.into_nondimensional(&dataset.manifest.section)?,
+                report,
+            ))
         })
         .collect();
     let mut cases = Vec::with_capacity(results.len());

@@ -575,3 +575,22 @@ fn two_frequency_pitch_keeps_both_components() {
     let ea = max_rel_err(&p.alpha_dot, p.dt, |t| a.rate(t));
     assert!(ea < 2e-3, "pitch velocity error {ea:e}");
 }
+
+/// The consuming conversion gives bit for bit the borrowed one's series, and the same
+/// errors (U = 0).
+#[test]
+fn into_nondimensional_equals_nondimensional() {
+    let section = crate::record::Section {
+        chord: 0.25,
+        span: 0.75,
+        air_density: 1.225,
+    };
+    let p = prepare(&demo_case(false), &PreprocessOptions::default()).unwrap();
+    let a = p.nondimensional(&section).unwrap();
+    let b = p.clone().into_nondimensional(&section).unwrap();
+    assert_eq!(a, b);
+    let mut still = p;
+    still.meta.wind_speed = 0.0;
+    let e = still.into_nondimensional(&section).unwrap_err().to_string();
+    assert!(e.contains("wind_speed"), "{e}");
+}

@@ -16,12 +16,18 @@
 //! entries below row p, so without cancellation). Every support fit is then a tiny
 //! least-squares solve on at most p × p numbers, independent of the record length n.
 
-use faer::{Mat, MatRef};
+use faer::{Mat, MatMut, MatRef};
 
 use crate::{Error, Result};
 
 /// Rows per block of the row-blocked factorisation (at least twice the column count).
 const ROW_BLOCK: usize = 256;
+/// Rows of Θ requested per call of the `fill` closure of [`CaseFactor::from_row_blocks`]
+/// (rounded down to a multiple of the factorisation block).
+pub const FILL_BLOCK: usize = crate::library::EVAL_BLOCK;
+/// Triangles stacked by the row-blocked factorisation before the stack is reduced to one
+/// (128 × 32 × 32 × 8 B = 1 MB for the paper library with two targets).
+pub const STACK_BLOCKS: usize = 128;
 
 /// Reduced form of one target (one force coefficient) of a case.
 #[derive(Debug, Clone, PartialEq)]
@@ -72,6 +78,7 @@ pub struct CaseFactor {
 impl CaseFactor {
     /// Factorises the library matrix `theta` (n × p, library column order) of case `case`
     /// with the columns taken in priority order `order`, together with the `targets`.
+    /// Same as [`CaseFactor::from_row_blocks`] reading the blocks from `theta`.
     ///
     /// # Errors
     /// [`Error::InvalidData`] when the case has fewer samples than p + number of targets
@@ -89,6 +96,38 @@ impl CaseFactor {
         targets: &[&[f64]],
     ) -> Result<Self> {
         let (n, p) = theta.shape();
+        Self::from_row_blocks(case, n, p, order, targets, |r0, mut out| {
+            let rows = out.nrows();
+            out.copy_from(theta.subrows(r0, rows));
+        })
+    }
+
+    /// As [`CaseFactor::new`] for an n × p library matrix Θ that is never held whole:
+    /// `fill(r0, out)` writes the rows `r0 .. r0 + out.nrows()` of Θ (library column order)
+    /// into `out` (`out.nrows()` × p). It is called for consecutive blocks of at most
+    /// [`FILL_BLOCK`] rows covering 0..n, twice (column norms, then the factorisation), so
+    /// memory beyond the targets is O(p² + [`FILL_BLOCK`]·p), independent of n.
+    ///
+    /// The row-blocked factorisation stacks the triangles of blocks of 256 rows; once
+    /// [`STACK_BLOCKS`] triangles are stacked, the stack is factorised into one triangle
+    /// and filling continues. Up to `STACK_BLOCKS · 256` = 32768 rows (64 s at 512 Hz) this
+    /// never happens and the result is bit for bit that of a single stack; beyond, R and
+    /// Qᵀy change by rounding only (the same orthogonal reduction in another order).
+    ///
+    /// # Errors
+    /// As [`CaseFactor::new`].
+    ///
+    /// # Panics
+    /// As [`CaseFactor::new`], and when `fill` changes the shape of `out`.
+    #[track_caller]
+    pub fn from_row_blocks(
+        case: &str,
+        n: usize,
+        p: usize,
+        order: &[usize],
+        targets: &[&[f64]],
+        mut fill: impl FnMut(usize, MatMut<'_, f64>),
+    ) -> Result<Self> {
         assert_eq!(order.len(), p, "priority order must cover every column");
         let mut pos = vec![usize::MAX; p];
         for (k, &j) in order.iter().enumerate() {
@@ -109,14 +148,35 @@ impl CaseFactor {
                 ),
             });
         }
+        let ncols = p + nt;
+        let bs = ROW_BLOCK.max(2 * ncols);
+        // rows per call of `fill`: a multiple of the factorisation block
+        let chunk = bs * (FILL_BLOCK / bs).max(1);
+        let mut block = vec![0.0; chunk * p];
+        // Calls `visit(r0, rows, block)` with Θ's rows r0..r0+rows, column j at
+        // block[j*rows..(j+1)*rows].
+        let mut blocks = |visit: &mut dyn FnMut(usize, usize, &[f64])| {
+            let mut r0 = 0;
+            while r0 < n {
+                let rows = chunk.min(n - r0);
+                let buf = &mut block[..rows * p];
+                fill(r0, MatMut::from_column_major_slice_mut(buf, rows, p));
+                visit(r0, rows, buf);
+                r0 += rows;
+            }
+        };
+        // Column norms, accumulated in row order (the same sums as over the whole column).
+        let mut sums = vec![0.0; p];
+        blocks(&mut |_, rows, buf| {
+            for (j, s) in sums.iter_mut().enumerate() {
+                for v in &buf[j * rows..(j + 1) * rows] {
+                    *s += v * v;
+                }
+            }
+        });
         let mut scales = vec![1.0; p];
         let mut zero_column = vec![false; p];
-        for j in 0..p {
-            let col = theta.col(j);
-            let mut s = 0.0;
-            for v in col.iter() {
-                s += v * v;
-            }
+        for (j, &s) in sums.iter().enumerate() {
             if !s.is_finite() {
                 return Err(Error::InvalidData {
                     case: case.to_string(),
@@ -130,7 +190,6 @@ impl CaseFactor {
                 zero_column[j] = true;
             }
         }
-        let ncols = p + nt;
         let mut stats = Vec::with_capacity(nt);
         for (t, y) in targets.iter().enumerate() {
             let mut norm2 = 0.0;
@@ -153,42 +212,75 @@ impl CaseFactor {
         // of a block is lost but its zero rows), the triangles are stacked and the stack is
         // factorised again. Same R and Qᵀy as one factorisation of the whole matrix, at
         // about twice the speed for 5120 × 32 (the whole matrix does not stay in cache).
-        let bs = ROW_BLOCK.max(2 * ncols);
+        // A full stack of STACK_BLOCKS triangles is reduced to one triangle (bounded
+        // memory for long records).
         let nblocks = n / bs;
         let rem = n - nblocks * bs;
-        let m = nblocks * ncols + rem;
         let inv: Vec<f64> = scales.iter().map(|s| 1.0 / s).collect();
-        let fill = |dst: &mut [f64], ld: usize, off: usize, r0: usize, rows: usize| {
+        // copies Θ_s rows (block rows i0..i0+rows, global r0+i0..) and the targets into
+        // dst (leading dimension ld, starting at row off)
+        let copy = |dst: &mut [f64],
+                    ld: usize,
+                    off: usize,
+                    src: &[f64],
+                    src_rows: usize,
+                    r0: usize,
+                    i0: usize,
+                    rows: usize| {
             for (k, &j) in order.iter().enumerate() {
-                let col = theta.col(j).subrows(r0, rows);
-                for (d, v) in dst[k * ld + off..k * ld + off + rows]
-                    .iter_mut()
-                    .zip(col.iter())
-                {
+                let col = &src[j * src_rows + i0..j * src_rows + i0 + rows];
+                for (d, v) in dst[k * ld + off..k * ld + off + rows].iter_mut().zip(col) {
                     *d = v * inv[j];
                 }
             }
             for (t, y) in targets.iter().enumerate() {
                 dst[(p + t) * ld + off..(p + t) * ld + off + rows]
-                    .copy_from_slice(&y[r0..r0 + rows]);
+                    .copy_from_slice(&y[r0 + i0..r0 + i0 + rows]);
             }
         };
-        let mut stack = vec![0.0; m * ncols];
+        let sm = STACK_BLOCKS * ncols;
+        let mut stack = vec![0.0; sm * ncols];
+        let mut stacked = 0usize;
         let mut buf = vec![0.0; bs * ncols];
-        for b in 0..nblocks {
-            fill(&mut buf, bs, 0, b * bs, bs);
-            super::small::householder_qr(&mut buf, bs, ncols, ncols);
-            for c in 0..ncols {
+        let mut tail = vec![0.0; rem * ncols];
+        blocks(&mut |r0, rows, src| {
+            let mut i0 = 0;
+            while i0 + bs <= rows {
+                copy(&mut buf, bs, 0, src, rows, r0, i0, bs);
+                super::small::householder_qr(&mut buf, bs, ncols, ncols);
+                if stacked == STACK_BLOCKS {
+                    super::small::householder_qr(&mut stack, sm, ncols, ncols);
+                    for c in 0..ncols {
+                        let col = &mut stack[c * sm..(c + 1) * sm];
+                        col[c + 1..].fill(0.0);
+                    }
+                    stacked = 1;
+                }
+                for c in 0..ncols {
+                    for i in 0..=c {
+                        stack[c * sm + stacked * ncols + i] = buf[c * bs + i];
+                    }
+                }
+                stacked += 1;
+                i0 += bs;
+            }
+            if i0 < rows {
+                // the last rows of the record (fewer than a block)
+                copy(&mut tail, rem, 0, src, rows, r0, i0, rows - i0);
+            }
+        });
+        let m = stacked * ncols + rem;
+        let mut a = vec![0.0; m * ncols];
+        for c in 0..ncols {
+            for b in 0..stacked {
                 for i in 0..=c {
-                    stack[c * m + b * ncols + i] = buf[c * bs + i];
+                    a[c * m + b * ncols + i] = stack[c * sm + b * ncols + i];
                 }
             }
+            a[c * m + stacked * ncols..(c + 1) * m].copy_from_slice(&tail[c * rem..(c + 1) * rem]);
         }
-        if rem > 0 {
-            fill(&mut stack, m, nblocks * ncols, nblocks * bs, rem);
-        }
-        super::small::householder_qr(&mut stack, m, ncols, p);
-        let a = stack;
+        drop(stack);
+        super::small::householder_qr(&mut a, m, ncols, p);
         let r = Mat::<f64>::from_fn(p, p, |i, j| if i <= j { a[j * m + i] } else { 0.0 });
         let targets: Vec<TargetFactor> = (0..nt)
             .map(|t| {
@@ -398,6 +490,76 @@ mod tests {
         assert!((f.rss_of(0, &[0, 2], &xs) - rss).abs() < 1e-10 * rss);
         let (_, rss_empty) = f.fit(0, &[], 0.0);
         assert!((rss_empty - y.iter().map(|v| v * v).sum::<f64>()).abs() < 1e-10);
+    }
+
+    /// A record longer than `STACK_BLOCKS` factorisation blocks (the stack is reduced
+    /// twice) with a remainder of rows: the Gram matrix, Θ_sᵀy, r⊥² and the least-squares
+    /// fit agree with direct accumulation over the rows to 1e-12 relative, and blocks
+    /// given by `fill` equal the whole-matrix constructor.
+    #[test]
+    fn stack_reduction_matches_direct_normal_equations() {
+        let n = 2 * STACK_BLOCKS * ROW_BLOCK + 3 * ROW_BLOCK + 77;
+        let p = 4;
+        let theta = Mat::<f64>::from_fn(n, p, |i, j| {
+            let t = i as f64 * 0.002;
+            match j {
+                0 => t.sin(),
+                1 => 3.0 * (1.7 * t).cos(),
+                2 => 0.1 * (t * 0.3).sin().powi(2),
+                _ => 1.0,
+            }
+        });
+        let y: Vec<f64> = (0..n)
+            .map(|i| {
+                let t = i as f64 * 0.002;
+                0.5 * theta[(i, 0)] - 2.0 * theta[(i, 2)] + 0.3 + 0.01 * (7.3 * t).sin()
+            })
+            .collect();
+        let order = [3, 1, 0, 2];
+        let f = CaseFactor::new("c", theta.as_ref(), &order, &[&y]).unwrap();
+        let g = CaseFactor::from_row_blocks("c", n, p, &order, &[&y], |r0, mut out| {
+            for i in 0..out.nrows() {
+                for j in 0..p {
+                    out[(i, j)] = theta[(r0 + i, j)];
+                }
+            }
+        })
+        .unwrap();
+        assert_eq!(f.gram, g.gram);
+        assert_eq!(f.targets, g.targets);
+        // relative to `scale` (1 for the Gram matrix of unit columns, ‖y‖ for Θ_sᵀy)
+        let close = |a: f64, b: f64, scale: f64, what: &str| {
+            assert!((a - b).abs() <= 1e-12 * scale, "{what}: {a} vs {b}");
+        };
+        let ynorm = y.iter().map(|v| v * v).sum::<f64>().sqrt();
+        // direct sums on the scaled columns, priority order
+        let col = |k: usize, i: usize| theta[(i, order[k])] / f.scales[order[k]];
+        for a in 0..p {
+            close(
+                f.scales[a],
+                (0..n).map(|i| theta[(i, a)].powi(2)).sum::<f64>().sqrt(),
+                f.scales[a],
+                "scale",
+            );
+            for b in 0..p {
+                let direct: f64 = (0..n).map(|i| col(a, i) * col(b, i)).sum();
+                close(f.gram[a * p + b], direct, 1.0, "gram");
+            }
+            let direct: f64 = (0..n).map(|i| col(a, i) * y[i]).sum();
+            close(f.gram_rhs[0][a], direct, ynorm, "gram_rhs");
+        }
+        // full least-squares fit: coefficients and residual
+        let support = [0, 1, 2, 3];
+        let (xs, rss) = f.fit(0, &support, 0.0);
+        let raw: Vec<f64> = (0..p).map(|j| xs[j] / f.scales[j]).collect();
+        for (j, want) in [(0, 0.5), (2, -2.0), (3, 0.3)] {
+            assert!((raw[j] - want).abs() < 1e-2, "coefficient {j}: {}", raw[j]);
+        }
+        let direct: f64 = (0..n)
+            .map(|i| ((0..p).map(|j| raw[j] * theta[(i, j)]).sum::<f64>() - y[i]).powi(2))
+            .sum();
+        assert!((rss - direct).abs() <= 1e-9 * direct, "{rss} vs {direct}");
+        close(f.targets[0].rss_perp, rss, rss, "rss_perp");
     }
 
     #[test]
