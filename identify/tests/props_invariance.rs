@@ -10,6 +10,7 @@ use identify::pipeline::{Identification, IdentifySettings};
 use identify::synthetic::{PolynomialLaw, Sampling};
 use props_common::*;
 use proptest::prelude::*;
+use proptest::test_runner::RngSeed;
 
 /// Eight synthetic cases (two configurations × four amplitudes/speeds), demo law.
 fn small_campaign(
@@ -44,7 +45,7 @@ fn check_units(seed: u64, span: f64, u: identify::dataset::Units) -> Result<(), 
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 6, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: 6, rng_seed: RngSeed::Fixed(20261121), ..ProptestConfig::default() })]
 
     #[test]
     fn identification_is_invariant_to_declared_units(

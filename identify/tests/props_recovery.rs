@@ -11,6 +11,7 @@ use identify::pipeline::IdentifySettings;
 use identify::synthetic::{LawTerm, PolynomialLaw, Sampling};
 use props_common::*;
 use proptest::prelude::*;
+use proptest::test_runner::RngSeed;
 
 /// One configuration, four (amplitude, wind speed) cases, one group.
 fn defs() -> Vec<CaseDef> {
@@ -181,7 +182,7 @@ fn lin() -> impl Strategy<Value = [f64; 4]> {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 8, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: 8, rng_seed: RngSeed::Fixed(20261122), ..ProptestConfig::default() })]
 
     #[test]
     fn random_sparse_laws_are_recovered_with_exact_support(
@@ -192,7 +193,7 @@ proptest! {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 64, ..ProptestConfig::default() })]
+    #![proptest_config(ProptestConfig { cases: 64, rng_seed: RngSeed::Fixed(20261122), ..ProptestConfig::default() })]
 
     #[test]
     #[ignore]
