@@ -5,7 +5,7 @@
 
 use aeroelastic::effects::Form;
 use diagnose::blind::{generate, BlindEffect, BlindScenario};
-use diagnose::force::{force_level, ForceOptions};
+use diagnose::force::{force_level, force_level_profiled, ForceOptions};
 use diagnose::{Effect, LevelResult};
 use identify::dataset::Dataset;
 
@@ -266,5 +266,89 @@ fn detectability_sweep() {
                 break;
             }
         }
+    }
+}
+
+/// Stage timings and full results on the reference sets (release, `RAYON_NUM_THREADS=1`
+/// for one-core times): every named-effect set of this file plus the baseline-only twin.
+#[test]
+#[ignore]
+fn profile_reference_sets() {
+    let sets: Vec<(&str, BlindEffect, f64, u64)> = vec![
+        ("none", BlindEffect::None, 0.0, 11),
+        ("none", BlindEffect::None, 0.0, 12),
+        (
+            "static_offset",
+            BlindEffect::Catalogue(Effect::StaticOffset),
+            0.7,
+            5,
+        ),
+        (
+            "higher_order",
+            BlindEffect::Catalogue(Effect::HigherOrder),
+            0.7,
+            6,
+        ),
+        (
+            "dynamic_stall",
+            BlindEffect::Catalogue(Effect::DynamicStall),
+            0.8,
+            7,
+        ),
+        (
+            "vortex_shedding",
+            BlindEffect::Catalogue(Effect::VortexShedding),
+            0.7,
+            8,
+        ),
+        ("buffeting", BlindEffect::Buffeting, 0.7, 9),
+        (
+            "time_delay",
+            BlindEffect::Catalogue(Effect::TimeDelay),
+            0.6,
+            10,
+        ),
+        (
+            "added_mass",
+            BlindEffect::Catalogue(Effect::AddedMass),
+            0.7,
+            12,
+        ),
+    ];
+    let only: Option<String> = std::env::var("FORCE_ONLY").ok();
+    for (name, e, s, seed) in sets {
+        if only
+            .as_deref()
+            .is_some_and(|o| !o.split(',').any(|x| x == name))
+        {
+            continue;
+        }
+        let ds = blind(e, s, Form::Primary, seed);
+        let t0 = std::time::Instant::now();
+        let (twin, pt) = force_level_profiled(
+            &ds,
+            &ForceOptions {
+                candidates: vec![],
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        let t_twin = t0.elapsed();
+        let t0 = std::time::Instant::now();
+        let (r, p) = force_level_profiled(&ds, &ForceOptions::default()).unwrap();
+        let t_full = t0.elapsed();
+        let fmt = |p: &[(String, f64)]| {
+            p.iter()
+                .map(|(k, v)| format!("{k} {v:.3}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        eprintln!(
+            "== {name} s={s} seed {seed}: full {t_full:?} [{}]\n   twin {t_twin:?} stat {:.4} [{}]\n{}",
+            fmt(&p),
+            twin.gap_statistic,
+            fmt(&pt),
+            summary(&r)
+        );
     }
 }

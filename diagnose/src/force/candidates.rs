@@ -41,7 +41,10 @@
 use crate::effect::Effect;
 
 use super::data::{CaseData, Node};
-use super::law::{self, NodeFit};
+use std::collections::HashMap;
+use std::sync::Arc;
+
+use super::law::{self, Aug, FitCache, NodeFit};
 use super::linalg::{dot, solve_spd};
 use super::{fold_residuals, Fold, ForceOptions};
 use identify::library::Term;
@@ -116,21 +119,37 @@ pub(crate) fn score_all(
     folds: &[Fold],
     before: &[[Vec<f64>; 2]],
     opts: &ForceOptions,
-) -> Vec<Scored> {
+    cache: &FitCache,
+) -> Vec<(Scored, f64)> {
     use rayon::prelude::*;
     opts.candidates
         .par_iter()
-        .map(|&k| match k {
-            CandidateKind::StaticOffset => shared(cases, nodes, folds, k, &static_offset_cols),
-            CandidateKind::AddedMass => shared(cases, nodes, folds, k, &|c: &CaseData, _| {
-                c.accelerations().to_vec()
-            }),
-            CandidateKind::TimeDelay => time_delay(cases, nodes, folds),
-            CandidateKind::HigherOrder => sparse(cases, nodes, folds, k, &higher_order_pool()),
-            CandidateKind::DynamicStall => sparse(cases, nodes, folds, k, &stall_pool()),
-            CandidateKind::VortexShedding => vortex(cases, nodes, folds, before),
+        .map(|&k| {
+            let t0 = std::time::Instant::now();
+            let s = score_one(cases, nodes, folds, before, k, cache);
+            (s, t0.elapsed().as_secs_f64())
         })
         .collect()
+}
+
+fn score_one(
+    cases: &[CaseData],
+    nodes: &[Node],
+    folds: &[Fold],
+    before: &[[Vec<f64>; 2]],
+    k: CandidateKind,
+    cache: &FitCache,
+) -> Scored {
+    match k {
+        CandidateKind::StaticOffset => shared(cases, nodes, folds, k, &static_offset_cols),
+        CandidateKind::AddedMass => shared(cases, nodes, folds, k, &|c: &CaseData, _| {
+            c.accelerations().to_vec()
+        }),
+        CandidateKind::TimeDelay => time_delay(cases, nodes, folds, cache),
+        CandidateKind::HigherOrder => sparse(cases, nodes, folds, k, &higher_order_pool()),
+        CandidateKind::DynamicStall => sparse(cases, nodes, folds, k, &stall_pool()),
+        CandidateKind::VortexShedding => vortex(cases, nodes, folds, before),
+    }
 }
 
 fn static_offset_cols(c: &CaseData, _ch: usize) -> Vec<Vec<f64>> {
@@ -153,10 +172,16 @@ fn shared(
 ) -> Scored {
     let mut res = vec![[Vec::new(), Vec::new()]; cases.len()];
     let extra = |i: usize, c: usize| cols(&cases[i], c);
+    let key = format!("{kind:?}");
+    let aug = Aug {
+        key: &key,
+        cols: &extra,
+        subset: None,
+    };
     let mut betas: Vec<Vec<f64>> = vec![Vec::new(); 2];
     for f in folds {
         for c in 0..2 {
-            let l = fold_residuals(cases, nodes, f, c, &extra, &mut res);
+            let l = fold_residuals(cases, nodes, f, c, aug, &mut res);
             if betas[c].is_empty() {
                 betas[c] = vec![0.0; l.beta.len()];
             }
@@ -239,7 +264,7 @@ impl Pool {
 
     fn column(&self, c: &CaseData) -> Vec<f64> {
         match *self {
-            Pool::Mono(t) => c.column(&t),
+            Pool::Mono(t) => c.column(&t).to_vec(),
             Pool::Stall {
                 alpha_c,
                 lag_chords,
@@ -281,41 +306,22 @@ struct PoolStats {
     b: Vec<f64>,
 }
 
-fn pool_stats(
-    cases: &[CaseData],
-    nodes: &[Node],
-    fits: &[NodeFit],
-    c: usize,
-    cols: &[Vec<Vec<f64>>],
-) -> PoolStats {
-    let m = cols.first().map_or(0, |v| v.len());
-    let mut g = vec![vec![0.0; m]; m];
-    let mut b = vec![0.0; m];
+fn pool_stats(nodes: &[Node], fits: &[NodeFit], c: usize, aug: Aug<'_>) -> PoolStats {
+    let mut g: Vec<Vec<f64>> = Vec::new();
+    let mut b: Vec<f64> = Vec::new();
     for f in fits {
-        let w = 1.0
-            / nodes[f.node]
-                .cases
-                .iter()
-                .map(|&i| cases[i].sigma[c])
-                .sum::<f64>()
-                .max(1e-300)
-            * nodes[f.node].cases.len() as f64;
+        let w = f.ch[c].w_pool;
         let w2 = w * w;
-        let zt: Vec<Vec<f64>> = (0..m)
-            .map(|j| {
-                let col: Vec<f64> = nodes[f.node]
-                    .cases
-                    .iter()
-                    .flat_map(|&i| cols[i][j].iter().copied())
-                    .collect();
-                f.qr[c].residual(&col)
-            })
-            .collect();
-        let yt = f.qr[c].residual(&f.y[c]);
+        let gr = aug.gram(nodes, f, c);
+        let m = gr.b.len();
+        if g.is_empty() {
+            g = vec![vec![0.0; m]; m];
+            b = vec![0.0; m];
+        }
         for j in 0..m {
-            b[j] += w2 * dot(&zt[j], &yt);
+            b[j] += w2 * gr.b[j];
             for k in j..m {
-                let v = w2 * dot(&zt[j], &zt[k]);
+                let v = w2 * gr.g[j][k];
                 g[j][k] += v;
                 g[k][j] = g[j][k];
             }
@@ -359,9 +365,16 @@ fn sparse(
     } else {
         1
     };
+    let key = format!("{kind:?}");
+    let all = |i: usize, _c: usize| cols[i].clone();
+    let pool_aug = Aug {
+        key: &key,
+        cols: &all,
+        subset: None,
+    };
     for f in folds {
         for c in 0..2 {
-            let ps = pool_stats(cases, nodes, &f.fits, c, &cols);
+            let ps = pool_stats(nodes, &f.fits, c, pool_aug);
             let mut set: Vec<usize> = Vec::new();
             let mut cur = 0.0;
             while set.len() < max_terms {
@@ -382,8 +395,11 @@ fn sparse(
                 }
             }
             n_params += set.len() * (1 + hyper);
-            let extra = |i: usize, _c: usize| set.iter().map(|&j| cols[i][j].clone()).collect();
-            let l = fold_residuals(cases, nodes, f, c, &extra, &mut res);
+            let aug = Aug {
+                subset: Some(&set),
+                ..pool_aug
+            };
+            let l = fold_residuals(cases, nodes, f, c, aug, &mut res);
             for (&j, b) in set.iter().zip(&l.beta) {
                 chosen_names.push((
                     format!(
@@ -458,23 +474,22 @@ pub(crate) fn delayed_cases(cases: &[CaseData], tau: f64) -> Vec<CaseData> {
 /// from the other training nodes by the held-out rule ([`law::node_coefficients`]) and its
 /// residual energy is ‖r_n‖² + ‖R_n(â_n − a_n)‖² (a_n the node's own least-squares fit,
 /// X_n = Q_n R_n; dependent columns ignored), weighted by the node's mean 1/σ̂².
-fn delay_criterion(cases: &[CaseData], nodes: &[Node], f: &Fold, tau: f64) -> f64 {
-    let sh = delayed_cases(cases, tau);
-    let fits = law::node_fits(&sh, nodes, &f.train, &f.supports);
+fn delay_criterion(sh: &[CaseData], nodes: &[Node], f: &Fold, tau: f64, cache: &FitCache) -> f64 {
+    let fits = law::node_fits(sh, nodes, &f.train, &f.supports, cache, tau.to_bits());
     let mut e = 0.0;
     for c in 0..2 {
-        let full = law::fit_channel(&sh, nodes, &fits, c, &|_, _| Vec::new());
+        let full = law::fit_channel(nodes, &fits, c, Aug::NONE);
         for (j, nf) in fits.iter().enumerate() {
             let mut loo = full.clone();
             loo.nodes.remove(j);
             let Some(&i0) = nodes[nf.node].cases.first() else {
                 continue;
             };
-            let ahat = law::node_coefficients(&sh, nodes, &f.supports, &loo, i0, c);
+            let ahat = law::node_coefficients(sh, nodes, &f.supports, &loo, i0, c);
             let a = &full.nodes[j].2;
-            let qr = &nf.qr[c];
-            let r = qr.residual(&nf.y[c]);
-            let mut en = dot(&r, &r);
+            let qr = &nf.ch[c].qr;
+            let r = &nf.ch[c].res_y;
+            let mut en = dot(r, r);
             for k in 0..qr.kept.len() {
                 let mut v = 0.0;
                 for l in k..qr.kept.len() {
@@ -483,7 +498,7 @@ fn delay_criterion(cases: &[CaseData], nodes: &[Node], f: &Fold, tau: f64) -> f6
                 }
                 en += v * v;
             }
-            let w = nf.w[c].iter().sum::<f64>() / nf.w[c].len().max(1) as f64;
+            let w = nf.ch[c].w_mean;
             e += w * w * en;
         }
     }
@@ -499,11 +514,23 @@ pub const DELAY_GRID: [f64; 6] = [0.0, 1e-3, 3e-3, 8e-3, 0.02, 0.05];
 /// the cross-configuration consistency of the linear transfers ([`delay_criterion`]: a
 /// delay is a phase ωτ that depends on U as well as K, which the pooled prediction over K
 /// cannot absorb), then scored on the held-out nodes. One shared parameter (τ).
-fn time_delay(cases: &[CaseData], nodes: &[Node], folds: &[Fold]) -> Scored {
+fn time_delay(cases: &[CaseData], nodes: &[Node], folds: &[Fold], cache: &FitCache) -> Scored {
     let mut res = vec![[Vec::new(), Vec::new()]; cases.len()];
     let mut taus = Vec::new();
+    // delayed copies by τ, shared by the folds (the grid is the same in every fold)
+    let memo: std::sync::Mutex<HashMap<u64, Arc<Vec<CaseData>>>> = Default::default();
+    let delayed = |t: f64| -> Arc<Vec<CaseData>> {
+        if let Some(v) = memo.lock().ok().and_then(|m| m.get(&t.to_bits()).cloned()) {
+            return v;
+        }
+        let v = Arc::new(delayed_cases(cases, t));
+        if let Ok(mut m) = memo.lock() {
+            m.insert(t.to_bits(), v.clone());
+        }
+        v
+    };
     for f in folds {
-        let crit = |t: f64| delay_criterion(cases, nodes, f, t);
+        let crit = |t: f64| delay_criterion(&delayed(t), nodes, f, t, cache);
         let vals: Vec<f64> = DELAY_GRID.iter().map(|&t| crit(t)).collect();
         let kb = (0..vals.len())
             .min_by(|&a, &b| vals[a].total_cmp(&vals[b]))
@@ -528,16 +555,16 @@ fn time_delay(cases: &[CaseData], nodes: &[Node], folds: &[Fold]) -> Scored {
         }
         let _ = best;
         taus.push(tau);
-        let shifted = delayed_cases(cases, tau);
+        let shifted = delayed(tau);
         let fold = Fold {
             index: f.index,
             train: f.train.clone(),
             test: f.test.clone(),
             supports: f.supports.clone(),
-            fits: law::node_fits(&shifted, nodes, &f.train, &f.supports),
+            fits: law::node_fits(&shifted, nodes, &f.train, &f.supports, cache, tau.to_bits()),
         };
         for c in 0..2 {
-            fold_residuals(&shifted, nodes, &fold, c, &|_, _| Vec::new(), &mut res);
+            fold_residuals(&shifted, nodes, &fold, c, Aug::NONE, &mut res);
         }
     }
     let tau = taus.iter().sum::<f64>() / taus.len().max(1) as f64;
@@ -554,6 +581,9 @@ fn time_delay(cases: &[CaseData], nodes: &[Node], folds: &[Fold]) -> Scored {
         failure: None,
     }
 }
+
+/// (case, lift and moment factorisations of its node) naming a training residual.
+type SpecKey = (usize, *const law::NodeChan, *const law::NodeChan);
 
 /// Sine/cosine least-squares fit at frequency f removed from r; returns the new residual.
 fn remove_line(r: &[f64], dt: f64, f: f64) -> Vec<f64> {
@@ -669,11 +699,14 @@ fn vortex(cases: &[CaseData], nodes: &[Node], folds: &[Fold], before: &[[Vec<f64
     let mut ss = Vec::new();
     let mut bands = Vec::new();
     let mut q = 0usize;
+    // periodograms of a training case's residual: they depend on its node's factorisation
+    // only, so folds that train on the same node with the same support share them
+    let mut spec_memo: HashMap<SpecKey, Arc<(usize, Vec<f64>, f64, Vec<f64>)>> = HashMap::new();
     for f in folds {
         // training residuals of the baseline node fits, noise weighted, both channels
-        let mut train_res: Vec<(usize, [Vec<f64>; 2])> = Vec::new();
+        let mut train_res: Vec<(usize, [Vec<f64>; 2], SpecKey)> = Vec::new();
         for nf in &f.fits {
-            let r: [Vec<f64>; 2] = [0, 1].map(|c| nf.qr[c].residual(&nf.y[c]));
+            let r: [&Vec<f64>; 2] = [0, 1].map(|c| &nf.ch[c].res_y);
             let mut off = 0;
             for &i in &nodes[nf.node].cases {
                 let n = cases[i].n;
@@ -684,14 +717,18 @@ fn vortex(cases: &[CaseData], nodes: &[Node], folds: &[Fold], before: &[[Vec<f64
                         .collect::<Vec<f64>>()
                 });
                 off += n;
-                train_res.push((i, rc));
+                let key = (i, Arc::as_ptr(&nf.ch[0]), Arc::as_ptr(&nf.ch[1]));
+                train_res.push((i, rc, key));
             }
         }
         // periodograms (4× zero padding, and unpadded) of every training residual, both
         // channels summed
-        let spectra: Vec<(usize, Vec<f64>, f64, Vec<f64>)> = train_res
+        let spectra: Vec<Arc<(usize, Vec<f64>, f64, Vec<f64>)>> = train_res
             .iter()
-            .map(|(i, r)| {
+            .map(|(i, r, key)| {
+                if let Some(v) = spec_memo.get(key) {
+                    return v.clone();
+                }
                 let c = &cases[*i];
                 let m = (4 * c.n).next_power_of_two();
                 let mut p = vec![0.0; m / 2 + 1];
@@ -704,13 +741,16 @@ fn vortex(cases: &[CaseData], nodes: &[Node], folds: &[Fold], before: &[[Vec<f64
                         p1[k] += v;
                     }
                 }
-                (*i, p, 1.0 / (m as f64 * c.dt), p1)
+                let v = Arc::new((*i, p, 1.0 / (m as f64 * c.dt), p1));
+                spec_memo.insert(*key, v.clone());
+                v
             })
             .collect();
         let total = |s: f64| -> f64 {
             spectra
                 .iter()
-                .map(|(i, p, df, _)| {
+                .map(|sp| {
+                    let (i, p, df, _) = &**sp;
                     let c = &cases[*i];
                     let fq = s * c.u / c.nd.chord;
                     let k = (fq / df).round() as usize;
@@ -753,7 +793,8 @@ fn vortex(cases: &[CaseData], nodes: &[Node], folds: &[Fold], before: &[[Vec<f64
         for &bw in &SHEDDING_BANDS {
             let g: f64 = spectra
                 .iter()
-                .map(|(i, p4, df, p1)| {
+                .map(|s| {
+                    let (i, p4, df, p1) = &**s;
                     let c = &cases[*i];
                     let fq = s_hat * c.u / c.nd.chord;
                     if fq >= 0.45 / c.dt {

@@ -45,7 +45,7 @@ use crate::report::LevelResult;
 use crate::{Error, Result};
 
 use data::{CaseData, Node};
-use law::{NodeFit, Supports};
+use law::{Aug, FitCache, NodeFit, Supports};
 
 pub use candidates::CandidateKind;
 
@@ -156,6 +156,7 @@ fn build_fold(
     nodes: &[Node],
     settings: &IdentifySettings,
     dataset: &str,
+    cache: &FitCache,
 ) -> Result<Fold> {
     let train: Vec<usize> = (0..nodes.len()).filter(|&n| fold_of[n] != index).collect();
     let test: Vec<usize> = (0..nodes.len()).filter(|&n| fold_of[n] == index).collect();
@@ -208,7 +209,7 @@ fn build_fold(
             ));
         }
     }
-    let fits = law::node_fits(cases, nodes, &train, &supports);
+    let fits = law::node_fits(cases, nodes, &train, &supports, cache, 0);
     Ok(Fold {
         index,
         train,
@@ -219,17 +220,17 @@ fn build_fold(
 }
 
 /// Held-out residuals r = measured − predicted, `[case][channel]` in C units, for the
-/// augmentation given by `extra` (no augmentation: `&|_, _| vec![]`).
+/// augmentation `aug` ([`Aug::NONE`]: none).
 pub(crate) fn held_out_residuals(
     cases: &[CaseData],
     nodes: &[Node],
     folds: &[Fold],
-    extra: law::Extra<'_>,
+    aug: Aug<'_>,
 ) -> Vec<[Vec<f64>; 2]> {
     let mut out: Vec<[Vec<f64>; 2]> = vec![[Vec::new(), Vec::new()]; cases.len()];
     for f in folds {
         for c in 0..2 {
-            fold_residuals(cases, nodes, f, c, extra, &mut out);
+            fold_residuals(cases, nodes, f, c, aug, &mut out);
         }
     }
     out
@@ -241,13 +242,13 @@ pub(crate) fn fold_residuals(
     nodes: &[Node],
     f: &Fold,
     c: usize,
-    extra: law::Extra<'_>,
+    aug: Aug<'_>,
     out: &mut [[Vec<f64>; 2]],
 ) -> law::ChannelLaw {
-    let lawc = law::fit_channel(cases, nodes, &f.fits, c, extra);
+    let lawc = law::fit_channel(nodes, &f.fits, c, aug);
     for &n in &f.test {
         for &i in &nodes[n].cases {
-            let z = extra(i, c);
+            let z = aug.columns(i, c);
             let p = law::predict(cases, nodes, &f.supports, &lawc, i, c, &z);
             out[i][c] = cases[i].y[c].iter().zip(&p).map(|(y, p)| y - p).collect();
         }
@@ -306,6 +307,21 @@ pub(crate) fn noise_gaps(cases: &[CaseData]) -> Gaps {
 /// speed) groups for the folds, a configuration has a single wind speed, or a case has no
 /// pitch forcing; [`Error::Setting`] for `folds < 2` or a non-positive threshold.
 pub fn force_level(forced: &Dataset, opts: &ForceOptions) -> Result<LevelResult> {
+    force_level_profiled(forced, opts).map(|(r, _)| r)
+}
+
+/// [`force_level`] with the wall-clock time of each stage: `(stage, seconds)` for
+/// `prepare` (preprocessing, harmonic fits), `folds` (fold identifications and node
+/// factorisations), `baseline` (held-out residuals without augmentation), one
+/// `candidate:<name>` per scored candidate (measured inside its own task: candidates run
+/// in parallel, so these overlap) and `assemble` (gap, where, signatures, spectra).
+///
+/// # Errors
+/// As [`force_level`].
+pub fn force_level_profiled(
+    forced: &Dataset,
+    opts: &ForceOptions,
+) -> Result<(LevelResult, Vec<(String, f64)>)> {
     if !(opts.gap_threshold.is_finite() && opts.gap_threshold > 0.0) {
         return Err(Error::setting(
             "gap_threshold",
@@ -313,17 +329,33 @@ pub fn force_level(forced: &Dataset, opts: &ForceOptions) -> Result<LevelResult>
             "must be > 0",
         ));
     }
+    let mut prof: Vec<(String, f64)> = Vec::new();
+    let mut t0 = std::time::Instant::now();
+    let mut lap = |name: &str, prof: &mut Vec<(String, f64)>| {
+        prof.push((name.to_string(), t0.elapsed().as_secs_f64()));
+        t0 = std::time::Instant::now();
+    };
     let name = forced.manifest.name.clone();
     let (cases, nodes) = data::prepare(forced)?;
+    lap("prepare", &mut prof);
     let fold_of = assign_folds(&nodes, opts.folds, opts.seed, &name)?;
+    let cache = FitCache::default();
     let folds: Vec<Fold> = (0..opts.folds)
-        .map(|k| build_fold(k, &fold_of, &cases, &nodes, &opts.identify, &name))
+        .map(|k| build_fold(k, &fold_of, &cases, &nodes, &opts.identify, &name, &cache))
         .collect::<Result<_>>()?;
-    let before = held_out_residuals(&cases, &nodes, &folds, &|_, _| Vec::new());
-    let scored = candidates::score_all(&cases, &nodes, &folds, &before, opts);
-    Ok(analysis::assemble(
-        &cases, &nodes, &fold_of, &before, scored, opts,
-    ))
+    lap("folds", &mut prof);
+    let before = held_out_residuals(&cases, &nodes, &folds, Aug::NONE);
+    lap("baseline", &mut prof);
+    let timed = candidates::score_all(&cases, &nodes, &folds, &before, opts, &cache);
+    lap("candidates (wall)", &mut prof);
+    let mut scored = Vec::with_capacity(timed.len());
+    for (s, t) in timed {
+        prof.push((format!("candidate:{}", s.kind.effect().name()), t));
+        scored.push(s);
+    }
+    let r = analysis::assemble(&cases, &nodes, &fold_of, &before, scored, opts);
+    lap("assemble", &mut prof);
+    Ok((r, prof))
 }
 
 /// The level a force-level result reports.
