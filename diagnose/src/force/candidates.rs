@@ -627,6 +627,33 @@ fn periodogram(x: &[f64], m: usize) -> Vec<f64> {
     out.iter().map(|z| 2.0 * z.norm_sqr() / n).collect()
 }
 
+/// The forcing tones |m f_α + n f_h| of order ≤ 9 (pitch only: m f_α), sorted (see
+/// [`near_tone`]).
+fn tone_list(f_alpha: f64, f_h: Option<f64>) -> Vec<f64> {
+    let fh = f_h.unwrap_or(0.0);
+    let mut v = Vec::new();
+    for m in 0..=9i32 {
+        for n in -9..=9i32 {
+            if m.abs() + n.abs() > 9 || (f_h.is_none() && n != 0) {
+                continue;
+            }
+            v.push((m as f64 * f_alpha + n as f64 * fh).abs());
+        }
+    }
+    v.sort_by(f64::total_cmp);
+    v
+}
+
+/// True when f < tol or f is within tol of one of the sorted `tones` (bisection): the
+/// answer of [`near_tone`] with tol = 1.5/T.
+fn near_tone_sorted(tol: f64, tones: &[f64], f: f64) -> bool {
+    if f < tol {
+        return true;
+    }
+    let k = tones.partition_point(|&t| t < f);
+    (k < tones.len() && (tones[k] - f).abs() < tol) || (k > 0 && (tones[k - 1] - f).abs() < tol)
+}
+
 /// True when f is within 1.5/T of a forcing tone |m f_α + n f_h| of order ≤ 9 (or DC).
 fn near_tone(c: &CaseData, f: f64) -> bool {
     let tol = 1.5 / (c.n as f64 * c.dt);
@@ -702,6 +729,7 @@ fn vortex(cases: &[CaseData], nodes: &[Node], folds: &[Fold], before: &[[Vec<f64
     // periodograms of a training case's residual: they depend on its node's factorisation
     // only, so folds that train on the same node with the same support share them
     let mut spec_memo: HashMap<SpecKey, Arc<(usize, Vec<f64>, f64, Vec<f64>)>> = HashMap::new();
+    let tones: Vec<Vec<f64>> = cases.iter().map(|c| tone_list(c.f_alpha, c.f_h)).collect();
     for f in folds {
         // training residuals of the baseline node fits, noise weighted, both channels
         let mut train_res: Vec<(usize, [Vec<f64>; 2], SpecKey)> = Vec::new();
@@ -754,7 +782,10 @@ fn vortex(cases: &[CaseData], nodes: &[Node], folds: &[Fold], before: &[[Vec<f64
                     let c = &cases[*i];
                     let fq = s * c.u / c.nd.chord;
                     let k = (fq / df).round() as usize;
-                    if fq >= 0.45 / c.dt || k >= p.len() || near_tone(c, fq) {
+                    if fq >= 0.45 / c.dt
+                        || k >= p.len()
+                        || near_tone_sorted(1.5 / (c.n as f64 * c.dt), &tones[*i], fq)
+                    {
                         0.0
                     } else {
                         p[k]
@@ -869,4 +900,34 @@ pub(crate) fn significance(
     let sig = z > opts.significance && share >= opts.min_shrink;
     let score = (e_after + 2.0 * (p + q)) / n;
     (z, opts.significance, sig, share, score)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sorted_tone_test_matches_a_direct_scan() {
+        for (fa, fh) in [(1.5, Some(0.7)), (2.0, Some(1.3)), (1.7, None)] {
+            let tones = tone_list(fa, fh);
+            let tol = 1.5 / 8.0;
+            let mut hits = 0;
+            for k in 0..40000 {
+                let f = k as f64 * 0.00123;
+                let direct = f < tol
+                    || (0..=9i32).any(|m| {
+                        (-9..=9i32).any(|n| {
+                            m.abs() + n.abs() <= 9
+                                && (fh.is_some() || n == 0)
+                                && ((m as f64 * fa + n as f64 * fh.unwrap_or(0.0)).abs() - f).abs()
+                                    < tol
+                        })
+                    });
+                assert_eq!(direct, near_tone_sorted(tol, &tones, f), "f = {f}");
+                hits += usize::from(direct);
+            }
+            // both outcomes occur
+            assert!(hits > 100 && hits < 39000, "{hits}");
+        }
+    }
 }
