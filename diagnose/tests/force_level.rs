@@ -110,40 +110,39 @@ fn explore() {
     }
 }
 
-/// Effect-free gap statistics over seeds (candidates off: the benchmark's twin runs).
+/// Effect-free gap statistics over data seeds × fold seeds (candidates off: the
+/// benchmark's twin runs); false alarms at most 1 in 20.
 #[test]
 #[ignore]
 fn calibration_effect_free() {
     let n: u64 = std::env::var("FORCE_CAL_N")
         .ok()
-        .map_or(8, |s| s.parse().unwrap());
+        .map_or(20, |s| s.parse().unwrap());
     let mut stats = Vec::new();
     for seed in 100..100 + n {
         let ds = blind(BlindEffect::None, 0.0, Form::Primary, seed);
-        let t0 = std::time::Instant::now();
-        let r = force_level(
-            &ds,
-            &ForceOptions {
-                seed,
-                candidates: vec![],
-                ..Default::default()
-            },
-        )
-        .unwrap();
-        eprintln!(
-            "seed {seed}: gap {:.5} noise {:.5} stat {:.3} ({:?})",
-            r.before,
-            r.noise_level,
-            r.gap_statistic,
-            t0.elapsed()
-        );
-        stats.push(r.gap_statistic);
+        for fold_seed in 0..3 {
+            let r = force_level(
+                &ds,
+                &ForceOptions {
+                    seed: fold_seed,
+                    candidates: vec![],
+                    ..Default::default()
+                },
+            )
+            .unwrap();
+            eprintln!(
+                "seed {seed} fold seed {fold_seed}: gap {:.5} noise {:.5} stat {:.3}",
+                r.before, r.noise_level, r.gap_statistic
+            );
+            stats.push(r.gap_statistic);
+        }
     }
     stats.sort_by(f64::total_cmp);
     let thr = ForceOptions::default().gap_threshold;
     let alarms = stats.iter().filter(|&&s| s > thr).count();
-    eprintln!("stats {stats:?} alarms {alarms}/{n}");
-    assert!(alarms * 10 <= n as usize);
+    eprintln!("stats {stats:.3?} alarms {alarms}/{}", stats.len());
+    assert!(alarms * 20 <= stats.len());
 }
 
 #[test]
@@ -174,9 +173,10 @@ fn static_offset_is_named() {
     );
 }
 
-// Fails (force2): named first and significant, but excess shrink 0.462: `after` 0.00409
-// reaches the effect-free gap (≈ 0.0040, 2.45 × noise): the baseline's own held-out error,
-// not the candidate, caps the shrink measured against the noise level.
+// Fails (force3): named first and significant, excess shrink 0.680 (gap 0.00641 → 0.00258,
+// noise 0.00165). With configuration-stratified folds `after` equals the effect-free gap
+// of the same data (≈ 0.00257, 1.55 × noise: the extrapolated end nodes), which still caps
+// the shrink measured against the noise level (force2: 0.462 with the 2.45 × floor).
 #[test]
 #[ignore]
 fn higher_order_is_named() {
@@ -188,8 +188,9 @@ fn time_delay_is_named() {
     check_named(&run(&cat(Effect::TimeDelay, 0.6, 10)), Effect::TimeDelay);
 }
 
-// Fails (force2): named first and significant, excess shrink 0.407 (gap 0.1595 → 0.0946):
-// the lagged dead-zone pool does not fit the generator's Kirchhoff separation well enough.
+// Fails (force3): named first and significant, excess shrink 0.545 (gap 0.1452 → 0.0661;
+// force2: 0.407 before the stratified folds): the lagged dead-zone pool does not fit the
+// generator's separation well enough.
 #[test]
 #[ignore]
 fn dynamic_stall_is_named() {
@@ -207,10 +208,10 @@ fn vortex_shedding_is_named() {
     );
 }
 
-// Fails (force2) at strength 0.7: gap statistic 2.60 < threshold 2.7 (raised from 1.8 for
-// the D/G effect-free tail); no candidate above shrink 0.03.
+// Statistic 2.58 > threshold 1.8 (force3: stratified folds brought the effect-free
+// statistics to 1.50–1.60, so the threshold came back from 2.7); no candidate above shrink
+// 0.03.
 #[test]
-#[ignore]
 fn buffeting_is_a_gap_no_candidate_explains() {
     let r = run(&blind(BlindEffect::Buffeting, 0.7, Form::Primary, 9));
     eprintln!("{}", summary(&r));
@@ -351,4 +352,59 @@ fn profile_reference_sets() {
             summary(&r)
         );
     }
+}
+
+/// Effect-free held-out excess by node: for each seed and fold seed, the gap statistic and
+/// each (configuration, U) node's gap / noise (baseline only).
+#[test]
+#[ignore]
+fn floor_by_node() {
+    let n: u64 = std::env::var("FORCE_CAL_N")
+        .ok()
+        .map_or(4, |s| s.parse().unwrap());
+    let fold_seeds: Vec<u64> = std::env::var("FORCE_FOLD_SEEDS")
+        .ok()
+        .map_or(vec![0, 1, 2], |s| {
+            s.split(',').map(|v| v.parse().unwrap()).collect()
+        });
+    let mut all = Vec::new();
+    for seed in 100..100 + n {
+        let ds = blind(BlindEffect::None, 0.0, Form::Primary, seed);
+        for &fs in &fold_seeds {
+            let r = force_level(
+                &ds,
+                &ForceOptions {
+                    seed: fs,
+                    candidates: vec![],
+                    ..Default::default()
+                },
+            )
+            .unwrap();
+            let mut nodes: std::collections::BTreeMap<(String, i64), (f64, f64, usize)> =
+                Default::default();
+            for c in &r.cases {
+                let e = nodes
+                    .entry((
+                        c.config.clone().unwrap_or_default(),
+                        (c.wind_speed * 10.0) as i64,
+                    ))
+                    .or_default();
+                e.0 += c.before * c.before;
+                e.1 += c.noise_level * c.noise_level;
+                e.2 = c.fold;
+            }
+            let line: Vec<String> = nodes
+                .iter()
+                .map(|((cfg, u), (b, nn, f))| format!("{cfg}{u}:f{f}:{:.2}", (b / nn).sqrt()))
+                .collect();
+            eprintln!(
+                "seed {seed} fold seed {fs}: stat {:.3} | {}",
+                r.gap_statistic,
+                line.join(" ")
+            );
+            all.push(r.gap_statistic);
+        }
+    }
+    all.sort_by(f64::total_cmp);
+    eprintln!("stats {all:.3?}");
 }
