@@ -188,9 +188,10 @@ fn time_delay_is_named() {
     check_named(&run(&cat(Effect::TimeDelay, 0.6, 10)), Effect::TimeDelay);
 }
 
-// Fails (force3): named first and significant, excess shrink 0.545 (gap 0.1452 → 0.0661;
-// force2: 0.407 before the stratified folds): the lagged dead-zone pool does not fit the
-// generator's separation well enough.
+// Fails (force3): named first and significant, excess shrink 0.648 (gap 0.1452 → 0.0511).
+// force2: 0.407; stratified folds: 0.545; effective angle α + ḣ/U and quadratic dead
+// zones: 0.595; three terms: 0.648. The dead-zone pool still misses part of the
+// generator's separation.
 #[test]
 #[ignore]
 fn dynamic_stall_is_named() {
