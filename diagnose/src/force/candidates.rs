@@ -305,9 +305,11 @@ fn stall_column(c: &CaseData, alpha_c: f64, lag_chords: f64, power: u8) -> Vec<f
     let mut y = 0.0;
     if let (Some(ra), Some(rh)) = (&c.rep[0], &c.rep[3]) {
         let n_warm = (10.0 * tau / c.dt).ceil() as usize;
-        for k in (1..=n_warm).rev() {
-            let t = -(k as f64) * c.dt;
-            y = a * y + (1.0 - a) * dz(ra.value(t) + rh.value(t));
+        let t0 = -(n_warm as f64) * c.dt;
+        let wa = shifted_values(ra, t0, n_warm, c.dt);
+        let wh = shifted_values(rh, t0, n_warm, c.dt);
+        for (va, vh) in wa.iter().zip(&wh) {
+            y = a * y + (1.0 - a) * dz(va + vh);
         }
     } else {
         y = dz(x[0]);
@@ -318,6 +320,19 @@ fn stall_column(c: &CaseData, alpha_c: f64, lag_chords: f64, power: u8) -> Vec<f
             y
         })
         .collect()
+}
+
+/// Values of a harmonic fit at t = t0 + i·dt, i = 0..n (the fit's phases rotated by t0,
+/// then its sample recurrence: no per-sample sine).
+fn shifted_values(h: &identify::preprocess::HarmonicFit, t0: f64, n: usize, dt: f64) -> Vec<f64> {
+    let mut d = h.clone();
+    for j in 0..h.freqs.len() {
+        let (s, co) = (2.0 * std::f64::consts::PI * h.freqs[j] * t0).sin_cos();
+        let (a, b) = (h.cos[j], h.sin[j]);
+        d.cos[j] = a * co + b * s;
+        d.sin[j] = b * co - a * s;
+    }
+    d.values(n, dt)
 }
 
 /// Projected Gram statistics of a pool on one fold and channel (noise-weighted).
@@ -929,6 +944,23 @@ pub(crate) fn significance(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn shifted_values_match_pointwise_evaluation() {
+        let dt = 1.0 / 512.0;
+        let t: Vec<f64> = (0..2048).map(|i| i as f64 * dt).collect();
+        let x: Vec<f64> = t
+            .iter()
+            .map(|&t| 0.1 + 0.3 * (2.0 * std::f64::consts::PI * 1.5 * t + 0.4).sin())
+            .collect();
+        let h = identify::preprocess::harmonic_fit(&x, dt, &[1.5]).unwrap();
+        let t0 = -1.234;
+        let v = shifted_values(&h, t0, 700, dt);
+        for (i, vi) in v.iter().enumerate() {
+            let want = h.value(t0 + i as f64 * dt);
+            assert!((vi - want).abs() < 1e-9, "{i}: {vi} vs {want}");
+        }
+    }
 
     #[test]
     fn sorted_tone_test_matches_a_direct_scan() {
