@@ -5,7 +5,7 @@
 
 use aeroelastic::effects::Form;
 use diagnose::blind::{generate, BlindEffect, BlindScenario};
-use diagnose::force::{force_level, ForceOptions};
+use diagnose::force::{force_level, force_level_profiled, ForceOptions};
 use diagnose::{Effect, LevelResult};
 use identify::dataset::Dataset;
 
@@ -110,40 +110,39 @@ fn explore() {
     }
 }
 
-/// Effect-free gap statistics over seeds (candidates off: the benchmark's twin runs).
+/// Effect-free gap statistics over data seeds × fold seeds (candidates off: the
+/// benchmark's twin runs); false alarms at most 1 in 20.
 #[test]
 #[ignore]
 fn calibration_effect_free() {
     let n: u64 = std::env::var("FORCE_CAL_N")
         .ok()
-        .map_or(8, |s| s.parse().unwrap());
+        .map_or(20, |s| s.parse().unwrap());
     let mut stats = Vec::new();
     for seed in 100..100 + n {
         let ds = blind(BlindEffect::None, 0.0, Form::Primary, seed);
-        let t0 = std::time::Instant::now();
-        let r = force_level(
-            &ds,
-            &ForceOptions {
-                seed,
-                candidates: vec![],
-                ..Default::default()
-            },
-        )
-        .unwrap();
-        eprintln!(
-            "seed {seed}: gap {:.5} noise {:.5} stat {:.3} ({:?})",
-            r.before,
-            r.noise_level,
-            r.gap_statistic,
-            t0.elapsed()
-        );
-        stats.push(r.gap_statistic);
+        for fold_seed in 0..3 {
+            let r = force_level(
+                &ds,
+                &ForceOptions {
+                    seed: fold_seed,
+                    candidates: vec![],
+                    ..Default::default()
+                },
+            )
+            .unwrap();
+            eprintln!(
+                "seed {seed} fold seed {fold_seed}: gap {:.5} noise {:.5} stat {:.3}",
+                r.before, r.noise_level, r.gap_statistic
+            );
+            stats.push(r.gap_statistic);
+        }
     }
     stats.sort_by(f64::total_cmp);
     let thr = ForceOptions::default().gap_threshold;
     let alarms = stats.iter().filter(|&&s| s > thr).count();
-    eprintln!("stats {stats:?} alarms {alarms}/{n}");
-    assert!(alarms * 10 <= n as usize);
+    eprintln!("stats {stats:.3?} alarms {alarms}/{}", stats.len());
+    assert!(alarms * 20 <= stats.len());
 }
 
 #[test]
@@ -174,9 +173,10 @@ fn static_offset_is_named() {
     );
 }
 
-// Fails (force2): named first and significant, but excess shrink 0.462: `after` 0.00409
-// reaches the effect-free gap (≈ 0.0040, 2.45 × noise): the baseline's own held-out error,
-// not the candidate, caps the shrink measured against the noise level.
+// Fails (force3): named first and significant, excess shrink 0.680 (gap 0.00641 → 0.00258,
+// noise 0.00165). With configuration-stratified folds `after` equals the effect-free gap
+// of the same data (≈ 0.00257, 1.55 × noise: the extrapolated end nodes), which still caps
+// the shrink measured against the noise level (force2: 0.462 with the 2.45 × floor).
 #[test]
 #[ignore]
 fn higher_order_is_named() {
@@ -188,8 +188,10 @@ fn time_delay_is_named() {
     check_named(&run(&cat(Effect::TimeDelay, 0.6, 10)), Effect::TimeDelay);
 }
 
-// Fails (force2): named first and significant, excess shrink 0.407 (gap 0.1595 → 0.0946):
-// the lagged dead-zone pool does not fit the generator's Kirchhoff separation well enough.
+// Fails (force3): named first and significant, excess shrink 0.648 (gap 0.1452 → 0.0511).
+// force2: 0.407; stratified folds: 0.545; effective angle α + ḣ/U and quadratic dead
+// zones: 0.595; three terms: 0.648. The dead-zone pool still misses part of the
+// generator's separation.
 #[test]
 #[ignore]
 fn dynamic_stall_is_named() {
@@ -207,10 +209,10 @@ fn vortex_shedding_is_named() {
     );
 }
 
-// Fails (force2) at strength 0.7: gap statistic 2.60 < threshold 2.7 (raised from 1.8 for
-// the D/G effect-free tail); no candidate above shrink 0.03.
+// Statistic 2.58 > threshold 1.8 (force3: stratified folds brought the effect-free
+// statistics to 1.50–1.60, so the threshold came back from 2.7); no candidate above shrink
+// 0.03.
 #[test]
-#[ignore]
 fn buffeting_is_a_gap_no_candidate_explains() {
     let r = run(&blind(BlindEffect::Buffeting, 0.7, Form::Primary, 9));
     eprintln!("{}", summary(&r));
@@ -267,4 +269,143 @@ fn detectability_sweep() {
             }
         }
     }
+}
+
+/// Stage timings and full results on the reference sets (release, `RAYON_NUM_THREADS=1`
+/// for one-core times): every named-effect set of this file plus the baseline-only twin.
+#[test]
+#[ignore]
+fn profile_reference_sets() {
+    let sets: Vec<(&str, BlindEffect, f64, u64)> = vec![
+        ("none", BlindEffect::None, 0.0, 11),
+        ("none", BlindEffect::None, 0.0, 12),
+        (
+            "static_offset",
+            BlindEffect::Catalogue(Effect::StaticOffset),
+            0.7,
+            5,
+        ),
+        (
+            "higher_order",
+            BlindEffect::Catalogue(Effect::HigherOrder),
+            0.7,
+            6,
+        ),
+        (
+            "dynamic_stall",
+            BlindEffect::Catalogue(Effect::DynamicStall),
+            0.8,
+            7,
+        ),
+        (
+            "vortex_shedding",
+            BlindEffect::Catalogue(Effect::VortexShedding),
+            0.7,
+            8,
+        ),
+        ("buffeting", BlindEffect::Buffeting, 0.7, 9),
+        (
+            "time_delay",
+            BlindEffect::Catalogue(Effect::TimeDelay),
+            0.6,
+            10,
+        ),
+        (
+            "added_mass",
+            BlindEffect::Catalogue(Effect::AddedMass),
+            0.7,
+            12,
+        ),
+    ];
+    let only: Option<String> = std::env::var("FORCE_ONLY").ok();
+    for (name, e, s, seed) in sets {
+        if only
+            .as_deref()
+            .is_some_and(|o| !o.split(',').any(|x| x == name))
+        {
+            continue;
+        }
+        let ds = blind(e, s, Form::Primary, seed);
+        let t0 = std::time::Instant::now();
+        let (twin, pt) = force_level_profiled(
+            &ds,
+            &ForceOptions {
+                candidates: vec![],
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        let t_twin = t0.elapsed();
+        let t0 = std::time::Instant::now();
+        let (r, p) = force_level_profiled(&ds, &ForceOptions::default()).unwrap();
+        let t_full = t0.elapsed();
+        let fmt = |p: &[(String, f64)]| {
+            p.iter()
+                .map(|(k, v)| format!("{k} {v:.3}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        eprintln!(
+            "== {name} s={s} seed {seed}: full {t_full:?} [{}]\n   twin {t_twin:?} stat {:.4} [{}]\n{}",
+            fmt(&p),
+            twin.gap_statistic,
+            fmt(&pt),
+            summary(&r)
+        );
+    }
+}
+
+/// Effect-free held-out excess by node: for each seed and fold seed, the gap statistic and
+/// each (configuration, U) node's gap / noise (baseline only).
+#[test]
+#[ignore]
+fn floor_by_node() {
+    let n: u64 = std::env::var("FORCE_CAL_N")
+        .ok()
+        .map_or(4, |s| s.parse().unwrap());
+    let fold_seeds: Vec<u64> = std::env::var("FORCE_FOLD_SEEDS")
+        .ok()
+        .map_or(vec![0, 1, 2], |s| {
+            s.split(',').map(|v| v.parse().unwrap()).collect()
+        });
+    let mut all = Vec::new();
+    for seed in 100..100 + n {
+        let ds = blind(BlindEffect::None, 0.0, Form::Primary, seed);
+        for &fs in &fold_seeds {
+            let r = force_level(
+                &ds,
+                &ForceOptions {
+                    seed: fs,
+                    candidates: vec![],
+                    ..Default::default()
+                },
+            )
+            .unwrap();
+            let mut nodes: std::collections::BTreeMap<(String, i64), (f64, f64, usize)> =
+                Default::default();
+            for c in &r.cases {
+                let e = nodes
+                    .entry((
+                        c.config.clone().unwrap_or_default(),
+                        (c.wind_speed * 10.0) as i64,
+                    ))
+                    .or_default();
+                e.0 += c.before * c.before;
+                e.1 += c.noise_level * c.noise_level;
+                e.2 = c.fold;
+            }
+            let line: Vec<String> = nodes
+                .iter()
+                .map(|((cfg, u), (b, nn, f))| format!("{cfg}{u}:f{f}:{:.2}", (b / nn).sqrt()))
+                .collect();
+            eprintln!(
+                "seed {seed} fold seed {fs}: stat {:.3} | {}",
+                r.gap_statistic,
+                line.join(" ")
+            );
+            all.push(r.gap_statistic);
+        }
+    }
+    all.sort_by(f64::total_cmp);
+    eprintln!("stats {all:.3?}");
 }

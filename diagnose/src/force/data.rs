@@ -2,6 +2,9 @@
 //! forces, noise estimates, a harmonic representation of the motion (for shifted and
 //! differentiated regressors), and the (configuration, wind speed) nodes.
 
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
+
 use identify::dataset::Dataset;
 use identify::library::Term;
 use identify::preprocess::{harmonic_fit, noise_sigma, HarmonicFit, PreprocessOptions};
@@ -39,12 +42,32 @@ pub(crate) struct CaseData {
     pub rep: [Option<HarmonicFit>; 4],
     /// Node index (configuration, wind speed).
     pub node: usize,
+    /// Monomial columns evaluated so far (filled on demand, shared by every fold and
+    /// candidate; a clone starts empty, since clones are made to change the regressors).
+    pub cols: ColumnCache,
+}
+
+/// Memo of a case's monomial columns.
+#[derive(Debug, Default)]
+pub(crate) struct ColumnCache(Mutex<HashMap<Term, Arc<Vec<f64>>>>);
+
+impl Clone for ColumnCache {
+    fn clone(&self) -> Self {
+        ColumnCache::default()
+    }
 }
 
 impl CaseData {
-    /// Column of a monomial on this case's samples.
-    pub fn column(&self, t: &Term) -> Vec<f64> {
-        column_of(&self.nd.x, t)
+    /// Column of a monomial on this case's samples (evaluated once, then shared).
+    pub fn column(&self, t: &Term) -> Arc<Vec<f64>> {
+        if let Some(v) = self.cols.0.lock().ok().and_then(|m| m.get(t).cloned()) {
+            return v;
+        }
+        let v = Arc::new(column_of(&self.nd.x, t));
+        if let Ok(mut m) = self.cols.0.lock() {
+            m.entry(*t).or_insert_with(|| v.clone());
+        }
+        v
     }
 
     /// Nondimensional accelerations (B²α̈/U², Bḧ/U²) = (B/U)·d/dt(Bα̇/U, ḣ/U).
@@ -144,6 +167,7 @@ pub(crate) fn prepare(forced: &Dataset) -> Result<(Vec<CaseData>, Vec<Node>)> {
             k_alpha: b * 2.0 * std::f64::consts::PI * f_alpha / u,
             rep,
             node: 0,
+            cols: ColumnCache::default(),
             nd,
         });
     }

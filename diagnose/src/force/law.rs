@@ -7,6 +7,9 @@
 //! projections (I − P_n) Z_n, (I − P_n) y_n (P_n the projector on the node's support
 //! columns), then a_n by least squares on y_n − Z_n β.
 
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex};
+
 use identify::library::Term;
 
 use super::data::{CaseData, Node};
@@ -21,58 +24,157 @@ pub(crate) const BETA_RIDGE: f64 = 1e-9;
 /// Support of each configuration (lift, moment).
 pub(crate) type Supports = std::collections::BTreeMap<String, [Vec<Term>; 2]>;
 
-/// Cached factorisation of a training node: stacked support columns and targets.
+/// Cached factorisation of one training node and channel on a given support: stacked
+/// support columns (QR), targets, noise weights, and the per-node statistics of every
+/// augmentation column set seen so far (computed once, shared by every fold that trains
+/// on the node with the same support).
+#[derive(Debug)]
+pub(crate) struct NodeChan {
+    pub qr: Qr,
+    /// Mean over the stacked samples of the noise weight 1/σ̂.
+    pub w_mean: f64,
+    /// n_cases / Σ σ̂ of the node's cases (weight of the selection statistics).
+    pub w_pool: f64,
+    /// Residual of `y` on the support, y − Q Qᵀ y.
+    pub res_y: Vec<f64>,
+    /// Least-squares coefficients of `y` on the support.
+    pub a_y: Vec<f64>,
+    grams: Mutex<HashMap<String, Arc<NodeGram>>>,
+}
+
+/// Per-node statistics of an augmentation column set Z (columns j) against the node's
+/// support: z̃_j = (I − P) z_j.
+#[derive(Debug)]
+pub(crate) struct NodeGram {
+    /// z̃_j · z̃_k.
+    pub g: Vec<Vec<f64>>,
+    /// z̃_j · (I − P) y.
+    pub b: Vec<f64>,
+    /// True when the support spans z_j (‖z̃_j‖² ≤ 1e-12 ‖z_j‖²).
+    pub absorbed: Vec<bool>,
+    /// Least-squares coefficients of z_j on the support.
+    pub a: Vec<Vec<f64>>,
+}
+
+impl NodeChan {
+    /// Statistics of the column set `key` (stacked columns `cols()`), computed on first use.
+    pub fn gram(&self, key: &str, cols: &dyn Fn() -> Vec<Vec<f64>>) -> Arc<NodeGram> {
+        if let Some(g) = self.grams.lock().ok().and_then(|m| m.get(key).cloned()) {
+            return g;
+        }
+        let z = cols();
+        let m = z.len();
+        let zt: Vec<Vec<f64>> = z.iter().map(|c| self.qr.residual(c)).collect();
+        let absorbed = z
+            .iter()
+            .zip(&zt)
+            .map(|(c, r)| dot(r, r) <= 1e-12 * dot(c, c))
+            .collect();
+        let mut g = vec![vec![0.0; m]; m];
+        for j in 0..m {
+            for k in j..m {
+                let v = dot(&zt[j], &zt[k]);
+                g[j][k] = v;
+                g[k][j] = v;
+            }
+        }
+        let b = zt.iter().map(|r| dot(r, &self.res_y)).collect();
+        let a = z.iter().map(|c| self.qr.solve(c)).collect();
+        let out = Arc::new(NodeGram { g, b, absorbed, a });
+        if let Ok(mut mp) = self.grams.lock() {
+            mp.entry(key.to_string()).or_insert_with(|| out.clone());
+        }
+        out
+    }
+}
+
+/// A training node's factorisations (lift, moment).
 #[derive(Debug, Clone)]
 pub(crate) struct NodeFit {
     pub node: usize,
-    pub qr: [Qr; 2],
-    /// Stacked targets (cases of the node in order).
-    pub y: [Vec<f64>; 2],
-    /// Stacked noise weights 1/σ̂ per sample (for chi-square units).
-    pub w: [Vec<f64>; 2],
+    pub ch: [Arc<NodeChan>; 2],
 }
 
-/// Builds the node factorisations of the training nodes.
+/// Key of a node factorisation: (node, regressor version, channel, support).
+type FitKey = (usize, u64, usize, Vec<Term>);
+
+/// Node factorisations shared by every fold and candidate of one force-level run.
+#[derive(Debug, Default)]
+pub(crate) struct FitCache(Mutex<HashMap<FitKey, Arc<NodeChan>>>);
+
+fn build_chan(cases: &[CaseData], node: &Node, sup: &[Term], c: usize) -> NodeChan {
+    let cols: Vec<Vec<f64>> = sup
+        .iter()
+        .map(|t| {
+            node.cases
+                .iter()
+                .flat_map(|&i| cases[i].column(t).iter().copied().collect::<Vec<_>>())
+                .collect()
+        })
+        .collect();
+    let refs: Vec<&[f64]> = cols.iter().map(|v| v.as_slice()).collect();
+    let qr = Qr::new(&refs, QR_TOL);
+    let y: Vec<f64> = node
+        .cases
+        .iter()
+        .flat_map(|&i| cases[i].y[c].iter().copied())
+        .collect();
+    let w: Vec<f64> = node
+        .cases
+        .iter()
+        .flat_map(|&i| {
+            let s = cases[i].sigma[c].max(1e-300);
+            std::iter::repeat_n(1.0 / s, cases[i].n)
+        })
+        .collect();
+    let w_pool = 1.0
+        / node
+            .cases
+            .iter()
+            .map(|&i| cases[i].sigma[c])
+            .sum::<f64>()
+            .max(1e-300)
+        * node.cases.len() as f64;
+    let res_y = qr.residual(&y);
+    let a_y = qr.solve(&y);
+    NodeChan {
+        w_mean: mean(&w),
+        qr,
+        w_pool,
+        res_y,
+        a_y,
+        grams: Mutex::new(HashMap::new()),
+    }
+}
+
+/// Builds (or takes from `cache`) the node factorisations of the training nodes; `version`
+/// names the regressors of `cases` (0: the measured motion; the delayed copies of the
+/// `time_delay` candidate use their delay's bits).
 pub(crate) fn node_fits(
     cases: &[CaseData],
     nodes: &[Node],
     train: &[usize],
     supports: &Supports,
+    cache: &FitCache,
+    version: u64,
 ) -> Vec<NodeFit> {
     train
         .iter()
         .map(|&n| {
             let node = &nodes[n];
             let sup = &supports[&node.config];
-            let qr = std::array::from_fn(|c| {
-                let cols: Vec<Vec<f64>> = sup[c]
-                    .iter()
-                    .map(|t| {
-                        node.cases
-                            .iter()
-                            .flat_map(|&i| cases[i].column(t))
-                            .collect()
-                    })
-                    .collect();
-                let refs: Vec<&[f64]> = cols.iter().map(|v| v.as_slice()).collect();
-                Qr::new(&refs, QR_TOL)
+            let ch = std::array::from_fn(|c| {
+                let key: FitKey = (n, version, c, sup[c].clone());
+                if let Some(v) = cache.0.lock().ok().and_then(|m| m.get(&key).cloned()) {
+                    return v;
+                }
+                let v = Arc::new(build_chan(cases, node, &sup[c], c));
+                if let Ok(mut m) = cache.0.lock() {
+                    m.entry(key).or_insert_with(|| v.clone());
+                }
+                v
             });
-            let y = std::array::from_fn(|c| {
-                node.cases
-                    .iter()
-                    .flat_map(|&i| cases[i].y[c].iter().copied())
-                    .collect()
-            });
-            let w = std::array::from_fn(|c| {
-                node.cases
-                    .iter()
-                    .flat_map(|&i| {
-                        let s = cases[i].sigma[c].max(1e-300);
-                        std::iter::repeat_n(1.0 / s, cases[i].n)
-                    })
-                    .collect()
-            });
-            NodeFit { node: n, qr, y, w }
+            NodeFit { node: n, ch }
         })
         .collect()
 }
@@ -84,62 +186,87 @@ pub(crate) struct ChannelLaw {
     pub beta: Vec<f64>,
     /// (node index, K_α, coefficients on the configuration's support).
     pub nodes: Vec<(usize, f64, Vec<f64>)>,
-    /// Training residual sum of squares in noise units Σ (r/σ̂)².
-    #[allow(dead_code)]
-    pub rss_w: f64,
 }
 
 /// Extra (augmentation) columns of case `i`, channel `c`.
 pub(crate) type Extra<'a> = &'a (dyn Fn(usize, usize) -> Vec<Vec<f64>> + Sync);
 
-/// Fits channel `c` with shared columns `extra` on the training nodes. `targets` replaces
-/// the measured targets when given (per node fit, stacked), e.g. for shifted data.
-pub(crate) fn fit_channel(
-    _cases: &[CaseData],
-    nodes: &[Node],
-    fits: &[NodeFit],
-    c: usize,
-    extra: Extra<'_>,
-) -> ChannelLaw {
-    // stacked extra columns per node
-    let z: Vec<Vec<Vec<f64>>> = fits
-        .iter()
-        .map(|f| {
-            let per_case: Vec<Vec<Vec<f64>>> =
-                nodes[f.node].cases.iter().map(|&i| extra(i, c)).collect();
+/// An augmentation column set: a cache key naming it (unique within a run), the set's
+/// columns of case `i`, channel `c`, and the indices used (None: all).
+#[derive(Clone, Copy)]
+pub(crate) struct Aug<'a> {
+    pub key: &'a str,
+    pub cols: Extra<'a>,
+    pub subset: Option<&'a [usize]>,
+}
+
+impl Aug<'_> {
+    /// No augmentation.
+    pub const NONE: Aug<'static> = Aug {
+        key: "",
+        cols: &|_, _| Vec::new(),
+        subset: None,
+    };
+
+    /// The used columns of case `i`, channel `c`.
+    pub fn columns(&self, i: usize, c: usize) -> Vec<Vec<f64>> {
+        let all = (self.cols)(i, c);
+        match self.subset {
+            None => all,
+            Some(s) => s.iter().map(|&j| all[j].clone()).collect(),
+        }
+    }
+
+    /// Per-node statistics of the whole set on training node `f`, channel `c`.
+    pub fn gram(&self, nodes: &[Node], f: &NodeFit, c: usize) -> Arc<NodeGram> {
+        let stacked = || {
+            let per_case: Vec<Vec<Vec<f64>>> = nodes[f.node]
+                .cases
+                .iter()
+                .map(|&i| (self.cols)(i, c))
+                .collect();
             let m = per_case.first().map_or(0, |v| v.len());
             (0..m)
                 .map(|j| per_case.iter().flat_map(|v| v[j].iter().copied()).collect())
                 .collect()
-        })
+        };
+        f.ch[c].gram(&format!("{}#{c}", self.key), &stacked)
+    }
+}
+
+/// Fits channel `c` with shared columns `aug` on the training nodes: β from the
+/// noise-weighted stacked projections (columns the node's support spans get no weight),
+/// then every node's coefficients a_n = â(y) − Σ β_j â(z_j) (least squares on the support).
+pub(crate) fn fit_channel(nodes: &[Node], fits: &[NodeFit], c: usize, aug: Aug<'_>) -> ChannelLaw {
+    let grams: Vec<Option<Arc<NodeGram>>> = fits
+        .iter()
+        .map(|f| (!aug.key.is_empty()).then(|| aug.gram(nodes, f, c)))
         .collect();
-    let m = z.first().map_or(0, |v| v.len());
+    let idx: Vec<usize> = match (aug.subset, grams.first()) {
+        (Some(s), _) => s.to_vec(),
+        (None, Some(Some(g))) => (0..g.b.len()).collect(),
+        _ => Vec::new(),
+    };
+    let m = idx.len();
     let mut beta = vec![0.0; m];
     if m > 0 {
         let mut g = vec![vec![0.0; m]; m];
         let mut b = vec![0.0; m];
-        for (f, zn) in fits.iter().zip(&z) {
+        for (f, gr) in fits.iter().zip(&grams) {
+            let Some(gr) = gr else { continue };
             // weighted by the node's noise level so that quiet and noisy nodes count alike
-            let wn = mean(&f.w[c]);
+            let wn = f.ch[c].w_mean;
             let w2 = wn * wn;
-            // a column the node's support spans (projection below 1e-6 of its norm) is
-            // absorbed by the node coefficients: it gets no weight (β = 0 by the ridge)
-            let zt: Vec<Vec<f64>> = zn
-                .iter()
-                .map(|col| {
-                    let r = f.qr[c].residual(col);
-                    if dot(&r, &r) <= 1e-12 * dot(col, col) {
-                        vec![0.0; r.len()]
+            for (j, &jj) in idx.iter().enumerate() {
+                if !gr.absorbed[jj] {
+                    b[j] += w2 * gr.b[jj];
+                }
+                for (k, &kk) in idx.iter().enumerate().skip(j) {
+                    let v = if gr.absorbed[jj] || gr.absorbed[kk] {
+                        0.0
                     } else {
-                        r
-                    }
-                })
-                .collect();
-            let yt = f.qr[c].residual(&f.y[c]);
-            for j in 0..m {
-                b[j] += w2 * dot(&zt[j], &yt);
-                for k in j..m {
-                    let v = w2 * dot(&zt[j], &zt[k]);
+                        w2 * gr.g[jj][kk]
+                    };
                     g[j][k] += v;
                     if k != j {
                         g[k][j] += v;
@@ -149,27 +276,22 @@ pub(crate) fn fit_channel(
         }
         beta = solve_spd(&g, &b, BETA_RIDGE).unwrap_or(beta);
     }
-    let mut out = Vec::with_capacity(fits.len());
-    let mut rss_w = 0.0;
-    for (f, zn) in fits.iter().zip(&z) {
-        let mut t = f.y[c].clone();
-        for (j, col) in zn.iter().enumerate() {
-            t.iter_mut().zip(col).for_each(|(a, b)| *a -= beta[j] * b);
-        }
-        let a = f.qr[c].solve(&t);
-        let r = f.qr[c].residual(&t);
-        rss_w += r
-            .iter()
-            .zip(&f.w[c])
-            .map(|(r, w)| (r * w) * (r * w))
-            .sum::<f64>();
-        out.push((f.node, nodes[f.node].k_alpha, a));
-    }
-    ChannelLaw {
-        beta,
-        nodes: out,
-        rss_w,
-    }
+    let out = fits
+        .iter()
+        .zip(&grams)
+        .map(|(f, gr)| {
+            let mut a = f.ch[c].a_y.clone();
+            if let Some(gr) = gr {
+                for (j, &jj) in idx.iter().enumerate() {
+                    a.iter_mut()
+                        .zip(&gr.a[jj])
+                        .for_each(|(x, z)| *x -= beta[j] * z);
+                }
+            }
+            (f.node, nodes[f.node].k_alpha, a)
+        })
+        .collect();
+    ChannelLaw { beta, nodes: out }
 }
 
 fn mean(v: &[f64]) -> f64 {
@@ -359,7 +481,9 @@ pub(crate) fn predict(
     for (t, &aj) in supports[cfg][c].iter().zip(&a) {
         if aj != 0.0 {
             let col = case.column(t);
-            out.iter_mut().zip(&col).for_each(|(o, v)| *o += aj * v);
+            out.iter_mut()
+                .zip(col.iter())
+                .for_each(|(o, v)| *o += aj * v);
         }
     }
     for (col, &b) in extra_cols.iter().zip(&law.beta) {
