@@ -17,6 +17,32 @@ pub enum TunnelCommand {
     Forced(ForcedArgs),
     /// Free response of the section on springs at a list of wind speeds.
     Free(FreeArgs),
+    /// A withheld-effect data-set pair (the blind benchmark's scenario): `forced/` and
+    /// `free/` folders plus `truth.json`, to diagnose with `aeroform diagnose` or any other
+    /// program.
+    Blind(BlindArgs),
+}
+
+/// Flags of `aeroform tunnel blind`.
+#[derive(Debug, Args)]
+pub struct BlindArgs {
+    /// Effect: a catalogue name (`static_offset`, `added_mass`, `time_delay`,
+    /// `higher_order`, `dynamic_stall`, `vortex_shedding`, `structural_cubic`, `freeplay`,
+    /// `friction`), `none` or `buffeting` (outside the catalogue).
+    #[arg(long)]
+    pub effect: String,
+    /// Strength in [0, 1] (0 barely detectable, 1 strong).
+    #[arg(long, default_value_t = 0.8)]
+    pub strength: f64,
+    /// Use the effect's alternate functional form.
+    #[arg(long)]
+    pub alternate: bool,
+    /// Seed of every random draw (recorded in truth.json and the manifests).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Output folder (created if missing).
+    #[arg(long, default_value = "out/blind-set")]
+    pub out: PathBuf,
 }
 
 /// Flags of `aeroform tunnel forced`.
@@ -82,7 +108,31 @@ pub fn run(cmd: &TunnelCommand) -> anyhow::Result<()> {
     match cmd {
         TunnelCommand::Forced(a) => forced(a),
         TunnelCommand::Free(a) => free(a),
+        TunnelCommand::Blind(a) => blind(a),
     }
+}
+
+fn blind(a: &BlindArgs) -> anyhow::Result<()> {
+    use aeroelastic::effects::Form;
+    use diagnose::blind::{generate, write_blind, BlindScenario};
+    let effect = diagnose::bench_run::blind_effect(&a.effect)?;
+    let form = if a.alternate {
+        Form::Alternate
+    } else {
+        Form::Primary
+    };
+    let set = generate(effect, a.strength, form, a.seed, &BlindScenario::default())?;
+    crate::ensure_dir(&a.out)?;
+    write_blind(&a.out, &set)?;
+    println!(
+        "wrote {} forced cases to {}, {} free runs to {} and the truth to {}",
+        set.forced.records.len(),
+        a.out.join("forced").display(),
+        set.free.records.len(),
+        a.out.join("free").display(),
+        a.out.join("truth.json").display()
+    );
+    Ok(())
 }
 
 fn forced(a: &ForcedArgs) -> anyhow::Result<()> {
