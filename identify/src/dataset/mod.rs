@@ -51,6 +51,13 @@ impl Dataset {
 /// for any violation of DATA_FORMAT.md (see [`Manifest::parse`] and [`read_case`]).
 pub fn read_dataset(dir: &Path) -> Result<Dataset> {
     let manifest = Manifest::read(&dir.join(MANIFEST_FILE))?;
+    // Refuse every path that leaves the folder before reading any case file.
+    for case in &manifest.cases {
+        resolve_case_path(dir, case, "file", &case.file)?;
+        if let Some(still) = &case.nowind_file {
+            resolve_case_path(dir, case, "nowind_file", still)?;
+        }
+    }
     let records = manifest
         .cases
         .iter()
@@ -77,18 +84,70 @@ pub fn read_dataset(dir: &Path) -> Result<Dataset> {
 /// row), each naming the file, line and column.
 pub fn read_case(dir: &Path, manifest: &Manifest, case: &CaseSpec) -> Result<Record> {
     let meta = manifest.case_meta(case);
+    let file = resolve_case_path(dir, case, "file", &case.file)?;
+    let still_file = match &case.nowind_file {
+        Some(p) => Some(resolve_case_path(dir, case, "nowind_file", p)?),
+        None => None,
+    };
     let mut rec = read_record(
-        &dir.join(&case.file),
+        &file,
         manifest,
         case.kind,
         case.kind == CaseKind::Forced,
         meta.clone(),
     )?;
-    if let Some(still) = &case.nowind_file {
-        let still = read_record(&dir.join(still), manifest, case.kind, true, meta)?;
+    if let Some(still) = &still_file {
+        let still = read_record(still, manifest, case.kind, true, meta)?;
         rec.nowind = Some(Box::new(still));
     }
     Ok(rec)
+}
+
+/// `dir.join(rel)` when the file `rel` named by `case.<key>` stays inside the data-set
+/// folder `dir`.
+///
+/// Refused: an absolute path or one with a `..` component (as [`Manifest::parse`] does, for
+/// manifests built in code), and a path that resolves outside the folder through a
+/// symbolic link (a link as the file itself or as a folder on the way): both the folder and
+/// the file are canonicalised and the file must lie under the folder. Links that stay
+/// inside are accepted. A file that does not exist is left to the read, which reports it.
+///
+/// # Errors
+/// [`crate::Error::Manifest`] naming `dir/manifest.toml`, the line of the key, the field
+/// (`case[i].file` / `case[i].nowind_file`), the path and where it resolves;
+/// [`crate::Error::Io`] when the folder itself cannot be resolved.
+fn resolve_case_path(dir: &Path, case: &CaseSpec, key: &str, rel: &Path) -> Result<PathBuf> {
+    let manifest_path = dir.join(MANIFEST_FILE);
+    let refuse = |why: String| {
+        let text = std::fs::read_to_string(&manifest_path).unwrap_or_default();
+        let (field, line) = manifest::case_key_location(&text, &manifest_path, &case.id, key);
+        crate::Error::Manifest {
+            path: manifest_path.clone(),
+            line,
+            field,
+            message: format!(
+                "path \"{}\" {why}; case files must be inside the data set folder",
+                rel.display()
+            ),
+        }
+    };
+    if let Some(why) = manifest::unsafe_relative_path(rel) {
+        return Err(refuse(why.to_string()));
+    }
+    let joined = dir.join(rel);
+    let Ok(real) = std::fs::canonicalize(&joined) else {
+        return Ok(joined);
+    };
+    let root = std::fs::canonicalize(dir).map_err(|e| crate::Error::io(dir, e))?;
+    if real.starts_with(&root) {
+        Ok(joined)
+    } else {
+        Err(refuse(format!(
+            "resolves through a symbolic link to {}, outside the data set folder {}",
+            real.display(),
+            root.display()
+        )))
+    }
 }
 
 fn read_record(
@@ -122,3 +181,6 @@ fn read_record(
 
 #[cfg(test)]
 mod tests;
+
+#[cfg(test)]
+mod path_tests;
