@@ -33,7 +33,7 @@ fn toml_str(s: &str) -> String {
 /// 1-based line of the last line of `text` starting with `prefix` (found independently
 /// of the reader; the refused key is always in the last case).
 fn last_line_starting(text: &str, prefix: &str) -> usize {
-    text.lines().rposition(|l| l.starts_with(prefix)).unwrap() + 1
+    text.lines().collect::<Vec<_>>().iter().rposition(|l| l.starts_with(prefix)).unwrap() + 1
 }
 
 /// `tmp/ds` with `a.csv`, and `tmp/outside/secret.csv` (a valid case file, so a read
@@ -184,4 +184,34 @@ fn read_case_checks_paths_of_manifests_built_in_code() {
     assert_refused(&e, &ds, &text, "file", "x.csv", "symbolic link");
     case.file = PathBuf::from("a.csv");
     assert!(read_case(&ds, &m, &case).is_ok());
+}
+
+/// Found with the `dataset` fuzz harness's "finite SI values" invariant: a total force that
+/// is finite in the file became +inf N/m after division by a subnormal span, and the
+/// record was accepted (input: fuzz/regressions/dataset/span-overflow-to-infinite-force).
+#[test]
+fn fuzz_regression_dataset_span_overflow_to_infinite_force() {
+    let tmp = tempfile::tempdir().unwrap();
+    let ds = tmp.path();
+    let text = manifest("a.csv", None).replace("span = 0.75", "span = 1e-310");
+    write_manifest(ds, &text);
+    std::fs::write(
+        ds.join("a.csv"),
+        "t,h,alpha,lift,moment\n0,0,0,0,0\n0.1,0,0,0,0\n0.2,1,2,3,4\n",
+    )
+    .unwrap();
+    let e = read_dataset(ds).unwrap_err();
+    assert!(
+        matches!(&e, Error::Csv { line: 4, field, .. } if field == "lift"),
+        "{e:?}"
+    );
+    assert!(e.to_string().contains("a.csv:4"), "{e}");
+    // zero stays zero whatever the span: the first two rows were accepted
+    std::fs::write(
+        ds.join("a.csv"),
+        "t,h,alpha,lift,moment\n0,0,0,0,0\n0.1,0,0,0,0\n0.2,0,0,0,0\n",
+    )
+    .unwrap();
+    let d = read_dataset(ds).unwrap();
+    assert!(d.records[0].lift.as_ref().unwrap().iter().all(|x| *x == 0.0));
 }
