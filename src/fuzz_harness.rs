@@ -84,10 +84,7 @@ impl Scratch {
     fn new() -> Option<Scratch> {
         static N: AtomicUsize = AtomicUsize::new(0);
         let n = N.fetch_add(1, Ordering::Relaxed);
-        let dir = std::env::temp_dir().join(format!(
-            "aeroform-fuzz-{}-{n}",
-            std::process::id()
-        ));
+        let dir = std::env::temp_dir().join(format!("aeroform-fuzz-{}-{n}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         std::fs::create_dir_all(&dir).ok()?;
         Some(Scratch(dir))
@@ -163,7 +160,12 @@ pub fn dataset(data: &[u8]) {
                 let n = r.h.len();
                 assert!(n >= 3);
                 assert!(r.dt.is_finite() && r.dt > 0.0 && r.t0.is_finite());
-                let chans = [Some(&r.h), Some(&r.alpha), r.lift.as_ref(), r.moment.as_ref()];
+                let chans = [
+                    Some(&r.h),
+                    Some(&r.alpha),
+                    r.lift.as_ref(),
+                    r.moment.as_ref(),
+                ];
                 for c in chans.into_iter().flatten() {
                     assert_eq!(c.len(), n);
                     assert!(c.iter().all(|x| x.is_finite()), "non-finite SI value");
@@ -237,7 +239,10 @@ pub fn identification(data: &[u8]) {
             let _ = law.table().derivatives(k);
             let _ = law.table().q(k);
         }
-        let flow = Flow { rho: 1.225, u: 10.0 };
+        let flow = Flow {
+            rho: 1.225,
+            u: 10.0,
+        };
         let m = law.model();
         let _ = m.frequency_response(&flow, 20.0);
         let lag = vec![0.0; m.n_lag()];

@@ -180,11 +180,7 @@ fn symlinks_inside_the_folder_are_accepted() {
     let l = layout();
     symlink(Path::new("cases"), &l.ds.join("alias"));
     symlink(Path::new("ok.csv"), &l.ds.join("cases/link.csv"));
-    std::fs::write(
-        l.ds.join("manifest.toml"),
-        manifest("alias/link.csv", None),
-    )
-    .unwrap();
+    std::fs::write(l.ds.join("manifest.toml"), manifest("alias/link.csv", None)).unwrap();
     let (ok, err) = aeroform(&[
         "identify",
         l.ds.to_str().unwrap(),

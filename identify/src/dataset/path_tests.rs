@@ -33,7 +33,12 @@ fn toml_str(s: &str) -> String {
 /// 1-based line of the last line of `text` starting with `prefix` (found independently
 /// of the reader; the refused key is always in the last case).
 fn last_line_starting(text: &str, prefix: &str) -> usize {
-    text.lines().collect::<Vec<_>>().iter().rposition(|l| l.starts_with(prefix)).unwrap() + 1
+    text.lines()
+        .collect::<Vec<_>>()
+        .iter()
+        .rposition(|l| l.starts_with(prefix))
+        .unwrap()
+        + 1
 }
 
 /// `tmp/ds` with `a.csv`, and `tmp/outside/secret.csv` (a valid case file, so a read
@@ -83,7 +88,14 @@ fn absolute_case_file_is_refused() {
     let text = manifest(secret.to_str().unwrap(), None);
     write_manifest(&ds, &text);
     let e = read_dataset(&ds).unwrap_err();
-    assert_refused(&e, &ds, &text, "file", secret.to_str().unwrap(), "is absolute");
+    assert_refused(
+        &e,
+        &ds,
+        &text,
+        "file",
+        secret.to_str().unwrap(),
+        "is absolute",
+    );
 }
 
 #[test]
@@ -93,7 +105,14 @@ fn parent_dir_in_nowind_file_is_refused() {
     let text = manifest("a.csv", Some("sub/../../outside/secret.csv"));
     write_manifest(&ds, &text);
     let e = read_dataset(&ds).unwrap_err();
-    assert_refused(&e, &ds, &text, "nowind_file", "../outside/secret.csv", "`..`");
+    assert_refused(
+        &e,
+        &ds,
+        &text,
+        "nowind_file",
+        "../outside/secret.csv",
+        "`..`",
+    );
 }
 
 #[cfg(unix)]
@@ -106,7 +125,10 @@ fn symlinked_file_pointing_outside_is_refused() {
     write_manifest(&ds, &text);
     let e = read_dataset(&ds).unwrap_err();
     assert_refused(&e, &ds, &text, "file", "x.csv", "symbolic link");
-    assert!(e.to_string().contains("secret.csv"), "names the target: {e}");
+    assert!(
+        e.to_string().contains("secret.csv"),
+        "names the target: {e}"
+    );
     // a relative link target escapes the same way
     std::fs::remove_file(ds.join("x.csv")).unwrap();
     symlink(Path::new("../outside/secret.csv"), &ds.join("x.csv"));
@@ -123,7 +145,14 @@ fn symlinked_folder_pointing_outside_is_refused() {
     let text = manifest("a.csv", Some("cases/secret.csv"));
     write_manifest(&ds, &text);
     let e = read_dataset(&ds).unwrap_err();
-    assert_refused(&e, &ds, &text, "nowind_file", "cases/secret.csv", "outside the data set folder");
+    assert_refused(
+        &e,
+        &ds,
+        &text,
+        "nowind_file",
+        "cases/secret.csv",
+        "outside the data set folder",
+    );
 }
 
 #[cfg(unix)]
@@ -213,5 +242,10 @@ fn fuzz_regression_dataset_span_overflow_to_infinite_force() {
     )
     .unwrap();
     let d = read_dataset(ds).unwrap();
-    assert!(d.records[0].lift.as_ref().unwrap().iter().all(|x| *x == 0.0));
+    assert!(d.records[0]
+        .lift
+        .as_ref()
+        .unwrap()
+        .iter()
+        .all(|x| *x == 0.0));
 }
