@@ -213,10 +213,13 @@ const NONLINEAR: [(&str, [u32; 4], i32); 3] = [
     ("alpha_dot^3", [0, 3, 0, 0], 3),
 ];
 
+/// Median; NaN for an empty slice.
 fn median(v: &mut [f64]) -> f64 {
     v.sort_by(f64::total_cmp);
     let n = v.len();
-    if n % 2 == 1 {
+    if n == 0 {
+        f64::NAN
+    } else if n % 2 == 1 {
         v[n / 2]
     } else {
         0.5 * (v[n / 2 - 1] + v[n / 2])
@@ -884,5 +887,40 @@ mod tests {
             e.to_string().contains("2 distinct reduced frequencies"),
             "{e}"
         );
+    }
+}
+
+#[cfg(test)]
+mod fuzz_regressions {
+    use super::*;
+
+    /// Found by the `identification` fuzz target (input
+    /// fuzz/regressions/identification/duplicate-term-name.json): a term outside Eq. 19 that
+    /// iteration sees as non-zero while `TermMap::get` finds no finite non-zero value (a
+    /// repeated term name) left an empty list whose median underflowed an index. The reader
+    /// now refuses repeated names; built in code, such a term is reported as not included.
+    #[test]
+    fn fuzz_regression_identification_outside_term_without_value() {
+        let text = include_str!("../../fuzz/corpus/identification/cecfa55a89ef172c");
+        let mut id: Identification = serde_json::from_str(text).unwrap();
+        for c in &mut id.cases {
+            c.lift.terms.0.insert(0, ("alpha^2*h".into(), Some(0.0)));
+            c.lift.terms.0.push(("alpha^2*h".into(), Some(4.0)));
+        }
+        let mut o = IdentifiedOptions::new(0.25);
+        o.missing = MissingDerivative::Zero;
+        o.rfa_lags = 1;
+        // no panic, and the term without a usable value is not part of the law
+        let law = IdentifiedLaw::from_identification(&id, &o).unwrap();
+        let t: Vec<_> = law
+            .tables
+            .outside
+            .iter()
+            .filter(|t| t.term == "alpha^2*h" && t.channel == Channel::Lift)
+            .collect();
+        assert_eq!(t.len(), 1, "{:?}", law.tables.outside);
+        assert!(!t[0].included && t[0].n_nonzero == 0, "{:?}", t[0]);
+        assert!(median(&mut []).is_nan());
+        assert_eq!(median(&mut [3.0, 1.0, 2.0]), 2.0);
     }
 }

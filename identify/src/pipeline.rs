@@ -262,6 +262,9 @@ impl<'de> Deserialize<'de> for TermMap {
             ) -> std::result::Result<TermMap, A::Error> {
                 let mut v = Vec::new();
                 while let Some((k, x)) = a.next_entry::<String, Option<f64>>()? {
+                    if v.iter().any(|(n, _): &(String, _)| *n == k) {
+                        return Err(serde::de::Error::custom(format!("duplicate term `{k}`")));
+                    }
                     v.push((k, x));
                 }
                 Ok(TermMap(v))
@@ -996,4 +999,22 @@ pub fn identify(
         cases: case_results,
         groups: group_results,
     })
+}
+
+#[cfg(test)]
+mod fuzz_regressions {
+    use super::*;
+
+    /// Found by the `identification` fuzz target: a case whose `terms` object named a term
+    /// twice (`"alpha^2": 0.0, …, "alpha^2": 4.03`) was accepted, and `TermMap::get` saw
+    /// only the first value while iteration saw both (the law construction then took the
+    /// median of an empty list). The reader now refuses a repeated term name.
+    #[test]
+    fn fuzz_regression_identification_duplicate_term_name() {
+        let ok: TermMap = serde_json::from_str(r#"{"alpha": 1.0, "alpha^2": null}"#).unwrap();
+        assert_eq!(ok.get("alpha"), Some(1.0));
+        let e = serde_json::from_str::<TermMap>(r#"{"alpha^2": 0.0, "h": 1.0, "alpha^2": 4.0}"#)
+            .unwrap_err();
+        assert!(e.to_string().contains("duplicate term `alpha^2`"), "{e}");
+    }
 }

@@ -8,6 +8,8 @@ pub mod figures;
 pub mod files;
 pub mod progress;
 pub mod run;
-pub mod spec;
+/// The study-file parser lives in the library target (`aeroform::study_spec`) so that the
+/// fuzz target and tests can call it.
+pub use aeroform::study_spec as spec;
 
 pub use spec::Study;

@@ -568,6 +568,39 @@ pub(crate) fn unsafe_relative_path(path: &Path) -> Option<&'static str> {
     None
 }
 
+/// Dotted field name and 1-based line of `key` in the `[[case]]` table whose `id` is
+/// `case_id`, looked up in the manifest text (`("case[?].KEY", 0)` when the text does not
+/// parse or has no such case). Used by readers that report an error about a manifest value
+/// after parsing, e.g. a case path that resolves outside the data-set folder.
+pub(crate) fn case_key_location(
+    text: &str,
+    path: &Path,
+    case_id: &str,
+    key: &str,
+) -> (String, usize) {
+    let unknown = (format!("case[?].{key}"), 0);
+    let Ok(cx) = Cx::new(text, path) else {
+        return unknown;
+    };
+    let root = cx.root();
+    let Some(n) = root
+        .values
+        .get("case")
+        .and_then(|v| v.as_array())
+        .map(Vec::len)
+    else {
+        return unknown;
+    };
+    for i in 0..n {
+        if let Some(node) = cx.case_node(&root, i) {
+            if node.values.get("id").and_then(|v| v.as_str()) == Some(case_id) {
+                return (format!("case[{}].{key}", i + 1), node.line_of(key));
+            }
+        }
+    }
+    unknown
+}
+
 impl<'c, 'a> Node<'c, 'a> {
     fn field(&self, key: &str) -> String {
         format!("{}{key}", self.prefix)

@@ -48,9 +48,18 @@ impl Dataset {
 /// # Errors
 /// [`crate::Error::Io`] when a file cannot be read; [`crate::Error::Manifest`],
 /// [`crate::Error::Csv`] or [`crate::Error::NonUniformSampling`] naming file, line and field
-/// for any violation of DATA_FORMAT.md (see [`Manifest::parse`] and [`read_case`]).
+/// for any violation of DATA_FORMAT.md (see [`Manifest::parse`] and [`read_case`]); a
+/// case path that leaves the folder (see [`read_case`]) is refused before any case file is
+/// read.
 pub fn read_dataset(dir: &Path) -> Result<Dataset> {
     let manifest = Manifest::read(&dir.join(MANIFEST_FILE))?;
+    // Refuse every path that leaves the folder before reading any case file.
+    for case in &manifest.cases {
+        resolve_case_path(dir, case, "file", &case.file)?;
+        if let Some(still) = &case.nowind_file {
+            resolve_case_path(dir, case, "nowind_file", still)?;
+        }
+    }
     let records = manifest
         .cases
         .iter()
@@ -73,22 +82,77 @@ pub fn read_dataset(dir: &Path) -> Result<Dataset> {
 /// # Errors
 /// [`crate::Error::Io`] when a file cannot be read; [`crate::Error::Csv`] (missing column —
 /// `lift`, `moment` are required for forced cases —, wrong field count, empty, unparsable or
-/// non-finite value, fewer than 3 rows) and [`crate::Error::NonUniformSampling`] (first bad
-/// row), each naming the file, line and column.
+/// non-finite value, fewer than 3 rows, a value that overflows when converted to SI per
+/// unit span) and [`crate::Error::NonUniformSampling`] (first bad row), each naming the
+/// file, line and column; [`crate::Error::Manifest`] naming the manifest line and field
+/// when `file` or `nowind_file` is absolute, has a `..` component or resolves outside `dir`
+/// through a symbolic link.
 pub fn read_case(dir: &Path, manifest: &Manifest, case: &CaseSpec) -> Result<Record> {
     let meta = manifest.case_meta(case);
+    let file = resolve_case_path(dir, case, "file", &case.file)?;
+    let still_file = match &case.nowind_file {
+        Some(p) => Some(resolve_case_path(dir, case, "nowind_file", p)?),
+        None => None,
+    };
     let mut rec = read_record(
-        &dir.join(&case.file),
+        &file,
         manifest,
         case.kind,
         case.kind == CaseKind::Forced,
         meta.clone(),
     )?;
-    if let Some(still) = &case.nowind_file {
-        let still = read_record(&dir.join(still), manifest, case.kind, true, meta)?;
+    if let Some(still) = &still_file {
+        let still = read_record(still, manifest, case.kind, true, meta)?;
         rec.nowind = Some(Box::new(still));
     }
     Ok(rec)
+}
+
+/// `dir.join(rel)` when the file `rel` named by `case.<key>` stays inside the data-set
+/// folder `dir`.
+///
+/// Refused: an absolute path or one with a `..` component (as [`Manifest::parse`] does, for
+/// manifests built in code), and a path that resolves outside the folder through a
+/// symbolic link (a link as the file itself or as a folder on the way): both the folder and
+/// the file are canonicalised and the file must lie under the folder. Links that stay
+/// inside are accepted. A file that does not exist is left to the read, which reports it.
+///
+/// # Errors
+/// [`crate::Error::Manifest`] naming `dir/manifest.toml`, the line of the key, the field
+/// (`case[i].file` / `case[i].nowind_file`), the path and where it resolves;
+/// [`crate::Error::Io`] when the folder itself cannot be resolved.
+fn resolve_case_path(dir: &Path, case: &CaseSpec, key: &str, rel: &Path) -> Result<PathBuf> {
+    let manifest_path = dir.join(MANIFEST_FILE);
+    let refuse = |why: String| {
+        let text = std::fs::read_to_string(&manifest_path).unwrap_or_default();
+        let (field, line) = manifest::case_key_location(&text, &manifest_path, &case.id, key);
+        crate::Error::Manifest {
+            path: manifest_path.clone(),
+            line,
+            field,
+            message: format!(
+                "path \"{}\" {why}; case files must be inside the data set folder",
+                rel.display()
+            ),
+        }
+    };
+    if let Some(why) = manifest::unsafe_relative_path(rel) {
+        return Err(refuse(why.to_string()));
+    }
+    let joined = dir.join(rel);
+    let Ok(real) = std::fs::canonicalize(&joined) else {
+        return Ok(joined);
+    };
+    let root = std::fs::canonicalize(dir).map_err(|e| crate::Error::io(dir, e))?;
+    if real.starts_with(&root) {
+        Ok(joined)
+    } else {
+        Err(refuse(format!(
+            "resolves through a symbolic link to {}, outside the data set folder {}",
+            real.display(),
+            root.display()
+        )))
+    }
 }
 
 fn read_record(
@@ -102,23 +166,48 @@ fn read_record(
     let (t0, dt) = check_sampling(&table.t, path, 2)?;
     let u = &manifest.units;
     let span = manifest.section.span;
-    let conv = |v: Vec<f64>, f: &dyn Fn(f64) -> f64| -> Vec<f64> {
+    // Finite in the file's units can overflow in SI (a total force divided by a tiny span):
+    // name the first such value. Row i of the table is line i + 2 (header on line 1; blank
+    // lines are only allowed at the end).
+    let conv = |v: Vec<f64>, column: &str, f: &dyn Fn(f64) -> f64| -> Result<Vec<f64>> {
         let mut v = v;
-        v.iter_mut().for_each(|x| *x = f(*x));
-        v
+        for (i, x) in v.iter_mut().enumerate() {
+            let y = f(*x);
+            if !y.is_finite() {
+                return Err(crate::Error::Csv {
+                    path: path.to_path_buf(),
+                    line: i + 2,
+                    field: column.to_string(),
+                    message: format!(
+                        "{x} is {y} in SI per unit span (span = {span} m): out of range"
+                    ),
+                });
+            }
+            *x = y;
+        }
+        Ok(v)
     };
     Ok(Record {
         kind,
         meta,
         t0,
         dt,
-        h: conv(table.h, &|x| u.heave.to_si(x)),
-        alpha: conv(table.alpha, &|x| u.pitch.to_si(x)),
-        lift: table.lift.map(|v| conv(v, &|x| u.lift.to_si(x, span))),
-        moment: table.moment.map(|v| conv(v, &|x| u.moment.to_si(x, span))),
+        h: conv(table.h, "h", &|x| u.heave.to_si(x))?,
+        alpha: conv(table.alpha, "alpha", &|x| u.pitch.to_si(x))?,
+        lift: table
+            .lift
+            .map(|v| conv(v, "lift", &|x| u.lift.to_si(x, span)))
+            .transpose()?,
+        moment: table
+            .moment
+            .map(|v| conv(v, "moment", &|x| u.moment.to_si(x, span)))
+            .transpose()?,
         nowind: None,
     })
 }
 
 #[cfg(test)]
 mod tests;
+
+#[cfg(test)]
+mod path_tests;
