@@ -104,12 +104,13 @@ fn structural_cubic_is_named() {
     assert_named(Effect::StructuralCubic, 0.8, Form::Primary, 1);
 }
 
-/// Freeplay (primary form, s = 0.6).
+/// Freeplay (primary form, half gap 0.158° = 0.001°·1000^0.733: the generator's range is
+/// 0.001°–1°).
 #[test]
 fn freeplay_is_named_and_its_simulation_reproduces_the_lco() {
     let b = set(
         BlindEffect::Catalogue(Effect::Freeplay),
-        0.6,
+        0.733,
         Form::Primary,
         2,
     );
