@@ -14,7 +14,7 @@ use diagnose::Diagnosis;
 use identify::dataset::read_dataset;
 use identify::io::write_atomic;
 
-use crate::lco_cmd::CountBar;
+use crate::progress::CountBar;
 
 /// Flags of `aeroform diagnose`.
 #[derive(Debug, Args)]
@@ -131,7 +131,7 @@ fn blind(n: usize, seed: u64, out: &Path) -> anyhow::Result<()> {
     }
     crate::ensure_dir(&out.to_path_buf())?;
     let opts = BlindOptions::new(n, seed);
-    let bar = CountBar::new(n, "blind");
+    let bar = CountBar::new("blind", n);
     let wrong = AtomicUsize::new(0);
     let t = std::time::Instant::now();
     let report = run_blind(&opts, &|o| {

@@ -2,15 +2,14 @@
 //! written to `lco.json`.
 
 use std::path::PathBuf;
-use std::sync::Mutex;
 
+use crate::progress::CountBar;
 use aeroelastic::lco::{
     lco_hysteresis_k_iterated, lco_run_k_iterated, Classification, LcoOptions, SweepDirection,
     SweepProgress,
 };
 use anyhow::Context;
 use clap::Args;
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 use crate::flutter_cmd::{load, parse_speeds};
 
@@ -42,50 +41,6 @@ pub struct LcoArgs {
     /// Output folder (created if missing).
     #[arg(long, default_value = "out")]
     pub out: PathBuf,
-}
-
-/// A counting progress bar fed from any thread; hidden when stderr is not a terminal.
-pub struct CountBar {
-    bar: Mutex<Option<ProgressBar>>,
-    total: u64,
-    prefix: &'static str,
-}
-
-impl CountBar {
-    /// A bar of `total` steps.
-    pub fn new(total: usize, prefix: &'static str) -> Self {
-        CountBar {
-            bar: Mutex::new(None),
-            total: total as u64,
-            prefix,
-        }
-    }
-
-    /// Advances by one with a message.
-    pub fn tick(&self, msg: String) {
-        let Ok(mut g) = self.bar.lock() else { return };
-        let b = g.get_or_insert_with(|| {
-            let b = ProgressBar::with_draw_target(Some(self.total), ProgressDrawTarget::stderr());
-            b.set_style(
-                ProgressStyle::with_template("{prefix:>8} [{bar:40}] {pos}/{len} {elapsed} {msg}")
-                    .unwrap_or_else(|_| ProgressStyle::default_bar())
-                    .progress_chars("=> "),
-            );
-            b.set_prefix(self.prefix);
-            b
-        });
-        b.inc(1);
-        b.set_message(msg);
-    }
-
-    /// Removes the bar.
-    pub fn finish(&self) {
-        if let Ok(mut g) = self.bar.lock() {
-            if let Some(b) = g.take() {
-                b.finish_and_clear();
-            }
-        }
-    }
 }
 
 fn class_name(c: &Classification) -> String {
@@ -131,7 +86,7 @@ pub fn run(args: &LcoArgs) -> anyhow::Result<()> {
         })
     } else {
         let speeds = parse_speeds(args.sweep.as_deref().unwrap_or_default())?;
-        let bar = CountBar::new(2 * speeds.len(), "LCO");
+        let bar = CountBar::new("LCO", 2 * speeds.len());
         let obs = |p: SweepProgress| {
             let d = match p.direction {
                 SweepDirection::Up => "up",

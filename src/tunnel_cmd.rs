@@ -8,7 +8,7 @@ use anyhow::Context;
 use clap::{Args, Subcommand};
 
 use crate::flutter_cmd::{load, parse_speeds};
-use crate::lco_cmd::CountBar;
+use crate::progress::CountBar;
 
 /// `aeroform tunnel` subcommands.
 #[derive(Debug, Subcommand)]
@@ -151,7 +151,7 @@ fn forced(a: &ForcedArgs) -> anyhow::Result<()> {
     opts.duration = a.duration;
     opts.section.chord = m.model.chord();
     let cases = campaign.cases();
-    let bar = CountBar::new(cases.len(), "cases");
+    let bar = CountBar::new("cases", cases.len());
     let obs = |p: TunnelProgress| bar.tick(p.id);
     let r = tunnel::forced_dataset(m.model.as_ref(), &cases, &opts, &obs);
     bar.finish();
@@ -174,7 +174,7 @@ fn free(a: &FreeArgs) -> anyhow::Result<()> {
     opts.duration = a.duration;
     opts.initial = [0.0, a.alpha0.to_radians(), 0.0, 0.0];
     opts.record_forces = !a.no_forces;
-    let bar = CountBar::new(speeds.len(), "speeds");
+    let bar = CountBar::new("speeds", speeds.len());
     let obs = |p: TunnelProgress| bar.tick(p.id);
     let r = tunnel::free_dataset(&l.section, &speeds, &opts, &obs);
     bar.finish();

@@ -226,7 +226,7 @@ fn virtual_campaign(
     }
     let model = virtual_model(study, v, opts.section.chord)?;
     let cases = campaign.cases();
-    let bar = super::progress::CountBar::new("tunnel", cases.len());
+    let bar = crate::progress::CountBar::new("tunnel", cases.len());
     let r = tunnel::forced_dataset(&*model, &cases, &opts, &|_| bar.inc());
     bar.finish();
     let (manifest, records) = r.context("data.virtual: forced campaign")?;
@@ -335,7 +335,7 @@ fn prepare_with_bar(dataset: Dataset, pre: &PreprocessOptions) -> anyhow::Result
         manifest,
         records,
     } = dataset;
-    let bar = super::progress::CountBar::new("prepare", records.len());
+    let bar = crate::progress::CountBar::new("prepare", records.len());
     let mut out = Vec::with_capacity(records.len());
     let mut rest = records;
     while !rest.is_empty() {

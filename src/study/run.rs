@@ -14,8 +14,8 @@ use serde::{Deserialize, Serialize};
 
 use super::build;
 use super::files::{ensure_dir, num, write_json, write_text, Csv};
-use super::progress::CountBar;
 use super::spec::{FlutterReference, Study};
+use crate::progress::CountBar;
 use crate::progress::IdentifyBar;
 
 /// File names of the results (relative to the output folder).
