@@ -3,13 +3,14 @@
 //! downward, each from the previous converged state, to expose hysteresis; parallel for
 //! independent runs).
 
-use nalgebra::{Matrix2, SVector};
+use nalgebra::SVector;
 use ode_solvers::dop853::Dop853;
 use ode_solvers::dop_shared::{OutputType, System};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::aero::{AeroModel, Flow, NonlinearAero};
+use crate::aero::{AeroModel, NonlinearAero};
+use crate::dynamics::SectionDynamics;
 use crate::section::Section;
 use crate::structure::Structure;
 use crate::{Error, Result};
@@ -319,31 +320,14 @@ impl Tracker {
 }
 
 struct Rhs<'a> {
-    structure: &'a Structure,
-    aero: &'a dyn AeroModel,
-    flow: Flow,
-    minv: Matrix2<f64>,
-    friction: [f64; 4],
-    nlag: usize,
+    dynamics: SectionDynamics<'a>,
     tracker: &'a mut Tracker,
 }
 
 impl<const N: usize> System<f64, SVector<f64, N>> for Rhs<'_> {
     #[inline]
     fn system(&self, _t: f64, y: &SVector<f64, N>, dy: &mut SVector<f64, N>) {
-        let q = [y[0], y[1]];
-        let qd = [y[2], y[3]];
-        let ys = y.as_slice();
-        let f = self.aero.forces(&self.flow, q, qd, &ys[4..4 + self.nlag]);
-        let r = self.structure.restoring_with(q, qd, &self.friction);
-        let g = [f[0] - r[0], f[1] - r[1]];
-        dy[0] = qd[0];
-        dy[1] = qd[1];
-        dy[2] = self.minv[(0, 0)] * g[0] + self.minv[(0, 1)] * g[1];
-        dy[3] = self.minv[(1, 0)] * g[0] + self.minv[(1, 1)] * g[1];
-        let out = &mut dy.as_mut_slice()[4..4 + self.nlag];
-        self.aero
-            .lag_rates(&self.flow, q, qd, &ys[4..4 + self.nlag], out);
+        self.dynamics.rate(y.as_slice(), dy.as_mut_slice());
     }
 
     fn solout(&mut self, t: f64, y: &SVector<f64, N>, dy: &SVector<f64, N>) -> bool {
@@ -426,20 +410,11 @@ impl Section {
                 format!("must hold {n} finite values"),
             ));
         }
-        let flow = self.flow(u);
-        let minv = self
-            .total_mass(u)
-            .try_inverse()
-            .ok_or_else(|| Error::numerical("lco_run", format!("M_s − M_a singular at U = {u}")))?;
+        let dynamics = SectionDynamics::new(self, u)?;
         let mut tracker = Tracker::new(opts, self.semi_chord());
         let t_end = opts.max_periods * 2.0 * std::f64::consts::PI / self.structure.omega_alpha();
         let rhs = Rhs {
-            structure: &self.structure,
-            aero: self.aero.as_ref(),
-            flow,
-            minv,
-            friction: self.structure.friction_resolved(),
-            nlag: self.aero.n_lag(),
+            dynamics,
             tracker: &mut tracker,
         };
         let res =

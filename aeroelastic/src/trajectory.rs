@@ -9,6 +9,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::dynamics::SectionDynamics;
 use crate::section::Section;
 use crate::{Error, Result};
 
@@ -30,24 +31,6 @@ pub struct Trajectory {
 }
 
 impl Section {
-    /// First-order state derivative ż of the nonlinear section at speed `u`
-    /// (z = h, α, ḣ, α̇, lag states): (M_s − M_a) q̈ = (L, M) − restoring.
-    fn rate(&self, u: f64, minv: &nalgebra::Matrix2<f64>, z: &[f64], dz: &mut [f64]) {
-        let flow = self.flow(u);
-        let nlag = self.aero.n_lag();
-        let q = [z[0], z[1]];
-        let qd = [z[2], z[3]];
-        let f = self.aero.forces(&flow, q, qd, &z[4..4 + nlag]);
-        let r = self.structure.restoring(q, qd);
-        let g = [f[0] - r[0], f[1] - r[1]];
-        dz[0] = qd[0];
-        dz[1] = qd[1];
-        dz[2] = minv[(0, 0)] * g[0] + minv[(0, 1)] * g[1];
-        dz[3] = minv[(1, 0)] * g[0] + minv[(1, 1)] * g[1];
-        self.aero
-            .lag_rates(&flow, q, qd, &z[4..4 + nlag], &mut dz[4..4 + nlag]);
-    }
-
     /// Integrates from `y0` at speed `u` for `duration` seconds with `steps` RK4 steps and
     /// returns every step (`steps + 1` samples including the initial state). Integration
     /// stops early (shorter output) if |α| exceeds 1.5 rad or a value becomes non-finite.
@@ -76,9 +59,7 @@ impl Section {
                 format!("must hold {n} finite values"),
             ));
         }
-        let minv = self.total_mass(u).try_inverse().ok_or_else(|| {
-            Error::numerical("trajectory", format!("M_s − M_a singular at U = {u}"))
-        })?;
+        let dynamics = SectionDynamics::new(self, u)?;
         let dt = duration / steps as f64;
         let mut z = y0.to_vec();
         let mut out = Trajectory {
@@ -101,19 +82,19 @@ impl Section {
             (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
         let mut tmp = vec![0.0; n];
         for s in 0..steps {
-            self.rate(u, &minv, &z, &mut k1);
+            dynamics.rate(&z, &mut k1);
             for i in 0..n {
                 tmp[i] = z[i] + 0.5 * dt * k1[i];
             }
-            self.rate(u, &minv, &tmp, &mut k2);
+            dynamics.rate(&tmp, &mut k2);
             for i in 0..n {
                 tmp[i] = z[i] + 0.5 * dt * k2[i];
             }
-            self.rate(u, &minv, &tmp, &mut k3);
+            dynamics.rate(&tmp, &mut k3);
             for i in 0..n {
                 tmp[i] = z[i] + dt * k3[i];
             }
-            self.rate(u, &minv, &tmp, &mut k4);
+            dynamics.rate(&tmp, &mut k4);
             for i in 0..n {
                 z[i] += dt / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
             }

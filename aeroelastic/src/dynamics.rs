@@ -1,0 +1,102 @@
+//! The section's equations of motion, once: the rate of the full first-order state of the
+//! nonlinear section at one wind speed. Every time integration (LCO runs, trajectories,
+//! free-response records, continuation of periodic orbits) evaluates this and nothing else.
+//!
+//! State z = (h, α, ḣ, α̇, x₁ … x_n): h heave [m] positive down, α pitch [rad] positive
+//! nose-up, x the aerodynamic model's lag states. Equations (DESIGN.md §4):
+//!
+//! (M_s − M_a) q̈ = F_aero(q, q̇, x) − R(q, q̇),   ẋ = lag rates of the model,
+//!
+//! with M_a the model's apparent mass, F_aero = (L, M) per unit span (L positive down,
+//! M nose-up about the elastic axis) and R the structure's restoring force including its
+//! nonlinear springs, freeplay and (smoothed) friction.
+
+use nalgebra::Matrix2;
+
+use crate::aero::Flow;
+use crate::section::Section;
+use crate::{Error, Result};
+
+/// Right-hand side ż = f(z) of the nonlinear section at a fixed wind speed.
+///
+/// Built once per speed (it inverts the total mass matrix and resolves the friction
+/// parameters); [`SectionDynamics::rate`] is then allocation-free.
+#[derive(Debug, Clone)]
+pub struct SectionDynamics<'a> {
+    section: &'a Section,
+    flow: Flow,
+    minv: Matrix2<f64>,
+    friction: [f64; 4],
+    nlag: usize,
+}
+
+impl<'a> SectionDynamics<'a> {
+    /// Dynamics of `section` at wind speed `u` [m/s] (`u = 0` is still air: the
+    /// aerodynamic forces of the model at zero speed).
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] when `u` is negative or not finite;
+    /// [`Error::Numerical`] when M_s − M_a is singular at `u`.
+    pub fn new(section: &'a Section, u: f64) -> Result<Self> {
+        if !u.is_finite() || u < 0.0 {
+            return Err(Error::param("u", u, "must be finite and ≥ 0"));
+        }
+        let minv = section.total_mass(u).try_inverse().ok_or_else(|| {
+            Error::numerical("SectionDynamics", format!("M_s − M_a singular at U = {u}"))
+        })?;
+        Ok(SectionDynamics {
+            section,
+            flow: section.flow(u),
+            minv,
+            friction: section.structure.friction_resolved(),
+            nlag: section.aero.n_lag(),
+        })
+    }
+
+    /// The section.
+    pub fn section(&self) -> &'a Section {
+        self.section
+    }
+
+    /// Wind speed U [m/s].
+    pub fn u(&self) -> f64 {
+        self.flow.u
+    }
+
+    /// Flow (ρ, U).
+    pub fn flow(&self) -> &Flow {
+        &self.flow
+    }
+
+    /// Number of first-order states, 4 + lag states.
+    pub fn dim(&self) -> usize {
+        4 + self.nlag
+    }
+
+    /// Aerodynamic forces (L, M) per unit span at state `z` [N/m, N·m/m].
+    #[inline]
+    pub fn aero_forces(&self, z: &[f64]) -> [f64; 2] {
+        self.section
+            .aero
+            .forces(&self.flow, [z[0], z[1]], [z[2], z[3]], &z[4..4 + self.nlag])
+    }
+
+    /// Writes ż = f(z) into `dz`. Both slices hold [`SectionDynamics::dim`] values
+    /// (a shorter slice is a bug and panics).
+    #[inline]
+    pub fn rate(&self, z: &[f64], dz: &mut [f64]) {
+        let q = [z[0], z[1]];
+        let qd = [z[2], z[3]];
+        let lag = &z[4..4 + self.nlag];
+        let f = self.section.aero.forces(&self.flow, q, qd, lag);
+        let r = self.section.structure.restoring_with(q, qd, &self.friction);
+        let g = [f[0] - r[0], f[1] - r[1]];
+        dz[0] = qd[0];
+        dz[1] = qd[1];
+        dz[2] = self.minv[(0, 0)] * g[0] + self.minv[(0, 1)] * g[1];
+        dz[3] = self.minv[(1, 0)] * g[0] + self.minv[(1, 1)] * g[1];
+        self.section
+            .aero
+            .lag_rates(&self.flow, q, qd, lag, &mut dz[4..4 + self.nlag]);
+    }
+}
