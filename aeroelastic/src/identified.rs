@@ -213,26 +213,12 @@ const NONLINEAR: [(&str, [u32; 4], i32); 3] = [
     ("alpha_dot^3", [0, 3, 0, 0], 3),
 ];
 
-/// Median; NaN for an empty slice.
-fn median(v: &mut [f64]) -> f64 {
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n == 0 {
-        f64::NAN
-    } else if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
-}
-
 /// Robust standard deviation 1.4826·MAD around `med`.
 fn robust_sd(v: &[f64], med: f64) -> f64 {
     if v.len() < 2 {
         return 0.0;
     }
-    let mut d: Vec<f64> = v.iter().map(|x| (x - med).abs()).collect();
-    1.4826 * median(&mut d)
+    1.4826 * identify::numerics::mad(v, med)
 }
 
 /// Groups (K, value, filled) by K within `tol` (relative) and aggregates each group.
@@ -247,7 +233,7 @@ fn aggregate(mut pts: Vec<(f64, f64, bool)>, tol: f64) -> Vec<TablePoint> {
         }
         let grp = &pts[i..j];
         let mut vals: Vec<f64> = grp.iter().map(|p| p.1).collect();
-        let med = median(&mut vals);
+        let med = identify::numerics::median(&mut vals);
         out.push(TablePoint {
             k: grp.iter().map(|p| p.0).sum::<f64>() / grp.len() as f64,
             value: med,
@@ -596,7 +582,7 @@ impl IdentifiedLaw {
                     .filter(|v| *v != 0.0 && v.is_finite())
                     .collect();
                 let n_nonzero = vals.len();
-                let med = median(&mut vals);
+                let med = identify::numerics::median(&mut vals);
                 let rel = robust_sd(&vals, med) / med.abs().max(f64::MIN_POSITIVE);
                 let one_sign = vals.iter().all(|v| v.signum() == med.signum());
                 let powers = NonlinearTerm::powers_of(&n).ok();
@@ -920,7 +906,7 @@ mod fuzz_regressions {
             .collect();
         assert_eq!(t.len(), 1, "{:?}", law.tables.outside);
         assert!(!t[0].included && t[0].n_nonzero == 0, "{:?}", t[0]);
-        assert!(median(&mut []).is_nan());
-        assert_eq!(median(&mut [3.0, 1.0, 2.0]), 2.0);
+        assert!(identify::numerics::median(&mut []).is_nan());
+        assert_eq!(identify::numerics::median(&mut [3.0, 1.0, 2.0]), 2.0);
     }
 }

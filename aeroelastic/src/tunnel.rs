@@ -455,10 +455,7 @@ pub struct TunnelProgress {
 /// Seed of case `index` from the master seed (SplitMix64 of seed + (index+1)·φ·2⁶⁴), so
 /// that cases are independent and the data set does not depend on the thread count.
 pub fn case_seed(seed: u64, index: usize) -> u64 {
-    let mut z = seed.wrapping_add((index as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15));
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
+    identify::numerics::split_seed(seed, index as u64)
 }
 
 fn add_noise(rng: &mut ChaCha8Rng, v: &mut [f64], sd: f64) {

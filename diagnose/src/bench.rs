@@ -9,6 +9,7 @@
 //! (the same seed and noise draws with no effect). The ratio is the larger of the force-
 //! and system-level ratios.
 
+use identify::numerics::{median_finite, split_seed};
 use serde::{Deserialize, Serialize};
 
 use crate::effect::{Effect, Verdict};
@@ -51,14 +52,6 @@ pub struct BlindSpec {
     pub strength: f64,
 }
 
-/// SplitMix64 step: a well-mixed 64-bit value from a seed and a stream index.
-pub fn mix(seed: u64, index: u64) -> u64 {
-    let mut z = seed.wrapping_add((index + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15));
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
-}
-
 /// Draws `n` sets from the master `seed`: labels uniformly over [`truth_labels`] (a
 /// balanced cyclic assignment, shuffled, so that every label gets ⌊n/11⌋ or ⌈n/11⌉ sets),
 /// strengths uniform in [0, 1]. Each set's seed and strength depend only on (seed, index).
@@ -67,17 +60,17 @@ pub fn draw_specs(n: usize, seed: u64) -> Vec<BlindSpec> {
     let mut order: Vec<usize> = (0..n).map(|i| i % labels.len()).collect();
     // Fisher–Yates with the mixed stream.
     for i in (1..n).rev() {
-        let j = (mix(seed, 1_000_000 + i as u64) % (i as u64 + 1)) as usize;
+        let j = (split_seed(seed, 1_000_000 + i as u64) % (i as u64 + 1)) as usize;
         order.swap(i, j);
     }
     (0..n)
         .map(|i| {
-            let s = mix(seed, i as u64);
+            let s = split_seed(seed, i as u64);
             BlindSpec {
                 index: i,
                 seed: s,
                 truth: labels[order[i]].clone(),
-                strength: (mix(s, 7) >> 11) as f64 / (1u64 << 53) as f64,
+                strength: (split_seed(s, 7) >> 11) as f64 / (1u64 << 53) as f64,
             }
         })
         .collect()
@@ -179,20 +172,6 @@ pub struct BlindReport {
     pub outcomes: Vec<BlindOutcome>,
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.retain(|x| x.is_finite());
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
-}
-
 fn ratio(num: usize, den: usize) -> f64 {
     if den == 0 {
         f64::NAN
@@ -258,25 +237,25 @@ pub fn summarize(seed: u64, outcomes: Vec<BlindOutcome>) -> BlindReport {
             out_strong.iter().filter(|o| o.correct()).count(),
             out_strong.len(),
         ),
-        median_shrink_named: median(
-            cat_strong
+        median_shrink_named: median_finite(
+            &cat_strong
                 .iter()
                 .filter(|o| o.correct())
                 .map(|o| o.shrink)
-                .collect(),
+                .collect::<Vec<f64>>(),
         ),
-        median_shrink_true_candidate: median(
-            cat_strong
+        median_shrink_true_candidate: median_finite(
+            &cat_strong
                 .iter()
                 .filter_map(|o| o.true_candidate_shrink)
-                .collect(),
+                .collect::<Vec<f64>>(),
         ),
-        median_excess_shrink_named: median(
-            cat_strong
+        median_excess_shrink_named: median_finite(
+            &cat_strong
                 .iter()
                 .filter(|o| o.correct())
                 .map(|o| o.excess_shrink)
-                .collect(),
+                .collect::<Vec<f64>>(),
         ),
         per_effect,
         mean_seconds: if outcomes.is_empty() {

@@ -18,6 +18,7 @@ pub mod identifiability;
 pub mod io;
 pub mod library;
 pub mod metrics;
+pub mod numerics;
 pub mod paper;
 pub mod pipeline;
 pub mod preprocess;

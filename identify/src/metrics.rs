@@ -27,6 +27,7 @@ use faer::{Accum, Mat, MatMut, MatRef, Par};
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
+use crate::numerics::{cholesky_in_place, cholesky_solve_in_place, PivotFloor};
 use crate::record::Forcing;
 use crate::{Error, Result};
 
@@ -233,9 +234,10 @@ impl HarmonicFit {
                 g[c * m + r] = g[r * m + c];
             }
         }
-        let chol = cholesky(&g, m).ok_or_else(|| {
+        let mut chol = g;
+        cholesky_in_place(&mut chol, m, PivotFloor::RelativeToDiagonal(1e-12)).map_err(|e| {
             fail(format!(
-                "Gram matrix of {} tones over {n} samples is not positive definite",
+                "Gram matrix of {} tones over {n} samples is not positive definite ({e})",
                 freqs.len()
             ))
         })?;
@@ -342,8 +344,9 @@ impl HarmonicFit {
         }
         (0..p)
             .map(|j| {
-                let rhs: Vec<f64> = (0..m).map(|i| htv[(i, j)]).collect();
-                chol_solve(&self.chol, m, &rhs)
+                let mut x: Vec<f64> = (0..m).map(|i| htv[(i, j)]).collect();
+                cholesky_solve_in_place(&self.chol, m, &mut x);
+                x
             })
             .collect()
     }
@@ -386,47 +389,6 @@ fn to_amplitudes(x: &[f64]) -> Vec<Complex64> {
     (0..(x.len() - 1) / 2)
         .map(|i| Complex64::new(x[1 + 2 * i], -x[2 + 2 * i]))
         .collect()
-}
-
-/// Lower Cholesky factor (row-major) of a symmetric positive definite m × m matrix.
-fn cholesky(g: &[f64], m: usize) -> Option<Vec<f64>> {
-    let mut l = vec![0.0; m * m];
-    for i in 0..m {
-        for j in 0..=i {
-            let mut s = g[i * m + j];
-            for k in 0..j {
-                s -= l[i * m + k] * l[j * m + k];
-            }
-            if i == j {
-                if s <= 1e-12 * g[i * m + i].abs().max(f64::MIN_POSITIVE) {
-                    return None;
-                }
-                l[i * m + i] = s.sqrt();
-            } else {
-                l[i * m + j] = s / l[j * m + j];
-            }
-        }
-    }
-    Some(l)
-}
-
-fn chol_solve(l: &[f64], m: usize, b: &[f64]) -> Vec<f64> {
-    let mut y = b.to_vec();
-    for i in 0..m {
-        let mut s = y[i];
-        for k in 0..i {
-            s -= l[i * m + k] * y[k];
-        }
-        y[i] = s / l[i * m + i];
-    }
-    for i in (0..m).rev() {
-        let mut s = y[i];
-        for k in i + 1..m {
-            s -= l[k * m + i] * y[k];
-        }
-        y[i] = s / l[i * m + i];
-    }
-    y
 }
 
 /// The key frequencies of one force signal.

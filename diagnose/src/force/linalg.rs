@@ -3,6 +3,8 @@
 //! regressions of the force level have ≤ 40 columns of a few thousand samples; a thin QR
 //! of this kind is exact to rounding and cheap.
 
+use identify::numerics::{cholesky_in_place, cholesky_solve_in_place, PivotFloor};
+
 /// Thin QR factorisation X = Q R of a tall matrix given by columns; columns whose part
 /// orthogonal to the previous ones is below `rel_tol` of their norm are dropped (their
 /// coefficient is 0).
@@ -124,47 +126,16 @@ pub(crate) fn solve_spd(g: &[Vec<f64>], b: &[f64], ridge: f64) -> Option<Vec<f64
             }
         })
         .collect();
-    let mut a = vec![vec![0.0; n]; n];
+    let mut a = vec![0.0; n * n];
     for i in 0..n {
         for j in 0..n {
-            a[i][j] = g[i][j] * s[i] * s[j];
+            a[i * n + j] = g[i][j] * s[i] * s[j];
         }
-        a[i][i] += ridge.max(1e-12);
+        a[i * n + i] += ridge.max(1e-12);
     }
-    let mut l = vec![vec![0.0; n]; n];
-    for i in 0..n {
-        for j in 0..=i {
-            let mut v = a[i][j];
-            for k in 0..j {
-                v -= l[i][k] * l[j][k];
-            }
-            if i == j {
-                if v <= 0.0 {
-                    return None;
-                }
-                l[i][i] = v.sqrt();
-            } else {
-                l[i][j] = v / l[j][j];
-            }
-        }
-    }
-    let bs: Vec<f64> = (0..n).map(|i| b[i] * s[i]).collect();
-    let mut y = vec![0.0; n];
-    for i in 0..n {
-        let mut v = bs[i];
-        for k in 0..i {
-            v -= l[i][k] * y[k];
-        }
-        y[i] = v / l[i][i];
-    }
-    let mut x = vec![0.0; n];
-    for i in (0..n).rev() {
-        let mut v = y[i];
-        for k in i + 1..n {
-            v -= l[k][i] * x[k];
-        }
-        x[i] = v / l[i][i];
-    }
+    cholesky_in_place(&mut a, n, PivotFloor::Absolute(0.0)).ok()?;
+    let mut x: Vec<f64> = (0..n).map(|i| b[i] * s[i]).collect();
+    cholesky_solve_in_place(&a, n, &mut x);
     Some((0..n).map(|i| x[i] * s[i]).collect())
 }
 

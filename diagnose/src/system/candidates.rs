@@ -22,6 +22,8 @@
 //! * `static_offset`: a constant force and moment, either constant in U (structural zero
 //!   offset) or ∝ ½ρU² (aerodynamic mean-angle offset), chosen by training error (3).
 
+use identify::numerics::{cholesky_in_place, cholesky_solve_in_place, PivotFloor};
+
 use crate::effect::Effect;
 
 use super::residual::RunResidual;
@@ -89,38 +91,9 @@ pub(crate) fn solve(g: &[f64], b: &[f64]) -> Option<Vec<f64>> {
     for i in 0..p {
         a[i * p + i] += 1e-10 * a[i * p + i].abs();
     }
-    // Cholesky in place.
-    for j in 0..p {
-        let mut d = a[j * p + j];
-        for k in 0..j {
-            d -= a[j * p + k] * a[j * p + k];
-        }
-        if d.is_nan() || d <= 1e-13 * scale || !d.is_finite() {
-            return None;
-        }
-        let d = d.sqrt();
-        a[j * p + j] = d;
-        for i in j + 1..p {
-            let mut s = a[i * p + j];
-            for k in 0..j {
-                s -= a[i * p + k] * a[j * p + k];
-            }
-            a[i * p + j] = s / d;
-        }
-    }
+    cholesky_in_place(&mut a, p, PivotFloor::Absolute(1e-13 * scale)).ok()?;
     let mut y = b.to_vec();
-    for i in 0..p {
-        for k in 0..i {
-            y[i] -= a[i * p + k] * y[k];
-        }
-        y[i] /= a[i * p + i];
-    }
-    for i in (0..p).rev() {
-        for k in i + 1..p {
-            y[i] -= a[k * p + i] * y[k];
-        }
-        y[i] /= a[i * p + i];
-    }
+    cholesky_solve_in_place(&a, p, &mut y);
     Some(y)
 }
 

@@ -16,7 +16,10 @@ use std::f64::consts::PI;
 
 use realfft::RealFftPlanner;
 
-use super::linsolve::cholesky_solve;
+use crate::numerics::{cholesky_solve, PivotFloor};
+
+/// Pivot floor of the small normal-equation solves here (1e-13 of the largest diagonal).
+const FLOOR: PivotFloor = PivotFloor::RelativeToLargestDiagonal(1e-13);
 use crate::{Error, Result};
 
 /// Samples between exact re-synchronisations of the rotation in [`for_each_phase`] (a
@@ -289,7 +292,7 @@ fn fit_with_covariance(x: &[f64], dt: f64, freqs: &[f64]) -> Result<(HarmonicFit
     for j in 0..2 * kf {
         rhs[p * (1 + j) + 1 + j] = 1.0;
     }
-    if !cholesky_solve(&mut g, p, &mut rhs, 1 + 2 * kf) {
+    if cholesky_solve(&mut g, p, &mut rhs, 1 + 2 * kf, FLOOR).is_err() {
         return Err(Error::Numerical {
             context: "harmonic_fit".into(),
             message: format!(
@@ -491,7 +494,7 @@ fn vp_point(sig: &VpSignals, omegas: &[f64]) -> Option<VpPoint> {
     let mut rhs = Vec::with_capacity((ns + m2) * p);
     rhs.extend_from_slice(&b);
     rhs.extend_from_slice(&q);
-    if !cholesky_solve(&mut g, p, &mut rhs, ns + m2) {
+    if cholesky_solve(&mut g, p, &mut rhs, ns + m2, FLOOR).is_err() {
         return None;
     }
     let beta = |s: usize| &rhs[s * p..(s + 1) * p];
@@ -531,7 +534,9 @@ fn vp_point(sig: &VpSignals, omegas: &[f64]) -> Option<VpPoint> {
             }
         }
     }
-    let step = cholesky_solve(&mut h, kf, &mut grad, 1).then_some(grad);
+    let step = cholesky_solve(&mut h, kf, &mut grad, 1, FLOOR)
+        .is_ok()
+        .then_some(grad);
     Some(VpPoint { cost, step })
 }
 
@@ -794,7 +799,7 @@ mod tests {
         let ns = xs.len();
         let (mut g, mut b) = direct_normal_equations(xs, &omegas);
         let rhs = b.clone();
-        if !cholesky_solve(&mut g, p, &mut b, ns) {
+        if cholesky_solve(&mut g, p, &mut b, ns, FLOOR).is_err() {
             return None;
         }
         let betas: Vec<Vec<f64>> = (0..ns).map(|s| b[s * p..(s + 1) * p].to_vec()).collect();

@@ -24,7 +24,6 @@
 
 mod align;
 mod harmonic;
-mod linsolve;
 mod sg;
 
 pub use self::align::{align_lag, interpolate_cubic, nowind_overlap, subtract_nowind};

@@ -1,6 +1,6 @@
 //! Savitzky–Golay smoothing differentiator with asymmetric end windows.
 
-use super::linsolve::cholesky_solve;
+use crate::numerics::{cholesky_solve, PivotFloor};
 use crate::{Error, Result};
 
 /// Weights `w` such that `Σⱼ wⱼ x[j]` is the first derivative (per sample) at position
@@ -24,7 +24,15 @@ fn derivative_weights(len: usize, c: usize, order: usize) -> Option<Vec<f64>> {
     // g_coef = G⁻¹ e₁ (coefficient of z¹); the derivative at z = 0 is that coefficient.
     let mut e1 = vec![0.0; p];
     e1[1] = 1.0;
-    if !cholesky_solve(&mut g, p, &mut e1, 1) {
+    if cholesky_solve(
+        &mut g,
+        p,
+        &mut e1,
+        1,
+        PivotFloor::RelativeToLargestDiagonal(1e-13),
+    )
+    .is_err()
+    {
         return None;
     }
     Some(

@@ -18,6 +18,7 @@
 
 use faer::{Mat, MatMut, MatRef};
 
+use crate::numerics::{cholesky_in_place, cholesky_solve_in_place, PivotFloor};
 use crate::{Error, Result};
 
 /// Rows per block of the row-blocked factorisation (at least twice the column count).
@@ -386,39 +387,12 @@ impl CaseFactor {
         let mut l = vec![0.0; q * q];
         for i in 0..q {
             for j in 0..=i {
-                let mut s = self.gram[k[i] * p + k[j]];
-                if i == j {
-                    s += ridge;
-                }
-                for m in 0..j {
-                    s -= l[i * q + m] * l[j * q + m];
-                }
-                if i == j {
-                    let d = self.gram[k[i] * p + k[i]] + ridge;
-                    if s.is_nan() || s <= 1e-13 * d {
-                        return None;
-                    }
-                    l[i * q + i] = s.sqrt();
-                } else {
-                    l[i * q + j] = s / l[j * q + j];
-                }
+                l[i * q + j] = self.gram[k[i] * p + k[j]] + if i == j { ridge } else { 0.0 };
             }
         }
+        cholesky_in_place(&mut l, q, PivotFloor::RelativeToDiagonal(1e-13)).ok()?;
         let mut x: Vec<f64> = k.iter().map(|&kk| b[kk]).collect();
-        for i in 0..q {
-            let mut s = x[i];
-            for m in 0..i {
-                s -= l[i * q + m] * x[m];
-            }
-            x[i] = s / l[i * q + i];
-        }
-        for i in (0..q).rev() {
-            let mut s = x[i];
-            for m in i + 1..q {
-                s -= l[m * q + i] * x[m];
-            }
-            x[i] = s / l[i * q + i];
-        }
+        cholesky_solve_in_place(&l, q, &mut x);
         Some(x)
     }
 

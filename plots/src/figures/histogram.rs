@@ -37,16 +37,6 @@ pub struct HistogramFigure {
 /// Bar colour: palette blue at 75 % on white (opaque, so PNG and SVG agree).
 const BAR: RGBColor = RGBColor(64, 149, 197);
 
-fn median(v: &mut [f64]) -> f64 {
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
-}
-
 impl Figure for HistogramFigure {
     const KIND: &'static str = "histogram";
 
@@ -116,7 +106,7 @@ impl Figure for HistogramFigure {
             }
             let skipped = panel.values.len() - finite.len();
             let mut sorted = finite.clone();
-            let med = median(&mut sorted);
+            let med = identify::numerics::median(&mut sorted);
             prepared.push((lo, hi, w, counts, outside, skipped, med, finite.len()));
         }
 
