@@ -194,6 +194,7 @@ mod tests {
                     omega: std::f64::consts::TAU,
                     zeta: 0.05,
                 }],
+                ended_at: None,
             }],
             flutter: Some(aeroelastic::flutter::FlutterPoint {
                 u: 6.0,
@@ -203,6 +204,8 @@ mod tests {
                 omega_ratio: 0.0,
             }),
             divergence_speed: None,
+            failed: vec![],
+            unstable_at_u_min: false,
         };
         let si = vg_figure(&a, "t", &AxisScale::si());
         assert_eq!(si.modes[0].freq, vec![1.0]); // ω = 2π rad/s → 1 Hz
