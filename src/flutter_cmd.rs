@@ -6,7 +6,6 @@ use std::path::{Path, PathBuf};
 use aeroelastic::files::{LoadedModel, StructureFile};
 use aeroelastic::flutter::{FlutterMethod, FlutterOptions};
 use aeroelastic::section::Section;
-use aeroelastic::structure::Structure;
 use anyhow::Context;
 use clap::{Args, ValueEnum};
 
@@ -39,10 +38,9 @@ pub enum MethodArg {
     P,
 }
 
-/// Structure file, structure, model and section of a structure/model pair.
+/// Structure file, model and section of a structure/model pair.
 pub struct Loaded {
     pub file: StructureFile,
-    pub structure: Structure,
     pub model: LoadedModel,
     pub section: Section,
 }
@@ -53,8 +51,8 @@ pub fn load(structure: &Path, model: &Path, chord: Option<f64>) -> anyhow::Resul
     let file = StructureFile::read(structure).context("structure file")?;
     let st = file.structure().context("structure file")?;
     let loaded = LoadedModel::load(model, chord.or(file.chord)).context("model file")?;
-    let section = Section::new(st.clone(), loaded.model.clone(), file.air_density)
-        .context("building the section")?;
+    let section =
+        Section::new(st, loaded.model.clone(), file.air_density).context("building the section")?;
     if let Some(t) = &loaded.identified {
         for w in &t.warnings {
             eprintln!("warning: {}: {w}", model.display());
@@ -62,7 +60,6 @@ pub fn load(structure: &Path, model: &Path, chord: Option<f64>) -> anyhow::Resul
     }
     Ok(Loaded {
         file,
-        structure: st,
         model: loaded,
         section,
     })

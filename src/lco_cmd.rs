@@ -5,8 +5,7 @@ use std::path::PathBuf;
 
 use crate::progress::CountBar;
 use aeroelastic::lco::{
-    lco_hysteresis_k_iterated, lco_run_k_iterated, Classification, LcoOptions, SweepDirection,
-    SweepProgress,
+    Classification, KIteration, LcoOptions, LcoResult, SweepDirection, SweepPlan, SweepProgress,
 };
 use anyhow::Context;
 use clap::Args;
@@ -43,14 +42,14 @@ pub struct LcoArgs {
     pub out: PathBuf,
 }
 
-fn class_name(c: &Classification) -> String {
-    match c {
+fn class_name(r: &LcoResult) -> String {
+    match r.classification {
         Classification::Decay => "decay".into(),
         Classification::Lco => "LCO".into(),
         Classification::Divergent { time_left_bound } => {
             format!("divergent (left the bound at t = {time_left_bound:.3} s)")
         }
-        Classification::Unsettled => "unsettled".into(),
+        Classification::Unsettled => format!("unsettled ({})", r.stop.name()),
     }
 }
 
@@ -58,25 +57,23 @@ fn class_name(c: &Classification) -> String {
 pub fn run(args: &LcoArgs) -> anyhow::Result<()> {
     let l = load(&args.structure, &args.model, args.chord)?;
     let opts = LcoOptions::default();
-    let rho = l.file.air_density;
-    let model = match &l.model.nonlinear {
-        Some(m) => m.clone(),
-        None => aeroelastic::aero::NonlinearAero::new(l.model.model.clone(), vec![], 1.0)
-            .context("wrapping the model")?,
-    };
+    // K-dependent models (identified laws) iterate K to each cycle's own; the others run once.
+    let k_iteration = KIteration::default();
     let pert = l.section.perturbation(args.alpha0.to_radians());
     let pert_down = l.section.perturbation(args.alpha0_down.to_radians());
     crate::ensure_dir(&args.out)?;
     let path = args.out.join("lco.json");
     let json = if let Some(u) = args.speed {
-        let r = lco_run_k_iterated(&l.structure, &model, rho, u, &pert, &opts, 1e-4, 8)
+        let r = l
+            .section
+            .lco_run_k(u, &pert, &opts, &k_iteration)
             .with_context(|| format!("LCO run at U = {u} m/s"))?;
         println!(
             "U = {u} m/s: {}, pitch amplitude {:.4}°, heave amplitude {:.3} mm, {:.4} Hz",
-            class_name(&r.result.classification),
-            r.result.amplitude_alpha.to_degrees(),
-            r.result.amplitude_h * 1e3,
-            r.result.omega / (2.0 * std::f64::consts::PI)
+            class_name(&r),
+            r.amplitude_alpha.to_degrees(),
+            r.amplitude_h * 1e3,
+            r.omega / (2.0 * std::f64::consts::PI)
         );
         serde_json::json!({
             "format": "aeroform-lco/1",
@@ -95,16 +92,12 @@ pub fn run(args: &LcoArgs) -> anyhow::Result<()> {
             };
             bar.tick(format!("{d} U = {:.3}", p.u));
         };
-        let h = lco_hysteresis_k_iterated(
-            &l.structure,
-            &model,
-            rho,
-            &speeds,
-            &pert,
-            &pert_down,
-            &opts,
-            &obs,
-        );
+        let plan = SweepPlan {
+            perturbation_up: pert,
+            perturbation_down: Some(pert_down),
+            k_iteration,
+        };
+        let h = l.section.lco_sweeps(&speeds, &plan, &opts, &obs);
         bar.finish();
         let h = h.context("LCO sweep")?;
         println!(
@@ -116,9 +109,9 @@ pub fn run(args: &LcoArgs) -> anyhow::Result<()> {
                 "{:>10.4} {:>12.4} {:>15} {:>12.4} {:>15}",
                 a.u,
                 a.amplitude_alpha.to_degrees(),
-                class_name(&a.classification),
+                class_name(a),
                 b.amplitude_alpha.to_degrees(),
-                class_name(&b.classification)
+                class_name(b)
             );
         }
         let band = h.band();

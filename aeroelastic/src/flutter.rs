@@ -52,8 +52,26 @@ pub struct ModePoint {
 pub struct ModeBranch {
     /// Mode label (`mode 0` is the lowest-frequency structural mode at the lowest U).
     pub label: String,
-    /// Points, in the order of the speed scan.
+    /// Points, in the order of the speed scan (speeds where the mode's p-k iteration
+    /// failed are missing; see [`FlutterAnalysis::failed`]).
     pub points: Vec<ModePoint>,
+    /// First speed of the scan at which the mode had no oscillatory root any more (its
+    /// root pair turned real, p-method; or the p-k root reached ω = 0): the branch ends
+    /// at the point before it instead of repeating its last value.
+    #[serde(default)]
+    pub ended_at: Option<f64>,
+}
+
+/// A speed of the scan at which a mode could not be computed (the rest of the scan is
+/// kept).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FailedPoint {
+    /// Wind speed U [m/s].
+    pub u: f64,
+    /// Index of the mode branch (`None`: the flutter-point refinement).
+    pub mode: Option<usize>,
+    /// What failed.
+    pub message: String,
 }
 
 /// The flutter point.
@@ -84,6 +102,14 @@ pub struct FlutterAnalysis {
     pub flutter: Option<FlutterPoint>,
     /// Static divergence speed [m/s], `None` if there is none.
     pub divergence_speed: Option<f64>,
+    /// Speeds where a mode (or the refinement of a crossing) failed; the analysis went on.
+    #[serde(default)]
+    pub failed: Vec<FailedPoint>,
+    /// A mode was already unstable at the lowest speed of the scan: the flutter speed is
+    /// below `u_min` and not bracketed (then `flutter` reports a later crossing only if a
+    /// stable speed precedes it).
+    #[serde(default)]
+    pub unstable_at_u_min: bool,
 }
 
 /// Threshold on Re p / |p| above which a mode counts as unstable (robust against
@@ -393,15 +419,31 @@ impl Section {
                 format!("fewer than two oscillatory modes at U = {}", speeds[0]),
             ));
         }
-        let mut branches: Vec<ModeBranch> = (0..current.len())
+        let nm = current.len();
+        let mut branches: Vec<ModeBranch> = (0..nm)
             .map(|i| ModeBranch {
                 label: format!("mode {i}"),
                 points: Vec::new(),
+                ended_at: None,
             })
             .collect();
         let mut prev: Vec<Complex64> = current.clone();
         let mut vecs: Vec<DVector<Complex64>> = Vec::new();
         let mut flutter = None;
+        let mut failed: Vec<FailedPoint> = Vec::new();
+        // ok[j]: mode j was computed at this speed; ended[j]: its oscillatory root is gone.
+        let mut ok = vec![true; nm];
+        let mut ended = vec![false; nm];
+        let mut unstable_at_u_min = false;
+        // growth max Re p/|p| at the last speed where it could be computed, and that speed
+        let mut last_growth: Option<(f64, f64)> = None;
+        let grow = |ps: &[Complex64], ok: &[bool]| {
+            ps.iter()
+                .zip(ok)
+                .filter(|(_, o)| **o)
+                .map(|(p, _)| -zeta_of(*p))
+                .fold(f64::NEG_INFINITY, f64::max)
+        };
         for (iu, &u) in speeds.iter().enumerate() {
             if iu > 0 {
                 let pred: Vec<Complex64> = current
@@ -410,18 +452,53 @@ impl Section {
                     .map(|(c, p)| 2.0 * c - p)
                     .collect();
                 let next = match method {
-                    FlutterMethod::Pk => current
-                        .iter()
-                        .map(|&p| self.pk_mode(u, p))
-                        .collect::<Result<Vec<_>>>()?,
+                    FlutterMethod::Pk => {
+                        let mut next = current.clone();
+                        for j in 0..nm {
+                            ok[j] = false;
+                            if ended[j] {
+                                continue;
+                            }
+                            match self.pk_mode(u, current[j]) {
+                                Ok(p) if p.im <= 1e-6 * w_ref => {
+                                    ended[j] = true;
+                                    branches[j].ended_at = Some(u);
+                                }
+                                Ok(p) => {
+                                    next[j] = p;
+                                    ok[j] = true;
+                                }
+                                Err(e) => failed.push(FailedPoint {
+                                    u,
+                                    mode: Some(j),
+                                    message: e.to_string(),
+                                }),
+                            }
+                        }
+                        next
+                    }
                     FlutterMethod::P => {
-                        let (a, ev) = self.p_modes(u)?;
+                        let (a, ev) = match self.p_modes(u) {
+                            Ok(x) => x,
+                            Err(e) => {
+                                failed.push(FailedPoint {
+                                    u,
+                                    mode: None,
+                                    message: e.to_string(),
+                                });
+                                continue;
+                            }
+                        };
                         let evecs: Vec<DVector<Complex64>> =
                             ev.iter().map(|&l| eigenvector(&a, l)).collect();
                         let mut used = vec![false; ev.len()];
                         let mut out = current.clone();
                         let mut newvecs = vecs.clone();
                         for (j, pj) in pred.iter().enumerate() {
+                            ok[j] = false;
+                            if ended[j] {
+                                continue;
+                            }
                             let best = (0..ev.len()).filter(|&i| !used[i]).min_by(|&x, &y| {
                                 let cost = |i: usize| {
                                     let m = vecs.get(j).map(|v| mac(v, &evecs[i])).unwrap_or(1.0);
@@ -429,11 +506,20 @@ impl Section {
                                 };
                                 cost(x).total_cmp(&cost(y))
                             });
-                            if let Some(i) = best {
-                                used[i] = true;
-                                out[j] = ev[i];
-                                if j < newvecs.len() {
-                                    newvecs[j] = evecs[i].clone();
+                            match best {
+                                Some(i) => {
+                                    used[i] = true;
+                                    out[j] = ev[i];
+                                    ok[j] = true;
+                                    if j < newvecs.len() {
+                                        newvecs[j] = evecs[i].clone();
+                                    }
+                                }
+                                None => {
+                                    // fewer oscillatory roots than modes: this mode's pair
+                                    // turned real; its branch ends here
+                                    ended[j] = true;
+                                    branches[j].ended_at = Some(u);
                                 }
                             }
                         }
@@ -446,72 +532,92 @@ impl Section {
                 let a = self.state_matrix(u)?;
                 vecs = current.iter().map(|&l| eigenvector(&a, l)).collect();
             }
-            for (b, p) in branches.iter_mut().zip(&current) {
-                b.points.push(ModePoint {
-                    u,
-                    sigma: p.re,
-                    omega: p.im,
-                    zeta: zeta_of(*p),
-                });
-            }
-            if flutter.is_none() && iu > 0 {
-                let grow = |ps: &[Complex64]| {
-                    ps.iter()
-                        .map(|p| -zeta_of(*p))
-                        .fold(f64::NEG_INFINITY, f64::max)
-                };
-                let g_now = match method {
-                    FlutterMethod::Pk => grow(&current),
-                    FlutterMethod::P => self.max_growth(method, u, &current)?.0,
-                };
-                if g_now > UNSTABLE {
-                    let u_lo = speeds[iu - 1];
-                    let start = prev.clone();
-                    let f = |uu: f64| -> f64 {
-                        match self.max_growth(method, uu, &start) {
-                            Ok((g, _)) => g - UNSTABLE,
-                            Err(_) => f64::NAN,
-                        }
-                    };
-                    let uf = brent(f, u_lo, u, opts.tol_rel * u, 200).ok_or_else(|| {
-                        Error::numerical(
-                            "flutter",
-                            format!("Brent refinement failed in [{u_lo}, {u}]"),
-                        )
-                    })?;
-                    let (_, ps) = self.max_growth(method, uf, &start)?;
-                    let (mode, pc) = match method {
-                        FlutterMethod::Pk => ps
-                            .iter()
-                            .enumerate()
-                            .max_by(|a, b| (-zeta_of(*a.1)).total_cmp(&(-zeta_of(*b.1))))
-                            .map(|(i, p)| (i, *p))
-                            .unwrap_or((0, ps[0])),
-                        FlutterMethod::P => {
-                            let (_, ev) = self.p_modes(uf)?;
-                            let crit = ev
-                                .iter()
-                                .max_by(|a, b| (-zeta_of(**a)).total_cmp(&(-zeta_of(**b))))
-                                .copied()
-                                .unwrap_or(ps[0]);
-                            let mode = (0..ps.len())
-                                .min_by(|&a, &b| {
-                                    (ps[a] - crit).norm().total_cmp(&(ps[b] - crit).norm())
-                                })
-                                .unwrap_or(0);
-                            (mode, crit)
-                        }
-                    };
-                    let b = self.semi_chord();
-                    flutter = Some(FlutterPoint {
-                        u: uf,
-                        omega: pc.im,
-                        mode,
-                        u_reduced: uf / (b * w_ref),
-                        omega_ratio: pc.im / w_ref,
+            for ((b, p), o) in branches.iter_mut().zip(&current).zip(&ok) {
+                if *o {
+                    b.points.push(ModePoint {
+                        u,
+                        sigma: p.re,
+                        omega: p.im,
+                        zeta: zeta_of(*p),
                     });
                 }
             }
+            let g_now = match method {
+                FlutterMethod::Pk => Some(grow(&current, &ok)).filter(|g| g.is_finite()),
+                // every oscillatory eigenvalue counts, tracked or not
+                FlutterMethod::P => self.max_growth(method, u, &current).ok().map(|r| r.0),
+            };
+            let Some(g_now) = g_now else {
+                continue;
+            };
+            if iu == 0 && g_now > UNSTABLE {
+                unstable_at_u_min = true;
+            }
+            let bracket = match last_growth {
+                Some((u_lo, g_lo)) if flutter.is_none() && g_lo <= UNSTABLE && g_now > UNSTABLE => {
+                    Some(u_lo)
+                }
+                _ => None,
+            };
+            last_growth = Some((u, g_now));
+            let Some(u_lo) = bracket else {
+                continue;
+            };
+            let start = prev.clone();
+            let f = |uu: f64| -> f64 {
+                match self.max_growth(method, uu, &start) {
+                    Ok((g, _)) => g - UNSTABLE,
+                    Err(_) => f64::NAN,
+                }
+            };
+            let refined = brent(f, u_lo, u, opts.tol_rel * u, 200)
+                .ok_or_else(|| format!("Brent refinement failed in [{u_lo}, {u}]"))
+                .and_then(|uf| {
+                    self.max_growth(method, uf, &start)
+                        .map(|(_, ps)| (uf, ps))
+                        .map_err(|e| e.to_string())
+                });
+            let (uf, ps) = match refined {
+                Ok(x) => x,
+                Err(message) => {
+                    failed.push(FailedPoint {
+                        u,
+                        mode: None,
+                        message,
+                    });
+                    continue;
+                }
+            };
+            let (mode, pc) = match method {
+                FlutterMethod::Pk => ps
+                    .iter()
+                    .enumerate()
+                    .max_by(|a, b| (-zeta_of(*a.1)).total_cmp(&(-zeta_of(*b.1))))
+                    .map(|(i, p)| (i, *p))
+                    .unwrap_or((0, ps[0])),
+                FlutterMethod::P => {
+                    let crit = match self.p_modes(uf) {
+                        Ok((_, ev)) => ev
+                            .iter()
+                            .max_by(|a, b| (-zeta_of(**a)).total_cmp(&(-zeta_of(**b))))
+                            .copied()
+                            .unwrap_or(ps[0]),
+                        Err(_) => ps[0],
+                    };
+                    let mode = (0..ps.len())
+                        .min_by(|&a, &b| (ps[a] - crit).norm().total_cmp(&(ps[b] - crit).norm()))
+                        .unwrap_or(0);
+                    (mode, crit)
+                }
+            };
+            let b = self.semi_chord();
+            flutter = Some(FlutterPoint {
+                u: uf,
+                omega: pc.im,
+                mode,
+                u_reduced: uf / (b * w_ref),
+                omega_ratio: pc.im / w_ref,
+            });
         }
         Ok(FlutterAnalysis {
             method,
@@ -519,6 +625,8 @@ impl Section {
             branches,
             flutter,
             divergence_speed: self.divergence_speed(),
+            failed,
+            unstable_at_u_min,
         })
     }
 }
@@ -636,5 +744,106 @@ mod rfa_tests {
         let json = serde_json::to_string(&r).unwrap();
         let back: FlutterAnalysis = serde_json::from_str(&json).unwrap();
         assert_eq!(back.branches.len(), 2);
+    }
+}
+
+#[cfg(test)]
+mod defect_tests {
+    use super::*;
+    use crate::reference::{flat_plate_table, hp1_structure, lpw_theodorsen};
+
+    fn pk(s: &Section, u_min: f64, u_max: f64, n: usize) -> FlutterAnalysis {
+        let o = FlutterOptions {
+            u_min,
+            u_max,
+            n_speeds: n,
+            tol_rel: 1e-10,
+        };
+        s.flutter(FlutterMethod::Pk, &o).unwrap()
+    }
+
+    /// Issue 13: p-k on the Lee–Price–Wong section stopped the whole analysis beyond
+    /// U* ≈ 9.15; a scan over 1–20 must give the flutter point of the scan over 1–9.
+    #[test]
+    fn lpw_pk_over_1_to_20_gives_the_flutter_point_of_1_to_9() {
+        let s = lpw_theodorsen();
+        let short = pk(&s, 1.0, 9.0, 81);
+        let long = pk(&s, 1.0, 20.0, 191);
+        let (a, b) = (short.flutter.unwrap(), long.flutter.unwrap());
+        eprintln!(
+            "LPW: U_F = {:.6} / {:.6}, ω = {:.6} / {:.6}, failed points {} / {}",
+            a.u_reduced,
+            b.u_reduced,
+            a.omega_ratio,
+            b.omega_ratio,
+            short.failed.len(),
+            long.failed.len()
+        );
+        for f in long.failed.iter().take(3) {
+            eprintln!("  failed: {f:?}");
+        }
+        assert!(((a.u - b.u) / a.u).abs() < 1e-8, "{} vs {}", a.u, b.u);
+        assert!(((a.omega - b.omega) / a.omega).abs() < 1e-6);
+        // the scan is kept past the hard speeds
+        let last = long
+            .branches
+            .iter()
+            .filter_map(|b| b.points.last())
+            .map(|p| p.u);
+        assert!(last.fold(0.0, f64::max) > 15.0);
+    }
+
+    /// A scan that starts above the flutter speed reports it instead of failing in Brent.
+    #[test]
+    fn scan_starting_above_flutter_is_flagged_not_an_error() {
+        let s = lpw_theodorsen();
+        let uf = pk(&s, 1.0, 9.0, 81).flutter.unwrap().u;
+        let r = pk(&s, 1.05 * uf, 1.5 * uf, 20);
+        assert!(r.unstable_at_u_min);
+        assert!(r.flutter.is_none());
+    }
+
+    /// Issue 13: HP-1 with steady aerodynamics, p-method: after coalescence a root pair
+    /// turns real and the tracked branch used to repeat its last value (25 repeats).
+    #[test]
+    fn vg_branches_end_when_roots_turn_real() {
+        let steady: std::sync::Arc<dyn crate::aero::AeroModel> = std::sync::Arc::new(
+            crate::aero::QuasiSteady::new(2.0, -0.2, crate::aero::QuasiSteadyKind::Steady, false)
+                .unwrap(),
+        );
+        let s = Section::new(hp1_structure(), steady, 1.0).unwrap();
+        let r = s
+            .flutter(FlutterMethod::P, &crate::reference::flutter_options())
+            .unwrap();
+        for b in &r.branches {
+            let frozen = b
+                .points
+                .windows(2)
+                .filter(|w| w[0].sigma == w[1].sigma && w[0].omega == w[1].omega)
+                .count();
+            eprintln!(
+                "{}: {} points, ended at {:?}, frozen {frozen}",
+                b.label,
+                b.points.len(),
+                b.ended_at
+            );
+            assert_eq!(frozen, 0, "{}", b.label);
+            if let Some(u) = b.ended_at {
+                assert!(b.points.iter().all(|p| p.u < u));
+            }
+        }
+        assert!(r.branches.iter().any(|b| b.ended_at.is_some()));
+    }
+
+    /// Issue 13: flat-plate divergence from the derivative table, exact √5 (μ 20, r² 0.25,
+    /// elastic axis at mid-chord: U_D² = μ r² b² ω_α²). Holding Q at the lowest node
+    /// (K = 0.05) gave +2.5 %; the straight-line extrapolation of Re Q reaches −1.4e-3,
+    /// the O(k² ln k) term of F(k) that a line through k = 0.025, 0.05 cannot carry.
+    #[test]
+    fn flat_plate_table_divergence_is_sqrt5() {
+        let ud = flat_plate_table(4).divergence_speed().unwrap();
+        let rel = (ud - 5f64.sqrt()) / 5f64.sqrt();
+        eprintln!("flat-plate table divergence {ud:.6}, rel {rel:.2e}");
+        assert!(rel.abs() < 2e-3, "{ud}");
     }
 }

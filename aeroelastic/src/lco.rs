@@ -3,16 +3,12 @@
 //! downward, each from the previous converged state, to expose hysteresis; parallel for
 //! independent runs).
 
-use nalgebra::SVector;
-use ode_solvers::dop853::Dop853;
-use ode_solvers::dop_shared::{OutputType, System};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::aero::{AeroModel, NonlinearAero};
 use crate::dynamics::SectionDynamics;
+use crate::integrate::{dop853, AdaptiveOptions, Control, StopReason};
 use crate::section::Section;
-use crate::structure::Structure;
 use crate::{Error, Result};
 
 /// Options of one LCO run.
@@ -37,6 +33,11 @@ pub struct LcoOptions {
     /// A run whose amplitude (extrapolated) falls below this fraction of the largest
     /// amplitude seen is `Decay`.
     pub decay_fraction: f64,
+    /// Run ode_solvers' stiffness detector, which aborts the run (`Unsettled`, stop
+    /// reason `stiffness`). Off by default: the error control keeps the explicit run
+    /// accurate on a stiff problem (see DECISIONS.md, "Stiffness detector").
+    #[serde(default)]
+    pub stiffness_test: bool,
     /// Stop as soon as the run is classified (false: integrate the whole `max_periods`,
     /// used by the benchmark for fixed work).
     pub stop_when_classified: bool,
@@ -54,6 +55,7 @@ impl Default for LcoOptions {
             cycle_tol: 1e-6,
             n_converged: 3,
             decay_fraction: 1e-3,
+            stiffness_test: false,
             stop_when_classified: true,
         }
     }
@@ -120,6 +122,18 @@ pub struct LcoResult {
     pub rhs_evals: u64,
     /// Accepted integrator steps.
     pub steps: u64,
+    /// Why the integration stopped: `converged` (LCO), `decayed`, `left_bound` or
+    /// `non_finite` (divergent), or — for an `Unsettled` run — `time_cap`, `step_cap`,
+    /// `step_size_underflow` or `stiffness`. With `stop_when_classified = false` a
+    /// classified run still stops at `time_cap`.
+    pub stop: StopReason,
+    /// Reduced frequency K = Bω/U at which a K-dependent model's coefficients were
+    /// evaluated in this run (`None` for models that do not depend on K).
+    #[serde(default)]
+    pub k_eval: Option<f64>,
+    /// Runs performed at this speed (> 1 when the K iteration re-ran it).
+    #[serde(default)]
+    pub k_iterations: usize,
     /// State at `t_end` (h, α, ḣ, α̇, lag states) — the start of the next speed in a sweep.
     pub final_state: Vec<f64>,
 }
@@ -146,7 +160,6 @@ struct Tracker {
     converged_count: usize,
     decay_count: usize,
     last_state: Vec<f64>,
-    t_last: f64,
 }
 
 /// Quintic Hermite interpolant on [0, 1] from values, first and second derivatives at
@@ -214,19 +227,15 @@ impl Tracker {
             converged_count: 0,
             decay_count: 0,
             last_state: Vec::new(),
-            t_last: 0.0,
         }
     }
 
-    /// Processes an accepted step; returns true to stop the integration.
-    fn step(&mut self, t: f64, y: &[f64], dy: &[f64]) -> bool {
-        self.t_last = t;
-        if !(y[0].abs() <= self.bound_h && y[1].abs() <= self.bound_alpha)
-            || y.iter().any(|v| !v.is_finite())
-        {
+    /// Processes an accepted step; says whether to stop the integration and why.
+    fn step(&mut self, t: f64, y: &[f64], dy: &[f64]) -> Control {
+        if !(y[0].abs() <= self.bound_h && y[1].abs() <= self.bound_alpha) {
             self.class = Some(Classification::Divergent { time_left_bound: t });
             self.last_state = y.to_vec();
-            return true;
+            return Control::Stop(StopReason::LeftBound);
         }
         let cur = [t, y[0], y[1], y[2], y[3], dy[2], dy[3]];
         let mut stop = false;
@@ -264,7 +273,14 @@ impl Tracker {
         if stop || self.class.is_some() {
             self.last_state = y.to_vec();
         }
-        stop && self.stop_when_classified
+        match self.class {
+            Some(c) if stop && self.stop_when_classified => Control::Stop(match c {
+                Classification::Lco => StopReason::Converged,
+                Classification::Decay => StopReason::Decayed,
+                _ => StopReason::LeftBound,
+            }),
+            _ => Control::Continue,
+        }
     }
 
     /// Aitken-extrapolated amplitude from the last three, or the last amplitude.
@@ -319,60 +335,6 @@ impl Tracker {
     }
 }
 
-struct Rhs<'a> {
-    dynamics: SectionDynamics<'a>,
-    tracker: &'a mut Tracker,
-}
-
-impl<const N: usize> System<f64, SVector<f64, N>> for Rhs<'_> {
-    #[inline]
-    fn system(&self, _t: f64, y: &SVector<f64, N>, dy: &mut SVector<f64, N>) {
-        self.dynamics.rate(y.as_slice(), dy.as_mut_slice());
-    }
-
-    fn solout(&mut self, t: f64, y: &SVector<f64, N>, dy: &SVector<f64, N>) -> bool {
-        self.tracker.step(t, y.as_slice(), dy.as_slice())
-    }
-}
-
-fn integrate_fixed<const N: usize>(
-    rhs: Rhs<'_>,
-    y0: &[f64],
-    t_end: f64,
-    opts: &LcoOptions,
-) -> std::result::Result<(u64, u64), ode_solvers::dop_shared::IntegrationError> {
-    let y = SVector::<f64, N>::from_column_slice(y0);
-    let mut solver = Dop853::from_param(
-        rhs,
-        0.0,
-        t_end,
-        0.0,
-        y,
-        opts.rtol,
-        opts.atol,
-        0.9,
-        0.0,
-        0.333,
-        6.0,
-        t_end,
-        0.0,
-        opts.max_steps,
-        1000,
-        OutputType::Sparse,
-    );
-    let stats = solver.integrate()?;
-    Ok((stats.num_eval as u64, stats.accepted_steps as u64))
-}
-
-macro_rules! dispatch {
-    ($n:expr, $rhs:expr, $y0:expr, $t:expr, $o:expr; $($k:literal),*) => {
-        match $n {
-            $( $k => Some(integrate_fixed::<$k>($rhs, $y0, $t, $o)), )*
-            _ => None,
-        }
-    };
-}
-
 impl Section {
     /// The default initial perturbation: α = `alpha0` [rad], everything else zero.
     pub fn perturbation(&self, alpha0: f64) -> Vec<f64> {
@@ -382,18 +344,19 @@ impl Section {
     }
 
     /// Integrates the nonlinear section at speed `u` from state `y0`
-    /// (h, α, ḣ, α̇, lag states) with Dop853 (sparse output, every accepted step goes to
-    /// the cycle detector) and classifies the response.
+    /// (h, α, ḣ, α̇, lag states) with Dop853 ([`crate::integrate::dop853`]: sparse
+    /// output, every accepted step goes to the cycle detector) and classifies the
+    /// response; [`LcoResult::stop`] says why the integration ended.
     ///
     /// Cycle detection: pitch maxima/minima are located inside a step by the root of the
-    /// cubic Hermite interpolant of α̇ (slopes α̈), their values by the Hermite interpolant
-    /// of α; the cycle amplitude is half the peak-to-peak; the amplitude sequence is
+    /// derivative of the quintic Hermite interpolant of α (values, α̇, α̈ at both ends); the cycle amplitude is half the peak-to-peak; the amplitude sequence is
     /// Aitken-extrapolated. `Lco` when the extrapolated amplitude is stable to
     /// `cycle_tol` (relative) and the raw amplitude changes by < 1e-3 per cycle for
     /// `n_converged` cycles; `Decay` when the amplitude (or its extrapolation) falls under
     /// `decay_fraction` of the largest amplitude seen; `Divergent` when |h| or |α| leaves
     /// the bound (checked at every step, so never NaN); `Unsettled` when the time or
-    /// step cap is reached first.
+    /// step cap is reached first, the step size underflows or (only with
+    /// `stiffness_test`) the stiffness detector aborts. Amplitudes are never negative.
     ///
     /// # Errors
     /// [`Error::InvalidParameter`] for bad options, a `y0` of the wrong length or
@@ -413,34 +376,23 @@ impl Section {
         let dynamics = SectionDynamics::new(self, u)?;
         let mut tracker = Tracker::new(opts, self.semi_chord());
         let t_end = opts.max_periods * 2.0 * std::f64::consts::PI / self.structure.omega_alpha();
-        let rhs = Rhs {
-            dynamics,
-            tracker: &mut tracker,
+        let adaptive = AdaptiveOptions {
+            rtol: opts.rtol,
+            atol: opts.atol,
+            max_steps: opts.max_steps,
+            stiffness_test: opts.stiffness_test,
+            // the tracker checks the bound itself (it records the time and the state)
+            bound: None,
         };
-        let res =
-            dispatch!(n, rhs, y0, t_end, opts; 4, 5, 6, 7, 8, 9, 10, 11, 12).ok_or_else(|| {
-                Error::numerical(
-                    "lco_run",
-                    format!("state dimension {n} not supported (4..=12)"),
-                )
-            })?;
-        let (rhs_evals, steps, capped) = match res {
-            Ok((e, s)) => (e, s, false),
-            Err(ode_solvers::dop_shared::IntegrationError::MaxNumStepReached {
-                n_step, ..
-            }) => (0, n_step as u64, true),
-            Err(e) => {
-                // Step-size underflow or stiffness: report where, as Unsettled.
-                let _ = e;
-                (0, 0, true)
-            }
-        };
-        let class = match tracker.class {
-            Some(c) => c,
-            None => {
-                let _ = capped;
-                Classification::Unsettled
-            }
+        let mut observer = |t: f64, z: &[f64], dz: &[f64]| tracker.step(t, z, dz);
+        let run = dop853(&dynamics, 0.0, t_end, y0, &adaptive, &mut observer)?;
+        let class = match (tracker.class, run.stop) {
+            (Some(c), _) => c,
+            // a state that overflows before any step leaves the bound has still diverged
+            (None, StopReason::NonFinite) => Classification::Divergent {
+                time_left_bound: run.t_end,
+            },
+            (None, _) => Classification::Unsettled,
         };
         let omega = match tracker.max_times.len() {
             0 | 1 => 0.0,
@@ -458,9 +410,11 @@ impl Section {
         } else {
             tracker.last_state.clone()
         };
+        // Aitken's extrapolation of a sequence falling towards zero can overshoot below
+        // it; an amplitude is never negative.
         let amplitude_alpha = match class {
             Classification::Decay => 0.0,
-            _ if !tracker.amps.is_empty() => tracker.extrapolated(),
+            _ if !tracker.amps.is_empty() => tracker.extrapolated().max(0.0),
             _ => 0.0,
         };
         Ok(LcoResult {
@@ -474,9 +428,12 @@ impl Section {
             },
             omega,
             cycles: tracker.amps.len(),
-            t_end: tracker.t_last,
-            rhs_evals,
-            steps,
+            t_end: run.t_end,
+            rhs_evals: run.rhs_evals,
+            steps: run.steps,
+            stop: run.stop,
+            k_eval: self.aero.reduced_frequency(),
+            k_iterations: 1,
             final_state,
         })
     }
@@ -533,20 +490,120 @@ impl Hysteresis {
     }
 }
 
+/// Fixed-point iteration of the reduced frequency at which a K-dependent model
+/// ([`crate::aero::AeroModel::reduced_frequency`] is `Some`, e.g. an identified [`crate::aero::NonlinearAero`])
+/// evaluates its coefficients: run, measure the limit cycle's ω, set K = Bω/U, re-run from
+/// the last state, until K changes by less than `tol` (relative) or after `max_iter` runs.
+/// Models whose coefficients do not depend on K are run once whatever these settings.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct KIteration {
+    /// Relative change of K below which the iteration stops.
+    pub tol: f64,
+    /// Largest number of runs per speed (≥ 1).
+    pub max_iter: usize,
+}
+
+impl Default for KIteration {
+    /// tol 1e-4, 8 runs (DECISIONS.md: converges to 1e-4 from a start of 0.3).
+    fn default() -> Self {
+        KIteration {
+            tol: 1e-4,
+            max_iter: 8,
+        }
+    }
+}
+
+/// What to sweep: the perturbations that start the upward and (optionally) downward
+/// sweeps and the K iteration of K-dependent models.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SweepPlan {
+    /// Start of the upward sweep (and of every run after a non-LCO run): (h, α, ḣ, α̇, lag).
+    pub perturbation_up: Vec<f64>,
+    /// Start of the downward sweep; `None`: upward sweep only.
+    pub perturbation_down: Option<Vec<f64>>,
+    /// K iteration for K-dependent models (ignored by the others).
+    pub k_iteration: KIteration,
+}
+
 impl Section {
-    /// Continuation sweep over `speeds` (taken in increasing order for `Up`, decreasing for
-    /// `Down`): each speed starts from the previous final state when that run ended on a
-    /// limit cycle (or unsettled with amplitude above the perturbation), otherwise from
-    /// `perturbation`. Results are returned in the order integrated.
+    /// The section with its aerodynamic model's coefficients evaluated at reduced frequency
+    /// `k` (`None` when the model does not depend on K).
+    fn at_reduced_frequency(&self, k: f64) -> Result<Option<Section>> {
+        if self.aero.reduced_frequency().is_none() {
+            return Ok(None);
+        }
+        let aero = self
+            .aero
+            .with_reduced_frequency(k)
+            .ok_or_else(|| Error::param("k_eval", k, "must be finite and > 0"))?;
+        Ok(Some(Section {
+            structure: self.structure.clone(),
+            aero,
+            rho: self.rho,
+        }))
+    }
+
+    /// One LCO run at speed `u` from `y0` with the K iteration of [`KIteration`] for a
+    /// K-dependent model: the first run uses the model's current K; while the response is
+    /// a limit cycle with ω > 0 the model is re-evaluated at K = Bω/U and the run repeated
+    /// from its final state, until K changes by less than `k.tol` or `k.max_iter` runs.
+    /// [`LcoResult::k_eval`] is the K of the returned run and
+    /// [`LcoResult::k_iterations`] the number of runs. A model that does not depend on K
+    /// is run once ([`Section::lco_run`]).
     ///
     /// # Errors
-    /// As [`Section::lco_run`]; `direction` must be `Up` or `Down`.
+    /// As [`Section::lco_run`]; [`Error::InvalidParameter`] for `max_iter = 0` or a
+    /// non-positive `tol`.
+    pub fn lco_run_k(
+        &self,
+        u: f64,
+        y0: &[f64],
+        opts: &LcoOptions,
+        k: &KIteration,
+    ) -> Result<LcoResult> {
+        if k.max_iter == 0 {
+            return Err(Error::param("max_iter", 0.0, "must be > 0"));
+        }
+        crate::error::positive("k_tol", k.tol)?;
+        let mut current: Option<Section> = None;
+        let mut y = y0.to_vec();
+        let mut it = 0;
+        loop {
+            it += 1;
+            let sec = current.as_ref().unwrap_or(self);
+            let mut r = sec.lco_run(u, &y, opts)?;
+            r.k_iterations = it;
+            let Some(k_now) = sec.aero.reduced_frequency() else {
+                return Ok(r);
+            };
+            if r.classification != Classification::Lco || it >= k.max_iter || r.omega <= 0.0 {
+                return Ok(r);
+            }
+            let k_new = sec.aero.chord() * r.omega / u;
+            if ((k_new - k_now) / k_now).abs() < k.tol {
+                return Ok(r);
+            }
+            current = self.at_reduced_frequency(k_new)?;
+            y = r.final_state;
+        }
+    }
+
+    /// Continuation sweep over `speeds` (taken in increasing order for `Up`, decreasing for
+    /// `Down`), each speed by [`Section::lco_run_k`]: a speed starts from the previous
+    /// final state when that run ended on a limit cycle (or unsettled with an amplitude
+    /// above the perturbation's), and a K-dependent model from the previous run's K when
+    /// it ended on a limit cycle; otherwise from `perturbation` and the model's own K.
+    /// Results are returned in the order integrated.
+    ///
+    /// # Errors
+    /// As [`Section::lco_run_k`]; `direction` must be `Up` or `Down`.
     pub fn lco_sweep(
         &self,
         speeds: &[f64],
         direction: SweepDirection,
         perturbation: &[f64],
         opts: &LcoOptions,
+        k: &KIteration,
         observer: &(dyn Fn(SweepProgress) + Sync),
     ) -> Result<Vec<LcoResult>> {
         let mut us = speeds.to_vec();
@@ -564,6 +621,7 @@ impl Section {
         }
         let pert_amp = perturbation.get(1).copied().unwrap_or(0.0).abs();
         let mut out: Vec<LcoResult> = Vec::with_capacity(us.len());
+        let mut at_k: Option<Section> = None;
         for (i, &u) in us.iter().enumerate() {
             let start: Vec<f64> = match out.last() {
                 Some(prev)
@@ -575,7 +633,17 @@ impl Section {
                 }
                 _ => perturbation.to_vec(),
             };
-            let r = self.lco_run(u, &start, opts)?;
+            // K carried over from the previous limit cycle, else the model's own.
+            at_k = match out.last() {
+                Some(prev) if prev.classification == Classification::Lco => match prev.k_eval {
+                    Some(kp) => self.at_reduced_frequency(kp)?,
+                    None => None,
+                },
+                Some(prev) if prev.classification == Classification::Unsettled => at_k,
+                _ => None,
+            };
+            let sec = at_k.as_ref().unwrap_or(self);
+            let r = sec.lco_run_k(u, &start, opts, k)?;
             observer(SweepProgress {
                 direction,
                 done: i + 1,
@@ -588,31 +656,37 @@ impl Section {
         Ok(out)
     }
 
-    /// Upward and downward sweeps, run in parallel (rayon::join); the downward sweep starts
-    /// from the upward sweep's best candidate: the perturbation scaled to the largest LCO
-    /// seen is not known in advance, so it starts from `perturbation_down` (e.g. a large
-    /// pitch displacement that reaches the upper branch of a subcritical LCO).
+    /// The LCO sweeps of a study or of `aeroform lco`: the upward sweep from
+    /// `plan.perturbation_up` and, when `plan.perturbation_down` is given, the downward
+    /// sweep from it (e.g. a large pitch displacement that reaches the upper branch of a
+    /// subcritical LCO), run in parallel (rayon::join); both with [`Section::lco_sweep`]
+    /// and the K iteration of `plan.k_iteration` for K-dependent models. Results of both
+    /// sweeps in increasing U (`down` empty without a downward sweep).
     ///
     /// # Errors
     /// As [`Section::lco_sweep`].
-    pub fn lco_hysteresis(
+    pub fn lco_sweeps(
         &self,
         speeds: &[f64],
-        perturbation_up: &[f64],
-        perturbation_down: &[f64],
+        plan: &SweepPlan,
         opts: &LcoOptions,
         observer: &(dyn Fn(SweepProgress) + Sync),
     ) -> Result<Hysteresis> {
+        let k = &plan.k_iteration;
         let (up, down) = rayon::join(
-            || self.lco_sweep(speeds, SweepDirection::Up, perturbation_up, opts, observer),
             || {
                 self.lco_sweep(
                     speeds,
-                    SweepDirection::Down,
-                    perturbation_down,
+                    SweepDirection::Up,
+                    &plan.perturbation_up,
                     opts,
+                    k,
                     observer,
                 )
+            },
+            || match &plan.perturbation_down {
+                Some(p) => self.lco_sweep(speeds, SweepDirection::Down, p, opts, k, observer),
+                None => Ok(Vec::new()),
             },
         );
         let up = up?;
@@ -652,144 +726,13 @@ impl Section {
     }
 }
 
-/// Result of an LCO run whose nonlinear coefficients were evaluated at the response's own
-/// reduced frequency.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct KIteratedLco {
-    /// The final run.
-    pub result: LcoResult,
-    /// Reduced frequency K = Bω/U at which the coefficients were finally evaluated.
-    pub k_eval: f64,
-    /// Runs performed.
-    pub iterations: usize,
-}
-
-/// LCO run with a [`NonlinearAero`] whose K-dependent coefficients are evaluated at the
-/// current response frequency: run at `model.k_eval()`, measure ω of the limit cycle, set
-/// K = Bω/U, re-run from the last state; stop when K changes by less than `k_tol`
-/// (relative) or after `max_iter` runs, or as soon as the response is not an LCO (then no
-/// response frequency defines K). This is the fixed point "coefficients interpolated in K
-/// at the response frequency" of [`NonlinearAero`].
-///
-/// # Errors
-/// As [`Section::lco_run`]; [`Error::InvalidParameter`] for `max_iter = 0`.
-#[allow(clippy::too_many_arguments)]
-pub fn lco_run_k_iterated(
-    structure: &Structure,
-    model: &NonlinearAero,
-    rho: f64,
-    u: f64,
-    y0: &[f64],
-    opts: &LcoOptions,
-    k_tol: f64,
-    max_iter: usize,
-) -> Result<KIteratedLco> {
-    if max_iter == 0 {
-        return Err(Error::param("max_iter", 0.0, "must be > 0"));
-    }
-    let mut m = model.clone();
-    let mut y = y0.to_vec();
-    let mut it = 0;
-    loop {
-        it += 1;
-        let section = Section::new(structure.clone(), std::sync::Arc::new(m.clone()), rho)?;
-        let r = section.lco_run(u, &y, opts)?;
-        if r.classification != Classification::Lco
-            || !m.depends_on_k()
-            || it >= max_iter
-            || r.omega <= 0.0
-        {
-            return Ok(KIteratedLco {
-                result: r,
-                k_eval: m.k_eval(),
-                iterations: it,
-            });
-        }
-        let k_new = m.chord() * r.omega / u;
-        if ((k_new - m.k_eval()) / m.k_eval()).abs() < k_tol {
-            return Ok(KIteratedLco {
-                result: r,
-                k_eval: m.k_eval(),
-                iterations: it,
-            });
-        }
-        m = m.with_k_eval(k_new)?;
-        y = r.final_state.clone();
-    }
-}
-
-/// Upward and downward continuation sweeps (run in parallel) of a [`NonlinearAero`] whose
-/// K-dependent coefficients are evaluated at each limit cycle's own reduced frequency
-/// ([`lco_run_k_iterated`] at every speed, each speed starting from the previous speed's
-/// final state and K when that run ended on a limit cycle, otherwise from the perturbation
-/// and the model's K). Results of both sweeps in increasing U.
-///
-/// # Errors
-/// As [`lco_run_k_iterated`].
-#[allow(clippy::too_many_arguments)]
-pub fn lco_hysteresis_k_iterated(
-    structure: &Structure,
-    model: &NonlinearAero,
-    rho: f64,
-    speeds: &[f64],
-    perturbation_up: &[f64],
-    perturbation_down: &[f64],
-    opts: &LcoOptions,
-    observer: &(dyn Fn(SweepProgress) + Sync),
-) -> Result<Hysteresis> {
-    let sweep = |direction: SweepDirection, pert: &[f64]| -> Result<Vec<LcoResult>> {
-        let mut us = speeds.to_vec();
-        us.sort_by(f64::total_cmp);
-        if direction == SweepDirection::Down {
-            us.reverse();
-        }
-        let mut out: Vec<LcoResult> = Vec::with_capacity(us.len());
-        let mut m = model.clone();
-        for (i, &u) in us.iter().enumerate() {
-            let start = match out.last() {
-                Some(prev) if prev.classification == Classification::Lco => {
-                    prev.final_state.clone()
-                }
-                _ => {
-                    m = model.clone();
-                    pert.to_vec()
-                }
-            };
-            let r = lco_run_k_iterated(structure, &m, rho, u, &start, opts, 1e-4, 8)?;
-            if r.result.classification == Classification::Lco {
-                m = m.with_k_eval(r.k_eval)?;
-            }
-            observer(SweepProgress {
-                direction,
-                done: i + 1,
-                total: us.len(),
-                u,
-                classification: r.result.classification,
-            });
-            out.push(r.result);
-        }
-        if direction == SweepDirection::Down {
-            out.reverse();
-        }
-        Ok(out)
-    };
-    let (up, down) = rayon::join(
-        || sweep(SweepDirection::Up, perturbation_up),
-        || sweep(SweepDirection::Down, perturbation_down),
-    );
-    Ok(Hysteresis {
-        up: up?,
-        down: down?,
-    })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::aero::{QuasiSteady, QuasiSteadyKind};
     use crate::flutter::{FlutterMethod, FlutterOptions};
     use crate::reference::{hp1_structure, hp1_theodorsen};
-    use crate::structure::PolyTerm;
+    use crate::structure::{PolyTerm, Structure};
     use std::sync::Arc;
 
     fn no_obs(_: SweepProgress) {}
@@ -857,6 +800,8 @@ mod tests {
         };
         let r = s.lco_run(2.0, &s.perturbation(0.01), &o).unwrap();
         assert_eq!(r.classification, Classification::Unsettled);
+        assert_eq!(r.stop, StopReason::StepCap);
+        assert!(r.steps > 0 && r.rhs_evals > r.steps, "{r:?}");
         let e = s.lco_run(2.0, &[0.0; 3], &o).unwrap_err();
         assert!(e.to_string().contains("y0"), "{e}");
     }
@@ -918,6 +863,7 @@ mod tests {
                 SweepDirection::Down,
                 &s.perturbation(0.1),
                 &LcoOptions::default(),
+                &KIteration::default(),
                 &obs,
             )
             .unwrap();
@@ -979,10 +925,13 @@ mod tests {
         let uf = jones_flutter_speed(&s);
         let speeds: Vec<f64> = (0..=16).map(|i| (0.90 + 0.01 * i as f64) * uf).collect();
         let h = s
-            .lco_hysteresis(
+            .lco_sweeps(
                 &speeds,
-                &s.perturbation(0.01),
-                &s.perturbation(0.2),
+                &SweepPlan {
+                    perturbation_up: s.perturbation(0.01),
+                    perturbation_down: Some(s.perturbation(0.2)),
+                    k_iteration: KIteration::default(),
+                },
                 &LcoOptions::default(),
                 &no_obs,
             )
@@ -1053,25 +1002,26 @@ mod tests {
         };
         let model = NonlinearAero::new(base.aero.clone(), vec![term], 0.3).unwrap();
         let u = 1.03 * uf;
-        let r = lco_run_k_iterated(
-            &base.structure,
-            &model,
-            1.0,
-            u,
-            &base.perturbation(0.05),
-            &LcoOptions::default(),
-            1e-6,
-            10,
-        )
-        .unwrap();
-        assert_eq!(r.result.classification, Classification::Lco);
-        let k_resp = 2.0 * r.result.omega / u;
+        let section = Section::new(base.structure.clone(), Arc::new(model), 1.0).unwrap();
+        let k = KIteration {
+            tol: 1e-6,
+            max_iter: 10,
+        };
+        let r = section
+            .lco_run_k(u, &base.perturbation(0.05), &LcoOptions::default(), &k)
+            .unwrap();
+        assert_eq!(r.classification, Classification::Lco);
+        let k_resp = 2.0 * r.omega / u;
+        let k_eval = r.k_eval.unwrap();
         assert!(
-            ((r.k_eval - k_resp) / k_resp).abs() < 1e-4,
-            "K_eval {} vs response K {}",
-            r.k_eval,
-            k_resp
+            ((k_eval - k_resp) / k_resp).abs() < 1e-4,
+            "K_eval {k_eval} vs response K {k_resp}"
         );
-        assert!(r.iterations >= 2 && (r.k_eval - 0.3).abs() > 0.1);
+        assert!(r.k_iterations >= 2 && (k_eval - 0.3).abs() > 0.1);
+        // The same section with a linear model runs once, without K.
+        let r = base
+            .lco_run_k(u, &base.perturbation(0.05), &LcoOptions::default(), &k)
+            .unwrap();
+        assert_eq!((r.k_eval, r.k_iterations), (None, 1));
     }
 }

@@ -14,6 +14,7 @@ pub mod error;
 pub mod files;
 pub mod flutter;
 pub mod identified;
+pub mod integrate;
 pub mod lco;
 pub(crate) mod optim;
 pub mod reference;

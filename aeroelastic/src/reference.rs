@@ -145,3 +145,24 @@ pub fn hp1_cubic_pitch() -> Section {
     let aero: Arc<dyn AeroModel> = Arc::new(TheodorsenAero::new(2.0, -0.2).expect("valid"));
     Section::new(st, aero, 1.0).expect("valid")
 }
+
+/// Lee, Price & Wong's section (Prog. Aerosp. Sci. 35, 1999): a = −1/2, x_α = 0.25,
+/// r² = 0.25, μ = 100, σ = ω_h/ω_α = 0.2, no structural damping, exact Theodorsen
+/// aerodynamics; b = 1 m, ω_α = 1 rad/s, ρ = 1 kg/m³ (so U = U* / 2 with U* = U/(bω_α)…
+/// here U is directly U/(bω_α)).
+pub fn lpw_theodorsen() -> Section {
+    let st = Structure::from_nondimensional(&NondimStructure {
+        mu: 100.0,
+        r_alpha2: 0.25,
+        sigma: 0.2,
+        x_alpha: 0.25,
+        semi_chord: 1.0,
+        omega_alpha: 1.0,
+        rho: 1.0,
+        zeta_h: 0.0,
+        zeta_alpha: 0.0,
+    })
+    .expect("valid LPW section");
+    let aero: Arc<dyn AeroModel> = Arc::new(TheodorsenAero::new(2.0, -0.5).expect("valid"));
+    Section::new(st, aero, 1.0).expect("valid")
+}

@@ -1,5 +1,6 @@
 //! Time histories of the nonlinear section at one speed, for phase portraits: a fixed-step
-//! classical Runge–Kutta integration (RK4) from a given state, sampled at every step.
+//! classical Runge–Kutta integration ([`crate::integrate::rk4`]) from a given state,
+//! sampled at every step.
 //!
 //! The LCO solver ([`crate::lco`]) classifies and measures cycles without storing the
 //! response; this module re-integrates a short window (typically a few cycles from the
@@ -10,6 +11,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::dynamics::SectionDynamics;
+use crate::integrate::{rk4, Bound, Control};
 use crate::section::Section;
 use crate::{Error, Result};
 
@@ -78,31 +80,19 @@ impl Section {
             out.alpha_dot.push(z[3]);
         };
         push(&mut out, 0.0, &z);
-        let (mut k1, mut k2, mut k3, mut k4) =
-            (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
-        let mut tmp = vec![0.0; n];
-        for s in 0..steps {
-            dynamics.rate(&z, &mut k1);
-            for i in 0..n {
-                tmp[i] = z[i] + 0.5 * dt * k1[i];
-            }
-            dynamics.rate(&tmp, &mut k2);
-            for i in 0..n {
-                tmp[i] = z[i] + 0.5 * dt * k2[i];
-            }
-            dynamics.rate(&tmp, &mut k3);
-            for i in 0..n {
-                tmp[i] = z[i] + dt * k3[i];
-            }
-            dynamics.rate(&tmp, &mut k4);
-            for i in 0..n {
-                z[i] += dt / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
-            }
-            if z.iter().any(|v| !v.is_finite()) || z[1].abs() > 1.5 {
-                break;
-            }
-            push(&mut out, (s + 1) as f64 * dt, &z);
-        }
+        // The sample time is s·dt (not the driver's accumulated t) for exact grids.
+        rk4(
+            &dynamics,
+            0.0,
+            &mut z,
+            dt,
+            steps,
+            Some(Bound::alpha(1.5)),
+            &mut |s, _t, z| {
+                push(&mut out, s as f64 * dt, z);
+                Control::Continue
+            },
+        )?;
         Ok(out)
     }
 }

@@ -28,7 +28,8 @@
 //! sim-to-real effect.
 //!
 //! **Free mode.** The section on springs in the flow at a list of U, from an initial
-//! perturbation, integrated by RK4 at `substeps` steps per sample (Dop853's dense output
+//! perturbation, integrated by RK4 ([`crate::integrate::rk4`]) at `substeps` steps per
+//! sample (Dop853's dense output
 //! is unreliable in ode_solvers 0.6, see DESIGN notes), recording h and α (and optionally
 //! L, M) as `kind = "free"` cases with the manifest `[structure]` table filled; a run that
 //! leaves the bound is truncated there and the time is recorded in the case's `[extra]`.
@@ -40,7 +41,6 @@
 
 use std::path::Path;
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::Arc;
 
 use identify::dataset::{
     AngleUnit, CaseSpec, ForceUnit, LengthUnit, Manifest, MomentUnit, StructureSpec, Units,
@@ -55,7 +55,9 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::aero::{linearize, AeroModel, Flow};
+use crate::dynamics::SectionDynamics;
 use crate::error::{non_negative, positive};
+use crate::integrate::{rk4, Bound, Control, OdeSystem, Rk4, StopReason};
 use crate::section::Section;
 use crate::structure::Structure;
 use crate::{Error, Result};
@@ -530,6 +532,24 @@ fn lag_rate_bound(model: &dyn AeroModel, flow: &Flow) -> f64 {
         .fold(0.0, f64::max)
 }
 
+/// The model's lag dynamics ẋ = g(q(t), q̇(t), x) along a prescribed motion.
+struct PrescribedLag<'a> {
+    model: &'a dyn AeroModel,
+    flow: &'a Flow,
+    motion: &'a Motion,
+    n: usize,
+}
+
+impl OdeSystem for PrescribedLag<'_> {
+    fn dim(&self) -> usize {
+        self.n
+    }
+    fn rate(&self, t: f64, x: &[f64], dx: &mut [f64]) {
+        let (q, qd, _) = self.motion.eval(t);
+        self.model.lag_rates(self.flow, q, qd, x, dx);
+    }
+}
+
 /// Aerodynamic forces (L, M) [N/m, N·m/m] of `model` along prescribed `motion` at the
 /// sample times t_i = t_start + i·dt (i < n), lag states started on the periodic solution
 /// at t_start − pre_roll. Returns (lift, moment).
@@ -559,31 +579,16 @@ pub fn forced_forces(
     let rate = lag_rate_bound(model, flow).max(w_max);
     let n_sub = ((dt * rate / 0.05).ceil() as usize).max(2);
     let h = dt / n_sub as f64;
-    let mut k = [vec![0.0; nl], vec![0.0; nl], vec![0.0; nl], vec![0.0; nl]];
-    let mut tmp = vec![0.0; nl];
+    let lag = PrescribedLag {
+        model,
+        flow,
+        motion,
+        n: nl,
+    };
+    let mut rk = Rk4::new(nl);
     let mut step = |x: &mut Vec<f64>, t: f64| {
-        if nl == 0 {
-            return;
-        }
-        let f = |t: f64, x: &[f64], out: &mut [f64]| {
-            let (q, qd, _) = motion.eval(t);
-            model.lag_rates(flow, q, qd, x, out);
-        };
-        f(t, x, &mut k[0]);
-        for i in 0..nl {
-            tmp[i] = x[i] + 0.5 * h * k[0][i];
-        }
-        f(t + 0.5 * h, &tmp, &mut k[1]);
-        for i in 0..nl {
-            tmp[i] = x[i] + 0.5 * h * k[1][i];
-        }
-        f(t + 0.5 * h, &tmp, &mut k[2]);
-        for i in 0..nl {
-            tmp[i] = x[i] + h * k[2][i];
-        }
-        f(t + h, &tmp, &mut k[3]);
-        for i in 0..nl {
-            x[i] += h / 6.0 * (k[0][i] + 2.0 * k[1][i] + 2.0 * k[2][i] + k[3][i]);
+        if nl > 0 {
+            rk.step(&lag, t, h, x);
         }
     };
     let n_pre = (pre_roll / h).round() as usize;
@@ -1010,81 +1015,79 @@ pub fn free_record(
 ) -> Result<(Record, FreeRun)> {
     opts.check()?;
     positive("wind_speed", u)?;
-    let flow = section.flow(u);
     let b = section.aero.chord();
     let k_model = section
         .aero
         .with_reduced_frequency(b * section.structure.omega_alpha() / u);
-    let model: Arc<dyn AeroModel> = k_model.unwrap_or_else(|| section.aero.clone());
-    let ma = model.apparent_mass(&flow);
-    let minv = (section.structure.mass_matrix() - ma)
-        .try_inverse()
-        .ok_or_else(|| Error::numerical("free_record", format!("M_s − M_a singular at U = {u}")))?;
-    let friction = section.structure.friction_resolved();
-    let nl = model.n_lag();
-    let nz = 4 + nl;
-    let rhs = |y: &[f64], dy: &mut [f64]| -> [f64; 2] {
-        let q = [y[0], y[1]];
-        let qd = [y[2], y[3]];
-        let f = model.forces(&flow, q, qd, &y[4..]);
-        let r = section.structure.restoring_with(q, qd, &friction);
-        let g = [f[0] - r[0], f[1] - r[1]];
-        dy[0] = qd[0];
-        dy[1] = qd[1];
-        dy[2] = minv[(0, 0)] * g[0] + minv[(0, 1)] * g[1];
-        dy[3] = minv[(1, 0)] * g[0] + minv[(1, 1)] * g[1];
-        model.lag_rates(&flow, q, qd, &y[4..], &mut dy[4..]);
-        f
+    // The section at the pitch frequency's K when the model's coefficients depend on K.
+    let k_section;
+    let sec = match k_model {
+        Some(m) => {
+            k_section = Section::new(section.structure.clone(), m, section.rho)?;
+            &k_section
+        }
+        None => section,
     };
+    let dynamics = SectionDynamics::new(sec, u)?;
+    let ma = sec.aero.apparent_mass(&sec.flow(u));
     let n = (opts.rate * opts.duration).round() as usize;
     let dt = 1.0 / opts.rate;
     let hstep = dt / opts.substeps as f64;
-    let mut y = vec![0.0; nz];
+    let mut y = vec![0.0; dynamics.dim()];
     y[..4].copy_from_slice(&opts.initial);
-    let mut k: [Vec<f64>; 4] = std::array::from_fn(|_| vec![0.0; nz]);
-    let mut tmp = vec![0.0; nz];
     let (mut h, mut alpha, mut lift, mut moment) = (
         Vec::with_capacity(n),
         Vec::with_capacity(n),
         Vec::new(),
         Vec::new(),
     );
-    let mut left = None;
-    for i in 0..n {
-        let f = rhs(&y, &mut k[0]);
-        if y[1].abs() > opts.bound_alpha
-            || y[0].abs() > opts.bound_h * b
-            || !y.iter().all(|v| v.is_finite())
-        {
-            left = Some(i as f64 * dt);
-            break;
+    let mut dy = vec![0.0; dynamics.dim()];
+    let bound = Bound {
+        h: opts.bound_h * b,
+        alpha: opts.bound_alpha,
+    };
+    // Sample i (state at i·dt): the bound is checked at the samples only; the record
+    // ends before the first sample outside it.
+    let mut record = |y: &[f64]| -> bool {
+        if bound.left(y) || !y.iter().all(|v| v.is_finite()) {
+            return false;
         }
         h.push(y[0]);
         alpha.push(y[1]);
         if opts.record_forces {
             // Full forces include the apparent-mass part M_a q̈.
-            lift.push(f[0] + ma[(0, 0)] * k[0][2] + ma[(0, 1)] * k[0][3]);
-            moment.push(f[1] + ma[(1, 0)] * k[0][2] + ma[(1, 1)] * k[0][3]);
+            let f = dynamics.aero_forces(y);
+            dynamics.rate(y, &mut dy);
+            lift.push(f[0] + ma[(0, 0)] * dy[2] + ma[(0, 1)] * dy[3]);
+            moment.push(f[1] + ma[(1, 0)] * dy[2] + ma[(1, 1)] * dy[3]);
         }
-        for s in 0..opts.substeps {
-            if s > 0 {
-                rhs(&y, &mut k[0]);
-            }
-            for j in 0..nz {
-                tmp[j] = y[j] + 0.5 * hstep * k[0][j];
-            }
-            rhs(&tmp, &mut k[1]);
-            for j in 0..nz {
-                tmp[j] = y[j] + 0.5 * hstep * k[1][j];
-            }
-            rhs(&tmp, &mut k[2]);
-            for j in 0..nz {
-                tmp[j] = y[j] + hstep * k[2][j];
-            }
-            rhs(&tmp, &mut k[3]);
-            for j in 0..nz {
-                y[j] += hstep / 6.0 * (k[0][j] + 2.0 * k[1][j] + 2.0 * k[2][j] + k[3][j]);
-            }
+        true
+    };
+    let mut left = None;
+    if n > 0 && !record(&y) {
+        left = Some(0.0);
+    } else if n > 1 {
+        let run = rk4(
+            &dynamics,
+            0.0,
+            &mut y,
+            hstep,
+            (n - 1) * opts.substeps,
+            None,
+            &mut |s, _t, y| {
+                if s % opts.substeps != 0 {
+                    return Control::Continue;
+                }
+                if record(y) {
+                    Control::Continue
+                } else {
+                    Control::Stop(StopReason::LeftBound)
+                }
+            },
+        )?;
+        if run.stop != StopReason::TimeCap {
+            // left the bound (or overflowed) before the next sample
+            left = Some(h.len() as f64 * dt);
         }
     }
     if h.len() < 3 {

@@ -314,6 +314,7 @@ pub(crate) fn bifurcation() -> BifurcationFigure {
             amplitude: amp,
             sweep: Sweep::Up,
             class,
+            stop: "",
         });
     }
     for i in 0..=18 {
@@ -328,6 +329,7 @@ pub(crate) fn bifurcation() -> BifurcationFigure {
             amplitude: amp,
             sweep: Sweep::Down,
             class,
+            stop: "",
         });
     }
     BifurcationFigure {

@@ -391,6 +391,7 @@ fn degenerate_data_draws_without_panic() {
             amplitude: f64::NAN,
             sweep: Sweep::Down,
             class: ResponseClass::Divergent,
+            stop: "left_bound",
         }],
         ..Default::default()
     };

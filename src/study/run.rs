@@ -5,7 +5,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use aeroelastic::flutter::{FlutterAnalysis, FlutterMethod, FlutterOptions};
-use aeroelastic::lco::{Classification, LcoOptions, LcoResult, SweepDirection};
+use aeroelastic::lco::{Classification, KIteration, LcoOptions, LcoResult, SweepPlan};
 use aeroelastic::trajectory::Trajectory;
 use anyhow::Context;
 use identify::pipeline::Identification;
@@ -502,53 +502,36 @@ fn lco_stage(
     let total = l.speeds.len() * if l.up_down { 2 } else { 1 };
     let bar = CountBar::new("LCO", total * if l.compare_truth { 2 } else { 1 });
     let observer = |p| bar.observe_sweep(p);
-    let identified = study
-        .spec
-        .aero
-        .as_ref()
-        .is_some_and(|a| a.model == "identified");
-    let (up, down) = if identified {
-        // the identified law's coefficients depend on K: iterate K to each cycle's own
-        let Some(model) = &derived.identified else {
-            anyhow::bail!("the identified model is not available");
-        };
-        let down0 = section.perturbation(l.perturbation_down_deg.to_radians());
-        let h = aeroelastic::lco::lco_hysteresis_k_iterated(
-            &section.structure,
-            model,
-            section.rho,
-            &l.speeds,
-            &up0,
-            &down0,
-            &opts,
-            &observer,
-        )
-        .context("LCO sweeps (identified model, K-iterated)")?;
-        (h.up, if l.up_down { h.down } else { vec![] })
-    } else if l.up_down {
-        let down0 = section.perturbation(l.perturbation_down_deg.to_radians());
-        let h = section
-            .lco_hysteresis(&l.speeds, &up0, &down0, &opts, &observer)
-            .context("LCO sweeps")?;
-        (h.up, h.down)
-    } else {
-        let up = section
-            .lco_sweep(&l.speeds, SweepDirection::Up, &up0, &opts, &observer)
-            .context("LCO sweep")?;
-        (up, vec![])
+    // One sweep API for every model: K-dependent models (the identified law) iterate K
+    // to each limit cycle's own, the others are run once per speed.
+    let plan = SweepPlan {
+        perturbation_up: up0,
+        perturbation_down: l
+            .up_down
+            .then(|| section.perturbation(l.perturbation_down_deg.to_radians())),
+        k_iteration: KIteration::default(),
     };
+    let h = section
+        .lco_sweeps(&l.speeds, &plan, &opts, &observer)
+        .context("LCO sweeps")?;
+    let (up, down) = (h.up, h.down);
     let (truth_up, truth_down) = if l.compare_truth {
         let truth = aeroelastic::section::Section::new(
             build::structure(s)?,
             build::truth_model(study, s)?,
             s.rho,
         )?;
-        let t_up0 = truth.perturbation(l.perturbation_deg.to_radians());
-        let t_down0 = truth.perturbation(l.perturbation_down_deg.to_radians());
+        let plan = SweepPlan {
+            perturbation_up: truth.perturbation(l.perturbation_deg.to_radians()),
+            perturbation_down: l
+                .up_down
+                .then(|| truth.perturbation(l.perturbation_down_deg.to_radians())),
+            k_iteration: KIteration::default(),
+        };
         let h = truth
-            .lco_hysteresis(&l.speeds, &t_up0, &t_down0, &opts, &observer)
+            .lco_sweeps(&l.speeds, &plan, &opts, &observer)
             .context("LCO sweeps of the truth model")?;
-        (h.up, if l.up_down { h.down } else { vec![] })
+        (h.up, h.down)
     } else {
         (vec![], vec![])
     };
@@ -603,6 +586,10 @@ fn lco_stage(
         "omega_rad_s",
         "cycles",
         "t_end_s",
+        "stop",
+        "steps",
+        "rhs_evals",
+        "k_eval",
     ]);
     for (name, rs) in [
         ("up", &stage.up),
@@ -626,6 +613,10 @@ fn lco_stage(
                 num(Some(r.omega)),
                 r.cycles.to_string(),
                 num(Some(r.t_end)),
+                r.stop.name().into(),
+                r.steps.to_string(),
+                r.rhs_evals.to_string(),
+                num(r.k_eval),
             ]);
         }
     }

@@ -80,6 +80,15 @@ pub trait AeroModel: Send + Sync + std::fmt::Debug {
     fn with_reduced_frequency(&self, _k: f64) -> Option<std::sync::Arc<dyn AeroModel>> {
         None
     }
+
+    /// Reduced frequency K = Bω/U at which the frequency-dependent coefficients are
+    /// currently evaluated, or `None` when nothing in the model depends on K (the
+    /// default). A model returning `Some` must also implement
+    /// [`AeroModel::with_reduced_frequency`]; the LCO solver then iterates K to each limit
+    /// cycle's own frequency ([`crate::lco::KIteration`]).
+    fn reduced_frequency(&self) -> Option<f64> {
+        None
+    }
 }
 
 /// Linearisation of a model's time-domain form about the origin:

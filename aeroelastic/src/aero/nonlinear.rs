@@ -287,6 +287,9 @@ impl AeroModel for NonlinearAero {
     fn frequency_response(&self, flow: &Flow, omega: f64) -> Matrix2<Complex64> {
         self.inner.frequency_response(flow, omega)
     }
+    fn reduced_frequency(&self) -> Option<f64> {
+        self.depends_on_k().then_some(self.k_eval)
+    }
     fn with_reduced_frequency(&self, k: f64) -> Option<Arc<dyn AeroModel>> {
         if !self.depends_on_k() {
             return None;

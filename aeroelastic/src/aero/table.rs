@@ -55,8 +55,8 @@ impl RfaFit {
 ///
 /// Frequency domain: the eight real functions K²H*, K²A* (the entries of Q, which are
 /// smooth in K unlike H*, A* themselves) are interpolated by natural cubic splines in K
-/// and held at the end values outside the table (so divergence, at K = 0, uses the
-/// lowest tabulated K). Time domain: [`RfaFit`] with 2 lag states per lag root
+/// inside the table, held at the end values above it and extrapolated quasi-statically
+/// below it ([`DerivativeTable::q`]; divergence uses K = 0). Time domain: [`RfaFit`] with 2 lag states per lag root
 /// (ẋ_j = −γ_j (U/B) x_j + d/dt (h/B, α)).
 #[derive(Debug, Clone)]
 pub struct DerivativeTable {
@@ -153,18 +153,28 @@ impl DerivativeTable {
     }
 
     /// Interpolated Q(K) (entries K²(H4* + iH1*) … as in [`Derivatives::q_matrix`]).
+    ///
+    /// Inside the table: natural cubic splines. Above the highest K: held at the end
+    /// values. Below the lowest tabulated K₀ (quasi-static extrapolation, down to K = 0
+    /// for divergence): the real parts (stiffness, K²H4*, K²A3* …) continue the straight
+    /// line through the two lowest nodes — for the flat plate Re Q is linear in K near 0
+    /// because F(k) = 1 − πk/2 + O(k² ln k) — and the imaginary parts (damping,
+    /// K²H1* …) fall linearly to 0 at K = 0, since a damping force vanishes with the
+    /// frequency (Im Q = O(K)).
     pub fn q(&self, k: f64) -> [[Complex64; 2]; 2] {
         let s = &self.splines;
-        [
-            [
-                Complex64::new(s[0].eval(k), s[1].eval(k)),
-                Complex64::new(s[2].eval(k), s[3].eval(k)),
-            ],
-            [
-                Complex64::new(s[4].eval(k), s[5].eval(k)),
-                Complex64::new(s[6].eval(k), s[7].eval(k)),
-            ],
-        ]
+        let k0 = self.rows[0].k;
+        let entry = |i: usize| -> Complex64 {
+            if k >= k0 {
+                return Complex64::new(s[2 * i].eval(k), s[2 * i + 1].eval(k));
+            }
+            let k1 = self.rows[1].k;
+            let (r0, r1) = (s[2 * i].eval(k0), s[2 * i].eval(k1));
+            let re = r0 + (r1 - r0) / (k1 - k0) * (k - k0);
+            let im = s[2 * i + 1].eval(k0) * k.max(0.0) / k0;
+            Complex64::new(re, im)
+        };
+        [[entry(0), entry(1)], [entry(2), entry(3)]]
     }
 
     /// Interpolated derivatives at K.

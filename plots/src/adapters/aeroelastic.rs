@@ -83,15 +83,16 @@ pub fn vg_figure(a: &FlutterAnalysis, title: &str, scale: &AxisScale) -> VgFigur
 fn class_of(c: Classification) -> ResponseClass {
     match c {
         Classification::Decay => ResponseClass::Decay,
-        // An unsettled run still oscillates at its last measured amplitude.
-        Classification::Lco | Classification::Unsettled => ResponseClass::Lco,
+        Classification::Lco => ResponseClass::Lco,
+        // drawn at its last measured amplitude, with its stop reason in the legend
+        Classification::Unsettled => ResponseClass::Unsettled,
         Classification::Divergent { .. } => ResponseClass::Divergent,
     }
 }
 
 /// Bifurcation diagram: pitch amplitude [deg] of the upward and downward sweeps against U,
 /// the flutter speed (if given, in m/s) as a vertical line. `Unsettled` runs are drawn as
-/// LCO points at their last measured amplitude.
+/// unsettled points at their last measured amplitude, their stop reasons in the legend.
 pub fn bifurcation_figure(
     up: &[LcoResult],
     down: &[LcoResult],
@@ -106,6 +107,7 @@ pub fn bifurcation_figure(
                 amplitude: r.amplitude_alpha.to_degrees(),
                 sweep,
                 class: class_of(r.classification),
+                stop: r.stop.name(),
             })
             .collect()
     };
@@ -154,6 +156,7 @@ pub fn phase_figure(
 #[cfg(test)]
 mod tests {
     use aeroelastic::flutter::{FlutterMethod, ModePoint};
+    use aeroelastic::integrate::StopReason;
 
     use super::*;
 
@@ -168,6 +171,12 @@ mod tests {
             t_end: 0.0,
             rhs_evals: 0,
             steps: 0,
+            stop: match class {
+                Classification::Decay => StopReason::Decayed,
+                Classification::Lco => StopReason::Converged,
+                Classification::Divergent { .. } => StopReason::LeftBound,
+                Classification::Unsettled => StopReason::TimeCap,
+            },
             final_state: vec![],
         }
     }
@@ -185,6 +194,7 @@ mod tests {
                     omega: std::f64::consts::TAU,
                     zeta: 0.05,
                 }],
+                ended_at: None,
             }],
             flutter: Some(aeroelastic::flutter::FlutterPoint {
                 u: 6.0,
@@ -194,6 +204,8 @@ mod tests {
                 omega_ratio: 0.0,
             }),
             divergence_speed: None,
+            failed: vec![],
+            unstable_at_u_min: false,
         };
         let si = vg_figure(&a, "t", &AxisScale::si());
         assert_eq!(si.modes[0].freq, vec![1.0]); // ω = 2π rad/s → 1 Hz
@@ -225,12 +237,13 @@ mod tests {
             vec![
                 ResponseClass::Decay,
                 ResponseClass::Lco,
-                ResponseClass::Lco,
+                ResponseClass::Unsettled,
                 ResponseClass::Divergent
             ]
         );
         assert!((f.points[1].amplitude - 0.1_f64.to_degrees()).abs() < 1e-12);
         assert!(f.points.iter().all(|p| p.sweep == Sweep::Up));
+        assert_eq!(f.points[2].stop, "time_cap");
         assert_eq!(f.flutter_speed, Some(1.5));
     }
 }

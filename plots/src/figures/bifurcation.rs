@@ -33,6 +33,10 @@ pub enum ResponseClass {
     /// Amplitude grows without bound: filled red marker drawn at the top edge of the axis
     /// (its amplitude is not meaningful).
     Divergent,
+    /// The run ended before it was classified (time or step cap, step-size underflow,
+    /// stiffness): hollow orange marker at its last measured amplitude; the legend names
+    /// the stop reasons ([`BifurcationPoint::stop`]).
+    Unsettled,
 }
 
 /// One point of a sweep.
@@ -47,6 +51,9 @@ pub struct BifurcationPoint {
     pub sweep: Sweep,
     /// Classification.
     pub class: ResponseClass,
+    /// Why the integration stopped (e.g. `"time_cap"`, `"stiffness"`; empty if unknown),
+    /// named in the legend for unsettled points.
+    pub stop: &'static str,
 }
 
 /// Bifurcation diagram of LCO amplitude vs wind speed.
@@ -69,6 +76,7 @@ pub struct BifurcationFigure {
 const C_DECAY: RGBColor = RGBColor(130, 130, 130);
 const C_LCO: RGBColor = PALETTE[0];
 const C_DIV: RGBColor = RGBColor(200, 0, 0);
+const C_UNSETTLED: RGBColor = RGBColor(230, 120, 0);
 
 impl Figure for BifurcationFigure {
     const KIND: &'static str = "bifurcation";
@@ -117,6 +125,21 @@ impl Figure for BifurcationFigure {
                 MarkerShape::Circle,
                 C_DIV,
                 true,
+            ));
+        }
+        let mut reasons: Vec<&str> = pts
+            .iter()
+            .filter(|p| p.class == ResponseClass::Unsettled)
+            .map(|p| if p.stop.is_empty() { "unknown" } else { p.stop })
+            .collect();
+        reasons.sort_unstable();
+        reasons.dedup();
+        if !reasons.is_empty() {
+            legend.push(LegendEntry::marker(
+                format!("unsettled (stopped: {})", reasons.join(", ")),
+                MarkerShape::Circle,
+                C_UNSETTLED,
+                false,
             ));
         }
         if let Some(u) = fs {
@@ -189,6 +212,7 @@ impl Figure for BifurcationFigure {
                 ResponseClass::Divergent => (a_div, C_DIV, true),
                 ResponseClass::Lco => (amp(p)?, C_LCO, true),
                 ResponseClass::Decay => (amp(p)?, C_DECAY, false),
+                ResponseClass::Unsettled => (amp(p)?, C_UNSETTLED, false),
             };
             Some(marker::<_, DB>((p.u, y), shape, color, filled, 7))
         });
