@@ -99,4 +99,52 @@ impl<'a> SectionDynamics<'a> {
             .aero
             .lag_rates(&self.flow, q, qd, lag, &mut dz[4..4 + self.nlag]);
     }
+
+    /// One classical fourth-order Runge–Kutta step of length `dt` [s] from `z` (in place),
+    /// with the scratch vectors of `work` (sized by [`Rk4Work::new`] with
+    /// [`SectionDynamics::dim`]). Local error O(dt⁵).
+    #[inline]
+    pub fn rk4_step(&self, z: &mut [f64], dt: f64, work: &mut Rk4Work) {
+        let n = z.len();
+        let Rk4Work { k1, k2, k3, k4, tmp } = work;
+        self.rate(z, k1);
+        for i in 0..n {
+            tmp[i] = z[i] + 0.5 * dt * k1[i];
+        }
+        self.rate(tmp, k2);
+        for i in 0..n {
+            tmp[i] = z[i] + 0.5 * dt * k2[i];
+        }
+        self.rate(tmp, k3);
+        for i in 0..n {
+            tmp[i] = z[i] + dt * k3[i];
+        }
+        self.rate(tmp, k4);
+        for i in 0..n {
+            z[i] += dt / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
+        }
+    }
+}
+
+/// Scratch vectors of [`SectionDynamics::rk4_step`] (four stages and a temporary state).
+#[derive(Debug, Clone)]
+pub struct Rk4Work {
+    k1: Vec<f64>,
+    k2: Vec<f64>,
+    k3: Vec<f64>,
+    k4: Vec<f64>,
+    tmp: Vec<f64>,
+}
+
+impl Rk4Work {
+    /// Scratch space for states of dimension `n`.
+    pub fn new(n: usize) -> Self {
+        Rk4Work {
+            k1: vec![0.0; n],
+            k2: vec![0.0; n],
+            k3: vec![0.0; n],
+            k4: vec![0.0; n],
+            tmp: vec![0.0; n],
+        }
+    }
 }

@@ -78,26 +78,9 @@ impl Section {
             out.alpha_dot.push(z[3]);
         };
         push(&mut out, 0.0, &z);
-        let (mut k1, mut k2, mut k3, mut k4) =
-            (vec![0.0; n], vec![0.0; n], vec![0.0; n], vec![0.0; n]);
-        let mut tmp = vec![0.0; n];
+        let mut work = crate::dynamics::Rk4Work::new(n);
         for s in 0..steps {
-            dynamics.rate(&z, &mut k1);
-            for i in 0..n {
-                tmp[i] = z[i] + 0.5 * dt * k1[i];
-            }
-            dynamics.rate(&tmp, &mut k2);
-            for i in 0..n {
-                tmp[i] = z[i] + 0.5 * dt * k2[i];
-            }
-            dynamics.rate(&tmp, &mut k3);
-            for i in 0..n {
-                tmp[i] = z[i] + dt * k3[i];
-            }
-            dynamics.rate(&tmp, &mut k4);
-            for i in 0..n {
-                z[i] += dt / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]);
-            }
+            dynamics.rk4_step(&mut z, dt, &mut work);
             if z.iter().any(|v| !v.is_finite()) || z[1].abs() > 1.5 {
                 break;
             }
