@@ -101,7 +101,10 @@ impl BranchOptions {
             return Err(Error::param(
                 "branch.ds",
                 self.ds,
-                format!("must lie in [ds_min, ds_max] = [{}, {}]", self.ds_min, self.ds_max),
+                format!(
+                    "must lie in [ds_min, ds_max] = [{}, {}]",
+                    self.ds_min, self.ds_max
+                ),
             ));
         }
         for (name, v, min) in [
@@ -530,11 +533,7 @@ fn half_peak_to_peak(s: &[[f64; 2]], c: usize) -> f64 {
         return 0.0;
     }
     let refine = |k: usize| {
-        let (a, b, d) = (
-            s[(k + n - 1) % n][c],
-            s[k][c],
-            s[(k + 1) % n][c],
-        );
+        let (a, b, d) = (s[(k + n - 1) % n][c], s[k][c], s[(k + 1) % n][c]);
         let den = a - 2.0 * b + d;
         if den.abs() < 1e-300 {
             b
@@ -653,7 +652,11 @@ impl Section {
     pub fn hopf_points(&self, u_min: f64, u_max: f64, n_scan: usize) -> Result<Vec<HopfPoint>> {
         crate::error::positive("u_min", u_min)?;
         if !(u_max.is_finite() && u_max > u_min) {
-            return Err(Error::param("u_max", u_max, format!("must be > u_min = {u_min}")));
+            return Err(Error::param(
+                "u_max",
+                u_max,
+                format!("must be > u_min = {u_min}"),
+            ));
         }
         let n_scan = n_scan.max(2);
         let us: Vec<f64> = (0..n_scan)
@@ -723,7 +726,11 @@ impl Section {
         self.check_smooth()?;
         let n = self.n_states();
         let t_h = std::f64::consts::TAU / hopf.omega;
-        let vmax = hopf.eigenvector.iter().map(|c| c.norm()).fold(0.0, f64::max);
+        let vmax = hopf
+            .eigenvector
+            .iter()
+            .map(|c| c.norm())
+            .fold(0.0, f64::max);
         let mut scales: Vec<f64> = hopf
             .eigenvector
             .iter()
@@ -997,6 +1004,189 @@ impl Section {
     }
 }
 
+/// One measured LCO amplitude (a row of a table like
+/// `bristol-spring1-lco-amplitudes.csv`): first-harmonic amplitudes at one speed.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MeasuredAmplitude {
+    /// Line in the file (1-based).
+    pub line: usize,
+    /// Branch the point was measured on (`stable` / `unstable`).
+    pub stable: bool,
+    /// Wind speed [m/s].
+    pub u: f64,
+    /// First-harmonic heave amplitude [m] (peak).
+    pub amplitude_h: f64,
+    /// First-harmonic pitch amplitude [rad] (peak).
+    pub amplitude_alpha: f64,
+}
+
+/// Reads a measured-amplitude table: CSV with a header naming at least `branch`,
+/// `wind_speed_m_s`, `heave_amp_m`, `pitch_amp_rad` (other columns ignored; the last
+/// column may contain commas); lines starting with `#` are comments; `branch` is
+/// `stable` or `unstable`.
+///
+/// # Errors
+/// [`Error::Io`] when the file cannot be read; [`Error::InvalidTable`] naming the file,
+/// the line and the column for a missing column, a bad number or an unknown branch name,
+/// or a table without data rows.
+pub fn read_measured_amplitudes(path: &std::path::Path) -> Result<Vec<MeasuredAmplitude>> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::Io {
+        path: path.display().to_string(),
+        message: e.to_string(),
+    })?;
+    parse_measured_amplitudes(&text, &path.display().to_string())
+}
+
+/// [`read_measured_amplitudes`] on the text of a file named `source` (for messages).
+///
+/// # Errors
+/// As [`read_measured_amplitudes`].
+pub fn parse_measured_amplitudes(text: &str, source: &str) -> Result<Vec<MeasuredAmplitude>> {
+    let bad = |line: usize, msg: String| Error::InvalidTable {
+        table: source.to_string(),
+        message: format!("line {line}: {msg}"),
+    };
+    let mut header: Option<Vec<String>> = None;
+    let mut cols = [0usize; 4];
+    let names = ["branch", "wind_speed_m_s", "heave_amp_m", "pitch_amp_rad"];
+    let mut out = Vec::new();
+    for (i, raw) in text.lines().enumerate() {
+        let line = i + 1;
+        let l = raw.trim();
+        if l.is_empty() || l.starts_with('#') {
+            continue;
+        }
+        match &header {
+            None => {
+                let h: Vec<String> = l.split(',').map(|c| c.trim().to_string()).collect();
+                for (k, name) in names.iter().enumerate() {
+                    cols[k] = h.iter().position(|c| c == name).ok_or_else(|| {
+                        bad(
+                            line,
+                            format!("header has no column `{name}` (columns: {})", h.join(", ")),
+                        )
+                    })?;
+                }
+                header = Some(h);
+            }
+            Some(h) => {
+                let f: Vec<&str> = l.splitn(h.len(), ',').map(str::trim).collect();
+                if f.len() < h.len() {
+                    return Err(bad(
+                        line,
+                        format!("{} fields, the header has {}", f.len(), h.len()),
+                    ));
+                }
+                let num = |k: usize| -> Result<f64> {
+                    let v: f64 = f[cols[k]].parse().map_err(|_| {
+                        bad(
+                            line,
+                            format!("column `{}`: `{}` is not a number", names[k], f[cols[k]]),
+                        )
+                    })?;
+                    if !v.is_finite() || v < 0.0 {
+                        return Err(bad(
+                            line,
+                            format!("column `{}`: {v} must be finite and ≥ 0", names[k]),
+                        ));
+                    }
+                    Ok(v)
+                };
+                let stable = match f[cols[0]] {
+                    "stable" => true,
+                    "unstable" => false,
+                    other => {
+                        return Err(bad(
+                            line,
+                            format!(
+                                "column `branch`: `{other}` is neither `stable` nor `unstable`"
+                            ),
+                        ))
+                    }
+                };
+                out.push(MeasuredAmplitude {
+                    line,
+                    stable,
+                    u: num(1)?,
+                    amplitude_h: num(2)?,
+                    amplitude_alpha: num(3)?,
+                });
+            }
+        }
+    }
+    if out.is_empty() {
+        return Err(Error::InvalidTable {
+            table: source.to_string(),
+            message: "no data rows".into(),
+        });
+    }
+    Ok(out)
+}
+
+/// Distance of one measured point to the predicted branch of the same stability.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MeasuredDistance {
+    /// The measured point.
+    pub measured: MeasuredAmplitude,
+    /// Predicted first-harmonic pitch amplitude at the measured speed on the branch of the
+    /// same stability [rad] (the segment closest in amplitude when several cover the
+    /// speed); `None` when no such segment covers the speed.
+    pub predicted_alpha: Option<f64>,
+    /// Predicted first-harmonic heave amplitude there [m].
+    pub predicted_h: Option<f64>,
+    /// Predicted − measured pitch amplitude [rad].
+    pub d_alpha: Option<f64>,
+    /// Predicted − measured heave amplitude [m].
+    pub d_h: Option<f64>,
+    /// Distance in speed to the nearest predicted orbit of the same stability [m/s]
+    /// (0 when a segment covers the speed).
+    pub speed_gap: f64,
+}
+
+/// Distances of measured points to the predicted branches of the same stability
+/// (first-harmonic amplitudes, linear interpolation in U between branch points).
+pub fn measured_distances(
+    set: &BranchSet,
+    measured: &[MeasuredAmplitude],
+) -> Vec<MeasuredDistance> {
+    measured
+        .iter()
+        .map(|m| {
+            let mut best: Option<(f64, f64)> = None;
+            let mut gap = f64::INFINITY;
+            for b in &set.branches {
+                for p in b.points.iter().filter(|p| p.stable == m.stable) {
+                    gap = gap.min((p.u - m.u).abs());
+                }
+                for w in b.points.windows(2) {
+                    if w[0].stable != m.stable || w[1].stable != m.stable {
+                        continue;
+                    }
+                    if (w[0].u - m.u) * (w[1].u - m.u) > 0.0 || w[0].u == w[1].u {
+                        continue;
+                    }
+                    let f = (m.u - w[0].u) / (w[1].u - w[0].u);
+                    let a = w[0].amplitude1_alpha * (1.0 - f) + w[1].amplitude1_alpha * f;
+                    let h = w[0].amplitude1_h * (1.0 - f) + w[1].amplitude1_h * f;
+                    if best.is_none_or(|(ba, _)| {
+                        (a - m.amplitude_alpha).abs() < (ba - m.amplitude_alpha).abs()
+                    }) {
+                        best = Some((a, h));
+                    }
+                }
+            }
+            MeasuredDistance {
+                measured: m.clone(),
+                predicted_alpha: best.map(|b| b.0),
+                predicted_h: best.map(|b| b.1),
+                d_alpha: best.map(|b| b.0 - m.amplitude_alpha),
+                d_h: best.map(|b| b.1 - m.amplitude_h),
+                speed_gap: if best.is_some() { 0.0 } else { gap },
+            }
+        })
+        .collect()
+}
+
 /// Quadratic interpolation through three points at `x`.
 fn interp3(s: [f64; 3], v: [f64; 3], x: f64) -> f64 {
     let l0 = (x - s[1]) * (x - s[2]) / ((s[0] - s[1]) * (s[0] - s[2]));
@@ -1017,14 +1207,11 @@ fn crossing(a: &BranchPoint, b: &BranchPoint) -> Option<EventKind> {
     if outside(a) == outside(b) {
         return None;
     }
-    let m = b
-        .multipliers
-        .iter()
-        .min_by(|x, y| {
-            (x[0].hypot(x[1]) - 1.0)
-                .abs()
-                .total_cmp(&(y[0].hypot(y[1]) - 1.0).abs())
-        })?;
+    let m = b.multipliers.iter().min_by(|x, y| {
+        (x[0].hypot(x[1]) - 1.0)
+            .abs()
+            .total_cmp(&(y[0].hypot(y[1]) - 1.0).abs())
+    })?;
     Some(if m[1].abs() > 1e-6 {
         EventKind::NeimarkSacker
     } else if m[0] < 0.0 {
@@ -1095,8 +1282,8 @@ mod tests {
         // √(U − U_F) onset.
         let uf = b.hopf.u;
         let (p0, p1) = (&b.points[0], &b.points[1]);
-        let slope = ((p1.u - uf) / (p0.u - uf)).ln()
-            / (p1.amplitude_alpha / p0.amplitude_alpha).ln();
+        let slope =
+            ((p1.u - uf) / (p0.u - uf)).ln() / (p1.amplitude_alpha / p0.amplitude_alpha).ln();
         println!("supercritical onset: log-log slope of U − U_F vs A = {slope:.4}");
         assert!((slope - 2.0).abs() < 0.02, "slope {slope}");
         let lo = LcoOptions::default();
@@ -1155,13 +1342,21 @@ mod tests {
         let p0 = &b.points[0];
         assert!(!p0.stable && p0.u < uf && uf - p0.u < 1e-3 * uf, "{p0:?}");
         assert!(p0.amplitude_alpha < 1.1e-3);
-        let folds: Vec<_> = b.events.iter().filter(|e| e.kind == EventKind::Fold).collect();
+        let folds: Vec<_> = b
+            .events
+            .iter()
+            .filter(|e| e.kind == EventKind::Fold)
+            .collect();
         assert_eq!(folds.len(), 1, "{:?}", b.events);
         let fold = folds[0];
         assert!(fold.u < uf, "fold {} vs Hopf {uf}", fold.u);
         // Stability changes at the fold.
         assert!(!b.points[fold.index - 1].stable || !b.points[fold.index - 2].stable);
-        assert!(b.points[fold.index + 1].stable, "{:?}", b.points[fold.index + 1]);
+        assert!(
+            b.points[fold.index + 1].stable,
+            "{:?}",
+            b.points[fold.index + 1]
+        );
         // Downward sweep of time integration from a large perturbation above U_F.
         let u_test = [uf * 1.02, 0.5 * (fold.u + uf), fold.u + 0.2 * (uf - fold.u)];
         let h = s
@@ -1191,21 +1386,6 @@ mod tests {
                 orbit.amplitude_alpha,
                 r.amplitude_alpha
             );
-        }
-    }
-}
-#[cfg(test)]
-mod debug_tmp {
-    use super::*;
-    #[test]
-    fn dbg_print_branches() {
-        for (name, s) in [("cubic", crate::reference::hp1_cubic_pitch()), ("softhard", tests::hp1_soft_hard())] {
-            let set = s.lco_branches(1.0, 3.0, &BranchOptions::default(), &|_| {}).unwrap();
-            let b = &set.branches[0];
-            println!("{name}: hopf {:?} stop {:?} events {:?} crit {}", b.hopf.u, b.stop, b.events, b.criticality);
-            for p in &b.points {
-                println!("{:.5} {:.5} {} {:.5} {:.4}", p.u, p.amplitude_alpha, p.stable, p.max_floquet, p.omega);
-            }
         }
     }
 }

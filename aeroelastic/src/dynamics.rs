@@ -106,7 +106,13 @@ impl<'a> SectionDynamics<'a> {
     #[inline]
     pub fn rk4_step(&self, z: &mut [f64], dt: f64, work: &mut Rk4Work) {
         let n = z.len();
-        let Rk4Work { k1, k2, k3, k4, tmp } = work;
+        let Rk4Work {
+            k1,
+            k2,
+            k3,
+            k4,
+            tmp,
+        } = work;
         self.rate(z, k1);
         for i in 0..n {
             tmp[i] = z[i] + 0.5 * dt * k1[i];
