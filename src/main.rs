@@ -1,6 +1,7 @@
 //! aeroform command-line interface: parses flags, builds library objects, draws progress
 //! bars and writes files. No physics lives here.
 
+mod branch_cmd;
 mod diagnose_cmd;
 mod flutter_cmd;
 mod identify_cmd;
@@ -35,6 +36,8 @@ enum Command {
     Flutter(flutter_cmd::FlutterArgs),
     /// Limit-cycle oscillation at one speed or over a sweep (up and down).
     Lco(lco_cmd::LcoArgs),
+    /// LCO branches by continuation (stable and unstable, folds, Floquet stability).
+    Branch(branch_cmd::BranchArgs),
     /// Virtual wind tunnel: forced-motion or free-response data sets.
     #[command(subcommand)]
     Tunnel(tunnel_cmd::TunnelCommand),
@@ -52,6 +55,7 @@ fn main() -> ExitCode {
         Command::Identify(a) => identify_cmd::run(&a).map(|_| ()),
         Command::Flutter(a) => flutter_cmd::run(&a),
         Command::Lco(a) => lco_cmd::run(&a),
+        Command::Branch(a) => branch_cmd::run(&a),
         Command::Tunnel(c) => tunnel_cmd::run(&c),
         Command::Plot(a) => plot_cmd::run(&a),
         Command::Diagnose(a) => diagnose_cmd::run(&a),

@@ -121,7 +121,7 @@ fn zeta_of(p: Complex64) -> f64 {
 }
 
 /// Eigenvalues of a real square matrix (Schur, bounded iterations).
-fn eigenvalues(a: &DMatrix<f64>) -> Result<Vec<Complex64>> {
+pub(crate) fn eigenvalues(a: &DMatrix<f64>) -> Result<Vec<Complex64>> {
     if a.iter().any(|v| !v.is_finite()) {
         return Err(Error::numerical("eigenvalues", "non-finite state matrix"));
     }
@@ -131,7 +131,7 @@ fn eigenvalues(a: &DMatrix<f64>) -> Result<Vec<Complex64>> {
 }
 
 /// Right eigenvector of `a` for eigenvalue `lambda` by two steps of inverse iteration.
-fn eigenvector(a: &DMatrix<f64>, lambda: Complex64) -> DVector<Complex64> {
+pub(crate) fn eigenvector(a: &DMatrix<f64>, lambda: Complex64) -> DVector<Complex64> {
     let n = a.nrows();
     let shift = lambda + Complex64::new(1e-10, 1e-10) * lambda.norm().max(1.0);
     let mut m = a.map(|v| Complex64::new(v, 0.0));

@@ -26,6 +26,7 @@ pub use diagnosis_report::{
 };
 pub use error::{Error, Result};
 pub use figures::bifurcation::{BifurcationFigure, BifurcationPoint, ResponseClass, Sweep};
+pub use figures::branch_diagram::{BranchCurve, BranchDiagramFigure, DiagramPoint};
 pub use figures::comparison::{ComparisonFigure, ComparisonPanel};
 pub use figures::delta_path::DeltaPathFigure;
 pub use figures::derivatives::{DerivativeFigure, DerivativePanel, DerivativePoints};

@@ -1,0 +1,1392 @@
+//! Limit-cycle branches by numerical continuation: Hopf points of the equilibrium, periodic
+//! orbits continued in the wind speed U by pseudo-arclength from each Hopf point (stable and
+//! unstable), their stability by Floquet multipliers, folds (saddle-node of cycles),
+//! period-doubling and Neimark–Sacker points.
+//!
+//! Method (DECISIONS.md, "LCO branches by continuation"): single shooting. The unknowns
+//! are the initial state z₀ (h, α, ḣ, α̇, lag states), the period T and U; the equations
+//! are φ_T(z₀; U) − z₀ = 0 (periodicity, φ the flow of [`SectionDynamics`] over one period
+//! by N fixed classical RK4 steps), the phase condition α̇(0) = 0 (the orbit starts at a
+//! pitch extremum) and the pseudo-arclength condition ⟨X − X_k, t_k⟩ = Δs in scaled
+//! variables. Newton's Jacobian is built from finite-difference columns; its z₀ block is
+//! the monodromy matrix, whose eigenvalues are the Floquet multipliers (one is the trivial
+//! multiplier 1, removed as the one closest to 1).
+//!
+//! The equilibrium is the origin (every restoring and aerodynamic term of the section
+//! vanishes there). Hopf points are the speeds where a complex pair of eigenvalues of the
+//! Jacobian of [`SectionDynamics::rate`] at the origin crosses the imaginary axis; the
+//! branch starts from the Hopf eigenvector at a small pitch amplitude.
+//!
+//! Models whose coefficients depend on the reduced frequency K = Bω/U (identified Eq. 19
+//! law, [`crate::aero::NonlinearAero`]) are evaluated at the orbit's own K = B(2π/T)/U at
+//! every Newton iterate ([`AeroModel::with_reduced_frequency`]); their Floquet multipliers
+//! are those of the system with K frozen at the orbit's value.
+//!
+//! Units: U [m/s], T [s], ω [rad/s], h [m] positive down, α [rad] positive nose-up.
+
+use std::sync::Arc;
+
+use nalgebra::{DMatrix, DVector};
+use num_complex::Complex64;
+use serde::{Deserialize, Serialize};
+
+use crate::aero::AeroModel;
+use crate::dynamics::SectionDynamics;
+use crate::integrate::Rk4;
+use crate::flutter::{eigenvalues, eigenvector};
+use crate::section::Section;
+use crate::{Error, Result};
+
+/// Settings of the continuation. Scaled variables: the state is divided by
+/// `amplitude_scale` times the Hopf eigenvector's magnitude of each component (pitch
+/// normalised to 1), T by 0.1 T_Hopf, U by 0.1 U_Hopf; Δs is measured in these units.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct BranchOptions {
+    /// Fixed RK4 steps per period of the shooting integration.
+    pub steps_per_period: usize,
+    /// Largest number of branch points per Hopf point.
+    pub max_points: usize,
+    /// Initial arclength step (scaled).
+    pub ds: f64,
+    /// Smallest arclength step before the branch is declared not converging.
+    pub ds_min: f64,
+    /// Largest arclength step.
+    pub ds_max: f64,
+    /// Newton tolerance on the scaled residual (max norm).
+    pub newton_tol: f64,
+    /// Newton iterations per point before the step is halved.
+    pub max_newton: usize,
+    /// Pitch amplitude of the first orbit, started from the Hopf eigenvector [rad].
+    pub start_amplitude: f64,
+    /// Reference pitch amplitude of the scaling [rad].
+    pub amplitude_scale: f64,
+    /// The branch stops when the pitch amplitude exceeds this [rad].
+    pub max_amplitude_alpha: f64,
+    /// Speeds of the Hopf scan over the range (each bracket then bisected).
+    pub n_scan: usize,
+}
+
+impl Default for BranchOptions {
+    fn default() -> Self {
+        BranchOptions {
+            steps_per_period: 128,
+            max_points: 200,
+            ds: 0.05,
+            ds_min: 1e-5,
+            ds_max: 0.5,
+            newton_tol: 1e-9,
+            max_newton: 8,
+            start_amplitude: 1e-3,
+            amplitude_scale: 0.05,
+            max_amplitude_alpha: 0.6,
+            n_scan: 200,
+        }
+    }
+}
+
+impl BranchOptions {
+    /// Checks the options.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] naming the bad option.
+    pub fn check(&self) -> Result<()> {
+        use crate::error::positive;
+        positive("branch.ds", self.ds)?;
+        positive("branch.ds_min", self.ds_min)?;
+        positive("branch.ds_max", self.ds_max)?;
+        positive("branch.newton_tol", self.newton_tol)?;
+        positive("branch.start_amplitude", self.start_amplitude)?;
+        positive("branch.amplitude_scale", self.amplitude_scale)?;
+        positive("branch.max_amplitude_alpha", self.max_amplitude_alpha)?;
+        if self.ds_min > self.ds || self.ds > self.ds_max {
+            return Err(Error::param(
+                "branch.ds",
+                self.ds,
+                format!(
+                    "must lie in [ds_min, ds_max] = [{}, {}]",
+                    self.ds_min, self.ds_max
+                ),
+            ));
+        }
+        for (name, v, min) in [
+            ("branch.steps_per_period", self.steps_per_period, 16),
+            ("branch.max_points", self.max_points, 2),
+            ("branch.max_newton", self.max_newton, 2),
+            ("branch.n_scan", self.n_scan, 2),
+        ] {
+            if v < min {
+                return Err(Error::param(name, v as f64, format!("must be ≥ {min}")));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A Hopf point of the equilibrium: a complex pair λ = σ ± iω crosses σ = 0 at U.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct HopfPoint {
+    /// Wind speed [m/s].
+    pub u: f64,
+    /// Frequency of the crossing pair [rad/s].
+    pub omega: f64,
+    /// dσ/dU at the crossing [1/m]: > 0 when the equilibrium loses stability with
+    /// increasing U (flutter onset), < 0 when it regains it.
+    pub dsigma_du: f64,
+    /// Hopf eigenvector, pitch component normalised to 1: (re, im) of each state.
+    #[serde(skip)]
+    pub eigenvector: Vec<Complex64>,
+}
+
+/// Kind of a bifurcation of the periodic orbits found on a branch.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum EventKind {
+    /// Turning point in U (saddle-node of cycles): a Floquet multiplier crosses +1.
+    Fold,
+    /// A real Floquet multiplier crosses −1.
+    PeriodDoubling,
+    /// A complex pair of Floquet multipliers crosses the unit circle (torus).
+    NeimarkSacker,
+    /// A real multiplier crosses +1 without a turning point (branch point of cycles).
+    BranchPoint,
+}
+
+/// A bifurcation located between two consecutive branch points.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct BranchEvent {
+    /// Kind.
+    pub kind: EventKind,
+    /// Speed [m/s] (folds: vertex of the parabola U(s) through three points; others: the
+    /// point after the crossing).
+    pub u: f64,
+    /// Pitch amplitude (half peak-to-peak) there [rad].
+    pub amplitude_alpha: f64,
+    /// Heave amplitude (half peak-to-peak) there [m].
+    pub amplitude_h: f64,
+    /// Index of the branch point after the crossing.
+    pub index: usize,
+}
+
+/// One periodic orbit on a branch.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct BranchPoint {
+    /// Wind speed [m/s].
+    pub u: f64,
+    /// Period T [s].
+    pub period: f64,
+    /// Frequency ω = 2π/T [rad/s].
+    pub omega: f64,
+    /// Pitch amplitude, half peak-to-peak [rad] (as the time-integration LCO runs report).
+    pub amplitude_alpha: f64,
+    /// Heave amplitude, half peak-to-peak [m].
+    pub amplitude_h: f64,
+    /// First-harmonic pitch amplitude [rad] (as the measured tables report).
+    pub amplitude1_alpha: f64,
+    /// First-harmonic heave amplitude [m].
+    pub amplitude1_h: f64,
+    /// Largest modulus of the non-trivial Floquet multipliers.
+    pub max_floquet: f64,
+    /// Stable orbit (every non-trivial multiplier inside the unit circle).
+    pub stable: bool,
+    /// Non-trivial Floquet multipliers (re, im).
+    pub multipliers: Vec<[f64; 2]>,
+    /// Initial state z₀ of the orbit (α̇ = 0: a pitch extremum).
+    pub state: Vec<f64>,
+}
+
+/// Why a branch ended.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case", tag = "reason")]
+pub enum StopReason {
+    /// U left the requested range.
+    SpeedRange {
+        /// Speed of the first point outside [m/s].
+        u: f64,
+    },
+    /// The pitch amplitude exceeded `max_amplitude_alpha`.
+    Amplitude {
+        /// Amplitude reached [rad].
+        amplitude_alpha: f64,
+    },
+    /// The branch came back to the equilibrium (another Hopf point).
+    Equilibrium {
+        /// Speed [m/s].
+        u: f64,
+    },
+    /// `max_points` reached.
+    MaxPoints,
+    /// Newton did not converge even with the smallest step.
+    NotConverged {
+        /// Speed of the last converged point [m/s].
+        u: f64,
+        /// Its pitch amplitude [rad].
+        amplitude_alpha: f64,
+        /// What failed.
+        message: String,
+    },
+}
+
+/// A continued branch of periodic orbits from one Hopf point.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Branch {
+    /// The Hopf point it starts from.
+    pub hopf: HopfPoint,
+    /// Orbits in continuation order.
+    pub points: Vec<BranchPoint>,
+    /// Folds, period doublings, Neimark–Sacker points.
+    pub events: Vec<BranchEvent>,
+    /// Why it ended.
+    pub stop: StopReason,
+    /// `supercritical` (stable cycles born towards U where the equilibrium is unstable)
+    /// or `subcritical`, from the first continued orbits.
+    pub criticality: String,
+    /// Scale of each unknown (state, T, U) used by the continuation.
+    pub scales: Vec<f64>,
+}
+
+/// All branches of a speed range.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct BranchSet {
+    /// Hopf points in the range, increasing U.
+    pub hopf_points: Vec<HopfPoint>,
+    /// One branch per Hopf point.
+    pub branches: Vec<Branch>,
+    /// Settings.
+    pub options: BranchOptions,
+    /// Speed range [m/s].
+    pub u_range: [f64; 2],
+}
+
+/// Progress report after each branch point.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BranchProgress {
+    /// Branch index.
+    pub branch: usize,
+    /// Points so far on this branch.
+    pub points: usize,
+    /// Speed of the last point [m/s].
+    pub u: f64,
+    /// Its pitch amplitude [rad].
+    pub amplitude_alpha: f64,
+}
+
+/// Which extra equation closes the shooting system.
+enum Closure<'a> {
+    /// Pitch at t = 0 equals the value (start from the Hopf point).
+    Alpha(f64),
+    /// Pseudo-arclength ⟨Y − Y_k, t_k⟩ = Δs.
+    Arclength(&'a DVector<f64>, &'a DVector<f64>, f64),
+    /// U fixed (scaled).
+    Speed(f64),
+}
+
+/// The shooting problem of one section in scaled unknowns Y = (z₀, T, U) / scales.
+struct Shooting<'a> {
+    section: &'a Section,
+    n: usize,
+    steps: usize,
+    scales: Vec<f64>,
+    k_dependent: bool,
+}
+
+/// Result of one flow evaluation.
+struct Flow {
+    end: Vec<f64>,
+    samples: Option<Vec<[f64; 2]>>,
+}
+
+impl<'a> Shooting<'a> {
+    fn new(section: &'a Section, steps: usize, scales: Vec<f64>) -> Self {
+        let k_dependent = section.aero.with_reduced_frequency(1.0).is_some();
+        Shooting {
+            section,
+            n: section.n_states(),
+            steps,
+            scales,
+            k_dependent,
+        }
+    }
+
+    fn unscale(&self, y: &DVector<f64>) -> (Vec<f64>, f64, f64) {
+        let n = self.n;
+        let z = (0..n).map(|i| y[i] * self.scales[i]).collect();
+        (z, y[n] * self.scales[n], y[n + 1] * self.scales[n + 1])
+    }
+
+    /// φ_T(z₀; U) by `steps` RK4 steps; with `record`, (h, α) at every step.
+    fn flow(&self, z0: &[f64], t: f64, u: f64, record: bool) -> Result<Flow> {
+        if !(t.is_finite() && t > 0.0 && u.is_finite() && u > 0.0) {
+            return Err(Error::numerical(
+                "shooting",
+                format!("non-physical iterate T = {t} s, U = {u} m/s"),
+            ));
+        }
+        let rebuilt;
+        let section = if self.k_dependent {
+            let k = self.section.aero.chord() * (std::f64::consts::TAU / t) / u;
+            let m: Arc<dyn AeroModel> = self
+                .section
+                .aero
+                .with_reduced_frequency(k)
+                .ok_or_else(|| Error::numerical("shooting", format!("no model at K = {k}")))?;
+            rebuilt = Section::new(self.section.structure.clone(), m, self.section.rho)?;
+            &rebuilt
+        } else {
+            self.section
+        };
+        let dynamics = SectionDynamics::new(section, u)?;
+        let dt = t / self.steps as f64;
+        let mut z = z0.to_vec();
+        let mut work = Rk4::new(self.n);
+        let mut samples = record.then(|| Vec::with_capacity(self.steps + 1));
+        for _ in 0..self.steps {
+            if let Some(s) = samples.as_mut() {
+                s.push([z[0], z[1]]);
+            }
+            work.step(&dynamics, 0.0, dt, &mut z);
+        }
+        if z.iter().any(|v| !v.is_finite()) {
+            return Err(Error::numerical(
+                "shooting",
+                format!("orbit integration overflowed at U = {u} m/s"),
+            ));
+        }
+        Ok(Flow { end: z, samples })
+    }
+
+    /// Periodicity and phase residuals G(Y) (n + 1 values, scaled).
+    fn g(&self, y: &DVector<f64>, record: bool) -> Result<(DVector<f64>, Flow)> {
+        let (z, t, u) = self.unscale(y);
+        let f = self.flow(&z, t, u, record)?;
+        let n = self.n;
+        let mut g = DVector::zeros(n + 1);
+        for i in 0..n {
+            g[i] = (f.end[i] - z[i]) / self.scales[i];
+        }
+        g[n] = y[3];
+        Ok((g, f))
+    }
+
+    /// Forward-difference Jacobian of G at `y` given G(y).
+    fn jac(&self, y: &DVector<f64>, g0: &DVector<f64>) -> Result<DMatrix<f64>> {
+        let m = self.n + 2;
+        let mut j = DMatrix::zeros(self.n + 1, m);
+        for c in 0..m {
+            let d = 1e-7 * (1.0 + y[c].abs());
+            let mut yp = y.clone();
+            yp[c] += d;
+            let (gp, _) = self.g(&yp, false)?;
+            j.set_column(c, &((gp - g0) / d));
+        }
+        Ok(j)
+    }
+
+    fn closure_row(&self, c: &Closure, y: &DVector<f64>) -> (DVector<f64>, f64) {
+        let m = self.n + 2;
+        match c {
+            Closure::Alpha(a) => {
+                let mut r = DVector::zeros(m);
+                r[1] = 1.0;
+                (r, y[1] - a)
+            }
+            Closure::Arclength(yk, tk, ds) => ((*tk).clone(), (y - *yk).dot(tk) - ds),
+            Closure::Speed(us) => {
+                let mut r = DVector::zeros(m);
+                r[m - 1] = 1.0;
+                (r, y[m - 1] - us)
+            }
+        }
+    }
+
+    /// Newton (chord, Jacobian refreshed once when slow) from `y`; returns the solution,
+    /// G and the Jacobian of G at the solution, and the iterations used.
+    fn newton(
+        &self,
+        mut y: DVector<f64>,
+        closure: &Closure,
+        jac: Option<&DMatrix<f64>>,
+        tol: f64,
+        max_iter: usize,
+    ) -> Result<(DVector<f64>, DMatrix<f64>, usize)> {
+        let m = self.n + 2;
+        let mut jg = match jac {
+            Some(j) => j.clone(),
+            None => {
+                let (g0, _) = self.g(&y, false)?;
+                self.jac(&y, &g0)?
+            }
+        };
+        let mut refreshed = jac.is_none();
+        let mut last = f64::INFINITY;
+        for it in 0..max_iter {
+            let (g, _) = self.g(&y, false)?;
+            let (row, c) = self.closure_row(closure, &y);
+            let mut r = DVector::zeros(m);
+            r.rows_mut(0, m - 1).copy_from(&g);
+            r[m - 1] = c;
+            let norm = r.amax();
+            if !norm.is_finite() {
+                return Err(Error::numerical("newton", "non-finite residual"));
+            }
+            if norm < tol {
+                let j = self.jac(&y, &g)?;
+                return Ok((y, j, it));
+            }
+            if (norm > 0.5 * last || it == 3) && !refreshed {
+                jg = self.jac(&y, &g)?;
+                refreshed = true;
+            } else if norm > 2.0 * last && refreshed {
+                return Err(Error::numerical(
+                    "newton",
+                    format!("residual grows ({last:.3e} → {norm:.3e})"),
+                ));
+            }
+            last = norm;
+            let mut a = DMatrix::zeros(m, m);
+            a.rows_mut(0, m - 1).copy_from(&jg);
+            a.set_row(m - 1, &row.transpose());
+            let dy = a
+                .lu()
+                .solve(&(-r))
+                .ok_or_else(|| Error::numerical("newton", "singular Jacobian"))?;
+            y += dy;
+        }
+        Err(Error::numerical(
+            "newton",
+            format!("no convergence in {max_iter} iterations (residual {last:.3e})"),
+        ))
+    }
+
+    /// Tangent of the solution curve: null vector of the Jacobian of G, oriented along
+    /// `prev`.
+    fn tangent(&self, jg: &DMatrix<f64>, prev: &DVector<f64>) -> Result<DVector<f64>> {
+        let m = self.n + 2;
+        let mut a = DMatrix::zeros(m, m);
+        a.rows_mut(0, m - 1).copy_from(jg);
+        a.set_row(m - 1, &prev.transpose());
+        let mut rhs = DVector::zeros(m);
+        rhs[m - 1] = 1.0;
+        let t = a
+            .lu()
+            .solve(&rhs)
+            .ok_or_else(|| Error::numerical("tangent", "singular extended Jacobian"))?;
+        let nrm = t.norm();
+        if !(nrm.is_finite() && nrm > 0.0) {
+            return Err(Error::numerical("tangent", "degenerate tangent"));
+        }
+        Ok(t / nrm)
+    }
+
+    /// The orbit at `y` (converged) with its multipliers from the Jacobian `jg`.
+    fn point(&self, y: &DVector<f64>, jg: &DMatrix<f64>) -> Result<BranchPoint> {
+        let (z, t, u) = self.unscale(y);
+        let f = self.flow(&z, t, u, true)?;
+        let s = f.samples.unwrap_or_default();
+        let (amp_h, amp_a) = (half_peak_to_peak(&s, 0), half_peak_to_peak(&s, 1));
+        let (a1_h, a1_a) = (first_harmonic(&s, 0), first_harmonic(&s, 1));
+        // Monodromy in scaled variables: M_s = S⁻¹ (∂φ/∂z₀) S = J_zz + I (same spectrum).
+        let n = self.n;
+        let mut mono = jg.view((0, 0), (n, n)).into_owned();
+        for i in 0..n {
+            mono[(i, i)] += 1.0;
+        }
+        let mut mu = eigenvalues(&mono)?;
+        if let Some((k, _)) = mu
+            .iter()
+            .enumerate()
+            .min_by(|a, b| (a.1 - 1.0).norm().total_cmp(&(b.1 - 1.0).norm()))
+        {
+            mu.remove(k);
+        }
+        let max_floquet = mu.iter().map(|m| m.norm()).fold(0.0, f64::max);
+        Ok(BranchPoint {
+            u,
+            period: t,
+            omega: std::f64::consts::TAU / t,
+            amplitude_alpha: amp_a,
+            amplitude_h: amp_h,
+            amplitude1_alpha: a1_a,
+            amplitude1_h: a1_h,
+            max_floquet,
+            stable: max_floquet < 1.0,
+            multipliers: mu.iter().map(|m| [m.re, m.im]).collect(),
+            state: z,
+        })
+    }
+
+    fn scaled(&self, p: &BranchPoint) -> DVector<f64> {
+        let n = self.n;
+        let mut y = DVector::zeros(n + 2);
+        for i in 0..n {
+            y[i] = p.state[i] / self.scales[i];
+        }
+        y[n] = p.period / self.scales[n];
+        y[n + 1] = p.u / self.scales[n + 1];
+        y
+    }
+}
+
+/// Half peak-to-peak of channel `c` of one period of samples, each extremum refined by the
+/// parabola through the extreme sample and its two (periodic) neighbours.
+fn half_peak_to_peak(s: &[[f64; 2]], c: usize) -> f64 {
+    let n = s.len();
+    if n < 3 {
+        return 0.0;
+    }
+    let refine = |k: usize| {
+        let (a, b, d) = (s[(k + n - 1) % n][c], s[k][c], s[(k + 1) % n][c]);
+        let den = a - 2.0 * b + d;
+        if den.abs() < 1e-300 {
+            b
+        } else {
+            b - 0.125 * (d - a) * (d - a) / den
+        }
+    };
+    let (mut kmax, mut kmin) = (0, 0);
+    for k in 0..n {
+        if s[k][c] > s[kmax][c] {
+            kmax = k;
+        }
+        if s[k][c] < s[kmin][c] {
+            kmin = k;
+        }
+    }
+    0.5 * (refine(kmax) - refine(kmin))
+}
+
+/// First-harmonic amplitude |c₁| of channel `c` over one period of uniform samples:
+/// (2/N)|Σ x_k e^{−2πik/N}| (exact for periodic signals up to aliasing).
+fn first_harmonic(s: &[[f64; 2]], c: usize) -> f64 {
+    let n = s.len() as f64;
+    let (mut re, mut im) = (0.0, 0.0);
+    for (k, v) in s.iter().enumerate() {
+        let th = std::f64::consts::TAU * k as f64 / n;
+        re += v[c] * th.cos();
+        im -= v[c] * th.sin();
+    }
+    2.0 / n * (re * re + im * im).sqrt()
+}
+
+/// Vertex of the parabola through three points (s_i, u_i); returns (s*, u*).
+fn parabola_vertex(s: [f64; 3], u: [f64; 3]) -> Option<(f64, f64)> {
+    let d1 = (u[1] - u[0]) / (s[1] - s[0]);
+    let d2 = (u[2] - u[1]) / (s[2] - s[1]);
+    let a = (d2 - d1) / (s[2] - s[0]);
+    if a.abs() < 1e-300 || !a.is_finite() {
+        return None;
+    }
+    let b = d1 - a * (s[0] + s[1]);
+    let sv = -b / (2.0 * a);
+    let uv = u[0] + d1 * (sv - s[0]) + a * (sv - s[0]) * (sv - s[1]);
+    Some((sv, uv))
+}
+
+impl Section {
+    /// Checks that the vector field is smooth enough for continuation: a sharp pitch
+    /// freeplay is refused (Coulomb friction is always regularised, F_c tanh(v/ε)).
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] naming `structure.pitch_freeplay`.
+    pub fn check_smooth(&self) -> Result<()> {
+        if self.structure.pitch_freeplay > 0.0 {
+            return Err(Error::param(
+                "structure.pitch_freeplay",
+                self.structure.pitch_freeplay,
+                "a sharp freeplay gap is not differentiable: continuation of periodic orbits \
+                 needs a smooth vector field; replace it by a smooth stiffness polynomial \
+                 (e.g. the hardening terms of a fitted smoothed gap) or use time integration \
+                 (`aeroform lco`)",
+            ));
+        }
+        Ok(())
+    }
+
+    /// Jacobian of [`SectionDynamics::rate`] at the origin at speed `u` (central
+    /// differences; consistent with the nonlinear rate, including regularised friction).
+    ///
+    /// # Errors
+    /// As [`SectionDynamics::new`].
+    pub fn equilibrium_jacobian(&self, u: f64) -> Result<DMatrix<f64>> {
+        let d = SectionDynamics::new(self, u)?;
+        let n = d.dim();
+        let fr = self.structure.friction_resolved();
+        let mut j = DMatrix::zeros(n, n);
+        let (mut fp, mut fm) = (vec![0.0; n], vec![0.0; n]);
+        for c in 0..n {
+            let mut h: f64 = 1e-6;
+            if c == 2 && fr[0] > 0.0 {
+                h = h.min(1e-3 * fr[1]);
+            }
+            if c == 3 && fr[2] > 0.0 {
+                h = h.min(1e-3 * fr[3]);
+            }
+            let mut z = vec![0.0; n];
+            z[c] = h;
+            d.rate(&z, &mut fp);
+            z[c] = -h;
+            d.rate(&z, &mut fm);
+            for r in 0..n {
+                j[(r, c)] = (fp[r] - fm[r]) / (2.0 * h);
+            }
+        }
+        Ok(j)
+    }
+
+    /// Largest real part of the oscillatory eigenvalues (|Im| > 1e-6 ω_α) of the
+    /// equilibrium at `u`, and the eigenvalue.
+    fn oscillatory_growth(&self, u: f64) -> Result<(f64, Complex64)> {
+        let ev = eigenvalues(&self.equilibrium_jacobian(u)?)?;
+        let floor = 1e-6 * self.structure.omega_alpha();
+        ev.into_iter()
+            .filter(|l| l.im > floor)
+            .map(|l| (l.re, l))
+            .max_by(|a, b| a.0.total_cmp(&b.0))
+            .ok_or_else(|| Error::numerical("hopf", format!("no oscillatory mode at U = {u}")))
+    }
+
+    /// Hopf points of the equilibrium in [`u_min`, `u_max`] [m/s]: the largest real part
+    /// of the oscillatory eigenvalues of [`Section::equilibrium_jacobian`] is scanned at
+    /// `n_scan` speeds and each sign change bisected to 1e-12 U.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] for a bad range; as [`Section::equilibrium_jacobian`].
+    pub fn hopf_points(&self, u_min: f64, u_max: f64, n_scan: usize) -> Result<Vec<HopfPoint>> {
+        crate::error::positive("u_min", u_min)?;
+        if !(u_max.is_finite() && u_max > u_min) {
+            return Err(Error::param(
+                "u_max",
+                u_max,
+                format!("must be > u_min = {u_min}"),
+            ));
+        }
+        let n_scan = n_scan.max(2);
+        let us: Vec<f64> = (0..n_scan)
+            .map(|i| u_min + (u_max - u_min) * i as f64 / (n_scan - 1) as f64)
+            .collect();
+        let mut g = Vec::with_capacity(n_scan);
+        for &u in &us {
+            g.push(self.oscillatory_growth(u)?.0);
+        }
+        let mut out = Vec::new();
+        for i in 1..n_scan {
+            if (g[i - 1] < 0.0) == (g[i] < 0.0) {
+                continue;
+            }
+            let (mut a, mut b, ga) = (us[i - 1], us[i], g[i - 1]);
+            while b - a > 1e-12 * b {
+                let m = 0.5 * (a + b);
+                let gm = self.oscillatory_growth(m)?.0;
+                if (gm < 0.0) == (ga < 0.0) {
+                    a = m;
+                } else {
+                    b = m;
+                }
+            }
+            let u = 0.5 * (a + b);
+            let (_, lam) = self.oscillatory_growth(u)?;
+            let jac = self.equilibrium_jacobian(u)?;
+            let v = eigenvector(&jac, lam);
+            if v[1].norm() < 1e-8 * v.norm() {
+                return Err(Error::numerical(
+                    "hopf",
+                    format!("Hopf mode at U = {u} m/s has no pitch motion"),
+                ));
+            }
+            let v1 = v[1];
+            let du = 1e-6 * u;
+            let dsig = (self.oscillatory_growth(u + du)?.0 - self.oscillatory_growth(u - du)?.0)
+                / (2.0 * du);
+            out.push(HopfPoint {
+                u,
+                omega: lam.im,
+                dsigma_du: dsig,
+                eigenvector: v.iter().map(|c| c / v1).collect(),
+            });
+        }
+        Ok(out)
+    }
+
+    /// Continues the periodic orbits born at `hopf` within [`u_min`, `u_max`] [m/s].
+    /// `observer` receives a report after each point.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] for bad options or a non-smooth structure
+    /// ([`Section::check_smooth`]); [`Error::Numerical`] when not even the first orbits
+    /// near the Hopf point converge (the message names the speed and amplitude). A branch
+    /// that stops converging later ends with [`StopReason::NotConverged`] and keeps its
+    /// points.
+    pub fn continue_branch(
+        &self,
+        hopf: &HopfPoint,
+        u_min: f64,
+        u_max: f64,
+        opts: &BranchOptions,
+        observer: &dyn Fn(BranchProgress),
+    ) -> Result<Branch> {
+        opts.check()?;
+        self.check_smooth()?;
+        let n = self.n_states();
+        let t_h = std::f64::consts::TAU / hopf.omega;
+        let vmax = hopf
+            .eigenvector
+            .iter()
+            .map(|c| c.norm())
+            .fold(0.0, f64::max);
+        let mut scales: Vec<f64> = hopf
+            .eigenvector
+            .iter()
+            .map(|c| opts.amplitude_scale * c.norm().max(1e-3 * vmax))
+            .collect();
+        scales.push(0.1 * t_h);
+        scales.push(0.1 * hopf.u);
+        let sh = Shooting::new(self, opts.steps_per_period, scales);
+        let start = |a: f64| -> Result<(DVector<f64>, DMatrix<f64>)> {
+            let mut y = DVector::zeros(n + 2);
+            for i in 0..n {
+                y[i] = a * hopf.eigenvector[i].re / sh.scales[i];
+            }
+            y[3] = 0.0;
+            y[n] = t_h / sh.scales[n];
+            y[n + 1] = hopf.u / sh.scales[n + 1];
+            let c = Closure::Alpha(a / sh.scales[1]);
+            sh.newton(y, &c, None, opts.newton_tol, 3 * opts.max_newton)
+                .map(|(y, j, _)| (y, j))
+                .map_err(|e| {
+                    Error::numerical(
+                        "branch start",
+                        format!(
+                            "the orbit of pitch amplitude {a:.3e} rad next to the Hopf point \
+                             U = {:.6} m/s did not converge: {e}",
+                            hopf.u
+                        ),
+                    )
+                })
+        };
+        let a0 = opts.start_amplitude;
+        let (y0, j0) = start(a0)?;
+        let (y1, j1) = start(2.0 * a0)?;
+        let mut points = vec![sh.point(&y0, &j0)?, sh.point(&y1, &j1)?];
+        for p in &points {
+            observer(BranchProgress {
+                branch: 0,
+                points: 1,
+                u: p.u,
+                amplitude_alpha: p.amplitude_alpha,
+            });
+        }
+        let sec = &y1 - &y0;
+        let mut t = sh.tangent(&j1, &(&sec / sec.norm()))?;
+        let mut ts = vec![sec.clone() / sec.norm(), t.clone()];
+        let mut arc = vec![0.0, sec.norm()];
+        let mut yk = y1;
+        let mut jk = j1;
+        let mut ds = opts.ds;
+        let mut events = Vec::new();
+        let stop;
+        loop {
+            if points.len() >= opts.max_points {
+                stop = StopReason::MaxPoints;
+                break;
+            }
+            let pred = &yk + &t * ds;
+            let c = Closure::Arclength(&yk, &t, ds);
+            let res = sh
+                .newton(pred, &c, Some(&jk), opts.newton_tol, opts.max_newton)
+                .and_then(|(y, j, it)| {
+                    let tn = sh.tangent(&j, &t)?;
+                    Ok((y, j, it, tn))
+                });
+            let accepted = match res {
+                Ok((y, j, it, tn)) if tn.dot(&t) > 0.8 => Some((y, j, it, tn)),
+                Ok(_) => None,
+                Err(e) => {
+                    if ds * 0.5 < opts.ds_min {
+                        let last = points.last().expect("two start points");
+                        stop = StopReason::NotConverged {
+                            u: last.u,
+                            amplitude_alpha: last.amplitude_alpha,
+                            message: format!(
+                                "after point {} (U = {:.6} m/s, pitch amplitude {:.4e} rad): {e}",
+                                points.len() - 1,
+                                last.u,
+                                last.amplitude_alpha
+                            ),
+                        };
+                        break;
+                    }
+                    None
+                }
+            };
+            let Some((y, j, it, tn)) = accepted else {
+                ds *= 0.5;
+                if ds < opts.ds_min {
+                    let last = points.last().expect("two start points");
+                    stop = StopReason::NotConverged {
+                        u: last.u,
+                        amplitude_alpha: last.amplitude_alpha,
+                        message: format!(
+                            "after point {} (U = {:.6} m/s): the tangent turns too sharply \
+                             even at the smallest step",
+                            points.len() - 1,
+                            last.u
+                        ),
+                    };
+                    break;
+                }
+                continue;
+            };
+            let p = sh.point(&y, &j)?;
+            if p.u < u_min || p.u > u_max {
+                stop = StopReason::SpeedRange { u: p.u };
+                break;
+            }
+            if p.amplitude_alpha > opts.max_amplitude_alpha {
+                stop = StopReason::Amplitude {
+                    amplitude_alpha: p.amplitude_alpha,
+                };
+                break;
+            }
+            if points.len() > 4 && p.amplitude_alpha < 0.5 * opts.start_amplitude {
+                stop = StopReason::Equilibrium { u: p.u };
+                break;
+            }
+            arc.push(arc.last().copied().unwrap_or(0.0) + (&y - &yk).norm());
+            let prev = points.last().expect("two start points").clone();
+            let k = points.len();
+            points.push(p);
+            ts.push(tn.clone());
+            // Events between k−1 and k.
+            let ui = n + 1;
+            let fold = ts[k - 1][ui] * ts[k][ui] < 0.0;
+            if fold {
+                let s3 = [arc[k - 2], arc[k - 1], arc[k]];
+                let u3 = [points[k - 2].u, points[k - 1].u, points[k].u];
+                let a3 = [
+                    points[k - 2].amplitude_alpha,
+                    points[k - 1].amplitude_alpha,
+                    points[k].amplitude_alpha,
+                ];
+                let h3 = [
+                    points[k - 2].amplitude_h,
+                    points[k - 1].amplitude_h,
+                    points[k].amplitude_h,
+                ];
+                let (u_f, a_f, h_f) = match parabola_vertex(s3, u3) {
+                    Some((sv, uv)) if sv >= s3[0] && sv <= s3[2] => {
+                        (uv, interp3(s3, a3, sv), interp3(s3, h3, sv))
+                    }
+                    _ => (points[k - 1].u, a3[1], h3[1]),
+                };
+                events.push(BranchEvent {
+                    kind: EventKind::Fold,
+                    u: u_f,
+                    amplitude_alpha: a_f,
+                    amplitude_h: h_f,
+                    index: k,
+                });
+            } else if let Some(kind) = crossing(&prev, &points[k]) {
+                events.push(BranchEvent {
+                    kind,
+                    u: points[k].u,
+                    amplitude_alpha: points[k].amplitude_alpha,
+                    amplitude_h: points[k].amplitude_h,
+                    index: k,
+                });
+            }
+            observer(BranchProgress {
+                branch: 0,
+                points: points.len(),
+                u: points[k].u,
+                amplitude_alpha: points[k].amplitude_alpha,
+            });
+            yk = y;
+            jk = j;
+            t = tn;
+            if it <= 3 {
+                ds = (ds * 1.5).min(opts.ds_max);
+            }
+        }
+        let criticality = {
+            let q = points.get(2).unwrap_or(&points[1]);
+            let towards_unstable = (q.u - hopf.u) * hopf.dsigma_du > 0.0;
+            if towards_unstable {
+                "supercritical"
+            } else {
+                "subcritical"
+            }
+        }
+        .to_string();
+        Ok(Branch {
+            hopf: hopf.clone(),
+            points,
+            events,
+            stop,
+            criticality,
+            scales: sh.scales,
+        })
+    }
+
+    /// Hopf points in [`u_min`, `u_max`] and the branch of periodic orbits of each.
+    ///
+    /// # Errors
+    /// [`Error::Numerical`] when there is no Hopf point in the range (the message gives
+    /// the growth rate at both ends); otherwise as [`Section::continue_branch`].
+    pub fn lco_branches(
+        &self,
+        u_min: f64,
+        u_max: f64,
+        opts: &BranchOptions,
+        observer: &dyn Fn(BranchProgress),
+    ) -> Result<BranchSet> {
+        opts.check()?;
+        self.check_smooth()?;
+        let hopf_points = self.hopf_points(u_min, u_max, opts.n_scan)?;
+        if hopf_points.is_empty() {
+            let g0 = self.oscillatory_growth(u_min)?.0;
+            let g1 = self.oscillatory_growth(u_max)?.0;
+            return Err(Error::numerical(
+                "branch",
+                format!(
+                    "no Hopf point in U = {u_min}…{u_max} m/s: the largest oscillatory growth \
+                     rate is {g0:.4e} 1/s at {u_min} and {g1:.4e} 1/s at {u_max} (no sign \
+                     change); widen the speed range"
+                ),
+            ));
+        }
+        let mut branches = Vec::new();
+        for (i, h) in hopf_points.iter().enumerate() {
+            let obs = |p: BranchProgress| observer(BranchProgress { branch: i, ..p });
+            branches.push(self.continue_branch(h, u_min, u_max, opts, &obs)?);
+        }
+        Ok(BranchSet {
+            hopf_points,
+            branches,
+            options: *opts,
+            u_range: [u_min, u_max],
+        })
+    }
+
+    /// The periodic orbit at speed `u` [m/s] on `branch`, of the given stability: the
+    /// first branch segment of that stability whose speeds bracket `u` gives the initial
+    /// guess (linear interpolation), Newton at fixed U corrects it.
+    ///
+    /// # Errors
+    /// [`Error::Numerical`] when no such segment brackets `u` or Newton fails.
+    pub fn orbit_on_branch(
+        &self,
+        branch: &Branch,
+        u: f64,
+        stable: bool,
+        opts: &BranchOptions,
+    ) -> Result<BranchPoint> {
+        let sh = Shooting::new(self, opts.steps_per_period, branch.scales.clone());
+        let seg = branch.points.windows(2).find(|w| {
+            w[0].stable == stable
+                && w[1].stable == stable
+                && (w[0].u - u) * (w[1].u - u) <= 0.0
+                && w[0].u != w[1].u
+        });
+        let w = seg.ok_or_else(|| {
+            Error::numerical(
+                "orbit_on_branch",
+                format!(
+                    "no {} segment of the branch from the Hopf point at {:.4} m/s covers U = {u} m/s",
+                    if stable { "stable" } else { "unstable" },
+                    branch.hopf.u
+                ),
+            )
+        })?;
+        let f = (u - w[0].u) / (w[1].u - w[0].u);
+        let y = sh.scaled(&w[0]) * (1.0 - f) + sh.scaled(&w[1]) * f;
+        let n = self.n_states();
+        let c = Closure::Speed(u / sh.scales[n + 1]);
+        let (y, j, _) = sh.newton(y, &c, None, opts.newton_tol, 3 * opts.max_newton)?;
+        sh.point(&y, &j)
+    }
+}
+
+/// One measured LCO amplitude (a row of a table like
+/// `bristol-spring1-lco-amplitudes.csv`): first-harmonic amplitudes at one speed.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MeasuredAmplitude {
+    /// Line in the file (1-based).
+    pub line: usize,
+    /// Branch the point was measured on (`stable` / `unstable`).
+    pub stable: bool,
+    /// Wind speed [m/s].
+    pub u: f64,
+    /// First-harmonic heave amplitude [m] (peak).
+    pub amplitude_h: f64,
+    /// First-harmonic pitch amplitude [rad] (peak).
+    pub amplitude_alpha: f64,
+}
+
+/// Reads a measured-amplitude table: CSV with a header naming at least `branch`,
+/// `wind_speed_m_s`, `heave_amp_m`, `pitch_amp_rad` (other columns ignored; the last
+/// column may contain commas); lines starting with `#` are comments; `branch` is
+/// `stable` or `unstable`.
+///
+/// # Errors
+/// [`Error::Io`] when the file cannot be read; [`Error::InvalidTable`] naming the file,
+/// the line and the column for a missing column, a bad number or an unknown branch name,
+/// or a table without data rows.
+pub fn read_measured_amplitudes(path: &std::path::Path) -> Result<Vec<MeasuredAmplitude>> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::Io {
+        path: path.display().to_string(),
+        message: e.to_string(),
+    })?;
+    parse_measured_amplitudes(&text, &path.display().to_string())
+}
+
+/// [`read_measured_amplitudes`] on the text of a file named `source` (for messages).
+///
+/// # Errors
+/// As [`read_measured_amplitudes`].
+pub fn parse_measured_amplitudes(text: &str, source: &str) -> Result<Vec<MeasuredAmplitude>> {
+    let bad = |line: usize, msg: String| Error::InvalidTable {
+        table: source.to_string(),
+        message: format!("line {line}: {msg}"),
+    };
+    let mut header: Option<Vec<String>> = None;
+    let mut cols = [0usize; 4];
+    let names = ["branch", "wind_speed_m_s", "heave_amp_m", "pitch_amp_rad"];
+    let mut out = Vec::new();
+    for (i, raw) in text.lines().enumerate() {
+        let line = i + 1;
+        let l = raw.trim();
+        if l.is_empty() || l.starts_with('#') {
+            continue;
+        }
+        match &header {
+            None => {
+                let h: Vec<String> = l.split(',').map(|c| c.trim().to_string()).collect();
+                for (k, name) in names.iter().enumerate() {
+                    cols[k] = h.iter().position(|c| c == name).ok_or_else(|| {
+                        bad(
+                            line,
+                            format!("header has no column `{name}` (columns: {})", h.join(", ")),
+                        )
+                    })?;
+                }
+                header = Some(h);
+            }
+            Some(h) => {
+                let f: Vec<&str> = l.splitn(h.len(), ',').map(str::trim).collect();
+                if f.len() < h.len() {
+                    return Err(bad(
+                        line,
+                        format!("{} fields, the header has {}", f.len(), h.len()),
+                    ));
+                }
+                let num = |k: usize| -> Result<f64> {
+                    let v: f64 = f[cols[k]].parse().map_err(|_| {
+                        bad(
+                            line,
+                            format!("column `{}`: `{}` is not a number", names[k], f[cols[k]]),
+                        )
+                    })?;
+                    if !v.is_finite() || v < 0.0 {
+                        return Err(bad(
+                            line,
+                            format!("column `{}`: {v} must be finite and ≥ 0", names[k]),
+                        ));
+                    }
+                    Ok(v)
+                };
+                let stable = match f[cols[0]] {
+                    "stable" => true,
+                    "unstable" => false,
+                    other => {
+                        return Err(bad(
+                            line,
+                            format!(
+                                "column `branch`: `{other}` is neither `stable` nor `unstable`"
+                            ),
+                        ))
+                    }
+                };
+                out.push(MeasuredAmplitude {
+                    line,
+                    stable,
+                    u: num(1)?,
+                    amplitude_h: num(2)?,
+                    amplitude_alpha: num(3)?,
+                });
+            }
+        }
+    }
+    if out.is_empty() {
+        return Err(Error::InvalidTable {
+            table: source.to_string(),
+            message: "no data rows".into(),
+        });
+    }
+    Ok(out)
+}
+
+/// Distance of one measured point to the predicted branch of the same stability.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MeasuredDistance {
+    /// The measured point.
+    pub measured: MeasuredAmplitude,
+    /// Predicted first-harmonic pitch amplitude at the measured speed on the branch of the
+    /// same stability [rad] (the segment closest in amplitude when several cover the
+    /// speed); `None` when no such segment covers the speed.
+    pub predicted_alpha: Option<f64>,
+    /// Predicted first-harmonic heave amplitude there [m].
+    pub predicted_h: Option<f64>,
+    /// Predicted − measured pitch amplitude [rad].
+    pub d_alpha: Option<f64>,
+    /// Predicted − measured heave amplitude [m].
+    pub d_h: Option<f64>,
+    /// Distance in speed to the nearest predicted orbit of the same stability [m/s]
+    /// (0 when a segment covers the speed).
+    pub speed_gap: f64,
+}
+
+/// Distances of measured points to the predicted branches of the same stability
+/// (first-harmonic amplitudes, linear interpolation in U between branch points).
+pub fn measured_distances(
+    set: &BranchSet,
+    measured: &[MeasuredAmplitude],
+) -> Vec<MeasuredDistance> {
+    measured
+        .iter()
+        .map(|m| {
+            let mut best: Option<(f64, f64)> = None;
+            let mut gap = f64::INFINITY;
+            for b in &set.branches {
+                for p in b.points.iter().filter(|p| p.stable == m.stable) {
+                    gap = gap.min((p.u - m.u).abs());
+                }
+                for w in b.points.windows(2) {
+                    if w[0].stable != m.stable || w[1].stable != m.stable {
+                        continue;
+                    }
+                    if (w[0].u - m.u) * (w[1].u - m.u) > 0.0 || w[0].u == w[1].u {
+                        continue;
+                    }
+                    let f = (m.u - w[0].u) / (w[1].u - w[0].u);
+                    let a = w[0].amplitude1_alpha * (1.0 - f) + w[1].amplitude1_alpha * f;
+                    let h = w[0].amplitude1_h * (1.0 - f) + w[1].amplitude1_h * f;
+                    if best.is_none_or(|(ba, _)| {
+                        (a - m.amplitude_alpha).abs() < (ba - m.amplitude_alpha).abs()
+                    }) {
+                        best = Some((a, h));
+                    }
+                }
+            }
+            MeasuredDistance {
+                measured: m.clone(),
+                predicted_alpha: best.map(|b| b.0),
+                predicted_h: best.map(|b| b.1),
+                d_alpha: best.map(|b| b.0 - m.amplitude_alpha),
+                d_h: best.map(|b| b.1 - m.amplitude_h),
+                speed_gap: if best.is_some() { 0.0 } else { gap },
+            }
+        })
+        .collect()
+}
+
+/// Quadratic interpolation through three points at `x`.
+fn interp3(s: [f64; 3], v: [f64; 3], x: f64) -> f64 {
+    let l0 = (x - s[1]) * (x - s[2]) / ((s[0] - s[1]) * (s[0] - s[2]));
+    let l1 = (x - s[0]) * (x - s[2]) / ((s[1] - s[0]) * (s[1] - s[2]));
+    let l2 = (x - s[0]) * (x - s[1]) / ((s[2] - s[0]) * (s[2] - s[1]));
+    v[0] * l0 + v[1] * l1 + v[2] * l2
+}
+
+/// Kind of multiplier crossing between two points without a turning point, if the number
+/// of multipliers outside the unit circle changed.
+fn crossing(a: &BranchPoint, b: &BranchPoint) -> Option<EventKind> {
+    let outside = |p: &BranchPoint| {
+        p.multipliers
+            .iter()
+            .filter(|m| m[0].hypot(m[1]) > 1.0)
+            .count()
+    };
+    if outside(a) == outside(b) {
+        return None;
+    }
+    let m = b.multipliers.iter().min_by(|x, y| {
+        (x[0].hypot(x[1]) - 1.0)
+            .abs()
+            .total_cmp(&(y[0].hypot(y[1]) - 1.0).abs())
+    })?;
+    Some(if m[1].abs() > 1e-6 {
+        EventKind::NeimarkSacker
+    } else if m[0] < 0.0 {
+        EventKind::PeriodDoubling
+    } else {
+        EventKind::BranchPoint
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::flutter::{FlutterMethod, FlutterOptions};
+    use crate::lco::LcoOptions;
+    use crate::reference::{hp1_cubic_pitch, hp1_structure};
+    use crate::structure::PolyTerm;
+
+    fn no_obs(_: BranchProgress) {}
+
+    #[test]
+    fn hopf_point_is_the_linear_flutter_speed() {
+        let s = hp1_cubic_pitch();
+        let h = s.hopf_points(1.0, 3.0, 50).unwrap();
+        let fo = FlutterOptions {
+            u_min: 0.05,
+            u_max: 4.0,
+            n_speeds: 80,
+            tol_rel: 1e-10,
+        };
+        let f = s.flutter(FlutterMethod::P, &fo).unwrap().flutter.unwrap();
+        assert_eq!(h.len(), 1, "{h:?}");
+        assert!((h[0].u - f.u).abs() < 1e-6 * f.u, "{} vs {}", h[0].u, f.u);
+        assert!((h[0].omega - f.omega).abs() < 1e-5 * f.omega);
+        assert!(h[0].dsigma_du > 0.0);
+    }
+
+    #[test]
+    fn freeplay_is_refused_with_the_field_name() {
+        let mut s = hp1_cubic_pitch();
+        s.structure.pitch_freeplay = 0.01;
+        let e = s
+            .lco_branches(1.0, 3.0, &BranchOptions::default(), &no_obs)
+            .unwrap_err();
+        assert!(e.to_string().contains("pitch_freeplay"), "{e}");
+    }
+
+    #[test]
+    fn no_hopf_point_in_range_is_an_error() {
+        let s = hp1_cubic_pitch();
+        let e = s
+            .lco_branches(0.5, 1.5, &BranchOptions::default(), &no_obs)
+            .unwrap_err();
+        assert!(e.to_string().contains("no Hopf point"), "{e}");
+    }
+
+    /// Supercritical reference: the cubic-pitch-spring HP-1 section of the LCO benchmark.
+    /// Stable amplitudes equal long Dop853 time integration (rtol 1e-10) to 0.1 %, and
+    /// the onset follows U − U_F ∝ A² (log-log slope 2 over the first orbits).
+    #[test]
+    fn supercritical_branch_matches_time_integration() {
+        let s = hp1_cubic_pitch();
+        let opts = BranchOptions::default();
+        let set = s.lco_branches(1.5, 3.0, &opts, &no_obs).unwrap();
+        let b = &set.branches[0];
+        assert_eq!(b.criticality, "supercritical");
+        assert!(b.events.is_empty(), "{:?}", b.events);
+        assert!(b.points.iter().all(|p| p.stable && p.u >= b.hopf.u));
+        // √(U − U_F) onset.
+        let uf = b.hopf.u;
+        let (p0, p1) = (&b.points[0], &b.points[1]);
+        let slope =
+            ((p1.u - uf) / (p0.u - uf)).ln() / (p1.amplitude_alpha / p0.amplitude_alpha).ln();
+        println!("supercritical onset: log-log slope of U − U_F vs A = {slope:.4}");
+        assert!((slope - 2.0).abs() < 0.02, "slope {slope}");
+        let lo = LcoOptions::default();
+        for f in [1.1, 1.3] {
+            let u = f * uf;
+            let orbit = s.orbit_on_branch(b, u, true, &opts).unwrap();
+            let mut y0 = orbit.state.clone();
+            y0[1] *= 1.05;
+            let r = s.lco_run(u, &y0, &lo).unwrap();
+            assert_eq!(r.classification, crate::lco::Classification::Lco);
+            let rel = (orbit.amplitude_alpha - r.amplitude_alpha).abs() / r.amplitude_alpha;
+            println!(
+                "supercritical U = {u:.5}: branch {:.7} time integration {:.7} rad, rel {rel:.2e}",
+                orbit.amplitude_alpha, r.amplitude_alpha
+            );
+            assert!(
+                rel < 1e-3,
+                "U = {u}: branch {} vs time integration {} ({rel:.2e})",
+                orbit.amplitude_alpha,
+                r.amplitude_alpha
+            );
+            let relw = (orbit.omega - r.omega).abs() / r.omega;
+            assert!(relw < 1e-3, "ω {} vs {}", orbit.omega, r.omega);
+        }
+    }
+
+    /// HP-1 with the softening–hardening pitch spring k_α(α − 3α³ + 20α⁵).
+    pub(crate) fn hp1_soft_hard() -> Section {
+        let mut s = hp1_cubic_pitch();
+        let k = hp1_structure().k_alpha;
+        s.structure.pitch_stiffness_terms = vec![
+            PolyTerm {
+                power: 3,
+                coefficient: -3.0 * k,
+            },
+            PolyTerm {
+                power: 5,
+                coefficient: 20.0 * k,
+            },
+        ];
+        s
+    }
+
+    /// Subcritical reference: a fold below the flutter speed, the unstable branch leaves
+    /// the Hopf point, the stable branch above the fold matches a downward time-integration
+    /// sweep to 0.1 %.
+    #[test]
+    fn subcritical_branch_has_a_fold_and_matches_down_sweep() {
+        let s = hp1_soft_hard();
+        let opts = BranchOptions::default();
+        let set = s.lco_branches(1.0, 3.0, &opts, &no_obs).unwrap();
+        let b = &set.branches[0];
+        assert_eq!(b.criticality, "subcritical");
+        let uf = b.hopf.u;
+        // The unstable branch joins the Hopf point.
+        let p0 = &b.points[0];
+        assert!(!p0.stable && p0.u < uf && uf - p0.u < 1e-3 * uf, "{p0:?}");
+        assert!(p0.amplitude_alpha < 1.1e-3);
+        let folds: Vec<_> = b
+            .events
+            .iter()
+            .filter(|e| e.kind == EventKind::Fold)
+            .collect();
+        assert_eq!(folds.len(), 1, "{:?}", b.events);
+        let fold = folds[0];
+        assert!(fold.u < uf, "fold {} vs Hopf {uf}", fold.u);
+        // Stability changes at the fold.
+        assert!(!b.points[fold.index - 1].stable || !b.points[fold.index - 2].stable);
+        assert!(
+            b.points[fold.index + 1].stable,
+            "{:?}",
+            b.points[fold.index + 1]
+        );
+        // Downward sweep of time integration from a large perturbation above U_F.
+        let u_test = [uf * 1.02, 0.5 * (fold.u + uf), fold.u + 0.2 * (uf - fold.u)];
+        let h = s
+            .lco_sweep(
+                &u_test,
+                crate::lco::SweepDirection::Down,
+                &s.perturbation(0.3),
+                &LcoOptions::default(),
+                &|_| {},
+            )
+            .unwrap();
+        for r in &h {
+            if r.u > uf {
+                continue;
+            }
+            assert_eq!(r.classification, crate::lco::Classification::Lco, "{r:?}");
+            let orbit = s.orbit_on_branch(b, r.u, true, &opts).unwrap();
+            let rel = (orbit.amplitude_alpha - r.amplitude_alpha).abs() / r.amplitude_alpha;
+            println!(
+                "subcritical U = {:.5} (fold {:.5}, Hopf {uf:.5}): branch {:.7} down-sweep {:.7} rad, rel {rel:.2e}",
+                r.u, fold.u, orbit.amplitude_alpha, r.amplitude_alpha
+            );
+            assert!(
+                rel < 1e-3,
+                "U = {}: branch {} vs down-sweep {} ({rel:.2e})",
+                r.u,
+                orbit.amplitude_alpha,
+                r.amplitude_alpha
+            );
+        }
+    }
+}

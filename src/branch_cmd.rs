@@ -1,0 +1,286 @@
+//! `aeroform branch`: LCO branches by continuation from each Hopf point (stable and
+//! unstable, folds, Floquet stability), written to `branch.csv`, `branch.json` and a
+//! bifurcation diagram; `--measured` overlays measured amplitudes and reports their
+//! distance to the predicted branch of the same stability.
+
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+use aeroelastic::branch::{
+    measured_distances, read_measured_amplitudes, BranchOptions, BranchProgress, BranchSet,
+    EventKind, MeasuredDistance, StopReason,
+};
+use anyhow::Context;
+use clap::Args;
+
+use crate::flutter_cmd::load;
+
+/// Flags of `aeroform branch`.
+#[derive(Debug, Args)]
+pub struct BranchArgs {
+    /// Structure file (TOML).
+    #[arg(long)]
+    pub structure: PathBuf,
+    /// Aerodynamic model: a model TOML file or an identification.json.
+    #[arg(long)]
+    pub model: PathBuf,
+    /// Speed range `a:b` [m/s]: Hopf points are searched and branches continued in it.
+    #[arg(long)]
+    pub speeds: String,
+    /// Measured amplitudes (CSV with columns branch, wind_speed_m_s, heave_amp_m,
+    /// pitch_amp_rad) to overlay and compare.
+    #[arg(long)]
+    pub measured: Option<PathBuf>,
+    /// Largest number of points per branch.
+    #[arg(long, default_value_t = 200)]
+    pub max_points: usize,
+    /// RK4 steps per period of the shooting integration.
+    #[arg(long, default_value_t = 128)]
+    pub steps_per_period: usize,
+    /// Chord B [m] for an identification.json model.
+    #[arg(long)]
+    pub chord: Option<f64>,
+    /// Output folder (created if missing).
+    #[arg(long, default_value = "out")]
+    pub out: PathBuf,
+}
+
+/// Parses `a:b` into a checked range.
+fn parse_range(s: &str) -> anyhow::Result<(f64, f64)> {
+    let bad = || anyhow::anyhow!("--speeds `{s}`: expected `a:b` with 0 < a < b [m/s]");
+    let (a, b) = s.split_once(':').ok_or_else(bad)?;
+    let a: f64 = a.trim().parse().map_err(|_| bad())?;
+    let b: f64 = b.trim().parse().map_err(|_| bad())?;
+    if !(a.is_finite() && b.is_finite() && a > 0.0 && b > a) {
+        return Err(bad());
+    }
+    Ok((a, b))
+}
+
+fn stop_text(s: &StopReason) -> String {
+    match s {
+        StopReason::SpeedRange { u } => format!("left the speed range at U = {u:.4} m/s"),
+        StopReason::Amplitude { amplitude_alpha } => format!(
+            "pitch amplitude {:.2}° above the limit",
+            amplitude_alpha.to_degrees()
+        ),
+        StopReason::Equilibrium { u } => format!("returned to the equilibrium at U = {u:.4} m/s"),
+        StopReason::MaxPoints => "point limit reached".into(),
+        StopReason::NotConverged { message, .. } => format!("did not converge {message}"),
+    }
+}
+
+fn branch_csv(set: &BranchSet) -> String {
+    let mut s = String::from(
+        "U_m_s,stable,amplitude_alpha_deg,amplitude_h_m,omega_rad_s,max_floquet,branch,amplitude1_alpha_deg,amplitude1_h_m\n",
+    );
+    for (i, b) in set.branches.iter().enumerate() {
+        for p in &b.points {
+            let _ = writeln!(
+                s,
+                "{},{},{},{},{},{},{},{},{}",
+                p.u,
+                p.stable,
+                p.amplitude_alpha.to_degrees(),
+                p.amplitude_h,
+                p.omega,
+                p.max_floquet,
+                i,
+                p.amplitude1_alpha.to_degrees(),
+                p.amplitude1_h
+            );
+        }
+    }
+    s
+}
+
+fn figure(set: &BranchSet, dist: &[MeasuredDistance]) -> plots::BranchDiagramFigure {
+    use plots::{BranchCurve, DiagramPoint};
+    // With measured points, compare like with like: first-harmonic amplitudes.
+    let first = !dist.is_empty();
+    let amp = |p: &aeroelastic::branch::BranchPoint| {
+        if first {
+            p.amplitude1_alpha.to_degrees()
+        } else {
+            p.amplitude_alpha.to_degrees()
+        }
+    };
+    plots::BranchDiagramFigure {
+        title: "LCO branches by continuation".into(),
+        u_label: "U [m/s]".into(),
+        amplitude_label: if first {
+            "first-harmonic pitch amplitude [deg]".into()
+        } else {
+            "pitch amplitude (half peak-to-peak) [deg]".into()
+        },
+        branches: set
+            .branches
+            .iter()
+            .map(|b| BranchCurve {
+                u: b.points.iter().map(|p| p.u).collect(),
+                amplitude: b.points.iter().map(amp).collect(),
+                stable: b.points.iter().map(|p| p.stable).collect(),
+            })
+            .collect(),
+        hopf: set
+            .hopf_points
+            .iter()
+            .map(|h| DiagramPoint {
+                u: h.u,
+                amplitude: 0.0,
+                stable: false,
+            })
+            .collect(),
+        folds: set
+            .branches
+            .iter()
+            .flat_map(|b| {
+                b.events
+                    .iter()
+                    .filter(|e| e.kind == EventKind::Fold)
+                    .map(|e| DiagramPoint {
+                        u: e.u,
+                        amplitude: if first {
+                            // first-harmonic amplitude of the orbit nearest the fold
+                            amp(&b.points[e.index.saturating_sub(1)])
+                        } else {
+                            e.amplitude_alpha.to_degrees()
+                        },
+                        stable: false,
+                    })
+            })
+            .collect(),
+        sweep: vec![],
+        measured: dist
+            .iter()
+            .map(|d| DiagramPoint {
+                u: d.measured.u,
+                amplitude: d.measured.amplitude_alpha.to_degrees(),
+                stable: d.measured.stable,
+            })
+            .collect(),
+    }
+}
+
+/// Runs `aeroform branch`.
+pub fn run(args: &BranchArgs) -> anyhow::Result<()> {
+    let (u_min, u_max) = parse_range(&args.speeds)?;
+    let l = load(&args.structure, &args.model, args.chord)?;
+    let opts = BranchOptions {
+        max_points: args.max_points,
+        steps_per_period: args.steps_per_period,
+        ..BranchOptions::default()
+    };
+    let measured = match &args.measured {
+        Some(p) => Some(read_measured_amplitudes(p).context("measured amplitudes")?),
+        None => None,
+    };
+    crate::ensure_dir(&args.out)?;
+    let obs = |_: BranchProgress| {};
+    let set = l
+        .section
+        .lco_branches(u_min, u_max, &opts, &obs)
+        .with_context(|| format!("LCO branches in U = {u_min}…{u_max} m/s"))?;
+    for (i, b) in set.branches.iter().enumerate() {
+        println!(
+            "branch {i}: Hopf point U = {:.4} m/s, {:.4} Hz, {}; {} orbits, {}",
+            b.hopf.u,
+            b.hopf.omega / std::f64::consts::TAU,
+            b.criticality,
+            b.points.len(),
+            stop_text(&b.stop)
+        );
+        if let StopReason::NotConverged { message, .. } = &b.stop {
+            eprintln!("warning: branch {i} stopped early: it did not converge {message}");
+        }
+        for e in &b.events {
+            println!(
+                "  {:?} at U = {:.4} m/s, pitch amplitude {:.3}°, heave amplitude {:.2} mm",
+                e.kind,
+                e.u,
+                e.amplitude_alpha.to_degrees(),
+                e.amplitude_h * 1e3
+            );
+        }
+    }
+    let dist = measured
+        .as_deref()
+        .map(|m| measured_distances(&set, m))
+        .unwrap_or_default();
+    if !dist.is_empty() {
+        println!(
+            "{:>9} {:>9} {:>14} {:>14} {:>12} {:>12}",
+            "U [m/s]", "branch", "meas α1 [deg]", "pred α1 [deg]", "Δα1 [deg]", "Δh1 [mm]"
+        );
+        for d in &dist {
+            let f =
+                |v: Option<f64>, k: f64| v.map_or("—".to_string(), |x| format!("{:.3}", x * k));
+            println!(
+                "{:>9.3} {:>9} {:>14.3} {:>14} {:>12} {:>12}{}",
+                d.measured.u,
+                if d.measured.stable {
+                    "stable"
+                } else {
+                    "unstable"
+                },
+                d.measured.amplitude_alpha.to_degrees(),
+                f(d.predicted_alpha, 180.0 / std::f64::consts::PI),
+                f(d.d_alpha, 180.0 / std::f64::consts::PI),
+                f(d.d_h, 1e3),
+                if d.predicted_alpha.is_none() {
+                    format!(
+                        "  (no predicted branch of this stability here; nearest {:.3} m/s away)",
+                        d.speed_gap
+                    )
+                } else {
+                    String::new()
+                }
+            );
+        }
+    }
+    let folds: Vec<_> = set
+        .branches
+        .iter()
+        .enumerate()
+        .flat_map(|(i, b)| {
+            b.events
+                .iter()
+                .filter(|e| e.kind == EventKind::Fold)
+                .map(move |e| {
+                    serde_json::json!({
+                        "branch": i,
+                        "U_m_s": e.u,
+                        "amplitude_alpha_deg": e.amplitude_alpha.to_degrees(),
+                        "amplitude_h_m": e.amplitude_h,
+                    })
+                })
+        })
+        .collect();
+    let json = serde_json::json!({
+        "format": "aeroform-branch/1",
+        "structure": args.structure.display().to_string(),
+        "model": args.model.display().to_string(),
+        "settings": {
+            "method": "single shooting (fixed-step RK4) + pseudo-arclength, Floquet multipliers from the monodromy matrix",
+            "options": set.options,
+            "u_range_m_s": set.u_range,
+        },
+        "hopf_points": set.hopf_points,
+        "folds": folds,
+        "branches": set.branches,
+        "measured": dist,
+    });
+    let csv = args.out.join("branch.csv");
+    identify::io::write_atomic(&csv, branch_csv(&set).as_bytes())?;
+    let path = args.out.join("branch.json");
+    identify::io::write_atomic(&path, format!("{json:#}\n").as_bytes())?;
+    let fig = plots::save(&figure(&set, &dist), &args.out, "branch_diagram")
+        .context("bifurcation diagram")?;
+    println!(
+        "wrote {}, {}, {}",
+        csv.display(),
+        path.display(),
+        fig.png.display()
+    );
+    Ok(())
+}
