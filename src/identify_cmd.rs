@@ -194,7 +194,7 @@ pub fn run(args: &IdentifyArgs) -> anyhow::Result<Identification> {
         .context("invalid identification option")?;
     let pre = args.preprocess();
     pre.check().context("invalid preprocessing option")?;
-    crate::ensure_dir(&args.out)?;
+    let _out = crate::outdir::SharedDir::begin(&args.out)?;
 
     let t_start = Instant::now();
     let dataset = read_dataset(&args.dataset)

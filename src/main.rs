@@ -2,10 +2,12 @@
 //! bars and writes files. No physics lives here.
 
 mod diagnose_cmd;
+mod exit;
 mod flutter_cmd;
 mod identify_cmd;
 mod interrupt;
 mod lco_cmd;
+mod outdir;
 mod plot_cmd;
 mod progress;
 mod run_cmd;
@@ -47,6 +49,7 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    interrupt::install();
     let result = match cli.command {
         Command::Run(a) => run_cmd::run(&a),
         Command::Identify(a) => identify_cmd::run(&a).map(|_| ()),
@@ -60,7 +63,7 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");
-            ExitCode::FAILURE
+            ExitCode::from(exit::code(&e))
         }
     }
 }

@@ -112,7 +112,10 @@ pub fn read_case(dir: &Path, manifest: &Manifest, case: &CaseSpec) -> Result<Rec
     // A forcing frequency at or above Nyquist cannot be in the record: refuse it (it would
     // otherwise silently null the derivatives of the case).
     let nyquist = 0.5 / rec.dt;
-    for (key, f) in [("freq_pitch", case.freq_pitch), ("freq_heave", case.freq_heave)] {
+    for (key, f) in [
+        ("freq_pitch", case.freq_pitch),
+        ("freq_heave", case.freq_heave),
+    ] {
         if let Some(f) = f.filter(|f| *f >= nyquist) {
             let manifest_path = dir.join(MANIFEST_FILE);
             let text = std::fs::read_to_string(&manifest_path).unwrap_or_default();
