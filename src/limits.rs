@@ -49,6 +49,15 @@ impl std::fmt::Display for LimitError {
 
 impl std::error::Error for LimitError {}
 
+/// A number for a message: exponent form outside [1e-4, 1e16) so that 1e300 stays short.
+fn show(x: f64) -> String {
+    if x != 0.0 && x.is_finite() && !(1e-4..1e16).contains(&x.abs()) {
+        format!("{x:e}")
+    } else {
+        format!("{x}")
+    }
+}
+
 fn err<T>(field: &str, message: String) -> Result<T, LimitError> {
     Err(LimitError {
         field: field.to_string(),
@@ -119,9 +128,11 @@ pub fn samples(
         return err(
             duration_field,
             format!(
-                "{records} record(s) × {duration} s × {rate} Hz = {n:.3e} samples \
+                "{records} record(s) × {} s × {} Hz = {n:.3e} samples \
                  (≈ {:.1} GB) exceed the cap of {MAX_SAMPLES:.1e} samples; shorten the \
                  records or use fewer cases",
+                show(duration),
+                show(rate),
                 n * 5.0 * 8.0 / 1e9
             ),
         );
