@@ -34,17 +34,21 @@ pub struct DiagnoseArgs {
     pub seed: u64,
     /// Run the withheld-effect benchmark on N generated data sets instead.
     #[arg(long, conflicts_with_all = ["dataset", "free"])]
-    pub blind: Option<usize>,
+    pub blind: Option<u128>,
+    /// Replace an existing output folder that aeroform did not write.
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// Runs `aeroform diagnose`.
 pub fn run(args: &DiagnoseArgs) -> anyhow::Result<()> {
     if let Some(n) = args.blind {
+        let n = aeroform::limits::count("--blind", n, aeroform::limits::MAX_BLIND_SETS)?;
         let out = args
             .out
             .clone()
             .unwrap_or_else(|| PathBuf::from("out/blind"));
-        return blind(n, args.seed, &out);
+        return blind(n, args.seed, &out, args.force);
     }
     let Some(dir) = &args.dataset else {
         bail!("give a data-set folder or --blind N");
@@ -58,7 +62,7 @@ pub fn run(args: &DiagnoseArgs) -> anyhow::Result<()> {
         Some(f) => Some(read_dataset(f).with_context(|| format!("reading {}", f.display()))?),
         None => None,
     };
-    crate::ensure_dir(&out)?;
+    let dir = crate::outdir::OutDir::begin(&out, "diagnose", args.force)?;
     let opts = DiagnoseOptions::new(args.seed);
     let t = std::time::Instant::now();
     let diag = diagnose(
@@ -68,8 +72,9 @@ pub fn run(args: &DiagnoseArgs) -> anyhow::Result<()> {
         &crate::study::figures::version(),
     )?;
     let secs = t.elapsed().as_secs_f64();
-    write_json(&out.join("diagnosis.json"), &diag)?;
-    let files = plots::write_diagnosis_outputs(&diag, &out)?;
+    write_json(&dir.path().join("diagnosis.json"), &diag)?;
+    let files = plots::write_diagnosis_outputs(&diag, dir.path())?;
+    dir.commit()?;
     print_diagnosis(&diag, secs);
     println!(
         "wrote {} and {} figure/report files to {}",
@@ -125,11 +130,8 @@ fn print_diagnosis(d: &Diagnosis, secs: f64) {
     println!("diagnosed in {secs:.2} s");
 }
 
-fn blind(n: usize, seed: u64, out: &Path) -> anyhow::Result<()> {
-    if n == 0 {
-        bail!("--blind needs at least one data set");
-    }
-    crate::ensure_dir(&out.to_path_buf())?;
+fn blind(n: usize, seed: u64, out: &Path, force: bool) -> anyhow::Result<()> {
+    let dir = crate::outdir::OutDir::begin(out, "diagnose --blind", force)?;
     let opts = BlindOptions::new(n, seed);
     let bar = CountBar::new("blind", n);
     let wrong = AtomicUsize::new(0);
@@ -142,9 +144,10 @@ fn blind(n: usize, seed: u64, out: &Path) -> anyhow::Result<()> {
     });
     bar.finish();
     let secs = t.elapsed().as_secs_f64();
-    write_json(&out.join("blind.json"), &report)?;
+    write_json(&dir.path().join("blind.json"), &report)?;
     let text = blind_text(&report, secs);
-    write_atomic(&out.join("confusion.md"), text.as_bytes())?;
+    write_atomic(&dir.path().join("confusion.md"), text.as_bytes())?;
+    dir.commit()?;
     print!("{text}");
     println!(
         "wrote {} and {}",

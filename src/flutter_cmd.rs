@@ -65,35 +65,9 @@ pub fn load(structure: &Path, model: &Path, chord: Option<f64>) -> anyhow::Resul
     })
 }
 
-/// Parses `a:b:n` (n ≥ 1 speeds from a to b) or a comma list `3,4,5.5`.
-pub fn parse_speeds(s: &str) -> anyhow::Result<Vec<f64>> {
-    let bad = || anyhow::anyhow!("speeds `{s}`: expected `a:b:n` or a comma list like `3,4,5`");
-    let v: Vec<f64> = if let Some((a, rest)) = s.split_once(':') {
-        let (b, n) = rest.split_once(':').ok_or_else(bad)?;
-        let a: f64 = a.trim().parse().map_err(|_| bad())?;
-        let b: f64 = b.trim().parse().map_err(|_| bad())?;
-        let n: usize = n.trim().parse().map_err(|_| bad())?;
-        match n {
-            0 => return Err(bad()),
-            1 => vec![a],
-            _ => (0..n)
-                .map(|i| a + (b - a) * i as f64 / (n - 1) as f64)
-                .collect(),
-        }
-    } else {
-        s.split(',')
-            .map(|x| x.trim().parse::<f64>().map_err(|_| bad()))
-            .collect::<anyhow::Result<_>>()?
-    };
-    if v.iter().any(|u| !(u.is_finite() && *u > 0.0)) {
-        anyhow::bail!("speeds `{s}`: every speed must be finite and > 0");
-    }
-    Ok(v)
-}
-
 /// Runs `aeroform flutter`.
 pub fn run(args: &FlutterArgs) -> anyhow::Result<()> {
-    let speeds = parse_speeds(&args.speeds)?;
+    let speeds = aeroform::limits::parse_speeds("--speeds", &args.speeds)?;
     if speeds.len() < 2 {
         anyhow::bail!(
             "speeds `{}`: a flutter scan needs at least 2 speeds",
@@ -115,7 +89,7 @@ pub fn run(args: &FlutterArgs) -> anyhow::Result<()> {
         .section
         .flutter(method, &opts)
         .context("flutter analysis")?;
-    crate::ensure_dir(&args.out)?;
+    let _out = crate::outdir::SharedDir::begin(&args.out)?;
     let b = l.section.aero.chord();
     let point = fa.flutter.map(|f| {
         serde_json::json!({

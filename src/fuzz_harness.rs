@@ -9,6 +9,7 @@
 //!   line `@@ NAME` (see [`split_dataset_input`]).
 //! - [`study`]: the study-file TOML text.
 //! - [`identification`]: the `identification.json` text.
+//! - [`cli`]: lines `FLAG VALUE` of the numeric command-line flags.
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -187,11 +188,132 @@ pub fn study(data: &[u8]) {
     match Study::parse(text, Path::new("fuzz.toml"), Path::new(".")) {
         Ok(s) => {
             let _ = s.figure_kinds();
+            check_study_is_bounded(&s);
         }
         Err(e) => {
             let lines = text.split('\n').count();
             assert!(e.line <= lines, "line {} of {lines}: {e}", e.line);
             let _ = e.to_string();
+        }
+    }
+}
+
+/// A study that parses asks for nothing beyond [`crate::limits`]: generated samples,
+/// cases, speeds, periods; every number it hands to a stage is finite.
+///
+/// # Panics
+/// When a parsed study exceeds a cap (the parser let it through).
+fn check_study_is_bounded(s: &Study) {
+    use crate::limits::*;
+    let sp = &s.spec;
+    if let Some(d) = &sp.data {
+        if let Some(sy) = &d.synthetic {
+            let n = sy.config.len() * sy.amplitudes_deg.len() * sy.speeds.len();
+            assert!(n <= MAX_CASES, "{n} cases");
+            let samples = n as f64 * (sy.duration * sy.rate).ceil();
+            assert!(samples <= MAX_SAMPLES, "{samples} samples");
+            assert!(sy.speeds.iter().all(|u| *u > 0.0 && *u <= MAX_SPEED));
+        }
+        if let Some(t) = &d.table_iv {
+            let samples = t.repeats as f64 * (t.duration * t.rate).ceil();
+            assert!(samples <= MAX_SAMPLES, "{samples} samples");
+            assert!(t.sigma.is_finite());
+        }
+        if let Some(v) = &d.virtual_tunnel {
+            let cases = if v.campaign == "paper" { 448.0 } else { 64.0 };
+            let records = cases * if v.still_air { 2.0 } else { 1.0 };
+            let samples = records * (v.duration * 512.0).ceil();
+            assert!(samples <= MAX_SAMPLES, "{samples} samples");
+        }
+    }
+    if let Some(f) = &sp.flutter {
+        assert!(f.n_speeds <= MAX_SPEEDS && f.u_max <= MAX_SPEED && f.u_min > 0.0);
+    }
+    if let Some(l) = &sp.lco {
+        assert!(l.speeds.len() <= MAX_SPEEDS);
+        assert!(l.max_periods <= MAX_PERIODS && l.phase_periods <= MAX_PHASE_PERIODS);
+        assert!(l.perturbation_down_deg.is_finite());
+    }
+    if let Some(a) = &sp.aero {
+        assert!(a.elastic_axis.is_finite() && (1..=8).contains(&a.n_lag));
+    }
+    if let Some(st) = &sp.structure {
+        for v in [
+            st.mu,
+            st.r_alpha2,
+            st.sigma,
+            st.x_alpha,
+            st.semi_chord,
+            st.omega_alpha,
+        ] {
+            assert!(v.is_finite());
+        }
+    }
+}
+
+/// Command-line harness: each line `FLAG VALUE` feeds VALUE to the checker of that
+/// numeric flag exactly as the binary does (`--speeds`/`--sweep`:
+/// [`crate::limits::parse_speeds`]; `--duration`: [`crate::limits::samples`] with the
+/// paper campaign's 448 records at 512 Hz; `--blind`: [`crate::limits::count`];
+/// `--alpha0`: [`crate::limits::abs_at_most`]). Unknown flags are skipped.
+///
+/// # Panics
+/// When an accepted value breaks a cap, or an error does not name its flag.
+pub fn cli(data: &[u8]) {
+    use crate::limits::*;
+    let Ok(text) = std::str::from_utf8(data) else {
+        return;
+    };
+    for line in text.lines() {
+        let Some((flag, value)) = line.trim().split_once(' ') else {
+            continue;
+        };
+        let value = value.trim();
+        let named = |e: &LimitError| {
+            assert!(
+                e.field.starts_with(flag),
+                "error for {flag} names {}",
+                e.field
+            );
+        };
+        match flag {
+            "--speeds" | "--sweep" => match parse_speeds(flag, value) {
+                Ok(v) => {
+                    assert!(!v.is_empty() && v.len() <= MAX_SPEEDS, "{} speeds", v.len());
+                    assert!(v
+                        .iter()
+                        .all(|u| u.is_finite() && *u > 0.0 && *u <= MAX_SPEED));
+                }
+                Err(e) => named(&e),
+            },
+            "--duration" => {
+                let Ok(d) = value.parse::<f64>() else {
+                    continue;
+                };
+                match samples(flag, "rate", 448, d, 512.0) {
+                    Ok(n) => assert!(n <= MAX_SAMPLES && d > 0.0 && d <= MAX_DURATION),
+                    Err(e) => named(&e),
+                }
+            }
+            "--blind" => {
+                let Ok(n) = value.parse::<u128>() else {
+                    continue;
+                };
+                match count(flag, n, MAX_BLIND_SETS) {
+                    Ok(k) => assert!((1..=MAX_BLIND_SETS).contains(&k)),
+                    Err(e) => named(&e),
+                }
+            }
+            "--alpha0" => {
+                let Ok(a) = value.parse::<f64>() else {
+                    continue;
+                };
+                match abs_at_most(flag, a, MAX_PITCH_DEG, "deg") {
+                    Ok(x) => assert!(x.abs() <= MAX_PITCH_DEG),
+                    Err(e) => named(&e),
+                }
+            }
+            _ => {}
         }
     }
 }

@@ -194,7 +194,6 @@ pub fn run(args: &IdentifyArgs) -> anyhow::Result<Identification> {
         .context("invalid identification option")?;
     let pre = args.preprocess();
     pre.check().context("invalid preprocessing option")?;
-    crate::ensure_dir(&args.out)?;
 
     let t_start = Instant::now();
     let dataset = read_dataset(&args.dataset)
@@ -211,6 +210,8 @@ pub fn run(args: &IdentifyArgs) -> anyhow::Result<Identification> {
         );
     }
 
+    // every input is read and checked: only now is the output folder created
+    let _out = crate::outdir::SharedDir::begin(&args.out)?;
     let t_id = Instant::now();
     let bar = IdentifyBar::new();
     let result =

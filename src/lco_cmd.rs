@@ -10,7 +10,8 @@ use aeroelastic::lco::{
 use anyhow::Context;
 use clap::Args;
 
-use crate::flutter_cmd::{load, parse_speeds};
+use crate::flutter_cmd::load;
+use aeroform::limits::{abs_at_most, parse_speeds, positive_at_most, MAX_PITCH_DEG, MAX_SPEED};
 
 /// Flags of `aeroform lco`.
 #[derive(Debug, Args)]
@@ -55,13 +56,22 @@ fn class_name(r: &LcoResult) -> String {
 
 /// Runs `aeroform lco`.
 pub fn run(args: &LcoArgs) -> anyhow::Result<()> {
+    if let Some(u) = args.speed {
+        positive_at_most("--speed", u, MAX_SPEED, "m/s")?;
+    }
+    let sweep = match &args.sweep {
+        Some(s) => Some(parse_speeds("--sweep", s)?),
+        None => None,
+    };
+    abs_at_most("--alpha0", args.alpha0, MAX_PITCH_DEG, "deg")?;
+    abs_at_most("--alpha0-down", args.alpha0_down, MAX_PITCH_DEG, "deg")?;
     let l = load(&args.structure, &args.model, args.chord)?;
     let opts = LcoOptions::default();
     // K-dependent models (identified laws) iterate K to each cycle's own; the others run once.
     let k_iteration = KIteration::default();
     let pert = l.section.perturbation(args.alpha0.to_radians());
     let pert_down = l.section.perturbation(args.alpha0_down.to_radians());
-    crate::ensure_dir(&args.out)?;
+    let _out = crate::outdir::SharedDir::begin(&args.out)?;
     let path = args.out.join("lco.json");
     let json = if let Some(u) = args.speed {
         let r = l
@@ -82,7 +92,7 @@ pub fn run(args: &LcoArgs) -> anyhow::Result<()> {
             "run": r,
         })
     } else {
-        let speeds = parse_speeds(args.sweep.as_deref().unwrap_or_default())?;
+        let speeds = sweep.unwrap_or_default();
         let bar = CountBar::new("LCO", 2 * speeds.len());
         let obs = |p: SweepProgress| {
             let d = match p.direction {

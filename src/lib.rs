@@ -6,3 +6,4 @@
 pub mod study_spec;
 
 pub mod fuzz_harness;
+pub mod limits;

@@ -3,10 +3,12 @@
 
 mod branch_cmd;
 mod diagnose_cmd;
+mod exit;
 mod flutter_cmd;
 mod identify_cmd;
 mod interrupt;
 mod lco_cmd;
+mod outdir;
 mod plot_cmd;
 mod progress;
 mod run_cmd;
@@ -50,6 +52,7 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    interrupt::install();
     let result = match cli.command {
         Command::Run(a) => run_cmd::run(&a),
         Command::Identify(a) => identify_cmd::run(&a).map(|_| ()),
@@ -64,7 +67,7 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");
-            ExitCode::FAILURE
+            ExitCode::from(exit::code(&e))
         }
     }
 }

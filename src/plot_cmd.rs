@@ -18,6 +18,8 @@ pub struct PlotArgs {
 
 /// Redraws figures and report.
 pub fn run(args: &PlotArgs) -> anyhow::Result<()> {
+    crate::outdir::check_complete(&args.outdir)?;
+    let _lock = crate::outdir::Lock::for_folder(&args.outdir)?;
     let path = args.outdir.join(names::STUDY);
     let text = std::fs::read_to_string(&path)
         .with_context(|| format!("{} is not a study output folder", args.outdir.display()))?;

@@ -22,6 +22,10 @@ pub struct RunArgs {
     /// Do not print the identification summary.
     #[arg(long)]
     pub quiet: bool,
+    /// Replace an existing output folder that aeroform did not write (it is replaced as a
+    /// whole, never mixed with the new results).
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// Runs the study.
@@ -38,9 +42,10 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from("out").join(&study.spec.name));
-    crate::interrupt::install_cleanup(out.clone());
     let t0 = Instant::now();
-    let timings = run_study(&study, &out, args.quiet)?;
+    let dir = crate::outdir::OutDir::begin(&out, "run", args.force)?;
+    let timings = run_study(&study, dir.path(), args.quiet)?;
+    dir.commit()?;
     println!(
         "study `{}` ({}) done; results in {}",
         study.spec.name,

@@ -7,8 +7,10 @@ use aeroelastic::tunnel::{self, Campaign, ForcedOptions, FreeOptions, TunnelProg
 use anyhow::Context;
 use clap::{Args, Subcommand};
 
-use crate::flutter_cmd::{load, parse_speeds};
+use crate::flutter_cmd::load;
+use crate::outdir::OutDir;
 use crate::progress::CountBar;
+use aeroform::limits::{abs_at_most, parse_speeds, MAX_PITCH_DEG};
 
 /// `aeroform tunnel` subcommands.
 #[derive(Debug, Subcommand)]
@@ -43,6 +45,9 @@ pub struct BlindArgs {
     /// Output folder (created if missing).
     #[arg(long, default_value = "out/blind-set")]
     pub out: PathBuf,
+    /// Replace an existing output folder that aeroform did not write.
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// Flags of `aeroform tunnel forced`.
@@ -69,6 +74,9 @@ pub struct ForcedArgs {
     /// Chord B [m] for an identification.json model.
     #[arg(long)]
     pub chord: Option<f64>,
+    /// Replace an existing output folder that aeroform did not write.
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// Flags of `aeroform tunnel free`.
@@ -101,6 +109,9 @@ pub struct FreeArgs {
     /// Chord B [m] for an identification.json model.
     #[arg(long)]
     pub chord: Option<f64>,
+    /// Replace an existing output folder that aeroform did not write.
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// Runs `aeroform tunnel …`.
@@ -116,14 +127,20 @@ fn blind(a: &BlindArgs) -> anyhow::Result<()> {
     use aeroelastic::effects::Form;
     use diagnose::blind::{generate, write_blind, BlindScenario};
     let effect = diagnose::bench_run::blind_effect(&a.effect)?;
+    if !(0.0..=1.0).contains(&a.strength) {
+        return Err(
+            crate::exit::Usage(format!("--strength {}: must be in [0, 1]", a.strength)).into(),
+        );
+    }
     let form = if a.alternate {
         Form::Alternate
     } else {
         Form::Primary
     };
     let set = generate(effect, a.strength, form, a.seed, &BlindScenario::default())?;
-    crate::ensure_dir(&a.out)?;
-    write_blind(&a.out, &set)?;
+    let dir = OutDir::begin(&a.out, "tunnel blind", a.force)?;
+    write_blind(dir.path(), &set)?;
+    dir.commit()?;
     println!(
         "wrote {} forced cases to {}, {} free runs to {} and the truth to {}",
         set.forced.records.len(),
@@ -143,20 +160,24 @@ fn forced(a: &ForcedArgs) -> anyhow::Result<()> {
             None => anyhow::bail!("--campaign `{c}`: expected `paper` or `config=X` (X in A..G)"),
         },
     };
-    let m = LoadedModel::load(&a.model, a.chord).context("model file")?;
     let mut opts = ForcedOptions::paper(a.seed);
     if a.still_air {
         opts = opts.with_paper_still_air();
     }
+    let cases = campaign.cases();
+    let records = cases.len() * if a.still_air { 2 } else { 1 };
+    aeroform::limits::samples("--duration", "rate", records, a.duration, opts.rate)?;
+    let m = LoadedModel::load(&a.model, a.chord).context("model file")?;
     opts.duration = a.duration;
     opts.section.chord = m.model.chord();
-    let cases = campaign.cases();
+    let dir = OutDir::begin(&a.out, "tunnel forced", a.force)?;
     let bar = CountBar::new("cases", cases.len());
     let obs = |p: TunnelProgress| bar.tick(p.id);
     let r = tunnel::forced_dataset(m.model.as_ref(), &cases, &opts, &obs);
     bar.finish();
     let (manifest, records) = r.context("virtual wind tunnel (forced)")?;
-    tunnel::write(&a.out, &manifest, &records)?;
+    tunnel::write(dir.path(), &manifest, &records)?;
+    dir.commit()?;
     println!(
         "wrote {} forced cases (model {}, seed {}) to {}",
         records.len(),
@@ -168,9 +189,11 @@ fn forced(a: &ForcedArgs) -> anyhow::Result<()> {
 }
 
 fn free(a: &FreeArgs) -> anyhow::Result<()> {
-    let speeds = parse_speeds(&a.speeds)?;
-    let l = load(&a.structure, &a.model, a.chord)?;
+    let speeds = parse_speeds("--speeds", &a.speeds)?;
+    abs_at_most("--alpha0", a.alpha0, MAX_PITCH_DEG, "deg")?;
     let mut opts = FreeOptions::new(a.seed);
+    aeroform::limits::samples("--duration", "rate", speeds.len(), a.duration, opts.rate)?;
+    let l = load(&a.structure, &a.model, a.chord)?;
     opts.duration = a.duration;
     opts.initial = [0.0, a.alpha0.to_radians(), 0.0, 0.0];
     opts.record_forces = !a.no_forces;
@@ -179,7 +202,9 @@ fn free(a: &FreeArgs) -> anyhow::Result<()> {
     let r = tunnel::free_dataset(&l.section, &speeds, &opts, &obs);
     bar.finish();
     let (manifest, records, runs) = r.context("virtual wind tunnel (free)")?;
-    tunnel::write(&a.out, &manifest, &records)?;
+    let dir = OutDir::begin(&a.out, "tunnel free", a.force)?;
+    tunnel::write(dir.path(), &manifest, &records)?;
+    dir.commit()?;
     for run in &runs {
         if let Some(t) = run.left_bound_at {
             println!(

@@ -536,3 +536,763 @@ fn one_million_row_case_is_identified_within_bounded_memory() {
 fn ten_million_row_case_is_identified_within_bounded_memory() {
     long_case(10_000_000, 1200);
 }
+
+// ---------------------------------------------------------------------------------------
+// Issue 13 (part A): complete-or-absent output folders, bounded inputs, exit codes.
+
+/// Exit code, stdout, stderr of `aeroform ARGS` (run in `cwd`).
+fn code_of(args: &[&str], cwd: &Path) -> (i32, String, String) {
+    let o = bin().args(args).current_dir(cwd).output().unwrap();
+    (
+        o.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&o.stdout).into_owned(),
+        String::from_utf8_lossy(&o.stderr).into_owned(),
+    )
+}
+
+/// A PID that belonged to a process which has ended.
+fn dead_pid() -> u32 {
+    let mut c = Command::new("true").spawn().unwrap();
+    let pid = c.id();
+    c.wait().unwrap();
+    pid
+}
+
+const MODEL: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/scenarios/plate-truth.model.toml"
+);
+const STRUCTURE: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/scenarios/plate-rig.structure.toml"
+);
+
+/// The issue's list of absurd inputs (and a few more of each class): every one ends with
+/// exit code 1 or 2 (never 101 = panic, 134 = allocation abort), within seconds, with a
+/// message naming the flag, key or field; no output folder is left behind.
+#[test]
+fn absurd_inputs_exit_with_1_or_2_and_name_the_field() {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    let ds = one_case_dataset(dir, 1024);
+    let ds_s = ds.to_str().unwrap().to_string();
+    let manifest = std::fs::read_to_string(ds.join("manifest.toml")).unwrap();
+    let csv = std::fs::read_to_string(ds.join("cases/D-U6-A12.csv")).unwrap();
+    // data-set variants: one bad number each
+    let variant = |name: &str, manifest: &str, csv: &str| -> String {
+        let root = dir.join(name);
+        std::fs::create_dir_all(root.join("cases")).unwrap();
+        std::fs::write(root.join("manifest.toml"), manifest).unwrap();
+        std::fs::write(root.join("cases/D-U6-A12.csv"), csv).unwrap();
+        root.to_str().unwrap().to_string()
+    };
+    let wind = variant(
+        "wind",
+        &manifest.replace("wind_speed = 6.0", "wind_speed = 1e308"),
+        &csv,
+    );
+    let nyq = variant(
+        "nyquist",
+        &manifest.replace("freq_pitch = 2.0", "freq_pitch = 1e6"),
+        &csv,
+    );
+    let mut lines: Vec<String> = csv.lines().map(String::from).collect();
+    let mut cells: Vec<String> = lines[10].split(',').map(String::from).collect();
+    cells[3] = "1e308".into();
+    lines[10] = cells.join(",");
+    let huge = variant("huge", &manifest, &(lines.join("\n") + "\n"));
+    // study variants
+    let study = |name: &str, body: &str| -> String {
+        let p = dir.join(format!("{name}.toml"));
+        std::fs::write(&p, format!("name = \"{name}\"\n{body}")).unwrap();
+        p.to_str().unwrap().to_string()
+    };
+    let synth = "[data.synthetic]\namplitudes_deg = [12.0]\nspeeds = [6.0]\n\
+                 [[data.synthetic.config]]\nname = \"D\"\nfreq_pitch = 2.0\n\
+                 freq_heave = 1.3\nmm_per_deg = 1.5\n";
+    let hp1 = "[structure]\nmu = 20.0\nr_alpha2 = 0.24\nsigma = 0.4\nx_alpha = 0.1\n\
+               [aero]\nmodel = \"theodorsen\"\nelastic_axis = nan\n\
+               [flutter]\nu_min = 0.5\nu_max = 3.0\n";
+    let s_duration = study(
+        "dur",
+        &synth.replace("speeds = [6.0]", "speeds = [6.0]\nduration = 1e300"),
+    );
+    let s_rate = study(
+        "rate",
+        &synth.replace("speeds = [6.0]", "speeds = [6.0]\nrate = 1e12"),
+    );
+    let s_dur9 = study(
+        "dur9",
+        &synth.replace("speeds = [6.0]", "speeds = [6.0]\nduration = 1e9"),
+    );
+    let s_speed = study(
+        "speed",
+        &synth.replace("speeds = [6.0]", "speeds = [6.0, 1e308]"),
+    );
+    let s_axis = study("axis", hp1);
+    let s_nspeeds = study(
+        "nspeeds",
+        &hp1.replace("nan", "0.0").replace(
+            "u_max = 3.0",
+            "u_max = 3.0\nn_speeds = 18446744073709551615",
+        ),
+    );
+    let s_series = study(
+        "series",
+        &format!("{synth}[outputs]\nseries_cases = [\"nope\"]\n"),
+    );
+    let s_virtual = study(
+        "virt",
+        "[data.virtual]\nmodel = \"m.toml\"\nduration = 1e300\n",
+    );
+    let s_table = study("tiv", "[data.table_iv]\nrepeats = 18446744073709551615\n");
+    let s_table_rate = study("tivr", "[data.table_iv]\nrepeats = 2\nrate = 1e12\n");
+    let out = dir.join("out");
+    let o = out.to_str().unwrap();
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (
+            vec![
+                "flutter",
+                "--structure",
+                STRUCTURE,
+                "--model",
+                MODEL,
+                "--speeds",
+                "1:20:18446744073709551615",
+                "--out",
+                o,
+            ],
+            "--speeds",
+        ),
+        (
+            vec![
+                "flutter",
+                "--structure",
+                STRUCTURE,
+                "--model",
+                MODEL,
+                "--speeds",
+                "1:20:1000000000",
+                "--out",
+                o,
+            ],
+            "--speeds",
+        ),
+        (
+            vec![
+                "flutter",
+                "--structure",
+                STRUCTURE,
+                "--model",
+                MODEL,
+                "--speeds",
+                "1:1e308:5",
+                "--out",
+                o,
+            ],
+            "--speeds",
+        ),
+        (
+            vec![
+                "tunnel",
+                "forced",
+                "--model",
+                MODEL,
+                "--duration",
+                "1e300",
+                "--out",
+                o,
+            ],
+            "--duration",
+        ),
+        (
+            vec![
+                "tunnel",
+                "forced",
+                "--model",
+                MODEL,
+                "--duration",
+                "1e9",
+                "--out",
+                o,
+            ],
+            "--duration",
+        ),
+        (
+            vec![
+                "tunnel",
+                "forced",
+                "--model",
+                MODEL,
+                "--duration",
+                "100000",
+                "--out",
+                o,
+            ],
+            "--duration",
+        ),
+        (
+            vec![
+                "tunnel",
+                "forced",
+                "--model",
+                MODEL,
+                "--duration",
+                "nan",
+                "--out",
+                o,
+            ],
+            "--duration",
+        ),
+        (
+            vec![
+                "tunnel",
+                "free",
+                "--structure",
+                STRUCTURE,
+                "--model",
+                MODEL,
+                "--speeds",
+                "5:8:18446744073709551615",
+                "--out",
+                o,
+            ],
+            "--speeds",
+        ),
+        (
+            vec![
+                "tunnel",
+                "free",
+                "--structure",
+                STRUCTURE,
+                "--model",
+                MODEL,
+                "--speeds",
+                "5,8",
+                "--duration",
+                "1e300",
+                "--out",
+                o,
+            ],
+            "--duration",
+        ),
+        (
+            vec![
+                "tunnel",
+                "blind",
+                "--effect",
+                "none",
+                "--strength",
+                "1e308",
+                "--out",
+                o,
+            ],
+            "--strength",
+        ),
+        (
+            vec!["diagnose", "--blind", "18446744073709551615", "--out", o],
+            "--blind",
+        ),
+        (
+            vec![
+                "diagnose",
+                "--blind",
+                "340282366920938463463374607431768211456",
+                "--out",
+                o,
+            ],
+            "--blind",
+        ),
+        (
+            vec![
+                "lco",
+                "--structure",
+                STRUCTURE,
+                "--model",
+                MODEL,
+                "--speed",
+                "1e308",
+                "--out",
+                o,
+            ],
+            "--speed",
+        ),
+        (
+            vec![
+                "lco",
+                "--structure",
+                STRUCTURE,
+                "--model",
+                MODEL,
+                "--sweep",
+                "1:9:99999999999",
+                "--out",
+                o,
+            ],
+            "--sweep",
+        ),
+        (
+            vec![
+                "lco",
+                "--structure",
+                STRUCTURE,
+                "--model",
+                MODEL,
+                "--speed",
+                "5",
+                "--alpha0",
+                "1e300",
+                "--out",
+                o,
+            ],
+            "--alpha0",
+        ),
+        (
+            vec![
+                "identify",
+                &ds_s,
+                "--n-delta",
+                "18446744073709551615",
+                "--out",
+                o,
+            ],
+            "n_delta",
+        ),
+        (
+            vec![
+                "identify",
+                &ds_s,
+                "--k-key",
+                "18446744073709551615",
+                "--out",
+                o,
+            ],
+            "k_key",
+        ),
+        (vec!["identify", &wind, "--out", o], "wind_speed"),
+        (vec!["identify", &nyq, "--out", o], "freq_pitch"),
+        (vec!["identify", &huge, "--out", o], "lift"),
+        (
+            vec!["run", &s_duration, "--out", o],
+            "data.synthetic.duration",
+        ),
+        (vec!["run", &s_rate, "--out", o], "data.synthetic.rate"),
+        (vec!["run", &s_dur9, "--out", o], "data.synthetic.duration"),
+        (vec!["run", &s_speed, "--out", o], "data.synthetic.speeds"),
+        (vec!["run", &s_axis, "--out", o], "aero.elastic_axis"),
+        (vec!["run", &s_nspeeds, "--out", o], "n_speeds"),
+        (vec!["run", &s_series, "--out", o], "outputs.series_cases"),
+        (vec!["run", &s_virtual, "--out", o], "data.virtual.duration"),
+        (vec!["run", &s_table, "--out", o], "data.table_iv.repeats"),
+        (vec!["run", &s_table_rate, "--out", o], "data.table_iv.rate"),
+    ];
+    for (args, field) in &cases {
+        let t = std::time::Instant::now();
+        let (code, _, err) = code_of(args, dir);
+        assert!(code == 1 || code == 2, "exit {code} for {args:?}:\n{err}");
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+        assert!(
+            err.contains(field),
+            "{args:?}: message does not name `{field}`:\n{err}"
+        );
+        assert!(
+            t.elapsed().as_secs() < 20,
+            "{args:?} took {:?}",
+            t.elapsed()
+        );
+        assert!(!out.exists(), "{args:?} left {}", out.display());
+    }
+    // the CSV error names file, line and column
+    let (_, _, err) = code_of(&["identify", &huge, "--out", o], dir);
+    assert!(
+        err.contains("D-U6-A12.csv:11") && err.contains("`lift`"),
+        "{err}"
+    );
+    // input errors are usage errors
+    let (code, _, err) = code_of(&["run", &s_axis, "--out", o], dir);
+    assert_eq!(code, 2, "{err}");
+}
+
+/// A re-run into an existing aeroform folder replaces it as a whole: no file of the first
+/// run survives (a stale file is gone, the manifest and every CSV come from the second
+/// run), and the folder carries the completion marker.
+#[test]
+fn rerun_replaces_the_folder_as_a_whole() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("ds");
+    let o = out.to_str().unwrap();
+    let args = |seed: &'static str| {
+        vec![
+            "tunnel",
+            "forced",
+            "--model",
+            MODEL,
+            "--campaign",
+            "config=D",
+            "--duration",
+            "1",
+            "--seed",
+            seed,
+            "--out",
+            o,
+        ]
+    };
+    let (code, _, err) = code_of(&args("7"), tmp.path());
+    assert_eq!(code, 0, "{err}");
+    std::fs::write(out.join("stale-figure.svg"), b"<svg></svg>").unwrap();
+    let first = std::fs::read(out.join("cases/D-U6-A12.csv")).ok();
+    let (code, _, err) = code_of(&args("1"), tmp.path());
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        !out.join("stale-figure.svg").exists(),
+        "stale file of the first run"
+    );
+    assert!(out.join(".aeroform-complete").is_file());
+    assert!(!out.join(".aeroform-incomplete").exists());
+    let manifest = std::fs::read_to_string(out.join("manifest.toml")).unwrap();
+    assert!(
+        !manifest.contains("\"7\""),
+        "seed of the first run in the manifest"
+    );
+    if let Some(first) = first {
+        assert_ne!(
+            std::fs::read(out.join("cases/D-U6-A12.csv")).ok(),
+            Some(first)
+        );
+    }
+    // nothing but the folder itself next to it (no staging, no lock)
+    let names: Vec<String> = std::fs::read_dir(tmp.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(names, vec!["ds".to_string()], "{names:?}");
+    // the data set reads
+    let (code, _, err) = code_of(
+        &[
+            "identify",
+            o,
+            "--out",
+            tmp.path().join("id").to_str().unwrap(),
+            "--quiet",
+        ],
+        tmp.path(),
+    );
+    assert_eq!(code, 0, "{err}");
+}
+
+/// An existing folder that aeroform did not write is never mixed into: refused with exit
+/// 2 (files untouched) unless `--force`, which replaces it whole. `--out .` is refused.
+#[test]
+fn foreign_folder_is_refused_unless_forced() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("mine");
+    std::fs::create_dir(&out).unwrap();
+    std::fs::write(out.join("keep.txt"), b"mine").unwrap();
+    let mut args = vec![
+        "tunnel",
+        "blind",
+        "--effect",
+        "none",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    let (code, _, err) = code_of(&args, tmp.path());
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("--force") && err.contains("mine"), "{err}");
+    assert_eq!(std::fs::read(out.join("keep.txt")).unwrap(), b"mine");
+    let (code, _, err) = code_of(&["tunnel", "blind", "--effect", "none", "--out", "."], &out);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("working directory"), "{err}");
+    args.push("--force");
+    let (code, _, err) = code_of(&args, tmp.path());
+    assert_eq!(code, 0, "{err}");
+    assert!(!out.join("keep.txt").exists());
+    assert!(out.join("truth.json").is_file() && out.join(".aeroform-complete").is_file());
+}
+
+/// A run that fails late (a series case that does not exist, found once the data are
+/// built) leaves no output folder and no work folder.
+#[test]
+fn failed_run_leaves_no_folder() {
+    let tmp = tempfile::tempdir().unwrap();
+    let p = tmp.path().join("s.toml");
+    std::fs::write(
+        &p,
+        "name = \"late\"\n[data.synthetic]\namplitudes_deg = [12.0]\nspeeds = [6.0]\n\
+         duration = 4.0\n[[data.synthetic.config]]\nname = \"D\"\nfreq_pitch = 2.0\n\
+         freq_heave = 1.3\nmm_per_deg = 1.5\n[outputs]\nseries_cases = [\"nope\"]\n",
+    )
+    .unwrap();
+    let out = tmp.path().join("out");
+    let (code, _, err) = code_of(
+        &["run", p.to_str().unwrap(), "--out", out.to_str().unwrap()],
+        tmp.path(),
+    );
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("series_cases") && err.contains("nope"),
+        "{err}"
+    );
+    let names: Vec<String> = std::fs::read_dir(tmp.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(names, vec!["s.toml".to_string()], "{names:?}");
+}
+
+/// Waits until a staging folder of `name` appears in `parent` holding at least `files`
+/// entries; returns it.
+fn wait_for_staging(parent: &Path, name: &str, files: usize) -> std::path::PathBuf {
+    let t = std::time::Instant::now();
+    loop {
+        if let Ok(rd) = std::fs::read_dir(parent) {
+            for e in rd.flatten() {
+                let n = e.file_name().to_string_lossy().into_owned();
+                if n.starts_with(&format!(".{name}.aeroform-staging.")) {
+                    let mut all = Vec::new();
+                    walk(&e.path(), &mut all);
+                    if all.len() >= files {
+                        return e.path();
+                    }
+                }
+            }
+        }
+        assert!(t.elapsed().as_secs() < 60, "no staging folder appeared");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+/// SIGKILL in the middle of writing a data set: the previous data set stays whole, the
+/// leftover staging folder is refused by `identify`, `diagnose` and `plot`, and the next
+/// command removes it (and takes over the dead process's lock).
+#[test]
+fn killed_run_leaves_a_folder_no_reader_accepts_and_the_next_run_cleans_it() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("ds");
+    let o = out.to_str().unwrap();
+    let (code, _, err) = code_of(
+        &[
+            "tunnel",
+            "forced",
+            "--model",
+            MODEL,
+            "--campaign",
+            "config=D",
+            "--duration",
+            "0.3",
+            "--out",
+            o,
+        ],
+        tmp.path(),
+    );
+    assert_eq!(code, 0, "{err}");
+    let before = files_in(&out);
+    let mut child = bin()
+        .args([
+            "tunnel",
+            "forced",
+            "--model",
+            MODEL,
+            "--duration",
+            "4",
+            "--seed",
+            "9",
+            "--out",
+            o,
+        ])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    // the campaign is generated in memory, then written: wait for the first case files
+    let staging = wait_for_staging(tmp.path(), "ds", 4);
+    child.kill().unwrap();
+    child.wait().unwrap();
+    assert_eq!(files_in(&out), before, "the previous data set changed");
+    for args in [
+        vec![
+            "identify",
+            staging.to_str().unwrap(),
+            "--out",
+            tmp.path().join("id").to_str().unwrap(),
+        ],
+        vec![
+            "diagnose",
+            staging.to_str().unwrap(),
+            "--out",
+            tmp.path().join("dg").to_str().unwrap(),
+        ],
+        vec!["plot", staging.to_str().unwrap()],
+    ] {
+        let (code, _, err) = code_of(&args, tmp.path());
+        assert_eq!(code, 2, "{args:?} accepted an unfinished folder: {err}");
+        assert!(err.contains("work folder"), "{err}");
+    }
+    // the same folder renamed to an ordinary name still carries the incomplete-marker
+    let renamed = tmp.path().join("renamed");
+    std::fs::rename(&staging, &renamed).unwrap();
+    let (code, _, err) = code_of(
+        &[
+            "identify",
+            renamed.to_str().unwrap(),
+            "--out",
+            tmp.path().join("id").to_str().unwrap(),
+        ],
+        tmp.path(),
+    );
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("did not finish"), "{err}");
+    std::fs::rename(&renamed, &staging).unwrap();
+    let (code, _, err) = code_of(
+        &[
+            "tunnel",
+            "forced",
+            "--model",
+            MODEL,
+            "--campaign",
+            "config=D",
+            "--duration",
+            "0.3",
+            "--seed",
+            "2",
+            "--out",
+            o,
+        ],
+        tmp.path(),
+    );
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("taking over the stale lock"), "{err}");
+    assert!(err.contains("no longer runs"), "{err}");
+    assert!(!staging.exists(), "stale staging folder kept");
+}
+
+/// SIGINT while a folder is written: exit 130, the staging folder and the lock removed,
+/// the previous results intact, and a symbolic link planted inside the staging folder
+/// (to a folder outside) is removed as a link: its target is untouched.
+#[test]
+fn interrupted_folder_write_keeps_the_previous_results_and_follows_no_link() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("ds");
+    let o = out.to_str().unwrap();
+    let (code, _, err) = code_of(
+        &[
+            "tunnel",
+            "forced",
+            "--model",
+            MODEL,
+            "--campaign",
+            "config=D",
+            "--duration",
+            "0.3",
+            "--out",
+            o,
+        ],
+        tmp.path(),
+    );
+    assert_eq!(code, 0, "{err}");
+    let before = files_in(&out);
+    let outside = tmp.path().join("outside");
+    std::fs::create_dir(&outside).unwrap();
+    std::fs::write(outside.join(".x.1.tmp"), b"keep").unwrap();
+    let child = bin()
+        .args([
+            "tunnel",
+            "forced",
+            "--model",
+            MODEL,
+            "--duration",
+            "4",
+            "--out",
+            o,
+        ])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let staging = wait_for_staging(tmp.path(), "ds", 1);
+    let _ = std::os::unix::fs::symlink(&outside, staging.join("link"));
+    let _ = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status();
+    let o2 = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&o2.stderr);
+    assert_eq!(o2.status.code(), Some(130), "{err}");
+    assert!(err.contains("left as it was"), "{err}");
+    assert_eq!(std::fs::read(outside.join(".x.1.tmp")).unwrap(), b"keep");
+    assert_eq!(files_in(&out), before);
+    let names: Vec<String> = std::fs::read_dir(tmp.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert!(
+        names.iter().all(|n| !n.contains("aeroform")),
+        "work folder or lock left: {names:?}"
+    );
+}
+
+/// Two writers of one folder: a live lock holder makes the second fail with exit 1
+/// naming the PID; the holder's lock is not touched.
+#[test]
+fn a_live_lock_refuses_a_second_writer() {
+    let tmp = tempfile::tempdir().unwrap();
+    let lock = tmp.path().join(".ds.aeroform-lock");
+    let me = std::process::id().to_string();
+    std::fs::write(&lock, format!("{me}\n")).unwrap();
+    let out = tmp.path().join("ds");
+    let (code, _, err) = code_of(
+        &[
+            "tunnel",
+            "blind",
+            "--effect",
+            "none",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        tmp.path(),
+    );
+    assert_eq!(code, 1, "{err}");
+    assert!(
+        err.contains(&me) && err.contains("another aeroform process"),
+        "{err}"
+    );
+    assert!(lock.exists() && !out.exists());
+}
+
+/// Temporary files of dead processes in a shared output folder (`flutter`, `identify`,
+/// `lco` write single files there) are removed; a link named like one is removed as a
+/// link, its target kept; a live process's temporary file is kept.
+#[test]
+fn stale_temporary_files_of_dead_processes_are_removed() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("out");
+    std::fs::create_dir(&out).unwrap();
+    let dead = dead_pid();
+    let target = tmp.path().join("target.txt");
+    std::fs::write(&target, b"keep").unwrap();
+    std::fs::write(out.join(format!(".flutter.json.{dead}.tmp")), b"half").unwrap();
+    std::os::unix::fs::symlink(&target, out.join(format!(".x.{dead}.tmp"))).unwrap();
+    let live = format!(".other.json.{}.tmp", std::process::id());
+    std::fs::write(out.join(&live), b"busy").unwrap();
+    let (code, _, err) = code_of(
+        &[
+            "flutter",
+            "--structure",
+            STRUCTURE,
+            "--model",
+            MODEL,
+            "--speeds",
+            "1:5:4",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+        tmp.path(),
+    );
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("removed 2 temporary file(s)"), "{err}");
+    let mut names = files_in(&out);
+    names.sort();
+    let mut want = vec!["flutter.json".to_string(), live];
+    want.sort();
+    assert_eq!(names, want);
+    assert_eq!(std::fs::read(&target).unwrap(), b"keep");
+}

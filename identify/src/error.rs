@@ -109,6 +109,16 @@ pub enum Error {
         /// What happened.
         message: String,
     },
+    /// A folder an aeroform command was still writing (or that a killed run left behind):
+    /// it carries the incomplete-marker [`crate::io::INCOMPLETE_MARKER`] or has the name of
+    /// a staging folder ([`crate::io::is_staging_name`]). Never read as a result.
+    #[error("{path}: {message}")]
+    IncompleteFolder {
+        /// The folder.
+        path: PathBuf,
+        /// Why it is refused and what to do.
+        message: String,
+    },
     /// A JSON result file is malformed.
     #[error("{path}: {message}")]
     Json {

@@ -37,9 +37,118 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     Ok(())
 }
 
+/// File an aeroform command writes into its output folder as the very last step before the
+/// folder is moved into place: the folder is complete. Content: `format`, `command`.
+pub const COMPLETE_MARKER: &str = ".aeroform-complete";
+
+/// File an aeroform command writes first into its staging folder and removes only after
+/// [`COMPLETE_MARKER`] is written: a folder holding it is unfinished and is never read.
+pub const INCOMPLETE_MARKER: &str = ".aeroform-incomplete";
+
+/// Tags of aeroform's work folders next to an output folder `P/NAME`:
+/// `P/.NAME.aeroform-staging.PID` (being written) and `P/.NAME.aeroform-old.PID` (the
+/// previous results during the final swap).
+pub const WORK_TAGS: [&str; 2] = [".aeroform-staging.", ".aeroform-old."];
+
+/// When `file_name` is the name of an aeroform work folder (`.NAME<tag>PID`, tag one of
+/// [`WORK_TAGS`]), the tag and the PID of the process that made it.
+pub fn work_folder_pid(file_name: &str) -> Option<(&'static str, u32)> {
+    let rest = file_name.strip_prefix('.')?;
+    for tag in WORK_TAGS {
+        if let Some(i) = rest.rfind(tag) {
+            if i == 0 {
+                continue;
+            }
+            let pid = &rest[i + tag.len()..];
+            if !pid.is_empty() && pid.bytes().all(|b| b.is_ascii_digit()) {
+                return pid.parse().ok().map(|p| (tag, p));
+            }
+        }
+    }
+    None
+}
+
+/// True when `file_name` is an aeroform work folder name ([`work_folder_pid`]).
+pub fn is_staging_name(file_name: &str) -> bool {
+    work_folder_pid(file_name).is_some()
+}
+
+/// Refuses a folder that an aeroform command had not finished: it holds
+/// [`INCOMPLETE_MARKER`] or its name is a work-folder name ([`is_staging_name`]).
+///
+/// The rule (docs/DATA_FORMAT.md, "Complete folders"): the marker is aeroform's, other
+/// programs never write it, so a folder without either marker and with an ordinary name
+/// (a data set written by another program, real measurements, results of older versions)
+/// is accepted; [`COMPLETE_MARKER`] is not required.
+///
+/// # Errors
+/// [`Error::IncompleteFolder`] naming the folder, the reason and the remedy.
+pub fn check_complete_folder(dir: &Path) -> Result<()> {
+    let name = dir
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    if let Some((tag, pid)) = work_folder_pid(&name) {
+        return Err(Error::IncompleteFolder {
+            path: dir.to_path_buf(),
+            message: format!(
+                "an aeroform work folder (`{}` of process {pid}), not a finished result; \
+                 read the folder it was written for",
+                tag.trim_matches('.')
+            ),
+        });
+    }
+    match std::fs::symlink_metadata(dir.join(INCOMPLETE_MARKER)) {
+        Ok(_) => Err(Error::IncompleteFolder {
+            path: dir.to_path_buf(),
+            message: format!(
+                "holds `{INCOMPLETE_MARKER}`: the aeroform command writing it did not \
+                 finish (interrupted, killed or failed); run it again"
+            ),
+        }),
+        Err(_) => Ok(()),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn work_folder_names_are_recognised() {
+        assert_eq!(
+            work_folder_pid(".out.aeroform-staging.123"),
+            Some((".aeroform-staging.", 123))
+        );
+        assert_eq!(
+            work_folder_pid(".a.b.aeroform-old.7"),
+            Some((".aeroform-old.", 7))
+        );
+        for n in [
+            "out",
+            ".aeroform-staging.1",
+            ".out.aeroform-staging.",
+            ".out.aeroform-staging.12x",
+            "out.aeroform-staging.1",
+        ] {
+            assert_eq!(work_folder_pid(n), None, "{n}");
+        }
+    }
+
+    #[test]
+    fn incomplete_folders_are_refused_and_foreign_ones_accepted() {
+        let dir = tempfile::tempdir().unwrap();
+        let ds = dir.path().join("ds");
+        std::fs::create_dir(&ds).unwrap();
+        check_complete_folder(&ds).unwrap();
+        std::fs::write(ds.join(INCOMPLETE_MARKER), b"").unwrap();
+        let e = check_complete_folder(&ds).unwrap_err();
+        assert!(e.to_string().contains("did not finish"), "{e}");
+        let st = dir.path().join(".ds.aeroform-staging.42");
+        std::fs::create_dir(&st).unwrap();
+        let e = check_complete_folder(&st).unwrap_err();
+        assert!(e.to_string().contains("process 42"), "{e}");
+    }
 
     #[test]
     fn writes_and_replaces_whole_file() {

@@ -183,10 +183,18 @@ impl IdentifySettings {
         if let RegressorChoice::Pysindy(o) = &self.regressor {
             o.validate()?;
         }
-        if self.k_key == 0 {
+        // k_key key frequencies are picked among the tones of harmonic order ≤ 20 (at most
+        // a few hundred): a larger count is a typo, refused before any allocation.
+        if self.k_key == 0 || self.k_key > 1000 {
             return Err(Error::InvalidOption {
                 name: "k_key".to_string(),
-                message: "must be ≥ 1".to_string(),
+                message: format!("{} must be in 1..=1000", self.k_key),
+            });
+        }
+        if self.max_iter > 1_000_000 {
+            return Err(Error::InvalidOption {
+                name: "max_iter".to_string(),
+                message: format!("{} must be ≤ 1000000", self.max_iter),
             });
         }
         if self.max_harmonic_order == 0 || self.max_harmonic_order > 20 {

@@ -118,9 +118,13 @@ fn timed<T>(
 /// complete (atomic writes), nothing half-written remains.
 pub fn run_study(study: &Study, out: &Path, quiet: bool) -> anyhow::Result<Timings> {
     ensure_dir(out)?;
-    write_text(&out.join(names::STUDY), &study.text)?;
     let mut timings = Timings::new();
     let cases = timed(&mut timings, "data", || build::cases(study, out))?;
+    if let Some(cases) = &cases {
+        // the last check of the spec that needs the data: before any result is written
+        series_case_indices(study, cases)?;
+    }
+    write_text(&out.join(names::STUDY), &study.text)?;
     let mut derived = build::Derived::default();
     if let Some(cases) = &cases {
         if !quiet {
@@ -180,6 +184,38 @@ pub fn run_study(study: &Study, out: &Path, quiet: bool) -> anyhow::Result<Timin
         super::figures::render_all(study, out).map(|_| ())
     })?;
     Ok(timings)
+}
+
+/// Indices of the cases whose series are saved: `outputs.series_cases`, or the first and
+/// the last case.
+///
+/// # Errors
+/// A listed case id that is not in the data ([`crate::exit::Usage`], naming the key).
+fn series_case_indices(study: &Study, cases: &build::Cases) -> anyhow::Result<Vec<usize>> {
+    let wanted = &study.spec.outputs.series_cases;
+    if wanted.is_empty() {
+        let mut v = vec![0];
+        if cases.cases.len() > 1 {
+            v.push(cases.cases.len() - 1);
+        }
+        return Ok(v);
+    }
+    wanted
+        .iter()
+        .map(|w| {
+            cases
+                .cases
+                .iter()
+                .position(|c| &c.meta.id == w)
+                .ok_or_else(|| {
+                    crate::exit::Usage(format!(
+                        "{}: key `outputs.series_cases`: no case `{w}` in the data",
+                        study.path.display()
+                    ))
+                    .into()
+                })
+        })
+        .collect()
 }
 
 fn identify_stage(
@@ -291,21 +327,10 @@ fn identify_stage(
     der.write(&out.join(names::DERIVATIVES))?;
 
     // compact series of the shown cases
-    let wanted: Vec<String> = if study.spec.outputs.series_cases.is_empty() {
-        let mut v = vec![cases.cases[0].meta.id.clone()];
-        if cases.cases.len() > 1 {
-            v.push(cases.cases[cases.cases.len() - 1].meta.id.clone());
-        }
-        v
-    } else {
-        study.spec.outputs.series_cases.clone()
-    };
     let dir = out.join(names::SERIES);
     ensure_dir(&dir)?;
-    for w in &wanted {
-        let Some(i) = cases.cases.iter().position(|c| &c.meta.id == w) else {
-            anyhow::bail!("outputs.series_cases: no case `{w}` in the data");
-        };
+    for i in series_case_indices(study, cases)? {
+        let w = &cases.cases[i].meta.id;
         let s = case_series(&cases.cases[i], &id.cases[i], &SeriesOptions::default())
             .with_context(|| format!("series of case {w}"))?;
         write_json(&dir.join(format!("{w}.json")), &s)?;

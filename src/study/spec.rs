@@ -721,6 +721,18 @@ impl Study {
                 Err((k.to_string(), format!("{v} must be finite and > 0")))
             }
         };
+        // caps and plausibility (`crate::limits`), before anything is allocated
+        let lim = |r: Result<f64, crate::limits::LimitError>| {
+            r.map(|_| ()).map_err(|e| (e.field, e.message))
+        };
+        let fin = |k: &str, v: f64| -> Result<(), (String, String)> {
+            if v.is_finite() {
+                Ok(())
+            } else {
+                Err((k.to_string(), format!("{v} must be finite")))
+            }
+        };
+        use crate::limits::{abs_at_most, positive_at_most, samples, MAX_CASES, MAX_SPEED};
         if let Some(d) = &s.data {
             let n = [
                 d.dataset.is_some(),
@@ -745,6 +757,16 @@ impl Study {
                     );
                 }
                 pos("data.virtual.duration", v.duration)?;
+                // the paper campaign: 7 configurations × 64 cases; one configuration: 64
+                let records =
+                    if v.campaign == "paper" { 448 } else { 64 } * if v.still_air { 2 } else { 1 };
+                lim(samples(
+                    "data.virtual.duration",
+                    "data.virtual.duration",
+                    records,
+                    v.duration,
+                    512.0,
+                ))?;
                 if v.campaign != "paper" {
                     let c = v.campaign.strip_prefix("config=").unwrap_or("");
                     if !aeroelastic::tunnel::paper_configurations()
@@ -772,6 +794,91 @@ impl Study {
                 pos("data.synthetic.duration", sy.duration)?;
                 if sy.config.is_empty() {
                     return err("data.synthetic.config", "at least one configuration".into());
+                }
+                lim(positive_at_most(
+                    "data.synthetic.section.chord",
+                    sy.section.chord,
+                    100.0,
+                    "m",
+                ))?;
+                lim(positive_at_most(
+                    "data.synthetic.section.span",
+                    sy.section.span,
+                    1000.0,
+                    "m",
+                ))?;
+                lim(positive_at_most(
+                    "data.synthetic.section.air_density",
+                    sy.section.air_density,
+                    2000.0,
+                    "kg/m^3",
+                ))?;
+                let n_cases = sy.config.len() as u128
+                    * sy.amplitudes_deg.len() as u128
+                    * sy.speeds.len() as u128;
+                if n_cases > MAX_CASES as u128 {
+                    return err(
+                        "data.synthetic.speeds",
+                        format!(
+                            "{} configurations × {} amplitudes × {} speeds = {n_cases} cases \
+                             exceed the cap of {MAX_CASES}",
+                            sy.config.len(),
+                            sy.amplitudes_deg.len(),
+                            sy.speeds.len()
+                        ),
+                    );
+                }
+                lim(samples(
+                    "data.synthetic.duration",
+                    "data.synthetic.rate",
+                    n_cases as usize,
+                    sy.duration,
+                    sy.rate,
+                ))?;
+                for (i, a) in sy.amplitudes_deg.iter().enumerate() {
+                    lim(positive_at_most(
+                        &format!("data.synthetic.amplitudes_deg[{i}]"),
+                        *a,
+                        90.0,
+                        "deg",
+                    ))?;
+                }
+                for (i, u) in sy.speeds.iter().enumerate() {
+                    lim(positive_at_most(
+                        &format!("data.synthetic.speeds[{i}]"),
+                        *u,
+                        MAX_SPEED,
+                        "m/s",
+                    ))?;
+                }
+                for (i, c) in sy.config.iter().enumerate() {
+                    for (k, f) in [("freq_pitch", c.freq_pitch), ("freq_heave", c.freq_heave)] {
+                        if f.is_finite() && f >= 0.5 * sy.rate {
+                            return err(
+                                &format!("data.synthetic.config[{i}].{k}"),
+                                format!(
+                                    "{f} Hz is not below the Nyquist frequency {} Hz of \
+                                     rate = {} Hz",
+                                    0.5 * sy.rate,
+                                    sy.rate
+                                ),
+                            );
+                        }
+                    }
+                    lim(positive_at_most(
+                        &format!("data.synthetic.config[{i}].mm_per_deg"),
+                        c.mm_per_deg,
+                        1000.0,
+                        "mm/deg",
+                    ))?;
+                }
+                for (ch, terms) in [("lift", &sy.law.lift), ("moment", &sy.law.moment)] {
+                    for (i, t) in terms.iter().enumerate() {
+                        fin(
+                            &format!("data.synthetic.law.{ch}[{i}].coefficient"),
+                            t.coefficient,
+                        )?;
+                    }
                 }
                 for (i, c) in sy.config.iter().enumerate() {
                     if !identify::dataset::is_valid_case_id(&c.name) {
@@ -839,6 +946,33 @@ impl Study {
                 }
                 pos("data.table_iv.rate", t.rate)?;
                 pos("data.table_iv.duration", t.duration)?;
+                if t.repeats > MAX_CASES {
+                    return err(
+                        "data.table_iv.repeats",
+                        format!("{} exceeds the cap of {MAX_CASES}", t.repeats),
+                    );
+                }
+                lim(samples(
+                    "data.table_iv.duration",
+                    "data.table_iv.rate",
+                    t.repeats,
+                    t.duration,
+                    t.rate,
+                ))?;
+                if !(t.sigma.is_finite() && t.sigma >= 0.0) {
+                    return err(
+                        "data.table_iv.sigma",
+                        format!("{} must be finite and ≥ 0", t.sigma),
+                    );
+                }
+                for (k, c) in [
+                    ("data.table_iv.moment", &t.moment),
+                    ("data.table_iv.lift", &t.lift),
+                ] {
+                    for v in c.iter() {
+                        fin(k, *v)?;
+                    }
+                }
             }
         }
         let has_virtual = s.data.as_ref().is_some_and(|d| d.virtual_tunnel.is_some());
@@ -872,8 +1006,34 @@ impl Study {
                 ("structure.semi_chord", st.semi_chord),
                 ("structure.omega_alpha", st.omega_alpha),
                 ("structure.rho", st.rho),
+                ("structure.sigma", st.sigma),
             ] {
                 pos(k, v)?;
+            }
+            for (k, v, max) in [
+                ("structure.mu", st.mu, 1e6),
+                ("structure.r_alpha2", st.r_alpha2, 100.0),
+                ("structure.sigma", st.sigma, 100.0),
+                ("structure.semi_chord", st.semi_chord, 50.0),
+                ("structure.omega_alpha", st.omega_alpha, 1e5),
+                ("structure.rho", st.rho, 2000.0),
+            ] {
+                lim(positive_at_most(k, v, max, ""))?;
+            }
+            lim(abs_at_most(
+                "structure.x_alpha",
+                st.x_alpha,
+                10.0,
+                "semi-chords",
+            ))?;
+            fin("structure.pitch_cubic", st.pitch_cubic)?;
+            for (k, v) in [
+                ("structure.zeta_h", st.zeta_h),
+                ("structure.zeta_alpha", st.zeta_alpha),
+            ] {
+                if !(v.is_finite() && (0.0..=10.0).contains(&v)) {
+                    return err(k, format!("{v} must be finite and in [0, 10]"));
+                }
             }
         }
         if let Some(a) = &s.aero {
@@ -889,6 +1049,28 @@ impl Study {
         if let Some(f) = &s.flutter {
             pos("flutter.u_min", f.u_min)?;
             pos("flutter.u_max", f.u_max)?;
+            lim(positive_at_most("flutter.u_max", f.u_max, MAX_SPEED, "m/s"))?;
+            if f.n_speeds > crate::limits::MAX_SPEEDS {
+                return err(
+                    "flutter.n_speeds",
+                    format!(
+                        "{} exceeds the cap of {}",
+                        f.n_speeds,
+                        crate::limits::MAX_SPEEDS
+                    ),
+                );
+            }
+            lim(positive_at_most("flutter.tol_rel", f.tol_rel, 0.1, ""))?;
+            for (i, r) in f.run.iter().enumerate() {
+                if let Some(x) = r.reference {
+                    for v in [x.u_reduced, x.omega_ratio, x.divergence]
+                        .into_iter()
+                        .flatten()
+                    {
+                        fin(&format!("flutter.run[{i}].reference"), v)?;
+                    }
+                }
+            }
             if f.u_max <= f.u_min {
                 return err(
                     "flutter.u_max",
@@ -930,6 +1112,58 @@ impl Study {
             for v in &l.speeds {
                 pos("lco.speeds", *v)?;
             }
+            if l.speeds.len() > crate::limits::MAX_SPEEDS {
+                return err(
+                    "lco.speeds",
+                    format!(
+                        "{} speeds exceed the cap of {}",
+                        l.speeds.len(),
+                        crate::limits::MAX_SPEEDS
+                    ),
+                );
+            }
+            for (i, v) in l.speeds.iter().enumerate() {
+                lim(positive_at_most(
+                    &format!("lco.speeds[{i}]"),
+                    *v,
+                    MAX_SPEED,
+                    "m/s",
+                ))?;
+            }
+            for (i, v) in l.phase_speeds.iter().enumerate() {
+                lim(positive_at_most(
+                    &format!("lco.phase_speeds[{i}]"),
+                    *v,
+                    MAX_SPEED,
+                    "m/s",
+                ))?;
+            }
+            lim(positive_at_most(
+                "lco.max_periods",
+                l.max_periods,
+                crate::limits::MAX_PERIODS,
+                "periods",
+            ))?;
+            lim(positive_at_most(
+                "lco.phase_periods",
+                l.phase_periods,
+                crate::limits::MAX_PHASE_PERIODS,
+                "periods",
+            ))?;
+            lim(positive_at_most("lco.rtol", l.rtol, 1.0, ""))?;
+            lim(positive_at_most("lco.atol", l.atol, 1.0, ""))?;
+            lim(abs_at_most(
+                "lco.perturbation_deg",
+                l.perturbation_deg,
+                90.0,
+                "deg",
+            ))?;
+            lim(abs_at_most(
+                "lco.perturbation_down_deg",
+                l.perturbation_down_deg,
+                90.0,
+                "deg",
+            ))?;
             pos("lco.max_periods", l.max_periods)?;
             pos("lco.rtol", l.rtol)?;
             pos("lco.atol", l.atol)?;
@@ -941,6 +1175,23 @@ impl Study {
                     "needs a [data.virtual] source (the truth model)".into(),
                 );
             }
+        }
+        for (i, c) in s.outputs.series_cases.iter().enumerate() {
+            if !identify::dataset::is_valid_case_id(c) {
+                return err(
+                    &format!("outputs.series_cases[{i}]"),
+                    format!("`{c}` is not a case id ([A-Za-z0-9._-]+)"),
+                );
+            }
+        }
+        if id.preprocess.sg_half_window > 100_000 || id.preprocess.sg_order > 20 {
+            return err(
+                "identify.preprocess.sg_half_window",
+                format!(
+                    "half window {} (≤ 100000) and order {} (≤ 20) out of range",
+                    id.preprocess.sg_half_window, id.preprocess.sg_order
+                ),
+            );
         }
         if let Some(f) = &s.outputs.figures {
             for (i, k) in f.iter().enumerate() {
@@ -986,6 +1237,29 @@ fn check_model(k: &str, m: &str, allow_identified: bool) -> Result<(), (String, 
 /// Checks an `[aero]`-like table whose dotted prefix is `prefix`.
 fn check_aero(prefix: &str, a: &AeroSpec, allow_identified: bool) -> Result<(), (String, String)> {
     check_model(&format!("{prefix}.model"), &a.model, allow_identified)?;
+    if !(a.elastic_axis.is_finite() && a.elastic_axis.abs() <= 1.0) {
+        return Err((
+            format!("{prefix}.elastic_axis"),
+            format!(
+                "{} must be finite and on the chord, in [-1, 1] semi-chords",
+                a.elastic_axis
+            ),
+        ));
+    }
+    if !(1..=8).contains(&a.n_lag) {
+        return Err((
+            format!("{prefix}.n_lag"),
+            format!("{} must be in 1..=8", a.n_lag),
+        ));
+    }
+    for (i, t) in a.nonlinear.iter().enumerate() {
+        if !t.coefficient.is_finite() {
+            return Err((
+                format!("{prefix}.nonlinear[{i}].coefficient"),
+                format!("{} must be finite", t.coefficient),
+            ));
+        }
+    }
     for (i, t) in a.nonlinear.iter().enumerate() {
         if !matches!(t.channel.as_str(), "lift" | "moment") {
             return Err((

@@ -572,6 +572,23 @@ pub(crate) fn unsafe_relative_path(path: &Path) -> Option<&'static str> {
 /// `case_id`, looked up in the manifest text (`("case[?].KEY", 0)` when the text does not
 /// parse or has no such case). Used by readers that report an error about a manifest value
 /// after parsing, e.g. a case path that resolves outside the data-set folder.
+/// Upper bounds of physical plausibility of manifest numbers (key, bound in the key's unit):
+/// a value above is an error naming the file, line and field. Chosen far outside any
+/// wind-tunnel section (docs/DATA_FORMAT.md) so that they only catch typos and absurd
+/// inputs (one `wind_speed = 1e308` case used to wreck a whole group silently).
+pub const PLAUSIBLE_MAX: [(&str, f64); 10] = [
+    ("wind_speed", 1000.0),
+    ("chord", 100.0),
+    ("span", 1000.0),
+    ("air_density", 2000.0),
+    ("mass", 1e6),
+    ("inertia", 1e6),
+    ("freq_heave", 1e4),
+    ("freq_pitch", 1e4),
+    ("damping_heave", 10.0),
+    ("damping_pitch", 10.0),
+];
+
 pub(crate) fn case_key_location(
     text: &str,
     path: &Path,
@@ -682,6 +699,14 @@ impl<'c, 'a> Node<'c, 'a> {
 
     fn check_range(&self, key: &str, x: f64, positive: bool, unit: &str) -> Result<f64> {
         let ok = if positive { x > 0.0 } else { x >= 0.0 };
+        if let Some((_, max)) = PLAUSIBLE_MAX.iter().find(|(k, _)| *k == key) {
+            if ok && x > *max {
+                return Err(self.err(
+                    key,
+                    format!("{x} {unit} is physically implausible (must be ≤ {max} {unit})"),
+                ));
+            }
+        }
         if ok {
             Ok(x)
         } else {

@@ -14,7 +14,9 @@ mod write;
 use std::path::{Path, PathBuf};
 
 pub use self::csv::{check_sampling, parse_case_csv, read_case_csv, CaseTable};
-pub use self::manifest::{is_valid_case_id, CaseSpec, Manifest, StructureSpec, FORMAT};
+pub use self::manifest::{
+    is_valid_case_id, CaseSpec, Manifest, StructureSpec, FORMAT, PLAUSIBLE_MAX,
+};
 pub use self::units::{AngleUnit, ForceUnit, LengthUnit, MomentUnit, Units};
 pub use self::write::write_dataset;
 pub use crate::record::{CaseKind, CaseMeta, Record, Section};
@@ -50,8 +52,9 @@ impl Dataset {
 /// [`crate::Error::Csv`] or [`crate::Error::NonUniformSampling`] naming file, line and field
 /// for any violation of DATA_FORMAT.md (see [`Manifest::parse`] and [`read_case`]); a
 /// case path that leaves the folder (see [`read_case`]) is refused before any case file is
-/// read.
+/// read; an unfinished aeroform folder is refused ([`crate::io::check_complete_folder`]).
 pub fn read_dataset(dir: &Path) -> Result<Dataset> {
+    crate::io::check_complete_folder(dir)?;
     let manifest = Manifest::read(&dir.join(MANIFEST_FILE))?;
     // Refuse every path that leaves the folder before reading any case file.
     for case in &manifest.cases {
@@ -86,7 +89,8 @@ pub fn read_dataset(dir: &Path) -> Result<Dataset> {
 /// unit span) and [`crate::Error::NonUniformSampling`] (first bad row), each naming the
 /// file, line and column; [`crate::Error::Manifest`] naming the manifest line and field
 /// when `file` or `nowind_file` is absolute, has a `..` component or resolves outside `dir`
-/// through a symbolic link.
+/// through a symbolic link, or when `freq_pitch`/`freq_heave` is not below the record's
+/// Nyquist frequency; [`crate::Error::Csv`] for a value beyond [`MAX_ABS_SI`].
 pub fn read_case(dir: &Path, manifest: &Manifest, case: &CaseSpec) -> Result<Record> {
     let meta = manifest.case_meta(case);
     let file = resolve_case_path(dir, case, "file", &case.file)?;
@@ -104,6 +108,30 @@ pub fn read_case(dir: &Path, manifest: &Manifest, case: &CaseSpec) -> Result<Rec
     if let Some(still) = &still_file {
         let still = read_record(still, manifest, case.kind, true, meta)?;
         rec.nowind = Some(Box::new(still));
+    }
+    // A forcing frequency at or above Nyquist cannot be in the record: refuse it (it would
+    // otherwise silently null the derivatives of the case).
+    let nyquist = 0.5 / rec.dt;
+    for (key, f) in [
+        ("freq_pitch", case.freq_pitch),
+        ("freq_heave", case.freq_heave),
+    ] {
+        if let Some(f) = f.filter(|f| *f >= nyquist) {
+            let manifest_path = dir.join(MANIFEST_FILE);
+            let text = std::fs::read_to_string(&manifest_path).unwrap_or_default();
+            let (field, line) = manifest::case_key_location(&text, &manifest_path, &case.id, key);
+            return Err(crate::Error::Manifest {
+                path: manifest_path,
+                line,
+                field,
+                message: format!(
+                    "{f} Hz is not below the Nyquist frequency {nyquist} Hz of {} \
+                     (sample interval {} s)",
+                    file.display(),
+                    rec.dt
+                ),
+            });
+        }
     }
     Ok(rec)
 }
@@ -155,6 +183,18 @@ fn resolve_case_path(dir: &Path, case: &CaseSpec, key: &str, rel: &Path) -> Resu
     }
 }
 
+/// Largest magnitude of a case-CSV value after conversion to SI per unit span, per column
+/// (name, bound, unit): 1 km of heave, 1000 rad of pitch, 1e12 N/m or N·m/m of force.
+/// Values beyond are refused as physically implausible (docs/DATA_FORMAT.md); they are
+/// far outside any wind-tunnel record and keep every cubic library term and its sum of
+/// squares finite.
+pub const MAX_ABS_SI: [(&str, f64, &str); 4] = [
+    ("h", 1e3, "m"),
+    ("alpha", 1e3, "rad"),
+    ("lift", 1e12, "N/m"),
+    ("moment", 1e12, "N*m/m"),
+];
+
 fn read_record(
     path: &Path,
     manifest: &Manifest,
@@ -169,7 +209,15 @@ fn read_record(
     // Finite in the file's units can overflow in SI (a total force divided by a tiny span):
     // name the first such value. Row i of the table is line i + 2 (header on line 1; blank
     // lines are only allowed at the end).
+    // A finite but absurd value (1e308 mm) would overflow later, in the library's cubic
+    // terms and their sums of squares: it is refused here, with file, line and column
+    // ([`MAX_ABS_SI`]).
     let conv = |v: Vec<f64>, column: &str, f: &dyn Fn(f64) -> f64| -> Result<Vec<f64>> {
+        let (max, unit) = MAX_ABS_SI
+            .iter()
+            .find(|(c, _, _)| *c == column)
+            .map(|(_, m, u)| (*m, *u))
+            .unwrap_or((f64::MAX, ""));
         let mut v = v;
         for (i, x) in v.iter_mut().enumerate() {
             let y = f(*x);
@@ -180,6 +228,17 @@ fn read_record(
                     field: column.to_string(),
                     message: format!(
                         "{x} is {y} in SI per unit span (span = {span} m): out of range"
+                    ),
+                });
+            }
+            if y.abs() > max {
+                return Err(crate::Error::Csv {
+                    path: path.to_path_buf(),
+                    line: i + 2,
+                    field: column.to_string(),
+                    message: format!(
+                        "{x} is {y} {unit} in SI: physically implausible (|{column}| must be \
+                         ≤ {max:e} {unit})"
                     ),
                 });
             }

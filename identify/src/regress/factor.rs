@@ -168,10 +168,15 @@ impl CaseFactor {
         };
         // Column norms, accumulated in row order (the same sums as over the whole column).
         let mut sums = vec![0.0; p];
-        blocks(&mut |_, rows, buf| {
+        // first row at which a column's value or its running sum of squares is not finite
+        let mut first_bad: Vec<Option<usize>> = vec![None; p];
+        blocks(&mut |r0, rows, buf| {
             for (j, s) in sums.iter_mut().enumerate() {
-                for v in &buf[j * rows..(j + 1) * rows] {
+                for (i, v) in buf[j * rows..(j + 1) * rows].iter().enumerate() {
                     *s += v * v;
+                    if first_bad[j].is_none() && !s.is_finite() {
+                        first_bad[j] = Some(r0 + i);
+                    }
                 }
             }
         });
@@ -182,7 +187,13 @@ impl CaseFactor {
                 return Err(Error::InvalidData {
                     case: case.to_string(),
                     field: "library".to_string(),
-                    message: format!("library column {j} holds a non-finite value"),
+                    message: format!(
+                        "library column {j} (library term order) is not finite or overflows \
+                         its sum of squares at sample {} (row {} of the case file when the \
+                         record was not trimmed, header on line 1)",
+                        first_bad[j].unwrap_or(0),
+                        first_bad[j].unwrap_or(0) + 2
+                    ),
                 });
             }
             if s > 0.0 {

@@ -44,6 +44,10 @@ pub struct PathOptions {
 }
 
 /// Default number of δ values.
+/// Largest number of δ values on a path (each value is one sparse fit per case; the
+/// default is 50): a larger request is an option error, checked before allocating.
+pub const MAX_N_DELTA: usize = 100_000;
+
 pub const DEFAULT_N_DELTA: usize = 50;
 /// Default relative slack of the loss limit.
 pub const DEFAULT_LOSS_REL: f64 = 0.1;
@@ -76,8 +80,11 @@ impl PathOptions {
             name: name.to_string(),
             message,
         };
-        if self.n_delta == 0 {
-            return Err(bad("n_delta", "must be ≥ 1".to_string()));
+        if self.n_delta == 0 || self.n_delta > MAX_N_DELTA {
+            return Err(bad(
+                "n_delta",
+                format!("{} must be in 1..={MAX_N_DELTA}", self.n_delta),
+            ));
         }
         if !(self.delta_min > 0.0 && self.delta_max >= self.delta_min && self.delta_max.is_finite())
         {

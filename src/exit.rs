@@ -1,0 +1,85 @@
+//! Exit codes: 0 success, 1 runtime failure, 2 usage or input error (a bad flag, study
+//! file, data set, model or structure file, a limit of `aeroform::limits`), 130 SIGINT or
+//! SIGTERM (`interrupt`). Clap's own usage errors exit with 2 as well.
+
+/// A usage or input error raised by the binary itself (exit code 2).
+#[derive(Debug)]
+pub struct Usage(pub String);
+
+impl std::fmt::Display for Usage {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for Usage {}
+
+/// The exit code of an error: 2 when any error of its chain is an input error (the
+/// input's file, line and field are in the message), else 1.
+pub fn code(e: &anyhow::Error) -> u8 {
+    if e.chain().any(is_input_error) {
+        2
+    } else {
+        1
+    }
+}
+
+fn is_input_error(c: &(dyn std::error::Error + 'static)) -> bool {
+    if c.is::<Usage>()
+        || c.is::<aeroform::limits::LimitError>()
+        || c.is::<aeroform::study_spec::SpecError>()
+    {
+        return true;
+    }
+    if let Some(e) = c.downcast_ref::<identify::Error>() {
+        use identify::Error as E;
+        return matches!(
+            e,
+            E::Manifest { .. }
+                | E::Csv { .. }
+                | E::NonUniformSampling { .. }
+                | E::TooShort { .. }
+                | E::InvalidOption { .. }
+                | E::InvalidData { .. }
+                | E::IncompleteFolder { .. }
+                | E::Json { .. }
+        );
+    }
+    if let Some(e) = c.downcast_ref::<aeroelastic::Error>() {
+        use aeroelastic::Error as E;
+        return matches!(
+            e,
+            E::InvalidParameter { .. } | E::Toml { .. } | E::InvalidTable { .. }
+        );
+    }
+    if let Some(e) = c.downcast_ref::<diagnose::Error>() {
+        use diagnose::Error as E;
+        return matches!(
+            e,
+            E::Setting { .. } | E::UnknownEffect { .. } | E::Data { .. }
+        );
+    }
+    false
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use anyhow::Context;
+
+    #[test]
+    fn input_errors_exit_2_through_context_and_others_1() {
+        let e: anyhow::Error = Usage("bad".into()).into();
+        assert_eq!(code(&e.context("outer")), 2);
+        let r: Result<(), identify::Error> = Err(identify::Error::Csv {
+            path: "a.csv".into(),
+            line: 3,
+            field: "h".into(),
+            message: "x".into(),
+        });
+        assert_eq!(code(&r.context("reading").unwrap_err()), 2);
+        let io = identify::Error::io("a", std::io::Error::other("disk"));
+        assert_eq!(code(&anyhow::Error::from(io)), 1);
+        assert_eq!(code(&anyhow::anyhow!("plain")), 1);
+    }
+}

@@ -1,0 +1,521 @@
+//! Complete-or-absent output folders.
+//!
+//! A command that writes a folder of results (`run`, `tunnel …`, `diagnose`) writes it
+//! as a whole:
+//!
+//! 1. it takes the lock `P/.NAME.aeroform-lock` (its PID inside) next to `--out P/NAME`;
+//!    the lock of a dead process is taken over with a message, a live one is an error;
+//! 2. it removes work folders of dead processes in `P` (`P/.X.aeroform-staging.PID`,
+//!    `P/.X.aeroform-old.PID`, never following a symbolic link) and refuses to replace an
+//!    existing `P/NAME` that aeroform did not write (no [`COMPLETE_MARKER`]) unless
+//!    `--force`;
+//! 3. everything is written into the staging folder `P/.NAME.aeroform-staging.PID`, which
+//!    holds [`INCOMPLETE_MARKER`] from its first byte;
+//! 4. [`OutDir::commit`] writes [`COMPLETE_MARKER`], removes the incomplete-marker and
+//!    swaps the staging folder with `P/NAME` in one `renameat2(RENAME_EXCHANGE)` (two
+//!    renames where the file system cannot), then deletes the previous results.
+//!
+//! A failure (an error, SIGINT, SIGTERM) before the swap removes the staging folder and
+//! leaves `P/NAME` as it was; a SIGKILL leaves a staging folder that readers refuse
+//! (`identify::io::check_complete_folder`) and the next command removes.
+//!
+//! Commands that write one file into a shared folder (`identify`, `flutter`, `lco`) use
+//! [`SharedDir`]: the file is written atomically (`identify::io::write_atomic`) and the
+//! temporary files of dead processes in that folder are removed.
+
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+pub use identify::io::{COMPLETE_MARKER, INCOMPLETE_MARKER};
+
+use crate::exit::Usage;
+
+/// What an interrupted process must clean up ([`interrupt_cleanup`]).
+enum Active {
+    /// A staging folder and its lock.
+    Staging {
+        out: PathBuf,
+        staging: PathBuf,
+        lock: PathBuf,
+    },
+    /// Temporary files of this process in a shared folder.
+    Shared { dir: PathBuf },
+}
+
+/// The current output of this process. The signal handler and [`OutDir::commit`] both
+/// hold this mutex, so an interrupt never lands in the middle of the swap.
+static ACTIVE: Mutex<Option<Active>> = Mutex::new(None);
+
+fn set_active(a: Option<Active>) {
+    *ACTIVE.lock().unwrap_or_else(|p| p.into_inner()) = a;
+}
+
+/// Called by the SIGINT/SIGTERM handler: removes the staging folder and the lock (or this
+/// process's temporary files in a shared folder) and returns a sentence for the user.
+/// Holds the state mutex until the process exits.
+pub fn interrupt_cleanup() -> String {
+    let guard = ACTIVE.lock().unwrap_or_else(|p| p.into_inner());
+    let msg = match &*guard {
+        Some(Active::Staging { out, staging, lock }) => {
+            remove_entry(staging);
+            let _ = std::fs::remove_file(lock);
+            format!(
+                "interrupted: {} left as it was (the unfinished results were removed)",
+                out.display()
+            )
+        }
+        Some(Active::Shared { dir }) => {
+            remove_temp_files(dir, |pid| pid == std::process::id());
+            format!(
+                "interrupted: {} holds only complete result files",
+                dir.display()
+            )
+        }
+        None => "interrupted".to_string(),
+    };
+    // keep the guard: the main thread must not start a swap before the process exits
+    std::mem::forget(guard);
+    msg
+}
+
+/// Removes a file, a symbolic link (the link only) or a folder tree without following
+/// symbolic links (`std::fs::remove_dir_all` removes links, never their targets).
+fn remove_entry(p: &Path) {
+    match std::fs::symlink_metadata(p) {
+        Ok(m) if m.is_dir() => {
+            let _ = std::fs::remove_dir_all(p);
+        }
+        Ok(_) => {
+            let _ = std::fs::remove_file(p);
+        }
+        Err(_) => {}
+    }
+}
+
+/// True when a process with this PID exists (signal 0; EPERM means it exists).
+pub fn pid_alive(pid: u32) -> bool {
+    if pid == 0 || pid > i32::MAX as u32 {
+        return false;
+    }
+    // SAFETY: kill with signal 0 only checks for the process; it sends nothing.
+    let r = unsafe { libc::kill(pid as libc::pid_t, 0) };
+    r == 0 || std::io::Error::last_os_error().raw_os_error() == Some(libc::EPERM)
+}
+
+/// Removes the regular files `.NAME.PID.tmp` of `identify::io::write_atomic` directly in
+/// `dir` (not in sub-folders) whose PID satisfies `remove`. Uses `symlink_metadata`: a
+/// symbolic link is never followed (a link named like a temporary file is removed as a
+/// link). Returns the number removed.
+pub fn remove_temp_files(dir: &Path, remove: impl Fn(u32) -> bool) -> usize {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return 0;
+    };
+    let mut n = 0;
+    for e in entries.flatten() {
+        let name = e.file_name().to_string_lossy().into_owned();
+        let Some(pid) = temp_file_pid(&name) else {
+            continue;
+        };
+        let p = e.path();
+        let is_file_or_link = std::fs::symlink_metadata(&p).is_ok_and(|m| !m.is_dir());
+        if is_file_or_link && remove(pid) && std::fs::remove_file(&p).is_ok() {
+            n += 1;
+        }
+    }
+    n
+}
+
+/// The PID of a `write_atomic` temporary file name `.NAME.PID.tmp`.
+fn temp_file_pid(name: &str) -> Option<u32> {
+    let rest = name.strip_prefix('.')?.strip_suffix(".tmp")?;
+    let (_, pid) = rest.rsplit_once('.')?;
+    if pid.is_empty() || !pid.bytes().all(|b| b.is_ascii_digit()) {
+        return None;
+    }
+    pid.parse().ok()
+}
+
+/// Parent and final name of an output folder; refuses `/`, `..` endings and folders that
+/// contain the working directory (replacing them would delete the user's work).
+fn split_out(out: &Path, check_cwd: bool) -> anyhow::Result<(PathBuf, String)> {
+    let abs = std::path::absolute(out)
+        .map_err(|e| anyhow::anyhow!("cannot create output folder {}: {e}", out.display()))?;
+    let name = match abs.components().next_back() {
+        Some(std::path::Component::Normal(n)) => n.to_string_lossy().into_owned(),
+        _ => {
+            return Err(Usage(format!(
+                "--out {}: give a folder with a name (not `/`, `.` or `..`)",
+                out.display()
+            ))
+            .into())
+        }
+    };
+    let parent = abs.parent().map(Path::to_path_buf).unwrap_or_default();
+    if !check_cwd {
+        return Ok((parent, name));
+    }
+    if let (Ok(real), Ok(cwd)) = (
+        std::fs::canonicalize(&abs),
+        std::env::current_dir().and_then(std::fs::canonicalize),
+    ) {
+        if cwd.starts_with(&real) {
+            return Err(Usage(format!(
+                "--out {}: contains the working directory; results replace the output \
+                 folder as a whole, so give a folder of its own",
+                out.display()
+            ))
+            .into());
+        }
+    }
+    Ok((parent, name))
+}
+
+/// The lock `P/.NAME.aeroform-lock` of an output folder, held until dropped.
+pub struct Lock {
+    path: PathBuf,
+}
+
+impl Lock {
+    /// Takes the lock of the output folder `dir` (see [`Lock::acquire`]).
+    ///
+    /// # Errors
+    /// As [`Lock::acquire`]; [`Usage`] when `dir` has no name.
+    pub fn for_folder(dir: &Path) -> anyhow::Result<Lock> {
+        let (parent, name) = split_out(dir, false)?;
+        Lock::acquire(&parent, &name)
+    }
+
+    /// Takes the lock of `parent/name`, taking over the lock of a dead process (with a
+    /// message on stderr).
+    ///
+    /// # Errors
+    /// Another live process holds the lock (its PID and the lock file are named), or the
+    /// lock file cannot be created.
+    pub fn acquire(parent: &Path, name: &str) -> anyhow::Result<Lock> {
+        let path = parent.join(format!(".{name}.aeroform-lock"));
+        for _ in 0..5 {
+            match std::fs::OpenOptions::new()
+                .write(true)
+                .create_new(true)
+                .open(&path)
+            {
+                Ok(mut f) => {
+                    use std::io::Write;
+                    writeln!(f, "{}", std::process::id()).map_err(|e| {
+                        anyhow::anyhow!("cannot write the lock {}: {e}", path.display())
+                    })?;
+                    return Ok(Lock { path });
+                }
+                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
+                    let text = std::fs::read_to_string(&path).unwrap_or_default();
+                    let pid: Option<u32> = text.trim().parse().ok();
+                    match pid {
+                        Some(p) if p != std::process::id() && pid_alive(p) => {
+                            anyhow::bail!(
+                                "{} is being written by another aeroform process (PID {p}, \
+                                 lock {}); wait for it to finish",
+                                parent.join(name).display(),
+                                path.display()
+                            );
+                        }
+                        _ => {
+                            eprintln!(
+                                "note: taking over the stale lock {} of {}",
+                                path.display(),
+                                match pid {
+                                    Some(p) => format!("process {p}, which no longer runs"),
+                                    None => "an unknown process (unreadable PID)".into(),
+                                }
+                            );
+                            remove_entry(&path);
+                        }
+                    }
+                }
+                Err(e) => anyhow::bail!(
+                    "cannot create output folder {}: lock {}: {e}",
+                    parent.join(name).display(),
+                    path.display()
+                ),
+            }
+        }
+        anyhow::bail!("cannot take the lock {}", path.display())
+    }
+}
+
+impl Drop for Lock {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.path);
+    }
+}
+
+/// Removes work folders (`.X.aeroform-staging.PID`, `.X.aeroform-old.PID`) of dead
+/// processes in `parent`, without following symbolic links; says so on stderr.
+fn clean_dead_work_folders(parent: &Path) {
+    let Ok(entries) = std::fs::read_dir(parent) else {
+        return;
+    };
+    for e in entries.flatten() {
+        let name = e.file_name().to_string_lossy().into_owned();
+        let Some((_, pid)) = identify::io::work_folder_pid(&name) else {
+            continue;
+        };
+        if pid == std::process::id() || pid_alive(pid) {
+            continue;
+        }
+        eprintln!(
+            "note: removing {}, left by process {pid}, which no longer runs",
+            e.path().display()
+        );
+        remove_entry(&e.path());
+    }
+}
+
+/// An output folder written as a whole (module documentation).
+pub struct OutDir {
+    out: PathBuf,
+    staging: PathBuf,
+    command: String,
+    lock: Option<Lock>,
+}
+
+impl OutDir {
+    /// Prepares to write `out`: lock, cleanup of dead work folders, the check of an
+    /// existing folder, and a fresh staging folder holding the incomplete-marker.
+    /// `command` is recorded in the completion marker.
+    ///
+    /// # Errors
+    /// [`Usage`] when `out` is `/`, contains the working directory, is a file or a
+    /// symbolic link, or is a non-empty folder without [`COMPLETE_MARKER`] and `force` is
+    /// false; an error naming the folder when it cannot be created or is locked.
+    pub fn begin(out: &Path, command: &str, force: bool) -> anyhow::Result<OutDir> {
+        let (parent, name) = split_out(out, true)?;
+        std::fs::create_dir_all(&parent)
+            .map_err(|e| anyhow::anyhow!("cannot create output folder {}: {e}", out.display()))?;
+        let lock = Lock::acquire(&parent, &name)?;
+        clean_dead_work_folders(&parent);
+        let dest = parent.join(&name);
+        match std::fs::symlink_metadata(&dest) {
+            Err(_) => {}
+            Ok(m) if m.file_type().is_symlink() => {
+                return Err(Usage(format!(
+                    "--out {}: is a symbolic link; give the folder itself",
+                    out.display()
+                ))
+                .into())
+            }
+            Ok(m) if !m.is_dir() => {
+                return Err(Usage(format!(
+                    "cannot create output folder {}: a file of that name exists",
+                    out.display()
+                ))
+                .into())
+            }
+            Ok(_) => {
+                let ours = dest.join(COMPLETE_MARKER).exists();
+                let empty = std::fs::read_dir(&dest).map_or(false, |mut d| d.next().is_none());
+                if !ours && !empty && !force {
+                    return Err(Usage(format!(
+                        "--out {}: the folder exists and holds files aeroform did not write \
+                         (no {COMPLETE_MARKER}); the new results replace the folder as a \
+                         whole, so choose another folder or pass --force to replace it",
+                        out.display()
+                    ))
+                    .into());
+                }
+            }
+        }
+        let staging = parent.join(format!(".{name}.aeroform-staging.{}", std::process::id()));
+        remove_entry(&staging); // a leftover of an earlier process with our PID
+        std::fs::create_dir(&staging)
+            .and_then(|()| std::fs::write(staging.join(INCOMPLETE_MARKER), command.as_bytes()))
+            .map_err(|e| {
+                remove_entry(&staging);
+                anyhow::anyhow!(
+                    "cannot create output folder {} (staging {}): {e}",
+                    out.display(),
+                    staging.display()
+                )
+            })?;
+        set_active(Some(Active::Staging {
+            out: dest.clone(),
+            staging: staging.clone(),
+            lock: lock.path.clone(),
+        }));
+        Ok(OutDir {
+            out: dest,
+            staging,
+            command: command.to_string(),
+            lock: Some(lock),
+        })
+    }
+
+    /// The folder to write into (the staging folder).
+    pub fn path(&self) -> &Path {
+        &self.staging
+    }
+
+    /// Marks the staging folder complete and moves it into place; the previous results
+    /// are deleted after the swap.
+    ///
+    /// # Errors
+    /// Writing the marker or the rename fails (the previous results are then kept).
+    pub fn commit(mut self) -> anyhow::Result<PathBuf> {
+        let guard = ACTIVE.lock().unwrap_or_else(|p| p.into_inner());
+        let marker = format!(
+            "format = \"aeroform-output/1\"\ncommand = \"{}\"\n",
+            self.command
+        );
+        identify::io::write_atomic(&self.staging.join(COMPLETE_MARKER), marker.as_bytes())?;
+        std::fs::remove_file(self.staging.join(INCOMPLETE_MARKER)).map_err(|e| {
+            anyhow::anyhow!("{}: {e}", self.staging.join(INCOMPLETE_MARKER).display())
+        })?;
+        swap_into_place(&self.staging, &self.out)?;
+        drop(guard);
+        set_active(None);
+        self.lock.take();
+        Ok(self.out.clone())
+    }
+}
+
+impl Drop for OutDir {
+    /// Not committed (an error or a panic): the staging folder is removed, the previous
+    /// results stay.
+    fn drop(&mut self) {
+        if self.lock.is_some() {
+            remove_entry(&self.staging);
+            set_active(None);
+        }
+    }
+}
+
+/// Moves `staging` to `dest`: a plain rename when `dest` is absent, else an atomic
+/// exchange (Linux `renameat2`), else rename `dest` aside, rename `staging` in, and put
+/// `dest` back if that fails. Whatever was at `dest` is deleted afterwards.
+fn swap_into_place(staging: &Path, dest: &Path) -> anyhow::Result<()> {
+    let ctx =
+        |e: std::io::Error| anyhow::anyhow!("moving the results into {}: {e}", dest.display());
+    if std::fs::symlink_metadata(dest).is_err() {
+        return std::fs::rename(staging, dest).map_err(ctx);
+    }
+    if exchange(staging, dest).is_ok() {
+        remove_entry(staging); // now holds the previous results
+        return Ok(());
+    }
+    let name = dest.file_name().unwrap_or_default().to_string_lossy();
+    let old = dest.with_file_name(format!(".{name}.aeroform-old.{}", std::process::id()));
+    remove_entry(&old);
+    std::fs::rename(dest, &old).map_err(ctx)?;
+    if let Err(e) = std::fs::rename(staging, dest) {
+        let _ = std::fs::rename(&old, dest);
+        return Err(ctx(e));
+    }
+    remove_entry(&old);
+    Ok(())
+}
+
+#[cfg(target_os = "linux")]
+fn exchange(a: &Path, b: &Path) -> std::io::Result<()> {
+    use std::os::unix::ffi::OsStrExt;
+    let ca = std::ffi::CString::new(a.as_os_str().as_bytes())?;
+    let cb = std::ffi::CString::new(b.as_os_str().as_bytes())?;
+    // SAFETY: two valid NUL-terminated paths; renameat2 does not keep the pointers.
+    let r = unsafe {
+        libc::renameat2(
+            libc::AT_FDCWD,
+            ca.as_ptr(),
+            libc::AT_FDCWD,
+            cb.as_ptr(),
+            libc::RENAME_EXCHANGE,
+        )
+    };
+    if r == 0 {
+        Ok(())
+    } else {
+        Err(std::io::Error::last_os_error())
+    }
+}
+
+#[cfg(not(target_os = "linux"))]
+fn exchange(_: &Path, _: &Path) -> std::io::Result<()> {
+    Err(std::io::Error::from(std::io::ErrorKind::Unsupported))
+}
+
+/// A shared output folder into which a command writes single files atomically
+/// (`identify`, `flutter`, `lco`): created if missing; temporary files of dead processes
+/// in it are removed; an interrupt removes this process's temporary files.
+pub struct SharedDir;
+
+impl SharedDir {
+    /// Prepares `dir`.
+    ///
+    /// # Errors
+    /// The folder cannot be created (named in the message).
+    pub fn begin(dir: &Path) -> anyhow::Result<SharedDir> {
+        crate::ensure_dir(&dir.to_path_buf())?;
+        let n = remove_temp_files(dir, |pid| pid != std::process::id() && !pid_alive(pid));
+        if n > 0 {
+            eprintln!(
+                "note: removed {n} temporary file(s) of dead processes in {}",
+                dir.display()
+            );
+        }
+        set_active(Some(Active::Shared {
+            dir: dir.to_path_buf(),
+        }));
+        Ok(SharedDir)
+    }
+}
+
+impl Drop for SharedDir {
+    fn drop(&mut self) {
+        set_active(None);
+    }
+}
+
+/// Refuses to read an unfinished aeroform folder (`plot`; data-set readers check the same
+/// through `identify::dataset::read_dataset`).
+///
+/// # Errors
+/// [`Usage`] with the reason of `identify::io::check_complete_folder`.
+pub fn check_complete(dir: &Path) -> anyhow::Result<()> {
+    identify::io::check_complete_folder(dir).map_err(|e| Usage(e.to_string()).into())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn temp_file_names_are_parsed() {
+        assert_eq!(temp_file_pid(".flutter.json.123.tmp"), Some(123));
+        assert_eq!(temp_file_pid(".a.1.tmp"), Some(1));
+        assert_eq!(temp_file_pid("a.1.tmp"), None);
+        assert_eq!(temp_file_pid(".a.x1.tmp"), None);
+        assert_eq!(temp_file_pid(".a.1.json"), None);
+    }
+
+    #[test]
+    fn own_pid_is_alive_and_pid_zero_is_not() {
+        assert!(pid_alive(std::process::id()));
+        assert!(!pid_alive(0));
+        assert!(!pid_alive(u32::MAX));
+    }
+
+    #[test]
+    fn temp_cleanup_removes_links_not_their_targets() {
+        let dir = tempfile::tempdir().unwrap();
+        let outside = dir.path().join("outside.txt");
+        std::fs::write(&outside, b"keep").unwrap();
+        let d = dir.path().join("d");
+        std::fs::create_dir(&d).unwrap();
+        std::os::unix::fs::symlink(&outside, d.join(".x.999999.tmp")).unwrap();
+        std::fs::create_dir(d.join(".sub.999999.tmp")).unwrap();
+        std::fs::write(d.join(".y.999999.tmp"), b"t").unwrap();
+        assert_eq!(remove_temp_files(&d, |_| true), 2);
+        assert_eq!(std::fs::read(&outside).unwrap(), b"keep");
+        assert!(
+            d.join(".sub.999999.tmp").is_dir(),
+            "folders are not temp files"
+        );
+    }
+}
