@@ -797,8 +797,9 @@ pub fn forced_record(
     let m: &dyn AeroModel = k_model.as_deref().unwrap_or(model);
     let n = (opts.rate * opts.duration).round() as usize;
     let dt = 1.0 / opts.rate;
+    let pre_roll = opts.pre_roll.max(m.settle_time(&flow));
     let (mut lift, mut moment) =
-        forced_forces(m, &flow, &case.motion, 0.0, dt, n, opts.pre_roll, &case.id)?;
+        forced_forces(m, &flow, &case.motion, 0.0, dt, n, pre_roll, &case.id)?;
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut extra = toml::Table::new();
     extra.insert("seed".into(), seed.to_string().into());

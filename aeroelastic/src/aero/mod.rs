@@ -11,16 +11,19 @@
 //!
 //! Implementations: [`QuasiSteady`] (steady or quasi-steady thin aerofoil),
 //! [`TheodorsenAero`] (exact C(k) / Jones–Wagner lag states), [`DerivativeTable`]
-//! (Scanlan H*, A* tables / Roger rational-function approximation) and [`NonlinearAero`]
+//! (Scanlan H*, A* tables / Roger rational-function approximation), [`DynamicStallAero`]
+//! (Beddoes–Leishman-type dynamic stall of a thin plate) and [`NonlinearAero`]
 //! (any model plus polynomial terms in α, Bα̇/U, h/B, ḣ/U — the Eq. 19 N* terms).
 
 mod nonlinear;
 mod quasi_steady;
+mod stall;
 mod table;
 mod unsteady;
 
 pub use nonlinear::{term_name, Channel, Coefficient, NonlinearAero, NonlinearTerm};
 pub use quasi_steady::{QuasiSteady, QuasiSteadyKind};
+pub use stall::DynamicStallAero;
 pub use table::{DerivativeTable, RfaFit};
 pub use unsteady::TheodorsenAero;
 
@@ -79,6 +82,13 @@ pub trait AeroModel: Send + Sync + std::fmt::Debug {
     /// frequency) — see [`NonlinearAero`] for identified N* coefficients.
     fn with_reduced_frequency(&self, _k: f64) -> Option<std::sync::Arc<dyn AeroModel>> {
         None
+    }
+
+    /// Time [s] a forced run needs before recording for the model's nonlinear lag states to
+    /// forget their start (the virtual wind tunnel starts lag states on the periodic
+    /// solution of the *linearised* lag dynamics, exact for linear lags: 0, the default).
+    fn settle_time(&self, _flow: &Flow) -> f64 {
+        0.0
     }
 }
 

@@ -287,6 +287,9 @@ impl AeroModel for NonlinearAero {
     fn frequency_response(&self, flow: &Flow, omega: f64) -> Matrix2<Complex64> {
         self.inner.frequency_response(flow, omega)
     }
+    fn settle_time(&self, flow: &Flow) -> f64 {
+        self.inner.settle_time(flow)
+    }
     fn with_reduced_frequency(&self, k: f64) -> Option<Arc<dyn AeroModel>> {
         if !self.depends_on_k() {
             return None;
