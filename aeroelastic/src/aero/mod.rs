@@ -90,6 +90,12 @@ pub trait AeroModel: Send + Sync + std::fmt::Debug {
     fn settle_time(&self, _flow: &Flow) -> f64 {
         0.0
     }
+
+    /// Elastic-axis position a [semi-chords aft of mid-chord] about which the moment is
+    /// taken, when the model has one (thin-aerofoil models); `None` otherwise.
+    fn elastic_axis(&self) -> Option<f64> {
+        None
+    }
 }
 
 /// Linearisation of a model's time-domain form about the origin:

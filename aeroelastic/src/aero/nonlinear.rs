@@ -290,6 +290,9 @@ impl AeroModel for NonlinearAero {
     fn settle_time(&self, flow: &Flow) -> f64 {
         self.inner.settle_time(flow)
     }
+    fn elastic_axis(&self) -> Option<f64> {
+        self.inner.elastic_axis()
+    }
     fn with_reduced_frequency(&self, k: f64) -> Option<Arc<dyn AeroModel>> {
         if !self.depends_on_k() {
             return None;

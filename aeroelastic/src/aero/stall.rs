@@ -168,6 +168,9 @@ impl AeroModel for DynamicStallAero {
     fn frequency_response(&self, flow: &Flow, omega: f64) -> Matrix2<Complex64> {
         self.theodorsen().frequency_response(flow, omega)
     }
+    fn elastic_axis(&self) -> Option<f64> {
+        Some(self.a)
+    }
     fn settle_time(&self, flow: &Flow) -> f64 {
         // ten of the slowest nonlinear time constants (τ_p + τ_f) b/U
         if flow.u > 0.0 {
