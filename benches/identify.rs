@@ -46,7 +46,9 @@ fn synthetic_cases() -> Vec<NondimCase> {
                 let mut rng = ChaCha8Rng::seed_from_u64((c * 64 + a * 8 + u) as u64);
                 let t: Vec<f64> = (0..n).map(|i| i as f64 / FS).collect();
                 let x: [Vec<f64>; 4] = [
-                    t.iter().map(|t| mean + amp * (tau * fa * t).sin()).collect(),
+                    t.iter()
+                        .map(|t| mean + amp * (tau * fa * t).sin())
+                        .collect(),
                     t.iter()
                         .map(|t| CHORD / wind * amp * tau * fa * (tau * fa * t).cos())
                         .collect(),

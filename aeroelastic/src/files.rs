@@ -49,8 +49,8 @@ use std::sync::Arc;
 use serde::{Deserialize, Serialize};
 
 use crate::aero::{
-    AeroModel, Channel, Coefficient, DerivativeTable, DynamicStallAero, NonlinearAero, NonlinearTerm, QuasiSteady,
-    QuasiSteadyKind, TheodorsenAero,
+    AeroModel, Channel, Coefficient, DerivativeTable, DynamicStallAero, NonlinearAero,
+    NonlinearTerm, QuasiSteady, QuasiSteadyKind, TheodorsenAero,
 };
 use crate::error::{non_negative, positive};
 use crate::identified::{IdentifiedLaw, IdentifiedOptions, IdentifiedTables, MissingDerivative};

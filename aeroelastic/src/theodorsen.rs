@@ -273,13 +273,22 @@ mod tests {
                 (d.a3, c.a3),
                 (d.a4, c.a4),
             ] {
-                assert!((x - y).abs() < 1e-12 * y.abs().max(1.0), "K {k}: {x} vs {y}");
+                assert!(
+                    (x - y).abs() < 1e-12 * y.abs().max(1.0),
+                    "K {k}: {x} vs {y}"
+                );
             }
         }
         // a = −0.3: heave-driven lift is unchanged, the pitch-rate downwash and the moment arm
         // of the circulatory lift about the axis (b/2 → 0.2 b) change
-        let (d, c) = (thin_plate_derivatives(1.0, -0.3), flat_plate_derivatives(1.0));
-        assert!((d.h3 - c.h3).abs() > 1e-3, "H3* depends on the axis through α̇ lift");
+        let (d, c) = (
+            thin_plate_derivatives(1.0, -0.3),
+            flat_plate_derivatives(1.0),
+        );
+        assert!(
+            (d.h3 - c.h3).abs() > 1e-3,
+            "H3* depends on the axis through α̇ lift"
+        );
         assert!((d.h4 - c.h4).abs() < 1e-12 && (d.h1 - c.h1).abs() < 1e-12);
         assert!(d.a3 < 0.7 * c.a3, "A3* {} vs mid-chord {}", d.a3, c.a3);
     }
