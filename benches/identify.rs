@@ -1,8 +1,9 @@
 //! Criterion benchmark of the whole identification (`identify::pipeline::identify`).
 //!
-//! 448 synthetic cases like the paper's Tables I/II: 7 configurations (forcing frequencies
-//! f_α = 1.0 … 2.5 Hz, f_h = 0.7 f_α + 0.13 Hz) × 8 pitch amplitudes (3° … 24°) × 8 wind
-//! speeds (3 … 10 m/s), B = 0.25 m, 10 s at 512 Hz, an Eq. 19-like law plus 1 % noise.
+//! 448 synthetic cases on the paper's Tables I/II: the 7 configurations of
+//! `aeroelastic::tunnel::paper_configurations` (frequencies, r_A, G at a 3° mean angle, which
+//! takes the mean-angle centring path) × 8 pitch amplitudes (3° … 24°) × 8 wind speeds
+//! (3 … 10 m/s), B = 0.25 m, 10 s at 512 Hz, an Eq. 19-like law plus 1 % noise.
 //! Full `identify()`: 30-term library, identifiability, group STLSQ by configuration, 50-value
 //! δ path and metrics. Before the criterion run, one timed pass of each stage (library,
 //! QR factor, harmonic projection) is printed to show where the time goes.
@@ -30,18 +31,24 @@ fn synthetic_cases() -> Vec<NondimCase> {
     let n = (FS * DURATION) as usize;
     let tau = 2.0 * std::f64::consts::PI;
     let mut out = Vec::with_capacity(448);
-    for c in 0..7 {
-        let fa = 1.0 + 0.25 * c as f64;
-        let fh = 0.7 * fa + 0.13;
+    for (c, cfg) in aeroelastic::tunnel::paper_configurations()
+        .iter()
+        .enumerate()
+    {
+        let (fa, fh) = (cfg.freq_pitch, cfg.freq_heave);
+        let mean = cfg.mean_pitch_deg.to_radians();
         for a in 0..8 {
-            let amp = (3.0 + 3.0 * a as f64).to_radians();
-            let h_amp = 0.004 * (1.0 + a as f64); // m
+            let amp_deg = 3.0 + 3.0 * a as f64;
+            let amp = amp_deg.to_radians();
+            let h_amp = cfg.amplitude_ratio * amp_deg * 1e-3; // m
             for u in 0..8 {
                 let wind = 3.0 + u as f64;
                 let mut rng = ChaCha8Rng::seed_from_u64((c * 64 + a * 8 + u) as u64);
                 let t: Vec<f64> = (0..n).map(|i| i as f64 / FS).collect();
                 let x: [Vec<f64>; 4] = [
-                    t.iter().map(|t| amp * (tau * fa * t).sin()).collect(),
+                    t.iter()
+                        .map(|t| mean + amp * (tau * fa * t).sin())
+                        .collect(),
                     t.iter()
                         .map(|t| CHORD / wind * amp * tau * fa * (tau * fa * t).cos())
                         .collect(),
@@ -91,6 +98,7 @@ fn synthetic_cases() -> Vec<NondimCase> {
                         amplitude: Some(amp),
                         freq_pitch: Some(fa),
                         freq_heave: Some(fh),
+                        mean_pitch: (mean != 0.0).then_some(mean),
                         ..CaseMeta::default()
                     },
                     dt: 1.0 / FS,

@@ -22,9 +22,9 @@
 //! **Model file** (`*.model.toml`):
 //!
 //! ```toml
-//! kind = "theodorsen"   # | "quasi_steady" | "steady" | "flat_plate_table" | "derivative_table" | "identified"
+//! kind = "theodorsen"   # | "quasi_steady" | "steady" | "flat_plate_table" | "derivative_table" | "identified" | "dynamic_stall"
 //! chord = 0.25          # [m] (all kinds; for "identified" optional when given elsewhere)
-//! elastic_axis = -0.3   # a, semi-chords aft of mid-chord (theodorsen, quasi_steady, steady; default 0)
+//! elastic_axis = -0.3   # a, semi-chords aft of mid-chord (theodorsen, dynamic_stall, quasi_steady, steady; default 0)
 //! noncirculatory = true # quasi_steady, steady (default true)
 //! rfa_lags = 3          # flat_plate_table, derivative_table, identified (default 3)
 //! k = [0.1, 0.2, …]     # flat_plate_table: the K grid
@@ -49,8 +49,8 @@ use std::sync::Arc;
 use serde::{Deserialize, Serialize};
 
 use crate::aero::{
-    AeroModel, Channel, Coefficient, DerivativeTable, NonlinearAero, NonlinearTerm, QuasiSteady,
-    QuasiSteadyKind, TheodorsenAero,
+    AeroModel, Channel, Coefficient, DerivativeTable, DynamicStallAero, NonlinearAero,
+    NonlinearTerm, QuasiSteady, QuasiSteadyKind, TheodorsenAero,
 };
 use crate::error::{non_negative, positive};
 use crate::identified::{IdentifiedLaw, IdentifiedOptions, IdentifiedTables, MissingDerivative};
@@ -216,6 +216,8 @@ pub enum ModelKind {
     DerivativeTable,
     /// [`IdentifiedLaw`] from `file`.
     Identified,
+    /// [`DynamicStallAero::thin_plate`] (Beddoes–Leishman-type dynamic stall).
+    DynamicStall,
 }
 
 /// One `[[nonlinear]]` entry of a model file.
@@ -337,7 +339,7 @@ impl LoadedModel {
         let f: ModelFile = toml::from_str(text).map_err(|e| toml_err(e.to_string()))?;
         let kind_name = serde_json::to_string(&f.kind).unwrap_or_default();
         let used: &[&str] = match f.kind {
-            ModelKind::Theodorsen => &["chord", "elastic_axis"],
+            ModelKind::Theodorsen | ModelKind::DynamicStall => &["chord", "elastic_axis"],
             ModelKind::QuasiSteady | ModelKind::Steady => {
                 &["chord", "elastic_axis", "noncirculatory"]
             }
@@ -371,6 +373,13 @@ impl LoadedModel {
             ModelKind::Theodorsen => (
                 Arc::new(
                     TheodorsenAero::new(chord.ok_or_else(|| need("chord"))?, a).map_err(wrap)?,
+                ),
+                None,
+            ),
+            ModelKind::DynamicStall => (
+                Arc::new(
+                    DynamicStallAero::thin_plate(chord.ok_or_else(|| need("chord"))?, a)
+                        .map_err(wrap)?,
                 ),
                 None,
             ),

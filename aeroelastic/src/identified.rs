@@ -702,6 +702,7 @@ mod tests {
             mfwa: None,
             mfwa_phase: None,
             key_frequency_loss: None,
+            constant: None,
             key_frequencies: vec![],
         }
     }
@@ -720,6 +721,7 @@ mod tests {
             k_h: Some(kh),
             rank: 25,
             dependencies: vec![],
+            mean_pitch: None,
             moment: force(
                 MomentEq19 {
                     A1: Some(dh.a1),

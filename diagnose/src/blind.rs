@@ -141,7 +141,7 @@ impl Default for BlindScenario {
             free_duration: 12.0,
             free_substeps: 8,
             free_alpha0_deg: 4.0,
-            noise: SensorNoise::paper(),
+            noise: SensorNoise::paper_relative(),
             span: 0.75,
             depth: 0.02,
         }

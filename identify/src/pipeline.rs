@@ -104,6 +104,12 @@ pub struct IdentifySettings {
     pub regressor: RegressorChoice,
     /// Grouping of cases.
     pub group_by: GroupBy,
+    /// Regress a case with a nonzero mean pitch ᾱ (`mean_pitch` in its descriptors) about
+    /// its mean: α − ᾱ replaces α and the library columns and the force are centred, which
+    /// is a constant term fitted exactly (reported as `constant`, the static coefficient at
+    /// ᾱ); the linear coefficients are then the local derivatives at ᾱ (Eq. 19 at a mean
+    /// angle). Cases with ᾱ = 0 or no `mean_pitch` are unaffected.
+    pub centre_mean_angle: bool,
 }
 
 impl Default for IdentifySettings {
@@ -131,6 +137,7 @@ impl Default for IdentifySettings {
             max_harmonic_order: metrics::DEFAULT_MAX_ORDER,
             regressor: RegressorChoice::Stlsq,
             group_by: GroupBy::Config,
+            centre_mean_angle: true,
         }
     }
 }
@@ -300,6 +307,11 @@ pub struct ForceResult<E> {
     pub key_frequency_loss: Option<f64>,
     /// The key frequencies [Hz], largest measured amplitude first.
     pub key_frequencies: Vec<f64>,
+    /// Cases regressed about a mean pitch ᾱ (`centre_mean_angle`): the constant of the fit,
+    /// i.e. the modelled force coefficient at α = ᾱ, ḣ = α̇ = h = 0 (nondimensional, C_L or
+    /// C_M convention); `None` for other cases.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub constant: Option<f64>,
 }
 
 /// Identification of one case.
@@ -319,6 +331,10 @@ pub struct CaseResult {
     pub rank: usize,
     /// Dependencies of the case's library (term names).
     pub dependencies: Vec<String>,
+    /// Mean pitch ᾱ [rad] about which the case was regressed (`centre_mean_angle`): the
+    /// variable `alpha` of its terms is α − ᾱ; `None` when regressed on α itself.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mean_pitch: Option<f64>,
     /// Moment.
     pub moment: ForceResult<MomentEq19>,
     /// Lift.
@@ -534,6 +550,51 @@ struct CaseWork {
     key_freqs: [Vec<f64>; 2],
     /// pysindy mode: per target, per δ, raw coefficients.
     pysindy: Option<[Vec<Vec<f64>>; 2]>,
+    /// Centring about a mean pitch, when applied.
+    centring: Option<Centring>,
+}
+
+/// A case regressed about its mean pitch: ᾱ, the library's column means (on α − ᾱ) and the
+/// means of (moment, lift).
+struct Centring {
+    mean_pitch: f64,
+    columns: Vec<f64>,
+    targets: [f64; 2],
+}
+
+impl Centring {
+    /// The constant of the uncentred fit: ȳ − Σ ξ_j θ̄_j.
+    fn constant(&self, target: usize, raw: &[f64]) -> f64 {
+        self.targets[target]
+            - raw
+                .iter()
+                .zip(&self.columns)
+                .map(|(a, b)| a * b)
+                .sum::<f64>()
+    }
+}
+
+/// Mean of every library column over the samples `x` (block by block).
+fn column_means(lib: &Library, x: &[Vec<f64>; 4]) -> Vec<f64> {
+    let n = x[0].len();
+    let p = lib.len();
+    let mut sums = vec![0.0; p];
+    let mut block = faer::Mat::<f64>::zeros(crate::library::EVAL_BLOCK.min(n.max(1)), p);
+    let mut r0 = 0;
+    while r0 < n {
+        let rows = crate::library::EVAL_BLOCK.min(n - r0);
+        let mut b = block.as_mut().subrows_mut(0, rows);
+        lib.evaluate_rows(x, r0, b.as_mut());
+        for (j, s) in sums.iter_mut().enumerate() {
+            *s += b.as_ref().col(j).iter().sum::<f64>();
+        }
+        r0 += rows;
+    }
+    sums.iter().map(|s| s / n.max(1) as f64).collect()
+}
+
+fn mean(v: &[f64]) -> f64 {
+    v.iter().sum::<f64>() / v.len().max(1) as f64
 }
 
 fn check_case(case: &NondimCase) -> Result<()> {
@@ -587,9 +648,50 @@ fn prepare_case(
     // data): twice for the factorisation, once for the key-frequency projection.
     let n = case.len();
     let p = lib.len();
-    let eval = |r0: usize, out: faer::MatMut<'_, f64>| lib.evaluate_rows(&case.x, r0, out);
-    let factor =
-        CaseFactor::from_row_blocks(id, n, p, order, &[&case.c_moment, &case.c_lift], eval)?;
+    let shifted;
+    let mut centred_targets = None;
+    let (x, centring): (&[Vec<f64>; 4], Option<Centring>) = match case.meta.mean_pitch {
+        Some(m) if s.centre_mean_angle && m != 0.0 && m.is_finite() => {
+            let mut xs = case.x.clone();
+            xs[0].iter_mut().for_each(|a| *a -= m);
+            shifted = xs;
+            let targets = [mean(&case.c_moment), mean(&case.c_lift)];
+            centred_targets = Some([
+                case.c_moment
+                    .iter()
+                    .map(|v| v - targets[0])
+                    .collect::<Vec<f64>>(),
+                case.c_lift
+                    .iter()
+                    .map(|v| v - targets[1])
+                    .collect::<Vec<f64>>(),
+            ]);
+            let columns = column_means(lib, &shifted);
+            (
+                &shifted,
+                Some(Centring {
+                    mean_pitch: m,
+                    columns,
+                    targets,
+                }),
+            )
+        }
+        _ => (&case.x, None),
+    };
+    let col_means = centring.as_ref().map(|c| c.columns.as_slice());
+    let eval = |r0: usize, mut out: faer::MatMut<'_, f64>| {
+        lib.evaluate_rows(x, r0, out.as_mut());
+        if let Some(m) = col_means {
+            for (j, mj) in m.iter().enumerate() {
+                out.as_mut().col_mut(j).iter_mut().for_each(|v| *v -= mj);
+            }
+        }
+    };
+    let (y_m, y_l): (&[f64], &[f64]) = match &centred_targets {
+        Some([a, b]) => (a, b),
+        None => (&case.c_moment, &case.c_lift),
+    };
+    let factor = CaseFactor::from_row_blocks(id, n, p, order, &[y_m, y_l], eval)?;
     let ident = identifiability::analyse_factor(
         id,
         lib,
@@ -613,7 +715,7 @@ fn prepare_case(
             message: e.to_string(),
         })?;
         let cols = fit.column_amplitudes_with(p, eval);
-        for (t, y) in [&case.c_moment, &case.c_lift].into_iter().enumerate() {
+        for (t, y) in [y_m, y_l].into_iter().enumerate() {
             let (_, all) = fit.amplitudes(y);
             let key = metrics::select_key_frequencies(&tones, &all, s.k_key);
             key_freqs[t] = key.tones.iter().map(|t| t.freq).collect();
@@ -630,7 +732,7 @@ fn prepare_case(
         RegressorChoice::Pysindy(o) => {
             let basis: Vec<usize> = (0..lib.len()).filter(|&j| ident.in_basis[j]).collect();
             // comparison mode: pysindy works on the whole matrix
-            let theta = lib.evaluate(&case.x);
+            let theta = lib.evaluate(x);
             Some([
                 adapter::path_case(theta.as_ref(), &basis, &case.c_moment, deltas, o),
                 adapter::path_case(theta.as_ref(), &basis, &case.c_lift, deltas, o),
@@ -644,6 +746,7 @@ fn prepare_case(
         keys,
         key_freqs,
         pysindy,
+        centring,
     })
 }
 
@@ -823,6 +926,7 @@ fn force_result<E: From<Eq19Values>>(
         mfwa_phase,
         key_frequency_loss: loss,
         key_frequencies: w.key_freqs[target].clone(),
+        constant: w.centring.as_ref().map(|c| c.constant(target, raw)),
     }
 }
 
@@ -985,6 +1089,7 @@ pub fn identify(
                 k_h: c.k_h(),
                 rank: w.ident.rank,
                 dependencies: w.ident.dependency_strings(),
+                mean_pitch: w.centring.as_ref().map(|c| c.mean_pitch),
                 moment: force_result::<MomentEq19>(&lib, c, w, 0, basis, &case_coefs[i][0]),
                 lift: force_result::<LiftEq19>(&lib, c, w, 1, basis, &case_coefs[i][1]),
             }

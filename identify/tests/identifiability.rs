@@ -264,3 +264,78 @@ fn pitch_only_forcing_leaves_heave_derivatives_unidentified() {
     );
     assert!((m.eq19.A2.unwrap() + 0.2 / k).abs() < 1e-8, "{:?}", m.eq19);
 }
+
+/// Configuration G of the paper (3° mean angle): a force law in the total angle with a
+/// static offset, C = c₀ + k α + n α³ (+ damping). Regressed about ᾱ (the default) the fit
+/// is exact: α-coefficient k + 3nᾱ² (the local slope), `alpha^2` 3nᾱ, `alpha^3` n and the
+/// constant c₀ + kᾱ + nᾱ³. Regressed on α itself (no constant) the offset has no term and
+/// the δ path must buy it with spurious terms.
+#[test]
+fn mean_angle_is_regressed_about_its_mean_with_a_constant() {
+    let abar = 3f64.to_radians();
+    let mut x = harmonic(1.3, 2.0);
+    x[0].iter_mut().for_each(|a| *a += abar);
+    let (c0, k, n3, d) = (0.05, 2.0 * std::f64::consts::PI, -4.0, -1.5);
+    let law = |x: &[Vec<f64>; 4], i: usize| c0 + k * x[0][i] + n3 * x[0][i].powi(3) + d * x[1][i];
+    let mut c = case(
+        "G-U8-A11",
+        x.clone(),
+        Forcing {
+            pitch: Some(1.3),
+            heave: Some(2.0),
+        },
+    );
+    c.c_lift = (0..N).map(|i| law(&x, i)).collect();
+    c.c_moment = (0..N).map(|i| 0.25 * law(&x, i)).collect();
+    c.meta.mean_pitch = Some(abar);
+    let r = identify(
+        std::slice::from_ref(&c),
+        &IdentifySettings::default(),
+        "t",
+        &|_| {},
+    )
+    .unwrap();
+    let cr = &r.cases[0];
+    assert_eq!(cr.mean_pitch, Some(abar));
+    let t = &cr.lift.terms;
+    let want = [
+        ("alpha", k + 3.0 * n3 * abar * abar),
+        ("alpha^2", 3.0 * n3 * abar),
+        ("alpha^3", n3),
+        ("alpha_dot", d),
+    ];
+    for (name, v) in want {
+        let got = t.get(name).unwrap();
+        assert!(
+            (got - v).abs() < 1e-6 * v.abs().max(1.0),
+            "{name}: {got} vs {v}"
+        );
+    }
+    let support: Vec<&str> = r.groups[0]
+        .lift
+        .support
+        .iter()
+        .map(|s| s.as_str())
+        .collect();
+    assert_eq!(
+        support,
+        ["alpha", "alpha_dot", "h", "h_dot", "alpha^2", "alpha^3"],
+        "{support:?}"
+    );
+    let c_want = c0 + k * abar + n3 * abar.powi(3);
+    let got = cr.lift.constant.unwrap();
+    assert!((got - c_want).abs() < 1e-9, "constant {got} vs {c_want}");
+    assert!(cr.lift.r2.unwrap() > 1.0 - 1e-12);
+    // not centred: the offset c₀ needs terms the law does not have
+    let off = IdentifySettings {
+        centre_mean_angle: false,
+        ..IdentifySettings::default()
+    };
+    let r2 = identify(std::slice::from_ref(&c), &off, "t", &|_| {}).unwrap();
+    assert!(r2.cases[0].mean_pitch.is_none() && r2.cases[0].lift.constant.is_none());
+    let s2 = &r2.groups[0].lift.support;
+    assert!(
+        s2.len() > 6,
+        "an uncentred fit of an offset law should need extra terms: {s2:?}"
+    );
+}

@@ -320,11 +320,19 @@ pub fn render_all(study: &Study, out: &Path) -> anyhow::Result<Vec<FigureEntry>>
             )?;
         }
         if cv.wants("derivatives") {
+            // the reference curves about the virtual truth's elastic axis, when there is one
+            let elastic_axis = s
+                .data
+                .as_ref()
+                .and_then(|d| d.virtual_tunnel.as_ref())
+                .and_then(|v| super::build::virtual_model(study, v, 0.25).ok())
+                .and_then(|m| m.elastic_axis())
+                .unwrap_or(0.0);
             cv.draw(
                 "derivatives",
                 "derivatives",
-                "Identified flutter derivatives against reduced frequency (h-terms at K_h, α-terms at K_α) with the flat-plate closed forms.".into(),
-                &derivative_figure(id),
+                format!("Identified flutter derivatives against reduced frequency (h-terms at K_h, α-terms at K_α) with the thin-plate Theodorsen derivatives about the truth's elastic axis a = {elastic_axis} (0 when the data do not say)."),
+                &derivative_figure(id, elastic_axis),
             )?;
         }
 

@@ -11,16 +11,19 @@
 //!
 //! Implementations: [`QuasiSteady`] (steady or quasi-steady thin aerofoil),
 //! [`TheodorsenAero`] (exact C(k) / Jones–Wagner lag states), [`DerivativeTable`]
-//! (Scanlan H*, A* tables / Roger rational-function approximation) and [`NonlinearAero`]
+//! (Scanlan H*, A* tables / Roger rational-function approximation), [`DynamicStallAero`]
+//! (Beddoes–Leishman-type dynamic stall of a thin plate) and [`NonlinearAero`]
 //! (any model plus polynomial terms in α, Bα̇/U, h/B, ḣ/U — the Eq. 19 N* terms).
 
 mod nonlinear;
 mod quasi_steady;
+mod stall;
 mod table;
 mod unsteady;
 
 pub use nonlinear::{term_name, Channel, Coefficient, NonlinearAero, NonlinearTerm};
 pub use quasi_steady::{QuasiSteady, QuasiSteadyKind};
+pub use stall::DynamicStallAero;
 pub use table::{DerivativeTable, RfaFit};
 pub use unsteady::TheodorsenAero;
 
@@ -87,6 +90,19 @@ pub trait AeroModel: Send + Sync + std::fmt::Debug {
     /// [`AeroModel::with_reduced_frequency`]; the LCO solver then iterates K to each limit
     /// cycle's own frequency ([`crate::lco::KIteration`]).
     fn reduced_frequency(&self) -> Option<f64> {
+        None
+    }
+
+    /// Time [s] a forced run needs before recording for the model's nonlinear lag states to
+    /// forget their start (the virtual wind tunnel starts lag states on the periodic
+    /// solution of the *linearised* lag dynamics, exact for linear lags: 0, the default).
+    fn settle_time(&self, _flow: &Flow) -> f64 {
+        0.0
+    }
+
+    /// Elastic-axis position a [semi-chords aft of mid-chord] about which the moment is
+    /// taken, when the model has one (thin-aerofoil models); `None` otherwise.
+    fn elastic_axis(&self) -> Option<f64> {
         None
     }
 }

@@ -290,6 +290,12 @@ impl AeroModel for NonlinearAero {
     fn reduced_frequency(&self) -> Option<f64> {
         self.depends_on_k().then_some(self.k_eval)
     }
+    fn settle_time(&self, flow: &Flow) -> f64 {
+        self.inner.settle_time(flow)
+    }
+    fn elastic_axis(&self) -> Option<f64> {
+        self.inner.elastic_axis()
+    }
     fn with_reduced_frequency(&self, k: f64) -> Option<Arc<dyn AeroModel>> {
         if !self.depends_on_k() {
             return None;

@@ -72,6 +72,9 @@ impl AeroModel for TheodorsenAero {
         out[0] = s * (w - JONES_LAGS[0].1 * lag[0]);
         out[1] = s * (w - JONES_LAGS[1].1 * lag[1]);
     }
+    fn elastic_axis(&self) -> Option<f64> {
+        Some(self.a)
+    }
     fn frequency_response(&self, flow: &Flow, omega: f64) -> Matrix2<Complex64> {
         let b = 0.5 * self.chord;
         let k = if flow.u > 0.0 {

@@ -406,9 +406,11 @@ pub fn quality_histogram(id: &Identification) -> HistogramFigure {
 }
 
 /// Identified flutter derivatives H1*..H4*, A1*..A4* against K (h-terms at K_h, α-terms at
-/// K_α), one point set per group, with the flat-plate closed forms
-/// ([`aeroelastic::theodorsen::flat_plate_derivatives`]) over the identified K range.
-pub fn derivative_figure(id: &Identification) -> DerivativeFigure {
+/// K_α), one point set per group, with the thin-plate (Theodorsen) derivatives about the
+/// elastic axis at `elastic_axis` semi-chords aft of mid-chord
+/// ([`aeroelastic::theodorsen::thin_plate_derivatives`]; 0 = the flat-plate closed forms)
+/// over the identified K range.
+pub fn derivative_figure(id: &Identification, elastic_axis: f64) -> DerivativeFigure {
     // (name, force, index in eq19 array, uses K_alpha)
     let defs: [(&str, Force, usize, bool); 8] = [
         ("H1", Force::Lift, 0, false),
@@ -465,7 +467,7 @@ pub fn derivative_figure(id: &Identification) -> DerivativeFigure {
             let reference_value = reference_k
                 .iter()
                 .map(|&k| {
-                    let d = aeroelastic::theodorsen::flat_plate_derivatives(k);
+                    let d = aeroelastic::theodorsen::thin_plate_derivatives(k, elastic_axis);
                     match name {
                         "H1" => d.h1,
                         "H2" => d.h2,
@@ -489,7 +491,11 @@ pub fn derivative_figure(id: &Identification) -> DerivativeFigure {
     DerivativeFigure {
         title: "Flutter derivatives vs reduced frequency".into(),
         k_label: "K = Bω/U [-]".into(),
-        reference_label: "flat plate (Theodorsen)".into(),
+        reference_label: if elastic_axis == 0.0 {
+            "flat plate (Theodorsen)".into()
+        } else {
+            format!("thin plate (Theodorsen), axis a = {elastic_axis}")
+        },
         panels,
     }
 }
