@@ -735,6 +735,7 @@ pub fn forced_record(
         section: opts.section,
         structure: None,
         units: opts.units,
+        convention: Default::default(),
         cases: vec![],
         extra: None,
     };
@@ -861,6 +862,7 @@ pub fn forced_dataset(
         section: opts.section,
         structure: None,
         units: opts.units,
+        convention: Default::default(),
         cases: specs,
         extra: Some(extra),
     };
@@ -1208,6 +1210,7 @@ pub fn free_dataset(
         },
         structure: Some(spec),
         units: opts.units,
+        convention: Default::default(),
         cases,
         extra: Some(extra),
     };

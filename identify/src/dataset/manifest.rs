@@ -12,6 +12,7 @@ use std::path::{Path, PathBuf};
 use toml::de::{DeTable, DeValue};
 use toml::Spanned;
 
+use super::convention::{Angular, Convention, Linear};
 use super::units::{AngleUnit, ForceUnit, LengthUnit, MomentUnit, UnitName, Units};
 use crate::record::{CaseKind, CaseMeta, Section};
 use crate::{Error, Result};
@@ -103,6 +104,8 @@ pub struct Manifest {
     pub structure: Option<StructureSpec>,
     /// Units of the CSV columns.
     pub units: Units,
+    /// Sign convention of the CSV columns (`[convention]`; Scanlan when absent).
+    pub convention: Convention,
     /// The cases, in manifest order (at least one).
     pub cases: Vec<CaseSpec>,
     /// The top-level `[extra]` table, kept verbatim and otherwise ignored.
@@ -174,6 +177,14 @@ impl Manifest {
         let _ = writeln!(s, "pitch = {}", quote(u.pitch.as_str()));
         let _ = writeln!(s, "lift = {}", quote(u.lift.as_str()));
         let _ = writeln!(s, "moment = {}", quote(u.moment.as_str()));
+        if !self.convention.is_scanlan() {
+            let c = &self.convention;
+            s.push_str("\n[convention]\n");
+            let _ = writeln!(s, "heave = {}", quote(c.heave.as_str()));
+            let _ = writeln!(s, "pitch = {}", quote(c.pitch.as_str()));
+            let _ = writeln!(s, "lift = {}", quote(c.lift.as_str()));
+            let _ = writeln!(s, "moment = {}", quote(c.moment.as_str()));
+        }
         if let Some(extra) = &self.extra {
             s.push_str("\n[extra]\n");
             write_table_body(&mut s, extra);
@@ -214,10 +225,11 @@ impl Manifest {
     }
 
     /// The descriptors of `case` converted to SI: `amplitude` and `mean_pitch` from
-    /// `units.pitch` to rad; frequencies [Hz], wind speed [m/s] and `amplitude_ratio`
-    /// (a label) unchanged.
+    /// `units.pitch` to rad (`mean_pitch` also to nose-up positive, see `[convention]`);
+    /// frequencies \[Hz\], wind speed \[m/s\] and `amplitude_ratio` (a label) unchanged.
     pub fn case_meta(&self, case: &CaseSpec) -> CaseMeta {
         let p = self.units.pitch;
+        let sp = self.convention.pitch.sign();
         CaseMeta {
             id: case.id.clone(),
             wind_speed: case.wind_speed,
@@ -226,7 +238,7 @@ impl Manifest {
             amplitude_ratio: case.amplitude_ratio,
             freq_pitch: case.freq_pitch,
             freq_heave: case.freq_heave,
-            mean_pitch: case.mean_pitch.map(|a| p.to_si(a)),
+            mean_pitch: case.mean_pitch.map(|a| sp * p.to_si(a)),
         }
     }
 
@@ -387,6 +399,7 @@ impl<'a> Cx<'a> {
             "section",
             "structure",
             "units",
+            "convention",
             "case",
             "extra",
         ])?;
@@ -439,6 +452,20 @@ impl<'a> Cx<'a> {
             moment: un.req_unit::<MomentUnit>("moment")?,
         };
 
+        let convention = match root.opt_table("convention", "convention.")? {
+            None => Convention::default(),
+            Some(cv) => {
+                cv.check_keys(&["heave", "pitch", "lift", "moment"])?;
+                let d = Convention::default();
+                Convention {
+                    heave: cv.opt_unit::<Linear>("heave")?.unwrap_or(d.heave),
+                    pitch: cv.opt_unit::<Angular>("pitch")?.unwrap_or(d.pitch),
+                    lift: cv.opt_unit::<Linear>("lift")?.unwrap_or(d.lift),
+                    moment: cv.opt_unit::<Angular>("moment")?.unwrap_or(d.moment),
+                }
+            }
+        };
+
         let extra = root.opt_extra("extra")?;
         let cases = self.cases(&root)?;
 
@@ -469,6 +496,7 @@ impl<'a> Cx<'a> {
             section,
             structure,
             units,
+            convention,
             cases,
             extra,
         })
@@ -715,6 +743,18 @@ impl<'c, 'a> Node<'c, 'a> {
         self.opt_f64(key)?
             .map(|x| self.check_range(key, x, false, unit))
             .transpose()
+    }
+
+    fn opt_unit<U: UnitName>(&self, key: &str) -> Result<Option<U>> {
+        match self.opt_str(key)? {
+            None => Ok(None),
+            Some(s) => U::from_name(s).map(Some).ok_or_else(|| {
+                self.err(
+                    key,
+                    format!("unknown value \"{s}\"; allowed values: {}", U::allowed()),
+                )
+            }),
+        }
     }
 
     fn req_unit<U: UnitName>(&self, key: &str) -> Result<U> {
