@@ -26,6 +26,21 @@ use crate::Result;
 /// File name of the manifest inside a data-set folder.
 pub const MANIFEST_FILE: &str = "manifest.toml";
 
+/// File name of the JSON form of the manifest, read when there is no `manifest.toml`.
+pub const MANIFEST_JSON_FILE: &str = "manifest.json";
+
+/// The manifest file of a data-set folder: `manifest.toml`, or `manifest.json` when only
+/// that exists.
+pub fn manifest_path(dir: &Path) -> PathBuf {
+    let toml = dir.join(MANIFEST_FILE);
+    let json = dir.join(MANIFEST_JSON_FILE);
+    if !toml.exists() && json.exists() {
+        json
+    } else {
+        toml
+    }
+}
+
 /// A data set read from a folder: the manifest and one [`Record`] per case, in manifest
 /// order, SI per unit span.
 #[derive(Debug, Clone, PartialEq)]
@@ -45,7 +60,8 @@ impl Dataset {
     }
 }
 
-/// Reads a whole data set (`dir/manifest.toml` and every case file it names).
+/// Reads a whole data set (`dir/manifest.toml`, or `dir/manifest.json` when there is no
+/// TOML manifest, and every case file it names).
 ///
 /// # Errors
 /// [`crate::Error::Io`] when a file cannot be read; [`crate::Error::Manifest`],
@@ -71,7 +87,7 @@ pub struct ReadOptions {
 /// # Errors
 /// As [`read_dataset`].
 pub fn read_dataset_with(dir: &Path, options: &ReadOptions) -> Result<Dataset> {
-    let mut manifest = Manifest::read(&dir.join(MANIFEST_FILE))?;
+    let mut manifest = Manifest::read(&manifest_path(dir))?;
     if options.flip_lift {
         manifest.convention = manifest.convention.with_lift_flipped();
     }
@@ -145,7 +161,7 @@ pub fn read_case(dir: &Path, manifest: &Manifest, case: &CaseSpec) -> Result<Rec
 /// (`case[i].file` / `case[i].nowind_file`), the path and where it resolves;
 /// [`crate::Error::Io`] when the folder itself cannot be resolved.
 fn resolve_case_path(dir: &Path, case: &CaseSpec, key: &str, rel: &Path) -> Result<PathBuf> {
-    let manifest_path = dir.join(MANIFEST_FILE);
+    let manifest_path = self::manifest_path(dir);
     let refuse = |why: String| {
         let text = std::fs::read_to_string(&manifest_path).unwrap_or_default();
         let (field, line) = manifest::case_key_location(&text, &manifest_path, &case.id, key);

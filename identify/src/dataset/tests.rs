@@ -558,3 +558,31 @@ fn convention_table_is_optional_checked_and_named_in_errors() {
         manifest_err(&SMALL.replace("[[case]]", "[convention]\ndrag = \"up\"\n\n[[case]]"));
     assert_eq!(field, "convention.drag");
 }
+
+#[test]
+fn json_manifest_is_the_toml_one_and_errors_name_json_lines() {
+    let m = Manifest::parse(SMALL, p()).unwrap();
+    let json = r#"{
+  "format": "aeroform-dataset/1",
+  "name": "small",
+  "section": {"chord": 0.25, "span": 0.75, "air_density": 1.225},
+  "units": {"heave": "m", "pitch": "rad", "lift": "N/m", "moment": "N*m/m"},
+  "case": [
+    {"id": "a", "kind": "forced", "file": "a.csv", "wind_speed": 5}
+  ]
+}"#;
+    let jp = Path::new("ds/manifest.json");
+    assert_eq!(Manifest::parse_json(json, jp).unwrap(), m);
+    let bad = json.replace("\"wind_speed\": 5", "\"wind_speed\": -5");
+    let e = Manifest::parse_json(&bad, jp).unwrap_err();
+    let Error::Manifest { line, field, .. } = &e else {
+        panic!("{e}")
+    };
+    assert_eq!((*line, field.as_str()), (7, "case[1].wind_speed"), "{e}");
+    assert!(e.to_string().contains("manifest.json"), "{e}");
+    let null = json.replace("\"chord\": 0.25", "\"chord\": null");
+    let e = Manifest::parse_json(&null, jp).unwrap_err();
+    assert!(e.to_string().contains(":4: field `section.chord`"), "{e}");
+    let e = Manifest::parse_json("{\"format\": ", jp).unwrap_err();
+    assert!(e.to_string().contains("invalid JSON"), "{e}");
+}
