@@ -234,15 +234,13 @@ fn result_files(out: &Path) -> Vec<String> {
     // write the same page
     files.push(names::FIGURE_LIST.to_string());
     files.sort();
-    for sub in [names::SERIES] {
-        if let Ok(rd) = std::fs::read_dir(out.join(sub)) {
-            let mut v: Vec<String> = rd
-                .flatten()
-                .map(|e| format!("{sub}/{}", e.file_name().to_string_lossy()))
-                .collect();
-            v.sort();
-            files.extend(v);
-        }
+    if let Ok(rd) = std::fs::read_dir(out.join(names::SERIES)) {
+        let mut v: Vec<String> = rd
+            .flatten()
+            .map(|e| format!("{}/{}", names::SERIES, e.file_name().to_string_lossy()))
+            .collect();
+        v.sort();
+        files.extend(v);
     }
     files
 }

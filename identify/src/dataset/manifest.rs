@@ -346,7 +346,7 @@ fn json_line(text: &str, field: &str) -> usize {
     let n_cases = text.matches("\"id\"").count();
     match (case_n, hits.len()) {
         (_, 1) => line_of(hits[0]),
-        (Some(n), h) if h == n_cases && n >= 1 && n <= h => line_of(hits[n - 1]),
+        (Some(n), h) if h == n_cases && (1..=h).contains(&n) => line_of(hits[n - 1]),
         _ => 0,
     }
 }
