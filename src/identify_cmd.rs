@@ -5,7 +5,7 @@ use std::time::Instant;
 
 use anyhow::Context;
 use clap::{Args, ValueEnum};
-use identify::dataset::read_dataset;
+use identify::dataset::{read_dataset_with, ReadOptions};
 use identify::identifiability::BasisMode;
 use identify::library::LibraryKind;
 use identify::pipeline::{GroupBy, Identification, IdentifySettings, RegressorChoice};
@@ -64,6 +64,10 @@ pub struct IdentifyArgs {
     /// Do not subtract still-air runs named by `nowind_file`.
     #[arg(long)]
     pub no_nowind: bool,
+    /// Reverse the lift direction the manifest declares (`[convention] lift`, "down" when
+    /// absent): for data exported lift-positive-up without a declaration.
+    #[arg(long)]
+    pub flip_lift: bool,
     /// Write stage timings (read_s, prepare_s, identify_s, total_s, cases) to this JSON file.
     #[arg(long)]
     pub timing_json: Option<PathBuf>,
@@ -196,9 +200,20 @@ pub fn run(args: &IdentifyArgs) -> anyhow::Result<Identification> {
     pre.check().context("invalid preprocessing option")?;
 
     let t_start = Instant::now();
-    let dataset = read_dataset(&args.dataset)
+    let options = ReadOptions {
+        flip_lift: args.flip_lift,
+    };
+    let dataset = read_dataset_with(&args.dataset, &options)
         .with_context(|| format!("reading data set {}", args.dataset.display()))?;
     let read_s = t_start.elapsed().as_secs_f64();
+    let convention = dataset.manifest.convention;
+    if !convention.is_scanlan() && !args.quiet {
+        eprintln!(
+            "{}: columns read as {} and converted to Scanlan's (h, lift down; alpha, moment nose-up)",
+            args.dataset.display(),
+            convention.describe()
+        );
+    }
 
     let t_prep = Instant::now();
     let prepared = prepare_dataset(&dataset, &pre).context("preprocessing")?;

@@ -20,9 +20,12 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
+/// `--version` text: the package version and the commit it was built from (`build.rs`).
+const VERSION: &str = concat!(env!("CARGO_PKG_VERSION"), " (", env!("AEROFORM_GIT"), ")");
+
 /// Nonlinear aeroelasticity from forced-motion wind-tunnel records.
 #[derive(Debug, Parser)]
-#[command(name = "aeroform", version, about, long_about = None)]
+#[command(name = "aeroform", version = VERSION, about, long_about = None)]
 struct Cli {
     #[command(subcommand)]
     command: Command,

@@ -878,6 +878,7 @@ pub fn forced_record(
         section: opts.section,
         structure: None,
         units: opts.units,
+        convention: Default::default(),
         cases: vec![],
         extra: None,
     };
@@ -1026,6 +1027,7 @@ pub fn forced_dataset(
         section: opts.section,
         structure: None,
         units: opts.units,
+        convention: Default::default(),
         cases: specs,
         extra: Some(extra),
     };
@@ -1370,6 +1372,7 @@ pub fn free_dataset(
         },
         structure: Some(spec),
         units: opts.units,
+        convention: Default::default(),
         cases,
         extra: Some(extra),
     };

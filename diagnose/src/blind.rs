@@ -389,6 +389,7 @@ fn forced_set(
         },
         structure: None,
         units,
+        convention: Default::default(),
         cases: vec![],
         extra: None,
     };
@@ -486,6 +487,7 @@ fn free_set(
         },
         structure: Some(tunnel::structure_spec(&base.structure).map_err(ae("blind: rig"))?),
         units: tunnel::paper_units(),
+        convention: Default::default(),
         cases: specs,
         extra: Some(extra_table(seed)),
     };

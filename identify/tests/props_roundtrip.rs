@@ -288,6 +288,7 @@ fn dataset() -> impl Strategy<Value = (Manifest, Vec<Record>)> {
                             },
                             structure,
                             units,
+                            convention: Default::default(),
                             cases,
                             extra: extra.clone(),
                         },

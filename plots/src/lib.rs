@@ -43,7 +43,7 @@ pub use figures::spectrum::{FreqMarker, SpectrumFigure};
 pub use figures::time_series::{TimePanel, TimeSeriesFigure};
 pub use figures::{Series, SeriesKind};
 pub use render::{render_png, render_svg, save, Figure, FigureFiles};
-pub use report::{escape_html, Report};
+pub use report::{anchor, column_label, escape_html, Report};
 
 #[cfg(test)]
 mod tests;

@@ -1,5 +1,9 @@
-//! A minimal self-contained HTML report: sections, paragraphs, key–value tables, data
-//! tables, inline SVG figures. No external resources (no CDN, no web fonts, no scripts).
+//! A minimal self-contained HTML report: a navigation bar, sections with anchors,
+//! paragraphs, key–value tables, data tables (wrapped so a wide one scrolls inside its box
+//! instead of widening the page), preformatted text, links to result files and inline SVG
+//! figures. No external resources (no CDN, no web fonts, no scripts). The page fits a
+//! 420 px phone and prints on A4 without cut columns (print CSS wraps cells and shrinks
+//! tables); `tests/report_headless.rs` checks both widths in headless Chromium.
 
 use std::path::Path;
 
@@ -24,6 +28,14 @@ enum Block {
         caption: String,
         svg: String,
     },
+    Pre {
+        caption: String,
+        text: String,
+    },
+    Links {
+        caption: String,
+        links: Vec<(String, String)>,
+    },
 }
 
 /// Builder of a self-contained HTML report.
@@ -31,7 +43,7 @@ enum Block {
 /// ```
 /// let mut r = plots::Report::new("Study A");
 /// r.section("Summary").text("Identified 12 cases.").key_values("Metrics", &[("R²", "0.98")]);
-/// assert!(r.to_html().contains("<h2>Summary</h2>"));
+/// assert!(r.to_html().contains("<h2 id=\"summary\">Summary</h2>"));
 /// ```
 #[derive(Debug, Clone, PartialEq)]
 pub struct Report {
@@ -107,12 +119,95 @@ fn split_csv_line(line: &str) -> Vec<String> {
 }
 
 const CSS: &str = "body{font-family:sans-serif;max-width:1300px;margin:2em auto;padding:0 1em;\
-color:#222;line-height:1.45}h1{border-bottom:2px solid #0072b2;padding-bottom:.2em}\
-h2{margin-top:1.8em;border-bottom:1px solid #ccc}table{border-collapse:collapse;margin:.8em 0}\
+color:#222;line-height:1.45}h1{border-bottom:2px solid #0072b2;padding-bottom:.2em;\
+overflow-wrap:anywhere}h2{margin-top:1.8em;border-bottom:1px solid #ccc}\
+nav{position:sticky;top:0;background:#fff;border-bottom:1px solid #ccc;padding:.4em 0;\
+z-index:1;display:flex;flex-wrap:wrap;gap:.3em 1.2em}nav a{color:#0072b2;text-decoration:none}\
+nav a:hover,a:hover{text-decoration:underline}h2{scroll-margin-top:3em}\
+.scroll{overflow-x:auto;max-width:100%;margin:.8em 0}table{border-collapse:collapse}\
 caption{text-align:left;font-weight:bold;padding:.3em 0}th,td{border:1px solid #ccc;\
-padding:.25em .7em;text-align:left}th{background:#f0f4f8}td.num{text-align:right;\
-font-variant-numeric:tabular-nums}figure{margin:1.2em 0}figure svg{max-width:100%;height:auto;\
-display:block;border:1px solid #eee}figcaption{color:#555;font-size:.95em;margin-top:.3em}";
+padding:.25em .7em;text-align:left;vertical-align:top}th{background:#f0f4f8}td.num{text-align:right;\
+font-variant-numeric:tabular-nums;white-space:nowrap}td:first-child{white-space:nowrap}\
+figure{margin:1.2em 0}figure svg{max-width:100%;height:auto;display:block;border:1px solid #eee}\
+figcaption{color:#555;font-size:.95em;margin-top:.3em}pre{background:#f6f8fa;padding:.6em;\
+overflow-x:auto;font-size:.9em}p.empty{color:#666;font-style:italic}ul.files{columns:18em;\
+padding-left:1.2em}ul.files li{overflow-wrap:anywhere}\
+@page{size:A4;margin:12mm}@media print{body{max-width:none;margin:0;font-size:10pt}nav{display:none}\
+.scroll{overflow:visible}table{font-size:7.5pt;width:100%}th,td{padding:.1em .3em;\
+white-space:normal!important;overflow-wrap:anywhere}figure,tr{break-inside:avoid}\
+pre{white-space:pre-wrap;font-size:7.5pt}h2{break-after:avoid}}";
+
+/// The display form of a machine column name of the result CSV files: a unit suffix
+/// becomes a bracketed unit (`U_m_s` → `U [m/s]`, `amplitude_deg` → `amplitude [deg]`),
+/// Greek names become letters (`K_alpha` → `K_α`, `omega_F_rad_s` → `ω_F [rad/s]`),
+/// `R2_lift` → `R² lift`; other names are returned unchanged.
+pub fn column_label(name: &str) -> String {
+    const UNITS: [(&str, &str); 8] = [
+        ("_rad_s", "rad/s"),
+        ("_m_s", "m/s"),
+        ("_deg", "deg"),
+        ("_rad", "rad"),
+        ("_Hz", "Hz"),
+        ("_hz", "Hz"),
+        ("_s", "s"),
+        ("_m", "m"),
+    ];
+    let (stem, unit) = UNITS
+        .iter()
+        .find_map(|(suf, u)| {
+            name.strip_suffix(suf)
+                .filter(|s| !s.is_empty())
+                .map(|s| (s, Some(*u)))
+        })
+        .unwrap_or((name, None));
+    let mut words: Vec<String> = vec![];
+    for w in stem.split('_') {
+        let w = match w {
+            "alpha" => "α".to_string(),
+            "omega" => "ω".to_string(),
+            "R2" => "R²".to_string(),
+            "rel" => "rel.".to_string(),
+            "err" => "error".to_string(),
+            "ref" => "published".to_string(),
+            w => w.to_string(),
+        };
+        words.push(w);
+    }
+    // K_alpha, U_F, omega_F: a one-letter symbol keeps its subscript
+    let mut out = String::new();
+    for (i, w) in words.iter().enumerate() {
+        if i > 0 {
+            let prev = &words[i - 1];
+            let symbol = prev.chars().count() == 1 && (i == 1 || w.chars().count() == 1);
+            out.push(if symbol { '_' } else { ' ' });
+        }
+        out.push_str(w);
+    }
+    match unit {
+        Some(u) => format!("{out} [{u}]"),
+        None => out,
+    }
+}
+
+/// The anchor of a section heading: lower-case ASCII letters and digits, other runs as `-`.
+pub fn anchor(heading: &str) -> String {
+    let mut out = String::new();
+    for c in heading.chars() {
+        if c.is_ascii_alphanumeric() {
+            out.push(c.to_ascii_lowercase());
+        } else if !out.ends_with('-') && !out.is_empty() {
+            out.push('-');
+        }
+    }
+    while out.ends_with('-') {
+        out.pop();
+    }
+    if out.is_empty() {
+        "section".into()
+    } else {
+        out
+    }
+}
 
 fn is_number(s: &str) -> bool {
     !s.is_empty() && s.parse::<f64>().is_ok()
@@ -203,6 +298,53 @@ impl Report {
         self
     }
 
+    /// Adds preformatted text (escaped) with a caption, e.g. a study file as it was run.
+    pub fn pre(&mut self, caption: impl Into<String>, text: impl Into<String>) -> &mut Self {
+        self.blocks.push(Block::Pre {
+            caption: caption.into(),
+            text: text.into(),
+        });
+        self
+    }
+
+    /// Adds a list of links `(href, label)`, e.g. to the result files next to the report
+    /// (relative hrefs, so the folder can be moved). An empty list prints "none".
+    pub fn links<H: AsRef<str>, L: AsRef<str>>(
+        &mut self,
+        caption: impl Into<String>,
+        links: &[(H, L)],
+    ) -> &mut Self {
+        self.blocks.push(Block::Links {
+            caption: caption.into(),
+            links: links
+                .iter()
+                .map(|(h, l)| (h.as_ref().to_string(), l.as_ref().to_string()))
+                .collect(),
+        });
+        self
+    }
+
+    /// The section headings in order, with their anchors (`#anchor` links of the navigation
+    /// bar; a repeated heading gets `-2`, `-3` …).
+    pub fn sections(&self) -> Vec<(String, String)> {
+        let mut seen: Vec<String> = vec![];
+        let mut out = vec![];
+        for b in &self.blocks {
+            if let Block::Section(s) = b {
+                let base = anchor(s);
+                let n = seen.iter().filter(|x| **x == base).count();
+                seen.push(base.clone());
+                let id = if n == 0 {
+                    base
+                } else {
+                    format!("{base}-{}", n + 1)
+                };
+                out.push((s.clone(), id));
+            }
+        }
+        out
+    }
+
     /// The whole page as HTML5 text (UTF-8, inline CSS, no external resources).
     pub fn to_html(&self) -> String {
         let mut h = String::new();
@@ -211,17 +353,54 @@ impl Report {
         h.push_str(&format!("<title>{}</title>\n", escape_html(&self.title)));
         h.push_str(&format!("<style>{CSS}</style>\n</head>\n<body>\n"));
         h.push_str(&format!("<h1>{}</h1>\n", escape_html(&self.title)));
+        let sections = self.sections();
+        if !sections.is_empty() {
+            h.push_str("<nav aria-label=\"sections\">");
+            for (s, id) in &sections {
+                h.push_str(&format!("<a href=\"#{id}\">{}</a>", escape_html(s)));
+            }
+            h.push_str("</nav>\n");
+        }
         let mut n_fig = 0;
+        let mut n_sec = 0;
         for b in &self.blocks {
             match b {
-                Block::Section(s) => h.push_str(&format!("<h2>{}</h2>\n", escape_html(s))),
+                Block::Section(s) => {
+                    let id = &sections[n_sec].1;
+                    n_sec += 1;
+                    h.push_str(&format!("<h2 id=\"{id}\">{}</h2>\n", escape_html(s)));
+                }
+                Block::Pre { caption, text } => {
+                    if !caption.is_empty() {
+                        h.push_str(&format!("<p><b>{}</b></p>\n", escape_html(caption)));
+                    }
+                    h.push_str(&format!("<pre>{}</pre>\n", escape_html(text)));
+                }
+                Block::Links { caption, links } => {
+                    if !caption.is_empty() {
+                        h.push_str(&format!("<p><b>{}</b></p>\n", escape_html(caption)));
+                    }
+                    if links.is_empty() {
+                        h.push_str("<p class=\"empty\">none</p>\n");
+                    } else {
+                        h.push_str("<ul class=\"files\">\n");
+                        for (href, label) in links {
+                            h.push_str(&format!(
+                                "<li><a href=\"{}\">{}</a></li>\n",
+                                escape_html(href),
+                                escape_html(label)
+                            ));
+                        }
+                        h.push_str("</ul>\n");
+                    }
+                }
                 Block::Text(t) => {
                     for p in t.split("\n\n").filter(|p| !p.trim().is_empty()) {
                         h.push_str(&format!("<p>{}</p>\n", escape_html(p.trim())));
                     }
                 }
                 Block::KeyValues { caption, rows } => {
-                    h.push_str("<table>\n");
+                    h.push_str("<div class=\"scroll\"><table>\n");
                     if !caption.is_empty() {
                         h.push_str(&format!("<caption>{}</caption>\n", escape_html(caption)));
                     }
@@ -233,14 +412,21 @@ impl Report {
                             escape_html(v)
                         ));
                     }
-                    h.push_str("</table>\n");
+                    h.push_str("</table></div>\n");
                 }
                 Block::Table {
                     caption,
                     header,
                     rows,
                 } => {
-                    h.push_str("<table>\n");
+                    if rows.is_empty() {
+                        h.push_str(&format!(
+                            "<p class=\"empty\"><b>{}</b>: no rows.</p>\n",
+                            escape_html(caption)
+                        ));
+                        continue;
+                    }
+                    h.push_str("<div class=\"scroll\"><table>\n");
                     if !caption.is_empty() {
                         h.push_str(&format!("<caption>{}</caption>\n", escape_html(caption)));
                     }
@@ -264,7 +450,7 @@ impl Report {
                         }
                         h.push_str("</tr>\n");
                     }
-                    h.push_str("</tbody>\n</table>\n");
+                    h.push_str("</tbody>\n</table></div>\n");
                 }
                 Block::Figure { caption, svg } => {
                     n_fig += 1;
@@ -331,6 +517,36 @@ mod tests {
         );
         let kept = inline_svg("<svg viewBox=\"0 0 1 1\"></svg>");
         assert_eq!(kept, "<svg viewBox=\"0 0 1 1\"></svg>");
+    }
+
+    #[test]
+    fn sections_get_unique_anchors_and_a_nav_bar() {
+        let mut r = Report::new("t");
+        r.section("Flutter & LCO")
+            .section("Flutter & LCO")
+            .section("Files");
+        r.links("results", &[("a b.json", "a b.json")])
+            .pre("study", "x < y");
+        r.table::<&str>("empty one", &["a"], &[]);
+        let h = r.to_html();
+        assert!(h.contains("<h2 id=\"flutter-lco\">"), "{h}");
+        assert!(h.contains("<h2 id=\"flutter-lco-2\">"), "{h}");
+        assert!(h.contains("<a href=\"#files\">Files</a>"), "{h}");
+        assert!(
+            h.contains("<li><a href=\"a b.json\">a b.json</a></li>"),
+            "{h}"
+        );
+        assert!(h.contains("<pre>x &lt; y</pre>"), "{h}");
+        assert!(h.contains("<b>empty one</b>: no rows."), "{h}");
+        assert_eq!(anchor("  Ω!! "), "section");
+        assert_eq!(column_label("U_m_s"), "U [m/s]");
+        assert_eq!(column_label("amplitude_alpha_deg"), "amplitude α [deg]");
+        assert_eq!(column_label("K_alpha"), "K_α");
+        assert_eq!(column_label("omega_F_rad_s"), "ω_F [rad/s]");
+        assert_eq!(column_label("R2_lift"), "R² lift");
+        assert_eq!(column_label("t_end_s"), "t_end [s]");
+        assert_eq!(column_label("case"), "case");
+        assert_eq!(column_label("rel_err_U_F"), "rel. error U_F");
     }
 
     #[test]

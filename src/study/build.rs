@@ -172,6 +172,7 @@ fn synthetic(study: &Study, sy: &SyntheticSpec, out: &Path) -> anyhow::Result<Da
             lift: ForceUnit::N,
             moment: MomentUnit::Nm,
         },
+        convention: Default::default(),
         cases,
         extra: Some(extra),
     };

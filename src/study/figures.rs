@@ -13,7 +13,7 @@ use plots::adapters::identification::{
     time_series_figure, Force,
 };
 use plots::adapters::term_label;
-use plots::{Figure, Report};
+use plots::{column_label, Figure, Report};
 use serde::{Deserialize, Serialize};
 
 use super::files::{ensure_dir, read_json, write_json};
@@ -135,13 +135,29 @@ fn split_csv(line: &str) -> Vec<String> {
     out
 }
 
-/// Adds a result CSV file of `out` to the report as a table with shortened numbers.
-fn csv_file_table(report: &mut Report, caption: &str, path: &Path) {
-    csv_file_columns(report, caption, path, None);
+/// Adds a result CSV file of `out` to the report as a table with shortened numbers and
+/// display headers ([`column_label`]).
+fn csv_file_table(report: &mut Report, caption: &str, path: &Path, reduced: bool) {
+    csv_file_columns(report, caption, path, None, reduced);
+}
+
+/// The display header of a column; `U_m_s` becomes `U/(bω_α)` when the study's speeds are
+/// reduced (the files keep the column name, the values are then U/(bω_α)).
+fn header_label(name: &str, reduced: bool) -> String {
+    match name {
+        "U_m_s" if reduced => "U/(bω_α)".into(),
+        _ => column_label(name),
+    }
 }
 
 /// As [`csv_file_table`], keeping only the columns named in `keep` (in file order).
-fn csv_file_columns(report: &mut Report, caption: &str, path: &Path, keep: Option<&[&str]>) {
+fn csv_file_columns(
+    report: &mut Report,
+    caption: &str,
+    path: &Path,
+    keep: Option<&[&str]>,
+    reduced: bool,
+) {
     if let Ok(t) = std::fs::read_to_string(path) {
         let rows = pretty_csv(&t);
         if let Some((header, body)) = rows.split_first() {
@@ -154,32 +170,176 @@ fn csv_file_columns(report: &mut Report, caption: &str, path: &Path, keep: Optio
                     .collect()
             };
             let body: Vec<Vec<String>> = body.iter().map(pick).collect();
-            report.table(caption, &pick(header), &body);
+            let header: Vec<String> = pick(header)
+                .iter()
+                .map(|h| header_label(h, reduced))
+                .collect();
+            let caption = format!(
+                "{caption} — {}",
+                path.file_name()
+                    .map(|f| f.to_string_lossy().into_owned())
+                    .unwrap_or_default()
+            );
+            report.table(caption, &header, &body);
+        } else {
+            report.text(format!("{caption}: the file {} is empty.", path.display()));
         }
+    } else {
+        report.text(format!(
+            "{caption}: {} was not written by this study.",
+            path.file_name()
+                .map(|f| f.to_string_lossy().into_owned())
+                .unwrap_or_default()
+        ));
     }
 }
 
-/// `aeroform <version> (<git describe>)`, or without the git part outside a checkout.
-pub(crate) fn version() -> String {
-    let v = env!("CARGO_PKG_VERSION");
-    let git = std::process::Command::new("git")
-        .args([
-            "-C",
-            env!("CARGO_MANIFEST_DIR"),
-            "describe",
-            "--always",
-            "--dirty",
-        ])
-        .output()
-        .ok()
-        .filter(|o| o.status.success())
-        .and_then(|o| String::from_utf8(o.stdout).ok())
-        .map(|s| s.trim().to_string())
-        .filter(|s| !s.is_empty());
-    match git {
-        Some(g) => format!("aeroform {v} ({g})"),
-        None => format!("aeroform {v}"),
+/// A JSON value as readable text: strings without quotes, objects as `key: value` pairs,
+/// arrays comma-separated, null as "—".
+fn readable(v: &serde_json::Value) -> String {
+    use serde_json::Value;
+    match v {
+        Value::Null => "—".into(),
+        Value::String(s) => s.clone(),
+        Value::Array(a) if a.is_empty() => "none".into(),
+        Value::Array(a) => a.iter().map(readable).collect::<Vec<_>>().join(", "),
+        Value::Object(o) if o.is_empty() => "—".into(),
+        Value::Object(o) => o
+            .iter()
+            .map(|(k, v)| format!("{k}: {}", readable(v)))
+            .collect::<Vec<_>>()
+            .join("; "),
+        other => other.to_string(),
     }
+}
+
+/// The result files of `out` (not the report itself), relative paths, sorted: JSON and CSV
+/// at the top level, the study file, then the figure files.
+fn result_files(out: &Path) -> Vec<String> {
+    let mut files = vec![];
+    if let Ok(rd) = std::fs::read_dir(out) {
+        for e in rd.flatten() {
+            let name = e.file_name().to_string_lossy().into_owned();
+            let p = e.path();
+            if p.is_file()
+                && name != names::REPORT
+                && name != names::FIGURE_LIST
+                && !name.starts_with('.')
+            {
+                files.push(name);
+            }
+        }
+    }
+    // written right after the report is assembled; listed always so that `run` and `plot`
+    // write the same page
+    files.push(names::FIGURE_LIST.to_string());
+    files.sort();
+    if let Ok(rd) = std::fs::read_dir(out.join(names::SERIES)) {
+        let mut v: Vec<String> = rd
+            .flatten()
+            .map(|e| format!("{}/{}", names::SERIES, e.file_name().to_string_lossy()))
+            .collect();
+        v.sort();
+        files.extend(v);
+    }
+    files
+}
+
+/// The report section listing every result file and figure file as a link.
+fn files_section(report: &mut Report, out: &Path, figures: &[FigureEntry]) {
+    report.section("Files");
+    report.text(
+        "Every number in this report comes from these files (formats: docs/DATA_FORMAT.md); \
+         links are relative to the report's folder.",
+    );
+    let files: Vec<(String, String)> = result_files(out)
+        .into_iter()
+        .map(|f| (f.clone(), f))
+        .collect();
+    report.links("Result files", &files);
+    let figs: Vec<(String, String)> = figures
+        .iter()
+        .flat_map(|f| {
+            ["png", "svg"].map(|ext| {
+                let p = format!("{}/{}.{ext}", names::FIGURES, f.stem);
+                (p.clone(), p)
+            })
+        })
+        .collect();
+    report.links("Figure files (PNG and SVG)", &figs);
+}
+
+/// The truth-vs-model table of `round_trip.csv` with the divergence speeds of the truth and
+/// model flutter runs (from `flutter.json`) as a row after the flutter speed.
+fn round_trip_table(report: &mut Report, out: &Path, reduced: bool) -> anyhow::Result<()> {
+    let path = out.join(names::ROUND_TRIP);
+    let text =
+        std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
+    let mut rows = pretty_csv(&text);
+    if rows.is_empty() {
+        report.text(format!("{} is empty.", names::ROUND_TRIP));
+        return Ok(());
+    }
+    let runs: Vec<FlutterRun> = if out.join(names::FLUTTER).exists() {
+        read_json(&out.join(names::FLUTTER))?
+    } else {
+        vec![]
+    };
+    let truth = runs.iter().find(|r| r.model == "truth");
+    let model = runs.iter().find(|r| r.model != "truth");
+    if let (Some(t), Some(m)) = (truth, model) {
+        let (td, md) = (t.analysis.divergence_speed, m.analysis.divergence_speed);
+        let cell =
+            |v: Option<f64>| v.map_or("none".to_string(), |x| pretty_cell(&format!("{x:e}")));
+        let rel = match (td, md) {
+            (Some(a), Some(b)) if a != 0.0 => pretty_cell(&format!("{:e}", b / a - 1.0)),
+            _ => String::new(),
+        };
+        let at = rows
+            .iter()
+            .position(|r| r.first().is_some_and(|c| c == "flutter_speed_m_s"))
+            .map_or(1, |i| i + 1);
+        rows.insert(
+            at,
+            vec![
+                "divergence_speed_m_s".into(),
+                String::new(),
+                cell(td),
+                cell(md),
+                rel,
+            ],
+        );
+    }
+    let header: Vec<String> = rows[0].iter().map(|h| header_label(h, reduced)).collect();
+    let body: Vec<Vec<String>> = rows[1..]
+        .iter()
+        .map(|r| {
+            r.iter()
+                .enumerate()
+                .map(|(i, c)| if i == 0 { column_label(c) } else { c.clone() })
+                .collect()
+        })
+        .collect();
+    report.table(
+        format!(
+            "Truth vs model: flutter and divergence speeds, LCO amplitudes — {} (divergence from {})",
+            names::ROUND_TRIP,
+            names::FLUTTER
+        ),
+        &header,
+        &body,
+    );
+    Ok(())
+}
+
+/// `aeroform <version> (<git describe>)` of the commit the binary was built from (captured
+/// by `build.rs`; `commit unknown` when it was built outside a git checkout).
+pub(crate) fn version() -> String {
+    format!(
+        "aeroform {} ({})",
+        env!("CARGO_PKG_VERSION"),
+        env!("AEROFORM_GIT")
+    )
 }
 
 /// Draws every figure of the study from the results in `out`, writes `figures.json` and
@@ -196,6 +356,7 @@ pub fn render_all(study: &Study, out: &Path) -> anyhow::Result<Vec<FigureEntry>>
         drawn: vec![],
     };
     let s = &study.spec;
+    let reduced = s.flutter.as_ref().is_some_and(|f| f.axes == "reduced");
     let mut report = Report::new(format!("aeroform study: {}", s.name));
     report.section("Summary");
     if !s.description.is_empty() {
@@ -369,11 +530,14 @@ pub fn render_all(study: &Study, out: &Path) -> anyhow::Result<Vec<FigureEntry>>
             .map(String::from),
             &rows,
         );
-        csv_file_table(
-            &mut report,
-            "Table IV: identified vs true coefficients over the noise realisations",
-            &out.join(names::TABLE_IV),
-        );
+        if out.join(names::TABLE_IV).exists() {
+            csv_file_table(
+                &mut report,
+                "Table IV: identified vs true coefficients over the noise realisations",
+                &out.join(names::TABLE_IV),
+                false,
+            );
+        }
         if id.cases.len() <= 64 {
             csv_file_columns(
                 &mut report,
@@ -399,6 +563,7 @@ pub fn render_all(study: &Study, out: &Path) -> anyhow::Result<Vec<FigureEntry>>
                     "R2_lift",
                     "R2_moment",
                 ]),
+                false, // the data set's wind speeds are in m/s
             );
         } else {
             report.text(format!(
@@ -540,13 +705,14 @@ pub fn render_all(study: &Study, out: &Path) -> anyhow::Result<Vec<FigureEntry>>
             )?;
         }
         report.section("Limit-cycle oscillations");
-        csv_file_table(&mut report, "LCO runs", &out.join(names::LCO_AMPLITUDES));
+        csv_file_table(
+            &mut report,
+            "LCO runs",
+            &out.join(names::LCO_AMPLITUDES),
+            reduced,
+        );
         if l.compare_truth {
-            csv_file_table(
-                &mut report,
-                "Truth vs model: flutter speed and LCO amplitudes",
-                &out.join(names::ROUND_TRIP),
-            );
+            round_trip_table(&mut report, out, reduced)?;
         }
         cv.embed(&mut report, "bifurcation");
         cv.embed(&mut report, "phase");
@@ -558,14 +724,21 @@ pub fn render_all(study: &Study, out: &Path) -> anyhow::Result<Vec<FigureEntry>>
         let v = serde_json::to_value(&id.settings)?;
         let rows: Vec<(String, String)> = v
             .as_object()
-            .map(|o| o.iter().map(|(k, v)| (k.clone(), v.to_string())).collect())
+            .map(|o| {
+                o.iter()
+                    .map(|(k, v)| (k.replace('_', " "), readable(v)))
+                    .collect()
+            })
             .unwrap_or_default();
         report.key_values("Identification settings", &rows);
     }
-    let lines: Vec<Vec<String>> = study.text.lines().map(|l| vec![l.to_string()]).collect();
-    report.table("Study file as run", &["study.toml".to_string()], &lines);
+    report.pre(
+        format!("Study file as run ({})", names::STUDY),
+        study.text.clone(),
+    );
 
     let entries: Vec<FigureEntry> = cv.drawn.iter().map(|d| d.entry.clone()).collect();
+    files_section(&mut report, out, &entries);
     write_json(&out.join(names::FIGURE_LIST), &entries)?;
     report
         .write(&out.join(names::REPORT))

@@ -12,6 +12,7 @@ use std::path::{Path, PathBuf};
 use toml::de::{DeTable, DeValue};
 use toml::Spanned;
 
+use super::convention::{Angular, Convention, Linear};
 use super::units::{AngleUnit, ForceUnit, LengthUnit, MomentUnit, UnitName, Units};
 use crate::record::{CaseKind, CaseMeta, Section};
 use crate::{Error, Result};
@@ -103,6 +104,8 @@ pub struct Manifest {
     pub structure: Option<StructureSpec>,
     /// Units of the CSV columns.
     pub units: Units,
+    /// Sign convention of the CSV columns (`[convention]`; Scanlan when absent).
+    pub convention: Convention,
     /// The cases, in manifest order (at least one).
     pub cases: Vec<CaseSpec>,
     /// The top-level `[extra]` table, kept verbatim and otherwise ignored.
@@ -116,7 +119,57 @@ impl Manifest {
     /// [`Error::Io`] when the file cannot be read; otherwise as [`Manifest::parse`].
     pub fn read(path: &Path) -> Result<Manifest> {
         let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-        Manifest::parse(&text, path)
+        if path.extension().is_some_and(|e| e == "json") {
+            Manifest::parse_json(&text, path)
+        } else {
+            Manifest::parse(&text, path)
+        }
+    }
+
+    /// Parses a `manifest.json`: the same keys and values as the TOML form, the `[[case]]`
+    /// tables as an array `"case"` of objects (for tools that cannot write TOML, e.g.
+    /// MATLAB's `jsonencode`). Validation is [`Manifest::parse`]'s; error lines point into
+    /// the JSON text where the key can be found unambiguously (0 otherwise).
+    ///
+    /// # Errors
+    /// [`Error::Manifest`] naming `path`, the line and the field: invalid JSON, a top level
+    /// that is not an object, a `null` value, and everything [`Manifest::parse`] rejects.
+    pub fn parse_json(text: &str, path: &Path) -> Result<Manifest> {
+        let err = |line: usize, field: &str, message: String| Error::Manifest {
+            path: path.to_path_buf(),
+            line,
+            field: field.to_string(),
+            message,
+        };
+        let v: serde_json::Value = serde_json::from_str(text)
+            .map_err(|e| err(e.line(), "(syntax)", format!("invalid JSON: {e}")))?;
+        let t = match json_to_toml(&v, "") {
+            Ok(toml::Value::Table(t)) => t,
+            Ok(_) => return Err(err(1, "(top level)", "expected a JSON object".into())),
+            Err(field) => {
+                return Err(err(
+                    json_line(text, &field),
+                    &field,
+                    "null is not allowed; leave the key out instead".into(),
+                ))
+            }
+        };
+        let toml_text = toml::to_string(&t)
+            .map_err(|e| err(0, "(top level)", format!("cannot convert to TOML: {e}")))?;
+        Manifest::parse(&toml_text, path).map_err(|e| match e {
+            Error::Manifest {
+                path,
+                field,
+                message,
+                ..
+            } => Error::Manifest {
+                path,
+                line: json_line(text, &field),
+                field,
+                message,
+            },
+            other => other,
+        })
     }
 
     /// Parses and validates manifest text; `path` is only used in error messages.
@@ -174,6 +227,14 @@ impl Manifest {
         let _ = writeln!(s, "pitch = {}", quote(u.pitch.as_str()));
         let _ = writeln!(s, "lift = {}", quote(u.lift.as_str()));
         let _ = writeln!(s, "moment = {}", quote(u.moment.as_str()));
+        if !self.convention.is_scanlan() {
+            let c = &self.convention;
+            s.push_str("\n[convention]\n");
+            let _ = writeln!(s, "heave = {}", quote(c.heave.as_str()));
+            let _ = writeln!(s, "pitch = {}", quote(c.pitch.as_str()));
+            let _ = writeln!(s, "lift = {}", quote(c.lift.as_str()));
+            let _ = writeln!(s, "moment = {}", quote(c.moment.as_str()));
+        }
         if let Some(extra) = &self.extra {
             s.push_str("\n[extra]\n");
             write_table_body(&mut s, extra);
@@ -214,10 +275,11 @@ impl Manifest {
     }
 
     /// The descriptors of `case` converted to SI: `amplitude` and `mean_pitch` from
-    /// `units.pitch` to rad; frequencies [Hz], wind speed [m/s] and `amplitude_ratio`
-    /// (a label) unchanged.
+    /// `units.pitch` to rad (`mean_pitch` also to nose-up positive, see `[convention]`);
+    /// frequencies \[Hz\], wind speed \[m/s\] and `amplitude_ratio` (a label) unchanged.
     pub fn case_meta(&self, case: &CaseSpec) -> CaseMeta {
         let p = self.units.pitch;
+        let sp = self.convention.pitch.sign();
         CaseMeta {
             id: case.id.clone(),
             wind_speed: case.wind_speed,
@@ -226,13 +288,66 @@ impl Manifest {
             amplitude_ratio: case.amplitude_ratio,
             freq_pitch: case.freq_pitch,
             freq_heave: case.freq_heave,
-            mean_pitch: case.mean_pitch.map(|a| p.to_si(a)),
+            mean_pitch: case.mean_pitch.map(|a| sp * p.to_si(a)),
         }
     }
 
     /// The case with this id.
     pub fn case(&self, id: &str) -> Option<&CaseSpec> {
         self.cases.iter().find(|c| c.id == id)
+    }
+}
+
+/// A JSON value as a TOML value (integers stay integers); `Err(field)` names the first `null`.
+fn json_to_toml(v: &serde_json::Value, field: &str) -> std::result::Result<toml::Value, String> {
+    use serde_json::Value as J;
+    Ok(match v {
+        J::Null => return Err(field.to_string()),
+        J::Bool(b) => toml::Value::Boolean(*b),
+        J::Number(n) => match n.as_i64() {
+            Some(i) => toml::Value::Integer(i),
+            None => toml::Value::Float(n.as_f64().unwrap_or(f64::NAN)),
+        },
+        J::String(s) => toml::Value::String(s.clone()),
+        J::Array(a) => toml::Value::Array(
+            a.iter()
+                .enumerate()
+                .map(|(i, x)| json_to_toml(x, &format!("{field}[{}]", i + 1)))
+                .collect::<std::result::Result<_, _>>()?,
+        ),
+        J::Object(o) => {
+            let mut t = toml::Table::new();
+            for (k, x) in o {
+                let f = if field.is_empty() {
+                    k.clone()
+                } else {
+                    format!("{field}.{k}")
+                };
+                t.insert(k.clone(), json_to_toml(x, &f)?);
+            }
+            toml::Value::Table(t)
+        }
+    })
+}
+
+/// 1-based line of the key that `field` (`section.chord`, `case[2].wind_speed`) names in a
+/// JSON manifest: the n-th occurrence of `"key"` for `case[n]` when the key occurs once per
+/// case, the only occurrence otherwise; 0 when that is ambiguous.
+fn json_line(text: &str, field: &str) -> usize {
+    let last = field.rsplit('.').next().unwrap_or(field);
+    let key = last.split('[').next().unwrap_or(last);
+    let quoted = format!("\"{key}\"");
+    let hits: Vec<usize> = text.match_indices(&quoted).map(|(i, _)| i).collect();
+    let line_of = |i: usize| text[..i].matches('\n').count() + 1;
+    let case_n = field
+        .strip_prefix("case[")
+        .and_then(|r| r.split(']').next())
+        .and_then(|n| n.parse::<usize>().ok());
+    let n_cases = text.matches("\"id\"").count();
+    match (case_n, hits.len()) {
+        (_, 1) => line_of(hits[0]),
+        (Some(n), h) if h == n_cases && (1..=h).contains(&n) => line_of(hits[n - 1]),
+        _ => 0,
     }
 }
 
@@ -387,6 +502,7 @@ impl<'a> Cx<'a> {
             "section",
             "structure",
             "units",
+            "convention",
             "case",
             "extra",
         ])?;
@@ -439,6 +555,20 @@ impl<'a> Cx<'a> {
             moment: un.req_unit::<MomentUnit>("moment")?,
         };
 
+        let convention = match root.opt_table("convention", "convention.")? {
+            None => Convention::default(),
+            Some(cv) => {
+                cv.check_keys(&["heave", "pitch", "lift", "moment"])?;
+                let d = Convention::default();
+                Convention {
+                    heave: cv.opt_unit::<Linear>("heave")?.unwrap_or(d.heave),
+                    pitch: cv.opt_unit::<Angular>("pitch")?.unwrap_or(d.pitch),
+                    lift: cv.opt_unit::<Linear>("lift")?.unwrap_or(d.lift),
+                    moment: cv.opt_unit::<Angular>("moment")?.unwrap_or(d.moment),
+                }
+            }
+        };
+
         let extra = root.opt_extra("extra")?;
         let cases = self.cases(&root)?;
 
@@ -469,6 +599,7 @@ impl<'a> Cx<'a> {
             section,
             structure,
             units,
+            convention,
             cases,
             extra,
         })
@@ -740,6 +871,18 @@ impl<'c, 'a> Node<'c, 'a> {
         self.opt_f64(key)?
             .map(|x| self.check_range(key, x, false, unit))
             .transpose()
+    }
+
+    fn opt_unit<U: UnitName>(&self, key: &str) -> Result<Option<U>> {
+        match self.opt_str(key)? {
+            None => Ok(None),
+            Some(s) => U::from_name(s).map(Some).ok_or_else(|| {
+                self.err(
+                    key,
+                    format!("unknown value \"{s}\"; allowed values: {}", U::allowed()),
+                )
+            }),
+        }
     }
 
     fn req_unit<U: UnitName>(&self, key: &str) -> Result<U> {

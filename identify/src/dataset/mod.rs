@@ -6,6 +6,7 @@
 //! signs); [`write_dataset`] converts back into the manifest's units. Every violation of
 //! the format is an [`crate::Error`] naming the file, the 1-based line and the field.
 
+mod convention;
 mod csv;
 mod manifest;
 mod units;
@@ -13,6 +14,7 @@ mod write;
 
 use std::path::{Path, PathBuf};
 
+pub use self::convention::{Angular, Convention, Linear};
 pub use self::csv::{check_sampling, parse_case_csv, read_case_csv, CaseTable};
 pub use self::manifest::{
     is_valid_case_id, CaseSpec, Manifest, StructureSpec, FORMAT, PLAUSIBLE_MAX,
@@ -25,6 +27,21 @@ use crate::Result;
 
 /// File name of the manifest inside a data-set folder.
 pub const MANIFEST_FILE: &str = "manifest.toml";
+
+/// File name of the JSON form of the manifest, read when there is no `manifest.toml`.
+pub const MANIFEST_JSON_FILE: &str = "manifest.json";
+
+/// The manifest file of a data-set folder: `manifest.toml`, or `manifest.json` when only
+/// that exists.
+pub fn manifest_path(dir: &Path) -> PathBuf {
+    let toml = dir.join(MANIFEST_FILE);
+    let json = dir.join(MANIFEST_JSON_FILE);
+    if !toml.exists() && json.exists() {
+        json
+    } else {
+        toml
+    }
+}
 
 /// A data set read from a folder: the manifest and one [`Record`] per case, in manifest
 /// order, SI per unit span.
@@ -45,7 +62,8 @@ impl Dataset {
     }
 }
 
-/// Reads a whole data set (`dir/manifest.toml` and every case file it names).
+/// Reads a whole data set (`dir/manifest.toml`, or `dir/manifest.json` when there is no
+/// TOML manifest, and every case file it names).
 ///
 /// # Errors
 /// [`crate::Error::Io`] when a file cannot be read; [`crate::Error::Manifest`],
@@ -54,8 +72,28 @@ impl Dataset {
 /// case path that leaves the folder (see [`read_case`]) is refused before any case file is
 /// read; an unfinished aeroform folder is refused ([`crate::io::check_complete_folder`]).
 pub fn read_dataset(dir: &Path) -> Result<Dataset> {
+    read_dataset_with(dir, &ReadOptions::default())
+}
+
+/// Options of [`read_dataset_with`] that change how a data set's columns are interpreted.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct ReadOptions {
+    /// Reverse the lift direction the manifest declares (`[convention] lift`, `"down"` when
+    /// absent) before reading: the `--flip-lift` flag for data exported lift-positive-up
+    /// without a declaration. The returned manifest carries the convention actually used.
+    pub flip_lift: bool,
+}
+
+/// [`read_dataset`] with [`ReadOptions`].
+///
+/// # Errors
+/// As [`read_dataset`].
+pub fn read_dataset_with(dir: &Path, options: &ReadOptions) -> Result<Dataset> {
     crate::io::check_complete_folder(dir)?;
-    let manifest = Manifest::read(&dir.join(MANIFEST_FILE))?;
+    let mut manifest = Manifest::read(&manifest_path(dir))?;
+    if options.flip_lift {
+        manifest.convention = manifest.convention.with_lift_flipped();
+    }
     // Refuse every path that leaves the folder before reading any case file.
     for case in &manifest.cases {
         resolve_case_path(dir, case, "file", &case.file)?;
@@ -75,7 +113,8 @@ pub fn read_dataset(dir: &Path) -> Result<Dataset> {
     })
 }
 
-/// Reads one case of a data set in folder `dir` and converts it to SI per unit span.
+/// Reads one case of a data set in folder `dir` and converts it to SI per unit span and to
+/// the Scanlan sign convention (each column times the sign of `manifest.convention`).
 ///
 /// `t0` and `dt` are the least-squares intercept and slope of `t` against the row index
 /// ([`check_sampling`]). When the case names a `nowind_file`, that still-air run is read the
@@ -150,7 +189,7 @@ pub fn read_case(dir: &Path, manifest: &Manifest, case: &CaseSpec) -> Result<Rec
 /// (`case[i].file` / `case[i].nowind_file`), the path and where it resolves;
 /// [`crate::Error::Io`] when the folder itself cannot be resolved.
 fn resolve_case_path(dir: &Path, case: &CaseSpec, key: &str, rel: &Path) -> Result<PathBuf> {
-    let manifest_path = dir.join(MANIFEST_FILE);
+    let manifest_path = self::manifest_path(dir);
     let refuse = |why: String| {
         let text = std::fs::read_to_string(&manifest_path).unwrap_or_default();
         let (field, line) = manifest::case_key_location(&text, &manifest_path, &case.id, key);
@@ -205,6 +244,13 @@ fn read_record(
     let table = read_case_csv(path, forces_required)?;
     let (t0, dt) = check_sampling(&table.t, path, 2)?;
     let u = &manifest.units;
+    let c = &manifest.convention;
+    let (sh, sa, sl, sm) = (
+        c.heave.sign(),
+        c.pitch.sign(),
+        c.lift.sign(),
+        c.moment.sign(),
+    );
     let span = manifest.section.span;
     // Finite in the file's units can overflow in SI (a total force divided by a tiny span):
     // name the first such value. Row i of the table is line i + 2 (header on line 1; blank
@@ -251,15 +297,15 @@ fn read_record(
         meta,
         t0,
         dt,
-        h: conv(table.h, "h", &|x| u.heave.to_si(x))?,
-        alpha: conv(table.alpha, "alpha", &|x| u.pitch.to_si(x))?,
+        h: conv(table.h, "h", &|x| sh * u.heave.to_si(x))?,
+        alpha: conv(table.alpha, "alpha", &|x| sa * u.pitch.to_si(x))?,
         lift: table
             .lift
-            .map(|v| conv(v, "lift", &|x| u.lift.to_si(x, span)))
+            .map(|v| conv(v, "lift", &|x| sl * u.lift.to_si(x, span)))
             .transpose()?,
         moment: table
             .moment
-            .map(|v| conv(v, "moment", &|x| u.moment.to_si(x, span)))
+            .map(|v| conv(v, "moment", &|x| sm * u.moment.to_si(x, span)))
             .transpose()?,
         nowind: None,
     })

@@ -31,6 +31,12 @@ lift = "N"                           # "N" (total over span) | "N/m"
 moment = "N*m"                       # "N*m" (total over span) | "N*m/m"
 # time is always seconds
 
+[convention]                         # optional; every key optional, Scanlan's sense by default
+heave = "down"                       # "down" | "up"
+pitch = "nose-up"                    # "nose-up" | "nose-down" (also the sense of mean_pitch)
+lift = "down"                        # "down" | "up"
+moment = "nose-up"                   # "nose-up" | "nose-down"
+
 [[case]]                             # one table per record; at least one
 id = "A-U10-A24"                     # unique, [A-Za-z0-9._-]+
 kind = "forced"                      # "forced" | "free"
@@ -91,6 +97,7 @@ fn manifest_err(text: &str) -> (usize, String, String) {
 fn doc_example_parses_with_the_documented_values() {
     let m = Manifest::parse(DOC_EXAMPLE, p()).unwrap();
     assert_eq!(m.name, "quasi-flat plate, configuration A");
+    assert!(m.convention.is_scanlan());
     assert_eq!(m.section.span, 0.75);
     assert_eq!(m.structure.unwrap().inertia, 0.0057);
     assert_eq!(
@@ -285,6 +292,11 @@ fn full_manifest() -> Manifest {
             lift: ForceUnit::N,
             moment: MomentUnit::Nm,
         },
+        convention: Convention {
+            lift: Linear::Up,
+            pitch: Angular::NoseDown,
+            ..Convention::default()
+        },
         cases: vec![
             CaseSpec {
                 config: Some("A".into()),
@@ -399,7 +411,7 @@ fn dataset_round_trip_mixed_units_and_si() {
         assert_eq!(a.meta, b.meta);
         assert_records_close(a, b);
     }
-    // The mixed-unit file really holds totals in mm / deg.
+    // The mixed-unit file really holds totals in mm / deg, pitch nose-down and lift up.
     let csv = std::fs::read_to_string(mixed.join("cases/f1.csv")).unwrap();
     let row: Vec<f64> = csv
         .lines()
@@ -409,9 +421,9 @@ fn dataset_round_trip_mixed_units_and_si() {
         .map(|x| x.parse().unwrap())
         .collect();
     assert!((row[1] - records[0].h[0] * 1e3).abs() <= 1e-12 * row[1].abs());
-    assert!((row[2] - records[0].alpha[0].to_degrees()).abs() <= 1e-12 * row[2].abs());
+    assert!((row[2] + records[0].alpha[0].to_degrees()).abs() <= 1e-12 * row[2].abs());
     let l = records[0].lift.as_ref().unwrap()[0];
-    assert!((row[3] - l * 0.75).abs() <= 1e-12 * row[3].abs());
+    assert!((row[3] + l * 0.75).abs() <= 1e-12 * row[3].abs());
 
     // Same physical data in SI units reads back the same SI.
     let mut si = m.clone();
@@ -523,4 +535,54 @@ fn read_dataset_errors_name_the_case_file() {
     assert!((ds.records[0].dt - 0.1).abs() < 1e-15);
     let e = read_dataset(&dir.path().join("nope")).unwrap_err();
     assert!(matches!(e, Error::Io { .. }));
+}
+
+#[test]
+fn convention_table_is_optional_checked_and_named_in_errors() {
+    let m = Manifest::parse(SMALL, p()).unwrap();
+    assert!(m.convention.is_scanlan());
+    let text = SMALL.replace(
+        "[[case]]",
+        "[convention]\nlift = \"up\"\npitch = \"nose-down\"\n\n[[case]]",
+    );
+    let m = Manifest::parse(&text, p()).unwrap();
+    assert_eq!(m.convention.lift, Linear::Up);
+    assert_eq!(m.convention.pitch, Angular::NoseDown);
+    assert_eq!(m.convention.heave, Linear::Down);
+    assert_eq!(Manifest::parse(&m.to_toml(), p()).unwrap(), m);
+    let (line, field, msg) =
+        manifest_err(&SMALL.replace("[[case]]", "[convention]\nlift = \"upward\"\n\n[[case]]"));
+    assert_eq!((line, field.as_str()), (16, "convention.lift"), "{msg}");
+    assert!(msg.contains("\"down\", \"up\""), "{msg}");
+    let (_, field, _) =
+        manifest_err(&SMALL.replace("[[case]]", "[convention]\ndrag = \"up\"\n\n[[case]]"));
+    assert_eq!(field, "convention.drag");
+}
+
+#[test]
+fn json_manifest_is_the_toml_one_and_errors_name_json_lines() {
+    let m = Manifest::parse(SMALL, p()).unwrap();
+    let json = r#"{
+  "format": "aeroform-dataset/1",
+  "name": "small",
+  "section": {"chord": 0.25, "span": 0.75, "air_density": 1.225},
+  "units": {"heave": "m", "pitch": "rad", "lift": "N/m", "moment": "N*m/m"},
+  "case": [
+    {"id": "a", "kind": "forced", "file": "a.csv", "wind_speed": 5}
+  ]
+}"#;
+    let jp = Path::new("ds/manifest.json");
+    assert_eq!(Manifest::parse_json(json, jp).unwrap(), m);
+    let bad = json.replace("\"wind_speed\": 5", "\"wind_speed\": -5");
+    let e = Manifest::parse_json(&bad, jp).unwrap_err();
+    let Error::Manifest { line, field, .. } = &e else {
+        panic!("{e}")
+    };
+    assert_eq!((*line, field.as_str()), (7, "case[1].wind_speed"), "{e}");
+    assert!(e.to_string().contains("manifest.json"), "{e}");
+    let null = json.replace("\"chord\": 0.25", "\"chord\": null");
+    let e = Manifest::parse_json(&null, jp).unwrap_err();
+    assert!(e.to_string().contains(":4: field `section.chord`"), "{e}");
+    let e = Manifest::parse_json("{\"format\": ", jp).unwrap_err();
+    assert!(e.to_string().contains("invalid JSON"), "{e}");
 }

@@ -88,6 +88,7 @@ fn check_record(id: &str, r: &Record, what: &str, need_forces: bool) -> Result<(
 /// The CSV text of a record in the manifest's units.
 fn case_csv(manifest: &Manifest, r: &Record) -> String {
     let u = &manifest.units;
+    let c = &manifest.convention;
     let span = manifest.section.span;
     let ncols = 3 + r.lift.is_some() as usize + r.moment.is_some() as usize;
     let mut s = String::with_capacity(r.len() * 22 * ncols + 32);
@@ -102,16 +103,16 @@ fn case_csv(manifest: &Manifest, r: &Record) -> String {
     for i in 0..r.len() {
         num(&mut s, r.t0 + i as f64 * r.dt);
         s.push(',');
-        num(&mut s, u.heave.from_si(r.h[i]));
+        num(&mut s, c.heave.sign() * u.heave.from_si(r.h[i]));
         s.push(',');
-        num(&mut s, u.pitch.from_si(r.alpha[i]));
+        num(&mut s, c.pitch.sign() * u.pitch.from_si(r.alpha[i]));
         if let Some(l) = &r.lift {
             s.push(',');
-            num(&mut s, u.lift.from_si(l[i], span));
+            num(&mut s, c.lift.sign() * u.lift.from_si(l[i], span));
         }
         if let Some(m) = &r.moment {
             s.push(',');
-            num(&mut s, u.moment.from_si(m[i], span));
+            num(&mut s, c.moment.sign() * u.moment.from_si(m[i], span));
         }
         s.push('\n');
     }

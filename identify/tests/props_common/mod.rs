@@ -102,6 +102,7 @@ pub fn campaign(
         section: sec,
         structure: None,
         units,
+        convention: Default::default(),
         cases,
         extra: None,
     };
