@@ -450,7 +450,14 @@ pub fn prepare_run(
         let v = residual_at(st, &q, &qd, &qdd, &force, i);
         for c in 0..2 {
             r[c].push(v[c]);
-            let sf = v[c] + force[c][i];
+            // in still air the structural force *is* the residual (no aerodynamic force
+            // balances it), so the run is normalised by its elastic force K_s q instead:
+            // the force the inertia must balance
+            let sf = if u == 0.0 {
+                st.stiffness[(c, 0)] * q[0][i] + st.stiffness[(c, 1)] * q[1][i]
+            } else {
+                v[c] + force[c][i]
+            };
             ss[c] += sf * sf;
         }
     }
