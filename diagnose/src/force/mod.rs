@@ -7,7 +7,9 @@
 //!    and the configurations' lists, one after the other, are dealt to `opts.folds` folds
 //!    in turn, so every case is held out exactly once, never shares a node with a training
 //!    case, and a fold holds at most one node of a configuration with ≤ `folds` wind
-//!    speeds. (Unstratified dealing could hold out an end node together with its only
+//!    speeds; with fewer nodes than `opts.folds` every node is its own fold (leave one
+//!    group out). The scheme is reported in `LevelResult::fold_scheme`. (Unstratified
+//!    dealing could hold out an end node together with its only
 //!    neighbour: the end node was then predicted two spacings away and the effect-free
 //!    gap statistic rose from ≈ 1.5 to ≈ 2.45 on one fold seed in three.)
 //! 2. **Baseline.** Per fold, `identify` (default [`IdentifySettings`]) on the training
@@ -408,4 +410,49 @@ pub const LEVEL: Level = Level::Aerodynamic;
 /// Catalogue effect of a candidate kind.
 pub fn effect_of(kind: CandidateKind) -> Effect {
     kind.effect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn nodes(spec: &[(&str, f64)]) -> Vec<Node> {
+        spec.iter()
+            .map(|&(c, u)| Node {
+                config: c.to_string(),
+                u,
+                k_alpha: 1.0 / u,
+                cases: vec![],
+            })
+            .collect()
+    }
+
+    #[test]
+    fn fewer_groups_than_folds_is_leave_one_group_out() {
+        // one configuration × 4 wind speeds (the refused campaign)
+        let n = nodes(&[("A", 4.0), ("A", 6.0), ("A", 8.0), ("A", 10.0)]);
+        let (f, s) = assign_folds(&n, 5, 0, "t").unwrap();
+        assert_eq!(f, vec![0, 1, 2, 3]);
+        assert_eq!((s.scheme.as_str(), s.folds, s.groups), ("leave_one_group_out", 4, 4));
+        // 2 groups: still diagnosed
+        let (f, s) = assign_folds(&n[..2], 5, 0, "t").unwrap();
+        assert_eq!((f, s.folds), (vec![0, 1], 2));
+    }
+
+    #[test]
+    fn five_or_more_groups_are_stratified_and_one_group_is_an_error() {
+        let n = nodes(&[
+            ("D", 4.0),
+            ("D", 6.0),
+            ("D", 8.0),
+            ("G", 4.0),
+            ("G", 6.0),
+            ("G", 8.0),
+        ]);
+        let (f, s) = assign_folds(&n, 5, 3, "t").unwrap();
+        assert_eq!((s.scheme.as_str(), s.folds), ("stratified", 5));
+        assert!(f.iter().all(|&k| k < 5));
+        let e = assign_folds(&n[..1], 5, 0, "set").unwrap_err().to_string();
+        assert!(e.contains("set") && e.contains("at least 2"), "{e}");
+    }
 }
