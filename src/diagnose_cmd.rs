@@ -5,11 +5,12 @@
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
+use aeroelastic::files::{LoadedModel, StructureFile};
 use anyhow::{bail, Context};
 use clap::Args;
 use diagnose::bench::{acceptance_lines, confusion_markdown, BlindReport, STRONG_RATIO};
 use diagnose::bench_run::{run_blind, BlindOptions};
-use diagnose::pipeline::{diagnose, DiagnoseOptions};
+use diagnose::pipeline::{diagnose, diagnose_free, merge_free, DiagnoseOptions};
 use diagnose::Diagnosis;
 use identify::dataset::read_dataset;
 use identify::io::write_atomic;
@@ -20,11 +21,20 @@ use crate::progress::CountBar;
 #[derive(Debug, Args)]
 pub struct DiagnoseArgs {
     /// Forced-motion data-set folder (DATA_FORMAT.md).
-    #[arg(required_unless_present = "blind")]
+    #[arg(required_unless_present_any = ["blind", "model"])]
     pub dataset: Option<PathBuf>,
-    /// Free-response data-set folder of the same section (enables the system level).
+    /// Free-response data-set folder of the same section (enables the system level); may
+    /// be repeated (e.g. LCO records and a still-air decay of the same rig).
     #[arg(long)]
-    pub free: Option<PathBuf>,
+    pub free: Vec<PathBuf>,
+    /// The sim's aerodynamic model for free-response data alone: a model file
+    /// (`*.model.toml`) or an `identification.json`; needs `--free` and no forced data set.
+    #[arg(long, requires = "free", conflicts_with = "dataset")]
+    pub model: Option<PathBuf>,
+    /// Nominal structure file (`*.structure.toml`) replacing the free data set's
+    /// `[structure]`.
+    #[arg(long, requires = "free")]
+    pub structure: Option<PathBuf>,
     /// Output folder (created if missing); default `out/diagnosis` or `out/blind`.
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -33,7 +43,7 @@ pub struct DiagnoseArgs {
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Run the withheld-effect benchmark on N generated data sets instead.
-    #[arg(long, conflicts_with_all = ["dataset", "free"])]
+    #[arg(long, conflicts_with_all = ["dataset", "free", "model"])]
     pub blind: Option<u128>,
     /// Replace an existing output folder that aeroform did not write.
     #[arg(long)]
@@ -50,27 +60,61 @@ pub fn run(args: &DiagnoseArgs) -> anyhow::Result<()> {
             .unwrap_or_else(|| PathBuf::from("out/blind"));
         return blind(n, args.seed, &out, args.force);
     }
-    let Some(dir) = &args.dataset else {
-        bail!("give a data-set folder or --blind N");
-    };
     let out = args
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from("out/diagnosis"));
-    let forced = read_dataset(dir).with_context(|| format!("reading {}", dir.display()))?;
-    let free = match &args.free {
-        Some(f) => Some(read_dataset(f).with_context(|| format!("reading {}", f.display()))?),
-        None => None,
+    let free_sets = args
+        .free
+        .iter()
+        .map(|f| read_dataset(f).with_context(|| format!("reading {}", f.display())))
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    let free = if free_sets.is_empty() {
+        None
+    } else {
+        Some(merge_free(&free_sets)?)
     };
+    let mut opts = DiagnoseOptions::new(args.seed);
+    let mut chord = free.as_ref().map(|f| f.manifest.section.chord);
+    if let Some(s) = &args.structure {
+        let sf = StructureFile::read(s).with_context(|| format!("reading {}", s.display()))?;
+        if !sf.heave_stiffness_terms.is_empty()
+            || !sf.pitch_stiffness_terms.is_empty()
+            || sf.pitch_freeplay > 0.0
+            || sf.friction.is_some()
+        {
+            bail!(
+                "{}: the diagnosis's nominal structure is linear (stiffness terms, freeplay and \
+                 friction are what the catalogue looks for); remove them",
+                s.display()
+            );
+        }
+        chord = sf.chord.or(chord);
+        opts.system.structure = Some(identify::dataset::StructureSpec {
+            mass: sf.mass,
+            inertia: sf.inertia,
+            static_unbalance: sf.static_unbalance,
+            freq_heave: sf.freq_heave,
+            freq_pitch: sf.freq_pitch,
+            damping_heave: sf.damping_heave,
+            damping_pitch: sf.damping_pitch,
+        });
+    }
     let dir = crate::outdir::OutDir::begin(&out, "diagnose", args.force)?;
-    let opts = DiagnoseOptions::new(args.seed);
     let t = std::time::Instant::now();
-    let diag = diagnose(
-        &forced,
-        free.as_ref(),
-        &opts,
-        &crate::study::figures::version(),
-    )?;
+    let version = crate::study::figures::version();
+    let diag = match (&args.dataset, &args.model, &free) {
+        (_, Some(m), Some(free)) => {
+            let loaded =
+                LoadedModel::load(m, chord).with_context(|| format!("loading {}", m.display()))?;
+            diagnose_free(free, &loaded.model, &opts, &version)?
+        }
+        (Some(dir), None, _) => {
+            let forced = read_dataset(dir).with_context(|| format!("reading {}", dir.display()))?;
+            diagnose(&forced, free.as_ref(), &opts, &version)?
+        }
+        _ => bail!("give a forced data-set folder, --free FREE --model M, or --blind N"),
+    };
     let secs = t.elapsed().as_secs_f64();
     write_json(&dir.path().join("diagnosis.json"), &diag)?;
     let files = plots::write_diagnosis_outputs(&diag, dir.path())?;

@@ -47,13 +47,24 @@ impl BlindOptions {
 /// The blind effect of a truth label.
 ///
 /// # Errors
-/// [`Error::UnknownEffect`] for a label that is neither a catalogue name, `none` nor
-/// [`OUTSIDE`].
+/// [`Error::UnknownEffect`] for a label that is neither an effect the generator injects
+/// ([`Effect::GENERATED`]), `none` nor [`OUTSIDE`].
 pub fn blind_effect(label: &str) -> Result<BlindEffect> {
     match label {
         "none" => Ok(BlindEffect::None),
         OUTSIDE => Ok(BlindEffect::Buffeting),
-        other => Effect::from_name(other).map(BlindEffect::Catalogue),
+        other => match Effect::from_name(other) {
+            Ok(e) if Effect::GENERATED.contains(&e) => Ok(BlindEffect::Catalogue(e)),
+            _ => Err(crate::Error::UnknownEffect {
+                name: other.to_string(),
+                expected: Effect::GENERATED
+                    .map(Effect::name)
+                    .into_iter()
+                    .chain(["none", OUTSIDE])
+                    .collect::<Vec<_>>()
+                    .join(", "),
+            }),
+        },
     }
 }
 

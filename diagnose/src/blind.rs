@@ -177,6 +177,8 @@ pub fn parameter_range(effect: BlindEffect, form: Form) -> Option<(&'static str,
             StructuralCubic => ("kappa [1/rad^2]", 0.5, 200.0),
             Freeplay => ("half gap [deg]", 0.001, 1.0),
             Friction => ("T_c [N*m/m]", 1e-5, 3e-3),
+            // catalogue effects the generator does not inject (real-rig structure)
+            StructuralPolynomial | StructuralDamping => return None,
         },
     })
 }
@@ -235,6 +237,7 @@ fn injection(
                 half_gap: p.to_radians(),
             },
             Friction => Inj::Friction { moment: p },
+            StructuralPolynomial | StructuralDamping => return (vec![], vec![]),
         },
     };
     (vec![Injection { effect: e, form }], params)

@@ -62,11 +62,33 @@ pub enum Effect {
     Freeplay,
     /// Dry (Coulomb) friction in the supports: linear, not exponential, amplitude decay.
     Friction,
+    /// Structural stiffness polynomial with even and odd terms, k₂q² + k₃q³ per DOF (an
+    /// asymmetric or softening–hardening spring: a subcritical Hopf with a fold).
+    StructuralPolynomial,
+    /// Amplitude-dependent structural damping, c₂q²q̇ per DOF (damping that grows with
+    /// amplitude, the opposite trend of dry friction).
+    StructuralDamping,
 }
 
 impl Effect {
-    /// The whole catalogue, in the order of DESIGN.md §5.
-    pub const ALL: [Effect; 9] = [
+    /// The whole catalogue: DESIGN.md §5's nine effects, then the structural polynomial
+    /// and amplitude-dependent damping added for real rigs.
+    pub const ALL: [Effect; 11] = [
+        Effect::StaticOffset,
+        Effect::AddedMass,
+        Effect::TimeDelay,
+        Effect::HigherOrder,
+        Effect::DynamicStall,
+        Effect::VortexShedding,
+        Effect::StructuralCubic,
+        Effect::Freeplay,
+        Effect::Friction,
+        Effect::StructuralPolynomial,
+        Effect::StructuralDamping,
+    ];
+
+    /// The effects the withheld-effect generator injects (DESIGN.md §5's nine).
+    pub const GENERATED: [Effect; 9] = [
         Effect::StaticOffset,
         Effect::AddedMass,
         Effect::TimeDelay,
@@ -90,13 +112,19 @@ impl Effect {
             Effect::StructuralCubic => "structural_cubic",
             Effect::Freeplay => "freeplay",
             Effect::Friction => "friction",
+            Effect::StructuralPolynomial => "structural_polynomial",
+            Effect::StructuralDamping => "structural_damping",
         }
     }
 
     /// The level the effect acts at.
     pub fn level(self) -> Level {
         match self {
-            Effect::StructuralCubic | Effect::Freeplay | Effect::Friction => Level::Structural,
+            Effect::StructuralCubic
+            | Effect::Freeplay
+            | Effect::Friction
+            | Effect::StructuralPolynomial
+            | Effect::StructuralDamping => Level::Structural,
             _ => Level::Aerodynamic,
         }
     }
@@ -183,7 +211,7 @@ mod tests {
         }
         names.sort();
         names.dedup();
-        assert_eq!(names.len(), 9);
+        assert_eq!(names.len(), 11);
         assert_eq!(Verdict::from_name("none").unwrap(), Verdict::None);
         assert_eq!(
             Verdict::from_name("unexplained").unwrap().level(),
@@ -194,14 +222,20 @@ mod tests {
     }
 
     #[test]
-    fn structural_effects_are_the_three_structural_ones() {
+    fn structural_effects_are_the_five_structural_ones() {
         let s: Vec<Effect> = Effect::ALL
             .into_iter()
             .filter(|e| e.level() == Level::Structural)
             .collect();
         assert_eq!(
             s,
-            [Effect::StructuralCubic, Effect::Freeplay, Effect::Friction]
+            [
+                Effect::StructuralCubic,
+                Effect::Freeplay,
+                Effect::Friction,
+                Effect::StructuralPolynomial,
+                Effect::StructuralDamping
+            ]
         );
     }
 }

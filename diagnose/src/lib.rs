@@ -22,4 +22,4 @@ pub mod verdict;
 
 pub use effect::{Effect, Level, Verdict};
 pub use error::{Error, Result};
-pub use report::{Diagnosis, LevelResult};
+pub use report::{Diagnosis, FoldScheme, LevelResult};

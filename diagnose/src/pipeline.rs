@@ -1,13 +1,16 @@
 //! The whole diagnosis of one data set pair: force level, system level (when free-response
 //! records are given), verdict and `diagnosis.json` (DESIGN.md §5).
 
+use std::sync::Arc;
+
+use aeroelastic::aero::AeroModel;
 use identify::dataset::Dataset;
 
 use crate::force::{force_level, ForceOptions};
 use crate::report::Diagnosis;
-use crate::system::{system_level, SystemOptions};
+use crate::system::{system_level, system_level_with_model, SystemOptions};
 use crate::verdict::{assemble, VerdictRules};
-use crate::Result;
+use crate::{Error, Result};
 
 /// Settings of a diagnosis.
 #[derive(Debug, Clone)]
@@ -58,4 +61,73 @@ pub fn diagnose(
         inputs.push(free.root.display().to_string());
     }
     Ok(assemble(levels, &opts.rules, opts.seed, version, inputs))
+}
+
+/// Diagnoses free-response records alone against a given sim: `model` (a model file or an
+/// identification, loaded by the caller) coupled to the nominal structure (`opts.system.
+/// structure`, else the data set's `[structure]`). This is the real-rig case: no forced
+/// campaign, only free runs (still-air runs at U = 0 included: they test the structure
+/// without aerodynamics). Every run is held out once.
+///
+/// # Errors
+/// As [`system_level_with_model`]: [`Error::Data`] naming the data set (no structure,
+/// fewer than `min_runs` runs, a run too short or without motion).
+pub fn diagnose_free(
+    free: &Dataset,
+    model: &Arc<dyn AeroModel>,
+    opts: &DiagnoseOptions,
+    version: &str,
+) -> Result<Diagnosis> {
+    let level = system_level_with_model(model, free, &opts.system)?;
+    Ok(assemble(
+        vec![level],
+        &opts.rules,
+        opts.seed,
+        version,
+        vec![free.root.display().to_string()],
+    ))
+}
+
+/// One free-response data set from several (e.g. LCO records in the flow and a still-air
+/// decay of the same rig): the first set's manifest with every set's free records
+/// appended; a repeated case id gets the folder name as a prefix.
+///
+/// # Errors
+/// [`Error::Data`] when `sets` is empty or the sections (chord, air density) differ.
+pub fn merge_free(sets: &[Dataset]) -> Result<Dataset> {
+    let Some(first) = sets.first() else {
+        return Err(Error::data("(none)", "no free-response data set given"));
+    };
+    let mut out = first.clone();
+    for s in &sets[1..] {
+        let (a, b) = (&first.manifest.section, &s.manifest.section);
+        if (a.chord - b.chord).abs() > 1e-12 * a.chord.abs() {
+            return Err(Error::data(
+                &s.manifest.name,
+                format!(
+                    "chord {} m differs from `{}`'s {} m",
+                    b.chord, first.manifest.name, a.chord
+                ),
+            ));
+        }
+        if out.manifest.structure.is_none() {
+            out.manifest.structure = s.manifest.structure;
+        }
+        for (case, rec) in s.manifest.cases.iter().zip(&s.records) {
+            let mut case = case.clone();
+            let mut rec = rec.clone();
+            if out.records.iter().any(|r| r.meta.id == rec.meta.id) {
+                let tag = s
+                    .root
+                    .file_name()
+                    .map(|n| n.to_string_lossy().into_owned())
+                    .unwrap_or_else(|| "set".into());
+                rec.meta.id = format!("{tag}.{}", rec.meta.id);
+                case.id = rec.meta.id.clone();
+            }
+            out.manifest.cases.push(case);
+            out.records.push(rec);
+        }
+    }
+    Ok(out)
 }

@@ -179,6 +179,22 @@ pub struct Bifurcation {
     pub predicted_after: Vec<BifurcationPoint>,
 }
 
+/// How a level's held-out folds were formed (`levels[].fold_scheme` of `diagnosis.json`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FoldScheme {
+    /// `leave_one_group_out` (each (configuration, wind speed) group is a fold: fewer
+    /// groups than the requested folds), `stratified` (groups dealt to folds per
+    /// configuration) or `leave_one_run_out` (free runs).
+    pub scheme: String,
+    /// Number of folds.
+    pub folds: usize,
+    /// Number of groups (forced: (configuration, wind speed) nodes; free: runs).
+    pub groups: usize,
+    /// Anything else that changed the folds (e.g. configurations pooled), one sentence.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub note: Option<String>,
+}
+
 /// What one level (force or system) of the diagnosis found.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct LevelResult {
@@ -215,6 +231,9 @@ pub struct LevelResult {
     /// Bifurcation diagram (system level only).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub bifurcation: Option<Bifurcation>,
+    /// How the held-out folds were formed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fold_scheme: Option<FoldScheme>,
 }
 
 /// `verdict` of `diagnosis.json`.

@@ -380,6 +380,7 @@ mod tests {
             signatures: vec![],
             observables: vec![],
             bifurcation: None,
+            fold_scheme: None,
         }
     }
 

@@ -199,6 +199,7 @@ fn aero_level() -> LevelResult {
             shrink: 1.0 - 0.025 / 0.12,
         }],
         bifurcation: None,
+        fold_scheme: None,
     }
 }
 
@@ -302,6 +303,7 @@ fn structural_level() -> LevelResult {
                 .map(|&u| pt(u, lco(u, 4.3), 2.9 + 0.021 * u))
                 .collect(),
         }),
+        fold_scheme: None,
     }
 }
 

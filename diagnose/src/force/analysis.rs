@@ -140,6 +140,7 @@ pub(crate) fn assemble(
         signatures,
         observables,
         bifurcation: None,
+        fold_scheme: None,
     }
 }
 

@@ -522,6 +522,11 @@ fn delay_criterion(sh: &[CaseData], nodes: &[Node], f: &Fold, tau: f64, cache: &
             };
             let ahat = law::node_coefficients(sh, nodes, &f.supports, &loo, i0, c);
             let a = &full.nodes[j].2;
+            if ahat.len() != a.len() {
+                // no other training node of this configuration (leave-one-group-out on
+                // a configuration with two wind speeds): nothing to predict it from
+                continue;
+            }
             let qr = &nf.ch[c].qr;
             let r = &nf.ch[c].res_y;
             let mut en = dot(r, r);

@@ -113,9 +113,17 @@ pub(crate) struct Node {
     pub cases: Vec<usize>,
 }
 
+/// Label of the configuration every case gets when configurations are pooled.
+pub(crate) const POOLED: &str = "pooled";
+
 /// Prepares the forced cases of a data set (identify's preprocessing) and groups them into
-/// nodes (sorted by configuration then wind speed).
-pub(crate) fn prepare(forced: &Dataset) -> Result<(Vec<CaseData>, Vec<Node>)> {
+/// nodes (sorted by configuration then wind speed). Pitch-only and heave-only forcing are
+/// both accepted: the node's reduced frequency `k_alpha` is then that of the one forcing
+/// frequency. When a configuration has forced cases at a single wind speed while the data
+/// set has at least two (configuration, wind speed) groups, every configuration is pooled
+/// into one (`POOLED`; its held-out node could not be predicted from its own configuration
+/// otherwise); the third value says so.
+pub(crate) fn prepare(forced: &Dataset) -> Result<(Vec<CaseData>, Vec<Node>, Option<String>)> {
     let name = forced.manifest.name.clone();
     let prepared = prepare_dataset(forced, &PreprocessOptions::default())
         .map_err(|e| Error::identify(format!("data set `{name}`: preprocessing"), e))?;
@@ -127,11 +135,13 @@ pub(crate) fn prepare(forced: &Dataset) -> Result<(Vec<CaseData>, Vec<Node>)> {
     for nd in prepared.cases {
         let id = nd.meta.id.clone();
         let u = nd.meta.wind_speed;
-        let Some(f_alpha) = nd.forcing.pitch else {
+        // pitch-only or heave-only forcing: the one forcing frequency sets the node's K
+        let Some(f_alpha) = nd.forcing.pitch.or(nd.forcing.heave) else {
             return Err(Error::data(
                 &name,
                 format!(
-                    "case `{id}`: no pitch forcing frequency (the force level needs pitch motion)"
+                    "case `{id}`: no forcing frequency (neither pitch nor heave moves \
+                     periodically; give `freq_pitch` or `freq_heave` in the manifest)"
                 ),
             ));
         };
@@ -171,6 +181,7 @@ pub(crate) fn prepare(forced: &Dataset) -> Result<(Vec<CaseData>, Vec<Node>)> {
             nd,
         });
     }
+    let pooled = pool_single_speed_configs(&mut cases);
     let mut keys: Vec<(String, f64)> = cases.iter().map(|c| (c.config.clone(), c.u)).collect();
     keys.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)));
     keys.dedup_by(|a, b| a.0 == b.0 && (a.1 - b.1).abs() <= 1e-9 * b.1.abs().max(1.0));
@@ -195,5 +206,40 @@ pub(crate) fn prepare(forced: &Dataset) -> Result<(Vec<CaseData>, Vec<Node>)> {
         nd.k_alpha =
             nd.cases.iter().map(|&i| cases[i].k_alpha).sum::<f64>() / nd.cases.len() as f64;
     }
-    Ok((cases, nodes))
+    Ok((cases, nodes, pooled))
+}
+
+fn same_speed(a: f64, b: f64) -> bool {
+    (a - b).abs() <= 1e-9 * a.abs().max(b.abs()).max(1.0)
+}
+
+/// Pools every configuration into [`POOLED`] when one configuration has a single wind
+/// speed but the cases span at least two (configuration, wind speed) groups; returns a
+/// note naming the single-speed configurations, or `None` when nothing changed.
+pub(crate) fn pool_single_speed_configs(cases: &mut [CaseData]) -> Option<String> {
+    let mut speeds: std::collections::BTreeMap<String, Vec<f64>> = Default::default();
+    for c in cases.iter() {
+        let v = speeds.entry(c.config.clone()).or_default();
+        if !v.iter().any(|&u| same_speed(u, c.u)) {
+            v.push(c.u);
+        }
+    }
+    let groups: usize = speeds.values().map(Vec::len).sum();
+    let single: Vec<&str> = speeds
+        .iter()
+        .filter(|(_, v)| v.len() < 2)
+        .map(|(k, _)| k.as_str())
+        .collect();
+    if single.is_empty() || groups < 2 || speeds.len() < 2 {
+        return None;
+    }
+    let note = format!(
+        "configuration(s) {} at a single wind speed: all configurations pooled into one law over K",
+        single.join(", ")
+    );
+    for c in cases.iter_mut() {
+        c.config = POOLED.to_string();
+        c.nd.meta.config = Some(POOLED.to_string());
+    }
+    Some(note)
 }

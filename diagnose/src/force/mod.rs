@@ -7,7 +7,9 @@
 //!    and the configurations' lists, one after the other, are dealt to `opts.folds` folds
 //!    in turn, so every case is held out exactly once, never shares a node with a training
 //!    case, and a fold holds at most one node of a configuration with ≤ `folds` wind
-//!    speeds. (Unstratified dealing could hold out an end node together with its only
+//!    speeds; with fewer nodes than `opts.folds` every node is its own fold (leave one
+//!    group out). The scheme is reported in `LevelResult::fold_scheme`. (Unstratified
+//!    dealing could hold out an end node together with its only
 //!    neighbour: the end node was then predicted two spacings away and the effect-free
 //!    gap statistic rose from ≈ 1.5 to ≈ 2.45 on one fold seed in three.)
 //! 2. **Baseline.** Per fold, `identify` (default [`IdentifySettings`]) on the training
@@ -109,26 +111,29 @@ pub(crate) struct Fold {
     pub fits: Vec<NodeFit>,
 }
 
-/// Deals the nodes to `k` folds after a seeded shuffle.
+/// Deals the nodes to folds: leave one group out when there are fewer nodes than the
+/// `k` requested folds (every node its own fold), else a seeded shuffle per configuration
+/// dealt to `k` folds in turn. Returns each node's fold and the scheme.
 ///
 /// # Errors
 /// [`Error::Setting`] for k < 2; [`Error::Data`] naming the data set when there are fewer
-/// nodes than folds or a configuration has a single wind speed (no node to interpolate
-/// from once it is held out).
+/// than 2 nodes (nothing to hold out and predict from), or a configuration has a single
+/// wind speed (call [`data::pool_single_speed_configs`] first).
 pub(crate) fn assign_folds(
     nodes: &[Node],
     k: usize,
     seed: u64,
     dataset: &str,
-) -> Result<Vec<usize>> {
+) -> Result<(Vec<usize>, crate::report::FoldScheme)> {
     if k < 2 {
         return Err(Error::setting("folds", k as f64, "need at least 2 folds"));
     }
-    if nodes.len() < k {
+    if nodes.len() < 2 {
         return Err(Error::data(
             dataset,
             format!(
-                "{} (configuration, wind speed) groups of forced cases; {k} folds need at least {k}",
+                "{} (configuration, wind speed) group(s) of forced cases; a held-out diagnosis \
+                 needs at least 2 (forced cases at two wind speeds or two configurations)",
                 nodes.len()
             ),
         ));
@@ -142,6 +147,18 @@ pub(crate) fn assign_folds(
             dataset,
             format!("configuration `{c}` has forced cases at one wind speed only; held-out prediction needs at least 2"),
         ));
+    }
+    if nodes.len() < k {
+        let scheme = crate::report::FoldScheme {
+            scheme: "leave_one_group_out".into(),
+            folds: nodes.len(),
+            groups: nodes.len(),
+            note: Some(format!(
+                "{} (configuration, wind speed) groups, fewer than the {k} requested folds",
+                nodes.len()
+            )),
+        };
+        return Ok(((0..nodes.len()).collect(), scheme));
     }
     // stratified by configuration: each configuration's nodes are shuffled and the
     // configurations' lists dealt in turn, so a fold holds at most one node of a
@@ -162,7 +179,13 @@ pub(crate) fn assign_folds(
     for (pos, &n) in order.iter().enumerate() {
         fold[n] = pos % k;
     }
-    Ok(fold)
+    let scheme = crate::report::FoldScheme {
+        scheme: "stratified".into(),
+        folds: k,
+        groups: nodes.len(),
+        note: None,
+    };
+    Ok((fold, scheme))
 }
 
 fn build_fold(
@@ -352,11 +375,17 @@ pub fn force_level_profiled(
         t0 = std::time::Instant::now();
     };
     let name = forced.manifest.name.clone();
-    let (cases, nodes) = data::prepare(forced)?;
+    let (cases, nodes, pooled) = data::prepare(forced)?;
     lap("prepare", &mut prof);
-    let fold_of = assign_folds(&nodes, opts.folds, opts.seed, &name)?;
+    let (fold_of, mut scheme) = assign_folds(&nodes, opts.folds, opts.seed, &name)?;
+    if let Some(p) = pooled {
+        scheme.note = Some(match scheme.note.take() {
+            Some(n) => format!("{n}; {p}"),
+            None => p,
+        });
+    }
     let cache = FitCache::default();
-    let folds: Vec<Fold> = (0..opts.folds)
+    let folds: Vec<Fold> = (0..scheme.folds)
         .map(|k| build_fold(k, &fold_of, &cases, &nodes, &opts.identify, &name, &cache))
         .collect::<Result<_>>()?;
     lap("folds", &mut prof);
@@ -369,7 +398,8 @@ pub fn force_level_profiled(
         prof.push((format!("candidate:{}", s.kind.effect().name()), t));
         scored.push(s);
     }
-    let r = analysis::assemble(&cases, &nodes, &fold_of, &before, scored, opts);
+    let mut r = analysis::assemble(&cases, &nodes, &fold_of, &before, scored, opts);
+    r.fold_scheme = Some(scheme);
     lap("assemble", &mut prof);
     Ok((r, prof))
 }
@@ -380,4 +410,49 @@ pub const LEVEL: Level = Level::Aerodynamic;
 /// Catalogue effect of a candidate kind.
 pub fn effect_of(kind: CandidateKind) -> Effect {
     kind.effect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn nodes(spec: &[(&str, f64)]) -> Vec<Node> {
+        spec.iter()
+            .map(|&(c, u)| Node {
+                config: c.to_string(),
+                u,
+                k_alpha: 1.0 / u,
+                cases: vec![],
+            })
+            .collect()
+    }
+
+    #[test]
+    fn fewer_groups_than_folds_is_leave_one_group_out() {
+        // one configuration × 4 wind speeds (the issue's refused campaign)
+        let n = nodes(&[("A", 4.0), ("A", 6.0), ("A", 8.0), ("A", 10.0)]);
+        let (f, s) = assign_folds(&n, 5, 0, "t").unwrap();
+        assert_eq!(f, vec![0, 1, 2, 3]);
+        assert_eq!((s.scheme.as_str(), s.folds, s.groups), ("leave_one_group_out", 4, 4));
+        // 2 groups: still diagnosed
+        let (f, s) = assign_folds(&n[..2], 5, 0, "t").unwrap();
+        assert_eq!((f, s.folds), (vec![0, 1], 2));
+    }
+
+    #[test]
+    fn five_or_more_groups_are_stratified_and_one_group_is_an_error() {
+        let n = nodes(&[
+            ("D", 4.0),
+            ("D", 6.0),
+            ("D", 8.0),
+            ("G", 4.0),
+            ("G", 6.0),
+            ("G", 8.0),
+        ]);
+        let (f, s) = assign_folds(&n, 5, 3, "t").unwrap();
+        assert_eq!((s.scheme.as_str(), s.folds), ("stratified", 5));
+        assert!(f.iter().all(|&k| k < 5));
+        let e = assign_folds(&n[..1], 5, 0, "set").unwrap_err().to_string();
+        assert!(e.contains("set") && e.contains("at least 2"), "{e}");
+    }
 }

@@ -19,6 +19,8 @@
 //!   missing inside the gap; δ on a grid 0.05°…3°, k fitted: 2 parameters);
 //! * `friction`: F_c tanh(ḣ/ε_h), T_c tanh(α̇/ε_α), ε a fraction (grid 0.01, 0.03, 0.1)
 //!   of the pooled rms velocity (3 parameters);
+//! * `structural_polynomial`: k₂h² + k₃h³ and k₂α² + k₃α³ springs, even and odd (4);
+//! * `structural_damping`: amplitude-dependent damping c₂h²ḣ, c₂α²α̇ (2);
 //! * `static_offset`: a constant force and moment, either constant in U (structural zero
 //!   offset) or ∝ ½ρU² (aerodynamic mean-angle offset), chosen by training error (3).
 
@@ -195,6 +197,23 @@ fn columns(effect: Effect, grid: &[f64], run: &RunResidual, rho: f64, chord: f64
             let x: Vec<f64> = run.q[1].iter().map(|a| a.clamp(-d, d)).collect();
             vec![[z(), acc_term(run, &x)]]
         }
+        Effect::StructuralPolynomial => {
+            let p = |c: usize, k: i32| kept(run, &run.q[c]).iter().map(|v| v.powi(k)).collect();
+            vec![
+                [p(0, 2), z()],
+                [p(0, 3), z()],
+                [z(), p(1, 2)],
+                [z(), p(1, 3)],
+            ]
+        }
+        Effect::StructuralDamping => {
+            let p = |c: usize| -> Vec<f64> {
+                (run.i0..run.i1)
+                    .map(|i| run.q[c][i].powi(2) * run.qd[c][i])
+                    .collect()
+            };
+            vec![[p(0), z()], [z(), p(1)]]
+        }
         Effect::Friction => {
             let (eh, ea) = (grid[0], grid[1]);
             let xh: Vec<f64> = run.qd[0].iter().map(|v| (v / eh).tanh()).collect();
@@ -223,19 +242,28 @@ pub(crate) fn coefficient_names(effect: Effect) -> Vec<String> {
         Effect::Freeplay => &["gap_stiffness_Nm_per_rad"],
         Effect::Friction => &["friction_heave_N_per_m", "friction_pitch_Nm_per_m"],
         Effect::StaticOffset => &["offset_coefficient_lift", "offset_coefficient_moment"],
+        Effect::StructuralPolynomial => &[
+            "k2_heave_N_per_m2",
+            "k3_heave_N_per_m3",
+            "k2_pitch_Nm_per_rad2",
+            "k3_pitch_Nm_per_rad3",
+        ],
+        Effect::StructuralDamping => &["c2_heave_Ns_per_m3", "c2_pitch_Nms_per_rad3"],
         _ => &[],
     };
     v.iter().map(|s| s.to_string()).collect()
 }
 
 /// The system-level candidates, in catalogue order.
-pub(crate) const CANDIDATES: [Effect; 6] = [
+pub(crate) const CANDIDATES: [Effect; 8] = [
     Effect::StaticOffset,
     Effect::AddedMass,
     Effect::TimeDelay,
     Effect::StructuralCubic,
     Effect::Freeplay,
     Effect::Friction,
+    Effect::StructuralPolynomial,
+    Effect::StructuralDamping,
 ];
 
 /// Freeplay half-gap grid [deg].
@@ -254,6 +282,8 @@ pub(crate) fn n_params(effect: Effect) -> usize {
         Effect::Freeplay => 2,
         Effect::Friction => 3,
         Effect::StaticOffset => 3,
+        Effect::StructuralPolynomial => 4,
+        Effect::StructuralDamping => 2,
         _ => 0,
     }
 }

@@ -60,6 +60,8 @@ pub struct SystemOptions {
     /// Re-simulate every run with the sim (and the best candidate) for the observables
     /// and the bifurcation diagram (default true; off saves the simulations' time).
     pub simulate: bool,
+    /// Nominal structure of the sim; `None` (default): the free data set's `[structure]`.
+    pub structure: Option<identify::dataset::StructureSpec>,
 }
 
 impl Default for SystemOptions {
@@ -78,6 +80,7 @@ impl Default for SystemOptions {
             preprocess: PreprocessOptions::default(),
             identify: IdentifySettings::default(),
             simulate: true,
+            structure: None,
         }
     }
 }
@@ -159,10 +162,11 @@ pub(crate) fn prepare_free(
     opts: &SystemOptions,
 ) -> Result<Prepared> {
     let name = free.manifest.name.as_str();
-    let spec = free.manifest.structure.ok_or_else(|| {
+    let spec = opts.structure.or(free.manifest.structure).ok_or_else(|| {
         Error::data(
             name,
-            "free-response data set has no [structure] table (the sim needs the nominal structure)",
+            "free-response data set has no [structure] table and no structure was given \
+             (the sim needs the nominal structure)",
         )
     })?;
     let structure = LinearStructure::from_spec(&spec);
@@ -433,5 +437,20 @@ pub fn system_level_with_model(
         signatures,
         observables,
         bifurcation,
+        fold_scheme: Some(crate::report::FoldScheme {
+            scheme: if folds.iter().max().map_or(0, |m| m + 1) == n {
+                "leave_one_run_out".into()
+            } else {
+                "seeded_k_fold".into()
+            },
+            folds: folds.iter().max().map_or(0, |m| m + 1),
+            groups: n,
+            note: {
+                let still = runs.iter().filter(|r| r.u == 0.0).count();
+                (still > 0).then(|| {
+                    format!("{still} still-air run(s) (U = 0): residual without aerodynamic force")
+                })
+            },
+        }),
     })
 }

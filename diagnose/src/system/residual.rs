@@ -57,6 +57,50 @@ impl LinearStructure {
     }
 }
 
+/// The aerodynamic model of a still-air run (U = 0): no aerodynamic force at all. Any
+/// apparent mass of the air is part of the structure a still-air decay measures, so a
+/// still-air run tests the structure alone, before any aerodynamics is blamed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StillAir {
+    /// Chord B [m] (of the model it stands in for).
+    pub chord: f64,
+}
+
+impl AeroModel for StillAir {
+    fn name(&self) -> String {
+        "still air".into()
+    }
+    fn chord(&self) -> f64 {
+        self.chord
+    }
+    fn n_lag(&self) -> usize {
+        0
+    }
+    fn apparent_mass(&self, _flow: &Flow) -> Matrix2<f64> {
+        Matrix2::zeros()
+    }
+    fn forces(&self, _flow: &Flow, _q: [f64; 2], _qd: [f64; 2], _lag: &[f64]) -> [f64; 2] {
+        [0.0; 2]
+    }
+    fn lag_rates(&self, _f: &Flow, _q: [f64; 2], _qd: [f64; 2], _lag: &[f64], _o: &mut [f64]) {}
+    fn frequency_response(&self, _flow: &Flow, _omega: f64) -> Matrix2<Complex64> {
+        Matrix2::zeros()
+    }
+}
+
+/// The aerodynamic model of one run: [`StillAir`] at U = 0, else `model` at the run's
+/// reduced frequency (or `model` itself when nothing in it depends on K).
+pub fn run_model(model: &Arc<dyn AeroModel>, u: f64, k: f64) -> Arc<dyn AeroModel> {
+    if u == 0.0 || !k.is_finite() {
+        return Arc::new(StillAir {
+            chord: model.chord(),
+        });
+    }
+    model
+        .with_reduced_frequency(k)
+        .unwrap_or_else(|| model.clone())
+}
+
 /// Settings of the residual computation.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ResidualSettings {
@@ -373,10 +417,10 @@ pub fn prepare_run(
     }
     let i1 = n - edge;
     let u = rec.meta.wind_speed;
-    if !(u.is_finite() && u > 0.0) {
+    if !(u.is_finite() && u >= 0.0) {
         return Err(Error::data(
             dataset,
-            format!("free run `{id}`: wind speed {u} m/s must be > 0"),
+            format!("free run `{id}`: wind speed {u} m/s must be >= 0"),
         ));
     }
     let q = [rec.h.clone(), rec.alpha.clone()];
@@ -387,14 +431,15 @@ pub fn prepare_run(
     ];
     let freq = dominant_frequency(&q[1][i0..i1], dt);
     let b = model.chord();
-    let k = if freq > 0.0 {
+    // still air (U = 0): K = Bω/U is infinite and the run has no aerodynamic force
+    let k = if u == 0.0 {
+        f64::INFINITY
+    } else if freq > 0.0 {
         b * 2.0 * std::f64::consts::PI * freq / u
     } else {
         1.0
     };
-    let run_model = model
-        .with_reduced_frequency(k)
-        .unwrap_or_else(|| model.clone());
+    let run_model = run_model(model, u, k);
     let flow = Flow { rho, u };
     let pad = (s.pad / dt).ceil() as usize;
     let force = forces_along(run_model.as_ref(), &flow, &q, &qd, dt, pad);
@@ -405,7 +450,14 @@ pub fn prepare_run(
         let v = residual_at(st, &q, &qd, &qdd, &force, i);
         for c in 0..2 {
             r[c].push(v[c]);
-            let sf = v[c] + force[c][i];
+            // in still air the structural force *is* the residual (no aerodynamic force
+            // balances it), so the run is normalised by its elastic force K_s q instead:
+            // the force the inertia must balance
+            let sf = if u == 0.0 {
+                st.stiffness[(c, 0)] * q[0][i] + st.stiffness[(c, 1)] * q[1][i]
+            } else {
+                v[c] + force[c][i]
+            };
             ss[c] += sf * sf;
         }
     }

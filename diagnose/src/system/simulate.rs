@@ -24,6 +24,11 @@ impl Augment {
         let t = &self.theta;
         match self.effect {
             Effect::StructuralCubic => [t[0] * q[0].powi(3), t[1] * q[1].powi(3)],
+            Effect::StructuralPolynomial => [
+                t[0] * q[0].powi(2) + t[1] * q[0].powi(3),
+                t[2] * q[1].powi(2) + t[3] * q[1].powi(3),
+            ],
+            Effect::StructuralDamping => [t[0] * q[0].powi(2) * qd[0], t[1] * q[1].powi(2) * qd[1]],
             Effect::Freeplay => {
                 let d = self.grid[0];
                 [0.0, t[0] * q[1].clamp(-d, d)]
@@ -70,9 +75,7 @@ pub(crate) fn simulate(
     aug: Option<&Augment>,
     substeps: usize,
 ) -> [Vec<f64>; 2] {
-    let model = model
-        .with_reduced_frequency(run.k)
-        .unwrap_or_else(|| model.clone());
+    let model = super::residual::run_model(model, run.u, run.k);
     let flow = Flow { rho, u: run.u };
     let chord = model.chord();
     let q_dyn = flow.q_dyn();
@@ -387,9 +390,7 @@ pub(crate) fn compare(
         let om = observables(a, r.dt, floor);
         meas_pts.push(point(r.u, &om));
         rates[0].push((r.u, om.rate));
-        let run_model = model
-            .with_reduced_frequency(r.k)
-            .unwrap_or_else(|| model.clone());
+        let run_model = super::residual::run_model(model, r.u, r.k);
         let Some(sub) = stable_substeps(run_model.as_ref(), rho, r.u, r.dt, 64) else {
             continue;
         };
