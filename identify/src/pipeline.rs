@@ -396,6 +396,11 @@ pub struct Identification {
     pub cases: Vec<CaseResult>,
     /// Groups sorted by name.
     pub groups: Vec<GroupResult>,
+    /// Block-bootstrap ensemble (`identify --ensemble N`): intervals of every support
+    /// coefficient and Eq. 19 value, and the members' coefficients. Absent (not `null`)
+    /// when no ensemble was run.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ensemble: Option<crate::ensemble::Ensemble>,
 }
 
 impl Identification {
@@ -998,6 +1003,7 @@ pub fn identify(
         },
         cases: case_results,
         groups: group_results,
+        ensemble: None,
     })
 }
 
