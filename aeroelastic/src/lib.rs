@@ -10,6 +10,7 @@ pub mod aero;
 pub mod bessel;
 pub mod dynamics;
 pub mod effects;
+pub mod ensemble;
 pub mod error;
 pub mod files;
 pub mod flutter;

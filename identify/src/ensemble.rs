@@ -23,9 +23,14 @@
 //! (n_b q) × q problem, independent of the record length.
 //!
 //! **Finite-block correction.** The bootstrap variance of a sum of n_b blocks is
-//! (n_b − 1)/n_b of the sampling variance; with `variance_correction` each member is
-//! moved to θ̂ + √(n_b/(n_b − 1))·(θ* − θ̂) (θ̂ the full-data fit), which removes that bias
-//! exactly for the linear part of the estimator.
+//! (n_b − 1)/n_b of the sampling variance, and it is itself an estimate with only n_b − 1
+//! degrees of freedom (13 blocks for 10 s at 1.3 Hz), so a percentile interval of level ℓ
+//! covers like a normal interval with an estimated variance: P(|t_{n_b−1}| < z_{(1+ℓ)/2})
+//! ≈ 87.5 % for ℓ = 90 %, n_b = 13 (measured: 87.2 %). With `variance_correction` each member
+//! is moved to θ̂ + c·(θ* − θ̂) (θ̂ the full-data fit) with
+//! c = √(n_b/(n_b − 1))·t_{n_b−1}((1+ℓ)/2)/z((1+ℓ)/2), the usual Student correction of an
+//! interval whose variance comes from n_b − 1 degrees of freedom. The factor depends on the
+//! level, so the stored members are those of the stored level.
 //!
 //! **Intervals.** Percentile intervals: for level ℓ the empirical quantiles (1 − ℓ)/2 and
 //! (1 + ℓ)/2 of the members (linear interpolation between order statistics), and the median.
@@ -63,7 +68,7 @@ pub struct EnsembleSettings {
     pub level: f64,
     /// Block length in periods of the case's slowest forcing frequency (> 0).
     pub block_periods: f64,
-    /// Apply the finite-block variance correction √(n_b/(n_b − 1)) (module docs).
+    /// Apply the finite-block correction √(n_b/(n_b − 1))·t_{n_b−1}/z (module docs).
     pub variance_correction: bool,
 }
 
@@ -345,6 +350,77 @@ impl ForceBlocks {
     }
 }
 
+/// Standard normal quantile (Acklam's rational approximation, relative error < 1.2e-9).
+pub fn normal_quantile(p: f64) -> f64 {
+    const A: [f64; 6] = [
+        -3.969_683_028_665_376e1,
+        2.209_460_984_245_205e2,
+        -2.759_285_104_469_687e2,
+        1.383_577_518_672_69e2,
+        -3.066_479_806_614_716e1,
+        2.506_628_277_459_239,
+    ];
+    const B: [f64; 5] = [
+        -5.447_609_879_822_406e1,
+        1.615_858_368_580_409e2,
+        -1.556_989_798_598_866e2,
+        6.680_131_188_771_972e1,
+        -1.328_068_155_288_572e1,
+    ];
+    const C: [f64; 6] = [
+        -7.784_894_002_430_293e-3,
+        -3.223_964_580_411_365e-1,
+        -2.400_758_277_161_838,
+        -2.549_732_539_343_734,
+        4.374_664_141_464_968,
+        2.938_163_982_698_783,
+    ];
+    const D: [f64; 4] = [
+        7.784_695_709_041_462e-3,
+        3.224_671_290_700_398e-1,
+        2.445_134_137_142_996,
+        3.754_408_661_907_416,
+    ];
+    let tail = |q: f64| {
+        (((((C[0] * q + C[1]) * q + C[2]) * q + C[3]) * q + C[4]) * q + C[5])
+            / ((((D[0] * q + D[1]) * q + D[2]) * q + D[3]) * q + 1.0)
+    };
+    if p <= 0.0 {
+        f64::NEG_INFINITY
+    } else if p >= 1.0 {
+        f64::INFINITY
+    } else if p < 0.02425 {
+        tail((-2.0 * p.ln()).sqrt())
+    } else if p > 1.0 - 0.02425 {
+        -tail((-2.0 * (1.0 - p).ln()).sqrt())
+    } else {
+        let q = p - 0.5;
+        let r = q * q;
+        (((((A[0] * r + A[1]) * r + A[2]) * r + A[3]) * r + A[4]) * r + A[5]) * q
+            / (((((B[0] * r + B[1]) * r + B[2]) * r + B[3]) * r + B[4]) * r + 1.0)
+    }
+}
+
+/// Student-t quantile with ν degrees of freedom from the normal quantile z by the
+/// Cornish–Fisher expansion to ν⁻⁴ (Abramowitz & Stegun 26.7.5; error < 1e-3 for ν ≥ 5 at
+/// the 95 % point, exact as ν → ∞).
+pub fn student_quantile(p: f64, nu: f64) -> f64 {
+    let z = normal_quantile(p);
+    let z2 = z * z;
+    let g1 = (z2 + 1.0) * z / 4.0;
+    let g2 = ((5.0 * z2 + 16.0) * z2 + 3.0) * z / 96.0;
+    let g3 = (((3.0 * z2 + 19.0) * z2 + 17.0) * z2 - 15.0) * z / 384.0;
+    let g4 = ((((79.0 * z2 + 776.0) * z2 + 1482.0) * z2 - 1920.0) * z2 - 945.0) * z / 92160.0;
+    z + g1 / nu + g2 / nu.powi(2) + g3 / nu.powi(3) + g4 / nu.powi(4)
+}
+
+/// Finite-block factor c = √(n_b/(n_b − 1))·t_{n_b−1}((1+ℓ)/2)/z((1+ℓ)/2) (module docs).
+pub fn finite_block_factor(n_blocks: usize, level: f64) -> f64 {
+    let nu = n_blocks as f64 - 1.0;
+    let p = (1.0 + level) / 2.0;
+    (n_blocks as f64 / nu).sqrt() * student_quantile(p, nu) / normal_quantile(p)
+}
+
 /// Eq. 19 names of a force, in [`EQ19_TERMS`] order.
 fn eq19_names(moment: bool) -> [&'static str; 7] {
     if moment {
@@ -473,7 +549,7 @@ fn case_ensemble(
     let ones = vec![1u32; nb];
     let centre = [fb[0].fit(&ones), fb[1].fit(&ones)];
     let scale = if s.variance_correction && nb > 1 {
-        (nb as f64 / (nb as f64 - 1.0)).sqrt()
+        finite_block_factor(nb, s.level)
     } else {
         1.0
     };

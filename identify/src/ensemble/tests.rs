@@ -87,6 +87,19 @@ fn quantiles_interpolate_between_order_statistics() {
 }
 
 #[test]
+fn normal_and_student_quantiles_match_tables() {
+    assert!((normal_quantile(0.95) - 1.644_853_627).abs() < 1e-8);
+    assert!((normal_quantile(0.975) - 1.959_963_985).abs() < 1e-8);
+    assert!((normal_quantile(0.001) + 3.090_232_306).abs() < 1e-8);
+    // t tables: t_12(0.95) = 1.782288, t_12(0.975) = 2.178813, t_5(0.95) = 2.015048
+    assert!((student_quantile(0.95, 12.0) - 1.782_288).abs() < 2e-4);
+    assert!((student_quantile(0.975, 12.0) - 2.178_813).abs() < 5e-4);
+    assert!((student_quantile(0.95, 5.0) - 2.015_048).abs() < 2e-3);
+    let c = finite_block_factor(13, 0.9);
+    assert!((c - (13.0f64 / 12.0).sqrt() * 1.782_288 / 1.644_854).abs() < 2e-4, "{c}");
+}
+
+#[test]
 fn settings_are_checked() {
     assert!(EnsembleSettings::new(1, 0).validate().is_err());
     let mut s = EnsembleSettings::new(10, 0);
