@@ -46,8 +46,12 @@ pub fn ensemble_laws(
     Vec<Result<aeroelastic::identified::IdentifiedLaw, String>>,
     identify::ensemble::Ensemble,
 )> {
-    let id = identify::pipeline::Identification::read(model)
-        .with_context(|| format!("--ensemble needs an identification.json model ({})", model.display()))?;
+    let id = identify::pipeline::Identification::read(model).with_context(|| {
+        format!(
+            "--ensemble needs an identification.json model ({})",
+            model.display()
+        )
+    })?;
     let opts = aeroelastic::identified::IdentifiedOptions::new(chord);
     let (laws, e) = aeroelastic::ensemble::member_laws(&id, &opts, Some(n))
         .with_context(|| format!("{}: ensemble", model.display()))?;
@@ -201,8 +205,9 @@ pub fn run(args: &FlutterArgs) -> anyhow::Result<()> {
         None => println!("divergence: none"),
     }
     if let Some(e) = &ensemble {
-        let show = |name: &str, q: &aeroelastic::ensemble::MemberQuantity, unit: &str| match q.interval {
-            Some(i) => println!(
+        let show =
+            |name: &str, q: &aeroelastic::ensemble::MemberQuantity, unit: &str| match q.interval {
+                Some(i) => println!(
                 "{name}: median {:.4} {unit}, {:.0} % interval [{:.4}, {:.4}] ({} of {} members)",
                 i.median,
                 100.0 * e.level,
@@ -211,8 +216,8 @@ pub fn run(args: &FlutterArgs) -> anyhow::Result<()> {
                 q.found,
                 e.members
             ),
-            None => println!("{name}: none in any of the {} members", e.members),
-        };
+                None => println!("{name}: none in any of the {} members", e.members),
+            };
         show("ensemble U_F", &e.flutter_speed, "m/s");
         show("ensemble f_F", &e.flutter_frequency_hz, "Hz");
         show("ensemble U_D", &e.divergence_speed, "m/s");

@@ -144,8 +144,7 @@ pub fn run(args: &LcoArgs) -> anyhow::Result<()> {
             Some(u) => vec![u],
             None => parse_speeds(args.sweep.as_deref().unwrap_or_default())?,
         };
-        let (laws, e) =
-            crate::flutter_cmd::ensemble_laws(&args.model, l.section.aero.chord(), n)?;
+        let (laws, e) = crate::flutter_cmd::ensemble_laws(&args.model, l.section.aero.chord(), n)?;
         let le = aeroelastic::ensemble::lco_ensemble(
             &l.structure,
             &laws,

@@ -64,9 +64,8 @@ fn identified(dir: &Path, seed: u64, noise: bool, members: usize) -> Identificat
     .unwrap();
     if members > 0 {
         let t = std::time::Instant::now();
-        id.ensemble = Some(
-            bootstrap(&prepared.cases, &id, &EnsembleSettings::new(members, seed)).unwrap(),
-        );
+        id.ensemble =
+            Some(bootstrap(&prepared.cases, &id, &EnsembleSettings::new(members, seed)).unwrap());
         eprintln!(
             "bootstrap of {members} members over {} cases: {:.3} s",
             prepared.cases.len(),
@@ -77,18 +76,21 @@ fn identified(dir: &Path, seed: u64, noise: bool, members: usize) -> Identificat
 }
 
 fn flutter_speed(law: &IdentifiedLaw) -> f64 {
-    let (st, rho) = rig();
-    Section::new(st, Arc::new(law.model().clone()), rho)
-        .unwrap()
-        .flutter(FlutterMethod::Pk, &flutter_opts())
-        .unwrap()
-        .flutter
-        .unwrap()
-        .u
+    flutter_and_divergence(law).0
 }
 
-/// Truth U_F (p-method on the truth's own time-domain realisation, as tests/round_trip.rs).
-fn truth_flutter_speed() -> f64 {
+fn flutter_and_divergence(law: &IdentifiedLaw) -> (f64, Option<f64>) {
+    let (st, rho) = rig();
+    let fa = Section::new(st, Arc::new(law.model().clone()), rho)
+        .unwrap()
+        .flutter(FlutterMethod::Pk, &flutter_opts())
+        .unwrap();
+    (fa.flutter.unwrap().u, fa.divergence_speed)
+}
+
+/// Truth U_F (p-method on the truth's own time-domain realisation, as tests/round_trip.rs)
+/// and divergence speed.
+fn truth_flutter_speed() -> (f64, Option<f64>) {
     let (st, rho) = rig();
     let truth = LoadedModel::load(&root().join("scenarios/plate-truth.model.toml"), None)
         .unwrap()
@@ -97,17 +99,21 @@ fn truth_flutter_speed() -> f64 {
         tol_rel: 1e-10,
         ..flutter_opts()
     };
-    Section::new(st, truth, rho)
+    let fa = Section::new(st, truth, rho)
         .unwrap()
         .flutter(FlutterMethod::P, &fo)
-        .unwrap()
-        .flutter
-        .unwrap()
-        .u
+        .unwrap();
+    (fa.flutter.unwrap().u, fa.divergence_speed)
 }
 
-/// Per seed: (nominal U_F, interval of U_F) of the ensemble.
-fn flutter_intervals(seeds: std::ops::Range<u64>, members: usize) -> Vec<(f64, identify::ensemble::Interval)> {
+type Intervals = Vec<(
+    f64,
+    identify::ensemble::Interval,
+    Option<identify::ensemble::Interval>,
+)>;
+
+/// Per seed: (nominal U_F, interval of U_F, interval of U_D) of the ensemble.
+fn flutter_intervals(seeds: std::ops::Range<u64>, members: usize) -> Intervals {
     let (st, rho) = rig();
     seeds
         .map(|seed| {
@@ -117,8 +123,8 @@ fn flutter_intervals(seeds: std::ops::Range<u64>, members: usize) -> Vec<(f64, i
             let nominal = flutter_speed(&IdentifiedLaw::from_identification(&id, &opts).unwrap());
             let t = std::time::Instant::now();
             let (laws, e) = member_laws(&id, &opts, None).unwrap();
-            let fe = flutter_ensemble(&st, &laws, e, rho, FlutterMethod::Pk, &flutter_opts())
-                .unwrap();
+            let fe =
+                flutter_ensemble(&st, &laws, e, rho, FlutterMethod::Pk, &flutter_opts()).unwrap();
             assert!(fe.failures.is_empty(), "{:?}", fe.failures);
             assert_eq!(fe.flutter_speed.found, members);
             let iv = fe.flutter_speed.interval.unwrap();
@@ -131,16 +137,16 @@ fn flutter_intervals(seeds: std::ops::Range<u64>, members: usize) -> Vec<(f64, i
                 t.elapsed().as_secs_f64(),
                 fe.divergence_speed.interval
             );
-            (nominal, iv)
+            (nominal, iv, fe.divergence_speed.interval)
         })
         .collect()
 }
 
-fn coverage(v: &[(f64, identify::ensemble::Interval)], truth: f64, label: &str) -> f64 {
-    let hits = v.iter().filter(|(_, iv)| iv.contains(truth)).count();
+fn coverage(v: &[identify::ensemble::Interval], truth: f64, label: &str) -> f64 {
+    let hits = v.iter().filter(|iv| iv.contains(truth)).count();
     let p = hits as f64 / v.len() as f64;
     eprintln!(
-        "U_F coverage against {label} ({truth:.5} m/s): {hits}/{} = {p:.3} ± {:.3}",
+        "coverage against {label} ({truth:.5} m/s): {hits}/{} = {p:.3} ± {:.3}",
         v.len(),
         (p * (1.0 - p) / v.len() as f64).sqrt()
     );
@@ -158,13 +164,14 @@ fn flutter_speed_interval_from_the_ensemble() {
         &IdentifiedLaw::from_identification(&clean, &IdentifiedOptions::new(CHORD)).unwrap(),
     );
     let v = flutter_intervals(0..2, 30);
-    for (nominal, iv) in &v {
+    for (nominal, iv, _) in &v {
         assert!(iv.lower < iv.upper, "{iv:?}");
         assert!(iv.contains(*nominal), "nominal {nominal} outside {iv:?}");
         let rel = (iv.upper - iv.lower) / iv.median;
         assert!(rel > 1e-5 && rel < 0.05, "relative width {rel}");
     }
-    coverage(&v, uf_clean, "the noise-free identification");
+    let uf: Vec<_> = v.iter().map(|x| x.1).collect();
+    coverage(&uf, uf_clean, "the noise-free identification");
 }
 
 /// Full check (ignored, a few minutes): 60 noise seeds, 100 members, nominal 90 %.
@@ -176,13 +183,22 @@ fn flutter_speed_interval_from_the_ensemble() {
 fn flutter_speed_interval_coverage_full() {
     let dir = tempfile::tempdir().unwrap();
     let clean = identified(dir.path(), 1, false, 0);
-    let uf_clean = flutter_speed(
+    let (uf_clean, ud_clean) = flutter_and_divergence(
         &IdentifiedLaw::from_identification(&clean, &IdentifiedOptions::new(CHORD)).unwrap(),
     );
-    let uf_truth = truth_flutter_speed();
+    let (uf_truth, ud_truth) = truth_flutter_speed();
     let v = flutter_intervals(0..60, 100);
-    let p = coverage(&v, uf_clean, "the noise-free identification");
-    coverage(&v, uf_truth, "the truth");
+    let uf: Vec<_> = v.iter().map(|x| x.1).collect();
+    let p = coverage(&uf, uf_clean, "the noise-free identification (U_F)");
+    coverage(&uf, uf_truth, "the truth (U_F)");
+    let ud: Vec<_> = v.iter().filter_map(|x| x.2).collect();
+    eprintln!("U_D (outside the campaign's K range): noise-free {ud_clean:?}, truth {ud_truth:?}");
+    if let Some(u) = ud_clean {
+        coverage(&ud, u, "the noise-free identification (U_D)");
+    }
+    if let Some(u) = ud_truth {
+        coverage(&ud, u, "the truth (U_D)");
+    }
     let se = (0.09f64 / v.len() as f64).sqrt();
     assert!((p - 0.9).abs() < 0.03 + 2.0 * se, "coverage {p}");
 }
@@ -221,6 +237,29 @@ fn cli_ensemble_flags() {
     let id = Identification::read(&idf).unwrap();
     let e = id.ensemble.as_ref().unwrap();
     assert_eq!((e.settings.members, e.settings.seed), (12, 77));
+    // the derivative figure carries the ensemble intervals as error bars around each point
+    let fig = plots::adapters::identification::derivative_figure(&id);
+    let mut bars = 0;
+    for p in &fig.panels {
+        for g in &p.points {
+            assert_eq!(g.interval.len(), g.k.len(), "{}", p.name);
+            for (v, [lo, hi]) in g.value.iter().zip(&g.interval) {
+                assert!(lo < hi, "{}: [{lo}, {hi}]", p.name);
+                // the nominal value is the full-data fit, near the ensemble median
+                assert!(
+                    *lo - (hi - lo) < *v && *v < hi + (hi - lo),
+                    "{}: {v} vs [{lo}, {hi}]",
+                    p.name
+                );
+                bars += 1;
+            }
+        }
+    }
+    assert_eq!(bars, 8 * 16);
+    let fig_dir = std::env::var_os("AEROFORM_FIGURE_DIR")
+        .map(std::path::PathBuf::from)
+        .unwrap_or_else(|| dir.path().to_path_buf());
+    plots::render::save(&fig, &fig_dir, "derivatives_ensemble").unwrap();
     let rig = root().join("scenarios/plate-rig.structure.toml");
     let (ok, text) = run(&[
         "flutter",
@@ -239,7 +278,10 @@ fn cli_ensemble_flags() {
     let fj: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("flutter.json")).unwrap()).unwrap();
     let iv = &fj["ensemble"]["flutter_speed"]["interval"];
-    assert!(iv["lower"].as_f64().unwrap() < iv["upper"].as_f64().unwrap(), "{fj:#}");
+    assert!(
+        iv["lower"].as_f64().unwrap() < iv["upper"].as_f64().unwrap(),
+        "{fj:#}"
+    );
     assert_eq!(fj["ensemble"]["seed"], "77");
     let (ok, text) = run(&[
         "lco",
@@ -257,7 +299,10 @@ fn cli_ensemble_flags() {
     assert!(ok, "{text}");
     let lj: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("lco.json")).unwrap()).unwrap();
-    assert_eq!(lj["ensemble"]["points"][0]["amplitude_alpha_deg"]["found"], 4, "{lj:#}");
+    assert_eq!(
+        lj["ensemble"]["points"][0]["amplitude_alpha_deg"]["found"], 4,
+        "{lj:#}"
+    );
     let (ok, text) = run(&[
         "flutter",
         "--structure",
@@ -270,5 +315,8 @@ fn cli_ensemble_flags() {
         "50",
     ]);
     assert!(!ok);
-    assert!(text.contains("asked for 50 members; the identification holds 12"), "{text}");
+    assert!(
+        text.contains("asked for 50 members; the identification holds 12"),
+        "{text}"
+    );
 }

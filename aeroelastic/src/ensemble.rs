@@ -37,7 +37,10 @@ pub fn member_laws<'a>(
     id: &'a Identification,
     opts: &IdentifiedOptions,
     n: Option<usize>,
-) -> Result<(Vec<std::result::Result<IdentifiedLaw, String>>, &'a Ensemble)> {
+) -> Result<(
+    Vec<std::result::Result<IdentifiedLaw, String>>,
+    &'a Ensemble,
+)> {
     let e = id.ensemble.as_ref().ok_or_else(|| {
         Error::param(
             "ensemble",
@@ -54,7 +57,10 @@ pub fn member_laws<'a>(
         return Err(Error::param(
             "ensemble.members",
             n as f64,
-            format!("asked for {n} members; the identification holds {}", e.members()),
+            format!(
+                "asked for {n} members; the identification holds {}",
+                e.members()
+            ),
         ));
     }
     let laws = (0..n)

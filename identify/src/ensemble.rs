@@ -490,8 +490,7 @@ pub fn bootstrap(
                 .ok_or_else(|| Error::InvalidData {
                     case: c.id.clone(),
                     field: "id".to_string(),
-                    message: "case of the identification not among the prepared cases"
-                        .to_string(),
+                    message: "case of the identification not among the prepared cases".to_string(),
                 })
         })
         .collect::<Result<_>>()?;
@@ -635,7 +634,11 @@ impl Ensemble {
         }
         for (e, c) in self.cases.iter().zip(&id.cases) {
             if e.id != c.id {
-                return Err(bad(&c.id, "cases", format!("entry `{}` out of order", e.id)));
+                return Err(bad(
+                    &c.id,
+                    "cases",
+                    format!("entry `{}` out of order", e.id),
+                ));
             }
             for (name, f, base) in [
                 ("moment", &e.moment, &c.moment.terms),
@@ -656,7 +659,11 @@ impl Ensemble {
                     return Err(bad(
                         &c.id,
                         &format!("{name}.samples[{r}]"),
-                        format!("{} values for {} support terms", f.samples[r].len(), f.support.len()),
+                        format!(
+                            "{} values for {} support terms",
+                            f.samples[r].len(),
+                            f.support.len()
+                        ),
                     ));
                 }
                 if let Some(t) = f.support.iter().find(|t| base.get(t).is_none()) {

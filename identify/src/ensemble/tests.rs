@@ -96,7 +96,10 @@ fn normal_and_student_quantiles_match_tables() {
     assert!((student_quantile(0.975, 12.0) - 2.178_813).abs() < 5e-4);
     assert!((student_quantile(0.95, 5.0) - 2.015_048).abs() < 2e-3);
     let c = finite_block_factor(13, 0.9);
-    assert!((c - (13.0f64 / 12.0).sqrt() * 1.782_288 / 1.644_854).abs() < 2e-4, "{c}");
+    assert!(
+        (c - (13.0f64 / 12.0).sqrt() * 1.782_288 / 1.644_854).abs() < 2e-4,
+        "{c}"
+    );
 }
 
 #[test]
@@ -108,7 +111,11 @@ fn settings_are_checked() {
     assert!(e.contains("ensemble.level"), "{e}");
     s.level = 0.9;
     s.block_periods = 0.0;
-    assert!(s.validate().unwrap_err().to_string().contains("block_periods"));
+    assert!(s
+        .validate()
+        .unwrap_err()
+        .to_string()
+        .contains("block_periods"));
 }
 
 /// With every block drawn once the block re-fit is the full-data least-squares fit on the
@@ -119,7 +126,11 @@ fn all_blocks_once_reproduce_the_identification() {
     let id = identified(&c);
     let lib = Library::new(id.settings.library, id.settings.constant);
     for (i, case) in c.iter().enumerate() {
-        let g = id.groups.iter().find(|g| g.name == id.cases[i].group).unwrap();
+        let g = id
+            .groups
+            .iter()
+            .find(|g| g.name == id.cases[i].group)
+            .unwrap();
         let cols: Vec<usize> = g
             .moment
             .support
@@ -180,12 +191,18 @@ fn deterministic_seeded_and_members_rebuild() {
             }
         }
     }
-    assert!(!a.cases[0].moment.eq19.contains_key("N3"), "N3 is not in the support");
+    assert!(
+        !a.cases[0].moment.eq19.contains_key("N3"),
+        "N3 is not in the support"
+    );
     // a truncated section is refused with the case and field named
     let mut bad = a.clone();
     bad.cases[2].lift.samples.pop();
     let err = bad.member(&id, 0).unwrap_err().to_string();
-    assert!(err.contains("ensemble.lift.samples") && err.contains("D-U10"), "{err}");
+    assert!(
+        err.contains("ensemble.lift.samples") && err.contains("D-U10"),
+        "{err}"
+    );
 }
 
 #[test]
@@ -214,7 +231,11 @@ fn coverage(
         .moment
         .iter()
         .map(|t| (true, name(t.powers), t.coefficient))
-        .chain(law.lift.iter().map(|t| (false, name(t.powers), t.coefficient)))
+        .chain(
+            law.lift
+                .iter()
+                .map(|t| (false, name(t.powers), t.coefficient)),
+        )
         .collect();
     for t in ["alpha*alpha_dot", "alpha_dot^3"] {
         if settings.kept_terms.iter().any(|k| k == t) {

@@ -90,7 +90,12 @@ impl Figure for DerivativeFigure {
                     check_len(kind, &format!("{f} k/spread"), g.k.len(), g.spread.len())?;
                 }
                 if !g.interval.is_empty() {
-                    check_len(kind, &format!("{f} k/interval"), g.k.len(), g.interval.len())?;
+                    check_len(
+                        kind,
+                        &format!("{f} k/interval"),
+                        g.k.len(),
+                        g.interval.len(),
+                    )?;
                 }
                 finite += segments(&g.k, &g.value).iter().map(Vec::len).sum::<usize>();
                 if !labels.contains(&g.label) {
