@@ -30,6 +30,31 @@ pub struct FlutterArgs {
     /// Output folder (created if missing).
     #[arg(long, default_value = "out")]
     pub out: PathBuf,
+    /// Flutter and divergence of the first N members of the model's ensemble (an
+    /// identification.json written with `identify --ensemble`): intervals in flutter.json.
+    #[arg(long, value_name = "N")]
+    pub ensemble: Option<usize>,
+}
+
+/// Members' laws of an identification.json model (`--ensemble N`) and the ensemble.
+pub fn ensemble_laws(
+    model: &Path,
+    chord: f64,
+    n: usize,
+) -> anyhow::Result<(
+    Vec<Result<aeroelastic::identified::IdentifiedLaw, String>>,
+    identify::ensemble::Ensemble,
+)> {
+    let id = identify::pipeline::Identification::read(model).with_context(|| {
+        format!(
+            "--ensemble needs an identification.json model ({})",
+            model.display()
+        )
+    })?;
+    let opts = aeroelastic::identified::IdentifiedOptions::new(chord);
+    let (laws, e) = aeroelastic::ensemble::member_laws(&id, &opts, Some(n))
+        .with_context(|| format!("{}: ensemble", model.display()))?;
+    Ok((laws, e.clone()))
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -91,6 +116,22 @@ pub fn run(args: &FlutterArgs) -> anyhow::Result<()> {
         .context("flutter analysis")?;
     let _out = crate::outdir::SharedDir::begin(&args.out)?;
     let b = l.section.aero.chord();
+    let ensemble = match args.ensemble {
+        Some(n) => {
+            let (laws, e) = ensemble_laws(&args.model, b, n)?;
+            let fe = aeroelastic::ensemble::flutter_ensemble(
+                &l.structure,
+                &laws,
+                &e,
+                l.file.air_density,
+                method,
+                &opts,
+            )
+            .context("ensemble flutter analysis")?;
+            Some(fe)
+        }
+        None => None,
+    };
     let point = fa.flutter.map(|f| {
         serde_json::json!({
             "speed": f.u,
@@ -113,6 +154,7 @@ pub fn run(args: &FlutterArgs) -> anyhow::Result<()> {
         "divergence_speed": fa.divergence_speed,
         "analysis": fa,
         "identified": l.model.identified,
+        "ensemble": ensemble,
     });
     let path = args.out.join("flutter.json");
     identify::io::write_atomic(&path, format!("{json:#}\n").as_bytes())?;
@@ -132,6 +174,27 @@ pub fn run(args: &FlutterArgs) -> anyhow::Result<()> {
     match fa.divergence_speed {
         Some(u) => println!("divergence: U_D = {u:.4} m/s"),
         None => println!("divergence: none"),
+    }
+    if let Some(e) = &ensemble {
+        let show =
+            |name: &str, q: &aeroelastic::ensemble::MemberQuantity, unit: &str| match q.interval {
+                Some(i) => println!(
+                "{name}: median {:.4} {unit}, {:.0} % interval [{:.4}, {:.4}] ({} of {} members)",
+                i.median,
+                100.0 * e.level,
+                i.lower,
+                i.upper,
+                q.found,
+                e.members
+            ),
+                None => println!("{name}: none in any of the {} members", e.members),
+            };
+        show("ensemble U_F", &e.flutter_speed, "m/s");
+        show("ensemble f_F", &e.flutter_frequency_hz, "Hz");
+        show("ensemble U_D", &e.divergence_speed, "m/s");
+        for f in &e.failures {
+            eprintln!("warning: ensemble: {f}");
+        }
     }
     println!("wrote {}", path.display());
     Ok(())

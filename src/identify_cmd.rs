@@ -74,6 +74,16 @@ pub struct IdentifyArgs {
     /// Do not print the summary table.
     #[arg(long)]
     pub quiet: bool,
+    /// Block-bootstrap ensemble of N members (intervals of every coefficient and
+    /// derivative, written to the `ensemble` section of identification.json).
+    #[arg(long, value_name = "N")]
+    pub ensemble: Option<usize>,
+    /// Seed of the ensemble's draws (recorded in the output).
+    #[arg(long, default_value_t = 2024)]
+    pub seed: u64,
+    /// Level of the ensemble intervals, in (0, 1).
+    #[arg(long, default_value_t = identify::ensemble::DEFAULT_LEVEL)]
+    pub level: f64,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -234,8 +244,23 @@ pub fn run(args: &IdentifyArgs) -> anyhow::Result<Identification> {
             bar.observe(p)
         });
     bar.finish();
-    let result = result.context("identification")?;
+    let mut result = result.context("identification")?;
     let identify_s = t_id.elapsed().as_secs_f64();
+    if let Some(n) = args.ensemble {
+        let t_e = Instant::now();
+        let mut es = identify::ensemble::EnsembleSettings::new(n, args.seed);
+        es.level = args.level;
+        let e = identify::ensemble::bootstrap(&prepared.cases, &result, &es)
+            .context("ensemble (block bootstrap)")?;
+        result.ensemble = Some(e);
+        if !args.quiet {
+            println!(
+                "ensemble: {n} block-bootstrap members (seed {}) in {:.3} s",
+                args.seed,
+                t_e.elapsed().as_secs_f64()
+            );
+        }
+    }
 
     let path = args.out.join("identification.json");
     result.write(&path)?;

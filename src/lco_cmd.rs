@@ -41,6 +41,11 @@ pub struct LcoArgs {
     /// Output folder (created if missing).
     #[arg(long, default_value = "out")]
     pub out: PathBuf,
+    /// LCO amplitudes of the first N members of the model's ensemble (identification.json
+    /// from `identify --ensemble`) at the speed or the sweep's speeds (upward runs from
+    /// --alpha0): intervals in lco.json under `ensemble`.
+    #[arg(long, value_name = "N")]
+    pub ensemble: Option<usize>,
 }
 
 fn class_name(r: &LcoResult) -> String {
@@ -136,6 +141,37 @@ pub fn run(args: &LcoArgs) -> anyhow::Result<()> {
             "hysteresis_speeds": band,
         })
     };
+    let mut json = json;
+    if let Some(n) = args.ensemble {
+        let speeds = match args.speed {
+            Some(u) => vec![u],
+            None => parse_speeds(args.sweep.as_deref().unwrap_or_default())?,
+        };
+        let (laws, e) = crate::flutter_cmd::ensemble_laws(&args.model, l.section.aero.chord(), n)?;
+        let le = aeroelastic::ensemble::lco_ensemble(
+            &l.structure,
+            &laws,
+            &e,
+            rho,
+            &speeds,
+            args.alpha0.to_radians(),
+            &opts,
+        )
+        .context("ensemble LCO runs")?;
+        for p in &le.points {
+            match p.amplitude_alpha_deg.interval {
+                Some(i) => println!(
+                    "ensemble U = {} m/s: pitch amplitude median {:.4}°, {:.0} % interval [{:.4}, {:.4}]° ({} of {} members in LCO)",
+                    p.u, i.median, 100.0 * le.level, i.lower, i.upper, p.amplitude_alpha_deg.found, le.members
+                ),
+                None => println!("ensemble U = {} m/s: no member in LCO", p.u),
+            }
+        }
+        for f in &le.failures {
+            eprintln!("warning: ensemble: {f}");
+        }
+        json["ensemble"] = serde_json::to_value(&le)?;
+    }
     identify::io::write_atomic(&path, format!("{json:#}\n").as_bytes())?;
     println!("wrote {}", path.display());
     Ok(())

@@ -11,6 +11,7 @@ pub mod bessel;
 pub mod branch;
 pub mod dynamics;
 pub mod effects;
+pub mod ensemble;
 pub mod error;
 pub mod files;
 pub mod flutter;

@@ -6,12 +6,14 @@
 //! (polynomial candidate terms) → [`identifiability`] (numerical rank, dependencies,
 //! canonical basis) → [`regress`] (STLSQ, group STLSQ, δ path) → [`metrics`] (R², Eq. 14
 //! key-frequency loss, MFWA) → [`eq19`] (Scanlan derivatives and N*) → [`pipeline`]
-//! (the whole identification of a data set, the `identification.json` result).
+//! (the whole identification of a data set, the `identification.json` result) →
+//! [`ensemble`] (block-bootstrap intervals of every coefficient and derivative).
 //!
 //! Sign conventions (DESIGN.md §2): h positive down, α positive nose-up, lift positive down,
 //! moment positive nose-up, C_L = L/(½ρU²B), C_M = M/(½ρU²B²).
 
 pub mod dataset;
+pub mod ensemble;
 pub mod eq19;
 pub mod error;
 pub mod identifiability;

@@ -420,6 +420,11 @@ pub struct Identification {
     pub cases: Vec<CaseResult>,
     /// Groups sorted by name.
     pub groups: Vec<GroupResult>,
+    /// Block-bootstrap ensemble (`identify --ensemble N`): intervals of every support
+    /// coefficient and Eq. 19 value, and the members' coefficients. Absent (not `null`)
+    /// when no ensemble was run.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ensemble: Option<crate::ensemble::Ensemble>,
 }
 
 impl Identification {
@@ -456,7 +461,8 @@ impl Identification {
     }
 
     /// Compact text table: per group and force the selected terms, then per case the Eq. 19
-    /// derivatives, R², MFWA and key-frequency loss.
+    /// derivatives, R², MFWA and key-frequency loss; with an ensemble, per case the intervals
+    /// of the linear derivatives.
     pub fn summary_table(&self) -> String {
         use std::fmt::Write;
         let f = |v: Option<f64>| match v {
@@ -535,6 +541,29 @@ impl Identification {
                         f(loss)
                     );
                 }
+            }
+        }
+        if let Some(e) = &self.ensemble {
+            let _ = writeln!(
+                s,
+                "\nensemble: {} block-bootstrap members (seed {}), {:.0} % intervals [lower, upper]",
+                e.settings.members,
+                e.settings.seed,
+                100.0 * e.settings.level
+            );
+            for c in &e.cases {
+                let mut line = format!("  {:<20}", c.id);
+                for (force, names) in [
+                    (&c.lift, ["H1", "H2", "H3", "H4"]),
+                    (&c.moment, ["A1", "A2", "A3", "A4"]),
+                ] {
+                    for n in names {
+                        if let Some(iv) = force.eq19.get(n) {
+                            let _ = write!(line, " {n} [{:.4}, {:.4}]", iv.lower, iv.upper);
+                        }
+                    }
+                }
+                let _ = writeln!(s, "{line}");
             }
         }
         s
@@ -1111,6 +1140,7 @@ pub fn identify(
         },
         cases: case_results,
         groups: group_results,
+        ensemble: None,
     })
 }
 

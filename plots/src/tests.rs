@@ -409,6 +409,7 @@ fn degenerate_data_draws_without_panic() {
                 k: vec![1.0],
                 value: vec![-3.0],
                 spread: vec![f64::NAN],
+                interval: vec![],
             }],
             ..Default::default()
         }],

@@ -405,9 +405,24 @@ pub fn quality_histogram(id: &Identification) -> HistogramFigure {
     }
 }
 
+/// The ensemble interval [lower, upper] of derivative `name` of case `i` ([NaN, NaN] when
+/// the identification has no ensemble or the derivative no interval).
+fn ensemble_bar(id: &Identification, i: usize, force: Force, name: &str) -> [f64; 2] {
+    let e = id.ensemble.as_ref().and_then(|e| e.cases.get(i));
+    let f = e.map(|e| match force {
+        Force::Lift => &e.lift,
+        Force::Moment => &e.moment,
+    });
+    match f.and_then(|f| f.eq19.get(name)) {
+        Some(iv) => [iv.lower, iv.upper],
+        None => [f64::NAN, f64::NAN],
+    }
+}
+
 /// Identified flutter derivatives H1*..H4*, A1*..A4* against K (h-terms at K_h, α-terms at
-/// K_α), one point set per group, with the thin-plate (Theodorsen) derivatives about the
-/// elastic axis at `elastic_axis` semi-chords aft of mid-chord
+/// K_α), one point set per group (with the ensemble's percentile intervals as error bars
+/// when the identification has an ensemble), with the thin-plate (Theodorsen) derivatives
+/// about the elastic axis at `elastic_axis` semi-chords aft of mid-chord
 /// ([`aeroelastic::theodorsen::thin_plate_derivatives`]; 0 = the flat-plate closed forms)
 /// over the identified K range.
 pub fn derivative_figure(id: &Identification, elastic_axis: f64) -> DerivativeFigure {
@@ -448,18 +463,24 @@ pub fn derivative_figure(id: &Identification, elastic_axis: f64) -> DerivativeFi
                 .map(|g| {
                     let mut k = vec![];
                     let mut value = vec![];
-                    for c in id.cases.iter().filter(|c| c.group == *g) {
+                    let mut interval = vec![];
+                    for (i, c) in id.cases.iter().enumerate().filter(|(_, c)| c.group == *g) {
                         let kk = if uses_alpha { c.k_alpha } else { c.k_h };
                         if let (Some(kk), Some(v)) = (kk, force.eq19(c)[idx].1) {
                             k.push(kk);
                             value.push(v);
+                            interval.push(ensemble_bar(id, i, force, name));
                         }
+                    }
+                    if interval.iter().all(|b| b[0].is_nan()) {
+                        interval.clear();
                     }
                     DerivativePoints {
                         label: format!("group {g}"),
                         k,
                         value,
                         spread: vec![],
+                        interval,
                     }
                 })
                 .filter(|p| !p.k.is_empty())

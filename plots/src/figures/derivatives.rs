@@ -26,6 +26,10 @@ pub struct DerivativePoints {
     /// Optional ± half-width of an error bar at each point (e.g. one standard deviation
     /// over repeated cases); empty = no bars.
     pub spread: Vec<f64>,
+    /// Optional error bar [lower, upper] in absolute values at each point (e.g. an ensemble's
+    /// percentile interval, not symmetric); takes precedence over `spread`; empty = none, a
+    /// non-finite bound = no bar at that point.
+    pub interval: Vec<[f64; 2]>,
 }
 
 /// One derivative panel.
@@ -84,6 +88,14 @@ impl Figure for DerivativeFigure {
                 check_len(kind, &format!("{f} k/value"), g.k.len(), g.value.len())?;
                 if !g.spread.is_empty() {
                     check_len(kind, &format!("{f} k/spread"), g.k.len(), g.spread.len())?;
+                }
+                if !g.interval.is_empty() {
+                    check_len(
+                        kind,
+                        &format!("{f} k/interval"),
+                        g.k.len(),
+                        g.interval.len(),
+                    )?;
                 }
                 finite += segments(&g.k, &g.value).iter().map(Vec::len).sum::<usize>();
                 if !labels.contains(&g.label) {
@@ -153,8 +165,8 @@ impl Figure for DerivativeFigure {
                     (0..g.k.len())
                         .filter(|&i| g.k[i].is_finite() && g.value[i].is_finite())
                         .flat_map(|i| {
-                            let s = spread_at(g, i);
-                            [g.value[i] - s, g.value[i] + s]
+                            let (lo, hi) = bar_at(g, i);
+                            [lo, hi]
                         })
                 })
                 .chain(
@@ -197,22 +209,25 @@ impl Figure for DerivativeFigure {
             }
             for g in &panel.points {
                 let (shape, color) = style_of(&g.label);
-                let pts: Vec<(f64, f64, f64)> = (0..g.k.len())
+                let pts: Vec<(f64, f64, (f64, f64))> = (0..g.k.len())
                     .filter(|&i| g.k[i].is_finite() && g.value[i].is_finite())
-                    .map(|i| (g.k[i], g.value[i], spread_at(g, i)))
+                    .map(|i| (g.k[i], g.value[i], bar_at(g, i)))
                     .collect();
                 let bar = ShapeStyle::from(color).stroke_width(1);
-                let bars: Vec<(f64, f64, f64)> =
-                    pts.iter().copied().filter(|p| p.2 > 0.0).collect();
+                let bars: Vec<(f64, f64, f64)> = pts
+                    .iter()
+                    .filter(|p| p.2 .1 > p.2 .0)
+                    .map(|&(k, _, (lo, hi))| (k, lo, hi))
+                    .collect();
                 chart
                     .draw_series(
                         bars.iter()
-                            .map(|&(k, v, s)| PathElement::new(vec![(k, v - s), (k, v + s)], bar)),
+                            .map(|&(k, lo, hi)| PathElement::new(vec![(k, lo), (k, hi)], bar)),
                     )
                     .ctx(kind)?;
                 chart
-                    .draw_series(bars.iter().flat_map(|&(k, v, s)| {
-                        [v - s, v + s].map(|y| {
+                    .draw_series(bars.iter().flat_map(|&(k, lo, hi)| {
+                        [lo, hi].map(|y| {
                             plotters::element::EmptyElement::at((k, y))
                                 + PathElement::new(vec![(-5, 0), (5, 0)], bar)
                         })
@@ -227,6 +242,18 @@ impl Figure for DerivativeFigure {
             }
         }
         Ok(())
+    }
+}
+
+/// Error bar (lower, upper) of point `i`: the interval when given and finite, else value ±
+/// spread (a zero-length bar when neither).
+fn bar_at(g: &DerivativePoints, i: usize) -> (f64, f64) {
+    match g.interval.get(i) {
+        Some(&[lo, hi]) if lo.is_finite() && hi.is_finite() => (lo.min(hi), lo.max(hi)),
+        _ => {
+            let s = spread_at(g, i);
+            (g.value[i] - s, g.value[i] + s)
+        }
     }
 }
 
