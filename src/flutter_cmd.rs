@@ -3,10 +3,8 @@
 
 use std::path::{Path, PathBuf};
 
-use aeroelastic::files::{LoadedModel, StructureFile};
-use aeroelastic::flutter::{FlutterMethod, FlutterOptions};
-use aeroelastic::section::Section;
-use aeroelastic::structure::Structure;
+use aeroelastic::documents::{flutter_document, LoadedPair};
+use aeroelastic::flutter::FlutterMethod;
 use anyhow::Context;
 use clap::{Args, ValueEnum};
 
@@ -39,33 +37,15 @@ pub enum MethodArg {
     P,
 }
 
-/// Structure file, structure, model and section of a structure/model pair.
-pub struct Loaded {
-    pub file: StructureFile,
-    pub structure: Structure,
-    pub model: LoadedModel,
-    pub section: Section,
-}
-
-/// Reads a structure file and a model file and builds the section.
-pub fn load(structure: &Path, model: &Path, chord: Option<f64>) -> anyhow::Result<Loaded> {
+/// Reads a structure file and a model file and builds the section (warnings of an
+/// identified model go to stderr).
+pub fn load(structure: &Path, model: &Path, chord: Option<f64>) -> anyhow::Result<LoadedPair> {
     // The library's errors name the file and the field.
-    let file = StructureFile::read(structure).context("structure file")?;
-    let st = file.structure().context("structure file")?;
-    let loaded = LoadedModel::load(model, chord.or(file.chord)).context("model file")?;
-    let section = Section::new(st.clone(), loaded.model.clone(), file.air_density)
-        .context("building the section")?;
-    if let Some(t) = &loaded.identified {
-        for w in &t.warnings {
-            eprintln!("warning: {}: {w}", model.display());
-        }
+    let pair = LoadedPair::load(structure, model, chord).context("structure and model files")?;
+    for w in pair.warnings() {
+        eprintln!("warning: {}: {w}", model.display());
     }
-    Ok(Loaded {
-        file,
-        structure: st,
-        model: loaded,
-        section,
-    })
+    Ok(pair)
 }
 
 /// Parses `a:b:n` (n ≥ 1 speeds from a to b) or a comma list `3,4,5.5`.
@@ -108,41 +88,15 @@ pub fn run(args: &FlutterArgs) -> anyhow::Result<()> {
         MethodArg::Pk => FlutterMethod::Pk,
         MethodArg::P => FlutterMethod::P,
     };
-    let opts = FlutterOptions {
-        u_min: speeds.iter().copied().fold(f64::INFINITY, f64::min),
-        u_max: speeds.iter().copied().fold(0.0, f64::max),
-        n_speeds: speeds.len(),
-        tol_rel: 1e-8,
-    };
-    let fa = l
-        .section
-        .flutter(method, &opts)
-        .context("flutter analysis")?;
+    let fa = l.flutter(method, &speeds).context("flutter analysis")?;
     crate::ensure_dir(&args.out)?;
     let b = l.section.aero.chord();
-    let point = fa.flutter.map(|f| {
-        serde_json::json!({
-            "speed": f.u,
-            "omega": f.omega,
-            "frequency_hz": f.omega / (2.0 * std::f64::consts::PI),
-            "reduced_frequency": b * f.omega / f.u,
-            "mode": f.mode,
-            "u_reduced": f.u_reduced,
-            "omega_ratio": f.omega_ratio,
-        })
-    });
-    let json = serde_json::json!({
-        "format": "aeroform-flutter/1",
-        "structure": args.structure.display().to_string(),
-        "model": args.model.display().to_string(),
-        "model_name": fa.model,
-        "air_density": l.file.air_density,
-        "chord": b,
-        "critical": point,
-        "divergence_speed": fa.divergence_speed,
-        "analysis": fa,
-        "identified": l.model.identified,
-    });
+    let json = flutter_document(
+        &args.structure.display().to_string(),
+        &args.model.display().to_string(),
+        &l,
+        &fa,
+    );
     let path = args.out.join("flutter.json");
     identify::io::write_atomic(&path, format!("{json:#}\n").as_bytes())?;
     match fa.flutter {
@@ -155,7 +109,8 @@ pub fn run(args: &FlutterArgs) -> anyhow::Result<()> {
         ),
         None => println!(
             "flutter: none between {} and {} m/s",
-            opts.u_min, opts.u_max
+            speeds.iter().copied().fold(f64::INFINITY, f64::min),
+            speeds.iter().copied().fold(0.0, f64::max)
         ),
     }
     match fa.divergence_speed {

@@ -4,10 +4,8 @@
 use std::path::PathBuf;
 
 use crate::progress::CountBar;
-use aeroelastic::lco::{
-    lco_hysteresis_k_iterated, lco_run_k_iterated, Classification, LcoOptions, SweepDirection,
-    SweepProgress,
-};
+use aeroelastic::documents::{lco_run_document, lco_sweep_document};
+use aeroelastic::lco::{Classification, SweepDirection, SweepProgress};
 use anyhow::Context;
 use clap::Args;
 
@@ -57,19 +55,13 @@ fn class_name(c: &Classification) -> String {
 /// Runs `aeroform lco`.
 pub fn run(args: &LcoArgs) -> anyhow::Result<()> {
     let l = load(&args.structure, &args.model, args.chord)?;
-    let opts = LcoOptions::default();
-    let rho = l.file.air_density;
-    let model = match &l.model.nonlinear {
-        Some(m) => m.clone(),
-        None => aeroelastic::aero::NonlinearAero::new(l.model.model.clone(), vec![], 1.0)
-            .context("wrapping the model")?,
-    };
-    let pert = l.section.perturbation(args.alpha0.to_radians());
-    let pert_down = l.section.perturbation(args.alpha0_down.to_radians());
+    let structure_name = args.structure.display().to_string();
+    let model_name = args.model.display().to_string();
     crate::ensure_dir(&args.out)?;
     let path = args.out.join("lco.json");
     let json = if let Some(u) = args.speed {
-        let r = lco_run_k_iterated(&l.structure, &model, rho, u, &pert, &opts, 1e-4, 8)
+        let r = l
+            .lco_run(u, args.alpha0.to_radians())
             .with_context(|| format!("LCO run at U = {u} m/s"))?;
         println!(
             "U = {u} m/s: {}, pitch amplitude {:.4}°, heave amplitude {:.3} mm, {:.4} Hz",
@@ -78,12 +70,7 @@ pub fn run(args: &LcoArgs) -> anyhow::Result<()> {
             r.result.amplitude_h * 1e3,
             r.result.omega / (2.0 * std::f64::consts::PI)
         );
-        serde_json::json!({
-            "format": "aeroform-lco/1",
-            "structure": args.structure.display().to_string(),
-            "model": args.model.display().to_string(),
-            "run": r,
-        })
+        lco_run_document(&structure_name, &model_name, &r)
     } else {
         let speeds = parse_speeds(args.sweep.as_deref().unwrap_or_default())?;
         let bar = CountBar::new("LCO", 2 * speeds.len());
@@ -95,14 +82,10 @@ pub fn run(args: &LcoArgs) -> anyhow::Result<()> {
             };
             bar.tick(format!("{d} U = {:.3}", p.u));
         };
-        let h = lco_hysteresis_k_iterated(
-            &l.structure,
-            &model,
-            rho,
+        let h = l.lco_sweep(
             &speeds,
-            &pert,
-            &pert_down,
-            &opts,
+            args.alpha0.to_radians(),
+            args.alpha0_down.to_radians(),
             &obs,
         );
         bar.finish();
@@ -125,13 +108,7 @@ pub fn run(args: &LcoArgs) -> anyhow::Result<()> {
         if !band.is_empty() {
             println!("hysteresis at U = {band:?}");
         }
-        serde_json::json!({
-            "format": "aeroform-lco/1",
-            "structure": args.structure.display().to_string(),
-            "model": args.model.display().to_string(),
-            "sweep": h,
-            "hysteresis_speeds": band,
-        })
+        lco_sweep_document(&structure_name, &model_name, &h)
     };
     identify::io::write_atomic(&path, format!("{json:#}\n").as_bytes())?;
     println!("wrote {}", path.display());

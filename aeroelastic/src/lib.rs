@@ -8,6 +8,7 @@
 
 pub mod aero;
 pub mod bessel;
+pub mod documents;
 pub mod dynamics;
 pub mod effects;
 pub mod error;
