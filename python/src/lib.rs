@@ -208,6 +208,8 @@ fn dataset_from_columns(
             lift: opt(&lift[k], "lift")?,
             moment: opt(&moment[k], "moment")?,
         };
+        // Rows counted from 0 in the message (no header line in arrays).
+        identify::dataset::check_sampling(&table.t, &label, 0).map_err(err)?;
         let rec = record_from_table(
             table,
             &label,
