@@ -110,3 +110,20 @@ def test_bad_specs_raise_naming_the_field():
         aeroform.sweep_local(spec)
     with pytest.raises(aeroform.AeroformError, match="unknown variant|kind"):
         aeroform.sweep_local({"kind": "teleport"})
+
+
+def test_cli_shards_merge_into_the_unsharded_run(tmp_path):
+    from conftest import run_cli
+
+    spec = map_spec(n_mu=3, n_sigma=3)
+    (tmp_path / "map.json").write_text(json.dumps(spec))
+    run_cli("sweep", tmp_path / "map.json", "--out", tmp_path / "whole.json")
+    parts = []
+    for i in range(4):
+        p = tmp_path / f"part{i}.json"
+        run_cli("sweep", tmp_path / "map.json", "--shard", f"{i}/4", "--out", p)
+        parts.append(p)
+    run_cli("merge", tmp_path / "merged.json", *reversed(parts))
+    whole = json.loads((tmp_path / "whole.json").read_text())
+    assert whole == json.loads((tmp_path / "merged.json").read_text())
+    assert whole == aeroform.sweep_local(spec)
