@@ -568,6 +568,32 @@ impl MapBase {
         }
     }
 
+    fn compute_point(&self, m: &MapSpec, p: &Nondim) -> std::result::Result<Value, String> {
+        let file = p.apply(&self.file, self.b);
+        let pair = LoadedPair::from_parts(file, self.model.clone()).map_err(|e| e.to_string())?;
+        let meth = method(&m.method, "sweep").map_err(|e| e.to_string())?;
+        let fa = pair
+            .flutter(meth, &m.speeds)
+            .map_err(|e| format!("flutter: {e}"))?;
+        let mut r = json!({
+            "critical": flutter_point_json(&fa, 2.0 * self.b),
+            "divergence_speed": fa.divergence_speed,
+        });
+        if !m.lco_speeds.is_empty() {
+            let h = pair
+                .lco_sweep(
+                    &m.lco_speeds,
+                    m.alpha0.to_radians(),
+                    m.alpha0_down.to_radians(),
+                    &|_| {},
+                )
+                .map_err(|e| format!("LCO sweep: {e}"))?;
+            r["hysteresis_speeds"] = json!(h.band());
+            r["lco"] = json!(h);
+        }
+        Ok(r)
+    }
+
     fn run_point(&self, m: &MapSpec, index: usize) -> Value {
         let p = self.point(&m.grid, index);
         let mut out = json!({
@@ -577,32 +603,7 @@ impl MapBase {
             "x_alpha": p.x_alpha,
             "r2": p.r2,
         });
-        let res = (|| -> std::result::Result<Value, String> {
-            let file = p.apply(&self.file, self.b);
-            let pair =
-                LoadedPair::from_parts(file, self.model.clone()).map_err(|e| e.to_string())?;
-            let meth = method(&m.method, "sweep").map_err(|e| e.to_string())?;
-            let fa = pair
-                .flutter(meth, &m.speeds)
-                .map_err(|e| format!("flutter: {e}"))?;
-            let mut r = json!({
-                "critical": flutter_point_json(&fa, 2.0 * self.b),
-                "divergence_speed": fa.divergence_speed,
-            });
-            if !m.lco_speeds.is_empty() {
-                let h = pair
-                    .lco_sweep(
-                        &m.lco_speeds,
-                        m.alpha0.to_radians(),
-                        m.alpha0_down.to_radians(),
-                        &|_| {},
-                    )
-                    .map_err(|e| format!("LCO sweep: {e}"))?;
-                r["hysteresis_speeds"] = json!(h.band());
-                r["lco"] = json!(h);
-            }
-            Ok(r)
-        })();
+        let res = self.compute_point(m, &p);
         match res {
             Ok(Value::Object(r)) => {
                 for (k, v) in r {

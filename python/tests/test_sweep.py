@@ -59,7 +59,7 @@ def test_map_on_a_local_cluster_equals_the_local_run(cluster):
 
 def test_blind_benchmark_on_a_local_cluster_equals_the_local_run(cluster):
     _, client = cluster
-    spec = {"kind": "blind", "n": 2, "seed": 7}
+    spec = {"kind": "blind", "n": 1, "seed": 7}
     local = aeroform.sweep_local(spec)
     dist = aeroform.sweep(spec, client=client, chunk_size=1)
 
@@ -71,7 +71,7 @@ def test_blind_benchmark_on_a_local_cluster_equals_the_local_run(cluster):
         return doc
 
     assert dumps(strip(local)) == dumps(strip(dist))
-    assert [o["spec"]["index"] for o in local["outcomes"]] == [0, 1]
+    assert [o["spec"]["index"] for o in local["outcomes"]] == [0]
 
 
 def test_killing_a_worker_mid_run_still_completes_identically(cluster):
