@@ -48,6 +48,10 @@ pub struct DiagnoseArgs {
     /// Replace an existing output folder that aeroform did not write.
     #[arg(long)]
     pub force: bool,
+    /// With `--blind`: run only shard i of n (sets whose index ≡ i mod n, each with its
+    /// global seed) and write `blind.part-I-of-N.json`; `aeroform merge` joins the parts.
+    #[arg(long, requires = "blind")]
+    pub shard: Option<String>,
 }
 
 /// Runs `aeroform diagnose`.
@@ -58,6 +62,9 @@ pub fn run(args: &DiagnoseArgs) -> anyhow::Result<()> {
             .out
             .clone()
             .unwrap_or_else(|| PathBuf::from("out/blind"));
+        if let Some(s) = &args.shard {
+            return blind_shard(n, args.seed, s, &out);
+        }
         return blind(n, args.seed, &out, args.force);
     }
     let out = args
@@ -198,6 +205,19 @@ fn blind(n: usize, seed: u64, out: &Path, force: bool) -> anyhow::Result<()> {
         out.join("blind.json").display(),
         out.join("confusion.md").display()
     );
+    Ok(())
+}
+
+/// One shard of the benchmark as a part document (`diagnose::sweep`).
+fn blind_shard(n: usize, seed: u64, shard: &str, out: &Path) -> anyhow::Result<()> {
+    let (i, k) = diagnose::sweep::parse_shard(shard)?;
+    let spec = diagnose::sweep::SweepSpec::Blind(diagnose::sweep::BlindSweep { n, seed });
+    spec.validate("--blind")?;
+    crate::ensure_dir(&out.to_path_buf())?;
+    let part = spec.run_shard(i, k)?;
+    let path = out.join(format!("blind.part-{i}-of-{k}.json"));
+    write_json(&path, &part)?;
+    println!("shard {i}/{k} of {n} sets; wrote {}", path.display());
     Ok(())
 }
 

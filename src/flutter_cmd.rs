@@ -3,9 +3,8 @@
 
 use std::path::{Path, PathBuf};
 
-use aeroelastic::files::{LoadedModel, StructureFile};
-use aeroelastic::flutter::{FlutterMethod, FlutterOptions};
-use aeroelastic::section::Section;
+use aeroelastic::documents::{flutter_document, flutter_options, LoadedPair};
+use aeroelastic::flutter::FlutterMethod;
 use anyhow::Context;
 use clap::{Args, ValueEnum};
 
@@ -63,31 +62,15 @@ pub enum MethodArg {
     P,
 }
 
-/// Structure file, model and section of a structure/model pair.
-pub struct Loaded {
-    pub file: StructureFile,
-    pub model: LoadedModel,
-    pub section: Section,
-}
-
-/// Reads a structure file and a model file and builds the section.
-pub fn load(structure: &Path, model: &Path, chord: Option<f64>) -> anyhow::Result<Loaded> {
+/// Reads a structure file and a model file and builds the section (warnings of an
+/// identified model go to stderr).
+pub fn load(structure: &Path, model: &Path, chord: Option<f64>) -> anyhow::Result<LoadedPair> {
     // The library's errors name the file and the field.
-    let file = StructureFile::read(structure).context("structure file")?;
-    let st = file.structure().context("structure file")?;
-    let loaded = LoadedModel::load(model, chord.or(file.chord)).context("model file")?;
-    let section =
-        Section::new(st, loaded.model.clone(), file.air_density).context("building the section")?;
-    if let Some(t) = &loaded.identified {
-        for w in &t.warnings {
-            eprintln!("warning: {}: {w}", model.display());
-        }
+    let pair = LoadedPair::load(structure, model, chord).context("structure and model files")?;
+    for w in pair.warnings() {
+        eprintln!("warning: {}: {w}", model.display());
     }
-    Ok(Loaded {
-        file,
-        model: loaded,
-        section,
-    })
+    Ok(pair)
 }
 
 /// Runs `aeroform flutter`.
@@ -104,12 +87,7 @@ pub fn run(args: &FlutterArgs) -> anyhow::Result<()> {
         MethodArg::Pk => FlutterMethod::Pk,
         MethodArg::P => FlutterMethod::P,
     };
-    let opts = FlutterOptions {
-        u_min: speeds.iter().copied().fold(f64::INFINITY, f64::min),
-        u_max: speeds.iter().copied().fold(0.0, f64::max),
-        n_speeds: speeds.len(),
-        tol_rel: 1e-8,
-    };
+    let opts = flutter_options(&speeds).context("--speeds")?;
     let fa = l
         .section
         .flutter(method, &opts)
@@ -132,30 +110,13 @@ pub fn run(args: &FlutterArgs) -> anyhow::Result<()> {
         }
         None => None,
     };
-    let point = fa.flutter.map(|f| {
-        serde_json::json!({
-            "speed": f.u,
-            "omega": f.omega,
-            "frequency_hz": f.omega / (2.0 * std::f64::consts::PI),
-            "reduced_frequency": b * f.omega / f.u,
-            "mode": f.mode,
-            "u_reduced": f.u_reduced,
-            "omega_ratio": f.omega_ratio,
-        })
-    });
-    let json = serde_json::json!({
-        "format": "aeroform-flutter/1",
-        "structure": args.structure.display().to_string(),
-        "model": args.model.display().to_string(),
-        "model_name": fa.model,
-        "air_density": l.file.air_density,
-        "chord": b,
-        "critical": point,
-        "divergence_speed": fa.divergence_speed,
-        "analysis": fa,
-        "identified": l.model.identified,
-        "ensemble": ensemble,
-    });
+    let mut json = flutter_document(
+        &args.structure.display().to_string(),
+        &args.model.display().to_string(),
+        &l,
+        &fa,
+    );
+    json["ensemble"] = serde_json::to_value(&ensemble)?;
     let path = args.out.join("flutter.json");
     identify::io::write_atomic(&path, format!("{json:#}\n").as_bytes())?;
     match fa.flutter {
@@ -168,7 +129,8 @@ pub fn run(args: &FlutterArgs) -> anyhow::Result<()> {
         ),
         None => println!(
             "flutter: none between {} and {} m/s",
-            opts.u_min, opts.u_max
+            speeds.iter().copied().fold(f64::INFINITY, f64::min),
+            speeds.iter().copied().fold(0.0, f64::max)
         ),
     }
     match fa.divergence_speed {

@@ -4,6 +4,7 @@
 use std::path::PathBuf;
 
 use crate::progress::CountBar;
+use aeroelastic::documents::{lco_run_document, lco_sweep_document};
 use aeroelastic::lco::{
     Classification, KIteration, LcoOptions, LcoResult, SweepDirection, SweepPlan, SweepProgress,
 };
@@ -64,9 +65,9 @@ pub fn run(args: &LcoArgs) -> anyhow::Result<()> {
     if let Some(u) = args.speed {
         positive_at_most("--speed", u, MAX_SPEED, "m/s")?;
     }
-    let sweep = match &args.sweep {
-        Some(s) => Some(parse_speeds("--sweep", s)?),
-        None => None,
+    let sweep_speeds = match &args.sweep {
+        Some(s) => parse_speeds("--sweep", s)?,
+        None => Vec::new(),
     };
     abs_at_most("--alpha0", args.alpha0, MAX_PITCH_DEG, "deg")?;
     abs_at_most("--alpha0-down", args.alpha0_down, MAX_PITCH_DEG, "deg")?;
@@ -78,6 +79,8 @@ pub fn run(args: &LcoArgs) -> anyhow::Result<()> {
     let pert_down = l.section.perturbation(args.alpha0_down.to_radians());
     let _out = crate::outdir::SharedDir::begin(&args.out)?;
     let path = args.out.join("lco.json");
+    let structure_name = args.structure.display().to_string();
+    let model_name = args.model.display().to_string();
     let json = if let Some(u) = args.speed {
         let r = l
             .section
@@ -90,14 +93,9 @@ pub fn run(args: &LcoArgs) -> anyhow::Result<()> {
             r.amplitude_h * 1e3,
             r.omega / (2.0 * std::f64::consts::PI)
         );
-        serde_json::json!({
-            "format": "aeroform-lco/1",
-            "structure": args.structure.display().to_string(),
-            "model": args.model.display().to_string(),
-            "run": r,
-        })
+        lco_run_document(&structure_name, &model_name, &r)
     } else {
-        let speeds = sweep.unwrap_or_default();
+        let speeds = sweep_speeds.clone();
         let bar = CountBar::new("LCO", 2 * speeds.len());
         let obs = |p: SweepProgress| {
             let d = match p.direction {
@@ -133,26 +131,20 @@ pub fn run(args: &LcoArgs) -> anyhow::Result<()> {
         if !band.is_empty() {
             println!("hysteresis at U = {band:?}");
         }
-        serde_json::json!({
-            "format": "aeroform-lco/1",
-            "structure": args.structure.display().to_string(),
-            "model": args.model.display().to_string(),
-            "sweep": h,
-            "hysteresis_speeds": band,
-        })
+        lco_sweep_document(&structure_name, &model_name, &h)
     };
     let mut json = json;
     if let Some(n) = args.ensemble {
         let speeds = match args.speed {
             Some(u) => vec![u],
-            None => parse_speeds(args.sweep.as_deref().unwrap_or_default())?,
+            None => sweep_speeds.clone(),
         };
         let (laws, e) = crate::flutter_cmd::ensemble_laws(&args.model, l.section.aero.chord(), n)?;
         let le = aeroelastic::ensemble::lco_ensemble(
             &l.structure,
             &laws,
             &e,
-            rho,
+            l.file.air_density,
             &speeds,
             args.alpha0.to_radians(),
             &opts,

@@ -13,6 +13,7 @@ mod plot_cmd;
 mod progress;
 mod run_cmd;
 mod study;
+mod sweep_cmd;
 mod tunnel_cmd;
 
 use std::path::PathBuf;
@@ -51,6 +52,11 @@ enum Command {
     /// Sim-to-real gap: where predictions and measurements differ, which unmodelled effect
     /// causes it, how far it shrinks (`--blind N`: the withheld-effect benchmark).
     Diagnose(diagnose_cmd::DiagnoseArgs),
+    /// A large job (flutter/LCO map over μ, σ, x_α, r²; withheld-effect benchmark) from a
+    /// JSON specification, whole or one shard (`--shard i/n`, e.g. a Slurm array task).
+    Sweep(sweep_cmd::SweepArgs),
+    /// Merges the part documents of `--shard` runs into the document of the whole run.
+    Merge(sweep_cmd::MergeArgs),
 }
 
 fn main() -> ExitCode {
@@ -65,6 +71,8 @@ fn main() -> ExitCode {
         Command::Tunnel(c) => tunnel_cmd::run(&c),
         Command::Plot(a) => plot_cmd::run(&a),
         Command::Diagnose(a) => diagnose_cmd::run(&a),
+        Command::Sweep(a) => sweep_cmd::run(&a),
+        Command::Merge(a) => sweep_cmd::merge_run(&a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

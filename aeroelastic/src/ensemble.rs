@@ -20,7 +20,7 @@ use serde::{Deserialize, Serialize};
 use crate::aero::NonlinearAero;
 use crate::flutter::{FlutterMethod, FlutterOptions};
 use crate::identified::{IdentifiedLaw, IdentifiedOptions};
-use crate::lco::{lco_run_k_iterated, Classification, LcoOptions};
+use crate::lco::{Classification, KIteration, LcoOptions};
 use crate::section::Section;
 use crate::structure::Structure;
 use crate::{Error, Result};
@@ -210,7 +210,7 @@ pub struct LcoEnsemble {
     pub failures: Vec<String>,
 }
 
-/// K-iterated LCO runs ([`lco_run_k_iterated`], tolerance 1e-4, at most 8 runs) of every
+/// K-iterated LCO runs ([`Section::lco_run_k`] with the default [`KIteration`]) of every
 /// law at every speed of `speeds` from the perturbation `alpha0` [rad] in pitch, in
 /// parallel over (member, speed).
 ///
@@ -239,18 +239,14 @@ pub fn lco_ensemble(
             let model: &NonlinearAero = law.model();
             let s = Section::new(structure.clone(), Arc::new(model.clone()), rho)
                 .map_err(|e| format!("member {m}: {e}"))?;
-            let r = lco_run_k_iterated(
-                structure,
-                model,
-                rho,
-                speeds[k],
-                &s.perturbation(alpha0),
-                opts,
-                1e-4,
-                8,
-            )
-            .map_err(|e| format!("member {m}, U = {} m/s: {e}", speeds[k]))?;
-            let r = r.result;
+            let r = s
+                .lco_run_k(
+                    speeds[k],
+                    &s.perturbation(alpha0),
+                    opts,
+                    &KIteration::default(),
+                )
+                .map_err(|e| format!("member {m}, U = {} m/s: {e}", speeds[k]))?;
             Ok((
                 r.classification,
                 r.amplitude_alpha.to_degrees(),

@@ -9,6 +9,7 @@
 pub mod aero;
 pub mod bessel;
 pub mod branch;
+pub mod documents;
 pub mod dynamics;
 pub mod effects;
 pub mod ensemble;

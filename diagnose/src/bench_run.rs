@@ -124,6 +124,16 @@ pub fn run_one(spec: &BlindSpec, opts: &BlindOptions) -> Result<(BlindOutcome, D
     Ok((outcome, diag))
 }
 
+/// [`run_one`] with a failure recorded in the outcome (verdict `error`, the message in
+/// `error`) instead of returned: what the benchmark keeps for each set.
+pub fn run_outcome(spec: &BlindSpec, opts: &BlindOptions) -> BlindOutcome {
+    let t = Instant::now();
+    match run_one(spec, opts) {
+        Ok((o, _)) => o,
+        Err(e) => failed(spec, &e, t.elapsed().as_secs_f64()),
+    }
+}
+
 /// Runs the benchmark: `opts.n` sets drawn by [`draw_specs`], in parallel; a set that fails
 /// to generate or diagnose is recorded with its error (and counted as failed), never
 /// dropped. `observer` is called after each set.
@@ -132,11 +142,7 @@ pub fn run_blind(opts: &BlindOptions, observer: &(dyn Fn(&BlindOutcome) + Sync))
     let outcomes: Vec<BlindOutcome> = specs
         .par_iter()
         .map(|s| {
-            let t = Instant::now();
-            let o = match run_one(s, opts) {
-                Ok((o, _)) => o,
-                Err(e) => failed(s, &e, t.elapsed().as_secs_f64()),
-            };
+            let o = run_outcome(s, opts);
             observer(&o);
             o
         })

@@ -63,6 +63,15 @@ pub enum Error {
         #[source]
         source: Box<aeroelastic::Error>,
     },
+    /// A sweep specification, an item index, a shard or a part document is invalid
+    /// (`source` names the file or the caller, `message` the field and the value).
+    #[error("{source_name}: {message}")]
+    Sweep {
+        /// File or caller the bad value came from.
+        source_name: String,
+        /// What is wrong, naming the field.
+        message: String,
+    },
     /// Writing a result file failed.
     #[error("{context}: {message}")]
     Io {

@@ -7,7 +7,8 @@
 //! * [`system`]: the system level (free-response records);
 //! * [`verdict`]: from the levels' findings to one verdict;
 //! * [`blind`]: the withheld-effect data-set generator (the diagnosis never reads it);
-//! * [`bench`]: the withheld-effect benchmark statistics.
+//! * [`bench`]: the withheld-effect benchmark statistics;
+//! * [`sweep`]: large jobs split into independent items (shards, Dask tasks) and merged.
 
 pub mod bench;
 pub mod bench_run;
@@ -17,6 +18,7 @@ pub mod error;
 pub mod force;
 pub mod pipeline;
 pub mod report;
+pub mod sweep;
 pub mod system;
 pub mod verdict;
 

@@ -242,6 +242,24 @@ fn read_record(
     meta: CaseMeta,
 ) -> Result<Record> {
     let table = read_case_csv(path, forces_required)?;
+    record_from_table(table, path, manifest, kind, meta)
+}
+
+/// Converts the columns of one case, in the manifest's units, to a [`Record`] in SI per
+/// unit span, as [`read_dataset`] does after reading a case file: the sampling check of
+/// DATA_FORMAT.md on `t`, then the unit conversion. `path` names the case in errors (a file
+/// or, for columns built in memory, any label); row i is reported as line i + 2.
+///
+/// # Errors
+/// [`crate::Error::NonUniformSampling`] and [`crate::Error::Csv`] as [`check_sampling`];
+/// [`crate::Error::Csv`] naming the column and line of a value that is not finite in SI.
+pub fn record_from_table(
+    table: CaseTable,
+    path: &Path,
+    manifest: &Manifest,
+    kind: CaseKind,
+    meta: CaseMeta,
+) -> Result<Record> {
     let (t0, dt) = check_sampling(&table.t, path, 2)?;
     let u = &manifest.units;
     let c = &manifest.convention;

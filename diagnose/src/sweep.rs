@@ -1,0 +1,689 @@
+//! Large jobs split into independent items: the withheld-effect benchmark (one item per
+//! data set) and flutter/LCO maps over the structural parameters μ, σ, x_α, r² (one item
+//! per grid point).
+//!
+//! Every item depends only on the specification and its global index (a benchmark set's
+//! seed is derived from the master seed and the index, [`crate::bench::draw_specs`]), so
+//! any partition of the items — shards of a Slurm job array (`aeroform sweep --shard i/n`
+//! then `aeroform merge`), Dask tasks (`aeroform.sweep` in Python), rayon inside one
+//! process ([`SweepSpec::run_local`]) — gathers into the same document.
+
+use std::path::{Path, PathBuf};
+
+use aeroelastic::documents::{flutter_point_json, LoadedPair};
+use aeroelastic::files::{LoadedModel, StructureFile};
+use aeroelastic::flutter::FlutterMethod;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use serde_json::{json, Value};
+
+use crate::bench::{draw_specs, summarize, BlindOutcome};
+use crate::bench_run::{run_outcome, BlindOptions};
+use crate::{Error, Result};
+
+/// Format tag of a merged sweep document of a flutter/LCO map.
+pub const MAP_FORMAT: &str = "aeroform-sweep/1";
+/// Format tag of a part document (the items of one shard).
+pub const PART_FORMAT: &str = "aeroform-sweep-part/1";
+
+/// What to sweep (JSON, tagged by `kind`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum SweepSpec {
+    /// The withheld-effect benchmark of `aeroform diagnose --blind n --seed seed`.
+    Blind(BlindSweep),
+    /// Flutter (and optionally LCO) over a grid of structural parameters.
+    FlutterMap(MapSpec),
+}
+
+/// The withheld-effect benchmark as a sweep.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BlindSweep {
+    /// Number of data sets.
+    pub n: usize,
+    /// Master seed.
+    pub seed: u64,
+}
+
+/// Flutter/LCO map over structural parameters. Each grid axis that is given replaces the
+/// base structure's value; the others keep it. The nondimensional parameters use the
+/// half-chord b = B/2 of the model: μ = m/(πρb²), σ = ω_h/ω_α, x_α = S_α/(m b),
+/// r² = I_α/(m b²); a point is rebuilt as m = μπρb², S_α = x_α m b, I_α = r² m b²,
+/// f_h = σ f_α (f_α, damping ratios and nonlinear stiffness terms are kept).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MapSpec {
+    /// Base structure file (TOML, as `aeroform flutter --structure`).
+    pub structure: PathBuf,
+    /// Aerodynamic model (model TOML or `identification.json`).
+    pub model: PathBuf,
+    /// Chord B [m] for an identification.json model (else the structure file's).
+    #[serde(default)]
+    pub chord: Option<f64>,
+    /// Flutter scan speeds [m/s] (≥ 2; from the lowest to the highest).
+    pub speeds: Vec<f64>,
+    /// `"pk"` (default) or `"p"`.
+    #[serde(default = "default_method")]
+    pub method: String,
+    /// The grid axes.
+    #[serde(default)]
+    pub grid: Grid,
+    /// Speeds [m/s] of an upward/downward LCO sweep at every point (empty: none).
+    #[serde(default)]
+    pub lco_speeds: Vec<f64>,
+    /// Initial pitch [deg] of the upward LCO sweep.
+    #[serde(default = "default_alpha0")]
+    pub alpha0: f64,
+    /// Initial pitch [deg] of the downward LCO sweep.
+    #[serde(default = "default_alpha0_down")]
+    pub alpha0_down: f64,
+}
+
+fn default_method() -> String {
+    "pk".into()
+}
+fn default_alpha0() -> f64 {
+    2.0
+}
+fn default_alpha0_down() -> f64 {
+    20.0
+}
+
+/// Axes of a structural grid; points are the Cartesian product in the order μ, σ, x_α, r²
+/// (r² varies fastest). An absent axis keeps the base value.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Grid {
+    /// Mass ratios μ.
+    #[serde(default)]
+    pub mu: Option<Vec<f64>>,
+    /// Frequency ratios σ = ω_h/ω_α.
+    #[serde(default)]
+    pub sigma: Option<Vec<f64>>,
+    /// Static unbalances x_α (semi-chords).
+    #[serde(default)]
+    pub x_alpha: Option<Vec<f64>>,
+    /// Squared radii of gyration r² (semi-chords²).
+    #[serde(default)]
+    pub r2: Option<Vec<f64>>,
+}
+
+/// Nondimensional structural parameters of one point.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Nondim {
+    /// μ = m/(πρb²).
+    pub mu: f64,
+    /// σ = ω_h/ω_α.
+    pub sigma: f64,
+    /// x_α = S_α/(m b).
+    pub x_alpha: f64,
+    /// r² = I_α/(m b²).
+    pub r2: f64,
+}
+
+impl Nondim {
+    /// The parameters of a structure file for half-chord `b`.
+    pub fn of(file: &StructureFile, b: f64) -> Self {
+        let m = file.mass;
+        Nondim {
+            mu: m / (std::f64::consts::PI * file.air_density * b * b),
+            sigma: file.freq_heave / file.freq_pitch,
+            x_alpha: file.static_unbalance / (m * b),
+            r2: file.inertia / (m * b * b),
+        }
+    }
+
+    /// `file` with these parameters (half-chord `b`).
+    pub fn apply(&self, file: &StructureFile, b: f64) -> StructureFile {
+        let mut f = file.clone();
+        f.mass = self.mu * std::f64::consts::PI * f.air_density * b * b;
+        f.static_unbalance = self.x_alpha * f.mass * b;
+        f.inertia = self.r2 * f.mass * b * b;
+        f.freq_heave = self.sigma * f.freq_pitch;
+        f
+    }
+}
+
+fn sweep_err(source: &str, message: impl Into<String>) -> Error {
+    Error::Sweep {
+        source_name: source.to_string(),
+        message: message.into(),
+    }
+}
+
+impl SweepSpec {
+    /// Parses and validates a JSON specification; `source` names it in errors.
+    ///
+    /// # Errors
+    /// [`Error::Sweep`] naming `source` with serde's line, column and message (unknown
+    /// `kind` or field, wrong type), or the field that fails [`SweepSpec::validate`].
+    pub fn from_json(text: &str, source: &str) -> Result<Self> {
+        let spec: SweepSpec =
+            serde_json::from_str(text).map_err(|e| sweep_err(source, e.to_string()))?;
+        spec.validate(source)?;
+        Ok(spec)
+    }
+
+    /// Reads a JSON specification file.
+    ///
+    /// # Errors
+    /// [`Error::Io`] when the file cannot be read; otherwise as [`SweepSpec::from_json`].
+    pub fn read(path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path).map_err(|e| Error::Io {
+            context: format!("reading {}", path.display()),
+            message: e.to_string(),
+        })?;
+        Self::from_json(&text, &path.display().to_string())
+    }
+
+    /// Checks every value: n ≥ 1; ≥ 2 finite positive flutter speeds; method `pk` or `p`;
+    /// grid values finite, μ, σ, r² > 0; LCO speeds finite and > 0.
+    ///
+    /// # Errors
+    /// [`Error::Sweep`] naming `source`, the field and the value.
+    pub fn validate(&self, source: &str) -> Result<()> {
+        match self {
+            SweepSpec::Blind(b) => {
+                if b.n == 0 {
+                    return Err(sweep_err(
+                        source,
+                        "`n` = 0: a benchmark needs at least one set",
+                    ));
+                }
+            }
+            SweepSpec::FlutterMap(m) => {
+                if m.speeds.len() < 2 {
+                    return Err(sweep_err(
+                        source,
+                        format!(
+                            "`speeds` has {} value(s): a flutter scan needs at least 2",
+                            m.speeds.len()
+                        ),
+                    ));
+                }
+                let positive = |name: &str, v: &[f64]| -> Result<()> {
+                    match v.iter().position(|x| !(x.is_finite() && *x > 0.0)) {
+                        Some(i) => Err(sweep_err(
+                            source,
+                            format!("`{name}[{i}]` = {}: must be finite and > 0", v[i]),
+                        )),
+                        None => Ok(()),
+                    }
+                };
+                positive("speeds", &m.speeds)?;
+                positive("lco_speeds", &m.lco_speeds)?;
+                if let Some(v) = &m.grid.mu {
+                    positive("grid.mu", v)?;
+                }
+                if let Some(v) = &m.grid.sigma {
+                    positive("grid.sigma", v)?;
+                }
+                if let Some(v) = &m.grid.r2 {
+                    positive("grid.r2", v)?;
+                }
+                if let Some(v) = &m.grid.x_alpha {
+                    if let Some(i) = v.iter().position(|x| !x.is_finite()) {
+                        return Err(sweep_err(
+                            source,
+                            format!("`grid.x_alpha[{i}]` = {}: must be finite", v[i]),
+                        ));
+                    }
+                }
+                for (name, v) in [
+                    ("grid.mu", &m.grid.mu),
+                    ("grid.sigma", &m.grid.sigma),
+                    ("grid.x_alpha", &m.grid.x_alpha),
+                    ("grid.r2", &m.grid.r2),
+                ] {
+                    if v.as_ref().is_some_and(|v| v.is_empty()) {
+                        return Err(sweep_err(
+                            source,
+                            format!("`{name}` is empty: omit it to keep the base value"),
+                        ));
+                    }
+                }
+                method(&m.method, source)?;
+                for (name, x) in [("alpha0", m.alpha0), ("alpha0_down", m.alpha0_down)] {
+                    if !x.is_finite() {
+                        return Err(sweep_err(source, format!("`{name}` = {x}: must be finite")));
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Number of items.
+    pub fn n_items(&self) -> usize {
+        match self {
+            SweepSpec::Blind(b) => b.n,
+            SweepSpec::FlutterMap(m) => {
+                let len = |v: &Option<Vec<f64>>| v.as_ref().map_or(1, Vec::len);
+                len(&m.grid.mu) * len(&m.grid.sigma) * len(&m.grid.x_alpha) * len(&m.grid.r2)
+            }
+        }
+    }
+
+    /// The specification as JSON (recorded in every part and merged document).
+    pub fn to_value(&self) -> Value {
+        serde_json::to_value(self).unwrap_or(Value::Null)
+    }
+
+    /// Runs item `index` (a failure of the item's computation is recorded in the item,
+    /// never returned: `error` in a map point, verdict `error` in a benchmark outcome).
+    ///
+    /// # Errors
+    /// [`Error::Sweep`] for an index outside `0..n_items()`; for a map, the errors of
+    /// loading the structure and model files.
+    pub fn run_item(&self, index: usize) -> Result<Value> {
+        self.check_index(index)?;
+        match self {
+            SweepSpec::Blind(b) => {
+                let specs = draw_specs(b.n, b.seed);
+                let o = run_outcome(&specs[index], &BlindOptions::new(b.n, b.seed));
+                Ok(serde_json::to_value(o).unwrap_or(Value::Null))
+            }
+            SweepSpec::FlutterMap(m) => {
+                let base = MapBase::load(m)?;
+                Ok(base.run_point(m, index))
+            }
+        }
+    }
+
+    /// Runs the items `indices` (for a map, the files are loaded once).
+    ///
+    /// # Errors
+    /// As [`SweepSpec::run_item`].
+    pub fn run_items(&self, indices: &[usize]) -> Result<Vec<Value>> {
+        for &i in indices {
+            self.check_index(i)?;
+        }
+        match self {
+            SweepSpec::Blind(_) => indices.iter().map(|&i| self.run_item(i)).collect(),
+            SweepSpec::FlutterMap(m) => {
+                let base = MapBase::load(m)?;
+                Ok(indices.iter().map(|&i| base.run_point(m, i)).collect())
+            }
+        }
+    }
+
+    fn check_index(&self, index: usize) -> Result<()> {
+        let n = self.n_items();
+        if index >= n {
+            return Err(sweep_err(
+                "sweep",
+                format!("item index {index} outside 0..{n}"),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Gathers the items (any order, each index exactly once) into the document of the
+    /// whole sweep: a benchmark's `blind.json` (`aeroform-blind/1`) or a map's
+    /// `aeroform-sweep/1` document (`spec`, `base` parameters, `points` by index).
+    ///
+    /// # Errors
+    /// [`Error::Sweep`] for an item without a valid `index`/`spec.index`, an index
+    /// outside the sweep, repeated or missing, or a benchmark item that is not an outcome.
+    pub fn assemble(&self, items: Vec<Value>) -> Result<Value> {
+        let n = self.n_items();
+        let mut slots: Vec<Option<Value>> = vec![None; n];
+        for item in items {
+            let index = item
+                .get("index")
+                .or_else(|| item.get("spec").and_then(|s| s.get("index")))
+                .and_then(Value::as_u64)
+                .ok_or_else(|| sweep_err("merge", "an item has no `index`"))?
+                as usize;
+            let slot = slots
+                .get_mut(index)
+                .ok_or_else(|| sweep_err("merge", format!("item index {index} outside 0..{n}")))?;
+            if slot.is_some() {
+                return Err(sweep_err("merge", format!("item {index} appears twice")));
+            }
+            *slot = Some(item);
+        }
+        let missing: Vec<usize> = (0..n).filter(|&i| slots[i].is_none()).collect();
+        if !missing.is_empty() {
+            let shown: Vec<String> = missing.iter().take(10).map(|i| i.to_string()).collect();
+            return Err(sweep_err(
+                "merge",
+                format!(
+                    "{} of {n} items missing (first: {})",
+                    missing.len(),
+                    shown.join(", ")
+                ),
+            ));
+        }
+        let items: Vec<Value> = slots.into_iter().flatten().collect();
+        match self {
+            SweepSpec::Blind(b) => {
+                let outcomes = items
+                    .into_iter()
+                    .map(|v| {
+                        serde_json::from_value::<BlindOutcome>(v)
+                            .map_err(|e| sweep_err("merge", format!("benchmark item: {e}")))
+                    })
+                    .collect::<Result<Vec<_>>>()?;
+                Ok(serde_json::to_value(summarize(b.seed, outcomes)).unwrap_or(Value::Null))
+            }
+            SweepSpec::FlutterMap(m) => {
+                let base = MapBase::load(m)?;
+                Ok(json!({
+                    "format": MAP_FORMAT,
+                    "spec": self.to_value(),
+                    "base": base.nondim,
+                    "points": items,
+                }))
+            }
+        }
+    }
+
+    /// The whole sweep in this process (items in parallel with rayon); `observer` is
+    /// called after each item.
+    ///
+    /// # Errors
+    /// As [`SweepSpec::run_items`] and [`SweepSpec::assemble`].
+    pub fn run_local(&self, observer: &(dyn Fn(usize) + Sync)) -> Result<Value> {
+        let n = self.n_items();
+        let items = match self {
+            SweepSpec::Blind(_) => (0..n)
+                .into_par_iter()
+                .map(|i| {
+                    let v = self.run_item(i);
+                    observer(i);
+                    v
+                })
+                .collect::<Result<Vec<_>>>()?,
+            SweepSpec::FlutterMap(m) => {
+                let base = MapBase::load(m)?;
+                (0..n)
+                    .into_par_iter()
+                    .map(|i| {
+                        let v = base.run_point(m, i);
+                        observer(i);
+                        v
+                    })
+                    .collect()
+            }
+        };
+        self.assemble(items)
+    }
+
+    /// The part document of shard `shard` of `of` (items whose index ≡ shard mod `of`).
+    ///
+    /// # Errors
+    /// [`Error::Sweep`] when `shard ≥ of`; as [`SweepSpec::run_items`].
+    pub fn run_shard(&self, shard: usize, of: usize) -> Result<Value> {
+        let indices = shard_indices(self.n_items(), shard, of)?;
+        let items = match self {
+            SweepSpec::Blind(_) => indices
+                .par_iter()
+                .map(|&i| self.run_item(i))
+                .collect::<Result<Vec<_>>>()?,
+            SweepSpec::FlutterMap(_) => self.run_items(&indices)?,
+        };
+        Ok(json!({
+            "format": PART_FORMAT,
+            "spec": self.to_value(),
+            "shard": [shard, of],
+            "items": items,
+        }))
+    }
+}
+
+/// Indices of shard `shard` of `of` among `n` items: `shard, shard + of, …`.
+///
+/// # Errors
+/// [`Error::Sweep`] when `of` = 0 or `shard ≥ of`.
+pub fn shard_indices(n: usize, shard: usize, of: usize) -> Result<Vec<usize>> {
+    if of == 0 || shard >= of {
+        return Err(sweep_err(
+            "--shard",
+            format!("shard {shard}/{of}: expected i/n with 0 ≤ i < n"),
+        ));
+    }
+    Ok((shard..n).step_by(of).collect())
+}
+
+/// Parses `i/n` (0-based shard i of n).
+///
+/// # Errors
+/// [`Error::Sweep`] naming the text.
+pub fn parse_shard(text: &str) -> Result<(usize, usize)> {
+    let bad = || {
+        sweep_err(
+            "--shard",
+            format!("`{text}`: expected i/n with 0 ≤ i < n, e.g. 0/4"),
+        )
+    };
+    let (i, n) = text.split_once('/').ok_or_else(bad)?;
+    let i: usize = i.trim().parse().map_err(|_| bad())?;
+    let n: usize = n.trim().parse().map_err(|_| bad())?;
+    if n == 0 || i >= n {
+        return Err(bad());
+    }
+    Ok((i, n))
+}
+
+/// Merges part documents ([`SweepSpec::run_shard`]) into the document of the whole sweep.
+/// `names` name the parts in errors.
+///
+/// # Errors
+/// [`Error::Sweep`] for a document that is not a part, parts of different
+/// specifications, and the errors of [`SweepSpec::assemble`] (missing or repeated items).
+pub fn merge(parts: &[(String, Value)]) -> Result<Value> {
+    let Some((first_name, first)) = parts.first() else {
+        return Err(sweep_err("merge", "no part given"));
+    };
+    let spec_value = first.get("spec").cloned().unwrap_or(Value::Null);
+    let spec: SweepSpec = serde_json::from_value(spec_value.clone())
+        .map_err(|e| sweep_err(first_name, format!("`spec`: {e}")))?;
+    let mut items = Vec::new();
+    for (name, part) in parts {
+        if part.get("format").and_then(Value::as_str) != Some(PART_FORMAT) {
+            return Err(sweep_err(
+                name,
+                format!("not a sweep part (`format` is not \"{PART_FORMAT}\")"),
+            ));
+        }
+        if part.get("spec") != Some(&spec_value) {
+            return Err(sweep_err(
+                name,
+                format!("its `spec` differs from that of {first_name}"),
+            ));
+        }
+        match part.get("items") {
+            Some(Value::Array(v)) => items.extend(v.iter().cloned()),
+            _ => return Err(sweep_err(name, "no `items` array")),
+        }
+    }
+    spec.assemble(items)
+}
+
+/// Method name → method.
+fn method(name: &str, source: &str) -> Result<FlutterMethod> {
+    match name {
+        "pk" => Ok(FlutterMethod::Pk),
+        "p" => Ok(FlutterMethod::P),
+        other => Err(sweep_err(
+            source,
+            format!("`method` = \"{other}\": expected \"pk\" or \"p\""),
+        )),
+    }
+}
+
+/// The files of a map loaded once.
+struct MapBase {
+    file: StructureFile,
+    model: LoadedModel,
+    b: f64,
+    nondim: Nondim,
+}
+
+impl MapBase {
+    fn load(m: &MapSpec) -> Result<Self> {
+        let ctx = |e: aeroelastic::Error| Error::Aeroelastic {
+            context: format!(
+                "sweep files {} and {}",
+                m.structure.display(),
+                m.model.display()
+            ),
+            source: Box::new(e),
+        };
+        let file = StructureFile::read(&m.structure).map_err(ctx)?;
+        let model = LoadedModel::load(&m.model, m.chord.or(file.chord)).map_err(ctx)?;
+        let b = model.model.chord() / 2.0;
+        let nondim = Nondim::of(&file, b);
+        Ok(MapBase {
+            file,
+            model,
+            b,
+            nondim,
+        })
+    }
+
+    fn point(&self, g: &Grid, index: usize) -> Nondim {
+        let axes = [&g.mu, &g.sigma, &g.x_alpha, &g.r2];
+        let base = [
+            self.nondim.mu,
+            self.nondim.sigma,
+            self.nondim.x_alpha,
+            self.nondim.r2,
+        ];
+        let mut rest = index;
+        let mut v = base;
+        for k in (0..4).rev() {
+            if let Some(axis) = axes[k] {
+                v[k] = axis[rest % axis.len()];
+                rest /= axis.len();
+            }
+        }
+        Nondim {
+            mu: v[0],
+            sigma: v[1],
+            x_alpha: v[2],
+            r2: v[3],
+        }
+    }
+
+    fn compute_point(&self, m: &MapSpec, p: &Nondim) -> std::result::Result<Value, String> {
+        let file = p.apply(&self.file, self.b);
+        let pair = LoadedPair::from_parts(file, self.model.clone()).map_err(|e| e.to_string())?;
+        let meth = method(&m.method, "sweep").map_err(|e| e.to_string())?;
+        let fa = pair
+            .flutter(meth, &m.speeds)
+            .map_err(|e| format!("flutter: {e}"))?;
+        let mut r = json!({
+            "critical": flutter_point_json(&fa, 2.0 * self.b),
+            "divergence_speed": fa.divergence_speed,
+        });
+        if !m.lco_speeds.is_empty() {
+            let h = pair
+                .lco_sweep(
+                    &m.lco_speeds,
+                    m.alpha0.to_radians(),
+                    m.alpha0_down.to_radians(),
+                    &|_| {},
+                )
+                .map_err(|e| format!("LCO sweep: {e}"))?;
+            r["hysteresis_speeds"] = json!(h.band());
+            r["lco"] = json!(h);
+        }
+        Ok(r)
+    }
+
+    fn run_point(&self, m: &MapSpec, index: usize) -> Value {
+        let p = self.point(&m.grid, index);
+        let mut out = json!({
+            "index": index,
+            "mu": p.mu,
+            "sigma": p.sigma,
+            "x_alpha": p.x_alpha,
+            "r2": p.r2,
+        });
+        let res = self.compute_point(m, &p);
+        match res {
+            Ok(Value::Object(r)) => {
+                for (k, v) in r {
+                    out[k] = v;
+                }
+                out["error"] = Value::Null;
+            }
+            Ok(_) => {}
+            Err(e) => out["error"] = json!(e),
+        }
+        out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn map_spec(dir: &Path) -> String {
+        let s = dir.join("s.toml");
+        let m = dir.join("m.toml");
+        std::fs::write(
+            &s,
+            "mass = 3.0\ninertia = 0.012\nstatic_unbalance = 0.03\nfreq_heave = 2.0\nfreq_pitch = 4.0\nchord = 0.25\n",
+        )
+        .unwrap();
+        std::fs::write(&m, "kind = \"theodorsen\"\nchord = 0.25\n").unwrap();
+        json!({
+            "kind": "flutter_map",
+            "structure": s, "model": m,
+            "speeds": (1..=40).map(|i| i as f64).collect::<Vec<f64>>(),
+            "grid": {"mu": [20.0, 40.0], "sigma": [0.3, 0.5, 0.7]},
+        })
+        .to_string()
+    }
+
+    #[test]
+    fn shards_merge_into_the_unsplit_map() {
+        let dir = tempfile::tempdir().unwrap();
+        let spec = SweepSpec::from_json(&map_spec(dir.path()), "test").unwrap();
+        assert_eq!(spec.n_items(), 6);
+        let whole = spec.run_local(&|_| {}).unwrap();
+        let parts: Vec<(String, Value)> = (0..4)
+            .map(|i| (format!("part{i}"), spec.run_shard(i, 4).unwrap()))
+            .rev()
+            .collect();
+        let merged = merge(&parts).unwrap();
+        assert_eq!(
+            serde_json::to_string(&whole).unwrap(),
+            serde_json::to_string(&merged).unwrap()
+        );
+        // r² fastest, then x_α, σ, μ: point 4 is μ = 40, σ = 0.5.
+        assert_eq!(whole["points"][4]["mu"], 40.0);
+        assert_eq!(whole["points"][4]["sigma"], 0.5);
+        // A heavier section flutters at a higher speed (same σ).
+        let u = |i: usize| whole["points"][i]["critical"]["speed"].as_f64();
+        if let (Some(a), Some(b)) = (u(1), u(4)) {
+            assert!(b > a, "{a} {b}");
+        }
+        // A missing part is an error naming the missing items.
+        let e = merge(&parts[1..]).unwrap_err().to_string();
+        assert!(e.contains("missing"), "{e}");
+    }
+
+    #[test]
+    fn bad_specs_name_the_field() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut v: Value = serde_json::from_str(&map_spec(dir.path())).unwrap();
+        v["grid"]["mu"] = json!([20.0, -1.0]);
+        let e = SweepSpec::from_json(&v.to_string(), "spec.json")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("spec.json") && e.contains("grid.mu[1]"), "{e}");
+        v["grid"]["mu"] = json!([20.0]);
+        v["grid"]["bogus"] = json!([1.0]);
+        let e = SweepSpec::from_json(&v.to_string(), "spec.json")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("bogus"), "{e}");
+        assert!(parse_shard("4/4").is_err());
+        assert_eq!(parse_shard("3/4").unwrap(), (3, 4));
+    }
+}

@@ -1,0 +1,59 @@
+"""`aeroform.flutter` / `aeroform.lco` equal the CLI's flutter.json / lco.json."""
+
+import json
+
+import pytest
+
+import aeroform
+from conftest import SCENARIOS, max_difference, run_cli
+
+S = SCENARIOS / "plate-rig.structure.toml"
+M = SCENARIOS / "plate-truth.model.toml"
+
+
+def test_flutter_equals_the_cli(tmp_path):
+    run_cli("flutter", "--structure", S, "--model", M, "--speeds", "2:12:41", "--out", tmp_path)
+    cli = json.loads((tmp_path / "flutter.json").read_text())
+    py = aeroform.flutter(str(S), str(M), "2:12:41")
+    assert max_difference(cli, py) == 0.0
+    # The truth plate flutters near 6.6 m/s (structure file comment).
+    assert 6.0 < py["critical"]["speed"] < 7.2
+
+
+def test_lco_equals_the_cli(tmp_path):
+    run_cli("lco", "--structure", S, "--model", M, "--speed", "12", "--out", tmp_path)
+    cli = json.loads((tmp_path / "lco.json").read_text())
+    py = aeroform.lco(str(S), str(M), speed=12.0)
+    assert max_difference(cli, py) == 0.0
+    run_cli("lco", "--structure", S, "--model", M, "--sweep", "6:9:3", "--out", tmp_path)
+    cli = json.loads((tmp_path / "lco.json").read_text())
+    py = aeroform.lco(str(S), str(M), sweep=[6.0, 7.5, 9.0])
+    assert max_difference(cli, py) == 0.0
+
+
+def test_structure_dict_and_identified_model(forced_dataset):
+    st = {"air_density": 1.225, "chord": 0.25, "mass": 1.0933333333333333,
+          "inertia": 0.0058037777777777775, "static_unbalance": 0.010933333333333333,
+          "freq_heave": 2.0, "freq_pitch": 3.5, "damping_heave": 0.005, "damping_pitch": 0.005}
+    truth = aeroform.flutter(st, str(M), "2:12:41")
+    ident = aeroform.identify(forced_dataset)
+    fl = aeroform.flutter(st, ident, "2:12:41")
+    # The identified law predicts the truth's flutter speed within 5 %.
+    assert abs(fl["critical"]["speed"] / truth["critical"]["speed"] - 1) < 0.05
+
+
+def test_errors_name_the_file_and_field(tmp_path):
+    with pytest.raises(aeroform.AeroformError, match="missing.toml"):
+        aeroform.flutter(str(tmp_path / "missing.toml"), str(M), "2:12:5")
+    bad = tmp_path / "s.toml"
+    bad.write_text(S.read_text() + "\nmas = 1.0\n")
+    with pytest.raises(aeroform.AeroformError, match="mas"):
+        aeroform.flutter(str(bad), str(M), "2:12:5")
+    with pytest.raises(aeroform.AeroformError, match="at least 2"):
+        aeroform.flutter(str(S), str(M), [5.0])
+    with pytest.raises(aeroform.AeroformError, match="speeds"):
+        aeroform.flutter(str(S), str(M), "2:x:5")
+    with pytest.raises(aeroform.AeroformError, match="exactly one"):
+        aeroform.lco(str(S), str(M))
+    with pytest.raises(NotImplementedError, match="branch"):
+        aeroform.branch(str(S), str(M))

@@ -1,0 +1,86 @@
+//! `aeroform sweep SPEC.json [--shard i/n]` and `aeroform merge OUT PART...`: large jobs
+//! split into shards (e.g. a Slurm job array) and merged into the document of the unsplit
+//! run (`diagnose::sweep`; docs/PYTHON.md "Scale-out").
+
+use std::path::PathBuf;
+
+use anyhow::Context;
+use clap::Args;
+use diagnose::sweep::{merge, parse_shard, SweepSpec};
+use identify::io::write_atomic;
+
+use crate::progress::CountBar;
+
+/// Flags of `aeroform sweep`.
+#[derive(Debug, Args)]
+pub struct SweepArgs {
+    /// Sweep specification (JSON: `{"kind": "flutter_map", ...}` or `{"kind": "blind", ...}`).
+    pub spec: PathBuf,
+    /// Run only shard i of n (items whose index ≡ i mod n) and write a part document.
+    #[arg(long)]
+    pub shard: Option<String>,
+    /// Output file (default `sweep.json`, or `sweep.part-I-of-N.json` with `--shard`).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+}
+
+/// Flags of `aeroform merge`.
+#[derive(Debug, Args)]
+pub struct MergeArgs {
+    /// Output file: the document of the whole sweep.
+    pub out: PathBuf,
+    /// Part documents written by `--shard` runs (any order).
+    #[arg(required = true)]
+    pub parts: Vec<PathBuf>,
+}
+
+fn write_json(path: &PathBuf, v: &serde_json::Value) -> anyhow::Result<()> {
+    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        crate::ensure_dir(&dir.to_path_buf())?;
+    }
+    write_atomic(path, format!("{v:#}\n").as_bytes())?;
+    Ok(())
+}
+
+/// Runs `aeroform sweep`.
+pub fn run(args: &SweepArgs) -> anyhow::Result<()> {
+    let spec = SweepSpec::read(&args.spec)?;
+    let (doc, default_out) = match &args.shard {
+        Some(s) => {
+            let (i, n) = parse_shard(s)?;
+            (spec.run_shard(i, n)?, format!("sweep.part-{i}-of-{n}.json"))
+        }
+        None => {
+            let bar = CountBar::new("sweep", spec.n_items());
+            let doc = spec.run_local(&|i| bar.tick(format!("item {i}")));
+            bar.finish();
+            (doc?, "sweep.json".to_string())
+        }
+    };
+    let out = args
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(default_out));
+    write_json(&out, &doc)?;
+    println!("{} items; wrote {}", spec.n_items(), out.display());
+    Ok(())
+}
+
+/// Runs `aeroform merge`.
+pub fn merge_run(args: &MergeArgs) -> anyhow::Result<()> {
+    let parts = args
+        .parts
+        .iter()
+        .map(|p| {
+            let text =
+                std::fs::read_to_string(p).with_context(|| format!("reading {}", p.display()))?;
+            let v: serde_json::Value = serde_json::from_str(&text)
+                .with_context(|| format!("{}: not JSON", p.display()))?;
+            Ok((p.display().to_string(), v))
+        })
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    let doc = merge(&parts)?;
+    write_json(&args.out, &doc)?;
+    println!("merged {} parts; wrote {}", parts.len(), args.out.display());
+    Ok(())
+}
