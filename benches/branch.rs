@@ -89,6 +89,9 @@ fn branch_vs_sweep(c: &mut Criterion) {
     g.bench_function("time_integration_sweep_100_speeds", |bch| {
         bch.iter(|| sweep().len())
     });
+    g.bench_function("time_integration_fixed_perturbation_100_speeds", |bch| {
+        bch.iter(|| fixed().len())
+    });
     g.finish();
 }
 
