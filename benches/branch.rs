@@ -12,7 +12,7 @@
 //! (Newton-corrected orbit at each sweep speed) to 0.1 % and prints the largest
 //! difference; the sweep covers 100 speeds over the stable part of the branch.
 
-use criterion::{criterion_group, criterion_main, Criterion};
+use criterion::{criterion_group, criterion_main, Criterion, SamplingMode};
 
 use aeroelastic::branch::BranchOptions;
 use aeroelastic::lco::{Classification, LcoOptions, SweepDirection};
@@ -75,6 +75,8 @@ fn branch_vs_sweep(c: &mut Criterion) {
     assert!(worst < 1e-3, "sweep and branch differ by {worst}");
     let mut g = c.benchmark_group("branch");
     g.sample_size(10);
+    // Flat sampling: the fixed-perturbation baseline takes seconds per iteration.
+    g.sampling_mode(SamplingMode::Flat);
     g.bench_function("continuation_100_points", |bch| {
         bch.iter(|| {
             s.lco_branches(1.5, 4.0, &opts, &|_| {})
@@ -86,6 +88,9 @@ fn branch_vs_sweep(c: &mut Criterion) {
     });
     g.bench_function("time_integration_sweep_100_speeds", |bch| {
         bch.iter(|| sweep().len())
+    });
+    g.bench_function("time_integration_fixed_perturbation_100_speeds", |bch| {
+        bch.iter(|| fixed().len())
     });
     g.finish();
 }
