@@ -18,7 +18,7 @@ use aeroelastic::aero::{
 };
 use aeroelastic::flutter::{FlutterMethod, FlutterOptions};
 use aeroelastic::identified::{IdentifiedLaw, IdentifiedOptions};
-use aeroelastic::lco::{lco_run_k_iterated, Classification, LcoOptions};
+use aeroelastic::lco::{Classification, KIteration, LcoOptions};
 use aeroelastic::section::Section;
 use aeroelastic::structure::Structure;
 use aeroelastic::tunnel::{self, Campaign, ForcedOptions, TunnelProgress};
@@ -233,36 +233,28 @@ fn round_trip(
         let t = s_truth
             .lco_run(u, &s_truth.perturbation(0.02), &lo)
             .unwrap();
-        let p = lco_run_k_iterated(
-            &st,
-            &model,
-            RHO,
-            u,
-            &s_pred.perturbation(0.02),
-            &lo,
-            1e-4,
-            8,
-        )
-        .unwrap();
+        let p = s_pred
+            .lco_run_k(u, &s_pred.perturbation(0.02), &lo, &KIteration::default())
+            .unwrap();
         eprintln!(
             "U/U_F {r}: truth {:?} {:.3}° at {:.3} Hz; predicted {:?} {:.3}° at {:.3} Hz (K_eval {:.3}, {} runs) → {:+.2} %",
             t.classification,
             t.amplitude_alpha.to_degrees(),
             t.omega / (2.0 * std::f64::consts::PI),
-            p.result.classification,
-            p.result.amplitude_alpha.to_degrees(),
-            p.result.omega / (2.0 * std::f64::consts::PI),
-            p.k_eval,
-            p.iterations,
-            100.0 * (p.result.amplitude_alpha / t.amplitude_alpha - 1.0)
+            p.classification,
+            p.amplitude_alpha.to_degrees(),
+            p.omega / (2.0 * std::f64::consts::PI),
+            p.k_eval.unwrap_or(f64::NAN),
+            p.k_iterations,
+            100.0 * (p.amplitude_alpha / t.amplitude_alpha - 1.0)
         );
         assert_eq!(t.classification, Classification::Lco, "truth at {r} U_F");
         assert_eq!(
-            p.result.classification,
+            p.classification,
             Classification::Lco,
             "prediction at {r} U_F"
         );
-        lco.push((r, t.amplitude_alpha, p.result.amplitude_alpha));
+        lco.push((r, t.amplitude_alpha, p.amplitude_alpha));
     }
     eprintln!(
         "identification {t_id:.2} s, total {:.2} s",
