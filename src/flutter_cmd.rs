@@ -150,10 +150,22 @@ pub fn run(args: &FlutterArgs) -> anyhow::Result<()> {
             b * f.omega / f.u,
             f.mode
         ),
+        None if fa.unstable_at_u_min => println!(
+            "flutter: already unstable at the lowest speed {} m/s (U_F is below the scan)",
+            opts.u_min
+        ),
         None => println!(
             "flutter: none between {} and {} m/s",
             opts.u_min, opts.u_max
         ),
+    }
+    if let Some(f) = fa.failed.first() {
+        println!(
+            "warning: {} point(s) of the scan failed and were skipped (first at U = {:.4} m/s: {})",
+            fa.failed.len(),
+            f.u,
+            f.message
+        );
     }
     match fa.divergence_speed {
         Some(u) => println!("divergence: U_D = {u:.4} m/s"),
