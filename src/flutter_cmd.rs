@@ -127,11 +127,23 @@ pub fn run(args: &FlutterArgs) -> anyhow::Result<()> {
             b * f.omega / f.u,
             f.mode
         ),
+        None if fa.unstable_at_u_min => println!(
+            "flutter: already unstable at the lowest speed {} m/s (U_F is below the scan)",
+            opts.u_min
+        ),
         None => println!(
             "flutter: none between {} and {} m/s",
             speeds.iter().copied().fold(f64::INFINITY, f64::min),
             speeds.iter().copied().fold(0.0, f64::max)
         ),
+    }
+    if let Some(f) = fa.failed.first() {
+        println!(
+            "warning: {} point(s) of the scan failed and were skipped (first at U = {:.4} m/s: {})",
+            fa.failed.len(),
+            f.u,
+            f.message
+        );
     }
     match fa.divergence_speed {
         Some(u) => println!("divergence: U_D = {u:.4} m/s"),

@@ -237,14 +237,14 @@ fn round_trip(
             .lco_run_k(u, &s_pred.perturbation(0.02), &lo, &KIteration::default())
             .unwrap();
         eprintln!(
-            "U/U_F {r}: truth {:?} {:.3}° at {:.3} Hz; predicted {:?} {:.3}° at {:.3} Hz (K_eval {:?}, {} runs) → {:+.2} %",
+            "U/U_F {r}: truth {:?} {:.3}° at {:.3} Hz; predicted {:?} {:.3}° at {:.3} Hz (K_eval {:.3}, {} runs) → {:+.2} %",
             t.classification,
             t.amplitude_alpha.to_degrees(),
             t.omega / (2.0 * std::f64::consts::PI),
             p.classification,
             p.amplitude_alpha.to_degrees(),
             p.omega / (2.0 * std::f64::consts::PI),
-            p.k_eval,
+            p.k_eval.unwrap_or(f64::NAN),
             p.k_iterations,
             100.0 * (p.amplitude_alpha / t.amplitude_alpha - 1.0)
         );

@@ -21,7 +21,7 @@
 //!
 //! **Evaluation away from the identified K.** A nonlinear coefficient is identified at the
 //! forcing frequency K_α of each case. In a free response (LCO) it is evaluated at the
-//! response's own reduced frequency K = Bω/U ([`crate::lco::lco_run_k_iterated`] iterates
+//! response's own reduced frequency K = Bω/U ([`crate::section::Section::lco_run_k`] iterates
 //! K to the limit cycle's frequency); between identified K the effective coefficient
 //! ξ = K^p N* is interpolated linearly, outside the identified K_α range it is held at
 //! the nearest end (never extrapolated) — see [`Coefficient::OverK`]. In a forced run the
@@ -663,7 +663,7 @@ impl IdentifiedLaw {
 
     /// The law as an aerodynamic model: derivative table (RFA in time) + nonlinear terms,
     /// the latter evaluated at the geometric mean of the K_α range until changed with
-    /// [`NonlinearAero::with_k_eval`] (or by [`crate::lco::lco_run_k_iterated`]).
+    /// [`NonlinearAero::with_k_eval`] (or by [`crate::section::Section::lco_run_k`]).
     pub fn model(&self) -> &NonlinearAero {
         &self.model
     }

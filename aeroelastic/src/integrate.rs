@@ -91,6 +91,9 @@ pub enum Control {
     Stop(StopReason),
 }
 
+/// Observer of an adaptive run: called with (t, z, ż) after every accepted step.
+pub type StepObserver<'a> = dyn FnMut(f64, &[f64], &[f64]) -> Control + 'a;
+
 /// Bound on the section's displacements: the run stops with [`StopReason::LeftBound`]
 /// when |z₀| = |h| > `h` [m] or |z₁| = |α| > `alpha` [rad] after a step.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -166,7 +169,7 @@ struct Adapter<'a, S: OdeSystem + ?Sized> {
     t_last: f64,
     bound: Option<Bound>,
     stop: Option<StopReason>,
-    observer: &'a mut dyn FnMut(f64, &[f64], &[f64]) -> Control,
+    observer: &'a mut StepObserver<'a>,
 }
 
 impl<const N: usize, S: OdeSystem + ?Sized> System<f64, SVector<f64, N>> for &mut Adapter<'_, S> {
@@ -254,7 +257,7 @@ pub fn dop853<S: OdeSystem + ?Sized>(
     t_end: f64,
     z0: &[f64],
     opts: &AdaptiveOptions,
-    observer: &mut dyn FnMut(f64, &[f64], &[f64]) -> Control,
+    observer: &mut StepObserver<'_>,
 ) -> Result<IntegrationRun> {
     opts.check()?;
     check_start(sys, t0, z0)?;

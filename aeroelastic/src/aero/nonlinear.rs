@@ -132,7 +132,7 @@ pub fn term_name(powers: [u32; 4]) -> String {
 /// **Evaluation away from the identified K.** A coefficient identified under forced
 /// motion at reduced frequency K is, in a free response, evaluated at one reduced
 /// frequency `k_eval` (set with [`NonlinearAero::with_k_eval`]); the LCO solver
-/// ([`crate::lco::lco_run_k_iterated`]) updates it to the *current response
+/// ([`crate::section::Section::lco_run_k`]) updates it to the *current response
 /// frequency* K = Bω_LCO/U by fixed-point iteration, so coefficients are interpolated in K
 /// where the section actually oscillates, and held at the nearest identified K outside the
 /// identified range (no extrapolation of a fitted coefficient). The nonlinear terms do not

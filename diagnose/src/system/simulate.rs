@@ -2,9 +2,11 @@
 //! measured state, and the observables of a response: dominant pitch frequency, decay or
 //! growth rate of the pitch amplitude, final (LCO) amplitude.
 
+use std::cell::Cell;
 use std::sync::Arc;
 
 use aeroelastic::aero::{AeroModel, Flow};
+use aeroelastic::integrate::{Control, OdeSystem, StopReason};
 
 use crate::effect::Effect;
 
@@ -63,8 +65,8 @@ impl Augment {
     }
 }
 
-/// Simulated pitch and heave from sample `run.i0` to the end of the run, RK4 with
-/// `substeps` steps per sample, from the measured state at `i0` (SG velocities) and the
+/// Simulated pitch and heave from sample `run.i0` to the end of the run, RK4
+/// ([`aeroelastic::integrate::rk4`]) with `substeps` steps per sample, from the measured state at `i0` (SG velocities) and the
 /// lag states integrated along the measured motion up to `i0`. The run stops early when
 /// |α| > 1.5 rad or the state is not finite.
 pub(crate) fn simulate(
@@ -103,64 +105,104 @@ pub(crate) fn simulate(
     y[2] = run.qd[0][run.i0];
     y[3] = run.qd[1][run.i0];
     y[4..].copy_from_slice(&run.lag0);
-    // Delay: F(t − τ) ≈ F − τ Ḟ with Ḟ from the previous step (explicit).
-    let mut f_prev: Option<[f64; 2]> = None;
-    let mut fdot = [0.0; 2];
-    let rhs = |y: &[f64], dy: &mut [f64], fdot: [f64; 2]| -> [f64; 2] {
+    let sys = Augmented {
+        model: model.as_ref(),
+        flow,
+        st,
+        aug,
+        minv,
+        q_dyn,
+        chord,
+        tau,
+        fdot: Cell::new([0.0; 2]),
+        nz,
+    };
+    let mut out = [Vec::with_capacity(n_out), Vec::with_capacity(n_out)];
+    if n_out == 0 {
+        return out;
+    }
+    out[0].push(y[0]);
+    out[1].push(y[1]);
+    // Delay: F(t − τ) ≈ F − τ Ḟ with Ḟ = (F(y_s) − F(y_{s−1}))/h, from the two previous
+    // step starts (explicit, held over the step; 0 on the first step).
+    let mut f_prev = sys.forces(&y);
+    let _ = aeroelastic::integrate::rk4(
+        &sys,
+        0.0,
+        &mut y,
+        h,
+        (n_out - 1) * substeps,
+        None,
+        &mut |s, _t, y| {
+            if y[1].abs() >= 1.5 {
+                return Control::Stop(StopReason::LeftBound);
+            }
+            let f = sys.forces(y);
+            sys.fdot
+                .set([(f[0] - f_prev[0]) / h, (f[1] - f_prev[1]) / h]);
+            f_prev = f;
+            if s % substeps == 0 {
+                out[0].push(y[0]);
+                out[1].push(y[1]);
+            }
+            Control::Continue
+        },
+    );
+    out
+}
+
+/// The sim with a fitted augmentation, as a first-order system (state h, α, ḣ, α̇, lags).
+struct Augmented<'a> {
+    model: &'a dyn AeroModel,
+    flow: Flow,
+    st: &'a LinearStructure,
+    aug: Option<&'a Augment>,
+    minv: nalgebra::Matrix2<f64>,
+    q_dyn: f64,
+    chord: f64,
+    tau: f64,
+    /// Ḟ used by the delay term over the current step.
+    fdot: Cell<[f64; 2]>,
+    nz: usize,
+}
+
+impl Augmented<'_> {
+    fn forces(&self, y: &[f64]) -> [f64; 2] {
+        self.model
+            .forces(&self.flow, [y[0], y[1]], [y[2], y[3]], &y[4..])
+    }
+}
+
+impl OdeSystem for Augmented<'_> {
+    fn dim(&self) -> usize {
+        self.nz
+    }
+
+    fn rate(&self, _t: f64, y: &[f64], dy: &mut [f64]) {
         let q = [y[0], y[1]];
         let qd = [y[2], y[3]];
-        let f = model.forces(&flow, q, qd, &y[4..]);
-        let extra = aug
-            .map(|a| a.force(q, qd, q_dyn, chord))
+        let f = self.forces(y);
+        let extra = self
+            .aug
+            .map(|a| a.force(q, qd, self.q_dyn, self.chord))
             .unwrap_or([0.0; 2]);
+        let fdot = self.fdot.get();
         let mut g = [0.0; 2];
         for c in 0..2 {
             // r_aug = r − Φθ: the augmentation acts like an aerodynamic force.
-            g[c] = f[c] - tau * fdot[c] + extra[c];
+            g[c] = f[c] - self.tau * fdot[c] + extra[c];
             for j in 0..2 {
-                g[c] -= st.damping[(c, j)] * qd[j] + st.stiffness[(c, j)] * q[j];
+                g[c] -= self.st.damping[(c, j)] * qd[j] + self.st.stiffness[(c, j)] * q[j];
             }
         }
+        let minv = &self.minv;
         dy[0] = qd[0];
         dy[1] = qd[1];
         dy[2] = minv[(0, 0)] * g[0] + minv[(0, 1)] * g[1];
         dy[3] = minv[(1, 0)] * g[0] + minv[(1, 1)] * g[1];
-        model.lag_rates(&flow, q, qd, &y[4..], &mut dy[4..]);
-        f
-    };
-    let mut k: [Vec<f64>; 4] = std::array::from_fn(|_| vec![0.0; nz]);
-    let mut tmp = vec![0.0; nz];
-    let mut out = [Vec::with_capacity(n_out), Vec::with_capacity(n_out)];
-    'outer: for _ in 0..n_out {
-        out[0].push(y[0]);
-        out[1].push(y[1]);
-        for _ in 0..substeps {
-            let f0 = rhs(&y, &mut k[0], fdot);
-            if let Some(fp) = f_prev {
-                fdot = [(f0[0] - fp[0]) / h, (f0[1] - fp[1]) / h];
-            }
-            f_prev = Some(f0);
-            for j in 0..nz {
-                tmp[j] = y[j] + 0.5 * h * k[0][j];
-            }
-            rhs(&tmp, &mut k[1], fdot);
-            for j in 0..nz {
-                tmp[j] = y[j] + 0.5 * h * k[1][j];
-            }
-            rhs(&tmp, &mut k[2], fdot);
-            for j in 0..nz {
-                tmp[j] = y[j] + h * k[2][j];
-            }
-            rhs(&tmp, &mut k[3], fdot);
-            for j in 0..nz {
-                y[j] += h / 6.0 * (k[0][j] + 2.0 * k[1][j] + 2.0 * k[2][j] + k[3][j]);
-            }
-            if y[1].abs() >= 1.5 || !y.iter().all(|v| v.is_finite()) {
-                break 'outer;
-            }
-        }
+        self.model
+            .lag_rates(&self.flow, q, qd, &y[4..], &mut dy[4..]);
     }
-    out
 }
 
 /// Observables of a pitch response sampled every `dt`.
