@@ -2,7 +2,7 @@
 //! nonlinear section at one wind speed. Every time integration (LCO runs, trajectories,
 //! free-response records, continuation of periodic orbits) evaluates this and nothing else.
 //!
-//! State z = (h, α, ḣ, α̇, x₁ … x_n): h heave [m] positive down, α pitch [rad] positive
+//! State z = (h, α, ḣ, α̇, x₁ … x_n): h heave \[m\] positive down, α pitch \[rad\] positive
 //! nose-up, x the aerodynamic model's lag states. Equations (DESIGN.md §4):
 //!
 //! (M_s − M_a) q̈ = F_aero(q, q̇, x) − R(q, q̇),   ẋ = lag rates of the model,
@@ -31,7 +31,7 @@ pub struct SectionDynamics<'a> {
 }
 
 impl<'a> SectionDynamics<'a> {
-    /// Dynamics of `section` at wind speed `u` [m/s] (`u = 0` is still air: the
+    /// Dynamics of `section` at wind speed `u` \[m/s\] (`u = 0` is still air: the
     /// aerodynamic forces of the model at zero speed).
     ///
     /// # Errors
@@ -58,7 +58,7 @@ impl<'a> SectionDynamics<'a> {
         self.section
     }
 
-    /// Wind speed U [m/s].
+    /// Wind speed U \[m/s\].
     pub fn u(&self) -> f64 {
         self.flow.u
     }

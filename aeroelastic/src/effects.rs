@@ -13,7 +13,7 @@
 //! * `added_mass` is an imperfect wind–no-wind subtraction: it exists only in the forced
 //!   records (ΔM q̈ added to the recorded forces), never in the free response;
 //! * structural effects change only the structure of the free response (primary forms
-//!   through the [`Structure`] fields; alternate forms that [`Structure`] cannot express —
+//!   through the [`crate::structure::Structure`] fields; alternate forms that [`crate::structure::Structure`] cannot express —
 //!   a smoothed gap, a Stribeck friction law — as an extra generalised force carried by
 //!   [`EffectAero`] in the free run only), never the forced records;
 //! * time-dependent forcing (vortex shedding, buffeting) is added to the forced records
@@ -71,10 +71,10 @@ pub enum Form {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum Effect {
-    /// Mean angle offset α₀ [rad] (typical 0.05°–1.5°): the rig reads α while the model
+    /// Mean angle offset α₀ \[rad\] (typical 0.05°–1.5°): the rig reads α while the model
     /// sits at α + α₀ (mounting or zero error).
     StaticOffset {
-        /// Offset α₀ [rad].
+        /// Offset α₀ \[rad\].
         alpha0: f64,
     },
     /// Acceleration-proportional forces ΔM q̈ left by an imperfect wind–no-wind
@@ -86,10 +86,10 @@ pub enum Effect {
         /// The rig's mass matrix [[m, S], [S, I]] per unit span (primary form), rows.
         rig: [[f64; 2]; 2],
     },
-    /// The force lags the motion by τ [s] (typical 0.5–20 ms: balance or flow latency).
+    /// The force lags the motion by τ \[s\] (typical 0.5–20 ms: balance or flow latency).
     /// The apparent-mass reaction M_a q̈ stays instantaneous.
     TimeDelay {
-        /// Delay or lag time constant τ [s].
+        /// Delay or lag time constant τ \[s\].
         tau: f64,
     },
     /// Moment terms outside the Eq. 19 library (degree 4 and 5), coefficient c
@@ -98,11 +98,11 @@ pub enum Effect {
         /// Coefficient c of both terms.
         c: f64,
     },
-    /// Dynamic stall: separation above α_crit [rad] (typical 8°–22°) with a lagged
+    /// Dynamic stall: separation above α_crit \[rad\] (typical 8°–22°) with a lagged
     /// separation variable s (0 attached, → 0.9 separated), ṡ = (s_ss(α_e) − s)/T,
     /// T = `lag_chords` · B/U (typical 1–4 chords), α_e = α + ḣ/U.
     DynamicStall {
-        /// Critical angle α_crit [rad].
+        /// Critical angle α_crit \[rad\].
         alpha_crit: f64,
         /// Lag time constant in chord transit times B/U.
         lag_chords: f64,
@@ -114,7 +114,7 @@ pub enum Effect {
     VortexShedding {
         /// Lift coefficient amplitude C_L,vs (typical 0.002–0.1).
         c_lift: f64,
-        /// Section depth D [m] (thickness of the plate).
+        /// Section depth D \[m\] (thickness of the plate).
         depth: f64,
     },
     /// Cubic pitch spring κ k_α d³, κ [1/rad²] (typical 0.5–200, hardening).
@@ -122,24 +122,24 @@ pub enum Effect {
         /// κ [1/rad²].
         kappa: f64,
     },
-    /// Pitch freeplay of half gap δ [rad] (typical 0.02°–1°).
+    /// Pitch freeplay of half gap δ \[rad\] (typical 0.02°–1°).
     Freeplay {
-        /// Half gap δ [rad].
+        /// Half gap δ \[rad\].
         half_gap: f64,
     },
-    /// Dry friction in the pitch bearings, kinetic moment T_c [N·m/m] (typical 1e-5–5e-3
+    /// Dry friction in the pitch bearings, kinetic moment T_c \[N·m/m\] (typical 1e-5–5e-3
     /// for the plate rig, i.e. 4T_c/k_α from 0.001° to 0.4° amplitude loss per cycle).
     Friction {
-        /// Kinetic friction moment T_c [N·m/m].
+        /// Kinetic friction moment T_c \[N·m/m\].
         moment: f64,
     },
     /// Turbulent buffeting (outside the catalogue): vertical gust w/U with rms I_w (typical
-    /// 0.1 %–6 %), Dryden/von Kármán-like spectrum of integral length L [m], quasi-steady
+    /// 0.1 %–6 %), Dryden/von Kármán-like spectrum of integral length L \[m\], quasi-steady
     /// forces C_L↑ = 2π w/U at the quarter chord.
     Buffeting {
         /// Turbulence intensity I_w = σ_w/U.
         intensity: f64,
-        /// Integral length scale L [m].
+        /// Integral length scale L \[m\].
         length_scale: f64,
         /// Elastic axis x_ea in chords from the leading edge.
         x_ea: f64,
@@ -163,7 +163,7 @@ fn shedding_form(form: Form) -> (f64, f64, f64) {
     }
 }
 
-/// Shedding frequency f = St·U/D [Hz] of an effect in a form.
+/// Shedding frequency f = St·U/D \[Hz\] of an effect in a form.
 pub fn shedding_frequency(depth: f64, u: f64, form: Form) -> f64 {
     shedding_form(form).0 * u / depth
 }
@@ -172,7 +172,7 @@ pub fn shedding_frequency(depth: f64, u: f64, form: Form) -> f64 {
 /// spacing `dt` from t = 0, linearly interpolated and held at the ends.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ForcingSeries {
-    /// Sample interval [s].
+    /// Sample interval \[s\].
     pub dt: f64,
     /// ΔC_L (L down) at t = i·dt.
     pub c_lift: Vec<f64>,
@@ -181,7 +181,7 @@ pub struct ForcingSeries {
 }
 
 impl ForcingSeries {
-    /// (ΔC_L, ΔC_M) at time t [s].
+    /// (ΔC_L, ΔC_M) at time t \[s\].
     pub fn at(&self, t: f64) -> [f64; 2] {
         let n = self.c_lift.len();
         if n == 0 {
@@ -210,7 +210,7 @@ impl ForcingSeries {
 }
 
 /// Coefficient series of the time-dependent effects (shedding, buffeting) of `effects` at
-/// wind speed `u` [m/s], `n` samples at `dt` [s], random phases from `seed`; `None` when
+/// wind speed `u` \[m/s\], `n` samples at `dt` \[s\], random phases from `seed`; `None` when
 /// no effect is time-dependent.
 ///
 /// Shedding: φ(t) = 2π f_s t + θ₀ + Σ₆ a_k sin(2π ν_k t + θ_k), ν_k uniform in
@@ -305,11 +305,11 @@ pub fn forcing_series(
 /// One part of an [`EffectAero`] (built by [`forced_model`] and [`free_section`]).
 #[derive(Debug, Clone, PartialEq)]
 pub enum Part {
-    /// The law is evaluated at α + α₀ [rad].
+    /// The law is evaluated at α + α₀ \[rad\].
     AngleOffset(f64),
-    /// Constant steady forces of a zero-lift-angle shift α₀ [rad] (x_ea in chords).
+    /// Constant steady forces of a zero-lift-angle shift α₀ \[rad\] (x_ea in chords).
     SteadyOffset {
-        /// α₀ [rad].
+        /// α₀ \[rad\].
         alpha0: f64,
         /// Elastic axis in chords from the leading edge.
         x_ea: f64,
@@ -318,7 +318,7 @@ pub enum Part {
     Polynomial(Vec<([i32; 4], f64)>),
     /// Dynamic stall with one separation state (see [`Effect::DynamicStall`]).
     Stall {
-        /// α_crit [rad].
+        /// α_crit \[rad\].
         alpha_crit: f64,
         /// T = lag_chords B/U.
         lag_chords: f64,
@@ -327,9 +327,9 @@ pub enum Part {
         /// Form (separation curve and force mapping).
         form: Form,
     },
-    /// Padé (2,2) delay of τ [s] on (L, M) without apparent mass (4 states).
+    /// Padé (2,2) delay of τ \[s\] on (L, M) without apparent mass (4 states).
     PadeDelay(f64),
-    /// First-order lag of time constant τ [s] on (L, M) without apparent mass (2 states).
+    /// First-order lag of time constant τ \[s\] on (L, M) without apparent mass (2 states).
     FirstOrderLag(f64),
     /// Time-dependent coefficients read with a clock state (1 state).
     Forcing(Arc<ForcingSeries>),
@@ -338,20 +338,20 @@ pub enum Part {
     SmoothFreeplay {
         /// k_α [N·m/rad per m].
         k_alpha: f64,
-        /// Half gap δ [rad].
+        /// Half gap δ \[rad\].
         delta: f64,
-        /// Smoothing ε [rad].
+        /// Smoothing ε \[rad\].
         eps: f64,
     },
     /// Stribeck pitch friction −[T_c + (T_s − T_c) e^{−(α̇/v_s)²}] tanh(α̇/ε).
     Stribeck {
-        /// Kinetic moment T_c [N·m/m].
+        /// Kinetic moment T_c \[N·m/m\].
         kinetic: f64,
-        /// Static moment T_s [N·m/m].
+        /// Static moment T_s \[N·m/m\].
         breakaway: f64,
-        /// Stribeck velocity v_s [rad/s].
+        /// Stribeck velocity v_s \[rad/s\].
         v_s: f64,
-        /// Regularisation ε [rad/s].
+        /// Regularisation ε \[rad/s\].
         eps: f64,
     },
 }
@@ -800,7 +800,7 @@ pub fn forced_case_forces(
     Ok((lift, moment))
 }
 
-/// Largest eigenvalue magnitude [1/s] of the effect states of `effects` in a free run
+/// Largest eigenvalue magnitude \[1/s\] of the effect states of `effects` in a free run
 /// (Padé delay √12/τ, first-order lag 1/τ; 0 when there are none): an explicit RK4 step h
 /// is stable for h·rate ≲ 2, so a free run needs at least rate·dt/2 steps per sample.
 pub fn stiffest_rate(effects: &[Injection]) -> f64 {

@@ -66,22 +66,22 @@ fn default_rho() -> f64 {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct StructureFile {
-    /// Air density ρ [kg/m³].
+    /// Air density ρ \[kg/m³\].
     #[serde(default = "default_rho")]
     pub air_density: f64,
-    /// Chord B [m] (used when the model file does not give one).
+    /// Chord B \[m\] (used when the model file does not give one).
     #[serde(default)]
     pub chord: Option<f64>,
-    /// Mass per unit span [kg/m].
+    /// Mass per unit span \[kg/m\].
     pub mass: f64,
-    /// Pitch inertia about the elastic axis [kg·m²/m].
+    /// Pitch inertia about the elastic axis \[kg·m²/m\].
     pub inertia: f64,
-    /// Static unbalance [kg·m/m], + when the mass centre is aft of the elastic axis.
+    /// Static unbalance \[kg·m/m\], + when the mass centre is aft of the elastic axis.
     #[serde(default)]
     pub static_unbalance: f64,
-    /// Uncoupled heave frequency [Hz] (≥ 0; 0 = no heave spring).
+    /// Uncoupled heave frequency \[Hz\] (≥ 0; 0 = no heave spring).
     pub freq_heave: f64,
-    /// Uncoupled pitch frequency [Hz] (> 0).
+    /// Uncoupled pitch frequency \[Hz\] (> 0).
     pub freq_pitch: f64,
     /// Heave damping ratio.
     #[serde(default)]
@@ -95,7 +95,7 @@ pub struct StructureFile {
     /// Extra pitch stiffness terms.
     #[serde(default)]
     pub pitch_stiffness_terms: Vec<PolyTerm>,
-    /// Pitch freeplay half gap [rad].
+    /// Pitch freeplay half gap \[rad\].
     #[serde(default)]
     pub pitch_freeplay: f64,
     /// Coulomb friction.
@@ -248,7 +248,7 @@ pub struct NonlinearSpec {
 pub struct ModelFile {
     /// Model kind.
     pub kind: ModelKind,
-    /// Chord B [m].
+    /// Chord B \[m\].
     #[serde(default)]
     pub chord: Option<f64>,
     /// Elastic axis a (semi-chords aft of mid-chord).

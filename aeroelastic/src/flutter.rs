@@ -24,9 +24,9 @@ pub enum FlutterMethod {
 /// Options of a flutter analysis.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct FlutterOptions {
-    /// Lowest speed of the scan [m/s] (> 0).
+    /// Lowest speed of the scan \[m/s\] (> 0).
     pub u_min: f64,
-    /// Highest speed of the scan [m/s].
+    /// Highest speed of the scan \[m/s\].
     pub u_max: f64,
     /// Number of speeds of the scan (≥ 2).
     pub n_speeds: usize,
@@ -37,11 +37,11 @@ pub struct FlutterOptions {
 /// One point of a mode branch (V–g and V–f data).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct ModePoint {
-    /// Wind speed U [m/s].
+    /// Wind speed U \[m/s\].
     pub u: f64,
-    /// Real part of the eigenvalue σ = Re p [1/s] (> 0: unstable).
+    /// Real part of the eigenvalue σ = Re p \[1/s\] (> 0: unstable).
     pub sigma: f64,
-    /// Circular frequency ω = Im p [rad/s].
+    /// Circular frequency ω = Im p \[rad/s\].
     pub omega: f64,
     /// Damping ratio ζ = −Re p / |p|.
     pub zeta: f64,
@@ -77,9 +77,9 @@ pub struct FailedPoint {
 /// The flutter point.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct FlutterPoint {
-    /// Critical speed U_F [m/s].
+    /// Critical speed U_F \[m/s\].
     pub u: f64,
-    /// Flutter frequency ω_F [rad/s].
+    /// Flutter frequency ω_F \[rad/s\].
     pub omega: f64,
     /// Index of the branch that goes unstable.
     pub mode: usize,
@@ -100,7 +100,7 @@ pub struct FlutterAnalysis {
     pub branches: Vec<ModeBranch>,
     /// First crossing of zero damping in the scan, refined; `None` if stable throughout.
     pub flutter: Option<FlutterPoint>,
-    /// Static divergence speed [m/s], `None` if there is none.
+    /// Static divergence speed \[m/s\], `None` if there is none.
     pub divergence_speed: Option<f64>,
     /// Speeds where a mode (or the refinement of a crossing) failed; the analysis went on.
     #[serde(default)]

@@ -71,7 +71,7 @@ pub enum MissingDerivative {
 /// Options of [`IdentifiedLaw::from_identification`].
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct IdentifiedOptions {
-    /// Chord B [m] (`identification.json` does not hold it).
+    /// Chord B \[m\] (`identification.json` does not hold it).
     pub chord: f64,
     /// Use only the cases of these groups (`None`: every case).
     pub groups: Option<Vec<String>>,
@@ -167,7 +167,7 @@ pub struct OutsideTerm {
 pub struct IdentifiedTables {
     /// Data-set name of the identification.
     pub dataset: String,
-    /// Chord B [m].
+    /// Chord B \[m\].
     pub chord: f64,
     /// Case ids used.
     pub cases: Vec<String>,

@@ -24,7 +24,7 @@ pub struct LcoOptions {
     pub max_steps: u32,
     /// Bound on |h| in semi-chords; leaving it ends the run as `Divergent`.
     pub bound_h: f64,
-    /// Bound on |α| [rad]; leaving it ends the run as `Divergent`.
+    /// Bound on |α| \[rad\]; leaving it ends the run as `Divergent`.
     pub bound_alpha: f64,
     /// Relative tolerance on the Aitken-extrapolated cycle amplitude (LCO convergence).
     pub cycle_tol: f64,
@@ -92,9 +92,9 @@ pub enum Classification {
     Decay,
     /// A steady limit cycle was reached.
     Lco,
-    /// The state left the bound at `time_left_bound` [s].
+    /// The state left the bound at `time_left_bound` \[s\].
     Divergent {
-        /// Time at which |h| or |α| first exceeded its bound [s].
+        /// Time at which |h| or |α| first exceeded its bound \[s\].
         time_left_bound: f64,
     },
     /// Neither converged nor left the bound within the time/step cap.
@@ -104,19 +104,19 @@ pub enum Classification {
 /// Result of one LCO run.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct LcoResult {
-    /// Wind speed U [m/s].
+    /// Wind speed U \[m/s\].
     pub u: f64,
     /// Classification.
     pub classification: Classification,
-    /// Pitch amplitude (half peak-to-peak, Aitken-extrapolated) [rad].
+    /// Pitch amplitude (half peak-to-peak, Aitken-extrapolated) \[rad\].
     pub amplitude_alpha: f64,
-    /// Heave amplitude (half peak-to-peak over the last cycle) [m].
+    /// Heave amplitude (half peak-to-peak over the last cycle) \[m\].
     pub amplitude_h: f64,
-    /// Oscillation frequency from successive pitch maxima [rad/s] (0 if < 2 maxima).
+    /// Oscillation frequency from successive pitch maxima \[rad/s\] (0 if < 2 maxima).
     pub omega: f64,
     /// Number of pitch cycles integrated.
     pub cycles: usize,
-    /// Time reached [s].
+    /// Time reached \[s\].
     pub t_end: f64,
     /// Right-hand-side evaluations.
     pub rhs_evals: u64,
@@ -336,7 +336,7 @@ impl Tracker {
 }
 
 impl Section {
-    /// The default initial perturbation: α = `alpha0` [rad], everything else zero.
+    /// The default initial perturbation: α = `alpha0` \[rad\], everything else zero.
     pub fn perturbation(&self, alpha0: f64) -> Vec<f64> {
         let mut y = vec![0.0; self.n_states()];
         y[1] = alpha0;
@@ -459,7 +459,7 @@ pub struct SweepProgress {
     pub done: usize,
     /// Number of speeds of the sweep.
     pub total: usize,
-    /// Speed just finished [m/s].
+    /// Speed just finished \[m/s\].
     pub u: f64,
     /// Its classification.
     pub classification: Classification,

@@ -18,7 +18,7 @@ pub struct Section {
     pub structure: Structure,
     /// Aerodynamic model.
     pub aero: Arc<dyn AeroModel>,
-    /// Air density ρ [kg/m³].
+    /// Air density ρ \[kg/m³\].
     pub rho: f64,
 }
 
@@ -58,7 +58,7 @@ impl Section {
         4 + self.aero.n_lag()
     }
 
-    /// Semi-chord b = B/2 [m].
+    /// Semi-chord b = B/2 \[m\].
     pub fn semi_chord(&self) -> f64 {
         0.5 * self.aero.chord()
     }

@@ -2,8 +2,8 @@
 //!
 //! m ḧ + S_α α̈ + c_h ḣ + F_h(h, ḣ) = L,   S_α ḧ + I_α α̈ + c_α α̇ + M_α(α, α̇) = M,
 //!
-//! h positive down [m], α positive nose-up [rad], L positive down [N/m], M nose-up about the
-//! elastic axis [N·m/m]; S_α = m x_α > 0 when the mass centre is aft of the elastic axis.
+//! h positive down \[m\], α positive nose-up \[rad\], L positive down \[N/m\], M nose-up about the
+//! elastic axis \[N·m/m\]; S_α = m x_α > 0 when the mass centre is aft of the elastic axis.
 //! The restoring terms are F_h = k_h h + Σ c_p h^p + F_c tanh(ḣ/ε_h) and
 //! M_α = k_α d + Σ c_p d^p + T_c tanh(α̇/ε_α), with the spring deflection d = α for no
 //! freeplay and d = α − δ sign α (|α| > δ), 0 (|α| ≤ δ) for a pitch freeplay of half gap δ.
@@ -33,16 +33,16 @@ pub struct PolyTerm {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Friction {
-    /// Heave friction force F_c [N/m], ≥ 0.
+    /// Heave friction force F_c \[N/m\], ≥ 0.
     #[serde(default)]
     pub heave_force: f64,
-    /// Pitch friction moment T_c [N·m/m], ≥ 0.
+    /// Pitch friction moment T_c \[N·m/m\], ≥ 0.
     #[serde(default)]
     pub pitch_moment: f64,
-    /// Heave smoothing velocity ε_h [m/s]; `None` = [`Friction::default_smoothing`].
+    /// Heave smoothing velocity ε_h \[m/s\]; `None` = [`Friction::default_smoothing`].
     #[serde(default)]
     pub heave_smoothing: Option<f64>,
-    /// Pitch smoothing rate ε_α [rad/s]; `None` = [`Friction::default_smoothing`].
+    /// Pitch smoothing rate ε_α \[rad/s\]; `None` = [`Friction::default_smoothing`].
     #[serde(default)]
     pub pitch_smoothing: Option<f64>,
 }
@@ -62,11 +62,11 @@ impl Friction {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Structure {
-    /// Mass per unit span m [kg/m].
+    /// Mass per unit span m \[kg/m\].
     pub mass: f64,
-    /// Pitch inertia about the elastic axis I_α [kg·m²/m].
+    /// Pitch inertia about the elastic axis I_α \[kg·m²/m\].
     pub inertia_alpha: f64,
-    /// Static unbalance S_α = m x_α [kg·m/m], positive when the mass centre is aft of the
+    /// Static unbalance S_α = m x_α \[kg·m/m\], positive when the mass centre is aft of the
     /// elastic axis.
     #[serde(default)]
     pub static_unbalance: f64,
@@ -86,7 +86,7 @@ pub struct Structure {
     /// Extra pitch stiffness terms Σ c_p d^p on the spring deflection d.
     #[serde(default)]
     pub pitch_stiffness_terms: Vec<PolyTerm>,
-    /// Pitch freeplay half gap δ [rad] (zero stiffness for |α| < δ); 0 = none.
+    /// Pitch freeplay half gap δ \[rad\] (zero stiffness for |α| < δ); 0 = none.
     #[serde(default)]
     pub pitch_freeplay: f64,
     /// Coulomb friction, if any.
@@ -107,11 +107,11 @@ pub struct NondimStructure {
     pub sigma: f64,
     /// Mass-centre offset aft of the elastic axis x_α in semi-chords (x_α = e − a).
     pub x_alpha: f64,
-    /// Semi-chord b = B/2 [m].
+    /// Semi-chord b = B/2 \[m\].
     pub semi_chord: f64,
-    /// Uncoupled pitch natural frequency ω_α = sqrt(k_α/I_α) [rad/s].
+    /// Uncoupled pitch natural frequency ω_α = sqrt(k_α/I_α) \[rad/s\].
     pub omega_alpha: f64,
-    /// Air density ρ [kg/m³] used in μ.
+    /// Air density ρ \[kg/m³\] used in μ.
     pub rho: f64,
     /// Heave damping ratio ζ_h (c_h = 2 ζ_h m ω_h).
     #[serde(default)]
@@ -123,7 +123,7 @@ pub struct NondimStructure {
 
 impl Structure {
     /// Builds a linear structure from SI rig values (mass m, pitch inertia about the elastic
-    /// axis I_α, mass-centre offset x_α [m] aft of the elastic axis, springs and dampers).
+    /// axis I_α, mass-centre offset x_α \[m\] aft of the elastic axis, springs and dampers).
     ///
     /// # Errors
     /// [`Error::InvalidParameter`] naming the first bad field (see [`Structure::validate`]).
@@ -271,12 +271,12 @@ impl Structure {
         Ok(())
     }
 
-    /// Uncoupled pitch natural frequency ω_α = sqrt(k_α / I_α) [rad/s].
+    /// Uncoupled pitch natural frequency ω_α = sqrt(k_α / I_α) \[rad/s\].
     pub fn omega_alpha(&self) -> f64 {
         (self.k_alpha / self.inertia_alpha).sqrt()
     }
 
-    /// Uncoupled heave natural frequency ω_h = sqrt(k_h / m) [rad/s].
+    /// Uncoupled heave natural frequency ω_h = sqrt(k_h / m) \[rad/s\].
     pub fn omega_h(&self) -> f64 {
         (self.k_h / self.mass).sqrt()
     }

@@ -15,20 +15,20 @@ use crate::integrate::{rk4, Bound, Control};
 use crate::section::Section;
 use crate::{Error, Result};
 
-/// A sampled response: h [m] positive down, α [rad] positive nose-up, and their rates.
+/// A sampled response: h \[m\] positive down, α \[rad\] positive nose-up, and their rates.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Trajectory {
-    /// Wind speed U [m/s].
+    /// Wind speed U \[m/s\].
     pub u: f64,
-    /// Time [s] from the initial state.
+    /// Time \[s\] from the initial state.
     pub t: Vec<f64>,
-    /// Heave h [m].
+    /// Heave h \[m\].
     pub h: Vec<f64>,
-    /// Pitch α [rad].
+    /// Pitch α \[rad\].
     pub alpha: Vec<f64>,
-    /// Heave rate ḣ [m/s].
+    /// Heave rate ḣ \[m/s\].
     pub h_dot: Vec<f64>,
-    /// Pitch rate α̇ [rad/s].
+    /// Pitch rate α̇ \[rad/s\].
     pub alpha_dot: Vec<f64>,
 }
 

@@ -68,22 +68,22 @@ use crate::{Error, Result};
 /// One sine component a·sin(2πf t + φ).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Sine {
-    /// Frequency f [Hz], > 0.
+    /// Frequency f \[Hz\], > 0.
     pub freq: f64,
     /// Amplitude a [m for heave, rad for pitch].
     pub amplitude: f64,
-    /// Phase φ [rad].
+    /// Phase φ \[rad\].
     pub phase: f64,
 }
 
 /// Prescribed motion h(t) = Σ heave sines, α(t) = ᾱ + Σ pitch sines.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Motion {
-    /// Pitch components [rad].
+    /// Pitch components \[rad\].
     pub pitch: Vec<Sine>,
-    /// Heave components [m].
+    /// Heave components \[m\].
     pub heave: Vec<Sine>,
-    /// Mean pitch ᾱ [rad].
+    /// Mean pitch ᾱ \[rad\].
     pub mean_pitch: f64,
 }
 
@@ -196,9 +196,9 @@ pub fn paper_configurations() -> Vec<Configuration> {
 pub struct Campaign {
     /// Motion configurations.
     pub configurations: Vec<Configuration>,
-    /// Pitch amplitudes [deg].
+    /// Pitch amplitudes \[deg\].
     pub amplitudes_deg: Vec<f64>,
-    /// Wind speeds [m/s].
+    /// Wind speeds \[m/s\].
     pub wind_speeds: Vec<f64>,
 }
 
@@ -273,13 +273,13 @@ impl Campaign {
 pub struct ForcedCase {
     /// Case id (`[A-Za-z0-9._-]+`).
     pub id: String,
-    /// Wind speed U [m/s], > 0.
+    /// Wind speed U \[m/s\], > 0.
     pub wind_speed: f64,
     /// Prescribed motion.
     pub motion: Motion,
     /// Configuration label.
     pub config: Option<String>,
-    /// Heave/pitch amplitude ratio label [mm/deg].
+    /// Heave/pitch amplitude ratio label \[mm/deg\].
     pub amplitude_ratio: Option<f64>,
 }
 
@@ -354,7 +354,7 @@ pub struct SensorNoise {
     pub balance_absolute: Option<BalanceNoise>,
     /// Heave noise σ_h [m] (8 µm).
     pub laser: f64,
-    /// Distance s between the two lasers [m]; σ_α = 2σ_h/s. `None`: the chord.
+    /// Distance s between the two lasers \[m\]; σ_α = 2σ_h/s. `None`: the chord.
     pub laser_spacing: Option<f64>,
 }
 
@@ -391,7 +391,7 @@ impl SensorNoise {
         }
     }
 
-    /// Pitch noise σ_α [rad] for chord `chord`.
+    /// Pitch noise σ_α \[rad\] for chord `chord`.
     pub fn pitch_sd(&self, chord: f64) -> f64 {
         2.0 * self.laser / self.laser_spacing.unwrap_or(chord)
     }
@@ -447,16 +447,16 @@ fn quantise(v: &mut [f64], step: f64) {
 /// Mass properties of the moving model per unit span (inertial balance forces).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct RigMass {
-    /// Mass m [kg/m].
+    /// Mass m \[kg/m\].
     pub mass: f64,
-    /// Pitch inertia about the elastic axis I [kg·m²/m].
+    /// Pitch inertia about the elastic axis I \[kg·m²/m\].
     pub inertia: f64,
-    /// Static unbalance S [kg·m/m], + when the mass centre is aft of the elastic axis.
+    /// Static unbalance S \[kg·m/m\], + when the mass centre is aft of the elastic axis.
     pub static_unbalance: f64,
 }
 
 impl RigMass {
-    /// A uniform plate of total mass `mass_total` [kg] over `span` [m], chord `chord` [m],
+    /// A uniform plate of total mass `mass_total` \[kg\] over `span` \[m\], chord `chord` \[m\],
     /// elastic axis at mid-chord: m = mass/span, I = m B²/12, S = 0 (the paper's 0.82 kg,
     /// 0.75 m, 0.25 m plate: m = 1.0933 kg/m, I = 5.694e-3 kg·m²/m).
     pub fn uniform_plate(mass_total: f64, span: f64, chord: f64) -> Self {
@@ -486,7 +486,7 @@ pub struct StillAir {
     /// Add the model's U-independent apparent-mass forces M_a q̈ to the still-air run (as
     /// physics does); off by default.
     pub apparent_mass: bool,
-    /// Half the largest random time offset of the still-air run [s].
+    /// Half the largest random time offset of the still-air run \[s\].
     pub max_offset: f64,
 }
 
@@ -497,15 +497,15 @@ pub struct ForcedOptions {
     pub name: String,
     /// Section geometry and air (chord must equal the model's).
     pub section: DataSection,
-    /// Sampling rate [Hz].
+    /// Sampling rate \[Hz\].
     pub rate: f64,
-    /// Record duration [s].
+    /// Record duration \[s\].
     pub duration: f64,
     /// Sensor noise.
     pub noise: SensorNoise,
     /// Still-air runs, if any.
     pub still_air: Option<StillAir>,
-    /// Extra integration before recording [s] (0: start on the periodic solution).
+    /// Extra integration before recording \[s\] (0: start on the periodic solution).
     pub pre_roll: f64,
     /// Master seed.
     pub seed: u64,
@@ -1076,11 +1076,11 @@ pub fn write(dir: &Path, manifest: &Manifest, records: &[Record]) -> Result<()> 
 pub struct FreeOptions {
     /// Data-set name.
     pub name: String,
-    /// Span [m] of the written totals (chord and density come from the section).
+    /// Span \[m\] of the written totals (chord and density come from the section).
     pub span: f64,
-    /// Sampling rate [Hz].
+    /// Sampling rate \[Hz\].
     pub rate: f64,
-    /// Record duration [s].
+    /// Record duration \[s\].
     pub duration: f64,
     /// Initial state (h, α, ḣ, α̇) [m, rad, m/s, rad/s]; lag states start at 0.
     pub initial: [f64; 4],
@@ -1090,7 +1090,7 @@ pub struct FreeOptions {
     pub record_forces: bool,
     /// Sensor noise.
     pub noise: SensorNoise,
-    /// |α| bound [rad]: a run leaving it is truncated there.
+    /// |α| bound \[rad\]: a run leaving it is truncated there.
     pub bound_alpha: f64,
     /// |h| bound in chords.
     pub bound_h: f64,
@@ -1160,9 +1160,9 @@ pub fn structure_spec(s: &Structure) -> Result<StructureSpec> {
 /// Result of one free run besides the record.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct FreeRun {
-    /// Wind speed [m/s].
+    /// Wind speed \[m/s\].
     pub u: f64,
-    /// Time the state left the bound [s], if it did (the record ends there).
+    /// Time the state left the bound \[s\], if it did (the record ends there).
     pub left_bound_at: Option<f64>,
 }
 

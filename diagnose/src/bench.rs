@@ -100,7 +100,7 @@ pub struct BlindOutcome {
     /// Error message when the set could not be generated or diagnosed.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub error: Option<String>,
-    /// Wall time of generation + diagnosis [s].
+    /// Wall time of generation + diagnosis \[s\].
     pub seconds: f64,
 }
 
@@ -147,7 +147,7 @@ pub struct BlindSummary {
     pub median_excess_shrink_named: f64,
     /// Top-1 accuracy per catalogue effect on its strong sets (name, correct, total).
     pub per_effect: Vec<(String, usize, usize)>,
-    /// Mean wall time per set [s].
+    /// Mean wall time per set \[s\].
     pub mean_seconds: f64,
 }
 

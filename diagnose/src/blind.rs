@@ -97,27 +97,27 @@ pub struct BlindScenario {
     pub rig: String,
     /// Forced campaign.
     pub campaign: Campaign,
-    /// Forced records: sampling rate [Hz].
+    /// Forced records: sampling rate \[Hz\].
     pub forced_rate: f64,
-    /// Forced records: duration [s].
+    /// Forced records: duration \[s\].
     pub forced_duration: f64,
-    /// Flutter speed of the truth section [m/s] (free speeds are multiples of it).
+    /// Flutter speed of the truth section \[m/s\] (free speeds are multiples of it).
     pub flutter_speed: f64,
     /// Free-run speeds as multiples of `flutter_speed`.
     pub free_speed_factors: Vec<f64>,
-    /// Free runs: sampling rate [Hz].
+    /// Free runs: sampling rate \[Hz\].
     pub free_rate: f64,
-    /// Free runs: duration [s].
+    /// Free runs: duration \[s\].
     pub free_duration: f64,
     /// Free runs: RK4 steps per sample.
     pub free_substeps: usize,
-    /// Free runs: initial pitch [deg].
+    /// Free runs: initial pitch \[deg\].
     pub free_alpha0_deg: f64,
     /// Sensor noise (both data sets).
     pub noise: SensorNoise,
-    /// Span [m] of the written totals.
+    /// Span \[m\] of the written totals.
     pub span: f64,
-    /// Plate thickness D [m] (vortex shedding length scale).
+    /// Plate thickness D \[m\] (vortex shedding length scale).
     pub depth: f64,
 }
 

@@ -7,7 +7,7 @@
 //! * [`system`]: the system level (free-response records);
 //! * [`verdict`]: from the levels' findings to one verdict;
 //! * [`blind`]: the withheld-effect data-set generator (the diagnosis never reads it);
-//! * [`bench`]: the withheld-effect benchmark statistics;
+//! * [`mod@bench`]: the withheld-effect benchmark statistics;
 //! * [`sweep`]: large jobs split into independent items (shards, Dask tasks) and merged.
 
 pub mod bench;

@@ -62,9 +62,9 @@ pub struct WhereShare {
     /// Harmonic or combination tone (`DC`, `1*f_alpha`, `3*f_alpha`, `2*f_alpha+f_h`,
     /// `broadband`…), or `all`.
     pub harmonic: String,
-    /// Wind-speed range [m/s] of the cell.
+    /// Wind-speed range \[m/s\] of the cell.
     pub wind_speed: [f64; 2],
-    /// Pitch-amplitude range [deg] of the cell (forced cases; free: amplitude of the
+    /// Pitch-amplitude range \[deg\] of the cell (forced cases; free: amplitude of the
     /// response).
     pub amplitude: [f64; 2],
     /// Motion configuration, if the cell is one.
@@ -87,9 +87,9 @@ pub struct CaseGap {
     /// Configuration label, if any.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub config: Option<String>,
-    /// Wind speed [m/s].
+    /// Wind speed \[m/s\].
     pub wind_speed: f64,
-    /// Pitch amplitude [deg] (forced: prescribed; free: initial or mean response).
+    /// Pitch amplitude \[deg\] (forced: prescribed; free: initial or mean response).
     pub amplitude: f64,
     /// Fold in which the case was held out.
     pub fold: usize,
@@ -159,12 +159,12 @@ pub struct ObservableGap {
 /// One point of a bifurcation diagram (free response).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct BifurcationPoint {
-    /// Wind speed [m/s].
+    /// Wind speed \[m/s\].
     pub wind_speed: f64,
-    /// Pitch amplitude at the end of the record [deg] (LCO amplitude, or the decayed
+    /// Pitch amplitude at the end of the record \[deg\] (LCO amplitude, or the decayed
     /// amplitude below flutter).
     pub amplitude: f64,
-    /// Dominant pitch frequency [Hz].
+    /// Dominant pitch frequency \[Hz\].
     pub frequency: f64,
 }
 

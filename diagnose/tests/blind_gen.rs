@@ -26,7 +26,7 @@ fn free_equal(a: &BlindSet, b: &BlindSet) -> bool {
     a.free.records == b.free.records
 }
 
-/// Amplitude of a sinusoid of frequency f [Hz] in v (least squares on sin/cos).
+/// Amplitude of a sinusoid of frequency f \[Hz\] in v (least squares on sin/cos).
 fn line_amplitude(v: &[f64], dt: f64, f: f64) -> f64 {
     let w = 2.0 * std::f64::consts::PI * f;
     let (mut s, mut c) = (0.0, 0.0);

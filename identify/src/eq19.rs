@@ -6,8 +6,8 @@
 //!       + K_α³ N1* (B/U) α α̇ + K_α⁶ N2* α³ + K_α³ N3* (B/U)³ α̇³
 //!
 //! so, with ξ the coefficient of a library term (variables α, Bα̇/U, h/B, ḣ/U):
-//! A1* = ξ[h_dot]/K_h, A2* = ξ[alpha_dot]/K_α, A3* = ξ[alpha]/K_α², A4* = ξ[h]/K_h²,
-//! N1* = ξ[alpha*alpha_dot]/K_α³, N2* = ξ[alpha^3]/K_α⁶, N3* = ξ[alpha_dot^3]/K_α³.
+//! A1* = ξ\[h_dot\]/K_h, A2* = ξ\[alpha_dot\]/K_α, A3* = ξ\[alpha\]/K_α², A4* = ξ\[h\]/K_h²,
+//! N1* = ξ\[alpha*alpha_dot\]/K_α³, N2* = ξ\[alpha^3\]/K_α⁶, N3* = ξ\[alpha_dot^3\]/K_α³.
 //!
 //! A value is `None` (JSON `null`) when its reduced frequency is missing (no forcing of that
 //! degree of freedom) or its term is not identifiable in the case; never a number then.

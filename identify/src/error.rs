@@ -54,9 +54,9 @@ pub enum Error {
         path: PathBuf,
         /// 1-based line of the first bad row.
         line: usize,
-        /// Offending step [s].
+        /// Offending step \[s\].
         step: f64,
-        /// Median step [s].
+        /// Median step \[s\].
         median: f64,
     },
     /// A record is too short for the requested processing.
@@ -64,9 +64,9 @@ pub enum Error {
     TooShort {
         /// Case id.
         case: String,
-        /// Record duration [s].
+        /// Record duration \[s\].
         duration: f64,
-        /// Needed duration [s].
+        /// Needed duration \[s\].
         needed: f64,
         /// Why that duration is needed.
         reason: String,

@@ -64,10 +64,10 @@ pub fn r_squared_from_sums(ss_res: f64, ss_tot: f64) -> f64 {
     }
 }
 
-/// A candidate tone f = |m f_α + n f_h| [Hz].
+/// A candidate tone f = |m f_α + n f_h| \[Hz\].
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Tone {
-    /// Frequency [Hz].
+    /// Frequency \[Hz\].
     pub freq: f64,
     /// Multiple of the pitch forcing frequency.
     pub m: i32,
@@ -178,7 +178,7 @@ pub const HARMONIC_BLOCK: usize = 4096;
 const ANCHOR: usize = 256;
 
 impl HarmonicFit {
-    /// Prepares the fit for `n` samples at interval `dt` [s] and tones `freqs` [Hz].
+    /// Prepares the fit for `n` samples at interval `dt` \[s\] and tones `freqs` \[Hz\].
     ///
     /// # Errors
     /// [`Error::Numerical`] when the basis is numerically singular (two frequencies closer
@@ -252,7 +252,7 @@ impl HarmonicFit {
         })
     }
 
-    /// The fitted frequencies [Hz].
+    /// The fitted frequencies \[Hz\].
     pub fn freqs(&self) -> &[f64] {
         &self.freqs
     }
@@ -267,7 +267,7 @@ impl HarmonicFit {
         self.n == 0
     }
 
-    /// Sample interval [s].
+    /// Sample interval \[s\].
     pub fn dt(&self) -> f64 {
         self.dt
     }

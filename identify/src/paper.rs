@@ -45,15 +45,15 @@ impl TableIvGroup {
 /// Sampling and noise of the verification.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TableIvSampling {
-    /// Sampling rate [Hz] (paper: 512).
+    /// Sampling rate \[Hz\] (paper: 512).
     pub rate: f64,
-    /// Duration [s] (paper: 20).
+    /// Duration \[s\] (paper: 20).
     pub duration: f64,
     /// Noise standard deviation σ (paper: 0.5).
     pub sigma: f64,
-    /// Pitch frequency [Hz] (paper: 2).
+    /// Pitch frequency \[Hz\] (paper: 2).
     pub freq_pitch: f64,
-    /// Heave frequency [Hz] (paper: 1.3).
+    /// Heave frequency \[Hz\] (paper: 1.3).
     pub freq_heave: f64,
 }
 

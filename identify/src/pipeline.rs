@@ -305,7 +305,7 @@ pub struct ForceResult<E> {
     pub mfwa_phase: Option<f64>,
     /// Eq. 14 key-frequency loss.
     pub key_frequency_loss: Option<f64>,
-    /// The key frequencies [Hz], largest measured amplitude first.
+    /// The key frequencies \[Hz\], largest measured amplitude first.
     pub key_frequencies: Vec<f64>,
     /// Cases regressed about a mean pitch ᾱ (`centre_mean_angle`): the constant of the fit,
     /// i.e. the modelled force coefficient at α = ᾱ, ḣ = α̇ = h = 0 (nondimensional, C_L or
@@ -321,7 +321,7 @@ pub struct CaseResult {
     pub id: String,
     /// Group name.
     pub group: String,
-    /// Wind speed U [m/s].
+    /// Wind speed U \[m/s\].
     pub wind_speed: f64,
     /// K_α = Bω_α/U.
     pub k_alpha: Option<f64>,

@@ -11,11 +11,11 @@ use crate::{Error, Result};
 /// Geometry and air of the section model (manifest `[section]`), SI.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Section {
-    /// Chord (deck width) B [m].
+    /// Chord (deck width) B \[m\].
     pub chord: f64,
-    /// Span of the model [m]; divides total forces into forces per unit span.
+    /// Span of the model \[m\]; divides total forces into forces per unit span.
     pub span: f64,
-    /// Air density ρ [kg/m³].
+    /// Air density ρ \[kg/m³\].
     pub air_density: f64,
 }
 
@@ -34,19 +34,19 @@ pub enum CaseKind {
 pub struct CaseMeta {
     /// Unique case id (`[A-Za-z0-9._-]+`).
     pub id: String,
-    /// Wind speed U [m/s].
+    /// Wind speed U \[m/s\].
     pub wind_speed: f64,
     /// Motion configuration label (paper Table I: "A".."G").
     pub config: Option<String>,
-    /// Pitch amplitude [rad].
+    /// Pitch amplitude \[rad\].
     pub amplitude: Option<f64>,
     /// Heave amplitude / pitch amplitude, mm per deg as in the paper (unit-free label).
     pub amplitude_ratio: Option<f64>,
-    /// Prescribed pitch frequency [Hz].
+    /// Prescribed pitch frequency \[Hz\].
     pub freq_pitch: Option<f64>,
-    /// Prescribed heave frequency [Hz].
+    /// Prescribed heave frequency \[Hz\].
     pub freq_heave: Option<f64>,
-    /// Mean angle of attack [rad].
+    /// Mean angle of attack \[rad\].
     pub mean_pitch: Option<f64>,
 }
 
@@ -57,17 +57,17 @@ pub struct Record {
     pub kind: CaseKind,
     /// Manifest descriptors.
     pub meta: CaseMeta,
-    /// Time of the first sample [s].
+    /// Time of the first sample \[s\].
     pub t0: f64,
-    /// Sample interval [s] (least-squares slope of t against row number).
+    /// Sample interval \[s\] (least-squares slope of t against row number).
     pub dt: f64,
-    /// Heave h [m], positive down.
+    /// Heave h \[m\], positive down.
     pub h: Vec<f64>,
-    /// Pitch α [rad], positive nose-up.
+    /// Pitch α \[rad\], positive nose-up.
     pub alpha: Vec<f64>,
-    /// Lift L [N/m], positive down (required for forced cases).
+    /// Lift L \[N/m\], positive down (required for forced cases).
     pub lift: Option<Vec<f64>>,
-    /// Moment M about the elastic axis [N·m/m], positive nose-up (required for forced cases).
+    /// Moment M about the elastic axis \[N·m/m\], positive nose-up (required for forced cases).
     pub moment: Option<Vec<f64>>,
     /// Still-air run of the same motion (raw balance forces), when the manifest names one.
     pub nowind: Option<Box<Record>>,
@@ -84,7 +84,7 @@ impl Record {
         self.alpha.is_empty()
     }
 
-    /// Record duration n·dt [s].
+    /// Record duration n·dt \[s\].
     pub fn duration(&self) -> f64 {
         self.len() as f64 * self.dt
     }
@@ -95,36 +95,36 @@ impl Record {
 pub struct PreparedCase {
     /// Manifest descriptors.
     pub meta: CaseMeta,
-    /// Sample interval [s].
+    /// Sample interval \[s\].
     pub dt: f64,
-    /// Pitch α [rad].
+    /// Pitch α \[rad\].
     pub alpha: Vec<f64>,
-    /// Pitch rate α̇ [rad/s].
+    /// Pitch rate α̇ \[rad/s\].
     pub alpha_dot: Vec<f64>,
-    /// Heave h [m].
+    /// Heave h \[m\].
     pub h: Vec<f64>,
-    /// Heave rate ḣ [m/s].
+    /// Heave rate ḣ \[m/s\].
     pub h_dot: Vec<f64>,
-    /// Aerodynamic lift L [N/m] (after wind–no-wind subtraction when applicable).
+    /// Aerodynamic lift L \[N/m\] (after wind–no-wind subtraction when applicable).
     pub lift: Vec<f64>,
-    /// Aerodynamic moment M [N·m/m].
+    /// Aerodynamic moment M \[N·m/m\].
     pub moment: Vec<f64>,
-    /// Forcing frequencies (pitch, heave) [Hz] refined from the measured motion; `None`
+    /// Forcing frequencies (pitch, heave) \[Hz\] refined from the measured motion; `None`
     /// for a degree of freedom without harmonic forcing.
     pub forcing: Forcing,
 }
 
-/// Forcing frequencies of a forced-motion case [Hz].
+/// Forcing frequencies of a forced-motion case \[Hz\].
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
 pub struct Forcing {
-    /// Pitch forcing frequency f_α [Hz].
+    /// Pitch forcing frequency f_α \[Hz\].
     pub pitch: Option<f64>,
-    /// Heave forcing frequency f_h [Hz].
+    /// Heave forcing frequency f_h \[Hz\].
     pub heave: Option<f64>,
 }
 
 impl Forcing {
-    /// The distinct forcing frequencies present [Hz] (pitch first).
+    /// The distinct forcing frequencies present \[Hz\] (pitch first).
     pub fn frequencies(&self) -> Vec<f64> {
         let mut f = Vec::with_capacity(2);
         if let Some(p) = self.pitch {
@@ -147,9 +147,9 @@ impl Forcing {
 pub struct NondimCase {
     /// Manifest descriptors.
     pub meta: CaseMeta,
-    /// Sample interval [s].
+    /// Sample interval \[s\].
     pub dt: f64,
-    /// Chord B [m].
+    /// Chord B \[m\].
     pub chord: f64,
     /// The four regression variables (α, Bα̇/U, h/B, ḣ/U).
     pub x: [Vec<f64>; 4],
@@ -157,7 +157,7 @@ pub struct NondimCase {
     pub c_lift: Vec<f64>,
     /// Moment coefficient C_M (positive nose-up).
     pub c_moment: Vec<f64>,
-    /// Forcing frequencies [Hz].
+    /// Forcing frequencies \[Hz\].
     pub forcing: Forcing,
 }
 

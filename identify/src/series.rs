@@ -21,19 +21,19 @@ pub struct CaseSeries {
     pub format: String,
     /// Case id.
     pub id: String,
-    /// Wind speed U [m/s].
+    /// Wind speed U \[m/s\].
     pub wind_speed: f64,
     /// Motion configuration label.
     pub config: Option<String>,
-    /// Pitch amplitude [deg].
+    /// Pitch amplitude \[deg\].
     pub amplitude_deg: Option<f64>,
-    /// Forcing frequencies (pitch, heave) [Hz].
+    /// Forcing frequencies (pitch, heave) \[Hz\].
     pub forcing_hz: [Option<f64>; 2],
-    /// Time of the window [s] (from the first sample of the record).
+    /// Time of the window \[s\] (from the first sample of the record).
     pub t: Vec<f64>,
-    /// Pitch α [deg].
+    /// Pitch α \[deg\].
     pub alpha_deg: Vec<f64>,
-    /// Heave h [mm] (positive down).
+    /// Heave h \[mm\] (positive down).
     pub h_mm: Vec<f64>,
     /// Measured C_L.
     pub c_lift: Vec<f64>,
@@ -43,7 +43,7 @@ pub struct CaseSeries {
     pub c_moment: Vec<f64>,
     /// Identified-model C_M.
     pub c_moment_model: Vec<f64>,
-    /// Frequencies of the spectra [Hz].
+    /// Frequencies of the spectra \[Hz\].
     pub freq: Vec<f64>,
     /// Amplitude spectrum of measured C_L (Hann window, amplitude-corrected).
     pub lift_spectrum: Vec<f64>,
@@ -53,18 +53,18 @@ pub struct CaseSeries {
     pub moment_spectrum: Vec<f64>,
     /// Amplitude spectrum of model C_M.
     pub moment_model_spectrum: Vec<f64>,
-    /// Key frequencies of the lift identification [Hz].
+    /// Key frequencies of the lift identification \[Hz\].
     pub lift_key_frequencies: Vec<f64>,
-    /// Key frequencies of the moment identification [Hz].
+    /// Key frequencies of the moment identification \[Hz\].
     pub moment_key_frequencies: Vec<f64>,
 }
 
 /// Options of [`case_series`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SeriesOptions {
-    /// Length of the time window kept [s] (from the start of the record).
+    /// Length of the time window kept \[s\] (from the start of the record).
     pub window: f64,
-    /// Highest frequency kept in the spectra [Hz].
+    /// Highest frequency kept in the spectra \[Hz\].
     pub f_max: f64,
 }
 
@@ -100,7 +100,7 @@ pub fn predict(case: &NondimCase, terms: &TermMap) -> Result<Vec<f64>> {
 }
 
 /// One-sided amplitude spectrum of `y` sampled at `dt` with a Hann window (mean removed),
-/// scaled so that a sinusoid of amplitude A on a bin shows A. Returns (f [Hz], amplitude)
+/// scaled so that a sinusoid of amplitude A on a bin shows A. Returns (f \[Hz\], amplitude)
 /// up to `f_max`.
 ///
 /// # Errors

@@ -76,31 +76,31 @@ impl PolynomialLaw {
 /// Prescribed harmonic motion α = ᾱ + A sin(2πf_α t), h = H sin(2πf_h t).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct HarmonicMotion {
-    /// Pitch frequency f_α [Hz].
+    /// Pitch frequency f_α \[Hz\].
     pub freq_pitch: f64,
-    /// Heave frequency f_h [Hz].
+    /// Heave frequency f_h \[Hz\].
     pub freq_heave: f64,
-    /// Pitch amplitude A [rad].
+    /// Pitch amplitude A \[rad\].
     pub amp_pitch: f64,
-    /// Heave amplitude H [m].
+    /// Heave amplitude H \[m\].
     pub amp_heave: f64,
-    /// Mean pitch ᾱ [rad].
+    /// Mean pitch ᾱ \[rad\].
     pub mean_pitch: f64,
 }
 
 /// Sampling and noise of a synthetic record.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Sampling {
-    /// Sampling rate [Hz].
+    /// Sampling rate \[Hz\].
     pub rate: f64,
-    /// Duration [s].
+    /// Duration \[s\].
     pub duration: f64,
     /// Standard deviation of force noise relative to each channel's peak force (the paper's
     /// balance: 0.1 % of range → 1e-3).
     pub force_noise: f64,
-    /// Standard deviation of heave noise [m] (the paper's laser: 8 µm).
+    /// Standard deviation of heave noise \[m\] (the paper's laser: 8 µm).
     pub heave_noise: f64,
-    /// Standard deviation of pitch noise [rad].
+    /// Standard deviation of pitch noise \[rad\].
     pub pitch_noise: f64,
 }
 

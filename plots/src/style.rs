@@ -215,7 +215,7 @@ pub(crate) enum Glyph {
     Line {
         /// Colour.
         color: RGBColor,
-        /// Stroke width [px].
+        /// Stroke width \[px\].
         width: u32,
         /// Dashed.
         dashed: bool,

@@ -71,7 +71,7 @@ pub struct VirtualSpec {
     /// Still-air runs (0.82 kg uniform plate) subtracted in preprocessing.
     #[serde(default)]
     pub still_air: bool,
-    /// Record length [s].
+    /// Record length \[s\].
     #[serde(default = "duration")]
     pub duration: f64,
     /// Also write the data set (manifest + CSV) under `OUT/dataset`.
@@ -87,11 +87,11 @@ fn paper() -> String {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SectionSpec {
-    /// Chord B [m].
+    /// Chord B \[m\].
     pub chord: f64,
-    /// Span [m].
+    /// Span \[m\].
     pub span: f64,
-    /// Air density ρ [kg/m³].
+    /// Air density ρ \[kg/m³\].
     pub air_density: f64,
 }
 
@@ -112,11 +112,11 @@ impl Default for SectionSpec {
 pub struct ConfigSpec {
     /// Label ("A".."G").
     pub name: String,
-    /// Pitch frequency f_α [Hz].
+    /// Pitch frequency f_α \[Hz\].
     pub freq_pitch: f64,
-    /// Heave frequency f_h [Hz].
+    /// Heave frequency f_h \[Hz\].
     pub freq_heave: f64,
-    /// Heave amplitude per pitch amplitude [mm/deg].
+    /// Heave amplitude per pitch amplitude \[mm/deg\].
     pub mm_per_deg: f64,
 }
 
@@ -168,26 +168,26 @@ pub struct SyntheticSpec {
     pub section: SectionSpec,
     /// Motion configurations.
     pub config: Vec<ConfigSpec>,
-    /// Pitch amplitudes [deg].
+    /// Pitch amplitudes \[deg\].
     pub amplitudes_deg: Vec<f64>,
-    /// Wind speeds [m/s].
+    /// Wind speeds \[m/s\].
     pub speeds: Vec<f64>,
     /// Force law.
     #[serde(default)]
     pub law: LawSpec,
-    /// Sampling rate [Hz].
+    /// Sampling rate \[Hz\].
     #[serde(default = "rate")]
     pub rate: f64,
-    /// Record length [s].
+    /// Record length \[s\].
     #[serde(default = "duration")]
     pub duration: f64,
     /// Force noise, fraction of each channel's peak.
     #[serde(default = "force_noise")]
     pub force_noise: f64,
-    /// Heave sensor noise [m].
+    /// Heave sensor noise \[m\].
     #[serde(default = "heave_noise")]
     pub heave_noise: f64,
-    /// Pitch sensor noise [rad].
+    /// Pitch sensor noise \[rad\].
     #[serde(default = "pitch_noise")]
     pub pitch_noise: f64,
     /// Also write the data set (manifest + CSV) under `OUT/dataset`.
@@ -220,10 +220,10 @@ pub struct TableIvSpec {
     /// Noise standard deviation σ.
     #[serde(default = "half")]
     pub sigma: f64,
-    /// Sampling rate [Hz].
+    /// Sampling rate \[Hz\].
     #[serde(default = "rate")]
     pub rate: f64,
-    /// Duration [s].
+    /// Duration \[s\].
     #[serde(default = "twenty")]
     pub duration: f64,
     /// (A1, A2, H1, H2, N1, N2) of the moment channel (paper group 1).
@@ -269,7 +269,7 @@ pub struct PreprocessSpec {
     /// Subtract still-air runs.
     #[serde(default = "yes")]
     pub subtract_nowind: bool,
-    /// Savitzky–Golay half window [samples].
+    /// Savitzky–Golay half window \[samples\].
     #[serde(default = "sg_half")]
     pub sg_half_window: usize,
     /// Savitzky–Golay order.
@@ -311,16 +311,16 @@ pub struct StructureSpec {
     pub r_alpha2: f64,
     /// ω_h/ω_α.
     pub sigma: f64,
-    /// Mass-centre offset aft of the elastic axis [semi-chords].
+    /// Mass-centre offset aft of the elastic axis \[semi-chords\].
     #[serde(default)]
     pub x_alpha: f64,
-    /// Semi-chord b [m].
+    /// Semi-chord b \[m\].
     #[serde(default = "unit")]
     pub semi_chord: f64,
-    /// ω_α [rad/s].
+    /// ω_α \[rad/s\].
     #[serde(default = "unit")]
     pub omega_alpha: f64,
-    /// Air density ρ [kg/m³].
+    /// Air density ρ \[kg/m³\].
     #[serde(default = "unit")]
     pub rho: f64,
     /// Heave damping ratio.
@@ -404,9 +404,9 @@ pub struct FlutterRunSpec {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct FlutterSpec {
-    /// Lowest speed [m/s].
+    /// Lowest speed \[m/s\].
     pub u_min: f64,
-    /// Highest speed [m/s].
+    /// Highest speed \[m/s\].
     pub u_max: f64,
     /// Speeds of the scan.
     #[serde(default = "eighty")]
@@ -436,15 +436,15 @@ fn si() -> String {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct LcoSpec {
-    /// Speeds [m/s].
+    /// Speeds \[m/s\].
     pub speeds: Vec<f64>,
     /// Also sweep down (hysteresis).
     #[serde(default = "yes")]
     pub up_down: bool,
-    /// Initial pitch perturbation of the upward sweep [deg].
+    /// Initial pitch perturbation of the upward sweep \[deg\].
     #[serde(default = "one_f")]
     pub perturbation_deg: f64,
-    /// Initial pitch perturbation of the downward sweep [deg].
+    /// Initial pitch perturbation of the downward sweep \[deg\].
     #[serde(default = "ten")]
     pub perturbation_down_deg: f64,
     /// Longest run [pitch periods].
@@ -456,7 +456,7 @@ pub struct LcoSpec {
     /// Absolute tolerance of the integrator.
     #[serde(default = "atol")]
     pub atol: f64,
-    /// Speeds [m/s] of the phase portraits (nearest LCO speeds of the upward sweep).
+    /// Speeds \[m/s\] of the phase portraits (nearest LCO speeds of the upward sweep).
     #[serde(default)]
     pub phase_speeds: Vec<f64>,
     /// Length of the phase portraits [pitch periods].

@@ -31,17 +31,17 @@ use nalgebra::{DMatrix, Matrix2};
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
-/// Flow condition: air density ρ [kg/m³] and wind speed U [m/s].
+/// Flow condition: air density ρ \[kg/m³\] and wind speed U \[m/s\].
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Flow {
-    /// Air density ρ [kg/m³].
+    /// Air density ρ \[kg/m³\].
     pub rho: f64,
-    /// Wind speed U [m/s], > 0 for the unsteady models.
+    /// Wind speed U \[m/s\], > 0 for the unsteady models.
     pub u: f64,
 }
 
 impl Flow {
-    /// Dynamic pressure ½ρU² [Pa].
+    /// Dynamic pressure ½ρU² \[Pa\].
     pub fn q_dyn(&self) -> f64 {
         0.5 * self.rho * self.u * self.u
     }
@@ -55,7 +55,7 @@ pub trait AeroModel: Send + Sync + std::fmt::Debug {
     /// Short human-readable name (for reports).
     fn name(&self) -> String;
 
-    /// Chord B [m].
+    /// Chord B \[m\].
     fn chord(&self) -> f64;
 
     /// Number of internal lag states.
@@ -72,7 +72,7 @@ pub trait AeroModel: Send + Sync + std::fmt::Debug {
     fn lag_rates(&self, flow: &Flow, q: [f64; 2], qd: [f64; 2], lag: &[f64], out: &mut [f64]);
 
     /// Frequency-domain transfer matrix H(ω): (L̂, M̂)ᵀ = H (ĥ, α̂)ᵀ for q = q̂ e^{iωt},
-    /// ω ≥ 0 [rad/s], including apparent-mass and all linear terms (nonlinear terms are
+    /// ω ≥ 0 \[rad/s\], including apparent-mass and all linear terms (nonlinear terms are
     /// not part of it).
     fn frequency_response(&self, flow: &Flow, omega: f64) -> Matrix2<Complex64>;
 

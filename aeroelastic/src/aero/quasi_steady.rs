@@ -24,7 +24,7 @@ pub enum QuasiSteadyKind {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct QuasiSteady {
-    /// Chord B [m].
+    /// Chord B \[m\].
     pub chord: f64,
     /// Elastic-axis position a in semi-chords aft of mid-chord.
     pub a: f64,

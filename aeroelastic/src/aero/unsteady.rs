@@ -17,11 +17,11 @@ use crate::Result;
 ///   w_c = (1 − A₁ − A₂) w + A₁β₁ x₁ + A₂β₂ x₂ with lag states
 ///   ẋ_i = (U/b)(w − β_i x_i), (A, β) = Jones' (0.165, 0.0455), (0.335, 0.3); its transfer
 ///   function is exactly [`crate::theodorsen::theodorsen_jones`] and its indicial response
-///   Wagner's function in Jones' form. Two lag states; x_i carry units of w [m/s].
+///   Wagner's function in Jones' form. Two lag states; x_i carry units of w \[m/s\].
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TheodorsenAero {
-    /// Chord B [m].
+    /// Chord B \[m\].
     pub chord: f64,
     /// Elastic-axis position a in semi-chords aft of mid-chord.
     pub a: f64,

@@ -545,7 +545,7 @@ fn delay_criterion(sh: &[CaseData], nodes: &[Node], f: &Fold, tau: f64, cache: &
     e
 }
 
-/// Delays tried by the `time_delay` search [s] (coarse; refined by one parabola through
+/// Delays tried by the `time_delay` search \[s\] (coarse; refined by one parabola through
 /// the best one and its neighbours).
 pub const DELAY_GRID: [f64; 6] = [0.0, 1e-3, 3e-3, 8e-3, 0.02, 0.05];
 
@@ -625,7 +625,7 @@ fn time_delay(cases: &[CaseData], nodes: &[Node], folds: &[Fold], cache: &FitCac
 /// (case, lift and moment factorisations of its node) naming a training residual.
 type SpecKey = (usize, *const law::NodeChan, *const law::NodeChan);
 
-/// (case, 4×-padded periodogram, its bin width [Hz], unpadded periodogram) of a training
+/// (case, 4×-padded periodogram, its bin width \[Hz\], unpadded periodogram) of a training
 /// residual, both channels summed.
 type Spectra = (usize, Vec<f64>, f64, Vec<f64>);
 

@@ -31,7 +31,7 @@ pub(crate) struct CaseData {
     pub scale: [f64; 2],
     /// Sensor-noise σ̂ of C_L, C_M ([`noise_sigma`]).
     pub sigma: [f64; 2],
-    /// Pitch / heave forcing frequency [Hz].
+    /// Pitch / heave forcing frequency \[Hz\].
     pub f_alpha: f64,
     pub f_h: Option<f64>,
     /// K_α = Bω_α/U.

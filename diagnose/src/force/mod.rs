@@ -18,9 +18,9 @@
 //!    the node's amplitudes together (the identified law depends on K only, as
 //!    `aeroelastic::identified` aggregates it). A held-out case is predicted from its
 //!    preprocessed motion with the node coefficients of its configuration interpolated at
-//!    its K_α ([`law::interpolate_scalar`]: quadratic through the three nearest nodes inside
+//!    its K_α (`law::interpolate_scalar`: quadratic through the three nearest nodes inside
 //!    the range, a line through the end nodes outside, held beyond one node spacing).
-//! 3. **Gap** ([`gaps`]): sqrt(Σr²/ΣF²) per channel in forces per unit span over the
+//! 3. **Gap** (`gaps`): sqrt(Σr²/ΣF²) per channel in forces per unit span over the
 //!    held-out cases, combined as the rms of the channels; the noise level is the same
 //!    metric with Σr² replaced by Σ n σ̂² (σ̂ = `noise_sigma` of each force channel).
 //!
@@ -80,10 +80,10 @@ pub struct ForceOptions {
     /// Candidate augmentations to score (default: all of [`CandidateKind::ALL`]).
     pub candidates: Vec<CandidateKind>,
     /// Significance threshold of a candidate's held-out improvement (see
-    /// [`candidates`]; default [`candidates::DEFAULT_SIGNIFICANCE`]).
+    /// `candidates`; default `candidates::DEFAULT_SIGNIFICANCE`).
     pub significance: f64,
     /// Minimum share of the excess (above-noise) held-out residual energy a significant
-    /// candidate must remove (default [`candidates::DEFAULT_MIN_SHRINK`]).
+    /// candidate must remove (default `candidates::DEFAULT_MIN_SHRINK`).
     pub min_shrink: f64,
 }
 

@@ -266,7 +266,7 @@ pub(crate) const CANDIDATES: [Effect; 8] = [
     Effect::StructuralDamping,
 ];
 
-/// Freeplay half-gap grid [deg].
+/// Freeplay half-gap grid \[deg\].
 pub(crate) const FREEPLAY_GRID_DEG: [f64; 14] = [
     0.05, 0.075, 0.1, 0.15, 0.2, 0.3, 0.4, 0.5, 0.7, 1.0, 1.4, 2.0, 2.5, 3.0,
 ];

@@ -34,14 +34,14 @@ pub struct SystemOptions {
     pub seed: u64,
     /// Number of folds over runs; 0 = leave one run out (default).
     pub folds: usize,
-    /// Savitzky–Golay half window [s] of the derivatives (default 0.05 s: 25 samples at
+    /// Savitzky–Golay half window \[s\] of the derivatives (default 0.05 s: 25 samples at
     /// 512 Hz).
     pub sg_half_window_s: f64,
     /// Savitzky–Golay polynomial degree (default 4).
     pub sg_order: usize,
     /// Seconds trimmed at the start of each run: the aerodynamic start-up transient (default 0.5 s).
     pub warmup: f64,
-    /// Padding [s] of the frequency-domain aerodynamic forces (default 4 s).
+    /// Padding \[s\] of the frequency-domain aerodynamic forces (default 4 s).
     pub pad: f64,
     /// Fewest free runs accepted (default 3).
     pub min_runs: usize,

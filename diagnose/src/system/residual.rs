@@ -104,7 +104,7 @@ pub fn run_model(model: &Arc<dyn AeroModel>, u: f64, k: f64) -> Arc<dyn AeroMode
 /// Settings of the residual computation.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ResidualSettings {
-    /// Savitzky–Golay half window [samples].
+    /// Savitzky–Golay half window \[samples\].
     pub half_window: usize,
     /// Savitzky–Golay polynomial degree.
     pub order: usize,
@@ -120,21 +120,21 @@ pub struct ResidualSettings {
 pub struct RunResidual {
     /// Case id.
     pub id: String,
-    /// Wind speed [m/s].
+    /// Wind speed \[m/s\].
     pub u: f64,
-    /// Sample interval [s].
+    /// Sample interval \[s\].
     pub dt: f64,
     /// First kept sample.
     pub i0: usize,
     /// One past the last kept sample.
     pub i1: usize,
-    /// Measured displacement (h [m], α [rad]), whole run.
+    /// Measured displacement (h \[m\], α \[rad\]), whole run.
     pub q: [Vec<f64>; 2],
     /// SG velocity, whole run.
     pub qd: [Vec<f64>; 2],
     /// SG acceleration, whole run.
     pub qdd: [Vec<f64>; 2],
-    /// Sim aerodynamic forces (L [N/m], M [N·m/m]) along the measured motion.
+    /// Sim aerodynamic forces (L \[N/m\], M \[N·m/m\]) along the measured motion.
     pub force: [Vec<f64>; 2],
     /// Lag states of the sim at sample `i0` (integrated along the measured motion).
     pub lag0: Vec<f64>,
@@ -143,16 +143,16 @@ pub struct RunResidual {
     /// Normaliser per DOF: rms of the structural force (M_s q̈ + C_s q̇ + K_s q)_c over
     /// the kept samples.
     pub norm: [f64; 2],
-    /// Dominant pitch frequency [Hz].
+    /// Dominant pitch frequency \[Hz\].
     pub freq: f64,
     /// Reduced frequency K = B·2πf/U the nonlinear terms were evaluated at.
     pub k: f64,
-    /// Displacement noise estimates σ̂ (h [m], α [rad]).
+    /// Displacement noise estimates σ̂ (h \[m\], α \[rad\]).
     pub sigma: [f64; 2],
     /// Expected normalised residual energy per sample due to displacement noise, per DOF
     /// (noise level² of the metric).
     pub noise_energy: [f64; 2],
-    /// Savitzky–Golay half window [samples] and degree of the derivatives.
+    /// Savitzky–Golay half window \[samples\] and degree of the derivatives.
     pub sg: (usize, usize),
 }
 
@@ -196,7 +196,7 @@ impl RunResidual {
     }
 }
 
-/// Dominant frequency [Hz] of `x` (mean removed, rectangular window, zero-padded to ≥ 4×
+/// Dominant frequency \[Hz\] of `x` (mean removed, rectangular window, zero-padded to ≥ 4×
 /// the length, parabolic peak interpolation on the magnitude spectrum, bins below two
 /// cycles per record ignored); 0 when flat.
 pub fn dominant_frequency(x: &[f64], dt: f64) -> f64 {
@@ -240,11 +240,11 @@ pub fn dominant_frequency(x: &[f64], dt: f64) -> f64 {
     (k as f64 + off) / (nfft as f64 * dt)
 }
 
-/// Pass band [Hz] of the frequency-domain force evaluation: full up to
+/// Pass band \[Hz\] of the frequency-domain force evaluation: full up to
 /// [`LOWPASS_HZ`].0, cosine taper to zero at [`LOWPASS_HZ`].1.
 pub const LOWPASS_HZ: (f64, f64) = (20.0, 30.0);
 
-/// Weight of the low-pass at frequency `f` [Hz] (see [`LOWPASS_HZ`]).
+/// Weight of the low-pass at frequency `f` \[Hz\] (see [`LOWPASS_HZ`]).
 fn lowpass(f: f64) -> f64 {
     let (a, b) = LOWPASS_HZ;
     if f <= a {

@@ -208,14 +208,14 @@ impl OdeSystem for Augmented<'_> {
 /// Observables of a pitch response sampled every `dt`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct Observables {
-    /// Dominant pitch frequency [Hz].
+    /// Dominant pitch frequency \[Hz\].
     pub freq: f64,
-    /// Exponential growth rate of the pitch amplitude σ [1/s] (< 0: decay), from a
+    /// Exponential growth rate of the pitch amplitude σ \[1/s\] (< 0: decay), from a
     /// least-squares line through ln A(t) of the per-period amplitudes above the noise.
     pub rate: f64,
-    /// Pitch amplitude over the last 2 s (half peak-to-peak) [deg].
+    /// Pitch amplitude over the last 2 s (half peak-to-peak) \[deg\].
     pub final_amp_deg: f64,
-    /// Linear decay rate of the amplitude dA/dt [rad/s] (least-squares line through A(t)).
+    /// Linear decay rate of the amplitude dA/dt \[rad/s\] (least-squares line through A(t)).
     pub linear_slope: f64,
     /// Relative misfit of the exponential envelope over that of the linear envelope
     /// (> 1: the decay is closer to linear, as Coulomb friction makes it).
@@ -223,12 +223,12 @@ pub(crate) struct Observables {
     /// Relative frequency change between the large- and small-amplitude halves of the
     /// record, (f_large − f_small)/f (amplitude-dependent frequency).
     pub freq_shift: f64,
-    /// Mean α over the last half of the record [rad].
+    /// Mean α over the last half of the record \[rad\].
     pub mean_late: f64,
 }
 
-/// Per-period amplitude windows of `a`: (centre time [s], half peak-to-peak, mean,
-/// zero-crossing frequency [Hz]).
+/// Per-period amplitude windows of `a`: (centre time \[s\], half peak-to-peak, mean,
+/// zero-crossing frequency \[Hz\]).
 fn windows(a: &[f64], dt: f64, f: f64) -> Vec<(f64, f64, f64, f64)> {
     if f.is_nan() || f <= 0.0 {
         return Vec::new();
@@ -270,7 +270,7 @@ fn line_fit(x: &[f64], y: &[f64]) -> (f64, f64, f64) {
 }
 
 /// Observables of the pitch series `a` (rad) sampled every `dt`; `floor` is the
-/// amplitude [rad] below which windows are ignored (noise).
+/// amplitude \[rad\] below which windows are ignored (noise).
 pub(crate) fn observables(a: &[f64], dt: f64, floor: f64) -> Observables {
     let freq = dominant_frequency(a, dt);
     let win = windows(a, dt, freq);
@@ -405,10 +405,10 @@ fn point(u: f64, o: &Observables) -> crate::report::BifurcationPoint {
 }
 
 /// Simulates every run from its measured state at `i0` with the sim (and with `aug`),
-/// and compares observables with the measured ones: pitch frequency [Hz], growth rate
-/// [1/s], final (LCO) amplitude [deg] — each as the rms over runs of sim − measured —
-/// the response gap rms(α_sim − α_meas)/rms(α_meas) [-] (rms over runs), and — when the
-/// measured growth rates change sign over U — |flutter speed sim − measured| [m/s]
+/// and compares observables with the measured ones: pitch frequency \[Hz\], growth rate
+/// \[1/s\], final (LCO) amplitude \[deg\] — each as the rms over runs of sim − measured —
+/// the response gap rms(α_sim − α_meas)/rms(α_meas) \[-\] (rms over runs), and — when the
+/// measured growth rates change sign over U — |flutter speed sim − measured| \[m/s\]
 /// ([`flutter_speed`]). Runs whose simulation is not possible (stiff law) or stops early
 /// (divergence) are left out of the comparison; an observable no run (or no bracketing
 /// of the flutter speed) supports is left out of the list.

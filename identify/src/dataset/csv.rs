@@ -9,7 +9,7 @@ use crate::{Error, Result};
 /// The columns of one case file, in the file's units, in row order.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct CaseTable {
-    /// Time stamps `t` [s].
+    /// Time stamps `t` \[s\].
     pub t: Vec<f64>,
     /// Heave `h`, in `units.heave`.
     pub h: Vec<f64>,

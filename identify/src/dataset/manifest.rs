@@ -23,16 +23,16 @@ pub const FORMAT: &str = "aeroform-dataset/1";
 /// Structural properties per unit span (manifest `[structure]`), SI.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StructureSpec {
-    /// Mass per unit span m [kg/m], > 0.
+    /// Mass per unit span m \[kg/m\], > 0.
     pub mass: f64,
-    /// Mass moment of inertia about the elastic axis I_α [kg·m²/m], > 0.
+    /// Mass moment of inertia about the elastic axis I_α \[kg·m²/m\], > 0.
     pub inertia: f64,
-    /// Static unbalance S_α = m·x_α [kg·m/m], positive when the mass centre is aft of the
+    /// Static unbalance S_α = m·x_α \[kg·m/m\], positive when the mass centre is aft of the
     /// elastic axis.
     pub static_unbalance: f64,
-    /// Still-air natural frequency of heave [Hz], > 0.
+    /// Still-air natural frequency of heave \[Hz\], > 0.
     pub freq_heave: f64,
-    /// Still-air natural frequency of pitch [Hz], > 0.
+    /// Still-air natural frequency of pitch \[Hz\], > 0.
     pub freq_pitch: f64,
     /// Damping ratio of heave (fraction of critical), ≥ 0.
     pub damping_heave: f64,
@@ -50,7 +50,7 @@ pub struct CaseSpec {
     pub kind: CaseKind,
     /// CSV file, relative to the data-set folder.
     pub file: PathBuf,
-    /// Wind speed U [m/s], ≥ 0.
+    /// Wind speed U \[m/s\], ≥ 0.
     pub wind_speed: f64,
     /// Motion configuration label (paper Table I).
     pub config: Option<String>,
@@ -58,9 +58,9 @@ pub struct CaseSpec {
     pub amplitude: Option<f64>,
     /// Heave amplitude / pitch amplitude (mm per deg as in the paper; a label), ≥ 0.
     pub amplitude_ratio: Option<f64>,
-    /// Prescribed pitch frequency [Hz], > 0.
+    /// Prescribed pitch frequency \[Hz\], > 0.
     pub freq_pitch: Option<f64>,
-    /// Prescribed heave frequency [Hz], > 0.
+    /// Prescribed heave frequency \[Hz\], > 0.
     pub freq_heave: Option<f64>,
     /// Mean angle of attack, in `units.pitch`.
     pub mean_pitch: Option<f64>,

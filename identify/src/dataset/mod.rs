@@ -2,7 +2,7 @@
 //!
 //! A data set is a folder with `manifest.toml` and case CSV files named by the manifest
 //! (paths relative to the folder). [`read_dataset`] validates everything and returns
-//! [`Record`]s in SI per unit span (h [m], α [rad], L [N/m], M [N·m/m]; DESIGN.md §2
+//! [`Record`]s in SI per unit span (h \[m\], α \[rad\], L \[N/m\], M \[N·m/m\]; DESIGN.md §2
 //! signs); [`write_dataset`] converts back into the manifest's units. Every violation of
 //! the format is an [`crate::Error`] naming the file, the 1-based line and the field.
 

@@ -153,7 +153,7 @@ impl ForceUnit {
     pub fn as_str(self) -> &'static str {
         self.name()
     }
-    /// Converts a value in this unit to N/m of span (`span` [m] divides totals).
+    /// Converts a value in this unit to N/m of span (`span` \[m\] divides totals).
     pub fn to_si(self, x: f64, span: f64) -> f64 {
         match self {
             ForceUnit::N => x / span,
@@ -174,7 +174,7 @@ impl MomentUnit {
     pub fn as_str(self) -> &'static str {
         self.name()
     }
-    /// Converts a value in this unit to N·m/m of span (`span` [m] divides totals).
+    /// Converts a value in this unit to N·m/m of span (`span` \[m\] divides totals).
     pub fn to_si(self, x: f64, span: f64) -> f64 {
         match self {
             MomentUnit::Nm => x / span,

@@ -229,7 +229,7 @@ fn overlap_range(
 }
 
 /// Samples of the wind-on record (`wind_len` samples every `wind_dt` s) that overlap the
-/// still-air record after shifting it by `lag` [s] (as returned by [`subtract_nowind`]):
+/// still-air record after shifting it by `lag` \[s\] (as returned by [`subtract_nowind`]):
 /// the indices whose forces [`subtract_nowind`] returns.
 pub fn nowind_overlap(
     wind_len: usize,
@@ -241,7 +241,7 @@ pub fn nowind_overlap(
     overlap_range(wind_len, wind_dt, still_len, still_dt, lag, 0.0)
 }
 
-/// Delay [s] of `b` relative to `a` (both sampled every `dt` s, from their own first
+/// Delay \[s\] of `b` relative to `a` (both sampled every `dt` s, from their own first
 /// sample): if `b(t) = a(t − D)` the result is `D`, sub-sample. Found by FFT
 /// cross-correlation of the normalised signals, a parabolic interpolation of its peak, and
 /// a golden-section maximisation of the correlation with `b` interpolated by 4-point cubic
@@ -279,7 +279,7 @@ fn bad(case: &str, field: &str, message: String) -> Error {
 
 /// Subtracts the still-air run from the wind-on run: the aerodynamic forces
 /// `L_aero(tᵢ) = L_wind(tᵢ) − L_still(tᵢ + D)` (same for M) on the wind-on samples that
-/// overlap the shifted still-air run ([`nowind_overlap`]), and the lag `D` [s] (delay of the
+/// overlap the shifted still-air run ([`nowind_overlap`]), and the lag `D` \[s\] (delay of the
 /// still-air motion relative to the wind-on motion, [`align_lag`] convention).
 ///
 /// The runs are aligned on α and h together: each degree of freedom whose wind-on motion is

@@ -151,7 +151,7 @@ fn centred_gram(n: usize, omegas: &[f64]) -> Vec<f64> {
 pub struct HarmonicFit {
     /// Constant term (signal units).
     pub mean: f64,
-    /// Frequencies fₖ [Hz].
+    /// Frequencies fₖ \[Hz\].
     pub freqs: Vec<f64>,
     /// Cosine coefficients aₖ (signal units).
     pub cos: Vec<f64>,
@@ -162,7 +162,7 @@ pub struct HarmonicFit {
 }
 
 impl HarmonicFit {
-    /// The fitted signal at time `t` [s] since the first sample.
+    /// The fitted signal at time `t` \[s\] since the first sample.
     pub fn value(&self, t: f64) -> f64 {
         let mut v = self.mean;
         for k in 0..self.freqs.len() {
@@ -172,7 +172,7 @@ impl HarmonicFit {
         v
     }
 
-    /// The time derivative of the fitted signal at `t` [s] (signal units per second):
+    /// The time derivative of the fitted signal at `t` \[s\] (signal units per second):
     /// `Σₖ 2π fₖ (−aₖ sin(2π fₖ t) + bₖ cos(2π fₖ t))`.
     pub fn derivative(&self, t: f64) -> f64 {
         let mut v = 0.0;
@@ -336,7 +336,7 @@ fn fit_with_covariance(x: &[f64], dt: f64, freqs: &[f64]) -> Result<(HarmonicFit
 /// kept it.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct HarmonicComponent {
-    /// Frequency [Hz].
+    /// Frequency \[Hz\].
     pub freq: f64,
     /// Amplitude √(a² + b²) in the fit at all candidate frequencies (signal units).
     pub amplitude: f64,
@@ -547,7 +547,7 @@ const VP_TOL: f64 = 1e-9;
 /// Most passes over the record in [`refine_vp`].
 const VP_MAX_PASSES: usize = 60;
 
-/// Frequencies [Hz] minimising `Σₛ ‖P⊥(f) xₛ‖² / ‖xₛ − x̄ₛ‖²` (the unexplained variance
+/// Frequencies \[Hz\] minimising `Σₛ ‖P⊥(f) xₛ‖² / ‖xₛ − x̄ₛ‖²` (the unexplained variance
 /// fractions of a least-squares fit of all signals at all frequencies, plus means),
 /// starting from `freqs`: Gauss–Newton on the variable-projection problem ([`vp_point`];
 /// one pass over the record per iteration), each step limited to `VP_MAX_STEP/T` and
@@ -616,7 +616,7 @@ fn refine_vp(xs: &[&[f64]], dt: f64, freqs: &[f64], tol: f64) -> Vec<f64> {
     to_hz(&w)
 }
 
-/// Refines a frequency estimate `f0` [Hz] of the dominant sinusoid of `x` (sampled every
+/// Refines a frequency estimate `f0` \[Hz\] of the dominant sinusoid of `x` (sampled every
 /// `dt` s): maximises the power of the least-squares fit of `mean + a cos 2πft + b sin 2πft`
 /// (not a DFT, so it is exact for records that are not a whole number of periods) by
 /// Gauss–Newton with step control from `f0` (each step at most 0.25/T, T = n·dt), to a
@@ -659,7 +659,7 @@ pub(crate) fn sinusoid_share(x: &[f64], dt: f64, f: f64) -> Option<(f64, f64)> {
     Some((share, fit.amplitude(0)))
 }
 
-/// Frequency [Hz] of the largest spectral peak of `x` (mean removed, Hann window, zero
+/// Frequency \[Hz\] of the largest spectral peak of `x` (mean removed, Hann window, zero
 /// padding to ≥ 4n points, parabolic interpolation of the peak), searching above `0.5/T`.
 /// `None` for a constant signal or fewer than 4 samples.
 pub fn dominant_frequency(x: &[f64], dt: f64) -> Option<f64> {

@@ -36,7 +36,7 @@ pub use self::sg::savitzky_golay_derivative;
 use crate::record::{CaseKind, Forcing, PreparedCase, Record};
 use crate::{Error, Result};
 
-/// Default Savitzky–Golay half-window [samples] of [`VelocityMethod::Auto`]'s fallback.
+/// Default Savitzky–Golay half-window \[samples\] of [`VelocityMethod::Auto`]'s fallback.
 ///
 /// Chosen with order 4 on noisy multi-sines sampled at 512 Hz (the paper's rate) with
 /// content up to 6 Hz: rms derivative error 0.7–2.9 % of the rms velocity (noise 0.5–2 %),
@@ -87,7 +87,7 @@ pub enum VelocityMethod {
     /// Always a Savitzky–Golay smoothing differentiator with these parameters
     /// (window `2·half_window + 1` samples, polynomial degree `order`); motion kept.
     SavitzkyGolay {
-        /// Half-width of the window [samples].
+        /// Half-width of the window \[samples\].
         half_window: usize,
         /// Polynomial degree.
         order: usize,
@@ -117,13 +117,13 @@ pub struct PreprocessOptions {
     /// … and is at least this fraction of the largest component of the same degree of
     /// freedom (default 1e-3, [`DEFAULT_COMPONENT_FLOOR`]).
     pub component_floor: f64,
-    /// Savitzky–Golay half-window of the `Auto` fallback [samples] (default 25).
+    /// Savitzky–Golay half-window of the `Auto` fallback \[samples\] (default 25).
     pub sg_half_window: usize,
     /// Savitzky–Golay order of the `Auto` fallback (default 4).
     pub sg_order: usize,
-    /// Pitch amplitude [rad] below which pitch counts as not forced (default 1e-4).
+    /// Pitch amplitude \[rad\] below which pitch counts as not forced (default 1e-4).
     pub min_pitch_amplitude: f64,
-    /// Heave amplitude [m] below which heave counts as not forced (default 1e-5).
+    /// Heave amplitude \[m\] below which heave counts as not forced (default 1e-5).
     pub min_heave_amplitude: f64,
     /// Minimum share of a signal's variance held by its largest spectral peak for that
     /// peak to count as a forcing frequency when the manifest gives none (default 0.1).
@@ -216,7 +216,7 @@ pub enum VelocitySource {
     },
     /// Savitzky–Golay differentiator; the measured motion was kept.
     SavitzkyGolay {
-        /// Half-window [samples].
+        /// Half-window \[samples\].
         half_window: usize,
         /// Polynomial degree.
         order: usize,
@@ -226,7 +226,7 @@ pub enum VelocitySource {
 /// What [`prepare_with_report`] did, for reporting.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PrepareReport {
-    /// Lag of the still-air run [s] when it was subtracted.
+    /// Lag of the still-air run \[s\] when it was subtracted.
     pub nowind_lag: Option<f64>,
     /// Index of the first wind-on sample kept (0 without subtraction).
     pub first_sample: usize,
@@ -234,13 +234,13 @@ pub struct PrepareReport {
     pub pitch_velocity: VelocitySource,
     /// Source of ḣ.
     pub heave_velocity: VelocitySource,
-    /// Sensor-noise estimates σ̂ of (α [rad], h [m]).
+    /// Sensor-noise estimates σ̂ of (α \[rad\], h \[m\]).
     pub noise: (f64, f64),
     /// Candidate components of the harmonic fit of α (one per forcing frequency, with
-    /// amplitude [rad], standard error and whether it was kept); empty when no harmonic
+    /// amplitude \[rad\], standard error and whether it was kept); empty when no harmonic
     /// fit was attempted (free case, Savitzky–Golay requested, no forcing frequency).
     pub pitch_components: Vec<HarmonicComponent>,
-    /// As `pitch_components`, for h [m].
+    /// As `pitch_components`, for h \[m\].
     pub heave_components: Vec<HarmonicComponent>,
 }
 

@@ -27,7 +27,7 @@ pub struct AxisScale {
 }
 
 impl AxisScale {
-    /// SI: U [m/s], f = ω/2π [Hz].
+    /// SI: U \[m/s\], f = ω/2π \[Hz\].
     pub fn si() -> Self {
         AxisScale {
             u_factor: 1.0,
@@ -39,8 +39,8 @@ impl AxisScale {
         }
     }
 
-    /// Reduced: U/(bω_α) and ω/ω_α, for semi-chord `b` [m] and pitch frequency
-    /// `omega_alpha` [rad/s].
+    /// Reduced: U/(bω_α) and ω/ω_α, for semi-chord `b` \[m\] and pitch frequency
+    /// `omega_alpha` \[rad/s\].
     pub fn reduced(b: f64, omega_alpha: f64) -> Self {
         AxisScale {
             u_factor: 1.0 / (b * omega_alpha),
@@ -90,7 +90,7 @@ fn class_of(c: Classification) -> ResponseClass {
     }
 }
 
-/// Bifurcation diagram: pitch amplitude [deg] of the upward and downward sweeps against U,
+/// Bifurcation diagram: pitch amplitude \[deg\] of the upward and downward sweeps against U,
 /// the flutter speed (if given, in m/s) as a vertical line. `Unsettled` runs are drawn as
 /// unsettled points at their last measured amplitude, their stop reasons in the legend.
 pub fn bifurcation_figure(
@@ -123,7 +123,7 @@ pub fn bifurcation_figure(
     }
 }
 
-/// Phase portrait α [deg] vs dα/dt [deg/s] of each trajectory (one curve per speed).
+/// Phase portrait α \[deg\] vs dα/dt \[deg/s\] of each trajectory (one curve per speed).
 pub fn phase_figure(
     trajectories: &[Trajectory],
     title: &str,

@@ -90,7 +90,7 @@ fn case_title(s: &CaseSeries) -> String {
     }
 }
 
-/// Time series of one case: α [deg], h [mm], then measured C_L and C_M with the identified
+/// Time series of one case: α \[deg\], h \[mm\], then measured C_L and C_M with the identified
 /// model overlaid (dashed).
 pub fn time_series_figure(s: &CaseSeries) -> TimeSeriesFigure {
     let t = &s.t;

@@ -18,9 +18,9 @@ use crate::style::{
 pub struct ModeBranch {
     /// Mode name for the legend, e.g. `"heave"`, `"pitch"`.
     pub name: String,
-    /// Wind speeds U [m/s] (or reduced speed; must match the axis label).
+    /// Wind speeds U \[m/s\] (or reduced speed; must match the axis label).
     pub u: Vec<f64>,
-    /// Damping ratio g [-] (negative = unstable with the usual sign; drawn as given).
+    /// Damping ratio g \[-\] (negative = unstable with the usual sign; drawn as given).
     pub damping: Vec<f64>,
     /// Frequency \[Hz\].
     pub freq: Vec<f64>,

@@ -21,11 +21,11 @@ use crate::style::{bold, check_len, fmt_num, title, PANEL_TITLE_SIZE};
 pub struct GapHeatmapPanel {
     /// Panel title, e.g. `"config B: before"`.
     pub title: String,
-    /// Column values (pitch amplitude [deg]).
+    /// Column values (pitch amplitude \[deg\]).
     pub x_values: Vec<f64>,
-    /// Row values (wind speed [m/s]).
+    /// Row values (wind speed \[m/s\]).
     pub y_values: Vec<f64>,
-    /// Ratios gap / noise level [-], one row per y value.
+    /// Ratios gap / noise level \[-\], one row per y value.
     pub values: Vec<Vec<Option<f64>>>,
 }
 
