@@ -130,7 +130,9 @@ pub fn flutter_ensemble(
     opts: &FlutterOptions,
 ) -> Result<FlutterEnsemble> {
     crate::error::positive("rho", rho)?;
-    let out: Vec<std::result::Result<(Option<(f64, f64)>, Option<f64>), String>> = laws
+    /// (flutter (U_F, f_F), U_D) of one member, or why it failed.
+    type Member = std::result::Result<(Option<(f64, f64)>, Option<f64>), String>;
+    let out: Vec<Member> = laws
         .par_iter()
         .enumerate()
         .map(|(m, law)| {

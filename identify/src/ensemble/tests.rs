@@ -59,19 +59,20 @@ fn identified(c: &[NondimCase]) -> Identification {
 /// selection cannot drop a true term, so the estimator is unbiased and the coverage
 /// measures the resampling scheme alone.
 fn truth_support_settings() -> IdentifySettings {
-    let mut s = IdentifySettings::default();
-    s.kept_terms = [
-        "alpha",
-        "alpha_dot",
-        "h",
-        "h_dot",
-        "alpha*alpha_dot",
-        "alpha^3",
-        "alpha_dot^3",
-    ]
-    .map(String::from)
-    .to_vec();
-    s
+    IdentifySettings {
+        kept_terms: [
+            "alpha",
+            "alpha_dot",
+            "h",
+            "h_dot",
+            "alpha*alpha_dot",
+            "alpha^3",
+            "alpha_dot^3",
+        ]
+        .map(String::from)
+        .to_vec(),
+        ..IdentifySettings::default()
+    }
 }
 
 #[test]
