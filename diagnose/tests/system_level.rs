@@ -69,7 +69,7 @@ fn effect_free_gap_is_at_noise_level_and_not_significant() {
         r.gap_statistic
     );
     assert!(r.candidates.iter().all(|c| !c.significant));
-    assert_eq!(r.candidates.len(), 6);
+    assert_eq!(r.candidates.len(), 8); // six of DESIGN §5 + structural_polynomial, structural_damping
     assert_eq!(r.cases.len(), 6);
     for s in &r.signatures {
         assert!(

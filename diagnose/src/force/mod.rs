@@ -433,7 +433,10 @@ mod tests {
         let n = nodes(&[("A", 4.0), ("A", 6.0), ("A", 8.0), ("A", 10.0)]);
         let (f, s) = assign_folds(&n, 5, 0, "t").unwrap();
         assert_eq!(f, vec![0, 1, 2, 3]);
-        assert_eq!((s.scheme.as_str(), s.folds, s.groups), ("leave_one_group_out", 4, 4));
+        assert_eq!(
+            (s.scheme.as_str(), s.folds, s.groups),
+            ("leave_one_group_out", 4, 4)
+        );
         // 2 groups: still diagnosed
         let (f, s) = assign_folds(&n[..2], 5, 0, "t").unwrap();
         assert_eq!((f, s.folds), (vec![0, 1], 2));
