@@ -15,7 +15,7 @@
 use criterion::{criterion_group, criterion_main, Criterion, SamplingMode};
 
 use aeroelastic::branch::BranchOptions;
-use aeroelastic::lco::{Classification, LcoOptions, SweepDirection};
+use aeroelastic::lco::{Classification, KIteration, LcoOptions, SweepDirection};
 use aeroelastic::reference::hp1_cubic_pitch;
 
 fn branch_vs_sweep(c: &mut Criterion) {
@@ -39,8 +39,15 @@ fn branch_vs_sweep(c: &mut Criterion) {
     let lco = LcoOptions::default();
     let y0 = s.perturbation(0.05);
     let sweep = || {
-        s.lco_sweep(&speeds, SweepDirection::Up, &y0, &lco, &|_| {})
-            .expect("sweep")
+        s.lco_sweep(
+            &speeds,
+            SweepDirection::Up,
+            &y0,
+            &lco,
+            &KIteration::default(),
+            &|_| {},
+        )
+        .expect("sweep")
     };
     // Independent runs from the same fixed perturbation (no continuation between speeds).
     let fixed = || {

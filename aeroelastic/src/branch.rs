@@ -32,8 +32,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::aero::AeroModel;
 use crate::dynamics::SectionDynamics;
-use crate::integrate::Rk4;
 use crate::flutter::{eigenvalues, eigenvector};
+use crate::integrate::Rk4;
 use crate::section::Section;
 use crate::{Error, Result};
 
@@ -1366,6 +1366,7 @@ mod tests {
                 crate::lco::SweepDirection::Down,
                 &s.perturbation(0.3),
                 &LcoOptions::default(),
+                &crate::lco::KIteration::default(),
                 &|_| {},
             )
             .unwrap();

@@ -178,6 +178,8 @@ mod tests {
                 Classification::Unsettled => StopReason::TimeCap,
             },
             final_state: vec![],
+            k_eval: None,
+            k_iterations: 1,
         }
     }
 
