@@ -34,7 +34,7 @@ pub struct MergeArgs {
     pub parts: Vec<PathBuf>,
 }
 
-fn write_json(path: &PathBuf, v: &serde_json::Value) -> anyhow::Result<()> {
+fn write_json(path: &std::path::Path, v: &serde_json::Value) -> anyhow::Result<()> {
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
         crate::ensure_dir(&dir.to_path_buf())?;
     }

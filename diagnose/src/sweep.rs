@@ -33,7 +33,7 @@ pub enum SweepSpec {
     /// The withheld-effect benchmark of `aeroform diagnose --blind n --seed seed`.
     Blind(BlindSweep),
     /// Flutter (and optionally LCO) over a grid of structural parameters.
-    FlutterMap(MapSpec),
+    FlutterMap(Box<MapSpec>),
 }
 
 /// The withheld-effect benchmark as a sweep.
