@@ -3,8 +3,11 @@
 //! forced cases, still-air runs, random ids) and random finite column values from tiny to
 //! huge magnitudes.
 //!
+//! Column values span every magnitude the reader accepts: from subnormals up to 100 in SI
+//! (the reader refuses physically implausible values, |h| > 1 km, |α| > 1000 rad, forces
+//! > 1e12 N/m; `identify::dataset::MAX_ABS_SI`).
 //! With SI per-span units (m, rad, N/m, N·m/m) no conversion happens and every value comes
-//! back bit-identical, subnormals and ±f64::MAX included. With mm/deg/totals each value
+//! back bit-identical, subnormals included. With mm/deg/totals each value
 //! goes through one multiplication and one division, so it comes back within a few ulps
 //! (checked at 1e-14 relative); the time base is refitted by least squares (1e-9).
 
@@ -21,14 +24,27 @@ fn magnitude(lo: i32, hi: i32) -> impl Strategy<Value = f64> {
     (1.0f64..10.0, lo..hi).prop_map(|(m, e)| m * 10f64.powi(e))
 }
 
-/// Any finite value: zeros, subnormals, normals of any exponent, the extremes.
+/// Largest column value drawn [SI], inside every plausibility bound of the reader.
+const COLUMN_MAX: f64 = 100.0;
+
+/// Any finite column value up to [`COLUMN_MAX`]: zeros, subnormals, normals of any
+/// smaller exponent, the extremes.
 fn any_finite() -> impl Strategy<Value = f64> {
     prop_oneof![
-        4 => prop::num::f64::NORMAL | prop::num::f64::SUBNORMAL | prop::num::f64::ZERO,
-        1 => Just(f64::MAX),
-        1 => Just(-f64::MAX),
+        4 => (prop::num::f64::NORMAL | prop::num::f64::SUBNORMAL | prop::num::f64::ZERO)
+            .prop_filter("plausible", |x| x.abs() <= COLUMN_MAX),
+        1 => Just(COLUMN_MAX),
+        1 => Just(-COLUMN_MAX),
         1 => Just(f64::MIN_POSITIVE),
         1 => Just(-0.0),
+    ]
+}
+
+/// A column value with |x| in [1e-250, 100] or zero (safe under ×1000, ×180/π, ×span).
+fn scaled_column() -> impl Strategy<Value = f64> {
+    prop_oneof![
+        8 => (magnitude(-250, 2), any::<bool>()).prop_map(|(m, neg)| if neg { -m } else { m }),
+        1 => Just(0.0),
     ]
 }
 
@@ -126,13 +142,17 @@ fn case_spec(id: String, shape: &CaseShape) -> impl Strategy<Value = CaseSpec> {
         CaseKind::Forced
     };
     let still = shape.still;
+    // Forcing frequencies below the record's Nyquist frequency 1/(2 dt) (the reader refuses
+    // others): up to 0.49/dt, down to 1e-6 of that.
+    let dt = shape.dt;
+    let below_nyquist = move || magnitude(-6, 0).prop_map(move |m| m * 0.049 / dt);
     (
         prop_oneof![Just(0.0), magnitude(-3, 3)],
         prop::option::of("[A-G]|\\PC{1,6}"),
         prop::option::of(prop_oneof![Just(0.0), magnitude(-3, 3)]),
         prop::option::of(prop_oneof![Just(0.0), magnitude(-3, 3)]),
-        opt_pos(),
-        opt_pos(),
+        prop::option::of(below_nyquist()),
+        prop::option::of(below_nyquist()),
         prop::option::of(-30.0f64..30.0),
         prop::option::of(toml_table(2)),
     )
@@ -219,7 +239,7 @@ fn dataset() -> impl Strategy<Value = (Manifest, Vec<Record>)> {
                     if exact {
                         any_finite().boxed()
                     } else {
-                        scaled_finite().boxed()
+                        scaled_column().boxed()
                     }
                 };
                 let specs: Vec<_> = ids
