@@ -107,20 +107,27 @@ pub fn run(args: &DiagnoseArgs) -> anyhow::Result<()> {
             damping_pitch: sf.damping_pitch,
         });
     }
+    // Every input is read and checked before the output folder is touched.
+    enum Input {
+        Free(LoadedModel),
+        Forced(identify::dataset::Dataset),
+    }
+    let input = match (&args.dataset, &args.model, &free) {
+        (_, Some(m), Some(_)) => Input::Free(
+            LoadedModel::load(m, chord).with_context(|| format!("loading {}", m.display()))?,
+        ),
+        (Some(d), None, _) => {
+            Input::Forced(read_dataset(d).with_context(|| format!("reading {}", d.display()))?)
+        }
+        _ => bail!("give a forced data-set folder, --free FREE --model M, or --blind N"),
+    };
     let dir = crate::outdir::OutDir::begin(&out, "diagnose", args.force)?;
     let t = std::time::Instant::now();
     let version = crate::study::figures::version();
-    let diag = match (&args.dataset, &args.model, &free) {
-        (_, Some(m), Some(free)) => {
-            let loaded =
-                LoadedModel::load(m, chord).with_context(|| format!("loading {}", m.display()))?;
-            diagnose_free(free, &loaded.model, &opts, &version)?
-        }
-        (Some(dir), None, _) => {
-            let forced = read_dataset(dir).with_context(|| format!("reading {}", dir.display()))?;
-            diagnose(&forced, free.as_ref(), &opts, &version)?
-        }
-        _ => bail!("give a forced data-set folder, --free FREE --model M, or --blind N"),
+    let diag = match (&input, &free) {
+        (Input::Free(loaded), Some(free)) => diagnose_free(free, &loaded.model, &opts, &version)?,
+        (Input::Forced(forced), _) => diagnose(forced, free.as_ref(), &opts, &version)?,
+        (Input::Free(_), None) => unreachable!("a model is only read with free data"),
     };
     let secs = t.elapsed().as_secs_f64();
     write_json(&dir.path().join("diagnosis.json"), &diag)?;
