@@ -312,7 +312,7 @@ impl OutDir {
             }
             Ok(_) => {
                 let ours = dest.join(COMPLETE_MARKER).exists();
-                let empty = std::fs::read_dir(&dest).map_or(false, |mut d| d.next().is_none());
+                let empty = std::fs::read_dir(&dest).is_ok_and(|mut d| d.next().is_none());
                 if !ours && !empty && !force {
                     return Err(Usage(format!(
                         "--out {}: the folder exists and holds files aeroform did not write \

@@ -102,5 +102,8 @@ fn diagnose_bad_inputs_are_clear_errors() {
 
     let (ok, _, stderr) = aeroform(&["diagnose", "--blind", "0", "--out", out.to_str().unwrap()]);
     assert!(!ok);
-    assert!(stderr.contains("--blind") && stderr.contains("1..="), "{stderr}");
+    assert!(
+        stderr.contains("--blind") && stderr.contains("1..="),
+        "{stderr}"
+    );
 }
