@@ -116,7 +116,9 @@ pub fn run(args: &FlutterArgs) -> anyhow::Result<()> {
         &l,
         &fa,
     );
-    json["ensemble"] = serde_json::to_value(&ensemble)?;
+    if let Some(e) = &ensemble {
+        json["ensemble"] = serde_json::to_value(e)?;
+    }
     let path = args.out.join("flutter.json");
     identify::io::write_atomic(&path, format!("{json:#}\n").as_bytes())?;
     match fa.flutter {
