@@ -4,8 +4,8 @@
 //! huge magnitudes.
 //!
 //! Column values span every magnitude the reader accepts: from subnormals up to 100 in SI
-//! (the reader refuses physically implausible values, |h| > 1 km, |α| > 1000 rad, forces
-//! > 1e12 N/m; `identify::dataset::MAX_ABS_SI`).
+//! (the reader refuses physically implausible values: |h| above 1 km, |α| above 1000 rad,
+//! forces above 1e12 N/m; `identify::dataset::MAX_ABS_SI`).
 //! With SI per-span units (m, rad, N/m, N·m/m) no conversion happens and every value comes
 //! back bit-identical, subnormals included. With mm/deg/totals each value
 //! goes through one multiplication and one division, so it comes back within a few ulps
@@ -129,10 +129,6 @@ fn case_shape() -> impl Strategy<Value = CaseShape> {
             t0,
             dt,
         })
-}
-
-fn opt_pos() -> impl Strategy<Value = Option<f64>> {
-    prop::option::of(magnitude(-6, 6))
 }
 
 fn case_spec(id: String, shape: &CaseShape) -> impl Strategy<Value = CaseSpec> {
