@@ -37,7 +37,7 @@ pub struct BranchArgs {
     /// RK4 steps per period of the shooting integration.
     #[arg(long, default_value_t = 128)]
     pub steps_per_period: usize,
-    /// Chord B [m] for an identification.json model.
+    /// Chord B \[m\] for an identification.json model.
     #[arg(long)]
     pub chord: Option<f64>,
     /// Output folder (created if missing).

@@ -23,7 +23,7 @@ pub struct FlutterArgs {
     /// Flutter method: p-k (exact frequency response) or p (time-domain realisation).
     #[arg(long, value_enum, default_value_t = MethodArg::Pk)]
     pub method: MethodArg,
-    /// Chord B [m] for an identification.json model (else `chord` of the structure file).
+    /// Chord B \[m\] for an identification.json model (else `chord` of the structure file).
     #[arg(long)]
     pub chord: Option<f64>,
     /// Output folder (created if missing).

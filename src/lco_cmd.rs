@@ -30,13 +30,13 @@ pub struct LcoArgs {
     /// Sweep `a:b:n` (or a comma list), integrated upward and downward.
     #[arg(long)]
     pub sweep: Option<String>,
-    /// Initial pitch perturbation [deg] (the upward sweep and single runs).
+    /// Initial pitch perturbation \[deg\] (the upward sweep and single runs).
     #[arg(long, default_value_t = 2.0)]
     pub alpha0: f64,
-    /// Initial pitch [deg] of the downward sweep (large, to reach an upper LCO branch).
+    /// Initial pitch \[deg\] of the downward sweep (large, to reach an upper LCO branch).
     #[arg(long, default_value_t = 20.0)]
     pub alpha0_down: f64,
-    /// Chord B [m] for an identification.json model.
+    /// Chord B \[m\] for an identification.json model.
     #[arg(long)]
     pub chord: Option<f64>,
     /// Output folder (created if missing).

@@ -17,9 +17,9 @@ pub const MAX_CASES: usize = 100_000;
 /// Largest number of samples a command may generate and hold (all cases and records
 /// together, still-air runs included): 25 M samples ≈ 1 GB of five f64 channels.
 pub const MAX_SAMPLES: f64 = 2.5e7;
-/// Largest record duration [s] (≈ 11.6 days).
+/// Largest record duration \[s\] (≈ 11.6 days).
 pub const MAX_DURATION: f64 = 1e6;
-/// Largest sampling rate [Hz].
+/// Largest sampling rate \[Hz\].
 pub const MAX_RATE: f64 = 1e6;
 /// Largest wind speed [m/s] (or reduced speed U/(bω_α) in a nondimensional study);
 /// equals the data-set reader's bound (`identify::dataset::PLAUSIBLE_MAX`).
@@ -28,7 +28,7 @@ pub const MAX_SPEED: f64 = 1000.0;
 pub const MAX_PERIODS: f64 = 1e5;
 /// Largest phase-portrait length [pitch periods] (400 points each).
 pub const MAX_PHASE_PERIODS: f64 = 1000.0;
-/// Largest initial pitch perturbation magnitude [deg].
+/// Largest initial pitch perturbation magnitude \[deg\].
 pub const MAX_PITCH_DEG: f64 = 90.0;
 
 /// A request beyond a cap or a physically implausible number: the flag or dotted key, and

@@ -68,10 +68,10 @@ pub struct ForcedArgs {
     /// Also record still-air runs (inertial forces of the 0.82 kg plate) with random offsets.
     #[arg(long)]
     pub still_air: bool,
-    /// Record duration [s].
+    /// Record duration \[s\].
     #[arg(long, default_value_t = 10.0)]
     pub duration: f64,
-    /// Chord B [m] for an identification.json model.
+    /// Chord B \[m\] for an identification.json model.
     #[arg(long)]
     pub chord: Option<f64>,
     /// Replace an existing output folder that aeroform did not write.
@@ -97,16 +97,16 @@ pub struct FreeArgs {
     /// Master seed.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Record duration [s].
+    /// Record duration \[s\].
     #[arg(long, default_value_t = 20.0)]
     pub duration: f64,
-    /// Initial pitch [deg].
+    /// Initial pitch \[deg\].
     #[arg(long, default_value_t = 2.0)]
     pub alpha0: f64,
     /// Do not record lift and moment.
     #[arg(long)]
     pub no_forces: bool,
-    /// Chord B [m] for an identification.json model.
+    /// Chord B \[m\] for an identification.json model.
     #[arg(long)]
     pub chord: Option<f64>,
     /// Replace an existing output folder that aeroform did not write.

@@ -22,7 +22,7 @@
 //! every Newton iterate ([`AeroModel::with_reduced_frequency`]); their Floquet multipliers
 //! are those of the system with K frozen at the orbit's value.
 //!
-//! Units: U [m/s], T [s], ω [rad/s], h [m] positive down, α [rad] positive nose-up.
+//! Units: U [m/s], T \[s\], ω [rad/s], h \[m\] positive down, α \[rad\] positive nose-up.
 
 use std::sync::Arc;
 
@@ -56,11 +56,11 @@ pub struct BranchOptions {
     pub newton_tol: f64,
     /// Newton iterations per point before the step is halved.
     pub max_newton: usize,
-    /// Pitch amplitude of the first orbit, started from the Hopf eigenvector [rad].
+    /// Pitch amplitude of the first orbit, started from the Hopf eigenvector \[rad\].
     pub start_amplitude: f64,
-    /// Reference pitch amplitude of the scaling [rad].
+    /// Reference pitch amplitude of the scaling \[rad\].
     pub amplitude_scale: f64,
-    /// The branch stops when the pitch amplitude exceeds this [rad].
+    /// The branch stops when the pitch amplitude exceeds this \[rad\].
     pub max_amplitude_alpha: f64,
     /// Speeds of the Hopf scan over the range (each bracket then bisected).
     pub n_scan: usize,
@@ -159,9 +159,9 @@ pub struct BranchEvent {
     /// Speed [m/s] (folds: vertex of the parabola U(s) through three points; others: the
     /// point after the crossing).
     pub u: f64,
-    /// Pitch amplitude (half peak-to-peak) there [rad].
+    /// Pitch amplitude (half peak-to-peak) there \[rad\].
     pub amplitude_alpha: f64,
-    /// Heave amplitude (half peak-to-peak) there [m].
+    /// Heave amplitude (half peak-to-peak) there \[m\].
     pub amplitude_h: f64,
     /// Index of the branch point after the crossing.
     pub index: usize,
@@ -172,17 +172,17 @@ pub struct BranchEvent {
 pub struct BranchPoint {
     /// Wind speed [m/s].
     pub u: f64,
-    /// Period T [s].
+    /// Period T \[s\].
     pub period: f64,
     /// Frequency ω = 2π/T [rad/s].
     pub omega: f64,
-    /// Pitch amplitude, half peak-to-peak [rad] (as the time-integration LCO runs report).
+    /// Pitch amplitude, half peak-to-peak \[rad\] (as the time-integration LCO runs report).
     pub amplitude_alpha: f64,
-    /// Heave amplitude, half peak-to-peak [m].
+    /// Heave amplitude, half peak-to-peak \[m\].
     pub amplitude_h: f64,
-    /// First-harmonic pitch amplitude [rad] (as the measured tables report).
+    /// First-harmonic pitch amplitude \[rad\] (as the measured tables report).
     pub amplitude1_alpha: f64,
-    /// First-harmonic heave amplitude [m].
+    /// First-harmonic heave amplitude \[m\].
     pub amplitude1_h: f64,
     /// Largest modulus of the non-trivial Floquet multipliers.
     pub max_floquet: f64,
@@ -205,7 +205,7 @@ pub enum StopReason {
     },
     /// The pitch amplitude exceeded `max_amplitude_alpha`.
     Amplitude {
-        /// Amplitude reached [rad].
+        /// Amplitude reached \[rad\].
         amplitude_alpha: f64,
     },
     /// The branch came back to the equilibrium (another Hopf point).
@@ -219,7 +219,7 @@ pub enum StopReason {
     NotConverged {
         /// Speed of the last converged point [m/s].
         u: f64,
-        /// Its pitch amplitude [rad].
+        /// Its pitch amplitude \[rad\].
         amplitude_alpha: f64,
         /// What failed.
         message: String,
@@ -266,7 +266,7 @@ pub struct BranchProgress {
     pub points: usize,
     /// Speed of the last point [m/s].
     pub u: f64,
-    /// Its pitch amplitude [rad].
+    /// Its pitch amplitude \[rad\].
     pub amplitude_alpha: f64,
 }
 
@@ -1015,9 +1015,9 @@ pub struct MeasuredAmplitude {
     pub stable: bool,
     /// Wind speed [m/s].
     pub u: f64,
-    /// First-harmonic heave amplitude [m] (peak).
+    /// First-harmonic heave amplitude \[m\] (peak).
     pub amplitude_h: f64,
-    /// First-harmonic pitch amplitude [rad] (peak).
+    /// First-harmonic pitch amplitude \[rad\] (peak).
     pub amplitude_alpha: f64,
 }
 
@@ -1130,14 +1130,14 @@ pub struct MeasuredDistance {
     /// The measured point.
     pub measured: MeasuredAmplitude,
     /// Predicted first-harmonic pitch amplitude at the measured speed on the branch of the
-    /// same stability [rad] (the segment closest in amplitude when several cover the
+    /// same stability \[rad\] (the segment closest in amplitude when several cover the
     /// speed); `None` when no such segment covers the speed.
     pub predicted_alpha: Option<f64>,
-    /// Predicted first-harmonic heave amplitude there [m].
+    /// Predicted first-harmonic heave amplitude there \[m\].
     pub predicted_h: Option<f64>,
-    /// Predicted − measured pitch amplitude [rad].
+    /// Predicted − measured pitch amplitude \[rad\].
     pub d_alpha: Option<f64>,
-    /// Predicted − measured heave amplitude [m].
+    /// Predicted − measured heave amplitude \[m\].
     pub d_h: Option<f64>,
     /// Distance in speed to the nearest predicted orbit of the same stability [m/s]
     /// (0 when a segment covers the speed).

@@ -100,7 +100,7 @@ impl LoadedPair {
         self.section.flutter(method, &flutter_options(speeds)?)
     }
 
-    /// One LCO run at `u` [m/s] from a pitch perturbation `alpha0` [rad], as
+    /// One LCO run at `u` [m/s] from a pitch perturbation `alpha0` \[rad\], as
     /// `aeroform lco --speed` (default options; the K iteration of a K-dependent model).
     ///
     /// # Errors
@@ -115,7 +115,7 @@ impl LoadedPair {
     }
 
     /// Upward and downward LCO sweeps over `speeds` from pitch perturbations `alpha0_up`
-    /// and `alpha0_down` [rad], as `aeroform lco --sweep` ([`Section::lco_sweeps`]).
+    /// and `alpha0_down` \[rad\], as `aeroform lco --sweep` ([`Section::lco_sweeps`]).
     ///
     /// # Errors
     /// The errors of [`Section::lco_sweeps`].

@@ -107,7 +107,7 @@ pub struct FlutterEnsemble {
     pub level: f64,
     /// Flutter speed U_F [m/s].
     pub flutter_speed: MemberQuantity,
-    /// Flutter frequency [Hz].
+    /// Flutter frequency \[Hz\].
     pub flutter_frequency_hz: MemberQuantity,
     /// Static divergence speed U_D [m/s].
     pub divergence_speed: MemberQuantity,
@@ -183,11 +183,11 @@ pub fn flutter_ensemble(
 pub struct LcoEnsemblePoint {
     /// Wind speed U [m/s].
     pub u: f64,
-    /// Pitch amplitude [deg] of the members that settle on an LCO.
+    /// Pitch amplitude \[deg\] of the members that settle on an LCO.
     pub amplitude_alpha_deg: MemberQuantity,
-    /// Heave amplitude [mm] of the same members.
+    /// Heave amplitude \[mm\] of the same members.
     pub amplitude_h_mm: MemberQuantity,
-    /// LCO frequency [Hz] of the same members.
+    /// LCO frequency \[Hz\] of the same members.
     pub frequency_hz: MemberQuantity,
     /// Members that decay, diverge or do not settle (not in the intervals).
     pub decay: usize,
@@ -213,7 +213,7 @@ pub struct LcoEnsemble {
 }
 
 /// K-iterated LCO runs ([`Section::lco_run_k`] with the default [`KIteration`]) of every
-/// law at every speed of `speeds` from the perturbation `alpha0` [rad] in pitch, in
+/// law at every speed of `speeds` from the perturbation `alpha0` \[rad\] in pitch, in
 /// parallel over (member, speed).
 ///
 /// # Errors

@@ -5,11 +5,11 @@
 //!
 //! ```toml
 //! air_density = 1.225          # [kg/m^3], optional (1.225)
-//! chord = 0.25                 # [m], optional: the chord for an identification.json model
+//! chord = 0.25                 # \[m\], optional: the chord for an identification.json model
 //! mass = 1.0933                # [kg/m]
 //! inertia = 0.005803           # [kg m^2/m] about the elastic axis
 //! static_unbalance = 0.010933  # [kg m/m], + when the mass centre is aft of the axis
-//! freq_heave = 2.0             # [Hz] uncoupled still-air natural frequencies
+//! freq_heave = 2.0             # \[Hz\] uncoupled still-air natural frequencies
 //! freq_pitch = 3.5
 //! damping_heave = 0.005        # ratio of critical, optional (0)
 //! damping_pitch = 0.005
@@ -23,7 +23,7 @@
 //!
 //! ```toml
 //! kind = "theodorsen"   # | "quasi_steady" | "steady" | "flat_plate_table" | "derivative_table" | "identified" | "dynamic_stall"
-//! chord = 0.25          # [m] (all kinds; for "identified" optional when given elsewhere)
+//! chord = 0.25          # \[m\] (all kinds; for "identified" optional when given elsewhere)
 //! elastic_axis = -0.3   # a, semi-chords aft of mid-chord (theodorsen, dynamic_stall, quasi_steady, steady; default 0)
 //! noncirculatory = true # quasi_steady, steady (default true)
 //! rfa_lags = 3          # flat_plate_table, derivative_table, identified (default 3)

@@ -95,12 +95,12 @@ pub enum Control {
 pub type StepObserver<'a> = dyn FnMut(f64, &[f64], &[f64]) -> Control + 'a;
 
 /// Bound on the section's displacements: the run stops with [`StopReason::LeftBound`]
-/// when |z₀| = |h| > `h` [m] or |z₁| = |α| > `alpha` [rad] after a step.
+/// when |z₀| = |h| > `h` \[m\] or |z₁| = |α| > `alpha` \[rad\] after a step.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Bound {
-    /// Largest |h| [m].
+    /// Largest |h| \[m\].
     pub h: f64,
-    /// Largest |α| [rad].
+    /// Largest |α| \[rad\].
     pub alpha: f64,
 }
 
@@ -124,7 +124,7 @@ impl Bound {
 pub struct IntegrationRun {
     /// Why it stopped.
     pub stop: StopReason,
-    /// Time reached [s] (the last accepted step).
+    /// Time reached \[s\] (the last accepted step).
     pub t_end: f64,
     /// Accepted steps.
     pub steps: u64,

@@ -147,13 +147,13 @@ impl Motion {
 pub struct Configuration {
     /// Label `A`..`G`.
     pub name: String,
-    /// Pitch frequency f_α = ω_α/2π [Hz].
+    /// Pitch frequency f_α = ω_α/2π \[Hz\].
     pub freq_pitch: f64,
-    /// Heave frequency f_h = ω_h/2π [Hz].
+    /// Heave frequency f_h = ω_h/2π \[Hz\].
     pub freq_heave: f64,
     /// Amplitude ratio r_A: heave amplitude per pitch amplitude [mm/deg].
     pub amplitude_ratio: f64,
-    /// Mean pitch angle ᾱ [deg] (angle of attack about which the plate oscillates).
+    /// Mean pitch angle ᾱ \[deg\] (angle of attack about which the plate oscillates).
     #[serde(default)]
     pub mean_pitch_deg: f64,
 }
@@ -273,8 +273,8 @@ impl Campaign {
     }
 
     /// The cases, id `{config}-U{U}-A{A}` (configuration, wind speed [m/s], pitch amplitude
-    /// [deg]; e.g. `D-U4-A6`), configuration-major, then wind speed, then amplitude;
-    /// α = ᾱ + A sin(2πf_α t), h = r_A·A [mm] sin(2πf_h t).
+    /// \[deg\]; e.g. `D-U4-A6`), configuration-major, then wind speed, then amplitude;
+    /// α = ᾱ + A sin(2πf_α t), h = r_A·A \[mm\] sin(2πf_h t).
     pub fn cases(&self) -> Vec<ForcedCase> {
         let mut out = Vec::new();
         for c in &self.configurations {
@@ -323,13 +323,13 @@ pub struct ForcedCase {
 /// balance reads them; records per unit span get σ/span and resolution/span.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct BalanceNoise {
-    /// Full range of the lift channel ±R_L [N] (the paper's balance: 65 N).
+    /// Full range of the lift channel ±R_L \[N\] (the paper's balance: 65 N).
     pub lift_range: f64,
     /// Full range of the moment channel ±R_M [N·m] (the paper's balance: 5 N·m).
     pub moment_range: f64,
     /// σ as a fraction of the full range (0.1 % → 1e-3).
     pub fraction: f64,
-    /// Resolution of the lift reading [N] (0: no quantisation).
+    /// Resolution of the lift reading \[N\] (0: no quantisation).
     pub lift_resolution: f64,
     /// Resolution of the moment reading [N·m] (0: no quantisation).
     pub moment_resolution: f64,
@@ -349,7 +349,7 @@ impl BalanceNoise {
         }
     }
 
-    /// σ of (lift, moment) per unit span [N/m, N·m/m] for a model of span `span` [m].
+    /// σ of (lift, moment) per unit span [N/m, N·m/m] for a model of span `span` \[m\].
     pub fn sd_per_span(&self, span: f64) -> (f64, f64) {
         (
             self.fraction * self.lift_range / span,
@@ -386,7 +386,7 @@ pub struct SensorNoise {
     /// Absolute balance noise (range × fraction, quantised to a resolution).
     #[serde(default)]
     pub balance_absolute: Option<BalanceNoise>,
-    /// Heave noise σ_h [m] (8 µm).
+    /// Heave noise σ_h \[m\] (8 µm).
     pub laser: f64,
     /// Distance s between the two lasers \[m\]; σ_α = 2σ_h/s. `None`: the chord.
     pub laser_spacing: Option<f64>,
@@ -431,7 +431,7 @@ impl SensorNoise {
     }
 
     /// Balance σ of (lift, moment) per unit span [N/m, N·m/m] for records of peak |force|
-    /// `peaks` (per unit span) on a model of span `span` [m].
+    /// `peaks` (per unit span) on a model of span `span` \[m\].
     pub fn balance_sd(&self, peaks: (f64, f64), span: f64) -> (f64, f64) {
         match &self.balance_absolute {
             Some(b) => b.sd_per_span(span),

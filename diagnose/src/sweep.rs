@@ -58,7 +58,7 @@ pub struct MapSpec {
     pub structure: PathBuf,
     /// Aerodynamic model (model TOML or `identification.json`).
     pub model: PathBuf,
-    /// Chord B [m] for an identification.json model (else the structure file's).
+    /// Chord B \[m\] for an identification.json model (else the structure file's).
     #[serde(default)]
     pub chord: Option<f64>,
     /// Flutter scan speeds [m/s] (≥ 2; from the lowest to the highest).
@@ -72,10 +72,10 @@ pub struct MapSpec {
     /// Speeds [m/s] of an upward/downward LCO sweep at every point (empty: none).
     #[serde(default)]
     pub lco_speeds: Vec<f64>,
-    /// Initial pitch [deg] of the upward LCO sweep.
+    /// Initial pitch \[deg\] of the upward LCO sweep.
     #[serde(default = "default_alpha0")]
     pub alpha0: f64,
-    /// Initial pitch [deg] of the downward LCO sweep.
+    /// Initial pitch \[deg\] of the downward LCO sweep.
     #[serde(default = "default_alpha0_down")]
     pub alpha0_down: f64,
 }

@@ -23,7 +23,7 @@ fn bristol_model() -> Arc<dyn AeroModel> {
     LoadedModel::load(&p, None).unwrap().model
 }
 
-/// The measured amplitudes table: (branch, U, pitch amplitude [rad], frequency [Hz]) of the
+/// The measured amplitudes table: (branch, U, pitch amplitude \[rad\], frequency \[Hz\]) of the
 /// rows fitted from the time series.
 fn amplitudes_table() -> Vec<(String, f64, f64, f64)> {
     let text = std::fs::read_to_string(data("bristol-spring1-lco-amplitudes.csv")).unwrap();

@@ -331,7 +331,7 @@ pub struct CaseResult {
     pub rank: usize,
     /// Dependencies of the case's library (term names).
     pub dependencies: Vec<String>,
-    /// Mean pitch ᾱ [rad] about which the case was regressed (`centre_mean_angle`): the
+    /// Mean pitch ᾱ (rad) about which the case was regressed (`centre_mean_angle`): the
     /// variable `alpha` of its terms is α − ᾱ; `None` when regressed on α itself.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mean_pitch: Option<f64>,

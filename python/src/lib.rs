@@ -91,7 +91,7 @@ impl PyDataset {
         to_json(&v)
     }
 
-    /// The columns of case `id` in SI per unit span: t [s], h [m], alpha [rad], lift
+    /// The columns of case `id` in SI per unit span: t \[s\], h \[m\], alpha \[rad\], lift
     /// [N/m], moment [N·m/m] (lift and moment absent for a free case without them).
     fn columns<'py>(&self, py: Python<'py>, id: &str) -> PyResult<Bound<'py, PyDict>> {
         let r = self.inner.record(id).ok_or_else(|| {

@@ -401,7 +401,7 @@ pub fn linear_aero(
     linear_aero_chord(model, 2.0 * s.semi_chord, a)
 }
 
-/// A linear aerodynamic model by name for chord `chord` [m].
+/// A linear aerodynamic model by name for chord `chord` \[m\].
 ///
 /// # Errors
 /// An unknown model or invalid parameters.

@@ -59,7 +59,7 @@ pub struct FlutterRun {
     pub label: String,
     /// Aerodynamic model name of the study (`theodorsen`, …).
     pub model: String,
-    /// Semi-chord b [m].
+    /// Semi-chord b \[m\].
     pub semi_chord: f64,
     /// ω_α [rad/s].
     pub omega_alpha: f64,
@@ -74,7 +74,7 @@ pub struct FlutterRun {
 pub struct LcoStage {
     /// Model description.
     pub model: String,
-    /// Semi-chord b [m].
+    /// Semi-chord b \[m\].
     pub semi_chord: f64,
     /// ω_α [rad/s].
     pub omega_alpha: f64,
@@ -97,7 +97,7 @@ pub struct LcoStage {
     pub truth_down: Vec<LcoResult>,
 }
 
-/// Wall time of each stage [s].
+/// Wall time of each stage \[s\].
 pub type Timings = Vec<(&'static str, f64)>;
 
 fn timed<T>(

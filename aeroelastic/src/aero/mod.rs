@@ -93,7 +93,7 @@ pub trait AeroModel: Send + Sync + std::fmt::Debug {
         None
     }
 
-    /// Time [s] a forced run needs before recording for the model's nonlinear lag states to
+    /// Time \[s\] a forced run needs before recording for the model's nonlinear lag states to
     /// forget their start (the virtual wind tunnel starts lag states on the periodic
     /// solution of the *linearised* lag dynamics, exact for linear lags: 0, the default).
     fn settle_time(&self, _flow: &Flow) -> f64 {

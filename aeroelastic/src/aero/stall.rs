@@ -38,11 +38,11 @@ use crate::Result;
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct DynamicStallAero {
-    /// Chord B [m].
+    /// Chord B \[m\].
     pub chord: f64,
     /// Elastic-axis position a in semi-chords aft of mid-chord.
     pub a: f64,
-    /// Angle α₁ [rad] at which the static separation point is f_st = ½.
+    /// Angle α₁ \[rad\] at which the static separation point is f_st = ½.
     pub alpha1: f64,
     /// Sharpness exponent m of f_st = 1/(1 + (α/α₁)^{2m}) (≥ 1).
     pub sharpness: f64,

@@ -62,7 +62,7 @@ impl LinearStructure {
 /// still-air run tests the structure alone, before any aerodynamics is blamed.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StillAir {
-    /// Chord B [m] (of the model it stands in for).
+    /// Chord B \[m\] (of the model it stands in for).
     pub chord: f64,
 }
 
