@@ -3,7 +3,6 @@
 //! bifurcation diagram; `--measured` overlays measured amplitudes and reports their
 //! distance to the predicted branch of the same stability.
 
-use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use aeroelastic::branch::{
@@ -68,30 +67,6 @@ fn stop_text(s: &StopReason) -> String {
         StopReason::MaxPoints => "point limit reached".into(),
         StopReason::NotConverged { message, .. } => format!("did not converge {message}"),
     }
-}
-
-fn branch_csv(set: &BranchSet) -> String {
-    let mut s = String::from(
-        "U_m_s,stable,amplitude_alpha_deg,amplitude_h_m,omega_rad_s,max_floquet,branch,amplitude1_alpha_deg,amplitude1_h_m\n",
-    );
-    for (i, b) in set.branches.iter().enumerate() {
-        for p in &b.points {
-            let _ = writeln!(
-                s,
-                "{},{},{},{},{},{},{},{},{}",
-                p.u,
-                p.stable,
-                p.amplitude_alpha.to_degrees(),
-                p.amplitude_h,
-                p.omega,
-                p.max_floquet,
-                i,
-                p.amplitude1_alpha.to_degrees(),
-                p.amplitude1_h
-            );
-        }
-    }
-    s
 }
 
 fn figure(set: &BranchSet, dist: &[MeasuredDistance]) -> plots::BranchDiagramFigure {
@@ -178,8 +153,7 @@ pub fn run(args: &BranchArgs) -> anyhow::Result<()> {
     crate::ensure_dir(&args.out)?;
     let obs = |_: BranchProgress| {};
     let set = l
-        .section
-        .lco_branches(u_min, u_max, &opts, &obs)
+        .branches(u_min, u_max, &opts, &obs)
         .with_context(|| format!("LCO branches in U = {u_min}…{u_max} m/s"))?;
     for (i, b) in set.branches.iter().enumerate() {
         println!(
@@ -238,40 +212,14 @@ pub fn run(args: &BranchArgs) -> anyhow::Result<()> {
             );
         }
     }
-    let folds: Vec<_> = set
-        .branches
-        .iter()
-        .enumerate()
-        .flat_map(|(i, b)| {
-            b.events
-                .iter()
-                .filter(|e| e.kind == EventKind::Fold)
-                .map(move |e| {
-                    serde_json::json!({
-                        "branch": i,
-                        "U_m_s": e.u,
-                        "amplitude_alpha_deg": e.amplitude_alpha.to_degrees(),
-                        "amplitude_h_m": e.amplitude_h,
-                    })
-                })
-        })
-        .collect();
-    let json = serde_json::json!({
-        "format": "aeroform-branch/1",
-        "structure": args.structure.display().to_string(),
-        "model": args.model.display().to_string(),
-        "settings": {
-            "method": "single shooting (fixed-step RK4) + pseudo-arclength, Floquet multipliers from the monodromy matrix",
-            "options": set.options,
-            "u_range_m_s": set.u_range,
-        },
-        "hopf_points": set.hopf_points,
-        "folds": folds,
-        "branches": set.branches,
-        "measured": dist,
-    });
+    let json = aeroelastic::documents::branch_document(
+        &args.structure.display().to_string(),
+        &args.model.display().to_string(),
+        &set,
+        &dist,
+    );
     let csv = args.out.join("branch.csv");
-    identify::io::write_atomic(&csv, branch_csv(&set).as_bytes())?;
+    identify::io::write_atomic(&csv, aeroelastic::documents::branch_csv(&set).as_bytes())?;
     let path = args.out.join("branch.json");
     identify::io::write_atomic(&path, format!("{json:#}\n").as_bytes())?;
     let fig = plots::save(&figure(&set, &dist), &args.out, "branch_diagram")

@@ -95,19 +95,10 @@ pub fn run(args: &FlutterArgs) -> anyhow::Result<()> {
     let _out = crate::outdir::SharedDir::begin(&args.out)?;
     let b = l.section.aero.chord();
     let ensemble = match args.ensemble {
-        Some(n) => {
-            let (laws, e) = ensemble_laws(&args.model, b, n)?;
-            let fe = aeroelastic::ensemble::flutter_ensemble(
-                &l.structure,
-                &laws,
-                &e,
-                l.file.air_density,
-                method,
-                &opts,
-            )
-            .context("ensemble flutter analysis")?;
-            Some(fe)
-        }
+        Some(n) => Some(
+            l.flutter_ensemble(&args.model, method, &speeds, Some(n))
+                .context("ensemble flutter analysis")?,
+        ),
         None => None,
     };
     let mut json = flutter_document(

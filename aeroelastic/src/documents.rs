@@ -1,12 +1,19 @@
 //! A structure/model pair loaded from files, and the result documents of `aeroform flutter`
-//! (`flutter.json`) and `aeroform lco` (`lco.json`).
+//! (`flutter.json`), `aeroform lco` (`lco.json`) and `aeroform branch` (`branch.json`,
+//! `branch.csv`).
 //!
 //! Built here, not in the binary, so that the command line, the Python binding and the
 //! sweeps write the same content from the same code.
 
 use std::path::Path;
 
+use std::fmt::Write as _;
+
 use serde_json::{json, Value};
+
+use crate::branch::{BranchOptions, BranchProgress, BranchSet, EventKind, MeasuredDistance};
+use crate::ensemble::{flutter_ensemble, member_laws, FlutterEnsemble};
+use crate::identified::IdentifiedOptions;
 
 use crate::files::{LoadedModel, StructureFile};
 use crate::flutter::{FlutterAnalysis, FlutterMethod, FlutterOptions};
@@ -134,6 +141,140 @@ impl LoadedPair {
         self.section
             .lco_sweeps(speeds, &plan, &LcoOptions::default(), observer)
     }
+
+    /// Flutter and divergence of the first `n` members (`None`: all) of the ensemble of
+    /// the identification in the file `model` (written with `identify --ensemble`), on
+    /// this pair's structure and air density with the scan of [`LoadedPair::flutter`]:
+    /// the `ensemble` object of `flutter.json`.
+    ///
+    /// # Errors
+    /// [`crate::Error::Io`] / [`crate::Error::Identify`] when `model` is not a readable
+    /// identification.json; the errors of [`crate::ensemble::member_laws`] (no ensemble
+    /// section, `n` out of range) and [`crate::ensemble::flutter_ensemble`].
+    pub fn flutter_ensemble(
+        &self,
+        model: &Path,
+        method: FlutterMethod,
+        speeds: &[f64],
+        n: Option<usize>,
+    ) -> Result<FlutterEnsemble> {
+        let id = identify::pipeline::Identification::read(model).map_err(|source| {
+            crate::Error::Identify {
+                context: format!(
+                    "{}: an ensemble needs an identification.json model",
+                    model.display()
+                ),
+                source,
+            }
+        })?;
+        let opts = IdentifiedOptions::new(self.section.aero.chord());
+        let (laws, e) = member_laws(&id, &opts, n)?;
+        flutter_ensemble(
+            &self.structure,
+            &laws,
+            e,
+            self.file.air_density,
+            method,
+            &flutter_options(speeds)?,
+        )
+    }
+
+    /// LCO branches by continuation from every Hopf point in `u_min … u_max` \[m/s\], as
+    /// `aeroform branch` ([`Section::lco_branches`]).
+    ///
+    /// # Errors
+    /// [`crate::Error::InvalidParameter`] when the range is not 0 < `u_min` < `u_max`
+    /// (finite); the errors of [`Section::lco_branches`] (no Hopf point in range,
+    /// non-smooth nonlinearity, bad options).
+    pub fn branches(
+        &self,
+        u_min: f64,
+        u_max: f64,
+        opts: &BranchOptions,
+        observer: &dyn Fn(BranchProgress),
+    ) -> Result<BranchSet> {
+        if !(u_min.is_finite() && u_min > 0.0) {
+            return Err(crate::Error::param("u_min", u_min, "finite and > 0 m/s"));
+        }
+        if !(u_max.is_finite() && u_max > u_min) {
+            return Err(crate::Error::param("u_max", u_max, "finite and > u_min"));
+        }
+        self.section.lco_branches(u_min, u_max, opts, observer)
+    }
+}
+
+/// The method string recorded in `branch.json` under `settings.method`.
+pub const BRANCH_METHOD: &str = "single shooting (fixed-step RK4) + pseudo-arclength, Floquet multipliers from the monodromy matrix";
+
+/// The `branch.json` document (`aeroform-branch/1`): settings, Hopf points, folds (branch,
+/// U \[m/s\], pitch amplitude \[deg\], heave amplitude \[m\]), every branch with its
+/// points and events, and the distances of measured points (`measured`, empty without).
+pub fn branch_document(
+    structure: &str,
+    model: &str,
+    set: &BranchSet,
+    measured: &[MeasuredDistance],
+) -> Value {
+    let folds: Vec<Value> = set
+        .branches
+        .iter()
+        .enumerate()
+        .flat_map(|(i, b)| {
+            b.events
+                .iter()
+                .filter(|e| e.kind == EventKind::Fold)
+                .map(move |e| {
+                    json!({
+                        "branch": i,
+                        "U_m_s": e.u,
+                        "amplitude_alpha_deg": e.amplitude_alpha.to_degrees(),
+                        "amplitude_h_m": e.amplitude_h,
+                    })
+                })
+        })
+        .collect();
+    json!({
+        "format": "aeroform-branch/1",
+        "structure": structure,
+        "model": model,
+        "settings": {
+            "method": BRANCH_METHOD,
+            "options": set.options,
+            "u_range_m_s": set.u_range,
+        },
+        "hopf_points": set.hopf_points,
+        "folds": folds,
+        "branches": set.branches,
+        "measured": measured,
+    })
+}
+
+/// The `branch.csv` table: one row per branch point with columns `U_m_s`, `stable`,
+/// `amplitude_alpha_deg` and `amplitude_h_m` (half peak-to-peak), `omega_rad_s`,
+/// `max_floquet` (largest Floquet multiplier modulus, the trivial one excluded),
+/// `branch` (index), `amplitude1_alpha_deg` and `amplitude1_h_m` (first harmonic).
+pub fn branch_csv(set: &BranchSet) -> String {
+    let mut s = String::from(
+        "U_m_s,stable,amplitude_alpha_deg,amplitude_h_m,omega_rad_s,max_floquet,branch,amplitude1_alpha_deg,amplitude1_h_m\n",
+    );
+    for (i, b) in set.branches.iter().enumerate() {
+        for p in &b.points {
+            let _ = writeln!(
+                s,
+                "{},{},{},{},{},{},{},{},{}",
+                p.u,
+                p.stable,
+                p.amplitude_alpha.to_degrees(),
+                p.amplitude_h,
+                p.omega,
+                p.max_floquet,
+                i,
+                p.amplitude1_alpha.to_degrees(),
+                p.amplitude1_h
+            );
+        }
+    }
+    s
 }
 
 /// The `critical` object of `flutter.json`: speed, angular and cyclic frequency, reduced

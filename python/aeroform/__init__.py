@@ -33,6 +33,7 @@ __all__ = [
     "flutter",
     "lco",
     "branch",
+    "Branch",
     "diagnose",
     "sweep",
     "sweep_local",
@@ -297,6 +298,9 @@ def identify(
     subtract_nowind: bool = True,
     pysindy_alpha: float = 0.05,
     pysindy_unbias: bool = True,
+    ensemble: Optional[int] = None,
+    seed: int = 2024,
+    level: float = 0.9,
     **settings: Any,
 ) -> Identification:
     """Identification of a data set, as ``aeroform identify``: returns the content of
@@ -309,6 +313,11 @@ def identify(
     ``wind_speed``/``amplitude``/``none``), ``ridge``, ``n_delta``, ``k_key``,
     ``kept_terms``, … and ``regressor`` (``stlsq``, ``lsq``, ``pysindy`` or the
     settings' dict form). An unknown name raises :class:`AeroformError` naming it.
+
+    ``ensemble=N`` adds a block-bootstrap ensemble of N members (``seed``, interval
+    ``level``), as ``aeroform identify --ensemble N --seed S --level L``: the ``ensemble``
+    section with intervals of every coefficient and derivative, which
+    ``flutter(..., ensemble=N)`` propagates to the flutter and divergence speeds.
     """
     ds = _as_dataset(dataset)
     reg = settings.get("regressor")
@@ -324,7 +333,9 @@ def identify(
             settings["regressor"] = {"kind": _REGRESSORS[reg]}
         else:
             raise AeroformError(f"regressor `{reg}`: expected stlsq, lsq or pysindy")
-    text = _core.identify(ds._inner, json.dumps(settings), velocity, subtract_nowind)
+    text = _core.identify(
+        ds._inner, json.dumps(settings), velocity, subtract_nowind, ensemble, seed, level
+    )
     return Identification(json.loads(text))
 
 
@@ -399,16 +410,19 @@ def flutter(
     *,
     method: str = "pk",
     chord: Optional[float] = None,
+    ensemble: Optional[int] = None,
 ) -> Dict[str, Any]:
     """Flutter and divergence, as ``aeroform flutter``: returns the content of
-    ``flutter.json`` (``critical`` is the flutter point or None).
+    ``flutter.json`` (``critical`` is the flutter point or None). ``ensemble=N``: the
+    same analysis for the first N members of the model's ensemble (an identification
+    made with ``ensemble=``), intervals under ``ensemble``, as ``--ensemble N``.
 
     ``structure``: a structure TOML file or a dict of its scalar keys; ``model``: a model
     TOML file, an identification.json, or an :class:`Identification`; ``speeds``: the scan
     (``"a:b:n"`` or numbers, at least 2)."""
     u = parse_speeds(speeds)
     with _Files(structure, model) as f:
-        return json.loads(_core.flutter(f.structure, f.model, u, method, chord))
+        return json.loads(_core.flutter(f.structure, f.model, u, method, chord, ensemble))
 
 
 def lco(
@@ -431,12 +445,76 @@ def lco(
         )
 
 
-def branch(*args: Any, **kwargs: Any) -> Dict[str, Any]:
-    """LCO branch continuation (issue 11): not in this build of aeroform yet."""
-    raise NotImplementedError(
-        "aeroform.branch: the LCO branch continuation is not part of this build yet; "
-        "use aeroform.lco(structure, model, sweep=...) for upward/downward sweeps"
-    )
+class Branch(dict):  # type: ignore[type-arg]
+    """The ``branch.json`` document (a dict) of :func:`branch`, with the ``branch.csv``
+    table as :attr:`csv` and as numpy columns / a pandas DataFrame."""
+
+    csv: str
+
+    def columns(self) -> Dict[str, np.ndarray]:
+        """The ``branch.csv`` columns as numpy arrays (``stable`` as bool): ``U_m_s``,
+        ``stable``, ``amplitude_alpha_deg``, ``amplitude_h_m``, ``omega_rad_s``,
+        ``max_floquet``, ``branch``, ``amplitude1_alpha_deg``, ``amplitude1_h_m``."""
+        lines = self.csv.strip().splitlines()
+        names = lines[0].split(",")
+        rows = [line.split(",") for line in lines[1:]]
+        out: Dict[str, np.ndarray] = {}
+        for j, name in enumerate(names):
+            col = [r[j] for r in rows]
+            if name == "stable":
+                out[name] = np.array([c == "true" for c in col], dtype=bool)
+            elif name == "branch":
+                out[name] = np.array([int(c) for c in col], dtype=np.int64)
+            else:
+                out[name] = np.array([float(c) for c in col], dtype=np.float64)
+        return out
+
+    def to_frame(self) -> Any:
+        """The ``branch.csv`` table as a pandas DataFrame."""
+        import pandas as pd
+
+        return pd.DataFrame(self.columns())
+
+
+def branch(
+    structure: Any,
+    model: Any,
+    speeds: Union[str, Tuple[float, float]],
+    *,
+    measured: Optional[PathLike] = None,
+    max_points: int = 200,
+    steps_per_period: int = 128,
+    chord: Optional[float] = None,
+) -> Branch:
+    """LCO branches by continuation, as ``aeroform branch``: from every Hopf point of the
+    linear flutter analysis in the speed range ``speeds`` (``"a:b"`` or ``(a, b)`` [m/s]),
+    periodic orbits continued in U by single shooting and pseudo-arclength, stability by
+    Floquet multipliers, folds marked. ``measured``: a CSV of measured amplitudes
+    (columns ``branch, wind_speed_m_s, heave_amp_m, pitch_amp_rad``) compared with the
+    branch of the same stability. Returns the content of ``branch.json`` as a
+    :class:`Branch` (``.csv``, ``.columns()``, ``.to_frame()``)."""
+    if isinstance(speeds, str):
+        parts = speeds.split(":")
+        try:
+            if len(parts) != 2:
+                raise ValueError
+            lo, hi = float(parts[0]), float(parts[1])
+        except ValueError:
+            raise AeroformError(
+                f"speeds `{speeds}`: expected `a:b` with 0 < a < b [m/s]"
+            ) from None
+    else:
+        lo, hi = (float(x) for x in speeds)
+    if not (np.isfinite(lo) and np.isfinite(hi) and 0 < lo < hi):
+        raise AeroformError(f"speeds ({lo}, {hi}): expected 0 < a < b [m/s], finite")
+    meas = None if measured is None else os.fspath(measured)
+    with _Files(structure, model) as f:
+        doc, csv = _core.branch(
+            f.structure, f.model, lo, hi, meas, max_points, steps_per_period, chord
+        )
+    out = Branch(json.loads(doc))
+    out.csv = csv
+    return out
 
 
 def diagnose(

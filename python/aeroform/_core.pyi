@@ -1,6 +1,6 @@
 """Type stubs of the extension module `aeroform._core` (Rust, PyO3)."""
 
-from typing import Dict, List, Optional
+from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 import numpy.typing as npt
@@ -33,9 +33,22 @@ def dataset_from_columns(
     lift: List[Optional[npt.NDArray[np.float64]]],
     moment: List[Optional[npt.NDArray[np.float64]]],
 ) -> Dataset: ...
-def identify(dataset: Dataset, settings_json: str, velocity: str, subtract_nowind: bool) -> str: ...
+def identify(
+    dataset: Dataset,
+    settings_json: str,
+    velocity: str,
+    subtract_nowind: bool,
+    ensemble: Optional[int] = None,
+    seed: int = 2024,
+    level: float = 0.9,
+) -> str: ...
 def flutter(
-    structure: str, model: str, speeds: List[float], method: str = "pk", chord: Optional[float] = None
+    structure: str,
+    model: str,
+    speeds: List[float],
+    method: str = "pk",
+    chord: Optional[float] = None,
+    ensemble: Optional[int] = None,
 ) -> str: ...
 def lco(
     structure: str,
@@ -46,6 +59,16 @@ def lco(
     alpha0_down: float = 20.0,
     chord: Optional[float] = None,
 ) -> str: ...
+def branch(
+    structure: str,
+    model: str,
+    u_min: float,
+    u_max: float,
+    measured: Optional[str] = None,
+    max_points: int = 200,
+    steps_per_period: int = 128,
+    chord: Optional[float] = None,
+) -> Tuple[str, str]: ...
 def diagnose(forced: Dataset, free: Optional[Dataset] = None, seed: int = 1) -> str: ...
 def sweep_n_items(spec_json: str) -> int: ...
 def sweep_run_items(spec_json: str, indices: List[int]) -> str: ...

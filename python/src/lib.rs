@@ -7,7 +7,10 @@
 use std::fmt::Display;
 use std::path::{Path, PathBuf};
 
-use aeroelastic::documents::{flutter_document, lco_run_document, lco_sweep_document, LoadedPair};
+use aeroelastic::branch::{measured_distances, read_measured_amplitudes, BranchOptions};
+use aeroelastic::documents::{
+    branch_csv, branch_document, flutter_document, lco_run_document, lco_sweep_document, LoadedPair,
+};
 use aeroelastic::flutter::FlutterMethod;
 use diagnose::pipeline::DiagnoseOptions;
 use diagnose::sweep::SweepSpec;
@@ -238,13 +241,17 @@ fn dataset_from_columns(
 /// absent take their defaults), `velocity` is `auto`, `harmonic` or `sg`. Returns the
 /// `identification.json` document as JSON text.
 #[pyfunction]
-#[pyo3(name = "identify")]
+#[pyo3(name = "identify", signature = (dataset, settings_json, velocity, subtract_nowind, ensemble = None, seed = 2024, level = identify::ensemble::DEFAULT_LEVEL))]
+#[allow(clippy::too_many_arguments)]
 fn py_identify(
     py: Python<'_>,
     dataset: &PyDataset,
     settings_json: &str,
     velocity: &str,
     subtract_nowind: bool,
+    ensemble: Option<usize>,
+    seed: u64,
+    level: f64,
 ) -> PyResult<String> {
     let settings: IdentifySettings = serde_json::from_str(settings_json)
         .map_err(|e| err(format!("invalid identification option: {e}")))?;
@@ -280,9 +287,17 @@ fn py_identify(
                 ds.root.display()
             ));
         }
-        let id =
+        let mut id =
             identify::pipeline::identify(&prepared.cases, &settings, &ds.manifest.name, &|_| {})
                 .map_err(|e| format!("identification: {e}"))?;
+        if let Some(n) = ensemble {
+            // As `aeroform identify --ensemble N --seed S --level L`.
+            let mut es = identify::ensemble::EnsembleSettings::new(n, seed);
+            es.level = level;
+            let e = identify::ensemble::bootstrap(&prepared.cases, &id, &es)
+                .map_err(|e| format!("ensemble (block bootstrap): {e}"))?;
+            id.ensemble = Some(e);
+        }
         serde_json::to_string(&id).map_err(|e| e.to_string())
     })
     .map_err(err)
@@ -307,7 +322,7 @@ fn check_speeds(speeds: &[f64], what: &str) -> PyResult<()> {
 
 /// Flutter and divergence (`aeroform flutter`): returns the `flutter.json` document.
 #[pyfunction]
-#[pyo3(signature = (structure, model, speeds, method = "pk", chord = None))]
+#[pyo3(signature = (structure, model, speeds, method = "pk", chord = None, ensemble = None))]
 fn flutter(
     py: Python<'_>,
     structure: PathBuf,
@@ -315,6 +330,7 @@ fn flutter(
     speeds: Vec<f64>,
     method: &str,
     chord: Option<f64>,
+    ensemble: Option<usize>,
 ) -> PyResult<String> {
     let method = flutter_method(method)?;
     check_speeds(&speeds, "speeds")?;
@@ -323,12 +339,18 @@ fn flutter(
         let fa = pair
             .flutter(method, &speeds)
             .map_err(|e| format!("flutter analysis: {e}"))?;
-        let doc = flutter_document(
+        let mut doc = flutter_document(
             &structure.display().to_string(),
             &model.display().to_string(),
             &pair,
             &fa,
         );
+        if let Some(n) = ensemble {
+            let e = pair
+                .flutter_ensemble(&model, method, &speeds, Some(n))
+                .map_err(|e| format!("ensemble flutter analysis: {e}"))?;
+            doc["ensemble"] = serde_json::to_value(&e).map_err(|e| e.to_string())?;
+        }
         Ok::<_, String>(doc.to_string())
     })
     .map_err(err)
@@ -387,6 +409,55 @@ fn lco(
             (None, None) => unreachable!("checked above"),
         };
         Ok::<_, String>(doc.to_string())
+    })
+    .map_err(err)
+}
+
+/// LCO branches by continuation (`aeroform branch`) from every Hopf point in
+/// `u_min … u_max` [m/s]: returns `(branch.json document, branch.csv text)`. `measured`
+/// is a CSV of measured amplitudes (columns `branch`, `wind_speed_m_s`, `heave_amp_m`,
+/// `pitch_amp_rad`) whose distances to the predicted branches are reported.
+#[pyfunction]
+#[pyo3(signature = (structure, model, u_min, u_max, measured = None, max_points = 200, steps_per_period = 128, chord = None))]
+#[allow(clippy::too_many_arguments)]
+fn branch(
+    py: Python<'_>,
+    structure: PathBuf,
+    model: PathBuf,
+    u_min: f64,
+    u_max: f64,
+    measured: Option<PathBuf>,
+    max_points: usize,
+    steps_per_period: usize,
+    chord: Option<f64>,
+) -> PyResult<(String, String)> {
+    py.detach(|| {
+        let pair = LoadedPair::load(&structure, &model, chord).map_err(|e| e.to_string())?;
+        let measured = match &measured {
+            Some(p) => {
+                Some(read_measured_amplitudes(p).map_err(|e| format!("measured amplitudes: {e}"))?)
+            }
+            None => None,
+        };
+        let opts = BranchOptions {
+            max_points,
+            steps_per_period,
+            ..BranchOptions::default()
+        };
+        let set = pair
+            .branches(u_min, u_max, &opts, &|_| {})
+            .map_err(|e| format!("LCO branches in U = {u_min}…{u_max} m/s: {e}"))?;
+        let dist = measured
+            .as_deref()
+            .map(|m| measured_distances(&set, m))
+            .unwrap_or_default();
+        let doc = branch_document(
+            &structure.display().to_string(),
+            &model.display().to_string(),
+            &set,
+            &dist,
+        );
+        Ok::<_, String>((doc.to_string(), branch_csv(&set)))
     })
     .map_err(err)
 }
@@ -470,6 +541,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(py_identify, m)?)?;
     m.add_function(wrap_pyfunction!(flutter, m)?)?;
     m.add_function(wrap_pyfunction!(lco, m)?)?;
+    m.add_function(wrap_pyfunction!(branch, m)?)?;
     m.add_function(wrap_pyfunction!(py_diagnose, m)?)?;
     m.add_function(wrap_pyfunction!(sweep_n_items, m)?)?;
     m.add_function(wrap_pyfunction!(sweep_run_items, m)?)?;

@@ -1,5 +1,7 @@
 """Runs the walk-through of docs/PYTHON.md: every ```python block, in order, in one
-namespace, in a scratch folder holding a link to the repository's scenarios/."""
+namespace, in a scratch folder holding a link to the repository's scenarios/. Blocks
+fenced ```py are examples that are not executed (the Dask cluster of 1000 benchmark sets;
+python/tests/test_sweep.py runs the cluster)."""
 
 import os
 import re

@@ -1,4 +1,5 @@
-"""`aeroform.flutter` / `aeroform.lco` equal the CLI's flutter.json / lco.json."""
+"""`aeroform.flutter` / `aeroform.lco` / `aeroform.branch` equal the CLI's flutter.json /
+lco.json / branch.json and branch.csv."""
 
 import json
 
@@ -55,5 +56,29 @@ def test_errors_name_the_file_and_field(tmp_path):
         aeroform.flutter(str(S), str(M), "2:x:5")
     with pytest.raises(aeroform.AeroformError, match="exactly one"):
         aeroform.lco(str(S), str(M))
-    with pytest.raises(NotImplementedError, match="branch"):
-        aeroform.branch(str(S), str(M))
+    with pytest.raises(aeroform.AeroformError, match="speeds"):
+        aeroform.branch(str(S), str(M), "5")
+    with pytest.raises(aeroform.AeroformError, match="no Hopf point"):
+        aeroform.branch(str(BS), str(BM), "1:5")
+
+
+BS = SCENARIOS / "bristol-spring1.structure.toml"
+BM = SCENARIOS / "bristol-spring1.model.toml"
+BMEAS = SCENARIOS / "bristol-spring1-lco-amplitudes.csv"
+
+
+def test_branch_equals_the_cli(tmp_path):
+    run_cli("branch", "--structure", BS, "--model", BM, "--speeds", "12:20",
+            "--measured", BMEAS, "--out", tmp_path)
+    cli = json.loads((tmp_path / "branch.json").read_text())
+    py = aeroform.branch(str(BS), str(BM), (12.0, 20.0), measured=BMEAS)
+    assert max_difference(cli, py) == 0.0
+    assert py.csv == (tmp_path / "branch.csv").read_text()
+    # The Bristol rig model is subcritical: Hopf near 17.96 m/s, one fold below it.
+    assert abs(py["hopf_points"][0]["u"] - 17.957) < 5e-3
+    assert len(py["folds"]) == 1 and py["folds"][0]["U_m_s"] < py["hopf_points"][0]["u"]
+    cols = py.columns()
+    n = sum(len(b["points"]) for b in py["branches"])
+    assert len(cols["U_m_s"]) == n and cols["stable"].dtype == bool
+    # Both stabilities are present on a subcritical branch.
+    assert cols["stable"].any() and not cols["stable"].all()

@@ -121,13 +121,29 @@ impl DerivativeTable {
                 splines.push(Spline::new(&ks, &im));
             }
         }
-        let rfa = fit_rfa(&ks, &qs, n_lag)?;
-        Ok(DerivativeTable {
+        let mut table = DerivativeTable {
             chord,
             rows,
             splines,
-            rfa,
-        })
+            rfa: RfaFit {
+                lags: Vec::new(),
+                a: Vec::new(),
+                max_rel_error: 0.0,
+                rms_rel_error: 0.0,
+            },
+        };
+        // The RFA is fitted to the table's rows and to the frequency-domain continuation
+        // below the lowest K (`q`: K = 0 and 1/4, 1/2, 3/4 of it), so that the time domain
+        // agrees with the frequency domain where slow motions (static divergence, the
+        // start of a transient) live; without them a near-zero lag root could pair with a
+        // large constant and make the quasi-static stiffness arbitrary (docs/DECISIONS.md).
+        let k0 = ks[0];
+        let mut fit_ks: Vec<f64> = [0.0, 0.25, 0.5, 0.75].iter().map(|f| f * k0).collect();
+        let mut fit_qs: Vec<[[Complex64; 2]; 2]> = fit_ks.iter().map(|&k| table.q(k)).collect();
+        fit_ks.extend_from_slice(&ks);
+        fit_qs.extend_from_slice(&qs);
+        table.rfa = fit_rfa(&fit_ks, &fit_qs, &ks, &qs, n_lag)?;
+        Ok(table)
     }
 
     /// Table of the flat-plate closed forms ([`flat_plate_derivatives`]) at the given K.
@@ -225,8 +241,16 @@ fn rfa_linear(
     Some((coefs, res2))
 }
 
-fn fit_rfa(ks: &[f64], qs: &[[[Complex64; 2]; 2]], n_lag: usize) -> Result<RfaFit> {
-    let (kmin, kmax) = (ks[0], ks[ks.len() - 1]);
+/// Roger RFA fitted to (`ks`, `qs`) (K ≥ 0, increasing); the reported errors are over the
+/// table rows (`rows_k`, `rows_q`). Lag roots stay within [K_min/10, 10 K_max] of the rows.
+fn fit_rfa(
+    ks: &[f64],
+    qs: &[[[Complex64; 2]; 2]],
+    rows_k: &[f64],
+    rows_q: &[[[Complex64; 2]; 2]],
+    n_lag: usize,
+) -> Result<RfaFit> {
+    let (kmin, kmax) = (rows_k[0], rows_k[rows_k.len() - 1]);
     let x0: Vec<f64> = (0..n_lag)
         .map(|j| kmin.ln() + (kmax / kmin).ln() * (j as f64 + 0.5) / n_lag as f64)
         .collect();
@@ -243,7 +267,7 @@ fn fit_rfa(ks: &[f64], qs: &[[[Complex64; 2]; 2]], n_lag: usize) -> Result<RfaFi
                         return f64::MAX;
                     }
                 }
-                if l[i] < 1e-3 * kmin || l[i] > 1e3 * kmax {
+                if l[i] < 0.1 * kmin || l[i] > 10.0 * kmax {
                     return f64::MAX;
                 }
             }
@@ -264,7 +288,7 @@ fn fit_rfa(ks: &[f64], qs: &[[[Complex64; 2]; 2]], n_lag: usize) -> Result<RfaFi
         rms_rel_error: 0.0,
     };
     let mut sum = 0.0;
-    for (k, q) in ks.iter().zip(qs) {
+    for (k, q) in rows_k.iter().zip(rows_q) {
         let f = fit.q(*k);
         let mut d = 0.0;
         for r in 0..2 {
@@ -276,7 +300,7 @@ fn fit_rfa(ks: &[f64], qs: &[[[Complex64; 2]; 2]], n_lag: usize) -> Result<RfaFi
         fit.max_rel_error = fit.max_rel_error.max(rel);
         sum += rel * rel;
     }
-    fit.rms_rel_error = (sum / ks.len() as f64).sqrt();
+    fit.rms_rel_error = (sum / rows_k.len() as f64).sqrt();
     Ok(fit)
 }
 
