@@ -69,7 +69,16 @@ fn stop_text(s: &StopReason) -> String {
     }
 }
 
-fn figure(set: &BranchSet, dist: &[MeasuredDistance]) -> plots::BranchDiagramFigure {
+/// The bifurcation diagram of `set`: stable branches solid, unstable dashed, Hopf points
+/// and folds marked, `sweep` (time-integration points, pitch amplitude \[deg\]) and the
+/// measured points of `dist` on top (first-harmonic amplitudes when measured points are
+/// given, to compare like with like). Used by `aeroform branch` and the study's
+/// `[branch]` stage.
+pub(crate) fn branch_figure(
+    set: &BranchSet,
+    dist: &[MeasuredDistance],
+    sweep: Vec<plots::DiagramPoint>,
+) -> plots::BranchDiagramFigure {
     use plots::{BranchCurve, DiagramPoint};
     // With measured points, compare like with like: first-harmonic amplitudes.
     let first = !dist.is_empty();
@@ -125,7 +134,7 @@ fn figure(set: &BranchSet, dist: &[MeasuredDistance]) -> plots::BranchDiagramFig
                     })
             })
             .collect(),
-        sweep: vec![],
+        sweep,
         measured: dist
             .iter()
             .map(|d| DiagramPoint {
@@ -222,8 +231,12 @@ pub fn run(args: &BranchArgs) -> anyhow::Result<()> {
     identify::io::write_atomic(&csv, aeroelastic::documents::branch_csv(&set).as_bytes())?;
     let path = args.out.join("branch.json");
     identify::io::write_atomic(&path, format!("{json:#}\n").as_bytes())?;
-    let fig = plots::save(&figure(&set, &dist), &args.out, "branch_diagram")
-        .context("bifurcation diagram")?;
+    let fig = plots::save(
+        &branch_figure(&set, &dist, vec![]),
+        &args.out,
+        "branch_diagram",
+    )
+    .context("bifurcation diagram")?;
     println!(
         "wrote {}, {}, {}",
         csv.display(),

@@ -434,3 +434,98 @@ fn a_failing_stage_names_its_cause_and_leaves_no_partial_file() {
     assert!(!out.exists(), "a failed run left {}", out.display());
     assert!(tree(tmp.path()).keys().all(|k| k == Path::new("s.toml")));
 }
+
+/// `[branch]` in `scenarios/flat-plate-lco.toml`: branch.json / branch.csv written with the
+/// CLI's documents, the Hopf point near the linear flutter speed of the study's p-k run,
+/// the upward sweep's time-integration LCOs on the branch (linear interpolation between
+/// orbits: 0.5 %), the diagram listed and embedded in the report, and `aeroform plot`
+/// redraws it from the files.
+#[test]
+fn branch_stage_writes_the_branch_and_its_figure() {
+    let tmp = tempfile::tempdir().unwrap();
+    let study = concat!(env!("CARGO_MANIFEST_DIR"), "/scenarios/flat-plate-lco.toml");
+    let out = tmp.path().join("out");
+    let (ok, stdout, err) = aeroform(&["run", study, "--out", out.to_str().unwrap()]);
+    assert!(ok, "{err}");
+    assert!(stdout.contains("branch 0: Hopf point"), "{stdout}");
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("branch.json")).unwrap()).unwrap();
+    assert_eq!(json["format"], "aeroform-branch/1");
+    let hopf = json["hopf_points"][0]["u"].as_f64().unwrap();
+    let fl: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("flutter.json")).unwrap()).unwrap();
+    let uf = fl[0]["analysis"]["flutter"]["u"].as_f64().unwrap();
+    // The Hopf point is the onset of the time-domain realisation (Jones' two lags), the
+    // study's run is p-k on exact Theodorsen: 0.10 % apart (measured 2.0074 vs 2.0054).
+    assert!((hopf / uf - 1.0).abs() < 2e-3, "Hopf {hopf} vs U_F {uf}");
+    // branch.csv: U, stable, amplitude_alpha_deg, …
+    let rows: Vec<(f64, f64)> = std::fs::read_to_string(out.join("branch.csv"))
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let c: Vec<&str> = l.split(',').collect();
+            assert_eq!(c[1], "true", "supercritical: every orbit stable ({l})");
+            (c[0].parse().unwrap(), c[2].parse().unwrap())
+        })
+        .collect();
+    assert!(rows.len() >= 20, "{} orbits", rows.len());
+    let lco: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("lco.json")).unwrap()).unwrap();
+    let mut compared = 0;
+    for r in lco["up"].as_array().unwrap() {
+        if r["classification"] != "Lco" {
+            continue;
+        }
+        let (u, a) = (
+            r["u"].as_f64().unwrap(),
+            r["amplitude_alpha"].as_f64().unwrap().to_degrees(),
+        );
+        let Some(w) = rows.windows(2).find(|w| w[0].0 <= u && u <= w[1].0) else {
+            continue;
+        };
+        let t = (u - w[0].0) / (w[1].0 - w[0].0);
+        let b = w[0].1 + t * (w[1].1 - w[0].1);
+        assert!(
+            (b / a - 1.0).abs() < 5e-3,
+            "U = {u}: branch {b}° vs sweep {a}°"
+        );
+        compared += 1;
+    }
+    assert!(compared >= 6, "only {compared} sweep LCOs on the branch");
+    let figs = std::fs::read_to_string(out.join("figures.json")).unwrap();
+    assert!(figs.contains("branch_diagram"), "{figs}");
+    let report = std::fs::read_to_string(out.join("report.html")).unwrap();
+    assert!(report.contains("LCO branches by continuation"));
+    std::fs::remove_file(out.join("figures/branch_diagram.svg")).unwrap();
+    let (ok, _, err) = aeroform(&["plot", out.to_str().unwrap()]);
+    assert!(ok, "{err}");
+    assert!(out.join("figures/branch_diagram.svg").exists());
+}
+
+#[test]
+fn branch_stage_errors_name_the_key() {
+    let tmp = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenarios/flat-plate-lco.toml"
+    ))
+    .unwrap();
+    for (bad, key) in [
+        ("speeds = [2.3, 1.5]", "branch.speeds"),
+        ("speeds = [0.0, 1.5]", "branch.speeds[0]"),
+        ("speeds = [1.5, 2.3]\nmax_points = 0", "branch.max_points"),
+        (
+            "speeds = [1.5, 2.3]\nmeasured = \"missing.csv\"",
+            "missing.csv",
+        ),
+    ] {
+        let p = tmp.path().join("s.toml");
+        std::fs::write(&p, text.replace("speeds = [1.5, 2.3]", bad)).unwrap();
+        let out = tmp.path().join("o");
+        let (ok, _, err) = aeroform(&["run", p.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+        assert!(!ok, "{bad}");
+        assert!(err.contains(key), "{bad}: {err}");
+        assert!(!out.exists(), "{bad}: a failed run leaves no folder");
+    }
+}

@@ -718,6 +718,11 @@ pub fn render_all(study: &Study, out: &Path) -> anyhow::Result<Vec<FigureEntry>>
         cv.embed(&mut report, "phase");
     }
 
+    // ---- LCO branches by continuation
+    if s.branch.is_some() {
+        branch_section(&mut cv, &mut report, out, s.lco.is_some())?;
+    }
+
     // ---- settings
     report.section("Settings");
     if let Some(id) = &id {
@@ -744,6 +749,99 @@ pub fn render_all(study: &Study, out: &Path) -> anyhow::Result<Vec<FigureEntry>>
         .write(&out.join(names::REPORT))
         .context("writing report.html")?;
     Ok(entries)
+}
+
+/// The `[branch]` section of the report from `branch.json` (and the upward LCO sweep of
+/// `lco.json` on top of the branches when the study has an `[lco]` stage): the
+/// bifurcation diagram and the table of Hopf points and folds.
+fn branch_section(
+    cv: &mut Canvas<'_>,
+    report: &mut Report,
+    out: &Path,
+    with_sweep: bool,
+) -> anyhow::Result<()> {
+    use aeroelastic::branch::{Branch, BranchOptions, BranchSet, HopfPoint, MeasuredDistance};
+    #[derive(serde::Deserialize)]
+    struct Settings {
+        options: BranchOptions,
+        u_range_m_s: [f64; 2],
+    }
+    #[derive(serde::Deserialize)]
+    struct Doc {
+        settings: Settings,
+        hopf_points: Vec<HopfPoint>,
+        branches: Vec<Branch>,
+        measured: Vec<MeasuredDistance>,
+    }
+    let doc: Doc = read_json(&out.join(names::BRANCH))?;
+    let set = BranchSet {
+        hopf_points: doc.hopf_points,
+        branches: doc.branches,
+        options: doc.settings.options,
+        u_range: doc.settings.u_range_m_s,
+    };
+    let sweep = if with_sweep {
+        let stage: LcoStage = read_json(&out.join(names::LCO))?;
+        stage
+            .up
+            .iter()
+            .filter(|r| r.classification == aeroelastic::lco::Classification::Lco)
+            .map(|r| plots::DiagramPoint {
+                u: r.u,
+                amplitude: r.amplitude_alpha.to_degrees(),
+                stable: true,
+            })
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let n_sweep = sweep.len();
+    if cv.wants("branch_diagram") {
+        cv.draw(
+            "branch_diagram",
+            "branch_diagram",
+            format!(
+                "LCO branches by continuation (single shooting + pseudo-arclength): stable orbits solid, unstable dashed (Floquet multipliers), Hopf points and folds marked{}{}.",
+                if n_sweep > 0 { format!(", {n_sweep} time-integration LCOs of the upward sweep on top") } else { String::new() },
+                if doc.measured.is_empty() { String::new() } else { format!(", {} measured points", doc.measured.len()) }
+            ),
+            &crate::branch_cmd::branch_figure(&set, &doc.measured, sweep),
+        )?;
+    }
+    report.section("LCO branches by continuation");
+    let mut rows: Vec<Vec<String>> = Vec::new();
+    for (i, b) in set.branches.iter().enumerate() {
+        rows.push(vec![
+            i.to_string(),
+            "Hopf".into(),
+            format!("{:.4}", b.hopf.u),
+            "0".into(),
+            format!("{} ({} orbits)", b.criticality, b.points.len()),
+        ]);
+        for e in &b.events {
+            rows.push(vec![
+                i.to_string(),
+                format!("{:?}", e.kind),
+                format!("{:.4}", e.u),
+                format!("{:.3}", e.amplitude_alpha.to_degrees()),
+                String::new(),
+            ]);
+        }
+    }
+    report.table(
+        "Hopf points and bifurcations of the branches (branch.json, branch.csv)",
+        &[
+            "branch",
+            "point",
+            "U [m/s]",
+            "pitch amplitude [deg]",
+            "note",
+        ]
+        .map(String::from),
+        &rows,
+    );
+    cv.embed(report, "branch_diagram");
+    Ok(())
 }
 
 #[cfg(test)]

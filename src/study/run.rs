@@ -42,6 +42,10 @@ pub mod names {
     pub const LCO: &str = "lco.json";
     /// LCO amplitudes per speed and sweep.
     pub const LCO_AMPLITUDES: &str = "lco_amplitudes.csv";
+    /// LCO branches by continuation (`[branch]`), as `aeroform branch` writes it.
+    pub const BRANCH: &str = "branch.json";
+    /// One row per branch orbit (`[branch]`).
+    pub const BRANCH_CSV: &str = "branch.csv";
     /// Truth vs identified: flutter speed and LCO amplitudes (`lco.compare_truth`).
     pub const ROUND_TRIP: &str = "round_trip.csv";
     /// Figure folder.
@@ -179,6 +183,26 @@ pub fn run_study(study: &Study, out: &Path, quiet: bool) -> anyhow::Result<Timin
         timed(&mut timings, "lco", || {
             lco_stage(study, out, [flutter_speed, truth_flutter_speed], &derived)
         })?;
+    }
+    if study.spec.branch.is_some() {
+        let set = timed(&mut timings, "branch", || {
+            branch_stage(study, out, &derived)
+        })?;
+        if !quiet {
+            for (i, b) in set.branches.iter().enumerate() {
+                let folds = b
+                    .events
+                    .iter()
+                    .filter(|e| e.kind == aeroelastic::branch::EventKind::Fold)
+                    .count();
+                println!(
+                    "branch {i}: Hopf point U = {:.4} m/s ({}), {} orbits, {folds} fold(s)",
+                    b.hopf.u,
+                    b.criticality,
+                    b.points.len()
+                );
+            }
+        }
     }
     timed(&mut timings, "figures+report", || {
         super::figures::render_all(study, out).map(|_| ())
@@ -713,4 +737,62 @@ fn round_trip_table(stage: &LcoStage, out: &Path) -> anyhow::Result<()> {
         }
     }
     csv.write(&out.join(names::ROUND_TRIP))
+}
+
+/// The `[branch]` stage: LCO branches by continuation on the section of `[structure]` and
+/// `[aero]` (the identified law when `aero.model = "identified"`), written as
+/// `branch.json` / `branch.csv` with the same documents as `aeroform branch`.
+///
+/// # Errors
+/// A missing `[structure]`/`[aero]`, an unreadable measured file (named), no Hopf point in
+/// the range or a branch that cannot start (the library's message).
+fn branch_stage(
+    study: &Study,
+    out: &Path,
+    derived: &build::Derived,
+) -> anyhow::Result<aeroelastic::branch::BranchSet> {
+    let Some(b) = &study.spec.branch else {
+        anyhow::bail!("no [branch] stage");
+    };
+    let section = build::nonlinear_section(study, derived)?;
+    let opts = aeroelastic::branch::BranchOptions {
+        max_points: b.max_points,
+        steps_per_period: b.steps_per_period,
+        ..aeroelastic::branch::BranchOptions::default()
+    };
+    let measured = match &b.measured {
+        Some(p) => {
+            let path = study.base.join(p);
+            Some(
+                aeroelastic::branch::read_measured_amplitudes(&path)
+                    .with_context(|| format!("branch.measured ({})", path.display()))?,
+            )
+        }
+        None => None,
+    };
+    let [u_min, u_max] = b.speeds;
+    let set = section
+        .lco_branches(u_min, u_max, &opts, &|_| {})
+        .with_context(|| format!("[branch]: LCO branches in U = {u_min}…{u_max} m/s"))?;
+    let dist = measured
+        .as_deref()
+        .map(|m| aeroelastic::branch::measured_distances(&set, m))
+        .unwrap_or_default();
+    let model = study
+        .spec
+        .aero
+        .as_ref()
+        .map_or_else(|| section.aero.name(), |a| a.model.clone());
+    let doc = aeroelastic::documents::branch_document(
+        &format!("{} [structure]", names::STUDY),
+        &model,
+        &set,
+        &dist,
+    );
+    write_text(&out.join(names::BRANCH), &format!("{doc:#}\n"))?;
+    write_text(
+        &out.join(names::BRANCH_CSV),
+        &aeroelastic::documents::branch_csv(&set),
+    )?;
+    Ok(set)
 }

@@ -31,6 +31,8 @@ pub struct StudySpec {
     pub flutter: Option<FlutterSpec>,
     /// LCO stage.
     pub lco: Option<LcoSpec>,
+    /// LCO branches by continuation (stable and unstable, folds), as `aeroform branch`.
+    pub branch: Option<BranchSpec>,
     /// Figures and series to save.
     #[serde(default)]
     pub outputs: OutputsSpec,
@@ -487,8 +489,34 @@ fn atol() -> f64 {
     1e-10
 }
 
+/// `[branch]`: LCO branches by continuation from every Hopf point in `speeds`, on the
+/// section of `[structure]` and `[aero]` (as `aeroform branch`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BranchSpec {
+    /// Speed range `[a, b]` \[m/s\], 0 < a < b: Hopf points are searched and branches
+    /// continued in it.
+    pub speeds: [f64; 2],
+    /// Largest number of orbits per branch.
+    #[serde(default = "branch_points")]
+    pub max_points: usize,
+    /// Fixed RK4 steps per period of the shooting integration.
+    #[serde(default = "steps_per_period")]
+    pub steps_per_period: usize,
+    /// Measured amplitudes to overlay (CSV: `branch, wind_speed_m_s, heave_amp_m,
+    /// pitch_amp_rad`), relative to the study file.
+    pub measured: Option<PathBuf>,
+}
+
+fn branch_points() -> usize {
+    200
+}
+fn steps_per_period() -> usize {
+    128
+}
+
 /// Figure kinds a study can draw.
-pub const FIGURE_KINDS: [&str; 9] = [
+pub const FIGURE_KINDS: [&str; 10] = [
     "time_series",
     "spectrum",
     "delta_path",
@@ -498,6 +526,7 @@ pub const FIGURE_KINDS: [&str; 9] = [
     "vg",
     "bifurcation",
     "phase",
+    "branch_diagram",
 ];
 
 /// `[outputs]`.
@@ -698,6 +727,9 @@ impl Study {
             if !l.phase_speeds.is_empty() {
                 v.push("phase");
             }
+        }
+        if s.branch.is_some() {
+            v.push("branch_diagram");
         }
         v.into_iter().map(String::from).collect()
     }
@@ -989,14 +1021,16 @@ impl Study {
                 ),
             );
         }
-        if (s.flutter.is_some() || s.lco.is_some()) && (s.structure.is_none() || s.aero.is_none()) {
+        if (s.flutter.is_some() || s.lco.is_some() || s.branch.is_some())
+            && (s.structure.is_none() || s.aero.is_none())
+        {
             return err(
                 if s.structure.is_none() {
                     "structure"
                 } else {
                     "aero"
                 },
-                "the flutter and LCO stages need [structure] and [aero]".into(),
+                "the flutter, LCO and branch stages need [structure] and [aero]".into(),
             );
         }
         if let Some(st) = &s.structure {
@@ -1103,6 +1137,26 @@ impl Study {
                         check_model(&k, m, s.data.is_some())?;
                     }
                 }
+            }
+        }
+        if let Some(b) = &s.branch {
+            let [a, c] = b.speeds;
+            lim(positive_at_most("branch.speeds[0]", a, MAX_SPEED, "m/s"))?;
+            lim(positive_at_most("branch.speeds[1]", c, MAX_SPEED, "m/s"))?;
+            if c <= a {
+                return err("branch.speeds", format!("[{a}, {c}]: expected a < b"));
+            }
+            if !(1..=100_000).contains(&b.max_points) {
+                return err(
+                    "branch.max_points",
+                    format!("{}: expected 1 … 100000", b.max_points),
+                );
+            }
+            if !(16..=100_000).contains(&b.steps_per_period) {
+                return err(
+                    "branch.steps_per_period",
+                    format!("{}: expected 16 … 100000", b.steps_per_period),
+                );
             }
         }
         if let Some(l) = &s.lco {
