@@ -88,16 +88,9 @@ fn truth_derivative(name: &str, k: f64) -> f64 {
         [h[(1, 0)] / (qd * CHORD), h[(1, 1)] / (qd * CHORD * CHORD)],
     ];
     let d = aeroelastic::theodorsen::Derivatives::from_q_matrix(k, q);
-    match name {
-        "H1" => d.h1,
-        "H2" => d.h2,
-        "H3" => d.h3,
-        "H4" => d.h4,
-        "A1" => d.a1,
-        "A2" => d.a2,
-        "A3" => d.a3,
-        _ => d.a4,
-    }
+    let x = aeroelastic::theodorsen::Derivative::parse(name)
+        .unwrap_or_else(|| panic!("{name} is not a flutter derivative"));
+    d.get(x)
 }
 
 /// Largest error of the identified derivatives against the truth, relative to

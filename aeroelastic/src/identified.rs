@@ -50,7 +50,7 @@ use crate::aero::{
     RfaFit,
 };
 use crate::optim::Spline;
-use crate::theodorsen::{flat_plate_derivatives, Derivatives};
+use crate::theodorsen::{flat_plate_derivatives, Derivative, Derivatives};
 use crate::{Error, Result};
 
 /// What to do with a derivative that is `null` (not identifiable) in a case.
@@ -197,8 +197,18 @@ pub struct IdentifiedLaw {
     model: NonlinearAero,
 }
 
-const LIFT_NAMES: [&str; 4] = ["H1", "H2", "H3", "H4"];
-const MOMENT_NAMES: [&str; 4] = ["A1", "A2", "A3", "A4"];
+const LIFT_NAMES: [Derivative; 4] = [
+    Derivative::H1,
+    Derivative::H2,
+    Derivative::H3,
+    Derivative::H4,
+];
+const MOMENT_NAMES: [Derivative; 4] = [
+    Derivative::A1,
+    Derivative::A2,
+    Derivative::A3,
+    Derivative::A4,
+];
 /// Terms and K of derivative index 1..4 (d1 = h_dot over K_h, d2 = alpha_dot over K_α…).
 const LINEAR: [(&str, ReducedFrequency); 4] = [
     ("h_dot", ReducedFrequency::KH),
@@ -279,20 +289,6 @@ impl QEntry {
         } else {
             s.eval(k)
         }
-    }
-}
-
-fn flat_plate_value(name: &str, k: f64) -> f64 {
-    let d = flat_plate_derivatives(k);
-    match name {
-        "H1" => d.h1,
-        "H2" => d.h2,
-        "H3" => d.h3,
-        "H4" => d.h4,
-        "A1" => d.a1,
-        "A2" => d.a2,
-        "A3" => d.a3,
-        _ => d.a4,
     }
 }
 
@@ -395,7 +391,8 @@ impl IdentifiedLaw {
         // Linear derivatives, each over its own K.
         let mut derivatives = Vec::with_capacity(8);
         for (channel, names) in [(Channel::Lift, LIFT_NAMES), (Channel::Moment, MOMENT_NAMES)] {
-            for (i, name) in names.iter().enumerate() {
+            for (i, derivative) in names.into_iter().enumerate() {
+                let name = derivative.name();
                 let (term, over) = LINEAR[i];
                 let mut pts = Vec::new();
                 let mut missing = Vec::new();
@@ -433,7 +430,7 @@ impl IdentifiedLaw {
                                         let v = if opts.missing == MissingDerivative::Zero {
                                             0.0
                                         } else {
-                                            flat_plate_value(name, *k)
+                                            flat_plate_derivatives(*k).get(derivative)
                                         };
                                         pts.push((*k, v, true));
                                     }

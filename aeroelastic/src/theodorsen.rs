@@ -84,7 +84,77 @@ pub struct Derivatives {
     pub a4: f64,
 }
 
+/// One of the eight Scanlan flutter derivatives H1*…H4*, A1*…A4* (lift H, moment A;
+/// 1 heave velocity, 2 pitch velocity, 3 pitch, 4 heave), named as in the result files.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Derivative {
+    /// H1*: lift from heave velocity.
+    H1,
+    /// H2*: lift from pitch velocity.
+    H2,
+    /// H3*: lift from pitch.
+    H3,
+    /// H4*: lift from heave.
+    H4,
+    /// A1*: moment from heave velocity.
+    A1,
+    /// A2*: moment from pitch velocity.
+    A2,
+    /// A3*: moment from pitch.
+    A3,
+    /// A4*: moment from heave.
+    A4,
+}
+
+impl Derivative {
+    /// All eight, lift first, in file order.
+    pub const ALL: [Derivative; 8] = [
+        Derivative::H1,
+        Derivative::H2,
+        Derivative::H3,
+        Derivative::H4,
+        Derivative::A1,
+        Derivative::A2,
+        Derivative::A3,
+        Derivative::A4,
+    ];
+
+    /// The name used in the result files (`"H1"` … `"A4"`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Derivative::H1 => "H1",
+            Derivative::H2 => "H2",
+            Derivative::H3 => "H3",
+            Derivative::H4 => "H4",
+            Derivative::A1 => "A1",
+            Derivative::A2 => "A2",
+            Derivative::A3 => "A3",
+            Derivative::A4 => "A4",
+        }
+    }
+
+    /// The derivative named `name` (`"H1"` … `"A4"`); `None` for any other name (an Eq. 19
+    /// nonlinear coefficient such as `"N1"` is not a flutter derivative).
+    pub fn parse(name: &str) -> Option<Derivative> {
+        Derivative::ALL.into_iter().find(|d| d.name() == name)
+    }
+}
+
 impl Derivatives {
+    /// The value of derivative `d`.
+    pub fn get(&self, d: Derivative) -> f64 {
+        match d {
+            Derivative::H1 => self.h1,
+            Derivative::H2 => self.h2,
+            Derivative::H3 => self.h3,
+            Derivative::H4 => self.h4,
+            Derivative::A1 => self.a1,
+            Derivative::A2 => self.a2,
+            Derivative::A3 => self.a3,
+            Derivative::A4 => self.a4,
+        }
+    }
+
     /// Complex aerodynamic transfer matrix in nondimensional coordinates:
     /// (C_L, C_M)ᵀ = Q(K) (h/B, α)ᵀ for harmonic motion e^{iωt}, with
     /// Q = K² [[H4* + iH1*, H3* + iH2*], [A4* + iA1*, A3* + iA2*]].
@@ -176,6 +246,27 @@ pub fn flat_plate_derivatives(k: f64) -> Derivatives {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn derivative_names_round_trip_and_select_the_field() {
+        let d = Derivatives {
+            k: 0.5,
+            h1: 1.0,
+            h2: 2.0,
+            h3: 3.0,
+            h4: 4.0,
+            a1: 5.0,
+            a2: 6.0,
+            a3: 7.0,
+            a4: 8.0,
+        };
+        for (i, x) in Derivative::ALL.into_iter().enumerate() {
+            assert_eq!(Derivative::parse(x.name()), Some(x));
+            assert_eq!(d.get(x), (i + 1) as f64);
+        }
+        assert_eq!(Derivative::parse("N1"), None);
+        assert_eq!(Derivative::parse("a4"), None);
+    }
 
     #[test]
     fn theodorsen_matches_design_reference_values() {

@@ -2,6 +2,7 @@
 
 use std::collections::{BTreeMap, BTreeSet};
 
+use aeroelastic::theodorsen::Derivative;
 use identify::pipeline::{CaseResult, GroupForce, Identification};
 use identify::record::CaseMeta;
 use identify::series::CaseSeries;
@@ -427,15 +428,15 @@ fn ensemble_bar(id: &Identification, i: usize, force: Force, name: &str) -> [f64
 /// over the identified K range.
 pub fn derivative_figure(id: &Identification, elastic_axis: f64) -> DerivativeFigure {
     // (name, force, index in eq19 array, uses K_alpha)
-    let defs: [(&str, Force, usize, bool); 8] = [
-        ("H1", Force::Lift, 0, false),
-        ("H2", Force::Lift, 1, true),
-        ("H3", Force::Lift, 2, true),
-        ("H4", Force::Lift, 3, false),
-        ("A1", Force::Moment, 0, false),
-        ("A2", Force::Moment, 1, true),
-        ("A3", Force::Moment, 2, true),
-        ("A4", Force::Moment, 3, false),
+    let defs: [(Derivative, Force, usize, bool); 8] = [
+        (Derivative::H1, Force::Lift, 0, false),
+        (Derivative::H2, Force::Lift, 1, true),
+        (Derivative::H3, Force::Lift, 2, true),
+        (Derivative::H4, Force::Lift, 3, false),
+        (Derivative::A1, Force::Moment, 0, false),
+        (Derivative::A2, Force::Moment, 1, true),
+        (Derivative::A3, Force::Moment, 2, true),
+        (Derivative::A4, Force::Moment, 3, false),
     ];
     let mut groups: Vec<&str> = id.cases.iter().map(|c| c.group.as_str()).collect();
     groups.sort_unstable();
@@ -457,7 +458,8 @@ pub fn derivative_figure(id: &Identification, elastic_axis: f64) -> DerivativeFi
         .collect();
     let panels = defs
         .iter()
-        .map(|&(name, force, idx, uses_alpha)| {
+        .map(|&(derivative, force, idx, uses_alpha)| {
+            let name = derivative.name();
             let points = groups
                 .iter()
                 .map(|g| {
@@ -489,16 +491,7 @@ pub fn derivative_figure(id: &Identification, elastic_axis: f64) -> DerivativeFi
                 .iter()
                 .map(|&k| {
                     let d = aeroelastic::theodorsen::thin_plate_derivatives(k, elastic_axis);
-                    match name {
-                        "H1" => d.h1,
-                        "H2" => d.h2,
-                        "H3" => d.h3,
-                        "H4" => d.h4,
-                        "A1" => d.a1,
-                        "A2" => d.a2,
-                        "A3" => d.a3,
-                        _ => d.a4,
-                    }
+                    d.get(derivative)
                 })
                 .collect();
             DerivativePanel {
