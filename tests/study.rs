@@ -325,8 +325,16 @@ fn plate_round_trip_study_matches_the_truth() {
     assert!(ok, "{err}");
     let csv = std::fs::read_to_string(tmp.path().join("round_trip.csv")).unwrap();
     let mut lco = 0;
+    let mut decays_at_6_4 = 0;
     for row in csv.lines().skip(1) {
         let c: Vec<&str> = row.split(',').collect();
+        // issue 13: no run may end `unsettled` (the stiffness detector used to abort three)
+        assert!(!row.contains("unsettled"), "unsettled run: {row}");
+        if c[1] == "6.4" {
+            // below the identified flutter speed both models decay
+            assert_eq!((c[5], c[6]), ("decay", "decay"), "{row}");
+            decays_at_6_4 += 1;
+        }
         if c[0] == "flutter_speed_m_s" {
             let e: f64 = c[4].parse().unwrap();
             assert!(e.abs() < 0.02, "flutter speed error {e}");
@@ -337,6 +345,9 @@ fn plate_round_trip_study_matches_the_truth() {
         }
     }
     assert!(lco >= 8, "only {lco} LCO pairs:\n{csv}");
+    assert_eq!(decays_at_6_4, 2, "{csv}");
+    let lco_json = std::fs::read_to_string(tmp.path().join("lco.json")).unwrap();
+    assert!(!lco_json.contains("unsettled"), "lco.json has an unsettled run");
     assert!(tmp.path().join("figures/bifurcation-truth.svg").exists());
 }
 
