@@ -208,6 +208,16 @@ pub fn run(args: &IdentifyArgs) -> anyhow::Result<Identification> {
         .context("invalid identification option")?;
     let pre = args.preprocess();
     pre.check().context("invalid preprocessing option")?;
+    if let Some(n) = args.ensemble {
+        // before any data are read (a u64 count would otherwise fail only after the fit)
+        aeroform::limits::count("--ensemble", n as u128, aeroform::limits::MAX_ENSEMBLE)?;
+        if n < 2 {
+            return Err(crate::exit::Usage(format!(
+                "`--ensemble`: {n} member; an interval needs at least 2"
+            ))
+            .into());
+        }
+    }
 
     let t_start = Instant::now();
     let options = ReadOptions {

@@ -30,6 +30,9 @@ pub const MAX_PERIODS: f64 = 1e5;
 pub const MAX_PHASE_PERIODS: f64 = 1000.0;
 /// Largest initial pitch perturbation magnitude \[deg\].
 pub const MAX_PITCH_DEG: f64 = 90.0;
+/// Largest number of bootstrap members of an identification ensemble (each member is one
+/// identification, ≈ the nominal one's cost; `identify --ensemble`, `[identify] ensemble`).
+pub const MAX_ENSEMBLE: usize = 10_000;
 
 /// A request beyond a cap or a physically implausible number: the flag or dotted key, and
 /// what is wrong with the numbers.

@@ -346,8 +346,72 @@ fn plate_round_trip_study_matches_the_truth() {
     }
     assert!(lco >= 8, "only {lco} LCO pairs:\n{csv}");
     assert_eq!(decays_at_6_4, 2, "{csv}");
+    // `[identify] ensemble = 20`: intervals of the identified law's flutter speed and LCO
+    // amplitudes (issue 15), in the CSVs, the figures and the report
+    let pts = std::fs::read_to_string(tmp.path().join("flutter_points.csv")).unwrap();
+    let header: Vec<&str> = pts.lines().next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let mut truth_uf = f64::NAN;
+    let mut interval = None;
+    for row in pts.lines().skip(1) {
+        let c: Vec<&str> = row.split(',').collect();
+        let uf: f64 = c[col("U_F_m_s")].parse().unwrap();
+        if c[col("model")] == "truth" {
+            truth_uf = uf;
+            assert_eq!(c[col("U_F_lower_m_s")], "", "the truth has no ensemble");
+        } else {
+            let lo: f64 = c[col("U_F_lower_m_s")].parse().unwrap();
+            let hi: f64 = c[col("U_F_upper_m_s")].parse().unwrap();
+            assert_eq!(c[col("ensemble_members")], "20");
+            assert_eq!(c[col("ensemble_with_flutter")], "20");
+            assert!(lo < uf && uf < hi, "nominal {uf} outside [{lo}, {hi}]");
+            assert!(hi - lo < 0.05 * uf, "[{lo}, {hi}]");
+            interval = Some((lo, hi));
+        }
+    }
+    let (lo, hi) = interval.expect("identified run");
+    // the truth's flutter speed lies in the 90 % interval (seed 1: 6.595 in [6.588, 6.620])
+    assert!(
+        lo <= truth_uf && truth_uf <= hi,
+        "truth {truth_uf} outside [{lo}, {hi}]"
+    );
+    let li = std::fs::read_to_string(tmp.path().join("lco_intervals.csv")).unwrap();
+    let nominal: std::collections::HashMap<String, f64> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect::<Vec<_>>())
+        .filter(|c| c[0] == "lco_amplitude_deg_up")
+        .map(|c| (c[1].to_string(), c[3].parse().unwrap()))
+        .collect();
+    let mut bars = 0;
+    for row in li.lines().skip(1) {
+        let c: Vec<&str> = row.split(',').collect();
+        assert_eq!(c[2], "20", "{row}");
+        if c[3] == "0" {
+            assert_eq!(c[0], "6.4", "{row}");
+            assert_eq!(c[4], "20", "every member decays at 6.4 m/s: {row}");
+            continue;
+        }
+        let v: Vec<f64> = c[7..10].iter().map(|x| x.parse().unwrap()).collect();
+        let nom = nominal[c[0]];
+        assert!(v[1] <= v[0] && v[0] <= v[2], "{row}");
+        assert!(
+            v[1] <= nom && nom <= v[2],
+            "nominal {nom} outside the interval: {row}"
+        );
+        bars += 1;
+    }
+    assert_eq!(bars, 5, "{li}");
+    let report = std::fs::read_to_string(tmp.path().join("report.html")).unwrap();
+    assert!(report.contains("Propagated identification uncertainty"));
+    assert!(report.contains("LCO amplitude intervals over the identification ensemble"));
+    let figs = std::fs::read_to_string(tmp.path().join("figures.json")).unwrap();
+    assert!(figs.contains("Error bars: 90 % interval"), "{figs}");
     let lco_json = std::fs::read_to_string(tmp.path().join("lco.json")).unwrap();
-    assert!(!lco_json.contains("unsettled"), "lco.json has an unsettled run");
+    assert!(
+        !lco_json.contains("\"Unsettled\""),
+        "lco.json has an unsettled run"
+    );
     assert!(tmp.path().join("figures/bifurcation-truth.svg").exists());
 }
 

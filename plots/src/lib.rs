@@ -25,12 +25,14 @@ pub use diagnosis_report::{
     DiagnosisFigure,
 };
 pub use error::{Error, Result};
-pub use figures::bifurcation::{BifurcationFigure, BifurcationPoint, ResponseClass, Sweep};
+pub use figures::bifurcation::{
+    AmplitudeInterval, BifurcationFigure, BifurcationPoint, ResponseClass, Sweep,
+};
 pub use figures::branch_diagram::{BranchCurve, BranchDiagramFigure, DiagramPoint};
 pub use figures::comparison::{ComparisonFigure, ComparisonPanel};
 pub use figures::delta_path::DeltaPathFigure;
 pub use figures::derivatives::{DerivativeFigure, DerivativePanel, DerivativePoints};
-pub use figures::flutter::{FlutterPoint, ModeBranch, VgFigure};
+pub use figures::flutter::{FlutterPoint, ModeBranch, SpeedInterval, VgFigure};
 pub use figures::gap_heatmap::{GapHeatmapFigure, GapHeatmapPanel};
 pub use figures::heatmap::{diverging, HeatmapGridFigure, HeatmapPanel};
 pub use figures::histogram::{HistogramFigure, HistogramPanel};

@@ -292,6 +292,13 @@ pub(crate) fn vg() -> VgFigure {
             u: uf,
             freq: 3.0 - 0.0012 * uf * uf,
         }),
+        flutter_interval: Some(SpeedInterval {
+            lower: 22.6,
+            upper: 24.5,
+            level: 0.9,
+            found: 20,
+            members: 20,
+        }),
     }
 }
 
@@ -339,6 +346,26 @@ pub(crate) fn bifurcation() -> BifurcationFigure {
         points,
         u_unit: "m/s".into(),
         flutter_speed: Some(uf),
+        intervals: (0..6)
+            .map(|i| {
+                let u = 20.0 + 0.75 * i as f64;
+                let m = lco(u);
+                AmplitudeInterval {
+                    u,
+                    median: m,
+                    lower: 0.93 * m,
+                    upper: 1.05 * m,
+                }
+            })
+            .collect(),
+        interval_label: "90 % interval over 20 bootstrap members".into(),
+        flutter_interval: Some(SpeedInterval {
+            lower: 19.4,
+            upper: 20.7,
+            level: 0.9,
+            found: 20,
+            members: 20,
+        }),
     }
 }
 

@@ -3,6 +3,7 @@
 
 use std::sync::Once;
 
+use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::element::{ComposedElement, EmptyElement, PathElement, Polygon};
 use plotters::prelude::*;
@@ -234,6 +235,11 @@ pub(crate) enum Glyph {
         /// Colour.
         color: RGBColor,
     },
+    /// A vertical error bar with caps (an interval).
+    ErrorBar {
+        /// Colour.
+        color: RGBColor,
+    },
 }
 
 /// One legend entry.
@@ -277,6 +283,50 @@ impl LegendEntry {
             glyph: Glyph::Patch { color },
         }
     }
+    pub(crate) fn error_bar(label: impl Into<String>, color: RGBColor) -> Self {
+        LegendEntry {
+            label: label.into(),
+            glyph: Glyph::ErrorBar { color },
+        }
+    }
+}
+
+/// Half length of an error bar's cap \[px\].
+pub(crate) const CAP_PX: i32 = 7;
+
+/// Draws an interval as an error bar with caps on `chart`, in data coordinates: vertical at
+/// `x` from `lo` to `hi` (`vertical`), or horizontal at height `x` from `lo` to `hi`.
+///
+/// # Errors
+/// [`Error::Draw`]-type errors of the backend, tagged with `kind`.
+pub(crate) fn draw_error_bar<DB: DrawingBackend>(
+    chart: &mut ChartContext<'_, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+    (x, lo, hi): (f64, f64, f64),
+    vertical: bool,
+    color: RGBColor,
+    kind: &'static str,
+) -> Result<()> {
+    let style = ShapeStyle::from(color).stroke_width(2);
+    let at = |v: f64| if vertical { (x, v) } else { (v, x) };
+    let cap = if vertical {
+        vec![(-CAP_PX, 0), (CAP_PX, 0)]
+    } else {
+        vec![(0, -CAP_PX), (0, CAP_PX)]
+    };
+    chart
+        .draw_series(std::iter::once(PathElement::new(
+            vec![at(lo), at(hi)],
+            style,
+        )))
+        .ctx(kind)?;
+    chart
+        .draw_series(
+            [lo, hi]
+                .into_iter()
+                .map(|v| EmptyElement::at(at(v)) + PathElement::new(cap.clone(), style)),
+        )
+        .ctx(kind)?;
+    Ok(())
 }
 
 const GLYPH_W: i32 = 40;
@@ -381,6 +431,17 @@ fn draw_glyph<DB: DrawingBackend>(
                 7,
             ))
             .ctx(kind)?;
+        }
+        Glyph::ErrorBar { color } => {
+            let style = ShapeStyle::from(color).stroke_width(2);
+            let xc = x + GLYPH_W / 2;
+            for path in [
+                vec![(xc, yc - 11), (xc, yc + 11)],
+                vec![(xc - CAP_PX, yc - 11), (xc + CAP_PX, yc - 11)],
+                vec![(xc - CAP_PX, yc + 11), (xc + CAP_PX, yc + 11)],
+            ] {
+                area.draw(&PathElement::new(path, style)).ctx(kind)?;
+            }
         }
         Glyph::Patch { color } => {
             area.draw(&Rectangle::new(

@@ -396,6 +396,48 @@ fn degenerate_data_draws_without_panic() {
         ..Default::default()
     };
     render_png(&bf).unwrap();
+    // intervals with non-finite or reversed bounds are skipped, never drawn or panicking
+    let vg = VgFigure {
+        modes: vec![ModeBranch {
+            name: "m".into(),
+            u: vec![5.0, 6.0],
+            damping: vec![0.1, -0.1],
+            freq: vec![1.0, 1.0],
+        }],
+        flutter_interval: Some(SpeedInterval {
+            lower: f64::NAN,
+            upper: 6.0,
+            level: 0.9,
+            found: 1,
+            members: 2,
+        }),
+        ..Default::default()
+    };
+    render_png(&vg).unwrap();
+    let bf = BifurcationFigure {
+        points: vec![BifurcationPoint {
+            u: 3.0,
+            amplitude: 1.0,
+            sweep: Sweep::Up,
+            class: ResponseClass::Lco,
+            stop: "",
+        }],
+        intervals: vec![AmplitudeInterval {
+            u: 3.0,
+            median: 1.0,
+            lower: f64::NEG_INFINITY,
+            upper: 2.0,
+        }],
+        flutter_interval: Some(SpeedInterval {
+            lower: 4.0,
+            upper: 3.0,
+            level: 0.9,
+            found: 1,
+            members: 2,
+        }),
+        ..Default::default()
+    };
+    render_png(&bf).unwrap();
     let ph = PhasePortraitFigure {
         trajectories: vec![one(2.0)],
         ..Default::default()

@@ -440,6 +440,36 @@ pub fn linear_aero_chord(
 pub struct Derived {
     /// The identified Eq. 19 law as a nonlinear model (linear part: derivative tables).
     pub identified: Option<NonlinearAero>,
+    /// The laws of the identification's bootstrap members (`[identify] ensemble`), for the
+    /// intervals of the flutter and LCO stages.
+    pub members: Option<Members>,
+}
+
+/// The bootstrap members of an identification as laws (a member that cannot be built keeps
+/// its reason), with the ensemble they come from (seed, level).
+#[derive(Debug, Clone)]
+pub struct Members {
+    /// Per member, the law or why it could not be built.
+    pub laws: Vec<std::result::Result<IdentifiedLaw, String>>,
+    /// The `ensemble` section of `identification.json`.
+    pub ensemble: identify::ensemble::Ensemble,
+}
+
+/// The laws of every bootstrap member of `id` for the study's chord 2b.
+///
+/// # Errors
+/// No `[structure]`, or the ensemble section does not match the identification.
+pub fn member_laws(study: &Study, id: &Identification) -> anyhow::Result<Members> {
+    let Some(s) = &study.spec.structure else {
+        anyhow::bail!("the ensemble's laws need [structure] (its chord)");
+    };
+    let (laws, e) =
+        aeroelastic::ensemble::member_laws(id, &IdentifiedOptions::new(2.0 * s.semi_chord), None)
+            .context("building the ensemble's laws")?;
+    Ok(Members {
+        laws,
+        ensemble: e.clone(),
+    })
 }
 
 /// The identified law of `id` for the study's chord 2b.

@@ -7,7 +7,9 @@ use anyhow::Context;
 use identify::pipeline::Identification;
 use identify::record::CaseMeta;
 use identify::series::CaseSeries;
-use plots::adapters::aeroelastic::{bifurcation_figure, phase_figure, vg_figure, AxisScale};
+use plots::adapters::aeroelastic::{
+    amplitude_intervals, bifurcation_figure, flutter_interval, phase_figure, vg_figure, AxisScale,
+};
 use plots::adapters::identification::{
     delta_path_figure, derivative_figure, heatmap_figures, quality_histogram, spectrum_figure,
     time_series_figure, Force,
@@ -599,10 +601,22 @@ pub fn render_all(study: &Study, out: &Path) -> anyhow::Result<Vec<FigureEntry>>
                     "vg",
                     &format!("vg_{i}"),
                     format!(
-                        "{}: damping ratio and frequency of the aeroelastic modes against wind speed.",
-                        r.label
+                        "{}: damping ratio and frequency of the aeroelastic modes against wind speed.{}",
+                        r.label,
+                        r.ensemble.as_ref().map_or(String::new(), |e| format!(
+                            " Shaded band and error bar: the flutter speed's {} % interval over {} block-bootstrap members of the identification ({} with flutter in the scan).",
+                            pretty_cell(&format!("{}", 100.0 * e.level)),
+                            e.members,
+                            e.flutter_speed.found
+                        ))
                     ),
-                    &vg_figure(&r.analysis, &format!("V–g / V–f: {}", r.label), &scale),
+                    &plots::VgFigure {
+                        flutter_interval: r
+                            .ensemble
+                            .as_ref()
+                            .and_then(|e| flutter_interval(e, &scale)),
+                        ..vg_figure(&r.analysis, &format!("V–g / V–f: {}", r.label), &scale)
+                    },
                 )?;
             }
         }
@@ -650,6 +664,7 @@ pub fn render_all(study: &Study, out: &Path) -> anyhow::Result<Vec<FigureEntry>>
             .map(String::from),
             &rows,
         );
+        ensemble_flutter_table(&mut report, &runs);
         cv.embed(&mut report, "vg");
     }
 
@@ -662,22 +677,37 @@ pub fn render_all(study: &Study, out: &Path) -> anyhow::Result<Vec<FigureEntry>>
             AxisScale::si()
         };
         if cv.wants("bifurcation") {
-            cv.draw(
-                "bifurcation",
-                "bifurcation",
-                format!(
-                    "LCO pitch amplitude against wind speed, upward (▲) and downward (▼) sweeps{}; model: {}.",
-                    if stage.flutter_speed.is_some() { ", linear flutter speed marked" } else { "" },
-                    stage.model
-                ),
-                &bifurcation_figure(
-                    &stage.up,
-                    &stage.down,
-                    stage.flutter_speed,
-                    "LCO sweeps",
-                    &scale,
-                ),
-            )?;
+            let mut fig = bifurcation_figure(
+                &stage.up,
+                &stage.down,
+                stage.flutter_speed,
+                "LCO sweeps",
+                &scale,
+            );
+            let mut caption = format!(
+                "LCO pitch amplitude against wind speed, upward (▲) and downward (▼) sweeps{}; model: {}.",
+                if stage.flutter_speed.is_some() { ", linear flutter speed marked" } else { "" },
+                stage.model
+            );
+            if let Some(e) = &stage.ensemble {
+                (fig.intervals, fig.interval_label) = amplitude_intervals(e, &scale);
+                // the identified model's flutter run carries the flutter-speed interval
+                if s.flutter.is_some() {
+                    let runs: Vec<FlutterRun> = read_json(&out.join(names::FLUTTER))?;
+                    fig.flutter_interval = runs
+                        .iter()
+                        .filter(|r| r.model == "identified")
+                        .find_map(|r| r.ensemble.as_ref())
+                        .and_then(|e| flutter_interval(e, &scale));
+                }
+                caption.push_str(&format!(
+                    " Error bars: {} % interval of the pitch amplitude over the identification's {} block-bootstrap members that settle on an LCO (each run from the same perturbation; median as a tick); shaded: the flutter speed's interval. Values in {}.",
+                    pretty_cell(&format!("{}", 100.0 * e.level)),
+                    e.members,
+                    names::LCO_INTERVALS
+                ));
+            }
+            cv.draw("bifurcation", "bifurcation", caption, &fig)?;
             if !stage.truth_up.is_empty() {
                 cv.draw(
                     "bifurcation",
@@ -714,6 +744,14 @@ pub fn render_all(study: &Study, out: &Path) -> anyhow::Result<Vec<FigureEntry>>
         if l.compare_truth {
             round_trip_table(&mut report, out, reduced)?;
         }
+        if stage.ensemble.is_some() {
+            csv_file_table(
+                &mut report,
+                "LCO amplitude intervals over the identification ensemble",
+                &out.join(names::LCO_INTERVALS),
+                reduced,
+            );
+        }
         cv.embed(&mut report, "bifurcation");
         cv.embed(&mut report, "phase");
     }
@@ -749,6 +787,50 @@ pub fn render_all(study: &Study, out: &Path) -> anyhow::Result<Vec<FigureEntry>>
         .write(&out.join(names::REPORT))
         .context("writing report.html")?;
     Ok(entries)
+}
+
+/// The intervals of the flutter runs that have an ensemble (`[identify] ensemble`): U_F,
+/// f_F and U_D, median and interval, and how many members found each.
+fn ensemble_flutter_table(report: &mut Report, runs: &[FlutterRun]) {
+    let rows: Vec<Vec<String>> = runs
+        .iter()
+        .filter_map(|r| r.ensemble.as_ref().map(|e| (r, e)))
+        .flat_map(|(r, e)| {
+            [
+                ("U_F [m/s]", &e.flutter_speed),
+                ("f_F [Hz]", &e.flutter_frequency_hz),
+                ("U_D [m/s]", &e.divergence_speed),
+            ]
+            .map(|(name, q)| {
+                let cell =
+                    |v: Option<f64>| v.map_or("—".into(), |x| pretty_cell(&format!("{x:e}")));
+                vec![
+                    r.label.clone(),
+                    name.to_string(),
+                    cell(q.interval.map(|i| i.median)),
+                    cell(q.interval.map(|i| i.lower)),
+                    cell(q.interval.map(|i| i.upper)),
+                    format!("{} of {}", q.found, e.members),
+                ]
+            })
+        })
+        .collect();
+    if rows.is_empty() {
+        return;
+    }
+    let level = runs
+        .iter()
+        .find_map(|r| r.ensemble.as_ref())
+        .map_or(0.0, |e| e.level);
+    report.table(
+        format!(
+            "Propagated identification uncertainty: {} % percentile intervals over the block-bootstrap members of the identified law (members without flutter or divergence in the scan are counted, not in the interval; columns U_F_lower_m_s … in {})",
+            pretty_cell(&format!("{}", 100.0 * level)),
+            names::FLUTTER_POINTS
+        ),
+        &["run", "quantity", "median", "lower", "upper", "members with it"].map(String::from),
+        &rows,
+    );
 }
 
 /// The `[branch]` section of the report from `branch.json` (and the upward LCO sweep of

@@ -4,6 +4,7 @@
 use std::path::Path;
 use std::time::Instant;
 
+use aeroelastic::ensemble::{flutter_ensemble, lco_ensemble, FlutterEnsemble, LcoEnsemble};
 use aeroelastic::flutter::{FlutterAnalysis, FlutterMethod, FlutterOptions};
 use aeroelastic::lco::{Classification, KIteration, LcoOptions, LcoResult, SweepPlan};
 use aeroelastic::trajectory::Trajectory;
@@ -42,6 +43,8 @@ pub mod names {
     pub const LCO: &str = "lco.json";
     /// LCO amplitudes per speed and sweep.
     pub const LCO_AMPLITUDES: &str = "lco_amplitudes.csv";
+    /// LCO amplitude intervals of the identification ensemble per speed.
+    pub const LCO_INTERVALS: &str = "lco_intervals.csv";
     /// LCO branches by continuation (`[branch]`), as `aeroform branch` writes it.
     pub const BRANCH: &str = "branch.json";
     /// One row per branch orbit (`[branch]`).
@@ -71,6 +74,10 @@ pub struct FlutterRun {
     pub analysis: FlutterAnalysis,
     /// Published values.
     pub reference: Option<FlutterReference>,
+    /// Intervals over the bootstrap members of the identified law (`[identify] ensemble`,
+    /// runs of the `identified` model only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ensemble: Option<FlutterEnsemble>,
 }
 
 /// The LCO stage as saved in `lco.json`.
@@ -99,6 +106,11 @@ pub struct LcoStage {
     /// Downward sweep of the truth model, increasing U (`compare_truth`).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub truth_down: Vec<LcoResult>,
+    /// LCO amplitude intervals over the bootstrap members of the identified law at every
+    /// speed of the sweep (`[identify] ensemble` with the `identified` model), each member
+    /// run from the upward sweep's perturbation.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ensemble: Option<LcoEnsemble>,
 }
 
 /// Wall time of each stage \[s\].
@@ -151,6 +163,11 @@ pub fn run_study(study: &Study, out: &Path, quiet: bool) -> anyhow::Result<Timin
             derived.identified = Some(timed(&mut timings, "identified model", || {
                 build::identified_model(study, &id)
             })?);
+            if id.ensemble.is_some() {
+                derived.members = Some(timed(&mut timings, "ensemble laws", || {
+                    build::member_laws(study, &id)
+                })?);
+            }
         }
     }
     let mut flutter_speed = None;
@@ -252,7 +269,16 @@ fn identify_stage(
     let result =
         identify::pipeline::identify(&cases.cases, &settings, &cases.name, &|p| bar.observe(p));
     bar.finish();
-    let id = result.context("identification")?;
+    let mut id = result.context("identification")?;
+    let spec = study.spec.identify.clone().unwrap_or_default();
+    if let Some(n) = spec.ensemble {
+        let mut es = identify::ensemble::EnsembleSettings::new(n, study.spec.seed);
+        es.level = spec.ensemble_level;
+        id.ensemble = Some(
+            identify::ensemble::bootstrap(&cases.cases, &id, &es)
+                .context("identification ensemble (block bootstrap)")?,
+        );
+    }
     id.write(&out.join(names::IDENTIFICATION))?;
     write_json(&out.join(names::CASES), &cases.metas())?;
 
@@ -472,6 +498,20 @@ fn flutter_stage(
         let analysis = section
             .flutter(method, &opts)
             .with_context(|| format!("flutter run `{}`", r.label))?;
+        let ensemble = match (&derived.members, model.as_str()) {
+            (Some(m), "identified") => Some(
+                flutter_ensemble(
+                    &section.structure,
+                    &m.laws,
+                    &m.ensemble,
+                    section.rho,
+                    method,
+                    &opts,
+                )
+                .with_context(|| format!("flutter run `{}`: ensemble", r.label))?,
+            ),
+            _ => None,
+        };
         bar.inc();
         results.push(FlutterRun {
             label: r.label.clone(),
@@ -480,6 +520,7 @@ fn flutter_stage(
             omega_alpha: s.omega_alpha,
             analysis,
             reference: r.reference,
+            ensemble,
         });
     }
     bar.finish();
@@ -499,6 +540,13 @@ fn flutter_stage(
         "ref_U_D_reduced",
         "rel_err_U_F",
         "rel_err_U_D",
+        "U_F_lower_m_s",
+        "U_F_upper_m_s",
+        "U_D_lower_m_s",
+        "U_D_upper_m_s",
+        "ensemble_level",
+        "ensemble_members",
+        "ensemble_with_flutter",
     ]);
     for r in &results {
         let scale = r.semi_chord * r.omega_alpha;
@@ -509,7 +557,7 @@ fn flutter_stage(
             (Some(v), Some(x)) => Some((v - x) / x),
             _ => None,
         };
-        csv.rows.push(vec![
+        let mut row = vec![
             r.label.clone(),
             r.model.clone(),
             format!("{:?}", r.analysis.method),
@@ -524,7 +572,20 @@ fn flutter_stage(
             num(rf.and_then(|x| x.divergence)),
             num(rel(fl.map(|f| f.u_reduced), rf.and_then(|x| x.u_reduced))),
             num(rel(ud.map(|u| u / scale), rf.and_then(|x| x.divergence))),
+        ];
+        let e = r.ensemble.as_ref();
+        let uf_i = e.and_then(|e| e.flutter_speed.interval);
+        let ud_i = e.and_then(|e| e.divergence_speed.interval);
+        row.extend([
+            num(uf_i.map(|i| i.lower)),
+            num(uf_i.map(|i| i.upper)),
+            num(ud_i.map(|i| i.lower)),
+            num(ud_i.map(|i| i.upper)),
+            num(e.map(|e| e.level)),
+            e.map_or(String::new(), |e| e.members.to_string()),
+            e.map_or(String::new(), |e| e.flutter_speed.found.to_string()),
         ]);
+        csv.rows.push(row);
     }
     csv.write(&out.join(names::FLUTTER_POINTS))?;
     Ok(results)
@@ -613,6 +674,21 @@ fn lco_stage(
                 .with_context(|| format!("phase portrait at U = {}", r.u))?,
         );
     }
+    let ensemble = match (&derived.members, study.spec.aero.as_ref()) {
+        (Some(m), Some(a)) if a.model == "identified" => Some(
+            lco_ensemble(
+                &section.structure,
+                &m.laws,
+                &m.ensemble,
+                section.rho,
+                &l.speeds,
+                l.perturbation_deg.to_radians(),
+                &opts,
+            )
+            .context("LCO runs of the ensemble")?,
+        ),
+        _ => None,
+    };
     let stage = LcoStage {
         model: section.aero.name(),
         semi_chord: s.semi_chord,
@@ -624,8 +700,12 @@ fn lco_stage(
         truth_flutter_speed,
         truth_up,
         truth_down,
+        ensemble,
     };
     write_json(&out.join(names::LCO), &stage)?;
+    if let Some(e) = &stage.ensemble {
+        lco_intervals(e, out)?;
+    }
     let mut csv = Csv::new(&[
         "sweep",
         "U_m_s",
@@ -674,6 +754,45 @@ fn lco_stage(
         round_trip_table(&stage, out)?;
     }
     Ok(())
+}
+
+/// `lco_intervals.csv`: per speed, the pitch and heave amplitude intervals of the
+/// ensemble members that settle on an LCO, and how many decay, diverge or do not settle.
+fn lco_intervals(e: &LcoEnsemble, out: &Path) -> anyhow::Result<()> {
+    let mut csv = Csv::new(&[
+        "U_m_s",
+        "level",
+        "members",
+        "lco",
+        "decay",
+        "divergent",
+        "unsettled",
+        "amplitude_alpha_deg_median",
+        "amplitude_alpha_deg_lower",
+        "amplitude_alpha_deg_upper",
+        "amplitude_h_mm_median",
+        "amplitude_h_mm_lower",
+        "amplitude_h_mm_upper",
+    ]);
+    for p in &e.points {
+        let (a, h) = (p.amplitude_alpha_deg.interval, p.amplitude_h_mm.interval);
+        csv.rows.push(vec![
+            num(Some(p.u)),
+            num(Some(e.level)),
+            e.members.to_string(),
+            p.amplitude_alpha_deg.found.to_string(),
+            p.decay.to_string(),
+            p.divergent.to_string(),
+            p.unsettled.to_string(),
+            num(a.map(|i| i.median)),
+            num(a.map(|i| i.lower)),
+            num(a.map(|i| i.upper)),
+            num(h.map(|i| i.median)),
+            num(h.map(|i| i.lower)),
+            num(h.map(|i| i.upper)),
+        ]);
+    }
+    csv.write(&out.join(names::LCO_INTERVALS))
 }
 
 /// `round_trip.csv`: truth vs `[aero]` model, flutter speed and LCO pitch amplitude per

@@ -250,7 +250,7 @@ fn group2() -> [f64; 6] {
 }
 
 /// `[identify]`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct IdentifySpec {
     /// Every option of `identify::pipeline::identify` (`[identify.settings]`).
@@ -259,6 +259,31 @@ pub struct IdentifySpec {
     /// Preprocessing (`[identify.preprocess]`).
     #[serde(default)]
     pub preprocess: PreprocessSpec,
+    /// Block-bootstrap ensemble of this many members (≥ 2), seeded with the study's
+    /// `seed`: `identification.json` gets its `ensemble` section, and the flutter and LCO
+    /// stages of the identified model report percentile intervals (`ensemble` keys of
+    /// `flutter.json` and `lco.json`) drawn as error bars in the figures. `None`: no
+    /// ensemble.
+    #[serde(default)]
+    pub ensemble: Option<usize>,
+    /// Level of the ensemble's intervals, in (0, 1).
+    #[serde(default = "ensemble_level")]
+    pub ensemble_level: f64,
+}
+
+impl Default for IdentifySpec {
+    fn default() -> Self {
+        IdentifySpec {
+            settings: IdentifySettings::default(),
+            preprocess: PreprocessSpec::default(),
+            ensemble: None,
+            ensemble_level: ensemble_level(),
+        }
+    }
+}
+
+fn ensemble_level() -> f64 {
+    identify::ensemble::DEFAULT_LEVEL
 }
 
 /// `[identify.preprocess]`.
@@ -1012,6 +1037,20 @@ impl Study {
         if let Err(e) = id.settings.validate() {
             return err("identify.settings", e.to_string());
         }
+        if let Some(n) = id.ensemble {
+            if !(2..=crate::limits::MAX_ENSEMBLE).contains(&n) {
+                return err(
+                    "identify.ensemble",
+                    format!("{n} members: expected 2 … {}", crate::limits::MAX_ENSEMBLE),
+                );
+            }
+        }
+        if !(id.ensemble_level > 0.0 && id.ensemble_level < 1.0) {
+            return err(
+                "identify.ensemble_level",
+                format!("{}: expected a level in (0, 1)", id.ensemble_level),
+            );
+        }
         if !matches!(id.preprocess.velocity.as_str(), "auto" | "harmonic" | "sg") {
             return err(
                 "identify.preprocess.velocity",
@@ -1366,6 +1405,28 @@ mod tests {
         let e = parse(text).unwrap_err();
         assert_eq!(e.key, "flutter.run[1].method", "{e}");
         assert_eq!(e.line, 16, "{e}");
+    }
+
+    #[test]
+    fn ensemble_size_and_level_are_checked_with_their_key() {
+        for (v, key) in [
+            ("ensemble = 1", "identify.ensemble"),
+            ("ensemble = 100000", "identify.ensemble"),
+            (
+                "ensemble = 5\nensemble_level = 1.0",
+                "identify.ensemble_level",
+            ),
+            (
+                "ensemble = 5\nensemble_level = nan",
+                "identify.ensemble_level",
+            ),
+        ] {
+            let e = parse(&format!("name = \"x\"\n[identify]\n{v}\n")).unwrap_err();
+            assert_eq!(e.key, key, "{v}: {e}");
+        }
+        let s = parse("name = \"x\"\n[identify]\nensemble = 8\n").unwrap();
+        let id = s.spec.identify.unwrap();
+        assert_eq!((id.ensemble, id.ensemble_level), (Some(8), 0.9));
     }
 
     #[test]

@@ -1,12 +1,13 @@
 //! Flutter and LCO results → figures.
 
+use aeroelastic::ensemble::{FlutterEnsemble, LcoEnsemble};
 use aeroelastic::flutter::FlutterAnalysis;
 use aeroelastic::lco::{Classification, LcoResult};
 use aeroelastic::trajectory::Trajectory;
 
 use crate::{
-    BifurcationFigure, BifurcationPoint, FlutterPoint, ModeBranch, PhasePortraitFigure,
-    ResponseClass, Series, SeriesKind, Sweep, VgFigure,
+    AmplitudeInterval, BifurcationFigure, BifurcationPoint, FlutterPoint, ModeBranch,
+    PhasePortraitFigure, ResponseClass, Series, SeriesKind, SpeedInterval, Sweep, VgFigure,
 };
 
 /// Axis scaling of speed and frequency in the aeroelastic figures.
@@ -77,7 +78,44 @@ pub fn vg_figure(a: &FlutterAnalysis, title: &str, scale: &AxisScale) -> VgFigur
             u: f.u * scale.u_factor,
             freq: f.omega * scale.f_factor,
         }),
+        flutter_interval: None,
     }
+}
+
+/// The interval of the flutter speed of an ensemble ([`FlutterEnsemble`]) on the figure's
+/// speed axis, if any member found flutter.
+pub fn flutter_interval(e: &FlutterEnsemble, scale: &AxisScale) -> Option<SpeedInterval> {
+    e.flutter_speed.interval.map(|i| SpeedInterval {
+        lower: i.lower * scale.u_factor,
+        upper: i.upper * scale.u_factor,
+        level: e.level,
+        found: e.flutter_speed.found,
+        members: e.members,
+    })
+}
+
+/// Error bars of the pitch amplitude \[deg\] of an LCO ensemble ([`LcoEnsemble`]) at every
+/// speed where at least one member settles on an LCO, and the legend text naming the
+/// level and the number of members.
+pub fn amplitude_intervals(e: &LcoEnsemble, scale: &AxisScale) -> (Vec<AmplitudeInterval>, String) {
+    let bars = e
+        .points
+        .iter()
+        .filter_map(|p| {
+            p.amplitude_alpha_deg.interval.map(|i| AmplitudeInterval {
+                u: p.u * scale.u_factor,
+                median: i.median,
+                lower: i.lower,
+                upper: i.upper,
+            })
+        })
+        .collect();
+    let label = format!(
+        "{} % interval over the members in LCO ({} bootstrap members)",
+        crate::style::fmt_num(100.0 * e.level),
+        e.members
+    );
+    (bars, label)
 }
 
 fn class_of(c: Classification) -> ResponseClass {
@@ -120,6 +158,9 @@ pub fn bifurcation_figure(
         points,
         u_unit: scale.u_unit.clone(),
         flutter_speed: flutter_speed.map(|u| u * scale.u_factor),
+        intervals: vec![],
+        interval_label: String::new(),
+        flutter_interval: None,
     }
 }
 

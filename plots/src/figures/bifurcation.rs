@@ -2,14 +2,16 @@
 //! sweeps (hysteresis), each point classified decay / LCO / divergent, flutter speed line.
 
 use plotters::coord::Shift;
+use plotters::element::EmptyElement;
 use plotters::prelude::*;
 
+use super::flutter::{SpeedInterval, C_BAND, C_INTERVAL};
 use super::mesh;
 use crate::error::{DrawResultExt, Error, Result};
 use crate::render::Figure;
 use crate::style::{
-    finite_range, fmt_num, fmt_tick, legend_band, marker, padded, title, LegendEntry, MarkerShape,
-    HIGHLIGHT, PALETTE,
+    draw_error_bar, finite_range, fmt_num, fmt_tick, legend_band, marker, padded, title,
+    LegendEntry, MarkerShape, CAP_PX, HIGHLIGHT, PALETTE,
 };
 
 /// Direction of the wind-speed sweep a point belongs to (drawn as ▲ / ▼).
@@ -56,6 +58,20 @@ pub struct BifurcationPoint {
     pub stop: &'static str,
 }
 
+/// The interval of the LCO amplitude at one wind speed over an ensemble of identified laws
+/// (members that settle on an LCO), drawn as an error bar with its median.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct AmplitudeInterval {
+    /// Wind speed (same unit as the axis label).
+    pub u: f64,
+    /// Median amplitude (same unit as the amplitude axis).
+    pub median: f64,
+    /// Lower bound.
+    pub lower: f64,
+    /// Upper bound.
+    pub upper: f64,
+}
+
 /// Bifurcation diagram of LCO amplitude vs wind speed.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct BifurcationFigure {
@@ -71,6 +87,12 @@ pub struct BifurcationFigure {
     pub u_unit: String,
     /// Linear flutter speed (dashed vertical line), if known.
     pub flutter_speed: Option<f64>,
+    /// Amplitude intervals over an ensemble (error bars), possibly empty.
+    pub intervals: Vec<AmplitudeInterval>,
+    /// Legend text of the error bars, e.g. `"90 % interval over 20 bootstrap members"`.
+    pub interval_label: String,
+    /// Interval of the linear flutter speed over the ensemble (shaded band), if any.
+    pub flutter_interval: Option<SpeedInterval>,
 }
 
 const C_DECAY: RGBColor = RGBColor(130, 130, 130);
@@ -96,15 +118,36 @@ impl Figure for BifurcationFigure {
             });
         }
         let fs = self.flutter_speed.filter(|u| u.is_finite());
-        let (u0, u1) = finite_range(pts.iter().map(|p| p.u).chain(fs)).expect("non-empty");
+        let band = self.flutter_interval.and_then(|i| i.finite());
+        let bars: Vec<&AmplitudeInterval> = self
+            .intervals
+            .iter()
+            .filter(|i| {
+                [i.u, i.median, i.lower, i.upper]
+                    .iter()
+                    .all(|v| v.is_finite())
+            })
+            .collect();
+        let (u0, u1) = finite_range(
+            pts.iter()
+                .map(|p| p.u)
+                .chain(fs)
+                .chain(band.into_iter().flat_map(|(a, b)| [a, b])),
+        )
+        .expect("non-empty");
         let (u0, u1) = padded((u0, u1), 0.04);
         let amp = |p: &BifurcationPoint| match p.class {
             ResponseClass::Divergent => None,
             ResponseClass::Decay if !p.amplitude.is_finite() => Some(0.0),
             _ => Some(p.amplitude).filter(|a| a.is_finite()),
         };
-        let (a_lo, a_hi) =
-            finite_range(pts.iter().filter_map(|p| amp(p)).chain([0.0])).expect("has 0");
+        let (a_lo, a_hi) = finite_range(
+            pts.iter()
+                .filter_map(|p| amp(p))
+                .chain([0.0])
+                .chain(bars.iter().flat_map(|i| [i.lower, i.upper])),
+        )
+        .expect("has 0");
         let has_div = pts.iter().any(|p| p.class == ResponseClass::Divergent);
         let a_hi = if a_hi > a_lo { a_hi } else { a_lo + 1.0 };
         // Divergent points sit on a row above the largest amplitude.
@@ -149,6 +192,15 @@ impl Figure for BifurcationFigure {
                 true,
             ));
         }
+        if !bars.is_empty() {
+            legend.push(LegendEntry::error_bar(
+                self.interval_label.clone(),
+                C_INTERVAL,
+            ));
+        }
+        if let Some(i) = self.flutter_interval.filter(|i| i.finite().is_some()) {
+            legend.push(LegendEntry::patch(i.legend("U_F", &self.u_unit), C_BAND));
+        }
         let area = legend_band(&area, &legend, kind)?;
         let mut chart = ChartBuilder::on(&area)
             .margin_left(10)
@@ -169,6 +221,14 @@ impl Figure for BifurcationFigure {
             .y_label_formatter(&fy)
             .draw()
             .ctx(kind)?;
+        if let Some((a, b)) = band {
+            chart
+                .draw_series(std::iter::once(Rectangle::new(
+                    [(a, y0), (b, y1)],
+                    C_BAND.filled(),
+                )))
+                .ctx(kind)?;
+        }
         if let Some(u) = fs {
             chart
                 .draw_series(DashedLineSeries::new(
@@ -217,6 +277,19 @@ impl Figure for BifurcationFigure {
             Some(marker::<_, DB>((p.u, y), shape, color, filled, 7))
         });
         chart.draw_series(elems).ctx(kind)?;
+        // Error bars on top, the median as a short horizontal tick.
+        for i in &bars {
+            draw_error_bar(&mut chart, (i.u, i.lower, i.upper), true, C_INTERVAL, kind)?;
+            chart
+                .draw_series(std::iter::once(
+                    EmptyElement::at((i.u, i.median))
+                        + PathElement::new(
+                            vec![(-CAP_PX - 3, 0), (CAP_PX + 3, 0)],
+                            ShapeStyle::from(C_INTERVAL).stroke_width(3),
+                        ),
+                ))
+                .ctx(kind)?;
+        }
         Ok(())
     }
 }

@@ -9,8 +9,8 @@ use super::mesh;
 use crate::error::{DrawResultExt, Error, Result};
 use crate::render::Figure;
 use crate::style::{
-    check_len, finite_range, fmt_num, fmt_tick, font, legend_band, marker, padded, segments,
-    series_color, title, LegendEntry, MarkerShape, HIGHLIGHT,
+    check_len, draw_error_bar, finite_range, fmt_num, fmt_tick, font, legend_band, marker, padded,
+    segments, series_color, title, LegendEntry, MarkerShape, HIGHLIGHT,
 };
 
 /// One mode branch of the flutter analysis: damping ratio and frequency at each wind speed.
@@ -35,6 +35,51 @@ pub struct FlutterPoint {
     pub freq: f64,
 }
 
+/// A percentile interval of a critical speed over an ensemble of identified laws (the
+/// propagated identification uncertainty), drawn as a shaded band with an error bar.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct SpeedInterval {
+    /// Lower bound (same unit as the U axis).
+    pub lower: f64,
+    /// Upper bound (same unit as the U axis).
+    pub upper: f64,
+    /// Interval level in (0, 1), e.g. 0.9.
+    pub level: f64,
+    /// Members that have the quantity (flutter inside the scan).
+    pub found: usize,
+    /// Members analysed.
+    pub members: usize,
+}
+
+impl SpeedInterval {
+    /// Legend text: `"{name} 90 % interval a … b unit (19 of 20 members)"`.
+    pub fn legend(&self, name: &str, unit: &str) -> String {
+        let unit = if unit.is_empty() {
+            String::new()
+        } else {
+            format!(" {unit}")
+        };
+        format!(
+            "{name} {} % interval {} … {}{unit} ({} of {} members)",
+            fmt_num(100.0 * self.level),
+            fmt_num(self.lower),
+            fmt_num(self.upper),
+            self.found,
+            self.members
+        )
+    }
+
+    pub(crate) fn finite(&self) -> Option<(f64, f64)> {
+        (self.lower.is_finite() && self.upper.is_finite() && self.upper >= self.lower)
+            .then_some((self.lower, self.upper))
+    }
+}
+
+/// Colour of intervals (error bars).
+pub(crate) const C_INTERVAL: RGBColor = RGBColor(60, 60, 60);
+/// Colour of interval bands (drawn under the curves).
+pub(crate) const C_BAND: RGBColor = RGBColor(226, 226, 226);
+
 /// V–g (top) and V–f (bottom) panels sharing the U axis.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct VgFigure {
@@ -54,6 +99,9 @@ pub struct VgFigure {
     pub modes: Vec<ModeBranch>,
     /// Flutter point, if one was found.
     pub flutter: Option<FlutterPoint>,
+    /// Interval of the flutter speed over an ensemble (shaded band on both panels, error
+    /// bar on the zero-damping line), if any.
+    pub flutter_interval: Option<SpeedInterval>,
 }
 
 impl Figure for VgFigure {
@@ -98,13 +146,15 @@ impl Figure for VgFigure {
         let fl = self
             .flutter
             .filter(|p| p.u.is_finite() && p.freq.is_finite());
+        let band = self.flutter_interval.and_then(|i| i.finite());
         let all_u = g_runs
             .iter()
             .chain(&f_runs)
             .flatten()
             .flatten()
             .map(|p| p.0)
-            .chain(fl.map(|p| p.u));
+            .chain(fl.map(|p| p.u))
+            .chain(band.into_iter().flat_map(|(a, b)| [a, b]));
         let (u0, u1) = finite_range(all_u).expect("validated");
         let (u0, u1) = if u1 > u0 {
             (u0, u1)
@@ -149,6 +199,12 @@ impl Figure for VgFigure {
                 MarkerShape::Diamond,
                 HIGHLIGHT,
                 true,
+            ));
+        }
+        if let Some(i) = self.flutter_interval.filter(|i| i.finite().is_some()) {
+            legend.push(LegendEntry::error_bar(
+                i.legend("U_F", &self.u_unit),
+                C_INTERVAL,
             ));
         }
         let area = legend_band(&area, &legend, kind)?;
@@ -197,6 +253,14 @@ impl Figure for VgFigure {
                 m.x_label_formatter(&empty);
             }
             m.draw().ctx(kind)?;
+            if let Some((a, b)) = band {
+                chart
+                    .draw_series(std::iter::once(Rectangle::new(
+                        [(a, y0), (b, y1)],
+                        C_BAND.filled(),
+                    )))
+                    .ctx(kind)?;
+            }
             if !last {
                 chart
                     .draw_series(std::iter::once(PathElement::new(
@@ -233,6 +297,9 @@ impl Figure for VgFigure {
                         )
                         .ctx(kind)?;
                 }
+            }
+            if let (Some((a, b)), false) = (band, last) {
+                draw_error_bar(&mut chart, (0.0, a, b), false, C_INTERVAL, kind)?;
             }
             if let (Some(p), Some(a)) = (fl, &annot) {
                 let y = if last { p.freq } else { 0.0 };
