@@ -36,6 +36,7 @@ pub use figures::flutter::{FlutterPoint, ModeBranch, SpeedInterval, VgFigure};
 pub use figures::gap_heatmap::{GapHeatmapFigure, GapHeatmapPanel};
 pub use figures::heatmap::{diverging, HeatmapGridFigure, HeatmapPanel};
 pub use figures::histogram::{HistogramFigure, HistogramPanel};
+pub use figures::library::{LibraryCell, LibraryFigure};
 pub use figures::phase::PhasePortraitFigure;
 pub use figures::ranking::{
     RankingBar, RankingFigure, RankingPanel, ShareBar, ShareSegment, SharesFigure,

@@ -36,6 +36,8 @@ pub struct Cases {
     pub source: String,
     /// Regression inputs.
     pub cases: Vec<NondimCase>,
+    /// Wind-on and still-air balance forces of the shown cases (paper Figs. 4/5).
+    pub forces: Vec<super::paper::ForceDecomposition>,
 }
 
 impl Cases {
@@ -298,6 +300,7 @@ pub fn cases(study: &Study, out: &Path) -> anyhow::Result<Option<Cases>> {
                 t.repeats, t.sigma, t.duration, t.rate
             ),
             cases,
+            forces: vec![],
         }));
     }
     let (dataset, source) = if let Some(sy) = &d.synthetic {
@@ -315,6 +318,26 @@ pub fn cases(study: &Study, out: &Path) -> anyhow::Result<Option<Cases>> {
         anyhow::bail!("[data]: no source");
     };
     let name = dataset.manifest.name.clone();
+    let forces = if study
+        .figure_kinds()
+        .iter()
+        .any(|k| k == "force_decomposition")
+    {
+        let wanted = &study.spec.outputs.series_cases;
+        let ids: Vec<String> = if wanted.is_empty() {
+            let r = &dataset.records;
+            r.first()
+                .into_iter()
+                .chain(r.last().filter(|_| r.len() > 1))
+                .map(|r| r.meta.id.clone())
+                .collect()
+        } else {
+            wanted.clone()
+        };
+        super::paper::force_decompositions(&dataset, &ids)
+    } else {
+        vec![]
+    };
     let prepared = prepare_with_bar(dataset, &pre)?;
     if prepared.is_empty() {
         anyhow::bail!("the data have no forced-motion case to identify");
@@ -323,6 +346,7 @@ pub fn cases(study: &Study, out: &Path) -> anyhow::Result<Option<Cases>> {
         name,
         source,
         cases: prepared,
+        forces,
     }))
 }
 

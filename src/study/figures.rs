@@ -11,14 +11,15 @@ use plots::adapters::aeroelastic::{
     amplitude_intervals, bifurcation_figure, flutter_interval, phase_figure, vg_figure, AxisScale,
 };
 use plots::adapters::identification::{
-    delta_path_figure, derivative_figure, heatmap_figures, quality_histogram, spectrum_figure,
-    time_series_figure, Force,
+    delta_path_figure, derivative_figure, heatmap_figures, library_figure, mean_angle_figure,
+    quality_histogram, spectrum_figure, time_series_figure, Force,
 };
 use plots::adapters::term_label;
-use plots::{column_label, Figure, Report};
+use plots::{column_label, Figure, Report, Series, SeriesKind, TimePanel, TimeSeriesFigure};
 use serde::{Deserialize, Serialize};
 
 use super::files::{ensure_dir, read_json, write_json};
+use super::paper::{DeltaFit, DeltaFits, ForceDecomposition, ForceLoop, LoopSet, PaperFigures};
 use super::run::{names, FlutterRun, LcoStage};
 use super::spec::Study;
 
@@ -437,6 +438,80 @@ pub fn render_all(study: &Study, out: &Path) -> anyhow::Result<Vec<FigureEntry>>
                 }
             }
         }
+        let paper: Option<PaperFigures> = out
+            .join(names::PAPER_FIGURES)
+            .exists()
+            .then(|| read_json(&out.join(names::PAPER_FIGURES)))
+            .transpose()?;
+        let paper = paper.unwrap_or_default();
+        if cv.wants("force_decomposition") {
+            for f in &paper.forces {
+                cv.draw(
+                    "force_decomposition",
+                    &format!("force_decomposition_{}", safe(&f.id)),
+                    format!(
+                        "Case {} (U = {} m/s): balance forces with wind (solid), of the still-air run of the same motion (inertia of the model and balance), and their difference, the aerodynamic force that is identified (dashed); first {} s (paper Figs. 4/5).",
+                        f.id,
+                        pretty_cell(&format!("{}", f.wind_speed)),
+                        f.t.last().copied().unwrap_or(0.0).round()
+                    ),
+                    &force_decomposition_figure(f),
+                )?;
+            }
+        }
+        if cv.wants("library") {
+            cv.draw(
+                "library",
+                "library",
+                format!(
+                    "The candidate library (paper Fig. 6): {} polynomial terms in α, Bα'/U, h/B and h'/U up to third order; per group and force, the selected terms, the identifiable ones and those that are linear combinations of others on the group's motion (numerical rank {}).",
+                    id.library.terms.len(),
+                    id.library.rank
+                ),
+                &library_figure(id),
+            )?;
+        }
+        if cv.wants("delta_fits") {
+            for d in &paper.delta_fits {
+                cv.draw(
+                    "delta_fits",
+                    &format!("delta_fits_{}_{}", safe(&d.group), d.force),
+                    format!(
+                        "Group {}, case {}, {}: measured (solid) and least-squares fits (dashed) of the supports at a high δ ({} terms, R² {}), the selected δ ({} terms, R² {}) and a low δ ({} terms, R² {}) of the path (paper Figs. 7/8; coefficients in Table III below).",
+                        d.group,
+                        d.case,
+                        d.force,
+                        d.fits[0].coefficients.len(),
+                        pretty_cell(&format!("{:.4}", d.fits[0].r2)),
+                        d.fits[1].coefficients.len(),
+                        pretty_cell(&format!("{:.4}", d.fits[1].r2)),
+                        d.fits[2].coefficients.len(),
+                        pretty_cell(&format!("{:.4}", d.fits[2].r2)),
+                    ),
+                    &delta_fits_figure(d),
+                )?;
+            }
+        }
+        if cv.wants("force_loops") {
+            for set in &paper.loops {
+                cv.draw(
+                    "force_loops",
+                    &format!(
+                        "force_loops_{}_{}",
+                        safe(&set.config),
+                        set.varied.replace(' ', "_")
+                    ),
+                    format!(
+                        "Configuration {}, {}: lift and moment coefficients against pitch over the last two forcing periods, across {} (paper Figs. {}).",
+                        set.config,
+                        set.fixed,
+                        set.varied,
+                        if set.varied == "wind speed" { "14" } else { "15" }
+                    ),
+                    &force_loops_figure(set),
+                )?;
+            }
+        }
         if cv.wants("delta_path") {
             let groups: Vec<String> = if s.outputs.delta_groups.is_empty() {
                 id.groups.iter().take(4).map(|g| g.name.clone()).collect()
@@ -474,6 +549,17 @@ pub fn render_all(study: &Study, out: &Path) -> anyhow::Result<Vec<FigureEntry>>
                 }
             }
         }
+        if cv.wants("mean_angle") {
+            let elastic_axis = truth_axis(study);
+            if let Some(fig) = mean_angle_figure(id, &metas, elastic_axis) {
+                cv.draw(
+                    "mean_angle",
+                    "mean_angle",
+                    format!("Identified flutter derivatives of the configurations forced about a mean angle of attack next to the same motion at zero mean (paper Fig. 28), with Theodorsen about a = {elastic_axis} (a zero-mean, small-amplitude reference)."),
+                    &fig,
+                )?;
+            }
+        }
         if cv.wants("histogram") {
             cv.draw(
                 "histogram",
@@ -484,13 +570,7 @@ pub fn render_all(study: &Study, out: &Path) -> anyhow::Result<Vec<FigureEntry>>
         }
         if cv.wants("derivatives") {
             // the reference curves about the virtual truth's elastic axis, when there is one
-            let elastic_axis = s
-                .data
-                .as_ref()
-                .and_then(|d| d.virtual_tunnel.as_ref())
-                .and_then(|v| super::build::virtual_model(study, v, 0.25).ok())
-                .and_then(|m| m.elastic_axis())
-                .unwrap_or(0.0);
+            let elastic_axis = truth_axis(study);
             cv.draw(
                 "derivatives",
                 "derivatives",
@@ -532,6 +612,9 @@ pub fn render_all(study: &Study, out: &Path) -> anyhow::Result<Vec<FigureEntry>>
             .map(String::from),
             &rows,
         );
+        for d in &paper.delta_fits {
+            table_iii(&mut report, d);
+        }
         if out.join(names::TABLE_IV).exists() {
             csv_file_table(
                 &mut report,
@@ -578,6 +661,11 @@ pub fn render_all(study: &Study, out: &Path) -> anyhow::Result<Vec<FigureEntry>>
         for k in [
             "time_series",
             "spectrum",
+            "force_decomposition",
+            "library",
+            "delta_fits",
+            "force_loops",
+            "mean_angle",
             "delta_path",
             "histogram",
             "heatmap",
@@ -787,6 +875,152 @@ pub fn render_all(study: &Study, out: &Path) -> anyhow::Result<Vec<FigureEntry>>
         .write(&out.join(names::REPORT))
         .context("writing report.html")?;
     Ok(entries)
+}
+
+/// Elastic axis a of the virtual truth, when the data come from one (0 otherwise).
+fn truth_axis(study: &Study) -> f64 {
+    study
+        .spec
+        .data
+        .as_ref()
+        .and_then(|d| d.virtual_tunnel.as_ref())
+        .and_then(|v| super::build::virtual_model(study, v, 0.25).ok())
+        .and_then(|m| m.elastic_axis())
+        .unwrap_or(0.0)
+}
+
+/// Paper Figs. 4/5: wind-on, still-air and aerodynamic (difference) lift and moment.
+fn force_decomposition_figure(f: &ForceDecomposition) -> TimeSeriesFigure {
+    let panel = |name: &str, unit: &str, on: &[f64], still: &[f64]| TimePanel {
+        y_label: format!("{name} [{unit}]"),
+        series: vec![
+            Series::new("wind on", SeriesKind::Measured, f.t.clone(), on.to_vec()),
+            Series::new("still air", SeriesKind::Other, f.t.clone(), still.to_vec()),
+            Series::new(
+                "aerodynamic (difference)",
+                SeriesKind::Model,
+                f.t.clone(),
+                on.iter().zip(still).map(|(a, b)| a - b).collect(),
+            ),
+        ],
+    };
+    TimeSeriesFigure {
+        title: format!("Force decomposition: case {}", f.id),
+        x_label: "t [s]".into(),
+        panels: vec![
+            panel("lift L", "N/m", &f.lift_wind_on, &f.lift_still_air),
+            panel("moment M", "N·m/m", &f.moment_wind_on, &f.moment_still_air),
+        ],
+    }
+}
+
+/// Paper Figs. 7/8: the case's measured coefficient against the fits at three δ.
+fn delta_fits_figure(d: &DeltaFits) -> TimeSeriesFigure {
+    let symbol = if d.force == "lift" { "C_L" } else { "C_M" };
+    TimeSeriesFigure {
+        title: format!(
+            "Fits along the δ path: group {}, case {}, {symbol}",
+            d.group, d.case
+        ),
+        x_label: "t [s]".into(),
+        panels: d
+            .fits
+            .iter()
+            .map(|f| TimePanel {
+                y_label: format!("{symbol}, {} ({} terms)", f.label, f.coefficients.len()),
+                series: vec![
+                    Series::new(
+                        "measured",
+                        SeriesKind::Measured,
+                        d.t.clone(),
+                        d.measured.clone(),
+                    ),
+                    Series::new("fit", SeriesKind::Model, d.t.clone(), f.model.clone()),
+                ],
+            })
+            .collect(),
+    }
+}
+
+/// Paper Figs. 14/15: C_L and C_M against α, one loop per wind speed or amplitude.
+fn force_loops_figure(set: &LoopSet) -> TimeSeriesFigure {
+    let panel = |name: &str, pick: fn(&ForceLoop) -> &Vec<f64>| TimePanel {
+        y_label: name.into(),
+        series: set
+            .loops
+            .iter()
+            .map(|l| {
+                Series::new(
+                    l.label.clone(),
+                    SeriesKind::Other,
+                    l.alpha_deg.clone(),
+                    pick(l).clone(),
+                )
+            })
+            .collect(),
+    };
+    TimeSeriesFigure {
+        title: format!(
+            "Configuration {} at {}: forces across {}",
+            set.config, set.fixed, set.varied
+        ),
+        x_label: "α [deg]".into(),
+        panels: vec![
+            panel("C_L [-]", |l| &l.c_lift),
+            panel("C_M [-]", |l| &l.c_moment),
+        ],
+    }
+}
+
+/// Table III: the terms and least-squares coefficients of the three supports of a δ fit.
+fn table_iii(report: &mut Report, d: &DeltaFits) {
+    let mut terms: Vec<&String> = d
+        .fits
+        .iter()
+        .flat_map(|f| f.coefficients.iter().map(|(t, _)| t))
+        .collect();
+    terms.sort_by_key(|t| d.fits[2].coefficients.iter().position(|(x, _)| x == *t));
+    terms.dedup();
+    let mut rows: Vec<Vec<String>> = terms
+        .iter()
+        .map(|t| {
+            let mut row = vec![term_label(t)];
+            row.extend(d.fits.iter().map(|f| {
+                f.coefficients
+                    .iter()
+                    .find(|(x, _)| x == *t)
+                    .map_or(String::new(), |(_, c)| pretty_cell(&format!("{c:e}")))
+            }));
+            row
+        })
+        .collect();
+    let mut last = |name: &str, v: &dyn Fn(&DeltaFit) -> String| {
+        let mut row = vec![name.to_string()];
+        row.extend(d.fits.iter().map(v));
+        rows.push(row);
+    };
+    last("terms", &|f| f.coefficients.len().to_string());
+    last("δ range", &|f| {
+        format!(
+            "{} … {}",
+            pretty_cell(&format!("{:e}", f.delta[0])),
+            pretty_cell(&format!("{:e}", f.delta[1]))
+        )
+    });
+    last("R² (whole record)", &|f| {
+        pretty_cell(&format!("{:.6}", f.r2))
+    });
+    let header: Vec<String> = std::iter::once("term".to_string())
+        .chain(d.fits.iter().map(|f| f.label.clone()))
+        .collect();
+    report.table(
+        format!(
+            "Table III: supports of group {} at three δ of the path, least-squares coefficients of case {}, {} (empty: term not in the support)",
+            d.group, d.case, d.force
+        ),
+        &header,
+        &rows,
+    );
 }
 
 /// The intervals of the flutter runs that have an ensemble (`[identify] ensemble`): U_F,

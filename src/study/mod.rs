@@ -6,6 +6,7 @@
 pub mod build;
 pub mod figures;
 pub mod files;
+pub mod paper;
 pub mod run;
 /// The study-file parser lives in the library target (`aeroform::study_spec`) so that the
 /// fuzz target and tests can call it.

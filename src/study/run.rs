@@ -15,6 +15,7 @@ use serde::{Deserialize, Serialize};
 
 use super::build;
 use super::files::{ensure_dir, num, write_json, write_text, Csv};
+use super::paper::{self, PaperFigures};
 use super::spec::{FlutterReference, Study};
 use crate::progress::CountBar;
 use crate::progress::IdentifyBar;
@@ -43,6 +44,8 @@ pub mod names {
     pub const LCO: &str = "lco.json";
     /// LCO amplitudes per speed and sweep.
     pub const LCO_AMPLITUDES: &str = "lco_amplitudes.csv";
+    /// Data of the paper's force-decomposition, δ-fit and force-loop figures.
+    pub const PAPER_FIGURES: &str = "paper_figures.json";
     /// LCO amplitude intervals of the identification ensemble per speed.
     pub const LCO_INTERVALS: &str = "lco_intervals.csv";
     /// LCO branches by continuation (`[branch]`), as `aeroform branch` writes it.
@@ -389,7 +392,71 @@ fn identify_stage(
     if let Some(t) = study.spec.data.as_ref().and_then(|d| d.table_iv.as_ref()) {
         table_iv(&id, t, out)?;
     }
+    let paper = paper_figures(study, cases, &id);
+    if !paper.is_empty() {
+        write_json(&out.join(names::PAPER_FIGURES), &paper)?;
+    }
     Ok(id)
+}
+
+/// The data of the paper's force-decomposition, δ-fit and force-loop figures, for the kinds
+/// the study draws. The δ fits use the first of `outputs.delta_groups` (else the first
+/// group) and in it a shown case (`outputs.series_cases`) or else the case of largest
+/// amplitude at the highest wind speed; the loops use that case's configuration.
+fn paper_figures(study: &Study, cases: &build::Cases, id: &Identification) -> PaperFigures {
+    let kinds = study.figure_kinds();
+    let wants = |k: &str| kinds.iter().any(|x| x == k);
+    let mut p = PaperFigures::default();
+    if wants("force_decomposition") {
+        p.forces = cases.forces.clone();
+    }
+    let group = study
+        .spec
+        .outputs
+        .delta_groups
+        .first()
+        .cloned()
+        .or_else(|| id.groups.first().map(|g| g.name.clone()));
+    let Some(group) = group else {
+        return p;
+    };
+    let in_group: Vec<&identify::pipeline::CaseResult> =
+        id.cases.iter().filter(|c| c.group == group).collect();
+    let shown = in_group
+        .iter()
+        .find(|c| study.spec.outputs.series_cases.contains(&c.id));
+    let strongest = || {
+        let amp = |c: &&&identify::pipeline::CaseResult| {
+            cases
+                .cases
+                .iter()
+                .find(|n| n.meta.id == c.id)
+                .and_then(|n| n.meta.amplitude)
+                .unwrap_or(0.0)
+        };
+        in_group.iter().max_by(|a, b| {
+            a.wind_speed
+                .total_cmp(&b.wind_speed)
+                .then(amp(a).total_cmp(&amp(b)))
+        })
+    };
+    let Some(case) = shown.or_else(strongest) else {
+        return p;
+    };
+    if wants("delta_fits") {
+        p.delta_fits = paper::delta_fits(id, &cases.cases, &group, &case.id);
+    }
+    if wants("force_loops") {
+        let config = cases
+            .cases
+            .iter()
+            .find(|n| n.meta.id == case.id)
+            .and_then(|n| n.meta.config.clone());
+        if let Some(c) = config {
+            p.loops = paper::loop_sets(&cases.cases, &c);
+        }
+    }
+    p
 }
 
 /// Table IV: per channel and true term, the true value and the mean and standard deviation

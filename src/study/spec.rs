@@ -541,13 +541,18 @@ fn steps_per_period() -> usize {
 }
 
 /// Figure kinds a study can draw.
-pub const FIGURE_KINDS: [&str; 10] = [
+pub const FIGURE_KINDS: [&str; 15] = [
     "time_series",
     "spectrum",
+    "force_decomposition",
+    "library",
     "delta_path",
+    "delta_fits",
     "heatmap",
+    "force_loops",
     "histogram",
     "derivatives",
+    "mean_angle",
     "vg",
     "bifurcation",
     "phase",
@@ -739,9 +744,22 @@ impl Study {
         let s = &self.spec;
         let mut v: Vec<&str> = vec![];
         if s.data.is_some() {
-            v.extend(["time_series", "spectrum", "delta_path", "histogram"]);
+            v.extend([
+                "time_series",
+                "spectrum",
+                "library",
+                "delta_path",
+                "delta_fits",
+            ]);
+            v.push("histogram");
             if s.data.as_ref().is_some_and(|d| d.table_iv.is_none()) {
-                v.extend(["heatmap", "derivatives"]);
+                v.extend([
+                    "force_decomposition",
+                    "heatmap",
+                    "force_loops",
+                    "derivatives",
+                    "mean_angle",
+                ]);
             }
         }
         if s.flutter.is_some() {

@@ -10,8 +10,8 @@ use identify::series::CaseSeries;
 use super::{eq19_label, term_label};
 use crate::{
     DeltaPathFigure, DerivativeFigure, DerivativePanel, DerivativePoints, FreqMarker,
-    HeatmapGridFigure, HeatmapPanel, HistogramFigure, HistogramPanel, Series, SeriesKind,
-    SpectrumFigure, TimePanel, TimeSeriesFigure,
+    HeatmapGridFigure, HeatmapPanel, HistogramFigure, HistogramPanel, LibraryCell, LibraryFigure,
+    Series, SeriesKind, SpectrumFigure, TimePanel, TimeSeriesFigure,
 };
 
 /// Force channel of a figure.
@@ -427,6 +427,74 @@ fn ensemble_bar(id: &Identification, i: usize, force: Force, name: &str) -> [f64
 /// ([`aeroelastic::theodorsen::thin_plate_derivatives`]; 0 = the flat-plate closed forms)
 /// over the identified K range.
 pub fn derivative_figure(id: &Identification, elastic_axis: f64) -> DerivativeFigure {
+    let mut groups: Vec<&str> = id.cases.iter().map(|c| c.group.as_str()).collect();
+    groups.sort_unstable();
+    groups.dedup();
+    let groups: Vec<(String, String)> = groups
+        .iter()
+        .map(|g| (g.to_string(), format!("group {g}")))
+        .collect();
+    derivative_figure_of(id, elastic_axis, &groups)
+}
+
+/// The mean-angle comparison (paper Fig. 28): the derivatives of every group forced about a
+/// non-zero mean pitch next to those of the group with the same motion at zero mean (same
+/// pitch and heave frequencies and amplitude ratio), against Theodorsen about
+/// `elastic_axis`. `None` when no group has a mean angle or none has a zero-mean twin.
+pub fn mean_angle_figure(
+    id: &Identification,
+    metas: &[CaseMeta],
+    elastic_axis: f64,
+) -> Option<DerivativeFigure> {
+    let meta_of = |group: &str| -> Vec<&CaseMeta> {
+        id.cases
+            .iter()
+            .filter(|c| c.group == group)
+            .filter_map(|c| metas.iter().find(|m| m.id == c.id))
+            .collect()
+    };
+    let mean = |m: &CaseMeta| m.mean_pitch.unwrap_or(0.0);
+    let motion = |m: &CaseMeta| (m.freq_pitch, m.freq_heave, m.amplitude_ratio);
+    let mut pairs: Vec<(String, String)> = vec![];
+    for g in &id.groups {
+        let ms = meta_of(&g.name);
+        let Some(first) = ms.first() else { continue };
+        if mean(first) == 0.0 {
+            continue;
+        }
+        let twin = id.groups.iter().find(|b| {
+            let bm = meta_of(&b.name);
+            bm.first()
+                .is_some_and(|f| mean(f) == 0.0 && motion(f) == motion(first))
+        });
+        if let Some(b) = twin {
+            if !pairs.iter().any(|(n, _)| *n == b.name) {
+                pairs.push((b.name.clone(), format!("{} (zero mean)", b.name)));
+            }
+            pairs.push((
+                g.name.clone(),
+                format!(
+                    "{} (mean {}°)",
+                    g.name,
+                    crate::style::fmt_num(mean(first).to_degrees())
+                ),
+            ));
+        }
+    }
+    if pairs.len() < 2 {
+        return None;
+    }
+    let mut f = derivative_figure_of(id, elastic_axis, &pairs);
+    f.title = "Flutter derivatives at a mean angle of attack vs zero mean".into();
+    Some(f)
+}
+
+/// [`derivative_figure`] for the groups `groups` (name, legend label), in that order.
+pub fn derivative_figure_of(
+    id: &Identification,
+    elastic_axis: f64,
+    groups: &[(String, String)],
+) -> DerivativeFigure {
     // (name, force, index in eq19 array, uses K_alpha)
     let defs: [(Derivative, Force, usize, bool); 8] = [
         (Derivative::H1, Force::Lift, 0, false),
@@ -438,9 +506,6 @@ pub fn derivative_figure(id: &Identification, elastic_axis: f64) -> DerivativeFi
         (Derivative::A3, Force::Moment, 2, true),
         (Derivative::A4, Force::Moment, 3, false),
     ];
-    let mut groups: Vec<&str> = id.cases.iter().map(|c| c.group.as_str()).collect();
-    groups.sort_unstable();
-    groups.dedup();
     let ks = id
         .cases
         .iter()
@@ -462,7 +527,7 @@ pub fn derivative_figure(id: &Identification, elastic_axis: f64) -> DerivativeFi
             let name = derivative.name();
             let points = groups
                 .iter()
-                .map(|g| {
+                .map(|(g, label)| {
                     let mut k = vec![];
                     let mut value = vec![];
                     let mut interval = vec![];
@@ -478,7 +543,7 @@ pub fn derivative_figure(id: &Identification, elastic_axis: f64) -> DerivativeFi
                         interval.clear();
                     }
                     DerivativePoints {
-                        label: format!("group {g}"),
+                        label: label.clone(),
                         k,
                         value,
                         spread: vec![],
@@ -511,6 +576,43 @@ pub fn derivative_figure(id: &Identification, elastic_axis: f64) -> DerivativeFi
             format!("thin plate (Theodorsen), axis a = {elastic_axis}")
         },
         panels,
+    }
+}
+
+/// The candidate library against every group's selection (paper Fig. 6): one row per
+/// library term, a lift and a moment column per group.
+pub fn library_figure(id: &Identification) -> LibraryFigure {
+    let mut columns = vec![];
+    let mut cells = vec![];
+    for g in &id.groups {
+        for (f, gf) in [(Force::Lift, &g.lift), (Force::Moment, &g.moment)] {
+            columns.push(format!("{} {}", g.name, f.symbol()));
+            cells.push(
+                id.library
+                    .terms
+                    .iter()
+                    .map(|t| {
+                        if gf.support.contains(t) {
+                            LibraryCell::Selected
+                        } else if g.basis.contains(t) {
+                            LibraryCell::Basis
+                        } else {
+                            LibraryCell::NotIdentifiable
+                        }
+                    })
+                    .collect(),
+            );
+        }
+    }
+    LibraryFigure {
+        title: format!(
+            "Candidate library: {} terms (rank {}) and the selected supports",
+            id.library.terms.len(),
+            id.library.rank
+        ),
+        terms: id.library.terms.iter().map(|t| term_label(t)).collect(),
+        columns,
+        cells,
     }
 }
 

@@ -10,6 +10,7 @@ pub mod flutter;
 pub mod gap_heatmap;
 pub mod heatmap;
 pub mod histogram;
+pub mod library;
 pub mod phase;
 pub mod ranking;
 pub mod residual_spectra;
