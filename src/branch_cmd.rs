@@ -36,7 +36,7 @@ pub struct BranchArgs {
     /// RK4 steps per period of the shooting integration.
     #[arg(long, default_value_t = 128)]
     pub steps_per_period: usize,
-    /// Chord B \[m\] for an identification.json model.
+    /// Chord B [m] for an identification.json model.
     #[arg(long)]
     pub chord: Option<f64>,
     /// Output folder (created if missing).
@@ -70,7 +70,7 @@ fn stop_text(s: &StopReason) -> String {
 }
 
 /// The bifurcation diagram of `set`: stable branches solid, unstable dashed, Hopf points
-/// and folds marked, `sweep` (time-integration points, pitch amplitude \[deg\]) and the
+/// and folds marked, `sweep` (time-integration points, pitch amplitude [deg]) and the
 /// measured points of `dist` on top (first-harmonic amplitudes when measured points are
 /// given, to compare like with like). Used by `aeroform branch` and the study's
 /// `[branch]` stage.
@@ -160,12 +160,23 @@ pub fn run(args: &BranchArgs) -> anyhow::Result<()> {
         None => None,
     };
     crate::ensure_dir(&args.out)?;
-    let obs = |_: BranchProgress| {};
-    let set = l
-        .branches(u_min, u_max, &opts, &obs)
-        .with_context(|| format!("LCO branches in U = {u_min}…{u_max} m/s"))?;
+    let bar = crate::progress::CountBar::new("branch", args.max_points);
+    let obs = |p: BranchProgress| {
+        bar.set(
+            p.points,
+            format!(
+                "branch {}: U = {:.4} m/s, α = {:.3}°",
+                p.branch,
+                p.u,
+                p.amplitude_alpha.to_degrees()
+            ),
+        )
+    };
+    let set = l.branches(u_min, u_max, &opts, &obs);
+    bar.finish();
+    let set = set.with_context(|| format!("LCO branches in U = {u_min}…{u_max} m/s"))?;
     for (i, b) in set.branches.iter().enumerate() {
-        println!(
+        crate::ui::say!(
             "branch {i}: Hopf point U = {:.4} m/s, {:.4} Hz, {}; {} orbits, {}",
             b.hopf.u,
             b.hopf.omega / std::f64::consts::TAU,
@@ -177,7 +188,7 @@ pub fn run(args: &BranchArgs) -> anyhow::Result<()> {
             eprintln!("warning: branch {i} stopped early: it did not converge {message}");
         }
         for e in &b.events {
-            println!(
+            crate::ui::say!(
                 "  {:?} at U = {:.4} m/s, pitch amplitude {:.3}°, heave amplitude {:.2} mm",
                 e.kind,
                 e.u,
@@ -191,14 +202,19 @@ pub fn run(args: &BranchArgs) -> anyhow::Result<()> {
         .map(|m| measured_distances(&set, m))
         .unwrap_or_default();
     if !dist.is_empty() {
-        println!(
+        crate::ui::say!(
             "{:>9} {:>9} {:>14} {:>14} {:>12} {:>12}",
-            "U [m/s]", "branch", "meas α1 [deg]", "pred α1 [deg]", "Δα1 [deg]", "Δh1 [mm]"
+            "U [m/s]",
+            "branch",
+            "meas α1 [deg]",
+            "pred α1 [deg]",
+            "Δα1 [deg]",
+            "Δh1 [mm]"
         );
         for d in &dist {
             let f =
                 |v: Option<f64>, k: f64| v.map_or("—".to_string(), |x| format!("{:.3}", x * k));
-            println!(
+            crate::ui::say!(
                 "{:>9.3} {:>9} {:>14.3} {:>14} {:>12} {:>12}{}",
                 d.measured.u,
                 if d.measured.stable {
@@ -237,11 +253,11 @@ pub fn run(args: &BranchArgs) -> anyhow::Result<()> {
         "branch_diagram",
     )
     .context("bifurcation diagram")?;
-    println!(
+    crate::ui::say!(
         "wrote {}, {}, {}",
         csv.display(),
         path.display(),
         fig.png.display()
     );
-    Ok(())
+    crate::ui::document(&json)
 }

@@ -134,13 +134,13 @@ pub fn run(args: &DiagnoseArgs) -> anyhow::Result<()> {
     let files = plots::write_diagnosis_outputs(&diag, dir.path())?;
     dir.commit()?;
     print_diagnosis(&diag, secs);
-    println!(
+    crate::ui::say!(
         "wrote {} and {} figure/report files to {}",
         out.join("diagnosis.json").display(),
         files.len(),
         out.display()
     );
-    Ok(())
+    crate::ui::document(&diag)
 }
 
 fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> anyhow::Result<()> {
@@ -151,14 +151,14 @@ fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> anyhow::Result<()>
 }
 
 fn print_diagnosis(d: &Diagnosis, secs: f64) {
-    println!(
+    crate::ui::say!(
         "verdict: {} (level {}, confidence {:.2})",
         d.verdict.effect,
         d.verdict.level.name(),
         d.verdict.confidence
     );
-    println!("  {}", d.verdict.reason);
-    println!(
+    crate::ui::say!("  {}", d.verdict.reason);
+    crate::ui::say!(
         "gap ({}): before {:.4}, after {:.4}, noise level {:.4}, shrink {:.1} % (excess {:.1} %)",
         d.gap.metric,
         d.gap.before,
@@ -168,7 +168,7 @@ fn print_diagnosis(d: &Diagnosis, secs: f64) {
         100.0 * d.gap.excess_shrink
     );
     for l in &d.levels {
-        println!(
+        crate::ui::say!(
             "level {}: held-out gap {:.4} vs noise {:.4} ({}significant)",
             l.level.name(),
             l.before,
@@ -176,7 +176,7 @@ fn print_diagnosis(d: &Diagnosis, secs: f64) {
             if l.significant_gap { "" } else { "not " }
         );
         for c in l.candidates.iter().take(4) {
-            println!(
+            crate::ui::say!(
                 "    {:<17} after {:.4}  shrink {:>6.1} %  {}",
                 c.effect.name(),
                 c.after,
@@ -185,7 +185,7 @@ fn print_diagnosis(d: &Diagnosis, secs: f64) {
             );
         }
     }
-    println!("diagnosed in {secs:.2} s");
+    crate::ui::say!("diagnosed in {secs:.2} s");
 }
 
 fn blind(n: usize, seed: u64, out: &Path, force: bool) -> anyhow::Result<()> {
@@ -206,13 +206,15 @@ fn blind(n: usize, seed: u64, out: &Path, force: bool) -> anyhow::Result<()> {
     let text = blind_text(&report, secs);
     write_atomic(&dir.path().join("confusion.md"), text.as_bytes())?;
     dir.commit()?;
-    print!("{text}");
-    println!(
+    if !crate::ui::silent() {
+        print!("{text}");
+    }
+    crate::ui::say!(
         "wrote {} and {}",
         out.join("blind.json").display(),
         out.join("confusion.md").display()
     );
-    Ok(())
+    crate::ui::document(&report)
 }
 
 /// One shard of the benchmark as a part document (`diagnose::sweep`).
@@ -224,8 +226,8 @@ fn blind_shard(n: usize, seed: u64, shard: &str, out: &Path) -> anyhow::Result<(
     let part = spec.run_shard(i, k)?;
     let path = out.join(format!("blind.part-{i}-of-{k}.json"));
     write_json(&path, &part)?;
-    println!("shard {i}/{k} of {n} sets; wrote {}", path.display());
-    Ok(())
+    crate::ui::say!("shard {i}/{k} of {n} sets; wrote {}", path.display());
+    crate::ui::document(&part)
 }
 
 /// The printed and saved summary of a benchmark.

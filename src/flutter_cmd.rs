@@ -23,7 +23,7 @@ pub struct FlutterArgs {
     /// Flutter method: p-k (exact frequency response) or p (time-domain realisation).
     #[arg(long, value_enum, default_value_t = MethodArg::Pk)]
     pub method: MethodArg,
-    /// Chord B \[m\] for an identification.json model (else `chord` of the structure file).
+    /// Chord B [m] for an identification.json model (else `chord` of the structure file).
     #[arg(long)]
     pub chord: Option<f64>,
     /// Output folder (created if missing).
@@ -113,25 +113,25 @@ pub fn run(args: &FlutterArgs) -> anyhow::Result<()> {
     let path = args.out.join("flutter.json");
     identify::io::write_atomic(&path, format!("{json:#}\n").as_bytes())?;
     match fa.flutter {
-        Some(f) => println!(
+        Some(f) => crate::ui::say!(
             "flutter: U_F = {:.4} m/s, f_F = {:.4} Hz (K = {:.4}, mode {})",
             f.u,
             f.omega / (2.0 * std::f64::consts::PI),
             b * f.omega / f.u,
             f.mode
         ),
-        None if fa.unstable_at_u_min => println!(
+        None if fa.unstable_at_u_min => crate::ui::say!(
             "flutter: already unstable at the lowest speed {} m/s (U_F is below the scan)",
             opts.u_min
         ),
-        None => println!(
+        None => crate::ui::say!(
             "flutter: none between {} and {} m/s",
             speeds.iter().copied().fold(f64::INFINITY, f64::min),
             speeds.iter().copied().fold(0.0, f64::max)
         ),
     }
     if let Some(f) = fa.failed.first() {
-        println!(
+        crate::ui::say!(
             "warning: {} point(s) of the scan failed and were skipped (first at U = {:.4} m/s: {})",
             fa.failed.len(),
             f.u,
@@ -139,13 +139,13 @@ pub fn run(args: &FlutterArgs) -> anyhow::Result<()> {
         );
     }
     match fa.divergence_speed {
-        Some(u) => println!("divergence: U_D = {u:.4} m/s"),
-        None => println!("divergence: none"),
+        Some(u) => crate::ui::say!("divergence: U_D = {u:.4} m/s"),
+        None => crate::ui::say!("divergence: none"),
     }
     if let Some(e) = &ensemble {
         let show =
             |name: &str, q: &aeroelastic::ensemble::MemberQuantity, unit: &str| match q.interval {
-                Some(i) => println!(
+                Some(i) => crate::ui::say!(
                 "{name}: median {:.4} {unit}, {:.0} % interval [{:.4}, {:.4}] ({} of {} members)",
                 i.median,
                 100.0 * e.level,
@@ -154,7 +154,7 @@ pub fn run(args: &FlutterArgs) -> anyhow::Result<()> {
                 q.found,
                 e.members
             ),
-                None => println!("{name}: none in any of the {} members", e.members),
+                None => crate::ui::say!("{name}: none in any of the {} members", e.members),
             };
         show("ensemble U_F", &e.flutter_speed, "m/s");
         show("ensemble f_F", &e.flutter_frequency_hz, "Hz");
@@ -163,6 +163,6 @@ pub fn run(args: &FlutterArgs) -> anyhow::Result<()> {
             eprintln!("warning: ensemble: {f}");
         }
     }
-    println!("wrote {}", path.display());
-    Ok(())
+    crate::ui::say!("wrote {}", path.display());
+    crate::ui::document(&json)
 }

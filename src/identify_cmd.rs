@@ -71,9 +71,6 @@ pub struct IdentifyArgs {
     /// Write stage timings (read_s, prepare_s, identify_s, total_s, cases) to this JSON file.
     #[arg(long)]
     pub timing_json: Option<PathBuf>,
-    /// Do not print the summary table.
-    #[arg(long)]
-    pub quiet: bool,
     /// Block-bootstrap ensemble of N members (intervals of every coefficient and
     /// derivative, written to the `ensemble` section of identification.json).
     #[arg(long, value_name = "N")]
@@ -227,7 +224,7 @@ pub fn run(args: &IdentifyArgs) -> anyhow::Result<Identification> {
         .with_context(|| format!("reading data set {}", args.dataset.display()))?;
     let read_s = t_start.elapsed().as_secs_f64();
     let convention = dataset.manifest.convention;
-    if !convention.is_scanlan() && !args.quiet {
+    if !convention.is_scanlan() && !crate::ui::silent() {
         eprintln!(
             "{}: columns read as {} and converted to Scanlan's (h, lift down; alpha, moment nose-up)",
             args.dataset.display(),
@@ -263,8 +260,8 @@ pub fn run(args: &IdentifyArgs) -> anyhow::Result<Identification> {
         let e = identify::ensemble::bootstrap(&prepared.cases, &result, &es)
             .context("ensemble (block bootstrap)")?;
         result.ensemble = Some(e);
-        if !args.quiet {
-            println!(
+        if !crate::ui::silent() {
+            crate::ui::say!(
                 "ensemble: {n} block-bootstrap members (seed {}) in {:.3} s",
                 args.seed,
                 t_e.elapsed().as_secs_f64()
@@ -285,14 +282,15 @@ pub fn run(args: &IdentifyArgs) -> anyhow::Result<Identification> {
             prepared.cases.len(),
         )?;
     }
-    if !args.quiet {
-        println!("{}", result.summary_table());
-        println!(
+    if !crate::ui::silent() {
+        crate::ui::say!("{}", result.summary_table());
+        crate::ui::say!(
             "{} cases: read {read_s:.3} s, preprocess {prepare_s:.3} s, identify {identify_s:.3} s; wrote {}",
             prepared.cases.len(),
             path.display()
         );
     }
+    crate::ui::document(&result)?;
     Ok(result)
 }
 

@@ -30,13 +30,13 @@ pub struct LcoArgs {
     /// Sweep `a:b:n` (or a comma list), integrated upward and downward.
     #[arg(long)]
     pub sweep: Option<String>,
-    /// Initial pitch perturbation \[deg\] (the upward sweep and single runs).
+    /// Initial pitch perturbation [deg] (the upward sweep and single runs).
     #[arg(long, default_value_t = 2.0)]
     pub alpha0: f64,
-    /// Initial pitch \[deg\] of the downward sweep (large, to reach an upper LCO branch).
+    /// Initial pitch [deg] of the downward sweep (large, to reach an upper LCO branch).
     #[arg(long, default_value_t = 20.0)]
     pub alpha0_down: f64,
-    /// Chord B \[m\] for an identification.json model.
+    /// Chord B [m] for an identification.json model.
     #[arg(long)]
     pub chord: Option<f64>,
     /// Output folder (created if missing).
@@ -86,7 +86,7 @@ pub fn run(args: &LcoArgs) -> anyhow::Result<()> {
             .section
             .lco_run_k(u, &pert, &opts, &k_iteration)
             .with_context(|| format!("LCO run at U = {u} m/s"))?;
-        println!(
+        crate::ui::say!(
             "U = {u} m/s: {}, pitch amplitude {:.4}°, heave amplitude {:.3} mm, {:.4} Hz",
             class_name(&r),
             r.amplitude_alpha.to_degrees(),
@@ -113,12 +113,14 @@ pub fn run(args: &LcoArgs) -> anyhow::Result<()> {
         let h = l.section.lco_sweeps(&speeds, &plan, &opts, &obs);
         bar.finish();
         let h = h.context("LCO sweep")?;
-        println!(
+        crate::ui::say!(
             "{:>10} {:>28} {:>28}",
-            "U [m/s]", "up: α amp [deg]", "down: α amp [deg]"
+            "U [m/s]",
+            "up: α amp [deg]",
+            "down: α amp [deg]"
         );
         for (a, b) in h.up.iter().zip(&h.down) {
-            println!(
+            crate::ui::say!(
                 "{:>10.4} {:>12.4} {:>15} {:>12.4} {:>15}",
                 a.u,
                 a.amplitude_alpha.to_degrees(),
@@ -129,7 +131,7 @@ pub fn run(args: &LcoArgs) -> anyhow::Result<()> {
         }
         let band = h.band();
         if !band.is_empty() {
-            println!("hysteresis at U = {band:?}");
+            crate::ui::say!("hysteresis at U = {band:?}");
         }
         lco_sweep_document(&structure_name, &model_name, &h)
     };
@@ -152,11 +154,11 @@ pub fn run(args: &LcoArgs) -> anyhow::Result<()> {
         .context("ensemble LCO runs")?;
         for p in &le.points {
             match p.amplitude_alpha_deg.interval {
-                Some(i) => println!(
+                Some(i) => crate::ui::say!(
                     "ensemble U = {} m/s: pitch amplitude median {:.4}°, {:.0} % interval [{:.4}, {:.4}]° ({} of {} members in LCO)",
                     p.u, i.median, 100.0 * le.level, i.lower, i.upper, p.amplitude_alpha_deg.found, le.members
                 ),
-                None => println!("ensemble U = {} m/s: no member in LCO", p.u),
+                None => crate::ui::say!("ensemble U = {} m/s: no member in LCO", p.u),
             }
         }
         for f in &le.failures {
@@ -165,6 +167,6 @@ pub fn run(args: &LcoArgs) -> anyhow::Result<()> {
         json["ensemble"] = serde_json::to_value(&le)?;
     }
     identify::io::write_atomic(&path, format!("{json:#}\n").as_bytes())?;
-    println!("wrote {}", path.display());
-    Ok(())
+    crate::ui::say!("wrote {}", path.display());
+    crate::ui::document(&json)
 }

@@ -15,6 +15,7 @@ mod run_cmd;
 mod study;
 mod sweep_cmd;
 mod tunnel_cmd;
+mod ui;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -30,6 +31,14 @@ const VERSION: &str = concat!(env!("CARGO_PKG_VERSION"), " (", env!("AEROFORM_GI
 struct Cli {
     #[command(subcommand)]
     command: Command,
+    /// Print the command's result document (JSON: identification.json, flutter.json, …) on
+    /// stdout and nothing else there (implies --quiet).
+    #[arg(long, global = true)]
+    json: bool,
+    /// No human-readable output on stdout and no progress bars (errors and warnings still
+    /// go to stderr).
+    #[arg(long, global = true)]
+    quiet: bool,
 }
 
 #[derive(Debug, Subcommand)]
@@ -61,6 +70,10 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    ui::init(ui::Mode {
+        json: cli.json,
+        quiet: cli.quiet,
+    });
     interrupt::install();
     let result = match cli.command {
         Command::Run(a) => run_cmd::run(&a),

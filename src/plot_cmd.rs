@@ -26,10 +26,10 @@ pub fn run(args: &PlotArgs) -> anyhow::Result<()> {
     // relative data paths are not needed: nothing is recomputed
     let study = Study::parse(&text, &path, &args.outdir)?;
     let figs = render_all(&study, &args.outdir)?;
-    println!(
+    crate::ui::say!(
         "redrew {} figures and {}",
         figs.len(),
         args.outdir.join(names::REPORT).display()
     );
-    Ok(())
+    crate::ui::document(&figs)
 }

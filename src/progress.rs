@@ -6,6 +6,16 @@ use aeroelastic::lco::SweepProgress;
 use identify::pipeline::Progress;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
+/// stderr, or nowhere under `--quiet`/`--json` ([`crate::ui::silent`]); indicatif itself
+/// hides a bar when stderr is not a terminal.
+fn target() -> ProgressDrawTarget {
+    if crate::ui::silent() {
+        ProgressDrawTarget::hidden()
+    } else {
+        ProgressDrawTarget::stderr()
+    }
+}
+
 /// A progress bar fed by [`identify::pipeline::identify`]'s observer; hidden when stderr is
 /// not a terminal.
 pub struct IdentifyBar {
@@ -33,7 +43,7 @@ impl IdentifyBar {
             if let Some((b, _)) = guard.take() {
                 b.finish_and_clear();
             }
-            let b = ProgressBar::with_draw_target(Some(total as u64), ProgressDrawTarget::stderr());
+            let b = ProgressBar::with_draw_target(Some(total as u64), target());
             b.set_style(
                 ProgressStyle::with_template("{prefix:>8} [{bar:40}] {pos}/{len} {elapsed}")
                     .unwrap_or_else(|_| ProgressStyle::default_bar())
@@ -65,7 +75,7 @@ pub struct CountBar {
 impl CountBar {
     /// A bar of `total` units labelled `prefix`.
     pub fn new(prefix: &'static str, total: usize) -> Self {
-        let bar = ProgressBar::with_draw_target(Some(total as u64), ProgressDrawTarget::stderr());
+        let bar = ProgressBar::with_draw_target(Some(total as u64), target());
         bar.set_style(
             ProgressStyle::with_template("{prefix:>8} [{bar:40}] {pos}/{len} {elapsed} {msg}")
                 .unwrap_or_else(|_| ProgressStyle::default_bar())
@@ -85,6 +95,12 @@ impl CountBar {
     /// One unit done, with a message.
     pub fn tick(&self, msg: String) {
         self.bar.inc(1);
+        self.bar.set_message(msg);
+    }
+
+    /// Position `pos` with a message (progress that is not a count of finished units).
+    pub fn set(&self, pos: usize, msg: String) {
+        self.bar.set_position(pos as u64);
         self.bar.set_message(msg);
     }
 

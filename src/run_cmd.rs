@@ -19,9 +19,6 @@ pub struct RunArgs {
     /// Override the study's seed.
     #[arg(long)]
     pub seed: Option<u64>,
-    /// Do not print the identification summary.
-    #[arg(long)]
-    pub quiet: bool,
     /// Replace an existing output folder that aeroform did not write (it is replaced as a
     /// whole, never mixed with the new results).
     #[arg(long)]
@@ -44,18 +41,34 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
         .unwrap_or_else(|| PathBuf::from("out").join(&study.spec.name));
     let t0 = Instant::now();
     let dir = crate::outdir::OutDir::begin(&out, "run", args.force)?;
-    let timings = run_study(&study, dir.path(), args.quiet)?;
+    let timings = run_study(&study, dir.path(), crate::ui::silent())?;
     dir.commit()?;
-    println!(
+    crate::ui::say!(
         "study `{}` ({}) done; results in {}",
         study.spec.name,
         study.path.display(),
         out.display()
     );
     for (stage, s) in &timings {
-        println!("  {stage:<16} {s:>8.2} s");
+        crate::ui::say!("  {stage:<16} {s:>8.2} s");
     }
-    println!("  {:<16} {:>8.2} s", "total", t0.elapsed().as_secs_f64());
+    let total = t0.elapsed().as_secs_f64();
+    crate::ui::say!("  {:<16} {:>8.2} s", "total", total);
+    if crate::ui::mode().json {
+        let figures: serde_json::Value =
+            crate::study::files::read_json(&out.join(crate::study::run::names::FIGURE_LIST))?;
+        crate::ui::document(&serde_json::json!({
+            "study": study.spec.name,
+            "out": out.display().to_string(),
+            "seed": study.spec.seed.to_string(),
+            "timings_s": timings
+                .iter()
+                .map(|(k, v)| ((*k).to_string(), serde_json::json!(v)))
+                .collect::<serde_json::Map<_, _>>(),
+            "total_s": total,
+            "figures": figures,
+        }))?;
+    }
     Ok(())
 }
 

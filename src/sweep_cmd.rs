@@ -62,8 +62,8 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<()> {
         .clone()
         .unwrap_or_else(|| PathBuf::from(default_out));
     write_json(&out, &doc)?;
-    println!("{} items; wrote {}", spec.n_items(), out.display());
-    Ok(())
+    crate::ui::say!("{} items; wrote {}", spec.n_items(), out.display());
+    crate::ui::document(&doc)
 }
 
 /// Runs `aeroform merge`.
@@ -81,6 +81,6 @@ pub fn merge_run(args: &MergeArgs) -> anyhow::Result<()> {
         .collect::<anyhow::Result<Vec<_>>>()?;
     let doc = merge(&parts)?;
     write_json(&args.out, &doc)?;
-    println!("merged {} parts; wrote {}", parts.len(), args.out.display());
-    Ok(())
+    crate::ui::say!("merged {} parts; wrote {}", parts.len(), args.out.display());
+    crate::ui::document(&doc)
 }

@@ -68,10 +68,10 @@ pub struct ForcedArgs {
     /// Also record still-air runs (inertial forces of the 0.82 kg plate) with random offsets.
     #[arg(long)]
     pub still_air: bool,
-    /// Record duration \[s\].
+    /// Record duration [s].
     #[arg(long, default_value_t = 10.0)]
     pub duration: f64,
-    /// Chord B \[m\] for an identification.json model.
+    /// Chord B [m] for an identification.json model.
     #[arg(long)]
     pub chord: Option<f64>,
     /// Replace an existing output folder that aeroform did not write.
@@ -97,16 +97,16 @@ pub struct FreeArgs {
     /// Master seed.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Record duration \[s\].
+    /// Record duration [s].
     #[arg(long, default_value_t = 20.0)]
     pub duration: f64,
-    /// Initial pitch \[deg\].
+    /// Initial pitch [deg].
     #[arg(long, default_value_t = 2.0)]
     pub alpha0: f64,
     /// Do not record lift and moment.
     #[arg(long)]
     pub no_forces: bool,
-    /// Chord B \[m\] for an identification.json model.
+    /// Chord B [m] for an identification.json model.
     #[arg(long)]
     pub chord: Option<f64>,
     /// Replace an existing output folder that aeroform did not write.
@@ -141,7 +141,7 @@ fn blind(a: &BlindArgs) -> anyhow::Result<()> {
     let dir = OutDir::begin(&a.out, "tunnel blind", a.force)?;
     write_blind(dir.path(), &set)?;
     dir.commit()?;
-    println!(
+    crate::ui::say!(
         "wrote {} forced cases to {}, {} free runs to {} and the truth to {}",
         set.forced.records.len(),
         a.out.join("forced").display(),
@@ -149,7 +149,24 @@ fn blind(a: &BlindArgs) -> anyhow::Result<()> {
         a.out.join("free").display(),
         a.out.join("truth.json").display()
     );
-    Ok(())
+    crate::ui::document(&serde_json::json!({
+        "out": a.out.display().to_string(),
+        "forced_cases": set.forced.records.len(),
+        "free_runs": set.free.records.len(),
+        "seed": a.seed.to_string(),
+    }))
+}
+
+/// The `manifest.toml` just written to `dir`, as JSON (for `--json`; `Null` otherwise).
+fn manifest_json(dir: &std::path::Path) -> anyhow::Result<serde_json::Value> {
+    if !crate::ui::mode().json {
+        return Ok(serde_json::Value::Null);
+    }
+    let path = dir.join("manifest.toml");
+    let text =
+        std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
+    let v: toml::Value = toml::from_str(&text).with_context(|| format!("{}", path.display()))?;
+    Ok(serde_json::to_value(v)?)
 }
 
 fn forced(a: &ForcedArgs) -> anyhow::Result<()> {
@@ -178,14 +195,20 @@ fn forced(a: &ForcedArgs) -> anyhow::Result<()> {
     let (manifest, records) = r.context("virtual wind tunnel (forced)")?;
     tunnel::write(dir.path(), &manifest, &records)?;
     dir.commit()?;
-    println!(
+    crate::ui::say!(
         "wrote {} forced cases (model {}, seed {}) to {}",
         records.len(),
         m.model.name(),
         a.seed,
         a.out.display()
     );
-    Ok(())
+    crate::ui::document(&serde_json::json!({
+        "out": a.out.display().to_string(),
+        "cases": records.len(),
+        "model": m.model.name(),
+        "seed": a.seed.to_string(),
+        "manifest": manifest_json(&a.out)?,
+    }))
 }
 
 fn free(a: &FreeArgs) -> anyhow::Result<()> {
@@ -207,16 +230,22 @@ fn free(a: &FreeArgs) -> anyhow::Result<()> {
     dir.commit()?;
     for run in &runs {
         if let Some(t) = run.left_bound_at {
-            println!(
+            crate::ui::say!(
                 "U = {} m/s: left the bound at t = {t:.3} s (record truncated)",
                 run.u
             );
         }
     }
-    println!(
+    crate::ui::say!(
         "wrote {} free-response cases to {}",
         records.len(),
         a.out.display()
     );
-    Ok(())
+    crate::ui::document(&serde_json::json!({
+        "out": a.out.display().to_string(),
+        "runs": records.len(),
+        "seed": a.seed.to_string(),
+        "manifest": manifest_json(&a.out)?,
+        "left_bound_at_s": runs.iter().map(|r| r.left_bound_at).collect::<Vec<_>>(),
+    }))
 }

@@ -147,13 +147,13 @@ pub fn run_study(study: &Study, out: &Path, quiet: bool) -> anyhow::Result<Timin
     let mut derived = build::Derived::default();
     if let Some(cases) = &cases {
         if !quiet {
-            println!("data: {} cases; {}", cases.cases.len(), cases.source);
+            crate::ui::say!("data: {} cases; {}", cases.cases.len(), cases.source);
         }
         let id = timed(&mut timings, "identify", || {
             identify_stage(study, cases, out)
         })?;
         if !quiet {
-            println!("{}", id.summary_table());
+            crate::ui::say!("{}", id.summary_table());
         }
         let s = &study.spec;
         let wants_identified = s.aero.as_ref().is_some_and(|a| a.model == "identified")
@@ -190,11 +190,14 @@ pub fn run_study(study: &Study, out: &Path, quiet: bool) -> anyhow::Result<Timin
         if !quiet {
             for r in &runs {
                 match r.analysis.flutter {
-                    Some(f) => println!(
+                    Some(f) => crate::ui::say!(
                         "flutter [{}]: U_F = {:.4} m/s (U/(bω_α) = {:.4}), ω_F/ω_α = {:.4}",
-                        r.label, f.u, f.u_reduced, f.omega_ratio
+                        r.label,
+                        f.u,
+                        f.u_reduced,
+                        f.omega_ratio
                     ),
-                    None => println!("flutter [{}]: stable over the scan", r.label),
+                    None => crate::ui::say!("flutter [{}]: stable over the scan", r.label),
                 }
             }
         }
@@ -215,7 +218,7 @@ pub fn run_study(study: &Study, out: &Path, quiet: bool) -> anyhow::Result<Timin
                     .iter()
                     .filter(|e| e.kind == aeroelastic::branch::EventKind::Fold)
                     .count();
-                println!(
+                crate::ui::say!(
                     "branch {i}: Hopf point U = {:.4} m/s ({}), {} orbits, {folds} fold(s)",
                     b.hopf.u,
                     b.criticality,
