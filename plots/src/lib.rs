@@ -15,6 +15,7 @@ pub mod error;
 pub mod figures;
 pub mod render;
 pub mod report;
+pub mod rich;
 pub mod style;
 
 #[cfg(test)]

@@ -7,6 +7,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 
 use crate::error::{DrawResultExt, Error, Result};
+use crate::rich::RichBackend;
 use crate::style::ensure_fonts;
 
 /// A figure: plain data plus the drawing code, run once per backend.
@@ -47,7 +48,7 @@ pub fn render_svg<F: Figure>(fig: &F) -> Result<String> {
     let (w, h) = fig.size();
     let mut text = String::new();
     {
-        let root = SVGBackend::with_string(&mut text, (w, h)).into_drawing_area();
+        let root = RichBackend::new(SVGBackend::with_string(&mut text, (w, h))).into_drawing_area();
         root.fill(&WHITE).ctx(F::KIND)?;
         fig.draw(&root)?;
         root.present().ctx(F::KIND)?;
@@ -64,7 +65,8 @@ pub fn render_png<F: Figure>(fig: &F) -> Result<Vec<u8>> {
     let (w, h) = fig.size();
     let mut buf = vec![0u8; w as usize * h as usize * 3];
     {
-        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        let root =
+            RichBackend::new(BitMapBackend::with_buffer(&mut buf, (w, h))).into_drawing_area();
         root.fill(&WHITE).ctx(F::KIND)?;
         fig.draw(&root)?;
         root.present().ctx(F::KIND)?;

@@ -1,0 +1,310 @@
+//! Real subscripts in every text of a figure: a drawing backend that wraps PNG and SVG
+//! backends and draws `C_L`, `ω_α`, `U_F` or `C_{L,max}` with the subscript smaller and
+//! lowered, in titles, axis labels, legends and annotations alike (plotters has no rich
+//! text of its own).
+//!
+//! Markup: `_{…}` makes everything inside the braces a subscript; `_x` makes the single
+//! character `x` a subscript when `_` follows a letter and `x` is not followed by a letter
+//! or digit, so machine names such as `time_cap` or `N1_lift` stay literal.
+
+use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+use plotters_backend::{
+    BackendColor, BackendCoord, BackendStyle, BackendTextStyle, DrawingBackend, DrawingErrorKind,
+};
+
+/// Size of a subscript relative to the text.
+const SUB_SCALE: f64 = 0.72;
+
+/// One run of text: plain or subscript.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub(crate) struct Run {
+    /// The characters of the run.
+    pub text: String,
+    /// Drawn as a subscript.
+    pub sub: bool,
+}
+
+/// Splits `text` into plain and subscript runs (module docs); `None` when there is no
+/// subscript, so the caller can draw it unchanged.
+pub(crate) fn parse(text: &str) -> Option<Vec<Run>> {
+    let chars: Vec<char> = text.chars().collect();
+    let mut runs: Vec<Run> = vec![];
+    let mut plain = String::new();
+    let mut any = false;
+    let mut i = 0;
+    while i < chars.len() {
+        let c = chars[i];
+        let prev_letter = i > 0 && chars[i - 1].is_alphabetic();
+        if c == '_' && prev_letter && i + 1 < chars.len() {
+            if chars[i + 1] == '{' {
+                if let Some(close) = chars[i + 2..].iter().position(|&x| x == '}') {
+                    let sub: String = chars[i + 2..i + 2 + close].iter().collect();
+                    if !plain.is_empty() {
+                        runs.push(Run {
+                            text: std::mem::take(&mut plain),
+                            sub: false,
+                        });
+                    }
+                    runs.push(Run {
+                        text: sub,
+                        sub: true,
+                    });
+                    any = true;
+                    i += close + 3;
+                    continue;
+                }
+            } else {
+                let x = chars[i + 1];
+                let next_alnum = chars.get(i + 2).is_some_and(|n| n.is_alphanumeric());
+                if !x.is_whitespace() && x != '_' && !next_alnum {
+                    if !plain.is_empty() {
+                        runs.push(Run {
+                            text: std::mem::take(&mut plain),
+                            sub: false,
+                        });
+                    }
+                    runs.push(Run {
+                        text: x.to_string(),
+                        sub: true,
+                    });
+                    any = true;
+                    i += 2;
+                    continue;
+                }
+            }
+        }
+        plain.push(c);
+        i += 1;
+    }
+    if !plain.is_empty() {
+        runs.push(Run {
+            text: plain,
+            sub: false,
+        });
+    }
+    any.then_some(runs)
+}
+
+/// A backend that draws subscripts (module docs) and otherwise forwards to `inner`.
+pub struct RichBackend<DB: DrawingBackend> {
+    inner: DB,
+}
+
+impl<DB: DrawingBackend> RichBackend<DB> {
+    /// Wraps `inner`.
+    pub fn new(inner: DB) -> Self {
+        RichBackend { inner }
+    }
+}
+
+/// The style of one run: `base` at `scale` × its size, anchored left in the text frame.
+fn run_style<'a, S: BackendTextStyle>(base: &'a S, scale: f64, v: VPos) -> TextStyle<'a> {
+    let c = base.color();
+    let mut s = TextStyle::from((base.family(), base.size() * scale, base.style()))
+        .transform(base.transform())
+        .pos(Pos::new(HPos::Left, v));
+    s.color = c;
+    s
+}
+
+impl<DB: DrawingBackend> DrawingBackend for RichBackend<DB> {
+    type ErrorType = DB::ErrorType;
+
+    fn get_size(&self) -> (u32, u32) {
+        self.inner.get_size()
+    }
+
+    fn ensure_prepared(&mut self) -> Result<(), DrawingErrorKind<Self::ErrorType>> {
+        self.inner.ensure_prepared()
+    }
+
+    fn present(&mut self) -> Result<(), DrawingErrorKind<Self::ErrorType>> {
+        self.inner.present()
+    }
+
+    fn draw_pixel(
+        &mut self,
+        point: BackendCoord,
+        color: BackendColor,
+    ) -> Result<(), DrawingErrorKind<Self::ErrorType>> {
+        self.inner.draw_pixel(point, color)
+    }
+
+    fn draw_line<S: BackendStyle>(
+        &mut self,
+        from: BackendCoord,
+        to: BackendCoord,
+        style: &S,
+    ) -> Result<(), DrawingErrorKind<Self::ErrorType>> {
+        self.inner.draw_line(from, to, style)
+    }
+
+    fn draw_rect<S: BackendStyle>(
+        &mut self,
+        upper_left: BackendCoord,
+        bottom_right: BackendCoord,
+        style: &S,
+        fill: bool,
+    ) -> Result<(), DrawingErrorKind<Self::ErrorType>> {
+        self.inner.draw_rect(upper_left, bottom_right, style, fill)
+    }
+
+    fn draw_path<S: BackendStyle, I: IntoIterator<Item = BackendCoord>>(
+        &mut self,
+        path: I,
+        style: &S,
+    ) -> Result<(), DrawingErrorKind<Self::ErrorType>> {
+        self.inner.draw_path(path, style)
+    }
+
+    fn draw_circle<S: BackendStyle>(
+        &mut self,
+        center: BackendCoord,
+        radius: u32,
+        style: &S,
+        fill: bool,
+    ) -> Result<(), DrawingErrorKind<Self::ErrorType>> {
+        self.inner.draw_circle(center, radius, style, fill)
+    }
+
+    fn fill_polygon<S: BackendStyle, I: IntoIterator<Item = BackendCoord>>(
+        &mut self,
+        vert: I,
+        style: &S,
+    ) -> Result<(), DrawingErrorKind<Self::ErrorType>> {
+        self.inner.fill_polygon(vert, style)
+    }
+
+    fn blit_bitmap(
+        &mut self,
+        pos: BackendCoord,
+        size: (u32, u32),
+        src: &[u8],
+    ) -> Result<(), DrawingErrorKind<Self::ErrorType>> {
+        self.inner.blit_bitmap(pos, size, src)
+    }
+
+    fn draw_text<TStyle: BackendTextStyle>(
+        &mut self,
+        text: &str,
+        style: &TStyle,
+        pos: BackendCoord,
+    ) -> Result<(), DrawingErrorKind<Self::ErrorType>> {
+        let Some(runs) = parse(text) else {
+            return self.inner.draw_text(text, style, pos);
+        };
+        let anchor = style.anchor();
+        let size = style.size();
+        let mut widths = Vec::with_capacity(runs.len());
+        for r in &runs {
+            let s = run_style(style, if r.sub { SUB_SCALE } else { 1.0 }, anchor.v_pos);
+            widths.push(self.inner.estimate_text_size(&r.text, &s)?.0 as i32);
+        }
+        let total: i32 = widths.iter().sum();
+        let mut u = match anchor.h_pos {
+            HPos::Left => 0,
+            HPos::Center => -total / 2,
+            HPos::Right => -total,
+        };
+        // how far a subscript's anchor point sits below the text's, in the text frame
+        let drop = size
+            * match anchor.v_pos {
+                VPos::Top => 0.45,
+                VPos::Center => 0.3,
+                VPos::Bottom => 0.15,
+            };
+        let trans = style.transform();
+        for (r, w) in runs.iter().zip(widths) {
+            let s = run_style(style, if r.sub { SUB_SCALE } else { 1.0 }, anchor.v_pos);
+            let v = if r.sub { drop.round() as i32 } else { 0 };
+            let (dx, dy) = trans.transform(u, v);
+            self.inner
+                .draw_text(&r.text, &s, (pos.0 + dx, pos.1 + dy))?;
+            u += w;
+        }
+        Ok(())
+    }
+
+    fn estimate_text_size<TStyle: BackendTextStyle>(
+        &self,
+        text: &str,
+        style: &TStyle,
+    ) -> Result<(u32, u32), DrawingErrorKind<Self::ErrorType>> {
+        let Some(runs) = parse(text) else {
+            return self.inner.estimate_text_size(text, style);
+        };
+        let (mut w, mut h) = (0, 0);
+        for r in &runs {
+            let s = run_style(
+                style,
+                if r.sub { SUB_SCALE } else { 1.0 },
+                style.anchor().v_pos,
+            );
+            let (rw, rh) = self.inner.estimate_text_size(&r.text, &s)?;
+            w += rw;
+            h = h.max(rh);
+        }
+        Ok((w, h))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn shown(text: &str) -> Vec<(String, bool)> {
+        parse(text)
+            .unwrap_or_else(|| {
+                vec![Run {
+                    text: text.into(),
+                    sub: false,
+                }]
+            })
+            .into_iter()
+            .map(|r| (r.text, r.sub))
+            .collect()
+    }
+
+    #[test]
+    fn subscripts_of_symbols_and_literal_machine_names() {
+        assert_eq!(
+            shown("C_L [-]"),
+            vec![
+                ("C".into(), false),
+                ("L".into(), true),
+                (" [-]".into(), false)
+            ]
+        );
+        assert_eq!(
+            shown("ω_F/ω_α"),
+            vec![
+                ("ω".into(), false),
+                ("F".into(), true),
+                ("/ω".into(), false),
+                ("α".into(), true)
+            ]
+        );
+        assert_eq!(
+            shown("C_{L,max} = 0.8"),
+            vec![
+                ("C".into(), false),
+                ("L,max".into(), true),
+                (" = 0.8".into(), false)
+            ]
+        );
+        for literal in [
+            "time_cap",
+            "N1_lift",
+            "left_bound",
+            "a_ b",
+            "x_",
+            "_x",
+            "3_4",
+        ] {
+            assert!(parse(literal).is_none(), "{literal}");
+        }
+        // an unclosed brace stays literal
+        assert!(parse("C_{L").is_none());
+    }
+}
