@@ -223,6 +223,7 @@ pub(crate) fn heatmap() -> HeatmapGridFigure {
         x_values: amps,
         y_values: speeds,
         panels,
+        value_label: "coefficient value [-]".into(),
     }
 }
 

@@ -680,11 +680,12 @@ pub fn render_all(study: &Study, out: &Path) -> anyhow::Result<Vec<FigureEntry>>
         let runs: Vec<FlutterRun> = read_json(&out.join(names::FLUTTER))?;
         if cv.wants("vg") {
             for (i, r) in runs.iter().enumerate() {
-                let scale = if f.axes == "reduced" {
+                let mut scale = if f.axes == "reduced" {
                     AxisScale::reduced(r.semi_chord, r.omega_alpha)
                 } else {
                     AxisScale::si()
                 };
+                scale.damping_g = f.damping == "g";
                 cv.draw(
                     "vg",
                     &format!("vg_{i}"),

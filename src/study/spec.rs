@@ -444,9 +444,17 @@ pub struct FlutterSpec {
     /// Axes of the figures: `"si"` (m/s, Hz) or `"reduced"` (U/(bω_α), ω/ω_α).
     #[serde(default = "si")]
     pub axes: String,
+    /// Damping axis of the V–g figures: `"zeta"` (damping ratio ζ = −Re p/|p|) or `"g"`
+    /// (structural damping g = 2ζ, the NASTRAN convention).
+    #[serde(default = "zeta")]
+    pub damping: String,
     /// Analyses (default: one p-k analysis of `[aero]`).
     #[serde(default)]
     pub run: Vec<FlutterRunSpec>,
+}
+
+fn zeta() -> String {
+    "zeta".into()
 }
 
 fn eighty() -> usize {
@@ -1175,6 +1183,12 @@ impl Study {
                 return err(
                     "flutter.axes",
                     format!("`{}`: expected si or reduced", f.axes),
+                );
+            }
+            if !matches!(f.damping.as_str(), "zeta" | "g") {
+                return err(
+                    "flutter.damping",
+                    format!("`{}`: expected zeta or g", f.damping),
                 );
             }
             for (i, r) in f.run.iter().enumerate() {

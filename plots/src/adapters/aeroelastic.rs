@@ -25,6 +25,8 @@ pub struct AxisScale {
     pub f_label: String,
     /// Frequency unit for annotations (may be empty).
     pub f_unit: String,
+    /// V–g damping axis as structural damping g = 2ζ instead of the damping ratio ζ.
+    pub damping_g: bool,
 }
 
 impl AxisScale {
@@ -37,6 +39,7 @@ impl AxisScale {
             f_factor: 1.0 / std::f64::consts::TAU,
             f_label: "f [Hz]".into(),
             f_unit: "Hz".into(),
+            damping_g: false,
         }
     }
 
@@ -50,17 +53,22 @@ impl AxisScale {
             f_factor: 1.0 / omega_alpha,
             f_label: "ω/ω_α [-]".into(),
             f_unit: String::new(),
+            damping_g: false,
         }
     }
 }
 
-/// V–g / V–f figure of a flutter analysis: damping ratio ζ = −Re p/|p| and frequency of
-/// every tracked branch, the flutter point marked.
+/// V–g / V–f figure of a flutter analysis: damping ratio ζ = −Re p/|p| (or g = 2ζ with
+/// [`AxisScale::damping_g`]) and frequency of every tracked branch, the flutter point marked.
 pub fn vg_figure(a: &FlutterAnalysis, title: &str, scale: &AxisScale) -> VgFigure {
     VgFigure {
         title: title.into(),
         u_label: scale.u_label.clone(),
-        g_label: "damping ratio ζ [-]".into(),
+        g_label: if scale.damping_g {
+            "structural damping g = 2ζ [-]".into()
+        } else {
+            "damping ratio ζ [-]".into()
+        },
         f_label: scale.f_label.clone(),
         u_unit: scale.u_unit.clone(),
         f_unit: scale.f_unit.clone(),
@@ -70,7 +78,17 @@ pub fn vg_figure(a: &FlutterAnalysis, title: &str, scale: &AxisScale) -> VgFigur
             .map(|b| ModeBranch {
                 name: b.label.clone(),
                 u: b.points.iter().map(|p| p.u * scale.u_factor).collect(),
-                damping: b.points.iter().map(|p| p.zeta).collect(),
+                damping: b
+                    .points
+                    .iter()
+                    .map(|p| {
+                        if scale.damping_g {
+                            2.0 * p.zeta
+                        } else {
+                            p.zeta
+                        }
+                    })
+                    .collect(),
                 freq: b.points.iter().map(|p| p.omega * scale.f_factor).collect(),
             })
             .collect(),

@@ -92,7 +92,7 @@ fn case_title(s: &CaseSeries) -> String {
 }
 
 /// Time series of one case: α \[deg\], h \[mm\], then measured C_L and C_M with the identified
-/// model overlaid (dashed).
+/// model overlaid (dashed), and the residuals measured − model of both in a last panel.
 pub fn time_series_figure(s: &CaseSeries) -> TimeSeriesFigure {
     let t = &s.t;
     let model = "identified model";
@@ -147,8 +147,32 @@ pub fn time_series_figure(s: &CaseSeries) -> TimeSeriesFigure {
                     ),
                 ],
             },
+            TimePanel {
+                y_label: "residual [-]".into(),
+                series: vec![
+                    Series::new(
+                        "C_L residual (measured − model)",
+                        SeriesKind::Other,
+                        t.clone(),
+                        residual(&s.c_lift, &s.c_lift_model),
+                    ),
+                    Series::new(
+                        "C_M residual (measured − model)",
+                        SeriesKind::Other,
+                        t.clone(),
+                        residual(&s.c_moment, &s.c_moment_model),
+                    ),
+                ],
+            },
         ],
     }
+}
+
+/// `measured − model`, sample by sample (NaN where either is missing).
+fn residual(measured: &[f64], model: &[f64]) -> Vec<f64> {
+    (0..measured.len())
+        .map(|i| measured[i] - model.get(i).copied().unwrap_or(f64::NAN))
+        .collect()
 }
 
 /// Name of a combination tone m·f_α + n·f_h matching `f` within 1 % (|m| + |n| ≤ 5), else
@@ -369,6 +393,7 @@ pub fn heatmap_figures(
                 x_values: xs.iter().map(|&v| v as f64 * 1e-6).collect(),
                 y_values: ys.iter().map(|&v| v as f64 * 1e-6).collect(),
                 panels,
+                value_label: "coefficient value [-]".into(),
             };
             (config, fig)
         })

@@ -38,11 +38,13 @@ pub struct HeatmapGridFigure {
     pub y_values: Vec<f64>,
     /// One panel per term.
     pub panels: Vec<HeatmapPanel>,
+    /// Label of every colour bar, e.g. `"coefficient [-]"` (empty: none).
+    pub value_label: String,
 }
 
 const PANEL_W: u32 = 400;
 const PANEL_H: u32 = 380;
-const BAR_W: u32 = 100;
+const BAR_W: u32 = 124;
 
 fn columns(n: usize) -> usize {
     match n {
@@ -213,11 +215,13 @@ impl Figure for HeatmapGridFigure {
                 .margin_bottom(64)
                 .margin_left(8)
                 .margin_right(4)
-                .set_label_area_size(LabelAreaPosition::Right, 62)
+                .set_label_area_size(LabelAreaPosition::Right, 86)
                 .build_cartesian_2d(0.0..1.0, -vmax..vmax)
                 .ctx(kind)?;
             let fv = crate::style::fmt_tick(2.0 * vmax);
             cb.configure_mesh()
+                .y_desc(self.value_label.as_str())
+                .axis_desc_style(crate::style::font(14.0))
                 .disable_mesh()
                 .disable_x_axis()
                 .y_labels(5)
