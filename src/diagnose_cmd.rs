@@ -124,11 +124,17 @@ pub fn run(args: &DiagnoseArgs) -> anyhow::Result<()> {
     let dir = crate::outdir::OutDir::begin(&out, "diagnose", args.force)?;
     let t = std::time::Instant::now();
     let version = crate::study::figures::version();
+    let spinner = crate::progress::Spinner::new(
+        "diagnose",
+        "held-out folds, candidates and verdict",
+    );
     let diag = match (&input, &free) {
-        (Input::Free(loaded), Some(free)) => diagnose_free(free, &loaded.model, &opts, &version)?,
-        (Input::Forced(forced), _) => diagnose(forced, free.as_ref(), &opts, &version)?,
+        (Input::Free(loaded), Some(free)) => diagnose_free(free, &loaded.model, &opts, &version),
+        (Input::Forced(forced), _) => diagnose(forced, free.as_ref(), &opts, &version),
         (Input::Free(_), None) => unreachable!("a model is only read with free data"),
     };
+    spinner.finish();
+    let diag = diag?;
     let secs = t.elapsed().as_secs_f64();
     write_json(&dir.path().join("diagnosis.json"), &diag)?;
     let files = plots::write_diagnosis_outputs(&diag, dir.path())?;

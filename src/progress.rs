@@ -67,6 +67,33 @@ impl IdentifyBar {
     }
 }
 
+/// A spinner with the elapsed time, for a stage whose progress the library does not
+/// report (one diagnosis); hidden under `--quiet`/`--json` and when stderr is not a
+/// terminal.
+pub struct Spinner {
+    bar: ProgressBar,
+}
+
+impl Spinner {
+    /// A ticking spinner labelled `prefix` with the message `msg`.
+    pub fn new(prefix: &'static str, msg: &str) -> Self {
+        let bar = ProgressBar::with_draw_target(None, target());
+        bar.set_style(
+            ProgressStyle::with_template("{prefix:>8} {spinner} {elapsed} {msg}")
+                .unwrap_or_else(|_| ProgressStyle::default_spinner()),
+        );
+        bar.set_prefix(prefix);
+        bar.set_message(msg.to_string());
+        bar.enable_steady_tick(std::time::Duration::from_millis(120));
+        Spinner { bar }
+    }
+
+    /// Removes the spinner.
+    pub fn finish(&self) {
+        self.bar.finish_and_clear();
+    }
+}
+
 /// Progress bar over a known number of runs; hidden when stderr is not a terminal.
 pub struct CountBar {
     bar: ProgressBar,
