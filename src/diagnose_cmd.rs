@@ -124,10 +124,8 @@ pub fn run(args: &DiagnoseArgs) -> anyhow::Result<()> {
     let dir = crate::outdir::OutDir::begin(&out, "diagnose", args.force)?;
     let t = std::time::Instant::now();
     let version = crate::study::figures::version();
-    let spinner = crate::progress::Spinner::new(
-        "diagnose",
-        "held-out folds, candidates and verdict",
-    );
+    let spinner =
+        crate::progress::Spinner::new("diagnose", "held-out folds, candidates and verdict");
     let diag = match (&input, &free) {
         (Input::Free(loaded), Some(free)) => diagnose_free(free, &loaded.model, &opts, &version),
         (Input::Forced(forced), _) => diagnose(forced, free.as_ref(), &opts, &version),

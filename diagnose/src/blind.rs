@@ -408,6 +408,10 @@ fn forced_set(
             spec.amplitude = Some(units.pitch.from_si(p.amplitude.abs()));
             spec.freq_heave = Some(hv.freq);
         }
+        // a mean angle is declared, as `tunnel forced` does (identification regresses about it)
+        if c.motion.mean_pitch != 0.0 {
+            spec.mean_pitch = Some(units.pitch.from_si(c.motion.mean_pitch));
+        }
         rec.meta = manifest.case_meta(&spec);
         specs.push(spec);
         records.push(rec);

@@ -257,8 +257,12 @@ pub fn diagnosis_section(report: &mut Report, diag: &Diagnosis, figures: &[Diagn
         diag.where_.iter().collect()
     };
     report.section("Where");
+    // the gap map first: where the gap lies is read off the picture, the table gives numbers
+    for f in figures.iter().filter(|f| f.kind == "gap_heatmap") {
+        report.figure(f.caption.clone(), &f.files);
+    }
     if where_all.is_empty() {
-        report.text("No where-split reported.");
+        report.text("No where-split reported (diagnosis.json has no `where` cells).");
     } else {
         let rows: Vec<Vec<String>> = where_all
             .iter()
@@ -421,7 +425,7 @@ pub fn diagnosis_section(report: &mut Report, diag: &Diagnosis, figures: &[Diagn
     if !missing.is_empty() {
         report.text(format!("Not drawn: {}.", missing.join("; ")));
     }
-    for f in figures {
+    for f in figures.iter().filter(|f| f.kind != "gap_heatmap") {
         report.figure(f.caption.clone(), &f.files);
     }
 }

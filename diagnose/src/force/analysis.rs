@@ -256,13 +256,14 @@ fn locate(
     ];
     let mut e_state = [0.0; 6];
     for (c, r) in cases.iter().zip(before) {
+        // pitch about the mean the case was regressed about (a mean angle is not amplitude)
         let amp = c.nd.x[0]
             .iter()
-            .fold(0.0f64, |m, v| m.max(v.abs()))
+            .fold(0.0f64, |m, v| m.max((v - c.alpha_shift).abs()))
             .max(1e-12);
         #[allow(clippy::needless_range_loop)]
         for i in 0..c.n {
-            let a = c.nd.x[0][i].abs() / amp;
+            let a = (c.nd.x[0][i] - c.alpha_shift).abs() / amp;
             let band = if a < 0.5 {
                 0
             } else if a < 0.85 {

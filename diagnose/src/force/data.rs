@@ -42,6 +42,11 @@ pub(crate) struct CaseData {
     pub rep: [Option<HarmonicFit>; 4],
     /// Node index (configuration, wind speed).
     pub node: usize,
+    /// Mean pitch ᾱ \[rad\] about which the baseline identification regresses this case
+    /// (identify's `centre_mean_angle`: the case's declared `mean_pitch`), 0 otherwise. The
+    /// support columns are evaluated on α − ᾱ, and the configuration's supports get the
+    /// constant term, exactly as the identification that selected them.
+    pub alpha_shift: f64,
     /// Monomial columns evaluated so far (filled on demand, shared by every fold and
     /// candidate; a clone starts empty, since clones are made to change the regressors).
     pub cols: ColumnCache,
@@ -63,7 +68,13 @@ impl CaseData {
         if let Some(v) = self.cols.0.lock().ok().and_then(|m| m.get(t).cloned()) {
             return v;
         }
-        let v = Arc::new(column_of(&self.nd.x, t));
+        let v = if self.alpha_shift != 0.0 {
+            let mut x = self.nd.x.clone();
+            x[0].iter_mut().for_each(|a| *a -= self.alpha_shift);
+            Arc::new(column_of(&x, t))
+        } else {
+            Arc::new(column_of(&self.nd.x, t))
+        };
         if let Ok(mut m) = self.cols.0.lock() {
             m.entry(*t).or_insert_with(|| v.clone());
         }
@@ -177,6 +188,11 @@ pub(crate) fn prepare(forced: &Dataset) -> Result<(Vec<CaseData>, Vec<Node>, Opt
             k_alpha: b * 2.0 * std::f64::consts::PI * f_alpha / u,
             rep,
             node: 0,
+            alpha_shift: nd
+                .meta
+                .mean_pitch
+                .filter(|m| *m != 0.0 && m.is_finite())
+                .unwrap_or(0.0),
             cols: ColumnCache::default(),
             nd,
         });

@@ -232,6 +232,22 @@ fn build_fold(
             }
         }
     }
+    // a configuration regressed about a mean pitch carries its mean force in a constant
+    // (identify centres those cases and reports the constant; its support omits it)
+    let constant =
+        Term::parse("1").map_err(|e| Error::identify(format!("fold {index}: constant term"), e))?;
+    for (cfg, s) in supports.iter_mut() {
+        let centred = train.iter().any(|&n| {
+            nodes[n].config == *cfg && nodes[n].cases.iter().any(|&i| cases[i].alpha_shift != 0.0)
+        });
+        if centred {
+            for c in s.iter_mut() {
+                if !c.contains(&constant) {
+                    c.push(constant);
+                }
+            }
+        }
+    }
     for s in supports.values_mut() {
         for c in s.iter_mut() {
             c.sort_by_key(|t| (t.degree(), std::cmp::Reverse(t.powers)));
