@@ -39,6 +39,14 @@ struct Cli {
     /// go to stderr).
     #[arg(long, global = true)]
     quiet: bool,
+    /// Figure style: `screen` (titles in the figures) or `paper` (no titles, PNG at 300 dpi
+    /// with the resolution in its metadata, 7 in wide per 1200 design pixels).
+    #[arg(long, global = true, default_value = "screen", value_parser = parse_style)]
+    figure_style: plots::FigureStyle,
+}
+
+fn parse_style(s: &str) -> Result<plots::FigureStyle, String> {
+    plots::FigureStyle::parse(s)
 }
 
 #[derive(Debug, Subcommand)]
@@ -74,6 +82,7 @@ fn main() -> ExitCode {
         json: cli.json,
         quiet: cli.quiet,
     });
+    plots::set_figure_style(cli.figure_style);
     interrupt::install();
     let result = match cli.command {
         Command::Run(a) => run_cmd::run(&a),

@@ -16,6 +16,7 @@ pub mod figures;
 pub mod render;
 pub mod report;
 pub mod rich;
+pub mod scaled;
 pub mod style;
 
 #[cfg(test)]
@@ -48,6 +49,7 @@ pub use figures::time_series::{TimePanel, TimeSeriesFigure};
 pub use figures::{Series, SeriesKind};
 pub use render::{render_png, render_svg, save, Figure, FigureFiles};
 pub use report::{anchor, column_label, escape_html, Report};
+pub use scaled::{figure_style, set_figure_style, with_figure_style, FigureStyle};
 
 #[cfg(test)]
 mod tests;

@@ -8,6 +8,7 @@ use plotters::prelude::*;
 
 use crate::error::{DrawResultExt, Error, Result};
 use crate::rich::RichBackend;
+use crate::scaled::{figure_style, FigureStyle, Scaled, PAPER_DPI, PAPER_SCALE};
 use crate::style::ensure_fonts;
 
 /// A figure: plain data plus the drawing code, run once per backend.
@@ -56,20 +57,38 @@ pub fn render_svg<F: Figure>(fig: &F) -> Result<String> {
     Ok(text)
 }
 
-/// Renders `fig` as PNG bytes (8-bit RGB).
+/// Renders `fig` as PNG bytes (8-bit RGB). In the paper style ([`crate::FigureStyle`]) the
+/// design size is drawn [`PAPER_SCALE`] times larger and the PNG says 300 dpi.
 ///
 /// # Errors
 /// As [`Figure::draw`]; [`Error::Encode`] if PNG encoding fails.
 pub fn render_png<F: Figure>(fig: &F) -> Result<Vec<u8>> {
     ensure_fonts()?;
-    let (w, h) = fig.size();
+    let design = fig.size();
+    let paper = figure_style() == FigureStyle::Paper;
+    let (w, h) = if paper {
+        (
+            (design.0 as f64 * PAPER_SCALE).round() as u32,
+            (design.1 as f64 * PAPER_SCALE).round() as u32,
+        )
+    } else {
+        design
+    };
     let mut buf = vec![0u8; w as usize * h as usize * 3];
     {
-        let root =
-            RichBackend::new(BitMapBackend::with_buffer(&mut buf, (w, h))).into_drawing_area();
-        root.fill(&WHITE).ctx(F::KIND)?;
-        fig.draw(&root)?;
-        root.present().ctx(F::KIND)?;
+        let bitmap = BitMapBackend::with_buffer(&mut buf, (w, h));
+        if paper {
+            let root =
+                RichBackend::new(Scaled::new(bitmap, PAPER_SCALE, design)).into_drawing_area();
+            root.fill(&WHITE).ctx(F::KIND)?;
+            fig.draw(&root)?;
+            root.present().ctx(F::KIND)?;
+        } else {
+            let root = RichBackend::new(bitmap).into_drawing_area();
+            root.fill(&WHITE).ctx(F::KIND)?;
+            fig.draw(&root)?;
+            root.present().ctx(F::KIND)?;
+        }
     }
     let enc = |e: png::EncodingError| Error::Encode {
         figure: F::KIND,
@@ -80,6 +99,15 @@ pub fn render_png<F: Figure>(fig: &F) -> Result<Vec<u8>> {
         let mut encoder = png::Encoder::new(&mut out, w, h);
         encoder.set_color(png::ColorType::Rgb);
         encoder.set_depth(png::BitDepth::Eight);
+        if paper {
+            // pixels per metre = dpi / 0.0254
+            let ppm = (PAPER_DPI / 0.0254).round() as u32;
+            encoder.set_pixel_dims(Some(png::PixelDimensions {
+                xppu: ppm,
+                yppu: ppm,
+                unit: png::Unit::Meter,
+            }));
+        }
         let mut writer = encoder.write_header().map_err(enc)?;
         writer.write_image_data(&buf).map_err(enc)?;
         writer.finish().map_err(enc)?;

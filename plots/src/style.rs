@@ -105,6 +105,10 @@ pub(crate) fn title<DB: DrawingBackend>(
     text: &str,
     kind: &'static str,
 ) -> Result<DrawingArea<DB, Shift>> {
+    if crate::scaled::figure_style() == crate::scaled::FigureStyle::Paper {
+        // the caption carries the title in a paper
+        return Ok(root.margin(12, 0, 0, 0));
+    }
     root.margin(12, 0, 0, 0)
         .titled(text, bold(TITLE_SIZE))
         .ctx(kind)

@@ -568,3 +568,34 @@ fn render_previews() {
     let (r, _) = sample_report(&d);
     r.write(&d.join("report.html")).unwrap();
 }
+
+/// `--figure-style paper`: no title, the design drawn 1.75× larger, 300 dpi in the PNG.
+#[test]
+fn paper_style_png_is_300_dpi_without_title() {
+    let fig = samples::vg();
+    let (w, h) = fig.size();
+    let bytes = crate::with_figure_style(crate::FigureStyle::Paper, || render_png(&fig)).unwrap();
+    let dec = png::Decoder::new(std::io::Cursor::new(&bytes));
+    let reader = dec.read_info().unwrap();
+    let info = reader.info();
+    assert_eq!(
+        (info.width, info.height),
+        (
+            (w as f64 * 1.75).round() as u32,
+            (h as f64 * 1.75).round() as u32
+        )
+    );
+    let dims = info.pixel_dims.expect("pHYs chunk");
+    assert_eq!(dims.unit, png::Unit::Meter);
+    assert!(
+        (dims.xppu as f64 * 0.0254 - 300.0).abs() < 0.1,
+        "{}",
+        dims.xppu
+    );
+    // the screen style of the same figure is unchanged on this thread afterwards
+    let screen = render_png(&fig).unwrap();
+    let dec = png::Decoder::new(std::io::Cursor::new(&screen));
+    let r = dec.read_info().unwrap();
+    assert_eq!((r.info().width, r.info().height), (w, h));
+    assert!(r.info().pixel_dims.is_none());
+}
