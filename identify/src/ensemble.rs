@@ -227,12 +227,10 @@ struct ForceBlocks {
     tri: Vec<Vec<f64>>,
 }
 
-/// SplitMix64 finaliser: decorrelates (seed, case, member) into one RNG seed.
-fn mix(mut z: u64) -> u64 {
-    z = z.wrapping_add(0x9E37_79B9_7F4A_7C15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
+/// SplitMix64 step ([`crate::numerics::split_seed`] of stream 0): decorrelates (seed, case,
+/// member) into one RNG seed.
+fn mix(z: u64) -> u64 {
+    crate::numerics::split_seed(z, 0)
 }
 
 /// Block counts of member `m` of case `case_index` (n_b draws with replacement).

@@ -97,8 +97,9 @@ fn inline_svg(svg: &str) -> String {
     }
 }
 
-/// Splits one CSV line on commas, honouring double-quoted fields with `""` escapes.
-fn split_csv_line(line: &str) -> Vec<String> {
+/// Splits one CSV line on commas, honouring double-quoted fields with `""` escapes; fields
+/// are trimmed. The one CSV splitter of the report builders (study and diagnosis).
+pub fn split_csv_line(line: &str) -> Vec<String> {
     let mut out = vec![];
     let mut cur = String::new();
     let mut quoted = false;

@@ -113,29 +113,13 @@ fn pretty_cell(c: &str) -> String {
 fn pretty_csv(text: &str) -> Vec<Vec<String>> {
     text.lines()
         .filter(|l| !l.trim().is_empty())
-        .map(|l| split_csv(l).iter().map(|c| pretty_cell(c)).collect())
+        .map(|l| {
+            plots::report::split_csv_line(l)
+                .iter()
+                .map(|c| pretty_cell(c))
+                .collect()
+        })
         .collect()
-}
-
-/// Splits a CSV line written by [`super::files::Csv`] (double-quote quoting).
-fn split_csv(line: &str) -> Vec<String> {
-    let mut out = vec![];
-    let mut cur = String::new();
-    let mut quoted = false;
-    let mut chars = line.chars().peekable();
-    while let Some(c) = chars.next() {
-        match (c, quoted) {
-            ('"', true) if chars.peek() == Some(&'"') => {
-                cur.push('"');
-                chars.next();
-            }
-            ('"', _) => quoted = !quoted,
-            (',', false) => out.push(std::mem::take(&mut cur)),
-            _ => cur.push(c),
-        }
-    }
-    out.push(cur);
-    out
 }
 
 /// Adds a result CSV file of `out` to the report as a table with shortened numbers and
@@ -1173,6 +1157,9 @@ mod tests {
         assert_eq!(pretty_cell("4"), "4");
         assert_eq!(pretty_cell("0"), "0");
         assert_eq!(pretty_cell("D-U4-A6"), "D-U4-A6");
-        assert_eq!(split_csv("a,\"b,c\",\"d\"\"e\""), vec!["a", "b,c", "d\"e"]);
+        assert_eq!(
+            plots::report::split_csv_line("a,\"b,c\",\"d\"\"e\""),
+            vec!["a", "b,c", "d\"e"]
+        );
     }
 }
