@@ -595,7 +595,7 @@ fn minimal_diagnosis_writes_only_the_report() {
         "Not drawn: gap_heatmap",
         "candidate_ranking (no candidate scored)",
         "No candidate scored.",
-        "No where-split reported.",
+        "No where-split reported (diagnosis.json has no `where` cells).",
         "No signature test reported.",
         "<td>–</td>",
     ] {
