@@ -97,11 +97,29 @@ impl Figure for BranchDiagramFigure {
         let (y0, y1) = (a0 - 0.04 * (a1 - a0), a1 * 1.08);
 
         let area = title(root, &self.title, kind)?;
-        let mut legend = vec![
-            LegendEntry::line("stable LCO (continuation)", C_BRANCH, false),
-            LegendEntry::line("unstable LCO (continuation)", C_BRANCH, true),
-            LegendEntry::marker("Hopf point", MarkerShape::TriangleUp, HIGHLIGHT, true),
-        ];
+        // only the kinds of orbit the branches have
+        let has = |s: bool| self.branches.iter().any(|b| b.stable.contains(&s));
+        let mut legend = vec![];
+        if has(true) {
+            legend.push(LegendEntry::line(
+                "stable LCO (continuation)",
+                C_BRANCH,
+                false,
+            ));
+        }
+        if has(false) {
+            legend.push(LegendEntry::line(
+                "unstable LCO (continuation)",
+                C_BRANCH,
+                true,
+            ));
+        }
+        legend.push(LegendEntry::marker(
+            "Hopf point",
+            MarkerShape::TriangleUp,
+            HIGHLIGHT,
+            true,
+        ));
         if !self.folds.is_empty() {
             legend.push(LegendEntry::marker(
                 "fold of cycles",
@@ -258,6 +276,16 @@ mod tests {
         let svg = crate::render::render_svg(&f).unwrap();
         assert!(svg.contains("unstable LCO"));
         assert!(svg.contains("fold of cycles"));
+        // a branch of stable orbits only: no legend entry for unstable ones
+        let stable_only = BranchDiagramFigure {
+            branches: vec![BranchCurve {
+                stable: vec![true; 5],
+                ..f.branches[0].clone()
+            }],
+            ..f.clone()
+        };
+        let svg = crate::render::render_svg(&stable_only).unwrap();
+        assert!(svg.contains("stable LCO") && !svg.contains("unstable LCO"));
         let e = crate::render::render_svg(&BranchDiagramFigure::default()).unwrap_err();
         assert!(e.to_string().contains("branches"), "{e}");
     }
