@@ -59,6 +59,33 @@ fn quickstart_is_complete_and_byte_identical_on_a_second_run() {
         );
     }
     assert!(doc["total_s"].as_f64().is_some());
+    // issue 16: CSV headers a numpy or MATLAB reader keeps, mapped back to the library terms
+    let coef = std::fs::read_to_string(a.join("coefficients.csv")).unwrap();
+    let header = coef.lines().next().unwrap();
+    assert!(
+        header
+            .split(',')
+            .all(|c| c.chars().all(|ch| ch.is_ascii_alphanumeric() || ch == '_')),
+        "{header}"
+    );
+    let cols: Vec<serde_json::Value> = serde_json::from_str(
+        &std::fs::read_to_string(a.join("coefficients.columns.json")).unwrap(),
+    )
+    .unwrap();
+    let id: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(a.join("identification.json")).unwrap())
+            .unwrap();
+    let terms = id["library"]["terms"].as_array().unwrap();
+    assert_eq!(cols.len(), terms.len());
+    for (c, t) in cols.iter().zip(terms) {
+        assert_eq!(&c["term"], t);
+        assert!(header
+            .split(',')
+            .any(|h| h == c["column"].as_str().unwrap()));
+    }
+    assert!(cols
+        .iter()
+        .any(|c| c["term"] == "alpha^3" && c["column"] == "alpha3"));
     run_quickstart(&b);
     let (ta, tb) = (tree(&a), tree(&b));
     for f in [

@@ -146,6 +146,32 @@ impl Term {
         })
     }
 
+    /// A column name safe for CSV readers that mangle `^` and `*` (numpy `genfromtxt`,
+    /// MATLAB `readtable`): letters, digits and `_` only, the variables in the order of
+    /// [`VARIABLES`] joined by `_`, a power above 1 appended as a digit (`alpha^2*h` →
+    /// `alpha2_h`, `alpha_dot^3` → `alpha_dot3`, `alpha*h_dot` → `alpha_h_dot`), the
+    /// constant `const`. One-to-one over the library (unit test).
+    pub fn safe_name(&self) -> String {
+        let parts: Vec<String> = self
+            .powers
+            .iter()
+            .enumerate()
+            .filter(|(_, p)| **p > 0)
+            .map(|(v, &p)| {
+                if p == 1 {
+                    VARIABLES[v].to_string()
+                } else {
+                    format!("{}{p}", VARIABLES[v])
+                }
+            })
+            .collect();
+        if parts.is_empty() {
+            "const".into()
+        } else {
+            parts.join("_")
+        }
+    }
+
     /// Value of the term at one sample `x = (α, Bα̇/U, h/B, ḣ/U)`.
     pub fn eval_at(&self, x: [f64; 4]) -> f64 {
         let mut v = 1.0;
@@ -379,6 +405,42 @@ impl Library {
 
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn safe_names_are_plain_and_one_to_one_over_every_term() {
+        let mut names = std::collections::BTreeSet::new();
+        let mut n = 0;
+        for a in 0..=3u8 {
+            for b in 0..=3 - a {
+                for c in 0..=3 - a - b {
+                    for d in 0..=3 - a - b - c {
+                        let t = Term {
+                            powers: [a, b, c, d],
+                        };
+                        let s = t.safe_name();
+                        assert!(
+                            s.chars().all(|c| c.is_ascii_alphanumeric() || c == '_'),
+                            "{s}"
+                        );
+                        names.insert(s);
+                        n += 1;
+                    }
+                }
+            }
+        }
+        assert_eq!(names.len(), n, "two terms share a safe name");
+        assert_eq!(Term::parse("alpha^2*h").unwrap().safe_name(), "alpha2_h");
+        assert_eq!(
+            Term::parse("alpha_dot^3").unwrap().safe_name(),
+            "alpha_dot3"
+        );
+        assert_eq!(
+            Term::parse("h_dot*alpha").unwrap().safe_name(),
+            "alpha_h_dot"
+        );
+        assert_eq!(Term::parse("1").unwrap().safe_name(), "const");
+    }
+
     use super::*;
 
     #[test]

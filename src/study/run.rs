@@ -44,6 +44,8 @@ pub mod names {
     pub const LCO: &str = "lco.json";
     /// LCO amplitudes per speed and sweep.
     pub const LCO_AMPLITUDES: &str = "lco_amplitudes.csv";
+    /// Column name → library term → display name of `coefficients.csv`'s term columns.
+    pub const COEFFICIENT_COLUMNS: &str = "coefficients.columns.json";
     /// Data of the paper's force-decomposition, δ-fit and force-loop figures.
     pub const PAPER_FIGURES: &str = "paper_figures.json";
     /// LCO amplitude intervals of the identification ensemble per speed.
@@ -288,12 +290,35 @@ fn identify_stage(
     id.write(&out.join(names::IDENTIFICATION))?;
     write_json(&out.join(names::CASES), &cases.metas())?;
 
-    // coefficients per case and force (wide: one column per library term)
+    // coefficients per case and force (wide: one column per library term, under a name CSV
+    // readers keep: `alpha2_h` for `alpha^2*h`; the mapping in coefficients.columns.json)
+    let safe: Vec<String> = id
+        .library
+        .terms
+        .iter()
+        .map(|t| {
+            identify::library::Term::parse(t)
+                .map(|p| p.safe_name())
+                .unwrap_or_else(|_| t.replace(|c: char| !c.is_ascii_alphanumeric(), "_"))
+        })
+        .collect();
+    let columns: Vec<serde_json::Value> = safe
+        .iter()
+        .zip(&id.library.terms)
+        .map(|(s, t)| {
+            serde_json::json!({
+                "column": s,
+                "term": t,
+                "display": plots::adapters::term_label(t),
+            })
+        })
+        .collect();
+    write_json(&out.join(names::COEFFICIENT_COLUMNS), &columns)?;
     let mut coef = Csv::new(
         &["case", "group", "force", "U_m_s", "amplitude_deg"]
             .iter()
             .map(|s| s.to_string())
-            .chain(id.library.terms.iter().cloned())
+            .chain(safe.iter().cloned())
             .collect::<Vec<_>>(),
     );
     let mut der = Csv::new(&[
