@@ -8,7 +8,7 @@ use plotters::prelude::*;
 
 use crate::error::{DrawResultExt, Error, Result};
 use crate::rich::RichBackend;
-use crate::scaled::{figure_style, FigureStyle, Scaled, PAPER_DPI, PAPER_SCALE};
+use crate::scaled::{figure_style, FigureStyle, PAPER_DPI, PAPER_SCALE};
 use crate::style::ensure_fonts;
 
 /// A figure: plain data plus the drawing code, run once per backend.
@@ -77,18 +77,15 @@ pub fn render_png<F: Figure>(fig: &F) -> Result<Vec<u8>> {
     let mut buf = vec![0u8; w as usize * h as usize * 3];
     {
         let bitmap = BitMapBackend::with_buffer(&mut buf, (w, h));
-        if paper {
-            let root =
-                RichBackend::new(Scaled::new(bitmap, PAPER_SCALE, design)).into_drawing_area();
-            root.fill(&WHITE).ctx(F::KIND)?;
-            fig.draw(&root)?;
-            root.present().ctx(F::KIND)?;
+        let backend = if paper {
+            RichBackend::scaled(bitmap, PAPER_SCALE, design)
         } else {
-            let root = RichBackend::new(bitmap).into_drawing_area();
-            root.fill(&WHITE).ctx(F::KIND)?;
-            fig.draw(&root)?;
-            root.present().ctx(F::KIND)?;
-        }
+            RichBackend::new(bitmap)
+        };
+        let root = backend.into_drawing_area();
+        root.fill(&WHITE).ctx(F::KIND)?;
+        fig.draw(&root)?;
+        root.present().ctx(F::KIND)?;
     }
     let enc = |e: png::EncodingError| Error::Encode {
         figure: F::KIND,

@@ -86,15 +86,66 @@ pub(crate) fn parse(text: &str) -> Option<Vec<Run>> {
     any.then_some(runs)
 }
 
-/// A backend that draws subscripts (module docs) and otherwise forwards to `inner`.
+/// A backend that draws subscripts (module docs) and otherwise forwards to `inner`; with a
+/// scale other than 1 ([`RichBackend::scaled`]) the figure is laid out at its design size
+/// and every coordinate, stroke width, radius and font size is multiplied by the scale on
+/// the way to `inner` (the paper style of [`crate::scaled`]).
 pub struct RichBackend<DB: DrawingBackend> {
     inner: DB,
+    scale: f64,
+    size: (u32, u32),
 }
 
 impl<DB: DrawingBackend> RichBackend<DB> {
-    /// Wraps `inner`.
+    /// Wraps `inner` at its own size.
     pub fn new(inner: DB) -> Self {
-        RichBackend { inner }
+        let size = inner.get_size();
+        RichBackend {
+            inner,
+            scale: 1.0,
+            size,
+        }
+    }
+
+    /// Lays out the design size `size` and draws it onto `inner`, `scale` times larger
+    /// (`inner` should be `scale` × `size`).
+    pub fn scaled(inner: DB, scale: f64, size: (u32, u32)) -> Self {
+        RichBackend { inner, scale, size }
+    }
+
+    fn p(&self, c: BackendCoord) -> BackendCoord {
+        if self.scale == 1.0 {
+            return c;
+        }
+        (
+            (c.0 as f64 * self.scale).round() as i32,
+            (c.1 as f64 * self.scale).round() as i32,
+        )
+    }
+
+    fn style<'a, S: BackendStyle>(&self, inner: &'a S) -> ScaledStyle<'a, S> {
+        ScaledStyle {
+            inner,
+            scale: self.scale,
+        }
+    }
+}
+
+/// A line style with its stroke width scaled.
+struct ScaledStyle<'a, S: BackendStyle> {
+    inner: &'a S,
+    scale: f64,
+}
+
+impl<S: BackendStyle> BackendStyle for ScaledStyle<'_, S> {
+    fn color(&self) -> BackendColor {
+        self.inner.color()
+    }
+    fn stroke_width(&self) -> u32 {
+        if self.scale == 1.0 {
+            return self.inner.stroke_width();
+        }
+        ((self.inner.stroke_width() as f64 * self.scale).round() as u32).max(1)
     }
 }
 
@@ -112,7 +163,7 @@ impl<DB: DrawingBackend> DrawingBackend for RichBackend<DB> {
     type ErrorType = DB::ErrorType;
 
     fn get_size(&self) -> (u32, u32) {
-        self.inner.get_size()
+        self.size
     }
 
     fn ensure_prepared(&mut self) -> Result<(), DrawingErrorKind<Self::ErrorType>> {
@@ -128,7 +179,11 @@ impl<DB: DrawingBackend> DrawingBackend for RichBackend<DB> {
         point: BackendCoord,
         color: BackendColor,
     ) -> Result<(), DrawingErrorKind<Self::ErrorType>> {
-        self.inner.draw_pixel(point, color)
+        if self.scale == 1.0 {
+            return self.inner.draw_pixel(point, color);
+        }
+        let (a, b) = (self.p(point), self.p((point.0 + 1, point.1 + 1)));
+        self.inner.draw_rect(a, (b.0 - 1, b.1 - 1), &color, true)
     }
 
     fn draw_line<S: BackendStyle>(
@@ -137,7 +192,13 @@ impl<DB: DrawingBackend> DrawingBackend for RichBackend<DB> {
         to: BackendCoord,
         style: &S,
     ) -> Result<(), DrawingErrorKind<Self::ErrorType>> {
-        self.inner.draw_line(from, to, style)
+        let st = self.style(style);
+        let (a, b) = (self.p(from), self.p(to));
+        if self.scale != 1.0 && st.stroke_width() > 1 {
+            self.inner.draw_path([a, b], &st)
+        } else {
+            self.inner.draw_line(a, b, &st)
+        }
     }
 
     fn draw_rect<S: BackendStyle>(
@@ -147,7 +208,8 @@ impl<DB: DrawingBackend> DrawingBackend for RichBackend<DB> {
         style: &S,
         fill: bool,
     ) -> Result<(), DrawingErrorKind<Self::ErrorType>> {
-        self.inner.draw_rect(upper_left, bottom_right, style, fill)
+        let (a, b) = (self.p(upper_left), self.p(bottom_right));
+        self.inner.draw_rect(a, b, &self.style(style), fill)
     }
 
     fn draw_path<S: BackendStyle, I: IntoIterator<Item = BackendCoord>>(
@@ -155,7 +217,8 @@ impl<DB: DrawingBackend> DrawingBackend for RichBackend<DB> {
         path: I,
         style: &S,
     ) -> Result<(), DrawingErrorKind<Self::ErrorType>> {
-        self.inner.draw_path(path, style)
+        let pts: Vec<BackendCoord> = path.into_iter().map(|c| self.p(c)).collect();
+        self.inner.draw_path(pts, &self.style(style))
     }
 
     fn draw_circle<S: BackendStyle>(
@@ -165,7 +228,9 @@ impl<DB: DrawingBackend> DrawingBackend for RichBackend<DB> {
         style: &S,
         fill: bool,
     ) -> Result<(), DrawingErrorKind<Self::ErrorType>> {
-        self.inner.draw_circle(center, radius, style, fill)
+        let r = (radius as f64 * self.scale).round() as u32;
+        let c = self.p(center);
+        self.inner.draw_circle(c, r, &self.style(style), fill)
     }
 
     fn fill_polygon<S: BackendStyle, I: IntoIterator<Item = BackendCoord>>(
@@ -173,7 +238,8 @@ impl<DB: DrawingBackend> DrawingBackend for RichBackend<DB> {
         vert: I,
         style: &S,
     ) -> Result<(), DrawingErrorKind<Self::ErrorType>> {
-        self.inner.fill_polygon(vert, style)
+        let pts: Vec<BackendCoord> = vert.into_iter().map(|c| self.p(c)).collect();
+        self.inner.fill_polygon(pts, style)
     }
 
     fn blit_bitmap(
@@ -182,7 +248,8 @@ impl<DB: DrawingBackend> DrawingBackend for RichBackend<DB> {
         size: (u32, u32),
         src: &[u8],
     ) -> Result<(), DrawingErrorKind<Self::ErrorType>> {
-        self.inner.blit_bitmap(pos, size, src)
+        let p = self.p(pos);
+        self.inner.blit_bitmap(p, size, src)
     }
 
     fn draw_text<TStyle: BackendTextStyle>(
@@ -191,11 +258,17 @@ impl<DB: DrawingBackend> DrawingBackend for RichBackend<DB> {
         style: &TStyle,
         pos: BackendCoord,
     ) -> Result<(), DrawingErrorKind<Self::ErrorType>> {
-        let Some(runs) = parse(text) else {
-            return self.inner.draw_text(text, style, pos);
+        let runs = match parse(text) {
+            Some(r) => r,
+            None if self.scale == 1.0 => return self.inner.draw_text(text, style, pos),
+            None => vec![Run {
+                text: text.to_string(),
+                sub: false,
+            }],
         };
         let anchor = style.anchor();
         let size = style.size();
+        // layout in design units, then scaled
         let mut widths = Vec::with_capacity(runs.len());
         for r in &runs {
             let s = run_style(style, if r.sub { SUB_SCALE } else { 1.0 }, anchor.v_pos);
@@ -216,11 +289,12 @@ impl<DB: DrawingBackend> DrawingBackend for RichBackend<DB> {
             };
         let trans = style.transform();
         for (r, w) in runs.iter().zip(widths) {
-            let s = run_style(style, if r.sub { SUB_SCALE } else { 1.0 }, anchor.v_pos);
+            let rel = if r.sub { SUB_SCALE } else { 1.0 };
+            let s = run_style(style, rel * self.scale, anchor.v_pos);
             let v = if r.sub { drop.round() as i32 } else { 0 };
             let (dx, dy) = trans.transform(u, v);
-            self.inner
-                .draw_text(&r.text, &s, (pos.0 + dx, pos.1 + dy))?;
+            let at = self.p((pos.0 + dx, pos.1 + dy));
+            self.inner.draw_text(&r.text, &s, at)?;
             u += w;
         }
         Ok(())

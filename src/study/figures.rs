@@ -533,8 +533,13 @@ pub fn render_all(study: &Study, out: &Path) -> anyhow::Result<Vec<FigureEntry>>
                 }
             }
         }
+        // the reference curves about the virtual truth's elastic axis, when there is one
+        let elastic_axis = if cv.wants("mean_angle") || cv.wants("derivatives") {
+            truth_axis(study)
+        } else {
+            0.0
+        };
         if cv.wants("mean_angle") {
-            let elastic_axis = truth_axis(study);
             if let Some(fig) = mean_angle_figure(id, &metas, elastic_axis) {
                 cv.draw(
                     "mean_angle",
@@ -553,8 +558,6 @@ pub fn render_all(study: &Study, out: &Path) -> anyhow::Result<Vec<FigureEntry>>
             )?;
         }
         if cv.wants("derivatives") {
-            // the reference curves about the virtual truth's elastic axis, when there is one
-            let elastic_axis = truth_axis(study);
             cv.draw(
                 "derivatives",
                 "derivatives",
@@ -660,8 +663,12 @@ pub fn render_all(study: &Study, out: &Path) -> anyhow::Result<Vec<FigureEntry>>
     }
 
     // ---- flutter
-    if let Some(f) = &s.flutter {
-        let runs: Vec<FlutterRun> = read_json(&out.join(names::FLUTTER))?;
+    let flutter_runs: Option<Vec<FlutterRun>> = s
+        .flutter
+        .is_some()
+        .then(|| read_json(&out.join(names::FLUTTER)))
+        .transpose()?;
+    if let (Some(f), Some(runs)) = (&s.flutter, &flutter_runs) {
         if cv.wants("vg") {
             for (i, r) in runs.iter().enumerate() {
                 let mut scale = if f.axes == "reduced" {
@@ -737,7 +744,7 @@ pub fn render_all(study: &Study, out: &Path) -> anyhow::Result<Vec<FigureEntry>>
             .map(String::from),
             &rows,
         );
-        ensemble_flutter_table(&mut report, &runs);
+        ensemble_flutter_table(&mut report, runs);
         cv.embed(&mut report, "vg");
     }
 
@@ -765,14 +772,12 @@ pub fn render_all(study: &Study, out: &Path) -> anyhow::Result<Vec<FigureEntry>>
             if let Some(e) = &stage.ensemble {
                 (fig.intervals, fig.interval_label) = amplitude_intervals(e, &scale);
                 // the identified model's flutter run carries the flutter-speed interval
-                if s.flutter.is_some() {
-                    let runs: Vec<FlutterRun> = read_json(&out.join(names::FLUTTER))?;
-                    fig.flutter_interval = runs
-                        .iter()
-                        .filter(|r| r.model == "identified")
-                        .find_map(|r| r.ensemble.as_ref())
-                        .and_then(|e| flutter_interval(e, &scale));
-                }
+                fig.flutter_interval = flutter_runs
+                    .iter()
+                    .flatten()
+                    .filter(|r| r.model == "identified")
+                    .find_map(|r| r.ensemble.as_ref())
+                    .and_then(|e| flutter_interval(e, &scale));
                 caption.push_str(&format!(
                     " Error bars: {} % interval of the pitch amplitude over the identification's {} block-bootstrap members that settle on an LCO (each run from the same perturbation; median as a tick); shaded: the flutter speed's interval. Values in {}.",
                     pretty_cell(&format!("{}", 100.0 * e.level)),

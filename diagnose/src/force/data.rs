@@ -68,13 +68,7 @@ impl CaseData {
         if let Some(v) = self.cols.0.lock().ok().and_then(|m| m.get(t).cloned()) {
             return v;
         }
-        let v = if self.alpha_shift != 0.0 {
-            let mut x = self.nd.x.clone();
-            x[0].iter_mut().for_each(|a| *a -= self.alpha_shift);
-            Arc::new(column_of(&x, t))
-        } else {
-            Arc::new(column_of(&self.nd.x, t))
-        };
+        let v = Arc::new(column_of(&self.nd.x, self.alpha_shift, t));
         if let Ok(mut m) = self.cols.0.lock() {
             m.entry(*t).or_insert_with(|| v.clone());
         }
@@ -96,11 +90,12 @@ impl CaseData {
     }
 }
 
-/// Column of a monomial (any degree) on four variable series.
-pub(crate) fn column_of(x: &[Vec<f64>; 4], t: &Term) -> Vec<f64> {
+/// Column of a monomial (any degree) on four variable series, pitch taken about
+/// `alpha_shift` (α − ᾱ; 0 for none).
+pub(crate) fn column_of(x: &[Vec<f64>; 4], alpha_shift: f64, t: &Term) -> Vec<f64> {
     let n = x[0].len();
     (0..n)
-        .map(|i| t.eval_at([x[0][i], x[1][i], x[2][i], x[3][i]]))
+        .map(|i| t.eval_at([x[0][i] - alpha_shift, x[1][i], x[2][i], x[3][i]]))
         .collect()
 }
 

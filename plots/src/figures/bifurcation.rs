@@ -5,7 +5,7 @@ use plotters::coord::Shift;
 use plotters::element::EmptyElement;
 use plotters::prelude::*;
 
-use super::flutter::{SpeedInterval, C_BAND, C_INTERVAL};
+use super::flutter::{draw_band, SpeedInterval, C_BAND, C_INTERVAL};
 use super::mesh;
 use crate::error::{DrawResultExt, Error, Result};
 use crate::render::Figure;
@@ -221,14 +221,7 @@ impl Figure for BifurcationFigure {
             .y_label_formatter(&fy)
             .draw()
             .ctx(kind)?;
-        if let Some((a, b)) = band {
-            chart
-                .draw_series(std::iter::once(Rectangle::new(
-                    [(a, y0), (b, y1)],
-                    C_BAND.filled(),
-                )))
-                .ctx(kind)?;
-        }
+        draw_band(&mut chart, band, (y0, y1), kind)?;
         if let Some(u) = fs {
             chart
                 .draw_series(DashedLineSeries::new(

@@ -1,6 +1,7 @@
 //! Figure 6: V–g and V–f diagrams: damping ratio and frequency of each mode vs wind speed,
 //! zero-damping line, flutter point marked and annotated.
 
+use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::element::EmptyElement;
 use plotters::prelude::*;
@@ -73,6 +74,28 @@ impl SpeedInterval {
         (self.lower.is_finite() && self.upper.is_finite() && self.upper >= self.lower)
             .then_some((self.lower, self.upper))
     }
+}
+
+/// Shades the speed interval `band` (from [`SpeedInterval::finite`]) over the height
+/// `y0..y1` of `chart`, under whatever is drawn next.
+///
+/// # Errors
+/// Backend failures, tagged with `kind`.
+pub(crate) fn draw_band<DB: DrawingBackend>(
+    chart: &mut ChartContext<'_, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+    band: Option<(f64, f64)>,
+    (y0, y1): (f64, f64),
+    kind: &'static str,
+) -> Result<()> {
+    if let Some((a, b)) = band {
+        chart
+            .draw_series(std::iter::once(Rectangle::new(
+                [(a, y0), (b, y1)],
+                C_BAND.filled(),
+            )))
+            .ctx(kind)?;
+    }
+    Ok(())
 }
 
 /// Colour of intervals (error bars).
@@ -253,14 +276,7 @@ impl Figure for VgFigure {
                 m.x_label_formatter(&empty);
             }
             m.draw().ctx(kind)?;
-            if let Some((a, b)) = band {
-                chart
-                    .draw_series(std::iter::once(Rectangle::new(
-                        [(a, y0), (b, y1)],
-                        C_BAND.filled(),
-                    )))
-                    .ctx(kind)?;
-            }
+            draw_band(&mut chart, band, (y0, y1), kind)?;
             if !last {
                 chart
                     .draw_series(std::iter::once(PathElement::new(
