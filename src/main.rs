@@ -39,8 +39,9 @@ struct Cli {
     /// go to stderr).
     #[arg(long, global = true)]
     quiet: bool,
-    /// Figure style: `screen` (titles in the figures) or `paper` (no titles, PNG at 300 dpi
-    /// with the resolution in its metadata, 7 in wide per 1200 design pixels).
+    /// Figure style: `screen` (titles in the figures) or `paper` (no titles, panel letters
+    /// (a), (b) …, PNG at 300 dpi with the resolution in its metadata and a PDF beside it,
+    /// 7 in wide per 1200 design pixels).
     #[arg(long, global = true, default_value = "screen", value_parser = parse_style)]
     figure_style: plots::FigureStyle,
 }

@@ -58,6 +58,14 @@ pub enum Error {
         /// Encoder's message.
         message: String,
     },
+    /// The SVG could not be turned into outlines or PDF (`usvg`/`svg2pdf` message).
+    #[error("figure `{figure}`: vector output failed: {message}")]
+    Vector {
+        /// Figure kind.
+        figure: &'static str,
+        /// What failed.
+        message: String,
+    },
     /// The bundled font could not be registered with plotters.
     #[error("bundled font `{name}` could not be registered")]
     Font {

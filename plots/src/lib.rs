@@ -18,9 +18,11 @@ pub mod report;
 pub mod rich;
 pub mod scaled;
 pub mod style;
+mod vector;
 
-#[cfg(test)]
-mod samples;
+/// Synthetic sample figures (tests, previews and the render benchmark; not an API).
+#[doc(hidden)]
+pub mod samples;
 
 pub use diagnosis_report::{
     diagnosis_report, diagnosis_section, save_diagnosis_figures, write_diagnosis_outputs,
@@ -47,7 +49,7 @@ pub use figures::residual_spectra::{ResidualSpectraFigure, SpectraPanel};
 pub use figures::spectrum::{FreqMarker, SpectrumFigure};
 pub use figures::time_series::{TimePanel, TimeSeriesFigure};
 pub use figures::{Series, SeriesKind};
-pub use render::{render_png, render_svg, save, Figure, FigureFiles};
+pub use render::{render_pdf, render_png, render_svg, render_svg_text, save, Figure, FigureFiles};
 pub use report::{anchor, column_label, escape_html, Report};
 pub use scaled::{figure_style, set_figure_style, with_figure_style, FigureStyle};
 

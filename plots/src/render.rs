@@ -1,5 +1,6 @@
-//! Rendering a figure to PNG and SVG (the same drawing code runs on both backends) and
-//! writing both files atomically.
+//! Rendering a figure to PNG, SVG and (paper style) PDF — the same drawing code runs on
+//! the bitmap and the SVG backend; the SVG's text becomes glyph outlines and the PDF comes
+//! from that SVG ([`crate::vector`]) — and writing the files atomically.
 
 use std::path::{Path, PathBuf};
 
@@ -32,19 +33,25 @@ pub trait Figure {
 /// Files written for one figure, plus its SVG text for embedding in the HTML report.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct FigureFiles {
-    /// PNG file (bitmap, `size()` pixels).
+    /// PNG file (bitmap, `size()` pixels; paper style: [`PAPER_SCALE`] × that at 300 dpi).
     pub png: PathBuf,
-    /// SVG file.
+    /// SVG file (text as glyph outlines of the bundled font).
     pub svg: PathBuf,
+    /// PDF file, written in the paper style only (one page, the design size at
+    /// [`PAPER_DPI`]/[`PAPER_SCALE`] pixels per inch: 1200 design pixels = 7 in; text
+    /// selectable, the bundled font subset embedded).
+    pub pdf: Option<PathBuf>,
     /// The SVG document as written to `svg` (for [`crate::Report::figure`]).
     pub svg_text: String,
 }
 
-/// Renders `fig` as an SVG document.
+/// Renders `fig` as the SVG document plotters writes: labels are `<text>` elements (so
+/// searchable), drawn by a viewer in its own font when it lacks DejaVu Sans. The files and
+/// the report use [`render_svg`] instead.
 ///
 /// # Errors
 /// As [`Figure::draw`]; [`Error::Font`] if the bundled font cannot be registered.
-pub fn render_svg<F: Figure>(fig: &F) -> Result<String> {
+pub fn render_svg_text<F: Figure>(fig: &F) -> Result<String> {
     ensure_fonts()?;
     let (w, h) = fig.size();
     let mut text = String::new();
@@ -55,6 +62,27 @@ pub fn render_svg<F: Figure>(fig: &F) -> Result<String> {
         root.present().ctx(F::KIND)?;
     }
     Ok(text)
+}
+
+/// Renders `fig` as an SVG document whose text is drawn as glyph outlines of the bundled
+/// font, so every viewer shows the layout that was measured.
+///
+/// # Errors
+/// As [`render_svg_text`]; [`Error::Vector`] if the SVG cannot be re-laid out.
+pub fn render_svg<F: Figure>(fig: &F) -> Result<String> {
+    let tagged = crate::vector::tag_texts(&render_svg_text(fig)?);
+    let tree = crate::vector::parse(&tagged, F::KIND)?;
+    crate::vector::outlined(&tree, &tagged, F::KIND)
+}
+
+/// Renders `fig` as a one-page PDF at paper size (1200 design pixels = 7 in), text
+/// selectable in the embedded bundled font.
+///
+/// # Errors
+/// As [`render_svg_text`]; [`Error::Vector`] if the conversion fails.
+pub fn render_pdf<F: Figure>(fig: &F) -> Result<Vec<u8>> {
+    let tree = crate::vector::parse(&render_svg_text(fig)?, F::KIND)?;
+    crate::vector::pdf(&tree, PAPER_DPI / PAPER_SCALE, F::KIND)
 }
 
 /// Renders `fig` as PNG bytes (8-bit RGB). In the paper style ([`crate::FigureStyle`]) the
@@ -112,19 +140,39 @@ pub fn render_png<F: Figure>(fig: &F) -> Result<Vec<u8>> {
     Ok(out)
 }
 
-/// Renders `fig` and writes `<dir>/<stem>.png` and `<dir>/<stem>.svg`, each atomically
-/// (temporary file + rename, [`identify::io::write_atomic`]). Nothing is written when the
-/// data are unusable.
+/// Renders `fig` and writes `<dir>/<stem>.png` and `<dir>/<stem>.svg` (and, in the paper
+/// style, `<dir>/<stem>.pdf`), each atomically (temporary file + rename,
+/// [`identify::io::write_atomic`]). Nothing is written when the data are unusable: every
+/// file is rendered before the first is written.
 ///
 /// # Errors
-/// As [`render_svg`] and [`render_png`]; [`Error::Write`] naming the file when `dir` is
-/// missing or unwritable.
+/// As [`render_svg`], [`render_png`] and [`render_pdf`]; [`Error::Write`] naming the file
+/// when `dir` is missing or unwritable.
 pub fn save<F: Figure>(fig: &F, dir: &Path, stem: &str) -> Result<FigureFiles> {
-    let svg_text = render_svg(fig)?;
+    let tagged = crate::vector::tag_texts(&render_svg_text(fig)?);
+    let tree = crate::vector::parse(&tagged, F::KIND)?;
+    let svg_text = crate::vector::outlined(&tree, &tagged, F::KIND)?;
+    let pdf_bytes = match figure_style() {
+        FigureStyle::Paper => Some(crate::vector::pdf(&tree, PAPER_DPI / PAPER_SCALE, F::KIND)?),
+        FigureStyle::Screen => None,
+    };
     let png_bytes = render_png(fig)?;
     let png = dir.join(format!("{stem}.png"));
     let svg = dir.join(format!("{stem}.svg"));
     identify::io::write_atomic(&png, &png_bytes)?;
     identify::io::write_atomic(&svg, svg_text.as_bytes())?;
-    Ok(FigureFiles { png, svg, svg_text })
+    let pdf = match pdf_bytes {
+        Some(bytes) => {
+            let path = dir.join(format!("{stem}.pdf"));
+            identify::io::write_atomic(&path, &bytes)?;
+            Some(path)
+        }
+        None => None,
+    };
+    Ok(FigureFiles {
+        png,
+        svg,
+        pdf,
+        svg_text,
+    })
 }

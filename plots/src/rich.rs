@@ -292,9 +292,18 @@ impl<DB: DrawingBackend> DrawingBackend for RichBackend<DB> {
             let rel = if r.sub { SUB_SCALE } else { 1.0 };
             let s = run_style(style, rel * self.scale, anchor.v_pos);
             let v = if r.sub { drop.round() as i32 } else { 0 };
-            let (dx, dy) = trans.transform(u, v);
+            // leading spaces are skipped, not drawn: an SVG viewer collapses them
+            // (xml:space), so the run starts where its first visible glyph belongs
+            let shown = r.text.trim_start();
+            let lead = if shown.len() < r.text.len() && !shown.is_empty() {
+                let ds = run_style(style, rel, anchor.v_pos);
+                w - self.inner.estimate_text_size(shown, &ds)?.0 as i32
+            } else {
+                0
+            };
+            let (dx, dy) = trans.transform(u + lead, v);
             let at = self.p((pos.0 + dx, pos.1 + dy));
-            self.inner.draw_text(&r.text, &s, at)?;
+            self.inner.draw_text(shown, &s, at)?;
             u += w;
         }
         Ok(())

@@ -4,7 +4,7 @@
 use crate::*;
 use std::f64::consts::{PI, TAU};
 
-pub(crate) fn time_series() -> TimeSeriesFigure {
+pub fn time_series() -> TimeSeriesFigure {
     let t: Vec<f64> = (0..2048).map(|i| i as f64 / 512.0).collect();
     let (fa, fh) = (2.0, 1.3);
     let alpha: Vec<f64> = t.iter().map(|t| 3.0 * (TAU * fa * t).sin()).collect();
@@ -64,7 +64,7 @@ pub(crate) fn time_series() -> TimeSeriesFigure {
 
 /// Amplitude spectrum of a synthetic two-tone signal with harmonics (closed-form peaks on a
 /// smooth floor), for test and model.
-pub(crate) fn spectrum() -> SpectrumFigure {
+pub fn spectrum() -> SpectrumFigure {
     let f: Vec<f64> = (0..2000).map(|i| i as f64 * 0.01).collect();
     let peak = |f: f64, f0: f64, a: f64| a / (1.0 + ((f - f0) / 0.03).powi(2));
     let tones = [
@@ -116,7 +116,7 @@ pub(crate) fn spectrum() -> SpectrumFigure {
     }
 }
 
-pub(crate) fn term_names() -> Vec<String> {
+pub fn term_names() -> Vec<String> {
     [
         "α",
         "Bα̇/U",
@@ -142,7 +142,7 @@ pub(crate) fn term_names() -> Vec<String> {
     .collect()
 }
 
-pub(crate) fn delta_path() -> DeltaPathFigure {
+pub fn delta_path() -> DeltaPathFigure {
     let names = term_names();
     let nt = names.len();
     let deltas: Vec<f64> = (0..30)
@@ -184,7 +184,7 @@ pub(crate) fn delta_path() -> DeltaPathFigure {
     }
 }
 
-pub(crate) fn heatmap() -> HeatmapGridFigure {
+pub fn heatmap() -> HeatmapGridFigure {
     let amps: Vec<f64> = (1..=8).map(|i| i as f64).collect();
     let speeds: Vec<f64> = (0..8).map(|i| 4.0 + 2.0 * i as f64).collect();
     let terms = [
@@ -227,7 +227,7 @@ pub(crate) fn heatmap() -> HeatmapGridFigure {
     }
 }
 
-pub(crate) fn histogram() -> HistogramFigure {
+pub fn histogram() -> HistogramFigure {
     // Deterministic spread of values (golden-ratio sequence), one outlier, one NaN.
     let u: Vec<f64> = (0..64)
         .map(|i| (i as f64 * 0.618_033_988_75).fract())
@@ -255,7 +255,7 @@ pub(crate) fn histogram() -> HistogramFigure {
     }
 }
 
-pub(crate) fn vg() -> VgFigure {
+pub fn vg() -> VgFigure {
     let u: Vec<f64> = (0..60).map(|i| 2.0 + 0.5 * i as f64).collect();
     let uf = 23.4;
     let heave_g: Vec<f64> = u.iter().map(|u| 0.01 + 0.004 * u).collect();
@@ -303,7 +303,7 @@ pub(crate) fn vg() -> VgFigure {
     }
 }
 
-pub(crate) fn bifurcation() -> BifurcationFigure {
+pub fn bifurcation() -> BifurcationFigure {
     let mut points = vec![];
     let uf = 20.0;
     let us = 17.0; // subcritical: LCO persists down to 17 m/s on the downward sweep
@@ -370,7 +370,7 @@ pub(crate) fn bifurcation() -> BifurcationFigure {
     }
 }
 
-pub(crate) fn phase() -> PhasePortraitFigure {
+pub fn phase() -> PhasePortraitFigure {
     let t: Vec<f64> = (0..1600).map(|i| i as f64 / 200.0).collect();
     // Growing spiral onto a limit cycle of amplitude 5 deg at 3 Hz, and a model at 4.6 deg.
     let traj = |a_lc: f64| {
@@ -430,7 +430,7 @@ fn flat_plate(k_red: f64) -> [f64; 8] {
     ]
 }
 
-pub(crate) fn derivatives() -> DerivativeFigure {
+pub fn derivatives() -> DerivativeFigure {
     let names = ["H1*", "H2*", "H3*", "H4*", "A1*", "A2*", "A3*", "A4*"];
     let kr: Vec<f64> = (0..60).map(|i| 0.3 + 0.03 * i as f64).collect();
     let kp: Vec<f64> = (0..8).map(|i| 0.4 + 0.2 * i as f64).collect();

@@ -12,9 +12,9 @@ use plotters::style::{FontFamily, FontStyle, RGBColor, ShapeStyle, TextStyle};
 use crate::error::{DrawResultExt, Error, Result};
 
 /// DejaVu Sans (Bitstream Vera licence, see `plots/assets/DejaVu-LICENSE.txt`).
-static DEJAVU_SANS: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
+pub(crate) static DEJAVU_SANS: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
 /// DejaVu Sans Bold (same licence).
-static DEJAVU_SANS_BOLD: &[u8] = include_bytes!("../assets/DejaVuSans-Bold.ttf");
+pub(crate) static DEJAVU_SANS_BOLD: &[u8] = include_bytes!("../assets/DejaVuSans-Bold.ttf");
 
 static FONT_ONCE: Once = Once::new();
 static FONT_OK: std::sync::atomic::AtomicU8 = std::sync::atomic::AtomicU8::new(0);
@@ -111,6 +111,25 @@ pub(crate) fn title<DB: DrawingBackend>(
     }
     root.margin(12, 0, 0, 0)
         .titled(text, bold(TITLE_SIZE))
+        .ctx(kind)
+}
+
+/// Paper style only ([`crate::FigureStyle::Paper`]): draws the panel letter "(a)", "(b)" …
+/// (`index` 0, 1 …) in bold at the top-left corner of the panel `cell`, for captions to
+/// refer to. The screen style names panels by their titles and draws nothing here.
+///
+/// # Errors
+/// [`Error::Drawing`] naming `kind` if the backend fails.
+pub(crate) fn panel_letter<DB: DrawingBackend>(
+    cell: &DrawingArea<DB, Shift>,
+    index: usize,
+    kind: &'static str,
+) -> Result<()> {
+    if crate::scaled::figure_style() != crate::scaled::FigureStyle::Paper {
+        return Ok(());
+    }
+    let letter = char::from(b'a' + (index % 26) as u8);
+    cell.draw_text(&format!("({letter})"), &bold(PANEL_TITLE_SIZE), (4, 2))
         .ctx(kind)
 }
 

@@ -34,9 +34,20 @@ fn check_figure<F: Figure>(fig: &F, expected: &[&str]) -> FigureFiles {
         "{}: title not drawn in PNG ({dark} dark pixels)",
         F::KIND
     );
-    let svg = std::fs::read_to_string(&files.svg).unwrap();
-    assert_eq!(svg, files.svg_text);
-    assert!(svg.starts_with("<svg"), "{}", &svg[..40.min(svg.len())]);
+    let written = std::fs::read_to_string(&files.svg).unwrap();
+    assert_eq!(written, files.svg_text);
+    assert!(
+        written.starts_with("<svg"),
+        "{}",
+        &written[..40.min(written.len())]
+    );
+    assert!(
+        !written.contains("<text"),
+        "{}: the written SVG still has <text> (viewer font)",
+        F::KIND
+    );
+    // the labels, searched in plotters' SVG before outlining
+    let svg = crate::render::render_svg_text(fig).unwrap();
     for e in expected {
         // a label with subscripts is drawn run by run (crate::rich)
         match crate::rich::parse(e) {
@@ -129,7 +140,7 @@ fn heatmap_writes_png_and_svg_with_labels() {
 
 #[test]
 fn histogram_writes_png_and_svg_with_labels() {
-    let f = check_figure(
+    check_figure(
         &samples::histogram(),
         &[
             "Identification quality",
@@ -142,7 +153,8 @@ fn histogram_writes_png_and_svg_with_labels() {
         ],
     );
     // Sample MFWA values 0.85 + 0.15·√u, u = frac(0.618·i), i < 64: n = 64 shown.
-    assert!(f.svg_text.contains("n = 64"));
+    let text = crate::render::render_svg_text(&samples::histogram()).unwrap();
+    assert!(text.contains("n = 64"));
 }
 
 #[test]
@@ -550,7 +562,11 @@ fn report_embeds_every_figure_inline() {
         html.matches("href=\"#").count()
     );
     assert!(html.contains("<td>B-1, repeat</td>"));
-    assert!(html.contains("flat plate (Theodorsen)"));
+    // every figure label is outlined: nothing is left to the browser's font
+    assert!(
+        !html.contains("<text"),
+        "a figure label left to the browser font"
+    );
 }
 
 fn preview_dir() -> PathBuf {
@@ -598,4 +614,46 @@ fn paper_style_png_is_300_dpi_without_title() {
     let r = dec.read_info().unwrap();
     assert_eq!((r.info().width, r.info().height), (w, h));
     assert!(r.info().pixel_dims.is_none());
+}
+
+/// `--figure-style paper`: a PDF beside PNG and SVG, one page of the paper size (1200 design
+/// pixels = 7 in = 504 pt), the bundled font embedded; panel letters on multi-panel figures
+/// and none in the screen style.
+#[test]
+fn paper_style_writes_pdf_with_panel_letters() {
+    let fig = samples::vg(); // V–g over V–f: two panels
+    let (w, h) = fig.size();
+    let dir = tempfile::tempdir().unwrap();
+    let files =
+        crate::with_figure_style(crate::FigureStyle::Paper, || save(&fig, dir.path(), "vg"))
+            .unwrap();
+    let pdf_path = files.pdf.expect("paper style writes a PDF");
+    let pdf = std::fs::read(&pdf_path).unwrap();
+    assert!(pdf.starts_with(b"%PDF-"), "not a PDF");
+    let text = String::from_utf8_lossy(&pdf);
+    // MediaBox in points: design px × 72 / (300 / 1.75)
+    let to_pt = |px: u32| px as f64 * 72.0 * 1.75 / 300.0;
+    let mb = text
+        .split("/MediaBox [")
+        .nth(1)
+        .and_then(|t| t.split(']').next())
+        .expect("a MediaBox");
+    let v: Vec<f64> = mb.split_whitespace().map(|x| x.parse().unwrap()).collect();
+    assert!((v[2] - v[0] - to_pt(w)).abs() < 0.5, "width {mb}");
+    assert!((v[3] - v[1] - to_pt(h)).abs() < 0.5, "height {mb}");
+    assert!(text.contains("DejaVu"), "bundled font not embedded");
+    let names: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
+    assert_eq!(names.len(), 3, "png, svg and pdf, no temporary files");
+    let paper =
+        crate::with_figure_style(crate::FigureStyle::Paper, || crate::render_svg_text(&fig))
+            .unwrap();
+    assert!(
+        paper.contains("(a)") && paper.contains("(b)"),
+        "panel letters"
+    );
+    let screen = crate::render_svg_text(&fig).unwrap();
+    assert!(!screen.contains("(a)"), "no panel letters on screen");
+    // the screen style writes no PDF
+    let dir = tempfile::tempdir().unwrap();
+    assert!(save(&fig, dir.path(), "vg").unwrap().pdf.is_none());
 }

@@ -304,7 +304,7 @@ pub fn delta_path_figure(
             }
             identify::regress::Measure::Coefficient => "threshold δ (|coefficient|) [-]".into(),
         },
-        loss_label: "key-frequency loss (Eq. 14) [-]".into(),
+        loss_label: "loss, Eq. 14 [-]".into(),
         loss_limit: Some(gf.loss_limit),
         term_names: basis.iter().map(|t| term_label(t)).collect(),
         ..DeltaPathFigure::default()

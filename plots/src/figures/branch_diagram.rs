@@ -273,7 +273,7 @@ mod tests {
                 stable: true,
             }],
         };
-        let svg = crate::render::render_svg(&f).unwrap();
+        let svg = crate::render::render_svg_text(&f).unwrap();
         assert!(svg.contains("unstable LCO"));
         assert!(svg.contains("fold of cycles"));
         // a branch of stable orbits only: no legend entry for unstable ones
@@ -284,9 +284,9 @@ mod tests {
             }],
             ..f.clone()
         };
-        let svg = crate::render::render_svg(&stable_only).unwrap();
+        let svg = crate::render::render_svg_text(&stable_only).unwrap();
         assert!(svg.contains("stable LCO") && !svg.contains("unstable LCO"));
-        let e = crate::render::render_svg(&BranchDiagramFigure::default()).unwrap_err();
+        let e = crate::render::render_svg_text(&BranchDiagramFigure::default()).unwrap_err();
         assert!(e.to_string().contains("branches"), "{e}");
     }
 }

@@ -88,7 +88,11 @@ impl Figure for ComparisonFigure {
         legend.extend(lines);
         let area = legend_band(&area, &legend, kind)?;
         let cells = area.split_evenly((1, self.panels.len()));
-        for (panel, cell) in self.panels.iter().zip(cells.iter()) {
+        let lettered = self.panels.len() > 1;
+        for (i, (panel, cell)) in self.panels.iter().zip(cells.iter()).enumerate() {
+            if lettered {
+                crate::style::panel_letter(cell, i, kind)?;
+            }
             let meas = sorted_points(&panel.measured);
             let preds: Vec<(&Series, Vec<(f64, f64)>)> = panel
                 .predicted
@@ -167,7 +171,7 @@ mod tests {
             predicted: vec![],
         };
         for (z, expect_zero_tick) in [(true, true), (false, false)] {
-            let svg = crate::render_svg(&ComparisonFigure {
+            let svg = crate::render_svg_text(&ComparisonFigure {
                 title: "t".into(),
                 x_label: "U".into(),
                 panels: vec![panel(z)],

@@ -120,6 +120,9 @@ impl Figure for DeltaPathFigure {
         let area = legend_band(&area, &legend, kind)?;
         let (top, rest) = area.split_vertically(240);
         let (mid, strip) = rest.split_vertically(240);
+        for (i, panel) in [&top, &mid, &strip].into_iter().enumerate() {
+            crate::style::panel_letter(panel, i, kind)?;
+        }
         let fx = |v: &f64| fmt_num(*v);
         let sel_line = |y0: f64, y1: f64| {
             sel.map(|d| {

@@ -152,7 +152,11 @@ impl Figure for DerivativeFigure {
         let rows = self.panels.len().div_ceil(COLS);
         let cells = area.split_evenly((rows, COLS));
         let fk = fmt_tick(k1 - k0);
-        for (panel, cell) in self.panels.iter().zip(cells.iter()) {
+        let lettered = self.panels.len() > 1;
+        for (i, (panel, cell)) in self.panels.iter().zip(cells.iter()).enumerate() {
+            if lettered {
+                crate::style::panel_letter(cell, i, kind)?;
+            }
             let cell = cell
                 .margin(10, 0, 0, 0)
                 .titled(&panel.name, bold(PANEL_TITLE_SIZE))

@@ -208,12 +208,15 @@ impl Figure for VgFigure {
             })
             .collect();
         let annot = fl.map(|p| {
+            // a nondimensional axis has no unit: no dangling space before the comma
+            let with_unit = |v: f64, unit: &str| match unit.trim() {
+                "" => fmt_num(v),
+                u => format!("{} {u}", fmt_num(v)),
+            };
             format!(
-                "U_F = {} {}, f_F = {} {}",
-                fmt_num(p.u),
-                self.u_unit,
-                fmt_num(p.freq),
-                self.f_unit
+                "U_F = {}, f_F = {}",
+                with_unit(p.u, &self.u_unit),
+                with_unit(p.freq, &self.f_unit)
             )
         });
         if let Some(a) = &annot {
@@ -233,6 +236,8 @@ impl Figure for VgFigure {
         let area = legend_band(&area, &legend, kind)?;
         let h = area.dim_in_pixel().1 as i32;
         let (top, bottom) = area.split_vertically((h - 55) / 2);
+        crate::style::panel_letter(&top, 0, kind)?;
+        crate::style::panel_letter(&bottom, 1, kind)?;
         let fu = fmt_tick(u1 - u0);
         let empty = |_: &f64| String::new();
         let a_style = font(18.0).color(&HIGHLIGHT);

@@ -134,7 +134,11 @@ impl Figure for GapHeatmapFigure {
         let nc = self.ncols();
         let nr = self.panels.len().div_ceil(nc);
         let cells = main.split_evenly((nr, nc));
-        for (panel, cell) in self.panels.iter().zip(cells.iter()) {
+        let lettered = self.panels.len() > 1;
+        for (i, (panel, cell)) in self.panels.iter().zip(cells.iter()).enumerate() {
+            if lettered {
+                crate::style::panel_letter(cell, i, kind)?;
+            }
             let cell = cell
                 .margin(10, 0, 0, 0)
                 .titled(&panel.title, bold(PANEL_TITLE_SIZE))

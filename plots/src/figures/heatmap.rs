@@ -153,7 +153,11 @@ impl Figure for HeatmapGridFigure {
             SegmentValue::CenterOf(i) if *i < ny => fmt_num(ys[*i]),
             _ => String::new(),
         };
-        for (panel, cell) in self.panels.iter().zip(cells.iter()) {
+        let lettered = self.panels.len() > 1;
+        for (i, (panel, cell)) in self.panels.iter().zip(cells.iter()).enumerate() {
+            if lettered {
+                crate::style::panel_letter(cell, i, kind)?;
+            }
             let cell = cell
                 .margin(14, 0, 0, 0)
                 .titled(&panel.term, bold(PANEL_TITLE_SIZE))

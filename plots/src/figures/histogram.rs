@@ -117,7 +117,16 @@ impl Figure for HistogramFigure {
         ];
         let area = legend_band(&area, &legend, kind)?;
         let cells = area.split_evenly((1, self.panels.len()));
-        for (panel, (cell, prep)) in self.panels.iter().zip(cells.iter().zip(&prepared)) {
+        let lettered = self.panels.len() > 1;
+        for (i, (panel, (cell, prep))) in self
+            .panels
+            .iter()
+            .zip(cells.iter().zip(&prepared))
+            .enumerate()
+        {
+            if lettered {
+                crate::style::panel_letter(cell, i, kind)?;
+            }
             let (lo, hi, w, counts, outside, skipped, med, n) = prep;
             let mut head = format!("n = {n}, median = {}", fmt_num(*med));
             if *outside > 0 {

@@ -111,9 +111,13 @@ impl Figure for RankingFigure {
             LegendEntry::line("noise level", HIGHLIGHT, true),
         ];
         let mut rest = legend_band(&area, &legend, kind)?;
-        for panel in &self.panels {
+        let lettered = self.panels.len() > 1;
+        for (i, panel) in self.panels.iter().enumerate() {
             let (cell, below) = rest.split_vertically(panel_height(panel));
             rest = below;
+            if lettered {
+                crate::style::panel_letter(&cell, i, kind)?;
+            }
             let cell = cell
                 .margin(8, 0, 0, 0)
                 .titled(&panel.title, bold(PANEL_TITLE_SIZE))

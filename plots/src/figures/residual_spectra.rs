@@ -77,7 +77,11 @@ impl Figure for ResidualSpectraFigure {
         let n = self.panels.len();
         let nc = ncols(n);
         let cells = area.split_evenly((n.div_ceil(nc), nc));
-        for (panel, cell) in self.panels.iter().zip(cells.iter()) {
+        let lettered = self.panels.len() > 1;
+        for (i, (panel, cell)) in self.panels.iter().zip(cells.iter()).enumerate() {
+            if lettered {
+                crate::style::panel_letter(cell, i, kind)?;
+            }
             let cell = cell
                 .margin(8, 0, 0, 0)
                 .titled(&panel.title, bold(PANEL_TITLE_SIZE))

@@ -96,6 +96,9 @@ impl Figure for TimeSeriesFigure {
 
         for (p, (panel, a)) in self.panels.iter().zip(areas.iter()).enumerate() {
             let last = p + 1 == n;
+            if n > 1 {
+                crate::style::panel_letter(a, p, kind)?;
+            }
             let yr =
                 finite_range(segs[p].iter().flatten().flatten().map(|q| q.1)).expect("validated");
             let (y0, y1) = padded(yr, 0.06);
