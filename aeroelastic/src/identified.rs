@@ -84,6 +84,26 @@ pub struct IdentifiedOptions {
     /// Largest robust relative spread 1.4826·MAD/|median| of a term outside Eq. 19 that is
     /// still included as a constant.
     pub outside_max_spread: f64,
+    /// How each derivative continues outside the K range its cases identified.
+    #[serde(default)]
+    pub extrapolation: Extrapolation,
+}
+
+/// Continuation of an identified derivative outside the K range of its cases (the tails).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Extrapolation {
+    /// Q entry K²d continued by the straight line through its two end nodes up to the
+    /// union K grid, held at the grid's end values beyond (the default).
+    #[default]
+    Linear,
+    /// Theodorsen-shaped tails: beyond an end node K_e the Q entry follows the flat plate's,
+    /// shifted to match there, K²d(K) = K_e²d(K_e) + K²d_fp(K) − K_e²d_fp(K_e) (d_fp =
+    /// [`flat_plate_derivatives`]), and the table grid is extended to 4 × its highest K so
+    /// the tail, not a held value, is what the model sees up there. A physically consistent
+    /// alternative to the straight line, used by the diagnosis to ask whether a gap comes
+    /// from extrapolating the tables.
+    Theodorsen,
 }
 
 impl IdentifiedOptions {
@@ -97,6 +117,7 @@ impl IdentifiedOptions {
             k_merge_tol: 1e-3,
             rfa_lags: 3,
             outside_max_spread: 0.5,
+            extrapolation: Extrapolation::Linear,
         }
     }
 }
@@ -264,18 +285,52 @@ struct QEntry {
     ks: Vec<f64>,
     gs: Vec<f64>,
     spline: Option<Spline>,
+    /// Theodorsen-shaped tails: the flat plate's Q entry K²d_fp(K) of this derivative.
+    tail: Option<fn(f64) -> f64>,
+}
+
+/// K²d_fp(K) of derivative `i` (0..8 = H1..H4, A1..A4) of the flat plate.
+fn flat_plate_q(i: usize) -> fn(f64) -> f64 {
+    const F: [fn(f64) -> f64; 8] = [
+        |k| k * k * flat_plate_derivatives(k).h1,
+        |k| k * k * flat_plate_derivatives(k).h2,
+        |k| k * k * flat_plate_derivatives(k).h3,
+        |k| k * k * flat_plate_derivatives(k).h4,
+        |k| k * k * flat_plate_derivatives(k).a1,
+        |k| k * k * flat_plate_derivatives(k).a2,
+        |k| k * k * flat_plate_derivatives(k).a3,
+        |k| k * k * flat_plate_derivatives(k).a4,
+    ];
+    F[i]
 }
 
 impl QEntry {
-    fn new(points: &[TablePoint]) -> Self {
+    fn new(points: &[TablePoint], tail: Option<fn(f64) -> f64>) -> Self {
         let ks: Vec<f64> = points.iter().map(|p| p.k).collect();
         let gs: Vec<f64> = points.iter().map(|p| p.k * p.k * p.value).collect();
         let spline = (ks.len() >= 2).then(|| Spline::new(&ks, &gs));
-        QEntry { ks, gs, spline }
+        QEntry {
+            ks,
+            gs,
+            spline,
+            tail,
+        }
     }
 
     fn eval(&self, k: f64) -> f64 {
         let n = self.ks.len();
+        if let Some(fp) = self.tail {
+            let edge = if k < self.ks[0] {
+                Some(0)
+            } else if k > self.ks[n - 1] {
+                Some(n - 1)
+            } else {
+                None
+            };
+            if let Some(e) = edge {
+                return self.gs[e] + fp(k) - fp(self.ks[e]);
+            }
+        }
         let Some(s) = &self.spline else {
             return self.gs[0];
         };
@@ -481,7 +536,26 @@ impl IdentifiedLaw {
                 merged.push(k);
             }
         }
-        let q: Vec<QEntry> = derivatives.iter().map(|s| QEntry::new(&s.points)).collect();
+        if opts.extrapolation == Extrapolation::Theodorsen {
+            // the tails up to 4 × the highest K (geometric steps of 2^(1/4))
+            if let Some(&top) = merged.last() {
+                let mut k = top;
+                for _ in 0..8 {
+                    k *= 2f64.powf(0.25);
+                    merged.push(k);
+                }
+            }
+        }
+        let q: Vec<QEntry> = derivatives
+            .iter()
+            .map(|s| {
+                let index = ["H1", "H2", "H3", "H4", "A1", "A2", "A3", "A4"]
+                    .iter()
+                    .position(|n| *n == s.name);
+                let tail = index.filter(|_| opts.extrapolation == Extrapolation::Theodorsen);
+                QEntry::new(&s.points, tail.map(flat_plate_q))
+            })
+            .collect();
         let rows: Vec<Derivatives> = merged
             .iter()
             .map(|&k| {
@@ -763,6 +837,62 @@ mod tests {
             }
         }
         v
+    }
+
+    /// Theodorsen-shaped tails continue a flat-plate table as the flat plate well beyond the
+    /// identified K (the straight line/hold of the default does not), and leave the
+    /// identified range untouched.
+    #[test]
+    fn theodorsen_tails_follow_the_flat_plate_beyond_the_range() {
+        let id = identification(grid_cases(|_| 0.0));
+        let lin = IdentifiedLaw::from_identification(&id, &IdentifiedOptions::new(0.25)).unwrap();
+        let opts = IdentifiedOptions {
+            extrapolation: Extrapolation::Theodorsen,
+            ..IdentifiedOptions::new(0.25)
+        };
+        let tails = IdentifiedLaw::from_identification(&id, &opts).unwrap();
+        // K_h spans 2.042/10 .. 2.042/3 = 0.68; K_α up to π/3 = 1.05: at K = 2.5 both are
+        // outside their own range and the union grid
+        let k = 2.5;
+        let e = flat_plate_derivatives(k);
+        let t = tails.table().derivatives(k);
+        let l = lin.table().derivatives(k);
+        for (name, got, held, want) in [
+            ("H1", t.h1, l.h1, e.h1),
+            ("H4", t.h4, l.h4, e.h4),
+            ("A1", t.a1, l.a1, e.a1),
+            // A2 carries the cases' +0.02 offset, shifted at K_e = π/3 and fading as (K_e/K)²
+            (
+                "A2",
+                t.a2,
+                l.a2,
+                e.a2 + 0.02 * (std::f64::consts::PI / 3.0 / k).powi(2),
+            ),
+            ("A3", t.a3, l.a3, e.a3),
+        ] {
+            let err = (got - want).abs() / want.abs().max(0.05);
+            assert!(err < 0.01, "{name}: tail {got} vs flat plate {want}");
+            let err_lin = (held - want).abs() / want.abs().max(0.05);
+            assert!(
+                err_lin > 3.0 * err,
+                "{name}: default {held} already as close"
+            );
+        }
+        // inside the range the two agree to interpolation accuracy
+        let k = 0.5;
+        let (a, b) = (tails.table().derivatives(k), lin.table().derivatives(k));
+        assert!(
+            (a.a2 - b.a2).abs() < 1e-3 * b.a2.abs(),
+            "{} vs {}",
+            a.a2,
+            b.a2
+        );
+        assert!(
+            (a.h1 - b.h1).abs() < 1e-3 * b.h1.abs(),
+            "{} vs {}",
+            a.h1,
+            b.h1
+        );
     }
 
     #[test]
