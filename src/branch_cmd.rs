@@ -242,7 +242,8 @@ pub fn run(args: &BranchArgs) -> anyhow::Result<()> {
         &args.model.display().to_string(),
         &set,
         &dist,
-    );
+    )
+    .to_value();
     let csv = args.out.join("branch.csv");
     identify::io::write_atomic(&csv, aeroelastic::documents::branch_csv(&set).as_bytes())?;
     let path = args.out.join("branch.json");

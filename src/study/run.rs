@@ -1003,7 +1003,7 @@ fn branch_stage(
         &set,
         &dist,
     );
-    write_text(&out.join(names::BRANCH), &format!("{doc:#}\n"))?;
+    write_text(&out.join(names::BRANCH), &format!("{:#}\n", doc.to_value()))?;
     write_text(
         &out.join(names::BRANCH_CSV),
         &aeroelastic::documents::branch_csv(&set),
