@@ -226,13 +226,12 @@ pub fn run(args: &BranchArgs) -> anyhow::Result<()> {
                 f(d.predicted_alpha, 180.0 / std::f64::consts::PI),
                 f(d.d_alpha, 180.0 / std::f64::consts::PI),
                 f(d.d_h, 1e3),
-                if d.predicted_alpha.is_none() {
-                    format!(
-                        "  (no predicted branch of this stability here; nearest {:.3} m/s away)",
-                        d.speed_gap
-                    )
-                } else {
-                    String::new()
+                match (d.predicted_alpha, d.speed_gap) {
+                    (Some(_), _) => String::new(),
+                    (None, Some(gap)) => format!(
+                        "  (no predicted branch of this stability here; nearest {gap:.3} m/s away)"
+                    ),
+                    (None, None) => "  (no predicted orbit of this stability)".to_string(),
                 }
             );
         }

@@ -1139,9 +1139,10 @@ pub struct MeasuredDistance {
     pub d_alpha: Option<f64>,
     /// Predicted − measured heave amplitude \[m\].
     pub d_h: Option<f64>,
-    /// Distance in speed to the nearest predicted orbit of the same stability [m/s]
-    /// (0 when a segment covers the speed).
-    pub speed_gap: f64,
+    /// Distance in speed to the nearest predicted orbit of the same stability \[m/s\]
+    /// (0 when a segment covers the speed); `None` (`null`) when no predicted orbit has
+    /// that stability (it was written `null` before, as the non-finite distance).
+    pub speed_gap: Option<f64>,
 }
 
 /// Distances of measured points to the predicted branches of the same stability
@@ -1182,7 +1183,11 @@ pub fn measured_distances(
                 predicted_h: best.map(|b| b.1),
                 d_alpha: best.map(|b| b.0 - m.amplitude_alpha),
                 d_h: best.map(|b| b.1 - m.amplitude_h),
-                speed_gap: if best.is_some() { 0.0 } else { gap },
+                speed_gap: if best.is_some() {
+                    Some(0.0)
+                } else {
+                    Some(gap).filter(|g| g.is_finite())
+                },
             }
         })
         .collect()
