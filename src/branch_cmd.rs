@@ -226,13 +226,12 @@ pub fn run(args: &BranchArgs) -> anyhow::Result<()> {
                 f(d.predicted_alpha, 180.0 / std::f64::consts::PI),
                 f(d.d_alpha, 180.0 / std::f64::consts::PI),
                 f(d.d_h, 1e3),
-                if d.predicted_alpha.is_none() {
-                    format!(
-                        "  (no predicted branch of this stability here; nearest {:.3} m/s away)",
-                        d.speed_gap
-                    )
-                } else {
-                    String::new()
+                match (d.predicted_alpha, d.speed_gap) {
+                    (Some(_), _) => String::new(),
+                    (None, Some(gap)) => format!(
+                        "  (no predicted branch of this stability here; nearest {gap:.3} m/s away)"
+                    ),
+                    (None, None) => "  (no predicted orbit of this stability)".to_string(),
                 }
             );
         }
@@ -242,7 +241,8 @@ pub fn run(args: &BranchArgs) -> anyhow::Result<()> {
         &args.model.display().to_string(),
         &set,
         &dist,
-    );
+    )
+    .to_value();
     let csv = args.out.join("branch.csv");
     identify::io::write_atomic(&csv, aeroelastic::documents::branch_csv(&set).as_bytes())?;
     let path = args.out.join("branch.json");

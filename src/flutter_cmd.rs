@@ -101,15 +101,14 @@ pub fn run(args: &FlutterArgs) -> anyhow::Result<()> {
         ),
         None => None,
     };
-    let mut json = flutter_document(
+    let mut doc = flutter_document(
         &args.structure.display().to_string(),
         &args.model.display().to_string(),
         &l,
         &fa,
     );
-    if let Some(e) = &ensemble {
-        json["ensemble"] = serde_json::to_value(e)?;
-    }
+    doc.ensemble = ensemble.clone();
+    let json = doc.to_value();
     let path = args.out.join("flutter.json");
     identify::io::write_atomic(&path, format!("{json:#}\n").as_bytes())?;
     match fa.flutter {

@@ -302,13 +302,13 @@ fn write_timing(
     total_s: f64,
     cases: usize,
 ) -> anyhow::Result<()> {
-    let json = serde_json::json!({
-        "read_s": read_s,
-        "prepare_s": prepare_s,
-        "identify_s": identify_s,
-        "total_s": total_s,
-        "cases": cases,
-    });
-    identify::io::write_atomic(path, format!("{json:#}\n").as_bytes())?;
+    let json = serde_json::to_string_pretty(&aeroform::documents::IdentifyTiming {
+        read_s,
+        prepare_s,
+        identify_s,
+        total_s,
+        cases,
+    })?;
+    identify::io::write_atomic(path, format!("{json}\n").as_bytes())?;
     Ok(())
 }

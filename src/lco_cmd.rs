@@ -81,7 +81,7 @@ pub fn run(args: &LcoArgs) -> anyhow::Result<()> {
     let path = args.out.join("lco.json");
     let structure_name = args.structure.display().to_string();
     let model_name = args.model.display().to_string();
-    let json = if let Some(u) = args.speed {
+    let doc = if let Some(u) = args.speed {
         let r = l
             .section
             .lco_run_k(u, &pert, &opts, &k_iteration)
@@ -135,7 +135,7 @@ pub fn run(args: &LcoArgs) -> anyhow::Result<()> {
         }
         lco_sweep_document(&structure_name, &model_name, &h)
     };
-    let mut json = json;
+    let mut doc = doc;
     if let Some(n) = args.ensemble {
         let speeds = match args.speed {
             Some(u) => vec![u],
@@ -164,8 +164,9 @@ pub fn run(args: &LcoArgs) -> anyhow::Result<()> {
         for f in &le.failures {
             eprintln!("warning: ensemble: {f}");
         }
-        json["ensemble"] = serde_json::to_value(&le)?;
+        doc.ensemble = Some(le);
     }
+    let json = doc.to_value();
     identify::io::write_atomic(&path, format!("{json:#}\n").as_bytes())?;
     crate::ui::say!("wrote {}", path.display());
     crate::ui::document(&json)

@@ -57,17 +57,17 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     if crate::ui::mode().json {
         let figures: serde_json::Value =
             crate::study::files::read_json(&out.join(crate::study::run::names::FIGURE_LIST))?;
-        crate::ui::document(&serde_json::json!({
-            "study": study.spec.name,
-            "out": out.display().to_string(),
-            "seed": study.spec.seed.to_string(),
-            "timings_s": timings
+        crate::ui::document(&aeroform::documents::RunSummary {
+            study: study.spec.name.clone(),
+            out: out.display().to_string(),
+            seed: study.spec.seed.to_string(),
+            timings_s: timings
                 .iter()
-                .map(|(k, v)| ((*k).to_string(), serde_json::json!(v)))
-                .collect::<serde_json::Map<_, _>>(),
-            "total_s": total,
-            "figures": figures,
-        }))?;
+                .map(|(k, v)| ((*k).to_string(), *v))
+                .collect(),
+            total_s: total,
+            figures,
+        })?;
     }
     Ok(())
 }

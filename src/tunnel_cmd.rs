@@ -149,12 +149,12 @@ fn blind(a: &BlindArgs) -> anyhow::Result<()> {
         a.out.join("free").display(),
         a.out.join("truth.json").display()
     );
-    crate::ui::document(&serde_json::json!({
-        "out": a.out.display().to_string(),
-        "forced_cases": set.forced.records.len(),
-        "free_runs": set.free.records.len(),
-        "seed": a.seed.to_string(),
-    }))
+    crate::ui::document(&aeroform::documents::TunnelBlindSummary {
+        out: a.out.display().to_string(),
+        forced_cases: set.forced.records.len(),
+        free_runs: set.free.records.len(),
+        seed: a.seed.to_string(),
+    })
 }
 
 /// The `manifest.toml` just written to `dir`, as JSON (for `--json`; `Null` otherwise).
@@ -202,13 +202,13 @@ fn forced(a: &ForcedArgs) -> anyhow::Result<()> {
         a.seed,
         a.out.display()
     );
-    crate::ui::document(&serde_json::json!({
-        "out": a.out.display().to_string(),
-        "cases": records.len(),
-        "model": m.model.name(),
-        "seed": a.seed.to_string(),
-        "manifest": manifest_json(&a.out)?,
-    }))
+    crate::ui::document(&aeroform::documents::TunnelForcedSummary {
+        out: a.out.display().to_string(),
+        cases: records.len(),
+        model: m.model.name().to_string(),
+        seed: a.seed.to_string(),
+        manifest: manifest_json(&a.out)?,
+    })
 }
 
 fn free(a: &FreeArgs) -> anyhow::Result<()> {
@@ -241,11 +241,11 @@ fn free(a: &FreeArgs) -> anyhow::Result<()> {
         records.len(),
         a.out.display()
     );
-    crate::ui::document(&serde_json::json!({
-        "out": a.out.display().to_string(),
-        "runs": records.len(),
-        "seed": a.seed.to_string(),
-        "manifest": manifest_json(&a.out)?,
-        "left_bound_at_s": runs.iter().map(|r| r.left_bound_at).collect::<Vec<_>>(),
-    }))
+    crate::ui::document(&aeroform::documents::TunnelFreeSummary {
+        out: a.out.display().to_string(),
+        runs: records.len(),
+        seed: a.seed.to_string(),
+        manifest: manifest_json(&a.out)?,
+        left_bound_at_s: runs.iter().map(|r| r.left_bound_at).collect(),
+    })
 }

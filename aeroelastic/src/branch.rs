@@ -40,7 +40,7 @@ use crate::{Error, Result};
 /// Settings of the continuation. Scaled variables: the state is divided by
 /// `amplitude_scale` times the Hopf eigenvector's magnitude of each component (pitch
 /// normalised to 1), T by 0.1 T_Hopf, U by 0.1 U_Hopf; Δs is measured in these units.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct BranchOptions {
     /// Fixed RK4 steps per period of the shooting integration.
     pub steps_per_period: usize,
@@ -123,7 +123,7 @@ impl BranchOptions {
 }
 
 /// A Hopf point of the equilibrium: a complex pair λ = σ ± iω crosses σ = 0 at U.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct HopfPoint {
     /// Wind speed [m/s].
     pub u: f64,
@@ -138,7 +138,7 @@ pub struct HopfPoint {
 }
 
 /// Kind of a bifurcation of the periodic orbits found on a branch.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum EventKind {
     /// Turning point in U (saddle-node of cycles): a Floquet multiplier crosses +1.
@@ -152,7 +152,7 @@ pub enum EventKind {
 }
 
 /// A bifurcation located between two consecutive branch points.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct BranchEvent {
     /// Kind.
     pub kind: EventKind,
@@ -168,7 +168,7 @@ pub struct BranchEvent {
 }
 
 /// One periodic orbit on a branch.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct BranchPoint {
     /// Wind speed [m/s].
     pub u: f64,
@@ -195,7 +195,7 @@ pub struct BranchPoint {
 }
 
 /// Why a branch ended.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case", tag = "reason")]
 pub enum StopReason {
     /// U left the requested range.
@@ -227,7 +227,7 @@ pub enum StopReason {
 }
 
 /// A continued branch of periodic orbits from one Hopf point.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct Branch {
     /// The Hopf point it starts from.
     pub hopf: HopfPoint,
@@ -245,7 +245,7 @@ pub struct Branch {
 }
 
 /// All branches of a speed range.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct BranchSet {
     /// Hopf points in the range, increasing U.
     pub hopf_points: Vec<HopfPoint>,
@@ -1007,7 +1007,7 @@ impl Section {
 
 /// One measured LCO amplitude (a row of a table like
 /// `bristol-spring1-lco-amplitudes.csv`): first-harmonic amplitudes at one speed.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct MeasuredAmplitude {
     /// Line in the file (1-based).
     pub line: usize,
@@ -1125,7 +1125,7 @@ pub fn parse_measured_amplitudes(text: &str, source: &str) -> Result<Vec<Measure
 }
 
 /// Distance of one measured point to the predicted branch of the same stability.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct MeasuredDistance {
     /// The measured point.
     pub measured: MeasuredAmplitude,
@@ -1139,9 +1139,10 @@ pub struct MeasuredDistance {
     pub d_alpha: Option<f64>,
     /// Predicted − measured heave amplitude \[m\].
     pub d_h: Option<f64>,
-    /// Distance in speed to the nearest predicted orbit of the same stability [m/s]
-    /// (0 when a segment covers the speed).
-    pub speed_gap: f64,
+    /// Distance in speed to the nearest predicted orbit of the same stability \[m/s\]
+    /// (0 when a segment covers the speed); `None` (`null`) when no predicted orbit has
+    /// that stability (it was written `null` before, as the non-finite distance).
+    pub speed_gap: Option<f64>,
 }
 
 /// Distances of measured points to the predicted branches of the same stability
@@ -1182,7 +1183,11 @@ pub fn measured_distances(
                 predicted_h: best.map(|b| b.1),
                 d_alpha: best.map(|b| b.0 - m.amplitude_alpha),
                 d_h: best.map(|b| b.1 - m.amplitude_h),
-                speed_gap: if best.is_some() { 0.0 } else { gap },
+                speed_gap: if best.is_some() {
+                    Some(0.0)
+                } else {
+                    Some(gap).filter(|g| g.is_finite())
+                },
             }
         })
         .collect()

@@ -9,14 +9,19 @@ use std::path::Path;
 
 use std::fmt::Write as _;
 
-use serde_json::{json, Value};
+use schemars::JsonSchema;
+use serde::de::DeserializeOwned;
+use serde::{Deserialize, Serialize};
+use serde_json::Value;
 
-use crate::branch::{BranchOptions, BranchProgress, BranchSet, EventKind, MeasuredDistance};
-use crate::ensemble::{flutter_ensemble, member_laws, FlutterEnsemble};
-use crate::identified::IdentifiedOptions;
+use crate::branch::{
+    Branch, BranchOptions, BranchProgress, BranchSet, EventKind, HopfPoint, MeasuredDistance,
+};
+use crate::ensemble::{flutter_ensemble, member_laws, FlutterEnsemble, LcoEnsemble};
+use crate::identified::{IdentifiedOptions, IdentifiedTables};
 
 use crate::files::{LoadedModel, StructureFile};
-use crate::flutter::{FlutterAnalysis, FlutterMethod, FlutterOptions};
+use crate::flutter::{FlutterAnalysis, FlutterMethod, FlutterOptions, FlutterPoint};
 use crate::lco::{Hysteresis, KIteration, LcoOptions, LcoResult, SweepPlan, SweepProgress};
 use crate::section::Section;
 use crate::structure::Structure;
@@ -206,16 +211,251 @@ impl LoadedPair {
 /// The method string recorded in `branch.json` under `settings.method`.
 pub const BRANCH_METHOD: &str = "single shooting (fixed-step RK4) + pseudo-arclength, Floquet multipliers from the monodromy matrix";
 
-/// The `branch.json` document (`aeroform-branch/1`): settings, Hopf points, folds (branch,
-/// U \[m/s\], pitch amplitude \[deg\], heave amplitude \[m\]), every branch with its
-/// points and events, and the distances of measured points (`measured`, empty without).
+/// Format tag of the `flutter.json` of `aeroform flutter` ([`FlutterDoc`]).
+pub const FLUTTER_FORMAT: &str = "aeroform-flutter/1";
+/// Format tag of the `lco.json` of `aeroform lco` ([`LcoDoc`]).
+pub const LCO_FORMAT: &str = "aeroform-lco/1";
+/// Format tag of `branch.json` ([`BranchDoc`]).
+pub const BRANCH_FORMAT: &str = "aeroform-branch/1";
+
+/// Parses `text` (from `source`, a file name) as a document of type `T` whose `format`
+/// field must be `expected`; the tag is checked first, so that a document of another kind
+/// is reported as such rather than as a missing field.
+fn parse_document<T: DeserializeOwned>(text: &str, source: &str, expected: &str) -> Result<T> {
+    #[derive(Deserialize)]
+    struct Tag {
+        format: String,
+    }
+    let doc_error = |e: serde_json::Error| crate::Error::Document {
+        path: source.to_string(),
+        message: e.to_string(),
+    };
+    let tag: Tag = serde_json::from_str(text).map_err(doc_error)?;
+    if tag.format != expected {
+        return Err(crate::Error::WrongFormat {
+            path: source.to_string(),
+            found: tag.format,
+            expected: expected.to_string(),
+        });
+    }
+    serde_json::from_str(text).map_err(doc_error)
+}
+
+/// Reads the file `path` as a document of type `T` tagged `expected`.
+fn read_document<T: DeserializeOwned>(path: &Path, expected: &str) -> Result<T> {
+    let text = std::fs::read_to_string(path).map_err(|e| crate::Error::Io {
+        path: path.display().to_string(),
+        message: e.to_string(),
+    })?;
+    parse_document(&text, &path.display().to_string(), expected)
+}
+
+/// The JSON value of a document (objects with their keys sorted, as written to disk).
+fn document_value<T: Serialize>(doc: &T) -> Value {
+    // A document holds only strings, numbers (non-finite ones become `null`), booleans,
+    // sequences and structs: serialising it into a `Value` cannot fail.
+    serde_json::to_value(doc).expect("a result document serialises to JSON")
+}
+
+/// `from_json`, `read` and `to_value` of a document type with a format tag.
+macro_rules! document_io {
+    ($ty:ident, $format:ident, $file:literal) => {
+        impl $ty {
+            #[doc = concat!("Parses the text of a `", $file, "` document; `source` names it in errors.")]
+            ///
+            /// # Errors
+            /// [`crate::Error::WrongFormat`] when the `format` tag is not
+            #[doc = concat!("[`", stringify!($format), "`];")]
+            /// [`crate::Error::Document`] (naming `source`, line and column) when the text is
+            /// not JSON of this shape. Fields the type does not know are ignored.
+            pub fn from_json(text: &str, source: &str) -> Result<Self> {
+                parse_document(text, source, $format)
+            }
+
+            #[doc = concat!("Reads a `", $file, "` document from the file `path`.")]
+            ///
+            /// # Errors
+            /// [`crate::Error::Io`] naming the file when it cannot be read; the errors of
+            #[doc = concat!("[`", stringify!($ty), "::from_json`]")]
+            /// (naming the file).
+            pub fn read(path: &Path) -> Result<Self> {
+                read_document(path, $format)
+            }
+
+            /// The document as a JSON value, as it is written to disk (pretty-printed, keys
+            /// sorted) and printed by `--json`.
+            pub fn to_value(&self) -> Value {
+                document_value(self)
+            }
+        }
+    };
+}
+
+/// The `critical` object of `flutter.json`: the flutter point with its derived
+/// frequencies.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct CriticalPoint {
+    /// Flutter speed U_F \[m/s\].
+    pub speed: f64,
+    /// Flutter angular frequency ω_F \[rad/s\].
+    pub omega: f64,
+    /// Flutter frequency f_F = ω_F/(2π) \[Hz\].
+    pub frequency_hz: f64,
+    /// Reduced frequency K = B·ω_F/U_F on the full chord B (Theodorsen's k = K/2).
+    pub reduced_frequency: f64,
+    /// Index of the mode that goes unstable (in `analysis.branches`).
+    pub mode: usize,
+    /// Reduced speed U_F/(b·ω_α), b = B/2 the semi-chord.
+    pub u_reduced: f64,
+    /// Frequency ratio ω_F/ω_α.
+    pub omega_ratio: f64,
+}
+
+impl CriticalPoint {
+    /// The critical point of flutter point `f` on a section of full chord `chord` \[m\].
+    pub fn new(f: &FlutterPoint, chord: f64) -> Self {
+        CriticalPoint {
+            speed: f.u,
+            omega: f.omega,
+            frequency_hz: f.omega / (2.0 * std::f64::consts::PI),
+            reduced_frequency: chord * f.omega / f.u,
+            mode: f.mode,
+            u_reduced: f.u_reduced,
+            omega_ratio: f.omega_ratio,
+        }
+    }
+}
+
+/// The `flutter.json` document of `aeroform flutter` and of the Python binding's
+/// `flutter` (format `aeroform-flutter/1`): the flutter analysis of one structure/model
+/// pair. Scanlan's convention: h positive down, α positive nose-up; SI units.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct FlutterDoc {
+    /// Format tag, `aeroform-flutter/1`.
+    pub format: String,
+    /// The structure file, as named on the command line.
+    pub structure: String,
+    /// The model file (model TOML or `identification.json`), as named on the command line.
+    pub model: String,
+    /// Name of the aerodynamic model (`theodorsen`, `quasi_steady`, `identified`, …).
+    pub model_name: String,
+    /// Air density ρ \[kg/m³\].
+    pub air_density: f64,
+    /// Full chord B \[m\].
+    pub chord: f64,
+    /// The flutter point with its frequencies; `null` when no mode crosses zero damping in
+    /// the scanned range.
+    pub critical: Option<CriticalPoint>,
+    /// Static divergence speed U_D \[m/s\]; `null` when none in the scanned range.
+    pub divergence_speed: Option<f64>,
+    /// The whole analysis: method, one branch per structural mode (V–g, V–f), flutter
+    /// point, divergence speed, failed points.
+    pub analysis: FlutterAnalysis,
+    /// What the identified law was built from; `null` unless the model is an
+    /// `identification.json`.
+    pub identified: Option<IdentifiedTables>,
+    /// Flutter and divergence over the members of the identification's bootstrap ensemble
+    /// (`--ensemble N`); absent without.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ensemble: Option<FlutterEnsemble>,
+}
+
+document_io!(FlutterDoc, FLUTTER_FORMAT, "flutter.json");
+
+/// The `lco.json` document of `aeroform lco` and of the Python binding's `lco` (format
+/// `aeroform-lco/1`): either one run (`run`) or an upward and a downward sweep (`sweep`,
+/// `hysteresis_speeds`). Scanlan's convention; SI units (amplitudes in rad and m).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct LcoDoc {
+    /// Format tag, `aeroform-lco/1`.
+    pub format: String,
+    /// The structure file, as named on the command line.
+    pub structure: String,
+    /// The model file, as named on the command line.
+    pub model: String,
+    /// The run at one speed (`--speed`); absent for a sweep.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub run: Option<LcoResult>,
+    /// The upward and downward sweeps (`--sweep`); absent for one run.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sweep: Option<Hysteresis>,
+    /// Speeds \[m/s\] at which the two sweeps disagree (one settles on an LCO, the other
+    /// not): the hysteresis band on the sweep's grid; present (possibly empty) with
+    /// `sweep`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hysteresis_speeds: Option<Vec<f64>>,
+    /// LCO amplitudes over the members of the identification's bootstrap ensemble
+    /// (`--ensemble N`), one point per speed; absent without.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ensemble: Option<LcoEnsemble>,
+}
+
+document_io!(LcoDoc, LCO_FORMAT, "lco.json");
+
+/// `settings` of `branch.json`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct BranchSettings {
+    /// The numerical method ([`BRANCH_METHOD`]).
+    pub method: String,
+    /// The continuation options.
+    pub options: BranchOptions,
+    /// Speed range searched for Hopf points and continued over, `[u_min, u_max]` \[m/s\].
+    pub u_range_m_s: [f64; 2],
+}
+
+/// A fold (saddle-node of limit cycles) of `branch.json`'s `folds`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct BranchFold {
+    /// Index of the branch (in `branches`) it lies on.
+    pub branch: usize,
+    /// Wind speed U \[m/s\].
+    #[serde(rename = "U_m_s")]
+    pub u_m_s: f64,
+    /// Pitch amplitude (half peak-to-peak) \[deg\].
+    pub amplitude_alpha_deg: f64,
+    /// Heave amplitude (half peak-to-peak) \[m\], heave positive down.
+    pub amplitude_h_m: f64,
+}
+
+/// The `branch.json` document of `aeroform branch`, of a study's `[branch]` stage and of
+/// the Python binding's `branch` (format `aeroform-branch/1`): LCO branches continued from
+/// every Hopf point in the speed range. Scanlan's convention; SI units unless a name says
+/// otherwise.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct BranchDoc {
+    /// Format tag, `aeroform-branch/1`.
+    pub format: String,
+    /// The structure file as named on the command line (`study.toml [structure]` in a
+    /// study).
+    pub structure: String,
+    /// The model file as named on the command line (the study's `aero.model` in a study).
+    pub model: String,
+    /// Method, options and speed range.
+    pub settings: BranchSettings,
+    /// Hopf points in the range, increasing U.
+    pub hopf_points: Vec<HopfPoint>,
+    /// Every fold event of every branch, in branch order.
+    pub folds: Vec<BranchFold>,
+    /// One branch per Hopf point, with its points, events and stop reason.
+    pub branches: Vec<Branch>,
+    /// Distances of measured amplitudes (`--measured`) to the predicted branches; empty
+    /// without.
+    pub measured: Vec<MeasuredDistance>,
+}
+
+document_io!(BranchDoc, BRANCH_FORMAT, "branch.json");
+
+/// The `branch.json` document (`aeroform-branch/1`) of the branches `set`: settings, Hopf
+/// points, folds (branch, U \[m/s\], pitch amplitude \[deg\], heave amplitude \[m\]), every
+/// branch with its points and events, and the distances of measured points (`measured`,
+/// empty without); `structure` and `model` name the inputs.
 pub fn branch_document(
     structure: &str,
     model: &str,
     set: &BranchSet,
     measured: &[MeasuredDistance],
-) -> Value {
-    let folds: Vec<Value> = set
+) -> BranchDoc {
+    let folds = set
         .branches
         .iter()
         .enumerate()
@@ -223,30 +463,28 @@ pub fn branch_document(
             b.events
                 .iter()
                 .filter(|e| e.kind == EventKind::Fold)
-                .map(move |e| {
-                    json!({
-                        "branch": i,
-                        "U_m_s": e.u,
-                        "amplitude_alpha_deg": e.amplitude_alpha.to_degrees(),
-                        "amplitude_h_m": e.amplitude_h,
-                    })
+                .map(move |e| BranchFold {
+                    branch: i,
+                    u_m_s: e.u,
+                    amplitude_alpha_deg: e.amplitude_alpha.to_degrees(),
+                    amplitude_h_m: e.amplitude_h,
                 })
         })
         .collect();
-    json!({
-        "format": "aeroform-branch/1",
-        "structure": structure,
-        "model": model,
-        "settings": {
-            "method": BRANCH_METHOD,
-            "options": set.options,
-            "u_range_m_s": set.u_range,
+    BranchDoc {
+        format: BRANCH_FORMAT.to_string(),
+        structure: structure.to_string(),
+        model: model.to_string(),
+        settings: BranchSettings {
+            method: BRANCH_METHOD.to_string(),
+            options: set.options,
+            u_range_m_s: set.u_range,
         },
-        "hopf_points": set.hopf_points,
-        "folds": folds,
-        "branches": set.branches,
-        "measured": measured,
-    })
+        hopf_points: set.hopf_points.clone(),
+        folds,
+        branches: set.branches.clone(),
+        measured: measured.to_vec(),
+    }
 }
 
 /// The `branch.csv` table: one row per branch point with columns `U_m_s`, `stable`,
@@ -277,65 +515,67 @@ pub fn branch_csv(set: &BranchSet) -> String {
     s
 }
 
-/// The `critical` object of `flutter.json`: speed, angular and cyclic frequency, reduced
-/// frequency K = Bω/U, mode, U/(bω_α), ω/ω_α; `null` when the scan found no flutter.
+/// The `critical` object of `flutter.json` as a JSON value ([`CriticalPoint`]); `null`
+/// when the scan found no flutter. `chord` is the full chord B \[m\].
 pub fn flutter_point_json(fa: &FlutterAnalysis, chord: f64) -> Value {
-    match fa.flutter {
-        Some(f) => json!({
-            "speed": f.u,
-            "omega": f.omega,
-            "frequency_hz": f.omega / (2.0 * std::f64::consts::PI),
-            "reduced_frequency": chord * f.omega / f.u,
-            "mode": f.mode,
-            "u_reduced": f.u_reduced,
-            "omega_ratio": f.omega_ratio,
-        }),
+    match &fa.flutter {
+        Some(f) => document_value(&CriticalPoint::new(f, chord)),
         None => Value::Null,
     }
 }
 
-/// The `flutter.json` document (`aeroform-flutter/1`); `structure` and `model` name the
-/// inputs.
+/// The `flutter.json` document (`aeroform-flutter/1`) of the analysis `fa` of `pair`;
+/// `structure` and `model` name the inputs. Without an ensemble (set
+/// [`FlutterDoc::ensemble`] to add one).
 pub fn flutter_document(
     structure: &str,
     model: &str,
     pair: &LoadedPair,
     fa: &FlutterAnalysis,
-) -> Value {
+) -> FlutterDoc {
     let b = pair.section.aero.chord();
-    json!({
-        "format": "aeroform-flutter/1",
-        "structure": structure,
-        "model": model,
-        "model_name": fa.model,
-        "air_density": pair.file.air_density,
-        "chord": b,
-        "critical": flutter_point_json(fa, b),
-        "divergence_speed": fa.divergence_speed,
-        "analysis": fa,
-        "identified": pair.model.identified,
-    })
+    FlutterDoc {
+        format: FLUTTER_FORMAT.to_string(),
+        structure: structure.to_string(),
+        model: model.to_string(),
+        model_name: fa.model.clone(),
+        air_density: pair.file.air_density,
+        chord: b,
+        critical: fa.flutter.as_ref().map(|f| CriticalPoint::new(f, b)),
+        divergence_speed: fa.divergence_speed,
+        analysis: fa.clone(),
+        identified: pair.model.identified.clone(),
+        ensemble: None,
+    }
 }
 
-/// The `lco.json` document (`aeroform-lco/1`) of one run.
-pub fn lco_run_document(structure: &str, model: &str, run: &LcoResult) -> Value {
-    json!({
-        "format": "aeroform-lco/1",
-        "structure": structure,
-        "model": model,
-        "run": run,
-    })
+/// The `lco.json` document (`aeroform-lco/1`) of one run; `structure` and `model` name
+/// the inputs. Without an ensemble (set [`LcoDoc::ensemble`] to add one).
+pub fn lco_run_document(structure: &str, model: &str, run: &LcoResult) -> LcoDoc {
+    LcoDoc {
+        format: LCO_FORMAT.to_string(),
+        structure: structure.to_string(),
+        model: model.to_string(),
+        run: Some(run.clone()),
+        sweep: None,
+        hysteresis_speeds: None,
+        ensemble: None,
+    }
 }
 
-/// The `lco.json` document (`aeroform-lco/1`) of an upward/downward sweep.
-pub fn lco_sweep_document(structure: &str, model: &str, sweep: &Hysteresis) -> Value {
-    json!({
-        "format": "aeroform-lco/1",
-        "structure": structure,
-        "model": model,
-        "sweep": sweep,
-        "hysteresis_speeds": sweep.band(),
-    })
+/// The `lco.json` document (`aeroform-lco/1`) of an upward/downward sweep; `structure`
+/// and `model` name the inputs. Without an ensemble (set [`LcoDoc::ensemble`] to add
+/// one).
+pub fn lco_sweep_document(structure: &str, model: &str, sweep: &Hysteresis) -> LcoDoc {
+    LcoDoc {
+        format: LCO_FORMAT.to_string(),
+        structure: structure.to_string(),
+        model: model.to_string(),
+        run: None,
+        sweep: Some(sweep.clone()),
+        hysteresis_speeds: Some(sweep.band()),
+        ensemble: None,
+    }
 }
 
 #[cfg(test)]
@@ -357,8 +597,39 @@ mod tests {
         let e = pair.flutter(FlutterMethod::Pk, &[5.0]).unwrap_err();
         assert!(e.to_string().contains("speeds"), "{e}");
         let fa = pair.flutter(FlutterMethod::Pk, &[1.0, 30.0]).unwrap();
-        let doc = flutter_document("s.toml", "m.toml", &pair, &fa);
+        let doc = flutter_document("s.toml", "m.toml", &pair, &fa).to_value();
         assert_eq!(doc["format"], "aeroform-flutter/1");
         assert_eq!(doc["chord"], 0.25);
+    }
+
+    #[test]
+    fn a_document_round_trips_and_another_format_is_refused_with_the_file_named() {
+        let dir = tempfile::tempdir().unwrap();
+        let s = dir.path().join("s.toml");
+        let m = dir.path().join("m.toml");
+        std::fs::write(
+            &s,
+            "mass = 1.0\ninertia = 0.01\nfreq_heave = 2.0\nfreq_pitch = 3.0\n",
+        )
+        .unwrap();
+        std::fs::write(&m, "kind = \"theodorsen\"\nchord = 0.25\n").unwrap();
+        let pair = LoadedPair::load(&s, &m, None).unwrap();
+        let fa = pair.flutter(FlutterMethod::Pk, &[1.0, 30.0]).unwrap();
+        let doc = flutter_document("s.toml", "m.toml", &pair, &fa);
+        let path = dir.path().join("flutter.json");
+        std::fs::write(&path, format!("{:#}\n", doc.to_value())).unwrap();
+        assert_eq!(FlutterDoc::read(&path).unwrap(), doc);
+        let e = LcoDoc::read(&path).unwrap_err();
+        assert!(
+            matches!(&e, crate::Error::WrongFormat { found, .. } if found == FLUTTER_FORMAT),
+            "{e}"
+        );
+        assert!(e.to_string().contains("flutter.json"), "{e}");
+        let e =
+            FlutterDoc::from_json("{\"format\": \"aeroform-flutter/1\"}", "x.json").unwrap_err();
+        assert!(
+            matches!(&e, crate::Error::Document { path, .. } if path == "x.json"),
+            "{e}"
+        );
     }
 }

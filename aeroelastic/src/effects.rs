@@ -44,7 +44,9 @@ const TAU: f64 = 2.0 * std::f64::consts::PI;
 /// Functional form of an injected effect: the same physics in two different shapes. The
 /// blind benchmark uses `Primary`; `Alternate` checks that a diagnosis does not rely on
 /// the exact shape.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum Form {
     /// The first form of each effect (see [`Effect`]).
@@ -68,7 +70,7 @@ pub enum Form {
 /// | freeplay | sharp gap (Structure) | smoothed gap (hyperbolic ramp, ε = δ/3) |
 /// | friction | Coulomb, tanh-regularised (Structure) | Stribeck: static 1.6 × kinetic, v_s = 0.05 rad/s |
 /// | buffeting | Dryden/von Kármán-like w, C_Lα = 2π | same w through a first-order Sears admittance |
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Effect {
     /// Mean angle offset α₀ \[rad\] (typical 0.05°–1.5°): the rig reads α while the model
@@ -147,7 +149,7 @@ pub enum Effect {
 }
 
 /// An effect in a form.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct Injection {
     /// The effect and its parameters.
     pub effect: Effect,

@@ -75,7 +75,7 @@ pub fn member_laws<'a>(
 }
 
 /// Distribution of one scalar result over the members.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct MemberQuantity {
     /// Percentile interval over the members that have the quantity (`None` when none has).
     pub interval: Option<Interval>,
@@ -97,7 +97,7 @@ impl MemberQuantity {
 }
 
 /// Flutter and divergence over an ensemble of laws.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct FlutterEnsemble {
     /// Members analysed.
     pub members: usize,
@@ -179,7 +179,7 @@ pub fn flutter_ensemble(
 }
 
 /// LCO over an ensemble at one wind speed.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct LcoEnsemblePoint {
     /// Wind speed U [m/s].
     pub u: f64,
@@ -198,7 +198,7 @@ pub struct LcoEnsemblePoint {
 }
 
 /// LCO amplitudes over an ensemble.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct LcoEnsemble {
     /// Members analysed.
     pub members: usize,

@@ -61,6 +61,25 @@ pub enum Error {
         /// What happened.
         message: String,
     },
+    /// A result document (`flutter.json`, `lco.json`, `branch.json`) is not JSON of the
+    /// documented shape.
+    #[error("{path}: {message}")]
+    Document {
+        /// The file.
+        path: String,
+        /// The parser's message, with line and column.
+        message: String,
+    },
+    /// A result document carries another `format` tag than the one expected.
+    #[error("{path}: format `{found}` is not `{expected}`")]
+    WrongFormat {
+        /// The file.
+        path: String,
+        /// The `format` tag read.
+        found: String,
+        /// The `format` tag expected.
+        expected: String,
+    },
     /// A numerical step failed (singular matrix, no convergence…).
     #[error("{context}: numerical failure: {message}")]
     Numerical {

@@ -63,7 +63,7 @@ fn default_rho() -> f64 {
 }
 
 /// A structure file (see the module docs).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct StructureFile {
     /// Air density ρ \[kg/m³\].
@@ -201,7 +201,7 @@ impl StructureFile {
 }
 
 /// Kind of a model file.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum ModelKind {
     /// [`TheodorsenAero`].
@@ -221,7 +221,7 @@ pub enum ModelKind {
 }
 
 /// One `[[nonlinear]]` entry of a model file.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct NonlinearSpec {
     /// Term name (DATA_FORMAT.md), degree 2 or 3.
@@ -243,7 +243,7 @@ pub struct NonlinearSpec {
 }
 
 /// A model file (see the module docs).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ModelFile {
     /// Model kind.

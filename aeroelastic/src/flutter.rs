@@ -11,7 +11,7 @@ use crate::section::Section;
 use crate::{Error, Result};
 
 /// Which linear flutter method.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
 pub enum FlutterMethod {
     /// p-method: eigenvalues of the state matrix of the time-domain realisation (lag
     /// states included; Theodorsen → Jones' lags, tables → Roger RFA).
@@ -22,7 +22,7 @@ pub enum FlutterMethod {
 }
 
 /// Options of a flutter analysis.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct FlutterOptions {
     /// Lowest speed of the scan \[m/s\] (> 0).
     pub u_min: f64,
@@ -35,7 +35,7 @@ pub struct FlutterOptions {
 }
 
 /// One point of a mode branch (V–g and V–f data).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct ModePoint {
     /// Wind speed U \[m/s\].
     pub u: f64,
@@ -48,7 +48,7 @@ pub struct ModePoint {
 }
 
 /// One tracked aeroelastic mode over U.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct ModeBranch {
     /// Mode label (`mode 0` is the lowest-frequency structural mode at the lowest U).
     pub label: String,
@@ -64,7 +64,7 @@ pub struct ModeBranch {
 
 /// A speed of the scan at which a mode could not be computed (the rest of the scan is
 /// kept).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct FailedPoint {
     /// Wind speed U [m/s].
     pub u: f64,
@@ -75,7 +75,7 @@ pub struct FailedPoint {
 }
 
 /// The flutter point.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct FlutterPoint {
     /// Critical speed U_F \[m/s\].
     pub u: f64,
@@ -90,7 +90,7 @@ pub struct FlutterPoint {
 }
 
 /// Result of a flutter analysis: V–g / V–f branches, flutter point, divergence speed.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct FlutterAnalysis {
     /// Method used.
     pub method: FlutterMethod,

@@ -54,7 +54,9 @@ use crate::theodorsen::{flat_plate_derivatives, Derivative, Derivatives};
 use crate::{Error, Result};
 
 /// What to do with a derivative that is `null` (not identifiable) in a case.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum MissingDerivative {
     /// Any `null` derivative is an [`Error::NotIdentifiable`] naming it (default).
@@ -69,7 +71,7 @@ pub enum MissingDerivative {
 }
 
 /// Options of [`IdentifiedLaw::from_identification`].
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct IdentifiedOptions {
     /// Chord B \[m\] (`identification.json` does not hold it).
     pub chord: f64,
@@ -123,7 +125,7 @@ impl IdentifiedOptions {
 }
 
 /// Which reduced frequency a table is over.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum ReducedFrequency {
     /// K_α = Bω_α/U (α-terms).
@@ -133,7 +135,7 @@ pub enum ReducedFrequency {
 }
 
 /// One aggregated table point: the median over the cases at one K, and its spread.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct TablePoint {
     /// Reduced frequency (mean of the merged K).
     pub k: f64,
@@ -152,7 +154,7 @@ pub struct TablePoint {
 }
 
 /// A derivative (H1*..H4*, A1*..A4*) or N* tabulated over its own K.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct Series {
     /// Name: `H1`..`H4`, `A1`..`A4`, or `lift N1`.. `moment N3`.
     pub name: String,
@@ -165,7 +167,7 @@ pub struct Series {
 }
 
 /// A term outside Eq. 19 selected by the identification.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct OutsideTerm {
     /// Force channel.
     pub channel: Channel,
@@ -184,7 +186,7 @@ pub struct OutsideTerm {
 }
 
 /// The serialisable description of an identified law (what was built and from what).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct IdentifiedTables {
     /// Data-set name of the identification.
     pub dataset: String,

@@ -42,7 +42,7 @@ impl OdeSystem for SectionDynamics<'_> {
 }
 
 /// Why an integration stopped.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum StopReason {
     /// The observer found a converged response (e.g. a steady limit cycle).
@@ -96,7 +96,7 @@ pub type StepObserver<'a> = dyn FnMut(f64, &[f64], &[f64]) -> Control + 'a;
 
 /// Bound on the section's displacements: the run stops with [`StopReason::LeftBound`]
 /// when |z₀| = |h| > `h` \[m\] or |z₁| = |α| > `alpha` \[rad\] after a step.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct Bound {
     /// Largest |h| \[m\].
     pub h: f64,
@@ -120,7 +120,7 @@ impl Bound {
 }
 
 /// Outcome of one integration.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct IntegrationRun {
     /// Why it stopped.
     pub stop: StopReason,
@@ -133,7 +133,7 @@ pub struct IntegrationRun {
 }
 
 /// Options of the adaptive Dop853 driver.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct AdaptiveOptions {
     /// Relative tolerance.
     pub rtol: f64,

@@ -12,7 +12,7 @@ use crate::section::Section;
 use crate::{Error, Result};
 
 /// Options of one LCO run.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct LcoOptions {
     /// Relative tolerance of Dop853.
     pub rtol: f64,
@@ -86,7 +86,7 @@ impl LcoOptions {
 }
 
 /// Outcome of one run.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub enum Classification {
     /// The response decays to the equilibrium.
     Decay,
@@ -102,7 +102,7 @@ pub enum Classification {
 }
 
 /// Result of one LCO run.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct LcoResult {
     /// Wind speed U \[m/s\].
     pub u: f64,
@@ -440,7 +440,7 @@ impl Section {
 }
 
 /// Direction of a continuation sweep.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
 pub enum SweepDirection {
     /// Increasing U.
     Up,
@@ -451,7 +451,7 @@ pub enum SweepDirection {
 }
 
 /// Progress report of a sweep, sent to the observer after each speed.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct SweepProgress {
     /// Sweep direction.
     pub direction: SweepDirection,
@@ -466,7 +466,7 @@ pub struct SweepProgress {
 }
 
 /// Upward and downward sweeps over the same speeds.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct Hysteresis {
     /// Results of the upward sweep (increasing U).
     pub up: Vec<LcoResult>,
@@ -495,7 +495,7 @@ impl Hysteresis {
 /// evaluates its coefficients: run, measure the limit cycle's ω, set K = Bω/U, re-run from
 /// the last state, until K changes by less than `tol` (relative) or after `max_iter` runs.
 /// Models whose coefficients do not depend on K are run once whatever these settings.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct KIteration {
     /// Relative change of K below which the iteration stops.
     pub tol: f64,
@@ -515,7 +515,7 @@ impl Default for KIteration {
 
 /// What to sweep: the perturbations that start the upward and (optionally) downward
 /// sweeps and the K iteration of K-dependent models.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct SweepPlan {
     /// Start of the upward sweep (and of every run after a non-LCO run): (h, α, ḣ, α̇, lag).
     pub perturbation_up: Vec<f64>,

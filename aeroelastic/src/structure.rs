@@ -15,7 +15,7 @@ use crate::error::{finite, non_negative, positive};
 use crate::{Error, Result};
 
 /// One polynomial stiffness term c·x^p added to a linear spring.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct PolyTerm {
     /// Power p ≥ 2 (3 = cubic, 5 = quintic…).
@@ -30,7 +30,7 @@ pub struct PolyTerm {
 /// the stiffness. The default ε ([`Friction::default_smoothing`]) makes that slope equal
 /// to a damping ratio of 5 on the uncoupled mode, which Dop853 integrates at ~30 steps per
 /// cycle while the friction force reaches 99 % of F_c for |v| > 2.6 ε.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Friction {
     /// Heave friction force F_c \[N/m\], ≥ 0.
@@ -59,7 +59,7 @@ impl Friction {
 /// Structural parameters of the section per unit span, SI units.
 ///
 /// Loadable from TOML ([`Structure::from_toml_str`]); unknown keys are rejected.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Structure {
     /// Mass per unit span m \[kg/m\].
@@ -96,7 +96,7 @@ pub struct Structure {
 
 /// Nondimensional description of a typical section (Hodges & Pierce notation) plus the
 /// dimensional scales needed to build a [`Structure`].
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct NondimStructure {
     /// Mass ratio μ = m / (πρb²).

@@ -61,7 +61,7 @@ pub fn wagner_jones(s: f64) -> f64 {
 ///
 /// L = ½ρU²B [K H1* ḣ/U + K H2* Bα̇/U + K² H3* α + K² H4* h/B],
 /// M = ½ρU²B² [K A1* ḣ/U + K A2* Bα̇/U + K² A3* α + K² A4* h/B].
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Derivatives {
     /// Reduced frequency K = Bω/U.

@@ -16,7 +16,7 @@ use crate::section::Section;
 use crate::{Error, Result};
 
 /// A sampled response: h \[m\] positive down, α \[rad\] positive nose-up, and their rates.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct Trajectory {
     /// Wind speed U \[m/s\].
     pub u: f64,

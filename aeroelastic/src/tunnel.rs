@@ -66,7 +66,7 @@ use crate::structure::Structure;
 use crate::{Error, Result};
 
 /// One sine component a·sin(2πf t + φ).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct Sine {
     /// Frequency f \[Hz\], > 0.
     pub freq: f64,
@@ -77,7 +77,7 @@ pub struct Sine {
 }
 
 /// Prescribed motion h(t) = Σ heave sines, α(t) = ᾱ + Σ pitch sines.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct Motion {
     /// Pitch components \[rad\].
     pub pitch: Vec<Sine>,
@@ -143,7 +143,7 @@ impl Motion {
 }
 
 /// A motion configuration of the paper's campaign (Table I).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct Configuration {
     /// Label `A`..`G`.
     pub name: String,
@@ -217,7 +217,7 @@ pub fn reconstructed_configurations() -> Vec<Configuration> {
 }
 
 /// A forced-motion campaign: configurations × pitch amplitudes × wind speeds.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct Campaign {
     /// Motion configurations.
     pub configurations: Vec<Configuration>,
@@ -303,7 +303,7 @@ impl Campaign {
 }
 
 /// One forced-motion case.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct ForcedCase {
     /// Case id (`[A-Za-z0-9._-]+`).
     pub id: String,
@@ -321,7 +321,7 @@ pub struct ForcedCase {
 /// channel (independent of the load, as a real balance), then every reading quantised to
 /// the balance's resolution. Ranges and resolutions are totals over the span [N, N·m], as a
 /// balance reads them; records per unit span get σ/span and resolution/span.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct BalanceNoise {
     /// Full range of the lift channel ±R_L \[N\] (the paper's balance: 65 N).
     pub lift_range: f64,
@@ -378,7 +378,7 @@ impl BalanceNoise {
 /// physical model and [`SensorNoise::paper`]) or relative to each record's peak force
 /// (`balance` fraction, used only when `balance_absolute` is `None`;
 /// [`SensorNoise::paper_relative`], aeroform's earlier model).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct SensorNoise {
     /// Relative balance noise: σ as a fraction of the record's peak |force| per channel
     /// (0.1 % → 1e-3); ignored when `balance_absolute` is set.
@@ -479,7 +479,7 @@ fn quantise(v: &mut [f64], step: f64) {
 }
 
 /// Mass properties of the moving model per unit span (inertial balance forces).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct RigMass {
     /// Mass m \[kg/m\].
     pub mass: f64,
@@ -513,7 +513,7 @@ impl RigMass {
 }
 
 /// Still-air runs (see the module docs).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct StillAir {
     /// Mass properties of the moving model.
     pub rig: RigMass,
@@ -525,7 +525,7 @@ pub struct StillAir {
 }
 
 /// Options of forced-motion records.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct ForcedOptions {
     /// Data-set name.
     pub name: String,
@@ -1106,7 +1106,7 @@ pub fn write(dir: &Path, manifest: &Manifest, records: &[Record]) -> Result<()> 
 }
 
 /// Options of free-response records.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct FreeOptions {
     /// Data-set name.
     pub name: String,
@@ -1192,7 +1192,7 @@ pub fn structure_spec(s: &Structure) -> Result<StructureSpec> {
 }
 
 /// Result of one free run besides the record.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct FreeRun {
     /// Wind speed \[m/s\].
     pub u: f64,

@@ -40,7 +40,7 @@ pub fn verdict_labels() -> Vec<String> {
 }
 
 /// One drawn benchmark set.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct BlindSpec {
     /// Index in the benchmark.
     pub index: usize,
@@ -77,7 +77,7 @@ pub fn draw_specs(n: usize, seed: u64) -> Vec<BlindSpec> {
 }
 
 /// What the diagnosis of one set gave.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct BlindOutcome {
     /// The drawn set.
     pub spec: BlindSpec,
@@ -121,7 +121,7 @@ impl BlindOutcome {
 }
 
 /// Acceptance statistics of a benchmark.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct BlindSummary {
     /// Sets run.
     pub n: usize,
@@ -152,7 +152,7 @@ pub struct BlindSummary {
 }
 
 /// A whole benchmark: settings, every outcome, confusion matrices and the summary.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct BlindReport {
     /// Always `aeroform-blind/1`.
     pub format: String,

@@ -40,7 +40,7 @@ use crate::effect::Effect;
 use crate::{Error, Result};
 
 /// What a blind set holds.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum BlindEffect {
     /// One catalogue effect.
@@ -63,7 +63,7 @@ impl BlindEffect {
 }
 
 /// The truth of a blind set (never read by the diagnosis).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct BlindTruth {
     /// The injected effect.
     pub effect: BlindEffect,
@@ -530,7 +530,7 @@ pub fn write_blind(dir: &Path, set: &BlindSet) -> Result<()> {
 }
 
 /// Size of an effect measured against the [`BlindEffect::None`] twin of the same seed.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct EffectSize {
     /// Forced records: rms(L − L_twin) / rms(L_twin) over all cases.
     pub forced_lift: f64,

@@ -9,7 +9,7 @@ use crate::{Error, Result};
 /// feels (or the forces the balance reports); `Structural` effects change only the
 /// structure's restoring forces, so they leave forced-motion residuals clean and show in
 /// free response only.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Level {
     /// Aerodynamic forces (including balance artefacts such as an imperfect wind–no-wind
@@ -33,7 +33,19 @@ impl Level {
 }
 
 /// A candidate unmodelled effect of the catalogue (DESIGN.md §5, fixed names).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Hash,
+    PartialOrd,
+    Ord,
+    Serialize,
+    Deserialize,
+    schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum Effect {
     /// Mean angle offset α₀ (the model sits at α + α₀ when the rig reads α): DC forces and,

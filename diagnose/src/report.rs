@@ -16,7 +16,7 @@ use crate::effect::{Effect, Level, Verdict};
 pub const FORMAT: &str = "aeroform-diagnosis/1";
 
 /// One candidate augmentation fitted on training data and scored on held-out data.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct CandidateScore {
     /// Catalogue effect.
     pub effect: Effect,
@@ -50,7 +50,7 @@ pub struct CandidateScore {
 
 /// A share of a level's held-out gap (excess residual energy) attributed to one cell of a
 /// split. The shares of one `split` sum to 1.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct WhereShare {
     /// Which split this cell belongs to: `level`, `channel`, `harmonic`, `region`,
     /// `state`.
@@ -78,7 +78,7 @@ pub struct WhereShare {
 }
 
 /// Held-out gap of one case (heat map over U × amplitude).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct CaseGap {
     /// Case id.
     pub id: String,
@@ -104,7 +104,7 @@ pub struct CaseGap {
 /// Mean residual amplitude spectrum of one channel over the held-out cases, before and
 /// after the best candidate, on a frequency axis normalised by each case's pitch
 /// frequency (forced) or in Hz (free).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct ResidualSpectrum {
     /// Level.
     pub level: Level,
@@ -121,7 +121,7 @@ pub struct ResidualSpectrum {
 }
 
 /// A residual signature test (spectral, phase, amplitude, U dependence, whiteness).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct SignatureTest {
     /// Test name (`whiteness`, `dc`, `odd_harmonics`, `even_harmonics`, `off_harmonic_line`,
     /// `amplitude_threshold`, `u_dependence`, `hysteresis`, …).
@@ -139,7 +139,7 @@ pub struct SignatureTest {
 }
 
 /// One observable of the gap, before and after the winning augmentation.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct ObservableGap {
     /// Observable (`force residual`, `pitch frequency`, `LCO pitch amplitude`, `decay
     /// rate`, `flutter speed`…).
@@ -157,7 +157,7 @@ pub struct ObservableGap {
 }
 
 /// One point of a bifurcation diagram (free response).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct BifurcationPoint {
     /// Wind speed \[m/s\].
     pub wind_speed: f64,
@@ -169,7 +169,7 @@ pub struct BifurcationPoint {
 }
 
 /// Predicted vs measured bifurcation diagram over the free runs.
-#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct Bifurcation {
     /// From the measured free response.
     pub measured: Vec<BifurcationPoint>,
@@ -180,7 +180,7 @@ pub struct Bifurcation {
 }
 
 /// How a level's held-out folds were formed (`levels[].fold_scheme` of `diagnosis.json`).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct FoldScheme {
     /// `leave_one_group_out` (each (configuration, wind speed) group is a fold: fewer
     /// groups than the requested folds), `stratified` (groups dealt to folds per
@@ -196,7 +196,7 @@ pub struct FoldScheme {
 }
 
 /// What one level (force or system) of the diagnosis found.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct LevelResult {
     /// `aerodynamic` (forced records) or `structural` (free response).
     pub level: Level,
@@ -237,7 +237,7 @@ pub struct LevelResult {
 }
 
 /// `verdict` of `diagnosis.json`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct VerdictReport {
     /// Catalogue name, `none` or `unexplained`.
     pub effect: String,
@@ -250,7 +250,7 @@ pub struct VerdictReport {
 }
 
 /// `gap` of `diagnosis.json`: the headline gap of the level that decided the verdict.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct GapReport {
     /// Metric name.
     pub metric: String,
@@ -271,7 +271,7 @@ pub struct GapReport {
 }
 
 /// The `diagnosis.json` document.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct Diagnosis {
     /// Always [`FORMAT`].
     pub format: String,

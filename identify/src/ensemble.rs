@@ -55,7 +55,7 @@ pub const DEFAULT_LEVEL: f64 = 0.9;
 const BLOCKS_WITHOUT_FORCING: usize = 20;
 
 /// Settings of [`bootstrap`].
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct EnsembleSettings {
     /// Number of members N (≥ 2).
@@ -63,6 +63,7 @@ pub struct EnsembleSettings {
     /// Master seed of every draw (written as a string: a u64 does not fit every JSON or
     /// TOML reader).
     #[serde(with = "seed_string")]
+    #[schemars(with = "String")]
     pub seed: u64,
     /// Confidence level of the intervals, in (0, 1).
     pub level: f64,
@@ -126,7 +127,7 @@ mod seed_string {
 }
 
 /// A percentile interval of an ensemble of values.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct Interval {
     /// Median of the members.
     pub median: f64,
@@ -177,7 +178,7 @@ pub fn quantile_sorted(sorted: &[f64], p: f64) -> f64 {
 }
 
 /// Ensemble of one force of one case.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct ForceEnsemble {
     /// The re-fitted support (term names, library order).
     pub support: Vec<String>,
@@ -192,7 +193,7 @@ pub struct ForceEnsemble {
 }
 
 /// Ensemble of one case.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct CaseEnsemble {
     /// Case id.
     pub id: String,
@@ -207,7 +208,7 @@ pub struct CaseEnsemble {
 }
 
 /// The optional `ensemble` section of `identification.json` (DATA_FORMAT.md).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct Ensemble {
     /// Always `block_bootstrap` (the resampling scheme of this module).
     pub method: String,

@@ -96,7 +96,7 @@ impl Eq19Values {
 /// Eq. 19 values of the moment: A1*..A4*, N1*..N3* (JSON keys `A1`…`N3`, `null` when not
 /// identifiable).
 #[allow(non_snake_case)]
-#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct MomentEq19 {
     /// A1* (heave rate, K_h).
     pub A1: Option<f64>,
@@ -116,7 +116,7 @@ pub struct MomentEq19 {
 
 /// Eq. 19 values of the lift: H1*..H4*, N1*..N3* (JSON keys `H1`…`N3`).
 #[allow(non_snake_case)]
-#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct LiftEq19 {
     /// H1* (heave rate, K_h).
     pub H1: Option<f64>,

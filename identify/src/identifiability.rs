@@ -40,7 +40,7 @@ pub const DEFAULT_NEAR_TOL: f64 = 1e-6;
 const NEGLIGIBLE: f64 = 1e-6;
 
 /// Tolerances of the rank test.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct RankOptions {
     /// Relative tolerance for exact dependencies (σ < tol·σ_max).
     pub tol: f64,
@@ -80,7 +80,9 @@ impl RankOptions {
 }
 
 /// How the regression basis is chosen.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum BasisMode {
     /// Drop dependent terms greedily in the priority order (the default).
@@ -117,7 +119,7 @@ pub fn priority_order(lib: &Library) -> Vec<usize> {
 
 /// A linear dependency among library terms: `term = Σ c_k terms_k` in the unscaled
 /// variables of the library, up to a relative residual.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct Dependency {
     /// The dependent term.
     pub term: String,
@@ -172,7 +174,7 @@ pub(crate) fn fmt_sig(x: f64, sig: usize) -> String {
 }
 
 /// Identifiability of one case's library.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct CaseIdentifiability {
     /// Case id (or group name).
     pub case: String,

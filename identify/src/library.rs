@@ -22,7 +22,9 @@ pub const EVAL_BLOCK: usize = 4096;
 pub const VARIABLES: [&str; 4] = ["alpha", "alpha_dot", "h", "h_dot"];
 
 /// Which polynomial library to use.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum LibraryKind {
     /// Every monomial of degree 1–3 in the four variables: 4 + 10 + 20 = 34 terms.

@@ -65,7 +65,7 @@ pub fn r_squared_from_sums(ss_res: f64, ss_tot: f64) -> f64 {
 }
 
 /// A candidate tone f = |m f_α + n f_h| \[Hz\].
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct Tone {
     /// Frequency \[Hz\].
     pub freq: f64,

@@ -32,7 +32,9 @@ use crate::{Error, Result};
 pub const FORMAT: &str = "aeroform-identification/1";
 
 /// How cases are grouped for group STLSQ (one support shared by a group).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum GroupBy {
     /// By motion configuration (`config` in the manifest; cases without one form the group
@@ -48,7 +50,7 @@ pub enum GroupBy {
 }
 
 /// Which sparse optimiser runs along the δ path.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case", tag = "kind")]
 pub enum RegressorChoice {
     /// (Group) STLSQ on the column-normalised basis (default).
@@ -62,7 +64,7 @@ pub enum RegressorChoice {
 }
 
 /// Every option of [`identify`] that changes the result.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct IdentifySettings {
     /// Candidate library.
@@ -263,6 +265,21 @@ impl Serialize for TermMap {
     }
 }
 
+impl schemars::JsonSchema for TermMap {
+    fn schema_name() -> std::borrow::Cow<'static, str> {
+        "TermMap".into()
+    }
+
+    fn json_schema(g: &mut schemars::SchemaGenerator) -> schemars::Schema {
+        let mut s = <std::collections::BTreeMap<String, Option<f64>>>::json_schema(g);
+        s.insert(
+            "description".into(),
+            "Library term name → raw nondimensional coefficient, in library order; null for a term outside the identifiable basis.".into(),
+        );
+        s
+    }
+}
+
 impl<'de> Deserialize<'de> for TermMap {
     fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
         struct V;
@@ -290,7 +307,7 @@ impl<'de> Deserialize<'de> for TermMap {
 }
 
 /// Identification of one force of one case.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct ForceResult<E> {
     /// Raw nondimensional coefficient of every library term (null = not identifiable,
     /// 0 = removed by the sparse regression).
@@ -315,7 +332,7 @@ pub struct ForceResult<E> {
 }
 
 /// Identification of one case.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct CaseResult {
     /// Case id.
     pub id: String,
@@ -342,7 +359,7 @@ pub struct CaseResult {
 }
 
 /// One support of a δ path, summarised.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct PathEntry {
     /// Number of terms.
     pub n_terms: usize,
@@ -355,7 +372,7 @@ pub struct PathEntry {
 }
 
 /// Group result of one force.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct GroupForce {
     /// Selected support (term names, library order).
     pub support: Vec<String>,
@@ -376,7 +393,7 @@ pub struct GroupForce {
 }
 
 /// One group.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct GroupResult {
     /// Group name.
     pub name: String,
@@ -391,7 +408,7 @@ pub struct GroupResult {
 }
 
 /// Library summary.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct LibraryInfo {
     /// Term names in column order.
     pub terms: Vec<String>,
@@ -406,7 +423,7 @@ pub struct LibraryInfo {
 }
 
 /// The content of `identification.json` (DATA_FORMAT.md).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct Identification {
     /// Always [`FORMAT`].
     pub format: String,

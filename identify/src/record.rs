@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 use crate::{Error, Result};
 
 /// Geometry and air of the section model (manifest `[section]`), SI.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct Section {
     /// Chord (deck width) B \[m\].
     pub chord: f64,
@@ -20,7 +20,7 @@ pub struct Section {
 }
 
 /// Kind of a record: prescribed (forced) motion, or free response on springs.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum CaseKind {
     /// Prescribed motion; `lift` and `moment` are required.
@@ -30,7 +30,7 @@ pub enum CaseKind {
 }
 
 /// Descriptors of a case from the manifest, converted to SI.
-#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct CaseMeta {
     /// Unique case id (`[A-Za-z0-9._-]+`).
     pub id: String,
@@ -115,7 +115,7 @@ pub struct PreparedCase {
 }
 
 /// Forcing frequencies of a forced-motion case \[Hz\].
-#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct Forcing {
     /// Pitch forcing frequency f_α \[Hz\].
     pub pitch: Option<f64>,

@@ -15,7 +15,7 @@ pub const FORMAT: &str = "aeroform-case-series/1";
 
 /// Measured and model series of one case (SI time, degrees and millimetres for the motion,
 /// nondimensional forces C_L = L/(½ρU²B) positive down, C_M = M/(½ρU²B²) positive nose-up).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct CaseSeries {
     /// Format tag ([`FORMAT`]).
     pub format: String,

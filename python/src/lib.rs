@@ -349,9 +349,9 @@ fn flutter(
             let e = pair
                 .flutter_ensemble(&model, method, &speeds, Some(n))
                 .map_err(|e| format!("ensemble flutter analysis: {e}"))?;
-            doc["ensemble"] = serde_json::to_value(&e).map_err(|e| e.to_string())?;
+            doc.ensemble = Some(e);
         }
-        Ok::<_, String>(doc.to_string())
+        Ok::<_, String>(doc.to_value().to_string())
     })
     .map_err(err)
 }
@@ -408,7 +408,7 @@ fn lco(
             }
             (None, None) => unreachable!("checked above"),
         };
-        Ok::<_, String>(doc.to_string())
+        Ok::<_, String>(doc.to_value().to_string())
     })
     .map_err(err)
 }
@@ -457,7 +457,7 @@ fn branch(
             &set,
             &dist,
         );
-        Ok::<_, String>((doc.to_string(), branch_csv(&set)))
+        Ok::<_, String>((doc.to_value().to_string(), branch_csv(&set)))
     })
     .map_err(err)
 }

@@ -4,19 +4,17 @@
 use std::path::Path;
 use std::time::Instant;
 
-use aeroelastic::ensemble::{flutter_ensemble, lco_ensemble, FlutterEnsemble, LcoEnsemble};
-use aeroelastic::flutter::{FlutterAnalysis, FlutterMethod, FlutterOptions};
+use aeroelastic::ensemble::{flutter_ensemble, lco_ensemble, LcoEnsemble};
+use aeroelastic::flutter::{FlutterMethod, FlutterOptions};
 use aeroelastic::lco::{Classification, KIteration, LcoOptions, LcoResult, SweepPlan};
-use aeroelastic::trajectory::Trajectory;
 use anyhow::Context;
 use identify::pipeline::Identification;
 use identify::series::{case_series, SeriesOptions};
-use serde::{Deserialize, Serialize};
 
 use super::build;
 use super::files::{ensure_dir, num, write_json, write_text, Csv};
 use super::paper::{self, PaperFigures};
-use super::spec::{FlutterReference, Study};
+use super::spec::Study;
 use crate::progress::CountBar;
 use crate::progress::IdentifyBar;
 
@@ -64,59 +62,7 @@ pub mod names {
     pub const REPORT: &str = "report.html";
 }
 
-/// One flutter analysis as saved in `flutter.json`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct FlutterRun {
-    /// Label.
-    pub label: String,
-    /// Aerodynamic model name of the study (`theodorsen`, …).
-    pub model: String,
-    /// Semi-chord b \[m\].
-    pub semi_chord: f64,
-    /// ω_α [rad/s].
-    pub omega_alpha: f64,
-    /// The analysis.
-    pub analysis: FlutterAnalysis,
-    /// Published values.
-    pub reference: Option<FlutterReference>,
-    /// Intervals over the bootstrap members of the identified law (`[identify] ensemble`,
-    /// runs of the `identified` model only).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub ensemble: Option<FlutterEnsemble>,
-}
-
-/// The LCO stage as saved in `lco.json`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct LcoStage {
-    /// Model description.
-    pub model: String,
-    /// Semi-chord b \[m\].
-    pub semi_chord: f64,
-    /// ω_α [rad/s].
-    pub omega_alpha: f64,
-    /// Linear flutter speed of the same model [m/s], if a flutter run of it exists.
-    pub flutter_speed: Option<f64>,
-    /// Upward sweep, increasing U.
-    pub up: Vec<LcoResult>,
-    /// Downward sweep, increasing U (empty without `up_down`).
-    pub down: Vec<LcoResult>,
-    /// Trajectories of the phase portraits.
-    pub phase: Vec<Trajectory>,
-    /// Linear flutter speed of the truth model [m/s] (`compare_truth`).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub truth_flutter_speed: Option<f64>,
-    /// Upward sweep of the truth model of `[data.virtual]` (`compare_truth`).
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub truth_up: Vec<LcoResult>,
-    /// Downward sweep of the truth model, increasing U (`compare_truth`).
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub truth_down: Vec<LcoResult>,
-    /// LCO amplitude intervals over the bootstrap members of the identified law at every
-    /// speed of the sweep (`[identify] ensemble` with the `identified` model), each member
-    /// run from the upward sweep's perturbation.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub ensemble: Option<LcoEnsemble>,
-}
+pub use aeroform::documents::{FlutterRun, LcoStage};
 
 /// Wall time of each stage \[s\].
 pub type Timings = Vec<(&'static str, f64)>;
@@ -302,15 +248,13 @@ fn identify_stage(
                 .unwrap_or_else(|_| t.replace(|c: char| !c.is_ascii_alphanumeric(), "_"))
         })
         .collect();
-    let columns: Vec<serde_json::Value> = safe
+    let columns: Vec<aeroform::documents::CoefficientColumn> = safe
         .iter()
         .zip(&id.library.terms)
-        .map(|(s, t)| {
-            serde_json::json!({
-                "column": s,
-                "term": t,
-                "display": plots::adapters::term_label(t),
-            })
+        .map(|(s, t)| aeroform::documents::CoefficientColumn {
+            column: s.clone(),
+            term: t.clone(),
+            display: plots::adapters::term_label(t),
         })
         .collect();
     write_json(&out.join(names::COEFFICIENT_COLUMNS), &columns)?;
@@ -1003,7 +947,7 @@ fn branch_stage(
         &set,
         &dist,
     );
-    write_text(&out.join(names::BRANCH), &format!("{doc:#}\n"))?;
+    write_text(&out.join(names::BRANCH), &format!("{:#}\n", doc.to_value()))?;
     write_text(
         &out.join(names::BRANCH_CSV),
         &aeroelastic::documents::branch_csv(&set),

@@ -401,14 +401,14 @@ fn four() -> usize {
 }
 
 /// Published values a flutter run is compared with.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct FlutterReference {
-    /// U_F/(bω_α).
+    /// Published reduced flutter speed U_F/(bω_α), b the semi-chord.
     pub u_reduced: Option<f64>,
-    /// ω_F/ω_α.
+    /// Published flutter frequency ratio ω_F/ω_α.
     pub omega_ratio: Option<f64>,
-    /// U_D/(bω_α).
+    /// Published reduced divergence speed U_D/(bω_α).
     pub divergence: Option<f64>,
 }
 

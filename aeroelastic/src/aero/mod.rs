@@ -32,7 +32,7 @@ use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
 /// Flow condition: air density ρ \[kg/m³\] and wind speed U \[m/s\].
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct Flow {
     /// Air density ρ \[kg/m³\].
     pub rho: f64,

@@ -11,7 +11,7 @@ use super::{AeroModel, Flow};
 use crate::{Error, Result};
 
 /// Force channel of a nonlinear term.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
 pub enum Channel {
     /// Adds to C_L = L / (½ρU²B) (L positive down).
     Lift,
@@ -20,7 +20,7 @@ pub enum Channel {
 }
 
 /// Coefficient of a nonlinear term.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub enum Coefficient {
     /// A plain nondimensional coefficient (terms outside Eq. 19).
     Constant(f64),
@@ -73,7 +73,7 @@ impl Coefficient {
 }
 
 /// One polynomial term c · α^p₀ (Bα̇/U)^p₁ (h/B)^p₂ (ḣ/U)^p₃ added to C_L or C_M.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct NonlinearTerm {
     /// Channel (C_L or C_M).

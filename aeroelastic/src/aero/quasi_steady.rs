@@ -9,7 +9,7 @@ use crate::error::{finite, positive};
 use crate::Result;
 
 /// Which quasi-steady variant.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
 pub enum QuasiSteadyKind {
     /// Steady aerodynamics: L↑ = 2πρU²b α, M = (½+a) b L↑ — the angle of attack is the
     /// pitch angle only (Hodges & Pierce §5.3 "steady-flow theory"); no damping terms.
@@ -21,7 +21,7 @@ pub enum QuasiSteadyKind {
 
 /// Steady / quasi-steady thin aerofoil about an elastic axis at `a` semi-chords aft of
 /// mid-chord, optionally with the noncirculatory (apparent-mass and πρb²Uα̇) terms.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct QuasiSteady {
     /// Chord B \[m\].

@@ -35,7 +35,7 @@ use crate::theodorsen::JONES_LAGS;
 use crate::Result;
 
 /// Beddoes–Leishman-type dynamic-stall model of a thin plate (see the module docs).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct DynamicStallAero {
     /// Chord B \[m\].

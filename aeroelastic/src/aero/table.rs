@@ -20,7 +20,7 @@ use crate::{Error, Result};
 /// minimising the weighted least-squares misfit; for fixed γ the A's are linear least
 /// squares over the tabulated K (real and imaginary parts stacked, each K weighted by
 /// 1/‖Q(K)‖_F so that the fit is relative at every K).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct RfaFit {
     /// Lag roots γ_j (nondimensional, in units of U/B).
     pub lags: Vec<f64>,

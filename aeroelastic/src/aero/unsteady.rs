@@ -18,7 +18,7 @@ use crate::Result;
 ///   ẋ_i = (U/b)(w − β_i x_i), (A, β) = Jones' (0.165, 0.0455), (0.335, 0.3); its transfer
 ///   function is exactly [`crate::theodorsen::theodorsen_jones`] and its indicial response
 ///   Wagner's function in Jones' form. Two lag states; x_i carry units of w \[m/s\].
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct TheodorsenAero {
     /// Chord B \[m\].

@@ -10,7 +10,9 @@ use serde::{Deserialize, Serialize};
 use super::units::UnitName;
 
 /// Positive direction of a translation (heave `h`) or a force (`lift`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "lowercase")]
 pub enum Linear {
     /// Positive downward (Scanlan), `"down"`.
@@ -21,7 +23,9 @@ pub enum Linear {
 }
 
 /// Positive direction of a rotation (pitch `alpha`) or a moment (`moment`).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "kebab-case")]
 pub enum Angular {
     /// Positive nose-up (Scanlan), `"nose-up"`.
@@ -80,7 +84,9 @@ impl Angular {
 ///
 /// `Default` is Scanlan's (DESIGN.md §2): h and lift down, α and moment nose-up. The reader
 /// multiplies each column by [`Linear::sign`] / [`Angular::sign`]; the writer divides.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize, schemars::JsonSchema,
+)]
 pub struct Convention {
     /// Positive direction of `h`.
     pub heave: Linear,

@@ -3,7 +3,9 @@
 use serde::{Deserialize, Serialize};
 
 /// Unit of the heave column `h`. Heave is positive down.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize, schemars::JsonSchema,
+)]
 pub enum LengthUnit {
     /// Metre, `"m"`.
     #[default]
@@ -14,7 +16,9 @@ pub enum LengthUnit {
 
 /// Unit of the pitch column `alpha` and of the manifest's `amplitude` and `mean_pitch`.
 /// Pitch is positive nose-up.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize, schemars::JsonSchema,
+)]
 pub enum AngleUnit {
     /// Radian, `"rad"`.
     #[default]
@@ -24,7 +28,9 @@ pub enum AngleUnit {
 }
 
 /// Unit of the lift column `lift`. Lift is positive down.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize, schemars::JsonSchema,
+)]
 pub enum ForceUnit {
     /// Newton, total over the span of the model, `"N"` (divided by `section.span` on reading).
     N,
@@ -34,7 +40,9 @@ pub enum ForceUnit {
 }
 
 /// Unit of the moment column `moment` (about the elastic axis, positive nose-up).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize, schemars::JsonSchema,
+)]
 pub enum MomentUnit {
     /// Newton metre, total over the span of the model, `"N*m"` (divided by `section.span`).
     Nm,
@@ -47,7 +55,9 @@ pub enum MomentUnit {
 /// required). Time is always in seconds.
 ///
 /// `Default` is SI per unit span (m, rad, N/m, N·m/m).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, Default, Serialize, Deserialize, schemars::JsonSchema,
+)]
 pub struct Units {
     /// Unit of `h`.
     pub heave: LengthUnit,

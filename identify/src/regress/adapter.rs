@@ -15,7 +15,7 @@ use crate::{Error, Result};
 
 /// Options of the pysindy-compatible mode (pysindy `STLSQ(alpha, max_iter, unbias)`; the
 /// threshold comes from the δ grid).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct PysindyOptions {
     /// Ridge parameter on raw columns (pysindy default 0.05).
     pub alpha: f64,

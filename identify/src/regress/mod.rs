@@ -55,7 +55,9 @@ pub fn bools_to_mask(b: &[bool]) -> Mask {
 }
 
 /// What a threshold δ is compared with.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum Measure {
     /// Scale-free contribution of a term relative to the target, ‖ξ_j θ_j‖₂ / ‖y‖₂ (the
@@ -67,7 +69,9 @@ pub enum Measure {
 }
 
 /// How the measures of a term over the cases of a group decide its removal (Alg. 2).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, Default, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum GroupRule {
     /// Remove when the root mean square over cases of the measure is < δ (default).
@@ -173,7 +177,7 @@ pub trait SparseRegressor: Sync {
 }
 
 /// Sequentially thresholded least squares (paper Alg. 1; Alg. 2 for a group of cases).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct Stlsq {
     /// Threshold δ on the measure.
     pub threshold: f64,
@@ -251,7 +255,9 @@ impl SparseRegressor for Stlsq {
 }
 
 /// Plain least squares on the whole basis (no sparsification).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, schemars::JsonSchema,
+)]
 pub struct LeastSquares;
 
 impl SparseRegressor for LeastSquares {

@@ -27,7 +27,7 @@ use super::{fit_group, mask_to_vec, CaseProblem, FitCache, GroupFit, Mask, Measu
 use crate::{Error, Result};
 
 /// Options of the δ path.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct PathOptions {
     /// Number of δ values (log grid).
     pub n_delta: usize,
@@ -177,7 +177,7 @@ impl KeyProjection {
 }
 
 /// One distinct support on the path.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct PathSupport {
     /// Library columns, ascending.
     pub support: Vec<usize>,
@@ -193,7 +193,7 @@ pub struct PathSupport {
 }
 
 /// A whole δ path of one group and target.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct DeltaPath {
     /// The δ grid.
     pub deltas: Vec<f64>,
