@@ -92,7 +92,9 @@ pub struct IdentifiedOptions {
 }
 
 /// Continuation of an identified derivative outside the K range of its cases (the tails).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, schemars::JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum Extrapolation {
     /// Q entry K²d continued by the straight line through its two end nodes up to the
