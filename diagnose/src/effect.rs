@@ -171,22 +171,30 @@ pub enum Verdict {
     None,
     /// A significant gap that no candidate removes.
     Unexplained,
+    /// A significant free-response gap that lies where the sim's tables are extrapolated
+    /// (free runs outside the K or amplitude range of the forced cases, covered runs
+    /// clean): a campaign to extend, not an unmodelled effect.
+    Extrapolation,
 }
 
 impl Verdict {
-    /// `verdict.effect` of `diagnosis.json`: a catalogue name, `none` or `unexplained`.
+    /// `verdict.effect` of `diagnosis.json`: a catalogue name, `none`, `unexplained` or
+    /// `extrapolation`.
     pub fn name(self) -> &'static str {
         match self {
             Verdict::Effect(e) => e.name(),
             Verdict::None => "none",
             Verdict::Unexplained => "unexplained",
+            Verdict::Extrapolation => "extrapolation",
         }
     }
 
-    /// `verdict.level` of `diagnosis.json`.
+    /// `verdict.level` of `diagnosis.json` (`structural` for `extrapolation`: a
+    /// free-response finding).
     pub fn level(self) -> Level {
         match self {
             Verdict::Effect(e) => e.level(),
+            Verdict::Extrapolation => Level::Structural,
             _ => Level::None,
         }
     }
@@ -199,6 +207,7 @@ impl Verdict {
         match name {
             "none" => Ok(Verdict::None),
             "unexplained" => Ok(Verdict::Unexplained),
+            "extrapolation" => Ok(Verdict::Extrapolation),
             _ => Effect::from_name(name).map(Verdict::Effect),
         }
     }

@@ -234,6 +234,106 @@ pub struct LevelResult {
     /// How the held-out folds were formed.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub fold_scheme: Option<FoldScheme>,
+    /// System level with a forced campaign: each free run's response against the K and
+    /// amplitude range the forced cases identified (verdict `extrapolation` when the gap
+    /// lies outside it).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub coverage: Option<Coverage>,
+}
+
+/// Free runs against the range the forced campaign identified (`levels[].coverage`).
+///
+/// A run's response reduced frequency per DOF is K = B·2πf/U with f its dominant
+/// frequency of that DOF (B the full chord); it is *covered* when K lies within the K range
+/// of the forced cases that identified that DOF's derivatives (K_h for H1, H4, A1, A4;
+/// K_α for H2, H3, A2, A3), widened by [`Coverage::margin`], and its pitch amplitude does
+/// not exceed the largest forced pitch amplitude by more than that margin. Still-air runs
+/// (U = 0) have no aerodynamic force and are always covered.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct Coverage {
+    /// K_h range [min, max] of the forced cases.
+    pub k_h_range: [f64; 2],
+    /// K_α range [min, max] of the forced cases.
+    pub k_alpha_range: [f64; 2],
+    /// Pitch amplitude range [min, max] of the forced cases \[deg\].
+    pub amplitude_alpha_deg_range: [f64; 2],
+    /// Relative widening of the ranges before a run counts as outside (0.1).
+    pub margin: f64,
+    /// Every free run.
+    pub runs: Vec<RunCoverage>,
+    /// Share of the level's excess residual energy (gap² − noise², summed over runs) in the
+    /// runs that leave the range.
+    pub extrapolated_share: f64,
+    /// Gap statistic (gap / noise level, as the level's test) over the covered runs alone;
+    /// `None` when no run is covered.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub covered_gap_statistic: Option<f64>,
+    /// The level's gap with the derivative tables continued by straight lines beyond the
+    /// forced range (the default sim), and its statistic (gap / noise level).
+    pub linear_before: f64,
+    /// Gap statistic of `linear_before`.
+    pub linear_gap_statistic: f64,
+    /// The level's gap with the derivative tables continued by Theodorsen-shaped tails
+    /// instead of straight lines (`None` when no run leaves the range).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tails_before: Option<f64>,
+    /// 1 − tails_before / linear_before: how far the physically consistent extrapolation
+    /// shrinks the gap.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tails_shrink: Option<f64>,
+    /// Which tables the level's gap and candidates use: `linear` or `theodorsen_tails` (the
+    /// tails when runs leave the range and the tails give the smaller gap).
+    pub sim_tables: String,
+    /// Whether the gap is put down to extrapolation (verdict `extrapolation`): the linear
+    /// sim's gap is significant, the runs outside the range carry at least half of its
+    /// excess, and either the covered runs alone are clean or, with no run covered, the
+    /// tails leave no significant gap.
+    pub explains_gap: bool,
+    /// Forced cases that would cover the runs outside the range.
+    pub suggestions: Vec<SuggestedCase>,
+}
+
+/// One free run against the forced range.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct RunCoverage {
+    /// Run id.
+    pub id: String,
+    /// Wind speed U \[m/s\].
+    pub wind_speed: f64,
+    /// Response K of heave, B·2πf_h/U (`None` at U = 0 or without heave motion).
+    pub k_h: Option<f64>,
+    /// Response K of pitch, B·2πf_α/U (`None` at U = 0 or without pitch motion).
+    pub k_alpha: Option<f64>,
+    /// Largest |α| over the scored part of the run \[deg\].
+    pub amplitude_alpha_deg: f64,
+    /// Largest |h| over the scored part of the run \[m\].
+    pub amplitude_h_m: f64,
+    /// Whether the run lies inside the forced range (K of both DOFs and amplitude).
+    pub covered: bool,
+    /// What leaves the range, e.g. `K_h 1.21 above 0.79`; empty when covered.
+    pub outside: Vec<String>,
+    /// The run's held-out gap (as `cases[].before`).
+    pub before: f64,
+}
+
+/// A forced case that would bring a run's response inside the identified range: same
+/// configuration and forcing frequency, the wind speed that gives the run's K.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct SuggestedCase {
+    /// The free run it covers.
+    pub run: String,
+    /// `heave` or `pitch`: which derivatives it identifies.
+    pub dof: String,
+    /// Configuration (group) of the forced cases whose forcing frequency is used.
+    pub configuration: String,
+    /// Forcing frequency of that configuration \[Hz\].
+    pub frequency_hz: f64,
+    /// Wind speed U = B·2πf/K \[m/s\].
+    pub wind_speed: f64,
+    /// Pitch amplitude to force \[deg\] (the run's).
+    pub amplitude_alpha_deg: f64,
+    /// The K it reaches.
+    pub k: f64,
 }
 
 /// `verdict` of `diagnosis.json`.

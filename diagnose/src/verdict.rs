@@ -9,6 +9,9 @@
 //!    so naming one would force a name on a gap no candidate explains.
 //! 2. **System level.** With a clean force level, a significant free-response gap is named
 //!    by the best system-level candidate under the same rule, else `unexplained`.
+//!    Before any candidate is named, a gap that lies where the sim is extrapolated is
+//!    `extrapolation` ([`crate::report::Coverage::explains_gap`]: the free runs outside
+//!    the forced K/amplitude range carry most of it and the covered runs are clean).
 //! 3. Otherwise `none`.
 //!
 //! Shrink is reported two ways. `shrink` = 1 − after/before (DATA_FORMAT.md), whose best
@@ -123,6 +126,51 @@ fn effect_confidence(level: &LevelResult, best_idx: usize, shrink: f64) -> f64 {
 /// Decides one level with a significant gap.
 fn decide_level(levels: &[LevelResult], li: usize, rules: &VerdictRules) -> Decision {
     let level = &levels[li];
+    if let Some(cov) = &level.coverage {
+        let tails = cov
+            .tails_before
+            .map(|t| excess_shrink(cov.linear_before, t, level.noise_level));
+        if cov.explains_gap {
+            let outside: Vec<&str> = cov
+                .runs
+                .iter()
+                .filter(|r| !r.covered)
+                .map(|r| r.id.as_str())
+                .collect();
+            let covered = match cov.covered_gap_statistic {
+                Some(s) => format!(
+                    "the covered runs alone are at {s:.2}× noise (threshold {:.2})",
+                    level.gap_threshold
+                ),
+                None => "no run is covered".to_string(),
+            };
+            let tail = match (cov.tails_before, tails) {
+                (Some(t), Some(x)) => format!(
+                    "; Theodorsen-shaped tails instead of straight lines give {t:.4} (excess \
+                     shrink {:.0} %)",
+                    100.0 * x
+                ),
+                _ => String::new(),
+            };
+            return Decision {
+                verdict: Verdict::Extrapolation,
+                confidence: cov.extrapolated_share.clamp(0.0, 1.0),
+                reason: format!(
+                    "{} held-out gap {:.4} is {:.1}× its noise level {:.4}, {:.0} % of its \
+                     excess in {} run(s) outside the forced K/amplitude range ({}); {covered}{tail}",
+                    level.level.name(),
+                    cov.linear_before,
+                    cov.linear_gap_statistic,
+                    level.noise_level,
+                    100.0 * cov.extrapolated_share,
+                    outside.len(),
+                    outside.join(", "),
+                ),
+                level: Some(li),
+                candidate: None,
+            };
+        }
+    }
     match best_candidate(level) {
         Some((ci, c, shrink)) if shrink >= rules.min_excess_shrink => Decision {
             verdict: Verdict::Effect(c.effect),
@@ -170,10 +218,10 @@ fn decide_level(levels: &[LevelResult], li: usize, rules: &VerdictRules) -> Deci
 pub fn decide(levels: &[LevelResult], rules: &VerdictRules) -> Decision {
     let order = [Level::Aerodynamic, Level::Structural];
     for want in order {
-        if let Some(li) = levels
-            .iter()
-            .position(|l| l.level == want && l.significant_gap)
-        {
+        if let Some(li) = levels.iter().position(|l| {
+            l.level == want
+                && (l.significant_gap || l.coverage.as_ref().is_some_and(|c| c.explains_gap))
+        }) {
             return decide_level(levels, li, rules);
         }
     }
@@ -381,6 +429,7 @@ mod tests {
             observables: vec![],
             bifurcation: None,
             fold_scheme: None,
+            coverage: None,
         }
     }
 

@@ -200,6 +200,7 @@ fn aero_level() -> LevelResult {
         }],
         bifurcation: None,
         fold_scheme: None,
+        coverage: None,
     }
 }
 
@@ -304,6 +305,7 @@ fn structural_level() -> LevelResult {
                 .collect(),
         }),
         fold_scheme: None,
+        coverage: None,
     }
 }
 

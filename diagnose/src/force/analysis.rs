@@ -141,6 +141,7 @@ pub(crate) fn assemble(
         observables,
         bifurcation: None,
         fold_scheme: None,
+        coverage: None,
     }
 }
 

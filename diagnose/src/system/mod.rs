@@ -10,6 +10,7 @@ pub mod residual;
 
 mod analysis;
 mod candidates;
+pub mod coverage;
 mod simulate;
 
 use std::sync::Arc;
@@ -135,6 +136,14 @@ impl SystemOptions {
 /// [`Error::Aeroelastic`] naming the data set when preprocessing, identification or the
 /// law fails.
 pub fn sim_law(forced: &Dataset, opts: &SystemOptions) -> Result<IdentifiedLaw> {
+    sim_identification(forced, opts).map(|(_, law)| law)
+}
+
+/// [`sim_law`] together with the identification it was built from.
+fn sim_identification(
+    forced: &Dataset,
+    opts: &SystemOptions,
+) -> Result<(identify::pipeline::Identification, IdentifiedLaw)> {
     let name = forced.manifest.name.clone();
     if !forced.records.iter().any(|r| r.kind == CaseKind::Forced) {
         return Err(Error::data(
@@ -146,8 +155,12 @@ pub fn sim_law(forced: &Dataset, opts: &SystemOptions) -> Result<IdentifiedLaw> 
         .map_err(|e| Error::identify(format!("data set `{name}`: preprocessing"), e))?;
     let id = identify(&prepared.cases, &opts.identify, &name, &|_| {})
         .map_err(|e| Error::identify(format!("data set `{name}`: identification"), e))?;
-    IdentifiedLaw::from_identification(&id, &IdentifiedOptions::new(forced.manifest.section.chord))
-        .map_err(|e| Error::aeroelastic(format!("data set `{name}`: identified law"), e))
+    let law = IdentifiedLaw::from_identification(
+        &id,
+        &IdentifiedOptions::new(forced.manifest.section.chord),
+    )
+    .map_err(|e| Error::aeroelastic(format!("data set `{name}`: identified law"), e))?;
+    Ok((id, law))
 }
 
 /// Prepared free runs of a data set for a given aerodynamic model.
@@ -207,11 +220,59 @@ pub(crate) fn prepare_free(
 ///
 /// # Errors
 /// As [`sim_law`] and [`system_level_with_model`].
+///
+/// Adds the level's [`crate::report::Coverage`]: each free run's response K and amplitude
+/// against the forced range ([`coverage::ForcedRange`]) and, when runs leave it, the gap
+/// with the tables continued by Theodorsen-shaped tails
+/// ([`aeroelastic::identified::Extrapolation::Theodorsen`]) instead of straight lines.
 pub fn system_level(forced: &Dataset, free: &Dataset, opts: &SystemOptions) -> Result<LevelResult> {
     opts.check()?;
-    let law = sim_law(forced, opts)?;
+    let (id, law) = sim_identification(forced, opts)?;
     let model: Arc<dyn AeroModel> = Arc::new(law.model().clone());
-    system_level_with_model(&model, free, opts)
+    let (mut level, p) = level_and_runs(&model, free, opts)?;
+    let chord = forced.manifest.section.chord;
+    let range = coverage::ForcedRange::new(&id, forced, chord);
+    let before: Vec<f64> = level.cases.iter().map(|c| c.before).collect();
+    let noise: Vec<f64> = level.cases.iter().map(|c| c.noise_level).collect();
+    let mut cov = coverage::assess(&range, &p.runs, &before, &noise);
+    cov.linear_before = level.before;
+    cov.linear_gap_statistic = level.gap_statistic;
+    if cov.any_outside() {
+        let tails_opts = IdentifiedOptions {
+            extrapolation: aeroelastic::identified::Extrapolation::Theodorsen,
+            ..IdentifiedOptions::new(chord)
+        };
+        // a failure here only leaves the tails unreported
+        if let Ok(tails) = IdentifiedLaw::from_identification(&id, &tails_opts) {
+            let tm: Arc<dyn AeroModel> = Arc::new(tails.model().clone());
+            if let Ok((tl, _)) = level_and_runs(&tm, free, opts) {
+                if tl.before.is_finite() {
+                    cov.tails_before = Some(tl.before);
+                    cov.tails_shrink = Some(crate::verdict::plain_shrink(level.before, tl.before));
+                    cov.decide(level.gap_threshold, level.noise_level);
+                    if tl.before < level.before {
+                        // the physically consistent extrapolation is the better sim: its
+                        // remaining gap is what the candidates are asked to explain
+                        level = tl;
+                        cov.sim_tables = "theodorsen_tails".into();
+                    }
+                }
+            }
+        }
+    }
+    cov.decide(level.gap_threshold, level.noise_level);
+    level.coverage = Some(cov);
+    Ok(level)
+}
+
+/// Mean over runs of per-DOF energies.
+fn mean2(v: &[[f64; 2]]) -> [f64; 2] {
+    let mut m = [0.0; 2];
+    for e in v {
+        m[0] += e[0] / v.len() as f64;
+        m[1] += e[1] / v.len() as f64;
+    }
+    m
 }
 
 /// Fold of each run: leave one run out (`folds` = 0 or ≥ the number of runs), else a
@@ -316,6 +377,15 @@ pub fn system_level_with_model(
     free: &Dataset,
     opts: &SystemOptions,
 ) -> Result<LevelResult> {
+    level_and_runs(model, free, opts).map(|(level, _)| level)
+}
+
+/// [`system_level_with_model`] and the prepared runs it scored.
+fn level_and_runs(
+    model: &Arc<dyn AeroModel>,
+    free: &Dataset,
+    opts: &SystemOptions,
+) -> Result<(LevelResult, Prepared)> {
     opts.check()?;
     let p = prepare_free(free, model, opts)?;
     let runs = &p.runs;
@@ -323,14 +393,6 @@ pub fn system_level_with_model(
     let rho = free.manifest.section.air_density;
     let chord = model.chord();
     let folds = fold_of(n, opts.folds, opts.seed);
-    let mean2 = |v: &[[f64; 2]]| -> [f64; 2] {
-        let mut m = [0.0; 2];
-        for e in v {
-            m[0] += e[0] / v.len() as f64;
-            m[1] += e[1] / v.len() as f64;
-        }
-        m
-    };
     let before_runs: Vec<[f64; 2]> = runs.iter().map(|r| r.energy()).collect();
     let noise_runs: Vec<[f64; 2]> = runs.iter().map(|r| r.noise_energy).collect();
     let e_before = mean2(&before_runs);
@@ -421,7 +483,7 @@ pub fn system_level_with_model(
     } else {
         (vec![], None)
     };
-    Ok(LevelResult {
+    let level = LevelResult {
         level: Level::Structural,
         metric: "held-out normalised equation error of the free response".into(),
         before,
@@ -452,5 +514,7 @@ pub fn system_level_with_model(
                 })
             },
         }),
-    })
+        coverage: None,
+    };
+    Ok((level, p))
 }
