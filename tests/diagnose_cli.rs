@@ -107,3 +107,43 @@ fn diagnose_bad_inputs_are_clear_errors() {
         "{stderr}"
     );
 }
+
+/// Free runs beyond the forced K range (forced wind speeds cut to 7–10 m/s, free runs at
+/// 4.6–7.6 m/s): the command says `extrapolation`, and the report's Coverage section lists
+/// every run with its K and the forced cases that would cover it.
+#[test]
+fn diagnose_reports_coverage_and_extrapolation() {
+    let tmp = tempfile::tempdir().unwrap();
+    let data = tmp.path().join("set");
+    let mut scenario = BlindScenario::default();
+    scenario.campaign.wind_speeds = vec![7.0, 8.5, 10.0];
+    let set = generate(BlindEffect::None, 0.0, Form::Primary, 3, &scenario).unwrap();
+    write_blind(&data, &set).unwrap();
+    let out = tmp.path().join("diag");
+    let (ok, stdout, stderr) = aeroform(&[
+        "diagnose",
+        data.join("forced").to_str().unwrap(),
+        "--free",
+        data.join("free").to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stdout}\n{stderr}");
+    let doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("diagnosis.json")).unwrap())
+            .unwrap();
+    assert_eq!(doc["verdict"]["effect"], "extrapolation", "{stdout}");
+    let cov = &doc["levels"][1]["coverage"];
+    assert_eq!(cov["explains_gap"], true);
+    assert_eq!(cov["runs"].as_array().unwrap().len(), 6);
+    assert!(!cov["suggestions"].as_array().unwrap().is_empty());
+    let html = std::fs::read_to_string(out.join("diagnosis.html")).unwrap();
+    for s in [
+        "Coverage",
+        "Forced cases that would cover",
+        "free-1",
+        "K_α range",
+    ] {
+        assert!(html.contains(s), "report lacks {s:?}");
+    }
+}

@@ -319,6 +319,21 @@ pub fn assemble(
     }
     let d = decide(&levels, rules);
     let gap = match d.level {
+        Some(li) if d.verdict == Verdict::Extrapolation && levels[li].coverage.is_some() => {
+            // before: the sim with straight-line tables; after: with Theodorsen-shaped tails
+            let l = &levels[li];
+            let cov = l.coverage.as_ref().expect("checked");
+            let after = cov.tails_before.unwrap_or(cov.linear_before);
+            GapReport {
+                metric: l.metric.clone(),
+                before: cov.linear_before,
+                after,
+                shrink: plain_shrink(cov.linear_before, after),
+                excess_shrink: excess_shrink(cov.linear_before, after, l.noise_level),
+                noise_level: l.noise_level,
+                held_out_cases: l.held_out_cases.clone(),
+            }
+        }
         Some(li) => {
             let l = &levels[li];
             let after = d

@@ -300,6 +300,10 @@ pub fn diagnosis_section(report: &mut Report, diag: &Diagnosis, figures: &[Diagn
         );
     }
 
+    if let Some(cov) = diag.levels.iter().find_map(|l| l.coverage.as_ref()) {
+        coverage_section(report, cov);
+    }
+
     let cands: Vec<_> = if diag.candidates.is_empty() {
         diag.levels.iter().flat_map(|l| &l.candidates).collect()
     } else {
@@ -427,6 +431,130 @@ pub fn diagnosis_section(report: &mut Report, diag: &Diagnosis, figures: &[Diagn
     }
     for f in figures.iter().filter(|f| f.kind != "gap_heatmap") {
         report.figure(f.caption.clone(), &f.files);
+    }
+}
+
+/// The "Coverage" section: every free run's response K and amplitude against the forced
+/// range, how the gap changes with Theodorsen-shaped tails, and the forced cases that would
+/// cover the runs outside.
+fn coverage_section(report: &mut Report, cov: &diagnose::report::Coverage) {
+    report.section("Coverage");
+    let outside = cov.runs.iter().filter(|r| !r.covered).count();
+    report.key_values(
+        "Free runs against the range the forced cases identified",
+        &[
+            (
+                "K_h range of the forced cases".to_string(),
+                range(cov.k_h_range),
+            ),
+            (
+                "K_α range of the forced cases".to_string(),
+                range(cov.k_alpha_range),
+            ),
+            (
+                "pitch amplitude range [deg]".to_string(),
+                range(cov.amplitude_alpha_deg_range),
+            ),
+            (
+                "runs outside (margin)".to_string(),
+                format!("{outside} of {} ({})", cov.runs.len(), pct(cov.margin)),
+            ),
+            (
+                "share of the gap's excess in runs outside".to_string(),
+                pct(cov.extrapolated_share),
+            ),
+            (
+                "gap statistic of the covered runs alone".to_string(),
+                cov.covered_gap_statistic
+                    .map_or("no run covered".into(), num),
+            ),
+            (
+                "gap, tables extended by straight lines".to_string(),
+                format!(
+                    "{} ({}× noise)",
+                    num(cov.linear_before),
+                    short(cov.linear_gap_statistic)
+                ),
+            ),
+            (
+                "gap, Theodorsen-shaped tails".to_string(),
+                match (cov.tails_before, cov.tails_shrink) {
+                    (Some(t), Some(s)) => format!("{} (shrink {})", num(t), pct(s)),
+                    _ => "–".into(),
+                },
+            ),
+            (
+                "tables the candidates used".to_string(),
+                cov.sim_tables.replace('_', " "),
+            ),
+            (
+                "put down to extrapolation".to_string(),
+                yes(cov.explains_gap),
+            ),
+        ],
+    );
+    let opt = |v: Option<f64>| v.map_or("–".to_string(), short);
+    let rows: Vec<Vec<String>> = cov
+        .runs
+        .iter()
+        .map(|r| {
+            vec![
+                r.id.clone(),
+                short(r.wind_speed),
+                opt(r.k_h),
+                opt(r.k_alpha),
+                short(r.amplitude_alpha_deg),
+                num(r.before),
+                yes(r.covered),
+                r.outside.join("; "),
+            ]
+        })
+        .collect();
+    report.table(
+        "Each free run: response reduced frequency K = B·2πf/U per DOF, pitch amplitude, held-out gap",
+        &[
+            "run",
+            "U [m/s]",
+            "K_h",
+            "K_α",
+            "α amplitude [deg]",
+            "gap",
+            "covered",
+            "outside the range",
+        ]
+        .map(String::from),
+        &rows,
+    );
+    if !cov.suggestions.is_empty() {
+        let rows: Vec<Vec<String>> = cov
+            .suggestions
+            .iter()
+            .map(|s| {
+                vec![
+                    s.run.clone(),
+                    s.dof.clone(),
+                    s.configuration.clone(),
+                    short(s.frequency_hz),
+                    short(s.wind_speed),
+                    short(s.amplitude_alpha_deg),
+                    short(s.k),
+                ]
+            })
+            .collect();
+        report.table(
+            "Forced cases that would cover the runs outside (the configuration's forcing frequency at the wind speed giving the run's K)",
+            &[
+                "run",
+                "DOF",
+                "configuration",
+                "f [Hz]",
+                "U [m/s]",
+                "α amplitude [deg]",
+                "K",
+            ]
+            .map(String::from),
+            &rows,
+        );
     }
 }
 
