@@ -101,7 +101,9 @@ impl ForcedRange {
     }
 
     fn inside(r: [f64; 2], x: f64) -> bool {
-        !(r[0] <= r[1]) || (x >= r[0] / (1.0 + MARGIN) && x <= r[1] * (1.0 + MARGIN))
+        // an empty range (no case forced that DOF) covers everything
+        let empty = r[0].partial_cmp(&r[1]).is_none_or(|o| o.is_gt());
+        empty || (x >= r[0] / (1.0 + MARGIN) && x <= r[1] * (1.0 + MARGIN))
     }
 }
 
