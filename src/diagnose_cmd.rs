@@ -52,6 +52,11 @@ pub struct DiagnoseArgs {
     /// global seed) and write `blind.part-I-of-N.json`; `aeroform merge` joins the parts.
     #[arg(long, requires = "blind")]
     pub shard: Option<String>,
+    /// With `--blind`: draw each set's campaign shape too (1–3 Table I configurations,
+    /// 3–8 wind speeds, 3–8 amplitudes, alternate forms for a third, absolute balance
+    /// noise) and report the statistics per shape class.
+    #[arg(long, requires = "blind", conflicts_with = "shard")]
+    pub shapes: bool,
 }
 
 /// Runs `aeroform diagnose`.
@@ -65,7 +70,7 @@ pub fn run(args: &DiagnoseArgs) -> anyhow::Result<()> {
         if let Some(s) = &args.shard {
             return blind_shard(n, args.seed, s, &out);
         }
-        return blind(n, args.seed, &out, args.force);
+        return blind(n, args.seed, args.shapes, &out, args.force);
     }
     let out = args
         .out
@@ -192,9 +197,10 @@ fn print_diagnosis(d: &Diagnosis, secs: f64) {
     crate::ui::say!("diagnosed in {secs:.2} s");
 }
 
-fn blind(n: usize, seed: u64, out: &Path, force: bool) -> anyhow::Result<()> {
+fn blind(n: usize, seed: u64, shapes: bool, out: &Path, force: bool) -> anyhow::Result<()> {
     let dir = crate::outdir::OutDir::begin(out, "diagnose --blind", force)?;
-    let opts = BlindOptions::new(n, seed);
+    let mut opts = BlindOptions::new(n, seed);
+    opts.shapes = shapes;
     let bar = CountBar::new("blind", n);
     let wrong = AtomicUsize::new(0);
     let t = std::time::Instant::now();
@@ -264,6 +270,35 @@ fn blind_text(r: &BlindReport, secs: f64) -> String {
     t.push_str("\n## Acceptance\n\n");
     for l in acceptance_lines(s) {
         t.push_str(&format!("- {l}\n"));
+    }
+    if !r.per_shape.is_empty() {
+        t.push_str(
+            "\n## Per campaign shape\n\n| shape | sets | failed | top-1 strong | \
+             none/extrapolation | unexplained (outside) | median shrink |\n\
+             |---|---:|---:|---:|---:|---:|---:|\n",
+        );
+        let p = |x: f64, n: usize| {
+            if n == 0 {
+                "–".to_string()
+            } else {
+                format!("{:.0} % of {n}", 100.0 * x)
+            }
+        };
+        for (class, s) in &r.per_shape {
+            t.push_str(&format!(
+                "| {class} | {} | {} | {} | {} | {} | {} |\n",
+                s.n,
+                s.failed,
+                p(s.catalogue_top1, s.catalogue_strong),
+                p(s.none_rate, s.none_sets),
+                p(s.outside_unexplained, s.outside_strong),
+                if s.median_shrink_named.is_finite() {
+                    format!("{:.0} %", 100.0 * s.median_shrink_named)
+                } else {
+                    "–".into()
+                }
+            ));
+        }
     }
     t.push_str(
         "\n## Per effect (strong sets)\n\n| effect | correct | strong sets |\n|---|---:|---:|\n",

@@ -25,6 +25,9 @@ pub struct BlindOptions {
     pub scenario: BlindScenario,
     /// Diagnosis settings (their seed is replaced by each set's seed).
     pub diagnose: DiagnoseOptions,
+    /// Draw each set's campaign shape ([`crate::bench::CampaignShape`]); `form` and the
+    /// scenario's campaign and noise then come from the shape.
+    pub shapes: bool,
 }
 
 impl BlindOptions {
@@ -40,6 +43,7 @@ impl BlindOptions {
             form: Form::Primary,
             scenario: BlindScenario::default(),
             diagnose,
+            shapes: false,
         }
     }
 }
@@ -91,12 +95,16 @@ pub fn run_one(spec: &BlindSpec, opts: &BlindOptions) -> Result<(BlindOutcome, D
     dopts.seed = spec.seed;
     dopts.force.seed = spec.seed;
     dopts.system.seed = spec.seed;
-    let set = generate(effect, spec.strength, opts.form, spec.seed, &opts.scenario)?;
+    let (form, scenario) = match &spec.shape {
+        Some(shape) => (shape.form(), shape.scenario(&opts.scenario)),
+        None => (opts.form, opts.scenario.clone()),
+    };
+    let set = generate(effect, spec.strength, form, spec.seed, &scenario)?;
     let diag = diagnose(&set.forced, Some(&set.free), &dopts, "blind")?;
     let ratio = if effect == BlindEffect::None {
         1.0
     } else {
-        let twin = generate(BlindEffect::None, 0.0, opts.form, spec.seed, &opts.scenario)?;
+        let twin = generate(BlindEffect::None, 0.0, form, spec.seed, &scenario)?;
         // Baseline gaps only: no candidates are needed for the twin.
         let mut topts = dopts.clone();
         topts.force.candidates.clear();
@@ -138,7 +146,12 @@ pub fn run_outcome(spec: &BlindSpec, opts: &BlindOptions) -> BlindOutcome {
 /// to generate or diagnose is recorded with its error (and counted as failed), never
 /// dropped. `observer` is called after each set.
 pub fn run_blind(opts: &BlindOptions, observer: &(dyn Fn(&BlindOutcome) + Sync)) -> BlindReport {
-    let specs = draw_specs(opts.n, opts.seed);
+    let mut specs = draw_specs(opts.n, opts.seed);
+    if opts.shapes {
+        for s in &mut specs {
+            s.shape = Some(crate::bench::CampaignShape::draw(s.seed));
+        }
+    }
     let outcomes: Vec<BlindOutcome> = specs
         .par_iter()
         .map(|s| {

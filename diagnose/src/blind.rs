@@ -365,8 +365,14 @@ fn forced_set(
                 alpha.push(q[1]);
             }
             let mut rng = ChaCha8Rng::seed_from_u64(case_seed(seed, i));
-            add_noise(&mut rng, &mut lift, sc.noise.balance * pl);
-            add_noise(&mut rng, &mut moment, sc.noise.balance * pm);
+            // balance noise: the paper's absolute σ (range × fraction, per unit span) or
+            // relative to the nominal peak
+            let (sl, sm) = match &sc.noise.balance_absolute {
+                Some(b) => b.sd_per_span(sc.span),
+                None => (sc.noise.balance * pl, sc.noise.balance * pm),
+            };
+            add_noise(&mut rng, &mut lift, sl);
+            add_noise(&mut rng, &mut moment, sm);
             add_noise(&mut rng, &mut h, sc.noise.laser);
             add_noise(&mut rng, &mut alpha, sc.noise.pitch_sd(chord));
             Ok(Record {
