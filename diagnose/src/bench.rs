@@ -493,6 +493,30 @@ pub fn acceptance_lines(s: &BlindSummary) -> Vec<String> {
 mod tests {
     use super::*;
 
+    /// Drawn shapes stay in their ranges, depend only on the seed, cover every size and
+    /// give the alternate forms to about a third of the sets.
+    #[test]
+    fn campaign_shapes_are_drawn_in_range_and_reproducibly() {
+        let shapes: Vec<CampaignShape> = (0..600).map(|i| CampaignShape::draw(split_seed(9, i))).collect();
+        for s in &shapes {
+            assert!((1..=3).contains(&s.configurations.len()), "{s:?}");
+            assert!((3..=8).contains(&s.wind_speeds.len()), "{s:?}");
+            assert!((3..=8).contains(&s.amplitudes_deg.len()), "{s:?}");
+            assert!(s.wind_speeds.windows(2).all(|w| w[0] < w[1]));
+            assert!(s.wind_speeds.iter().all(|u| (3.0..=10.0).contains(u)));
+            assert!(s.amplitudes_deg.iter().all(|a| (3.0..=24.0).contains(a)));
+            let sc = s.scenario(&crate::blind::BlindScenario::default());
+            assert_eq!(sc.campaign.configurations.len(), s.configurations.len());
+            assert!(sc.noise.balance_absolute.is_some());
+        }
+        assert_eq!(CampaignShape::draw(split_seed(9, 3)), shapes[3]);
+        let alt = shapes.iter().filter(|s| s.alternate_form).count();
+        assert!((150..250).contains(&alt), "{alt} of 600 alternate");
+        for class in ["3–4 groups", "5–11 groups", "12–24 groups"] {
+            assert!(shapes.iter().any(|s| s.class().starts_with(class)), "{class}");
+        }
+    }
+
     fn outcome(truth: &str, verdict: &str, ratio: f64, shrink: f64) -> BlindOutcome {
         BlindOutcome {
             spec: BlindSpec {
@@ -500,6 +524,7 @@ mod tests {
                 seed: 1,
                 truth: truth.into(),
                 strength: 0.5,
+                shape: None,
             },
             verdict: verdict.into(),
             confidence: 0.9,
