@@ -218,13 +218,14 @@ pub(crate) fn prepare_free(
 /// The system level (see the module docs): identifies the sim's law from `forced`
 /// ([`sim_law`]) and runs [`system_level_with_model`].
 ///
-/// # Errors
-/// As [`sim_law`] and [`system_level_with_model`].
-///
 /// Adds the level's [`crate::report::Coverage`]: each free run's response K and amplitude
 /// against the forced range ([`coverage::ForcedRange`]) and, when runs leave it, the gap
 /// with the tables continued by Theodorsen-shaped tails
-/// ([`aeroelastic::identified::Extrapolation::Theodorsen`]) instead of straight lines.
+/// ([`aeroelastic::identified::Extrapolation::Theodorsen`]) instead of straight lines; the
+/// tables with the smaller gap are the sim whose gap the candidates explain.
+///
+/// # Errors
+/// As [`sim_law`] and [`system_level_with_model`].
 pub fn system_level(forced: &Dataset, free: &Dataset, opts: &SystemOptions) -> Result<LevelResult> {
     opts.check()?;
     let (id, law) = sim_identification(forced, opts)?;
@@ -249,7 +250,6 @@ pub fn system_level(forced: &Dataset, free: &Dataset, opts: &SystemOptions) -> R
                 if tl.before.is_finite() {
                     cov.tails_before = Some(tl.before);
                     cov.tails_shrink = Some(crate::verdict::plain_shrink(level.before, tl.before));
-                    cov.decide(level.gap_threshold, level.noise_level);
                     if tl.before < level.before {
                         // the physically consistent extrapolation is the better sim: its
                         // remaining gap is what the candidates are asked to explain
