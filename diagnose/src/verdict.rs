@@ -1,11 +1,6 @@
 //! From the two levels' findings to one verdict (DESIGN.md §5.3).
 //!
 //! Rule, in order:
-//! 0. **Extrapolation before effects**, on either level: a significant force gap that lies
-//!    in held-out groups whose wind speed is outside their training folds' range
-//!    ([`force_extrapolation`]: ≥ half of the excess there, the interpolated groups clean),
-//!    or a free-response gap that lies in runs outside the forced K/amplitude range
-//!    ([`crate::report::Coverage::explains_gap`]), is `extrapolation`.
 //! 1. **Force level first.** When the held-out force gap is significant, the verdict is the
 //!    best force-level candidate if it is significant and removes at least
 //!    [`VerdictRules::min_excess_shrink`] of the gap's excess over noise; otherwise
@@ -128,94 +123,9 @@ fn effect_confidence(level: &LevelResult, best_idx: usize, shrink: f64) -> f64 {
     (shrink.clamp(0.0, 1.0) * (0.5 + 0.5 * margin)).clamp(0.0, 1.0)
 }
 
-/// Held-out forced groups predicted by extrapolation: a case whose wind speed lies outside
-/// the range of the training cases of its configuration (the cases in other folds) is
-/// predicted from derivatives extrapolated in K. Returns (share of the level's excess gap
-/// energy in those cases, gap statistic of the other cases — `None` when there are none —,
-/// ids of the extrapolated cases), or `None` when no case is extrapolated.
-pub fn force_extrapolation(level: &LevelResult) -> Option<(f64, Option<f64>, Vec<String>)> {
-    let extrapolated: Vec<bool> = level
-        .cases
-        .iter()
-        .map(|c| {
-            let train = level
-                .cases
-                .iter()
-                .filter(|t| t.fold != c.fold && t.config == c.config)
-                .map(|t| t.wind_speed);
-            let (lo, hi) = train.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), u| {
-                (a.min(u), b.max(u))
-            });
-            lo <= hi && (c.wind_speed < lo * (1.0 - 1e-9) || c.wind_speed > hi * (1.0 + 1e-9))
-        })
-        .collect();
-    if !extrapolated.iter().any(|&e| e) {
-        return None;
-    }
-    let ex = |c: &crate::report::CaseGap| (c.before.powi(2) - c.noise_level.powi(2)).max(0.0);
-    let total: f64 = level.cases.iter().map(ex).sum();
-    let outside: f64 = level
-        .cases
-        .iter()
-        .zip(&extrapolated)
-        .filter(|(_, &e)| e)
-        .map(|(c, _)| ex(c))
-        .sum();
-    let inner: Vec<&crate::report::CaseGap> = level
-        .cases
-        .iter()
-        .zip(&extrapolated)
-        .filter(|(_, &e)| !e)
-        .map(|(c, _)| c)
-        .collect();
-    let inner_stat = (!inner.is_empty()).then(|| {
-        let b: f64 = inner.iter().map(|c| c.before.powi(2)).sum();
-        let n: f64 = inner.iter().map(|c| c.noise_level.powi(2)).sum();
-        (b / n.max(f64::MIN_POSITIVE)).sqrt()
-    });
-    let ids = level
-        .cases
-        .iter()
-        .zip(&extrapolated)
-        .filter(|(_, &e)| e)
-        .map(|(c, _)| c.id.clone())
-        .collect();
-    Some((
-        if total > 0.0 { outside / total } else { 0.0 },
-        inner_stat,
-        ids,
-    ))
-}
-
 /// Decides one level with a significant gap.
 fn decide_level(levels: &[LevelResult], li: usize, rules: &VerdictRules) -> Decision {
     let level = &levels[li];
-    if level.level == Level::Aerodynamic {
-        if let Some((share, Some(inner), ids)) = force_extrapolation(level) {
-            if share >= crate::system::coverage::MIN_SHARE && inner <= level.gap_threshold {
-                return Decision {
-                    verdict: Verdict::Extrapolation,
-                    confidence: share.clamp(0.0, 1.0),
-                    reason: format!(
-                        "{} held-out gap {:.4} is {:.1}× its noise level {:.4}, {:.0} % of its \
-                         excess in {} held-out case(s) whose wind speed lies outside the \
-                         training folds' range of its configuration (derivatives extrapolated \
-                         in K); the interpolated cases alone are at {inner:.2}× noise \
-                         (threshold {:.2})",
-                        level.level.name(),
-                        level.before,
-                        level.gap_statistic,
-                        level.noise_level,
-                        100.0 * share,
-                        ids.len(),
-                        level.gap_threshold
-                    ),
-                    level: Some(li),
-                    candidate: None,
-                };
-            }
-        }
-    }
     if let Some(cov) = &level.coverage {
         let tails = cov
             .tails_before
@@ -536,46 +446,6 @@ mod tests {
             fold_scheme: None,
             coverage: None,
         }
-    }
-
-    fn case(id: &str, u: f64, fold: usize, before: f64) -> crate::report::CaseGap {
-        crate::report::CaseGap {
-            id: id.into(),
-            level: Level::Aerodynamic,
-            config: Some("D".into()),
-            wind_speed: u,
-            amplitude: 6.0,
-            fold,
-            before,
-            after: before,
-            noise_level: 0.01,
-        }
-    }
-
-    /// Held-out groups outside their training folds' wind-speed range carry the gap and the
-    /// interpolated ones are clean: `extrapolation`; a gap in the interpolated groups too
-    /// goes to the candidates.
-    #[test]
-    fn a_force_gap_in_extrapolated_groups_only_is_extrapolation() {
-        let mut l = level(Level::Aerodynamic, 0.05, 0.01, true, vec![]);
-        l.gap_threshold = 1.8;
-        l.cases = vec![
-            case("U3", 3.0, 0, 0.08),
-            case("U5", 5.0, 1, 0.012),
-            case("U7", 7.0, 2, 0.011),
-            case("U10", 10.0, 0, 0.06),
-        ];
-        let (share, inner, ids) = force_extrapolation(&l).unwrap();
-        assert_eq!(ids, ["U3", "U10"]);
-        assert!(share > 0.95, "{share}");
-        assert!(inner.unwrap() < 1.8);
-        let d = decide(&[l.clone()], &VerdictRules::default());
-        assert_eq!(d.verdict, Verdict::Extrapolation, "{}", d.reason);
-        // the same gap also in the interpolated groups: not extrapolation
-        l.cases[1].before = 0.08;
-        l.cases[2].before = 0.08;
-        let d = decide(&[l], &VerdictRules::default());
-        assert_eq!(d.verdict, Verdict::Unexplained, "{}", d.reason);
     }
 
     #[test]
