@@ -497,7 +497,9 @@ mod tests {
     /// give the alternate forms to about a third of the sets.
     #[test]
     fn campaign_shapes_are_drawn_in_range_and_reproducibly() {
-        let shapes: Vec<CampaignShape> = (0..600).map(|i| CampaignShape::draw(split_seed(9, i))).collect();
+        let shapes: Vec<CampaignShape> = (0..600)
+            .map(|i| CampaignShape::draw(split_seed(9, i)))
+            .collect();
         for s in &shapes {
             assert!((1..=3).contains(&s.configurations.len()), "{s:?}");
             assert!((3..=8).contains(&s.wind_speeds.len()), "{s:?}");
@@ -513,7 +515,10 @@ mod tests {
         let alt = shapes.iter().filter(|s| s.alternate_form).count();
         assert!((150..250).contains(&alt), "{alt} of 600 alternate");
         for class in ["3–4 groups", "5–11 groups", "12–24 groups"] {
-            assert!(shapes.iter().any(|s| s.class().starts_with(class)), "{class}");
+            assert!(
+                shapes.iter().any(|s| s.class().starts_with(class)),
+                "{class}"
+            );
         }
     }
 
