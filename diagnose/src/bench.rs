@@ -99,7 +99,7 @@ impl CampaignShape {
         let n_cfg = 1 + (split_seed(seed, 31) % 3) as usize;
         let n_u = 3 + (split_seed(seed, 32) % 6) as usize;
         let n_a = 3 + (split_seed(seed, 33) % 6) as usize;
-        let alternate_form = split_seed(seed, 34) % 3 == 0;
+        let alternate_form = split_seed(seed, 34).is_multiple_of(3);
         let cfg_idx = pick(&dummy, n_cfg);
         let u_idx = pick(&speeds, n_u);
         let a_idx = pick(&amps, n_a);

@@ -1,6 +1,6 @@
 //! Rendering a figure to PNG, SVG and (paper style) PDF — the same drawing code runs on
 //! the bitmap and the SVG backend; the SVG's text becomes glyph outlines and the PDF comes
-//! from that SVG ([`crate::vector`]) — and writing the files atomically.
+//! from that SVG (the private `vector` module) — and writing the files atomically.
 
 use std::path::{Path, PathBuf};
 
