@@ -4,8 +4,8 @@
 //! PDF with the font subset embedded (text stays selectable).
 //!
 //! Both go through one parse of the SVG that plotters writes (`usvg`, with a font database
-//! holding only the bundled faces, so no system font is ever looked up), then `usvg`'s
-//! writer (outlines) or `svg2pdf`.
+//! holding only the bundled faces, so no system font is ever looked up): the laid-out glyphs
+//! replace each `<text>` of plotters' SVG ([`outlined`]), or the tree goes to `svg2pdf`.
 
 use std::sync::{Arc, OnceLock};
 
