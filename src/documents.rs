@@ -216,6 +216,7 @@ pub fn schemas() -> Vec<(&'static str, serde_json::Value)> {
             schema_of::<identify::pipeline::Identification>(),
         ),
         ("diagnosis", schema_of::<diagnose::report::Diagnosis>()),
+        ("blind", schema_of::<diagnose::bench::BlindReport>()),
         (
             "study-flutter",
             array_schema_of::<FlutterRun>(
