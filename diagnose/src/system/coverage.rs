@@ -44,14 +44,6 @@ fn range(v: impl Iterator<Item = f64>) -> [f64; 2] {
         })
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.retain(|x| x.is_finite());
-    if v.is_empty() {
-        return f64::NAN;
-    }
-    identify::numerics::median(&mut v)
-}
-
 impl ForcedRange {
     /// The range of the identification `id` of the forced data set `forced`, chord `chord`.
     pub fn new(id: &Identification, forced: &Dataset, chord: f64) -> Self {
@@ -63,12 +55,12 @@ impl ForcedRange {
             .into_iter()
             .map(|g| {
                 let of = |k: fn(&identify::pipeline::CaseResult) -> Option<f64>| {
-                    median(
-                        id.cases
+                    identify::numerics::median_finite(
+                        &id.cases
                             .iter()
                             .filter(|c| c.group == g)
                             .filter_map(|c| k(c).map(|k| k * c.wind_speed / tau_b))
-                            .collect(),
+                            .collect::<Vec<f64>>(),
                     )
                 };
                 let fa = of(|c| c.k_alpha);
@@ -106,6 +98,16 @@ impl ForcedRange {
         empty || (x >= r[0] / (1.0 + MARGIN) && x <= r[1] * (1.0 + MARGIN))
     }
 }
+
+/// One DOF's check: response K, forced range, label, DOF name, the configuration's forcing
+/// frequency of that DOF.
+type Dof = (
+    Option<f64>,
+    [f64; 2],
+    &'static str,
+    &'static str,
+    fn(&(String, f64, f64)) -> f64,
+);
 
 /// The coverage of the prepared free `runs` (their held-out gap and noise level per run in
 /// `before`/`noise`) against `range`; `tails_before`/`tails_shrink` are left for the caller.
@@ -158,24 +160,20 @@ pub(crate) fn assess(
                     });
                 }
             };
-            let side = |k: f64, rg: [f64; 2]| if k > rg[1] { "above" } else { "below" };
-            if let Some(k) = k_h.filter(|&k| !ForcedRange::inside(range.k_h, k)) {
-                let edge = if k > range.k_h[1] {
-                    range.k_h[1]
-                } else {
-                    range.k_h[0]
-                };
-                outside.push(format!("K_h {k:.3} {} {edge:.3}", side(k, range.k_h)));
-                suggest("heave", k, |c| c.2);
-            }
-            if let Some(k) = k_a.filter(|&k| !ForcedRange::inside(range.k_alpha, k)) {
-                let edge = if k > range.k_alpha[1] {
-                    range.k_alpha[1]
-                } else {
-                    range.k_alpha[0]
-                };
-                outside.push(format!("K_α {k:.3} {} {edge:.3}", side(k, range.k_alpha)));
-                suggest("pitch", k, |c| c.1);
+            let dofs: [Dof; 2] = [
+                (k_h, range.k_h, "K_h", "heave", |c| c.2),
+                (k_a, range.k_alpha, "K_α", "pitch", |c| c.1),
+            ];
+            for (k, rg, name, dof, pick) in dofs {
+                if let Some(k) = k.filter(|&k| !ForcedRange::inside(rg, k)) {
+                    let (side, edge) = if k > rg[1] {
+                        ("above", rg[1])
+                    } else {
+                        ("below", rg[0])
+                    };
+                    outside.push(format!("{name} {k:.3} {side} {edge:.3}"));
+                    suggest(dof, k, pick);
+                }
             }
             let amp_hi = range.amplitude_alpha_deg[1];
             if r.u > 0.0 && amp_hi.is_finite() && amp_deg > amp_hi * (1.0 + MARGIN) {
