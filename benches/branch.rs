@@ -7,6 +7,8 @@
 //! Two time-integration baselines: the continuation sweep (`lco_sweep`, each speed from the
 //! previous final state) and independent runs from one fixed perturbation (α₀ = 0.05 rad).
 //! The branch uses 64 RK4 steps per period (the set-up check shows it still meets 0.1 %).
+//! A third contender is the same branch by harmonic balance (5 harmonics, multipliers from
+//! 64 RK4 steps of the variational equation), checked against the sweep the same way.
 //!
 //! Before timing, the set-up checks that the sweep's amplitudes agree with the branch
 //! (Newton-corrected orbit at each sweep speed) to 0.1 % and prints the largest
@@ -14,7 +16,7 @@
 
 use criterion::{criterion_group, criterion_main, Criterion, SamplingMode};
 
-use aeroelastic::branch::BranchOptions;
+use aeroelastic::branch::{BranchMethod, BranchOptions};
 use aeroelastic::lco::{Classification, KIteration, LcoOptions, SweepDirection};
 use aeroelastic::reference::hp1_cubic_pitch;
 
@@ -80,6 +82,33 @@ fn branch_vs_sweep(c: &mut Criterion) {
         b.points[0].u, u_end, worst
     );
     assert!(worst < 1e-3, "sweep and branch differ by {worst}");
+    // The same 100-point branch by harmonic balance (5 harmonics), checked the same way.
+    // Its scaled arclength counts every coefficient (sine and cosine of each state), so
+    // the same ds covers less U: ds_max 0.15 makes its 100 points reach the sweep's end.
+    let hb = BranchOptions {
+        method: BranchMethod::HarmonicBalance,
+        ds_max: 0.15,
+        ..opts
+    };
+    let set_hb = s.lco_branches(1.5, 4.0, &hb, &|_| {}).expect("hb branch");
+    let bh = &set_hb.branches[0];
+    assert_eq!(bh.points.len(), 100, "{:?}", bh.stop);
+    assert!(
+        bh.points.last().expect("points").u >= u_end,
+        "HB branch ends earlier"
+    );
+    let mut worst_hb: f64 = 0.0;
+    for r in &runs {
+        let o = s.orbit_on_branch(bh, r.u, true, &hb).expect("hb orbit");
+        worst_hb = worst_hb.max((o.amplitude_alpha - r.amplitude_alpha).abs() / r.amplitude_alpha);
+    }
+    eprintln!(
+        "harmonic balance: 100 points, U = {:.4} … {:.4}; largest amplitude difference to the sweep {:.2e}",
+        bh.points[0].u,
+        bh.points.last().expect("points").u,
+        worst_hb
+    );
+    assert!(worst_hb < 1e-3, "sweep and HB branch differ by {worst_hb}");
     let mut g = c.benchmark_group("branch");
     g.sample_size(10);
     // Flat sampling: the fixed-perturbation baseline takes seconds per iteration.
@@ -87,6 +116,15 @@ fn branch_vs_sweep(c: &mut Criterion) {
     g.bench_function("continuation_100_points", |bch| {
         bch.iter(|| {
             s.lco_branches(1.5, 4.0, &opts, &|_| {})
+                .expect("branch")
+                .branches[0]
+                .points
+                .len()
+        })
+    });
+    g.bench_function("harmonic_balance_100_points", |bch| {
+        bch.iter(|| {
+            s.lco_branches(1.5, 4.0, &hb, &|_| {})
                 .expect("branch")
                 .branches[0]
                 .points

@@ -6,8 +6,8 @@
 use std::path::PathBuf;
 
 use aeroelastic::branch::{
-    measured_distances, read_measured_amplitudes, BranchOptions, BranchProgress, BranchSet,
-    EventKind, MeasuredDistance, StopReason,
+    measured_distances, read_measured_amplitudes, BranchMethod, BranchOptions, BranchProgress,
+    BranchSet, EventKind, MeasuredDistance, StopReason,
 };
 use anyhow::Context;
 use clap::Args;
@@ -33,9 +33,16 @@ pub struct BranchArgs {
     /// Largest number of points per branch.
     #[arg(long, default_value_t = 200)]
     pub max_points: usize,
-    /// RK4 steps per period of the shooting integration.
+    /// RK4 steps per period (shooting integration, or the harmonic-balance orbit's
+    /// variational equation for the Floquet multipliers).
     #[arg(long, default_value_t = 128)]
     pub steps_per_period: usize,
+    /// Orbit discretisation: `shooting` or `harmonic_balance`.
+    #[arg(long, default_value = "shooting", value_parser = parse_method)]
+    pub method: BranchMethod,
+    /// Harmonics of the harmonic-balance series.
+    #[arg(long, default_value_t = 5)]
+    pub harmonics: usize,
     /// Chord B [m] for an identification.json model.
     #[arg(long)]
     pub chord: Option<f64>,
@@ -146,6 +153,15 @@ pub(crate) fn branch_figure(
     }
 }
 
+/// `--method` by the library's own (serde) names.
+fn parse_method(s: &str) -> Result<BranchMethod, String> {
+    use serde::de::IntoDeserializer;
+    let name = s.replace('-', "_");
+    let d: serde::de::value::StrDeserializer<serde::de::value::Error> =
+        name.as_str().into_deserializer();
+    serde::Deserialize::deserialize(d).map_err(|e| format!("{e}"))
+}
+
 /// Runs `aeroform branch`.
 pub fn run(args: &BranchArgs) -> anyhow::Result<()> {
     let (u_min, u_max) = parse_range(&args.speeds)?;
@@ -153,6 +169,8 @@ pub fn run(args: &BranchArgs) -> anyhow::Result<()> {
     let opts = BranchOptions {
         max_points: args.max_points,
         steps_per_period: args.steps_per_period,
+        method: args.method,
+        harmonics: args.harmonics,
         ..BranchOptions::default()
     };
     let measured = match &args.measured {

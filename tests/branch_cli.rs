@@ -150,3 +150,60 @@ fn sharp_freeplay_and_bad_measured_table_are_refused_by_name() {
         "{stderr}"
     );
 }
+
+/// The two orbit discretisations agree on the rig's fold; an unknown method is refused by
+/// name.
+#[test]
+fn harmonic_balance_finds_the_same_bristol_fold_as_shooting() {
+    let dir = tmp();
+    let fold = |method: &str| -> f64 {
+        let out: PathBuf = dir.path().join(method);
+        let (ok, stdout, stderr) = aeroform(&[
+            "branch",
+            "--structure",
+            &scenario("bristol-spring1.structure.toml"),
+            "--model",
+            &scenario("bristol-spring1.model.toml"),
+            "--speeds",
+            "12:20",
+            "--method",
+            method,
+            "--out",
+            &s(&out),
+        ]);
+        assert!(ok, "{stdout}\n{stderr}");
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("branch.json")).unwrap())
+                .unwrap();
+        assert_eq!(
+            json["settings"]["options"]["method"],
+            method.replace('-', "_"),
+            "{}",
+            json["settings"]
+        );
+        let folds = json["folds"].as_array().unwrap();
+        assert_eq!(folds.len(), 1, "{method}: {folds:?}");
+        folds[0]["U_m_s"].as_f64().unwrap()
+    };
+    let (fs, fh) = (fold("shooting"), fold("harmonic-balance"));
+    println!("Bristol fold: shooting {fs:.5} m/s, harmonic balance {fh:.5} m/s");
+    assert!((fs - fh).abs() < 1e-4 * fs, "fold {fs} vs {fh}");
+    let (ok, _, stderr) = aeroform(&[
+        "branch",
+        "--structure",
+        &scenario("bristol-spring1.structure.toml"),
+        "--model",
+        &scenario("bristol-spring1.model.toml"),
+        "--speeds",
+        "12:20",
+        "--method",
+        "collocation",
+        "--out",
+        &s(dir.path()),
+    ]);
+    assert!(!ok);
+    assert!(
+        stderr.contains("collocation") && stderr.contains("harmonic_balance"),
+        "{stderr}"
+    );
+}

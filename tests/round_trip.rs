@@ -403,10 +403,10 @@ fn cli_flutter_on_scenarios_and_bad_structure_file() {
 /// The identified law (K-dependent Eq. 19 coefficients, derivative tables with RFA) by
 /// continuation: the branch evaluates the coefficients at each orbit's own K; the stable
 /// orbits must match the K-iterated time integration to 0.1 % (issue 11), and the branch
-/// must start at the identified law's flutter speed.
+/// must start at the identified law's flutter speed. Both orbit discretisations.
 #[test]
 fn identified_law_branch_matches_k_iterated_time_integration() {
-    use aeroelastic::branch::{BranchOptions, BranchProgress};
+    use aeroelastic::branch::{BranchMethod, BranchOptions, BranchProgress};
     let dir = tempfile::tempdir().unwrap();
     let law = identified_law(
         dir.path(),
@@ -415,47 +415,51 @@ fn identified_law_branch_matches_k_iterated_time_integration() {
         &IdentifySettings::default(),
     );
     let s = Section::new(plate_rig(), Arc::new(law.model().clone()), RHO).unwrap();
-    let opts = BranchOptions::default();
-    let set = s
-        .lco_branches(4.0, 10.0, &opts, &|_: BranchProgress| {})
-        .unwrap();
-    let b = &set.branches[0];
-    let fo = FlutterOptions {
-        u_min: 3.0,
-        u_max: 10.0,
-        n_speeds: 91,
-        tol_rel: 1e-10,
-    };
-    let uf = s
-        .flutter(FlutterMethod::Pk, &fo)
-        .unwrap()
-        .flutter
-        .unwrap()
-        .u;
-    eprintln!(
-        "identified law: Hopf {:.4} m/s ({}), p-k U_F {uf:.4} m/s, {} orbits, stop {:?}",
+    for method in [BranchMethod::Shooting, BranchMethod::HarmonicBalance] {
+        let opts = BranchOptions {
+            method,
+            ..BranchOptions::default()
+        };
+        let set = s
+            .lco_branches(4.0, 10.0, &opts, &|_: BranchProgress| {})
+            .unwrap();
+        let b = &set.branches[0];
+        let fo = FlutterOptions {
+            u_min: 3.0,
+            u_max: 10.0,
+            n_speeds: 91,
+            tol_rel: 1e-10,
+        };
+        let uf = s
+            .flutter(FlutterMethod::Pk, &fo)
+            .unwrap()
+            .flutter
+            .unwrap()
+            .u;
+        eprintln!(
+        "identified law, {method:?}: Hopf {:.4} m/s ({}), p-k U_F {uf:.4} m/s, {} orbits, stop {:?}",
         b.hopf.u,
         b.criticality,
         b.points.len(),
         b.stop
     );
-    // The Hopf point comes from the time-domain (RFA) realisation, U_F from p-k on the
-    // tables: they agree to the RFA's accuracy.
-    assert!(
-        (b.hopf.u / uf - 1.0).abs() < 0.01,
-        "Hopf {} vs U_F {uf}",
-        b.hopf.u
-    );
-    let lo = LcoOptions::default();
-    let mut worst: f64 = 0.0;
-    for u in [7.0, 8.0, 9.0] {
-        let orbit = s.orbit_on_branch(b, u, true, &opts).unwrap();
-        let mut y0 = orbit.state.clone();
-        y0[1] *= 1.05;
-        let r = s.lco_run_k(u, &y0, &lo, &KIteration::default()).unwrap();
-        assert_eq!(r.classification, Classification::Lco, "U = {u}");
-        let rel = (orbit.amplitude_alpha - r.amplitude_alpha).abs() / r.amplitude_alpha;
-        eprintln!(
+        // The Hopf point comes from the time-domain (RFA) realisation, U_F from p-k on the
+        // tables: they agree to the RFA's accuracy.
+        assert!(
+            (b.hopf.u / uf - 1.0).abs() < 0.01,
+            "Hopf {} vs U_F {uf}",
+            b.hopf.u
+        );
+        let lo = LcoOptions::default();
+        let mut worst: f64 = 0.0;
+        for u in [7.0, 8.0, 9.0] {
+            let orbit = s.orbit_on_branch(b, u, true, &opts).unwrap();
+            let mut y0 = orbit.state.clone();
+            y0[1] *= 1.05;
+            let r = s.lco_run_k(u, &y0, &lo, &KIteration::default()).unwrap();
+            assert_eq!(r.classification, Classification::Lco, "U = {u}");
+            let rel = (orbit.amplitude_alpha - r.amplitude_alpha).abs() / r.amplitude_alpha;
+            eprintln!(
             "U = {u}: branch {:.5}° ω {:.4}, time integration {:.5}° ω {:.4} (K_eval {:.4}): {rel:.2e}",
             orbit.amplitude_alpha.to_degrees(),
             orbit.omega,
@@ -463,8 +467,12 @@ fn identified_law_branch_matches_k_iterated_time_integration() {
             r.omega,
             r.k_eval.unwrap_or(f64::NAN)
         );
-        worst = worst.max(rel);
-        assert!((orbit.omega / r.omega - 1.0).abs() < 1e-3, "U = {u}: ω");
+            worst = worst.max(rel);
+            assert!((orbit.omega / r.omega - 1.0).abs() < 1e-3, "U = {u}: ω");
+        }
+        assert!(
+            worst < 1e-3,
+            "{method:?}: largest amplitude difference {worst:.2e}"
+        );
     }
-    assert!(worst < 1e-3, "largest amplitude difference {worst:.2e}");
 }

@@ -15,7 +15,8 @@ use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
 use crate::branch::{
-    Branch, BranchOptions, BranchProgress, BranchSet, EventKind, HopfPoint, MeasuredDistance,
+    Branch, BranchMethod, BranchOptions, BranchProgress, BranchSet, EventKind, HopfPoint,
+    MeasuredDistance,
 };
 use crate::ensemble::{flutter_ensemble, member_laws, FlutterEnsemble, LcoEnsemble};
 use crate::identified::{IdentifiedOptions, IdentifiedTables};
@@ -208,8 +209,18 @@ impl LoadedPair {
     }
 }
 
-/// The method string recorded in `branch.json` under `settings.method`.
-pub const BRANCH_METHOD: &str = "single shooting (fixed-step RK4) + pseudo-arclength, Floquet multipliers from the monodromy matrix";
+/// The method description recorded in `branch.json` under `settings.method` (the
+/// machine-readable choice is `settings.options.method`).
+pub fn branch_method_text(method: BranchMethod) -> &'static str {
+    match method {
+        BranchMethod::Shooting => {
+            "single shooting (fixed-step RK4) + pseudo-arclength, Floquet multipliers from the monodromy matrix"
+        }
+        BranchMethod::HarmonicBalance => {
+            "harmonic balance (AFT) + pseudo-arclength, Floquet multipliers from the variational equation along the series"
+        }
+    }
+}
 
 /// Format tag of the `flutter.json` of `aeroform flutter` ([`FlutterDoc`]).
 pub const FLUTTER_FORMAT: &str = "aeroform-flutter/1";
@@ -395,7 +406,7 @@ document_io!(LcoDoc, LCO_FORMAT, "lco.json");
 /// `settings` of `branch.json`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct BranchSettings {
-    /// The numerical method ([`BRANCH_METHOD`]).
+    /// The numerical method ([`branch_method_text`]).
     pub method: String,
     /// The continuation options.
     pub options: BranchOptions,
@@ -476,7 +487,7 @@ pub fn branch_document(
         structure: structure.to_string(),
         model: model.to_string(),
         settings: BranchSettings {
-            method: BRANCH_METHOD.to_string(),
+            method: branch_method_text(set.options.method).to_string(),
             options: set.options,
             u_range_m_s: set.u_range,
         },

@@ -73,6 +73,68 @@ impl<'a> SectionDynamics<'a> {
         4 + self.nlag
     }
 
+    /// Inverse of the total mass matrix (M_s − M_a)⁻¹ at this speed.
+    pub(crate) fn mass_inverse(&self) -> &Matrix2<f64> {
+        &self.minv
+    }
+
+    /// ∂R/∂(h, α, ḣ, α̇) of the structure's restoring force R = (F_h, M_α) at state `z`, by
+    /// central differences (steps 1e-6·max(1, |z_c|), below 1e-3 of a friction velocity
+    /// scale so the smoothed friction is resolved).
+    pub(crate) fn structure_jacobian(&self, z: &[f64]) -> [[f64; 4]; 2] {
+        let mut out = [[0.0; 4]; 2];
+        for c in 0..4 {
+            let h = self.step(z, c);
+            let mut x = [z[0], z[1], z[2], z[3]];
+            x[c] = z[c] + h;
+            let rp =
+                self.section
+                    .structure
+                    .restoring_with([x[0], x[1]], [x[2], x[3]], &self.friction);
+            x[c] = z[c] - h;
+            let rm =
+                self.section
+                    .structure
+                    .restoring_with([x[0], x[1]], [x[2], x[3]], &self.friction);
+            for r in 0..2 {
+                out[r][c] = (rp[r] - rm[r]) / (2.0 * h);
+            }
+        }
+        out
+    }
+
+    /// Central-difference step of state `c` at `z`.
+    fn step(&self, z: &[f64], c: usize) -> f64 {
+        let mut h = 1e-6 * z[c].abs().max(1.0);
+        if c == 2 && self.friction[0] > 0.0 {
+            h = h.min(1e-3 * self.friction[1]);
+        }
+        if c == 3 && self.friction[2] > 0.0 {
+            h = h.min(1e-3 * self.friction[3]);
+        }
+        h
+    }
+
+    /// Jacobian ∂ż/∂z of [`SectionDynamics::rate`] at `z` by central differences, written
+    /// row-major into `jac` (dim × dim values; `work` holds 3·dim scratch values).
+    pub fn jacobian(&self, z: &[f64], jac: &mut [f64], work: &mut [f64]) {
+        let n = self.dim();
+        let (x, rest) = work.split_at_mut(n);
+        let (fp, fm) = rest.split_at_mut(n);
+        x.copy_from_slice(&z[..n]);
+        for c in 0..n {
+            let h = self.step(z, c);
+            x[c] = z[c] + h;
+            self.rate(x, fp);
+            x[c] = z[c] - h;
+            self.rate(x, fm);
+            x[c] = z[c];
+            for r in 0..n {
+                jac[r * n + c] = (fp[r] - fm[r]) / (2.0 * h);
+            }
+        }
+    }
+
     /// Aerodynamic forces (L, M) per unit span at state `z` [N/m, N·m/m].
     #[inline]
     pub fn aero_forces(&self, z: &[f64]) -> [f64; 2] {

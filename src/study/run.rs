@@ -916,6 +916,8 @@ fn branch_stage(
     let opts = aeroelastic::branch::BranchOptions {
         max_points: b.max_points,
         steps_per_period: b.steps_per_period,
+        method: b.method,
+        harmonics: b.harmonics,
         ..aeroelastic::branch::BranchOptions::default()
     };
     let measured = match &b.measured {

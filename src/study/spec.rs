@@ -533,12 +533,23 @@ pub struct BranchSpec {
     /// Largest number of orbits per branch.
     #[serde(default = "branch_points")]
     pub max_points: usize,
-    /// Fixed RK4 steps per period of the shooting integration.
+    /// Fixed RK4 steps per period of the shooting integration (or of harmonic balance's
+    /// variational equation).
     #[serde(default = "steps_per_period")]
     pub steps_per_period: usize,
+    /// Orbit discretisation, `shooting` (default) or `harmonic_balance`.
+    #[serde(default)]
+    pub method: aeroelastic::branch::BranchMethod,
+    /// Harmonics of the harmonic-balance series.
+    #[serde(default = "harmonics")]
+    pub harmonics: usize,
     /// Measured amplitudes to overlay (CSV: `branch, wind_speed_m_s, heave_amp_m,
     /// pitch_amp_rad`), relative to the study file.
     pub measured: Option<PathBuf>,
+}
+
+fn harmonics() -> usize {
+    aeroelastic::branch::BranchOptions::default().harmonics
 }
 
 fn branch_points() -> usize {

@@ -68,6 +68,14 @@ pub trait AeroModel: Send + Sync + std::fmt::Debug {
     /// lag states `lag` (length [`AeroModel::n_lag`]).
     fn forces(&self, flow: &Flow, q: [f64; 2], qd: [f64; 2], lag: &[f64]) -> [f64; 2];
 
+    /// Whether the forces and lag rates are linear in (q, q̇, lag) at a fixed flow. Then the
+    /// Jacobian of the section's rate changes along an orbit only through the structure's
+    /// nonlinear terms (harmonic balance uses this). Default `false`, always safe: callers
+    /// then difference the full rate.
+    fn is_linear(&self) -> bool {
+        false
+    }
+
     /// Rates of the lag states, written to `out` (length [`AeroModel::n_lag`]).
     fn lag_rates(&self, flow: &Flow, q: [f64; 2], qd: [f64; 2], lag: &[f64], out: &mut [f64]);
 

@@ -66,6 +66,9 @@ impl AeroModel for QuasiSteady {
     fn n_lag(&self) -> usize {
         0
     }
+    fn is_linear(&self) -> bool {
+        true
+    }
     fn apparent_mass(&self, flow: &Flow) -> Matrix2<f64> {
         if self.noncirculatory {
             thin_airfoil_apparent_mass(flow.rho, 0.5 * self.chord, self.a)

@@ -318,6 +318,9 @@ impl AeroModel for DerivativeTable {
     fn n_lag(&self) -> usize {
         2 * self.rfa.lags.len()
     }
+    fn is_linear(&self) -> bool {
+        true
+    }
     fn apparent_mass(&self, flow: &Flow) -> Matrix2<f64> {
         let a2 = &self.rfa.a[2];
         let c = 0.5 * flow.rho * self.chord * self.chord;

@@ -54,6 +54,9 @@ impl AeroModel for TheodorsenAero {
     fn n_lag(&self) -> usize {
         2
     }
+    fn is_linear(&self) -> bool {
+        true
+    }
     fn apparent_mass(&self, flow: &Flow) -> Matrix2<f64> {
         thin_airfoil_apparent_mass(flow.rho, 0.5 * self.chord, self.a)
     }

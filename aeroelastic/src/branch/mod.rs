@@ -26,7 +26,7 @@
 
 use std::sync::Arc;
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DVector, Dyn};
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
@@ -37,12 +37,22 @@ use crate::integrate::Rk4;
 use crate::section::Section;
 use crate::{Error, Result};
 
+mod harmonic;
+
 /// Settings of the continuation. Scaled variables: the state is divided by
 /// `amplitude_scale` times the Hopf eigenvector's magnitude of each component (pitch
 /// normalised to 1), T by 0.1 T_Hopf, U by 0.1 U_Hopf; Δs is measured in these units.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct BranchOptions {
-    /// Fixed RK4 steps per period of the shooting integration.
+    /// How each periodic orbit is discretised (DECISIONS.md: harmonic balance is the
+    /// faster, shooting the reference).
+    #[serde(default)]
+    pub method: BranchMethod,
+    /// Harmonics H of the harmonic-balance series (ignored by shooting).
+    #[serde(default = "default_harmonics")]
+    pub harmonics: usize,
+    /// Fixed RK4 steps per period: of the shooting integration, or of the variational
+    /// equation that gives harmonic balance its Floquet multipliers.
     pub steps_per_period: usize,
     /// Largest number of branch points per Hopf point.
     pub max_points: usize,
@@ -66,9 +76,30 @@ pub struct BranchOptions {
     pub n_scan: usize,
 }
 
+/// Discretisation of the periodic orbits of a branch.
+#[derive(
+    Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum BranchMethod {
+    /// Single shooting: the flow over one period by fixed RK4 steps; multipliers from the
+    /// finite-difference monodromy matrix.
+    #[default]
+    Shooting,
+    /// Harmonic balance (AFT) with `harmonics` harmonics; multipliers from the variational
+    /// equation along the series.
+    HarmonicBalance,
+}
+
+fn default_harmonics() -> usize {
+    5
+}
+
 impl Default for BranchOptions {
     fn default() -> Self {
         BranchOptions {
+            method: BranchMethod::default(),
+            harmonics: default_harmonics(),
             steps_per_period: 128,
             max_points: 200,
             ds: 0.05,
@@ -113,6 +144,7 @@ impl BranchOptions {
             ("branch.max_points", self.max_points, 2),
             ("branch.max_newton", self.max_newton, 2),
             ("branch.n_scan", self.n_scan, 2),
+            ("branch.harmonics", self.harmonics, 1),
         ] {
             if v < min {
                 return Err(Error::param(name, v as f64, format!("must be ≥ {min}")));
@@ -190,8 +222,13 @@ pub struct BranchPoint {
     pub stable: bool,
     /// Non-trivial Floquet multipliers (re, im).
     pub multipliers: Vec<[f64; 2]>,
-    /// Initial state z₀ of the orbit (α̇ = 0: a pitch extremum).
+    /// A state on the orbit: z₀ at t = 0 (shooting: α̇ = 0, a pitch extremum; harmonic
+    /// balance: the phase where the first pitch harmonic is a cosine).
     pub state: Vec<f64>,
+    /// The continuation's scaled unknowns of this orbit (method-specific; not written).
+    #[serde(skip)]
+    #[schemars(skip)]
+    pub unknowns: Vec<f64>,
 }
 
 /// Why a branch ended.
@@ -270,14 +307,180 @@ pub struct BranchProgress {
     pub amplitude_alpha: f64,
 }
 
-/// Which extra equation closes the shooting system.
+/// Which extra equation closes the periodic-orbit system.
 enum Closure<'a> {
-    /// Pitch at t = 0 equals the value (start from the Hopf point).
+    /// The pitch-amplitude unknown ([`PeriodicProblem::amplitude_index`]) equals the
+    /// value (start from the Hopf point).
     Alpha(f64),
     /// Pseudo-arclength ⟨Y − Y_k, t_k⟩ = Δs.
     Arclength(&'a DVector<f64>, &'a DVector<f64>, f64),
     /// U fixed (scaled).
     Speed(f64),
+}
+
+/// A discretisation of the periodic orbits of a section: scaled unknowns Y whose last
+/// component is U, and m − 1 equations G(Y) = 0 (periodicity and phase). The continuation
+/// adds the m-th equation ([`Closure`]).
+trait PeriodicProblem {
+    /// Number of unknowns m (U last).
+    fn unknowns(&self) -> usize;
+    /// Index of the unknown fixed by [`Closure::Alpha`] (a pitch amplitude).
+    fn amplitude_index(&self) -> usize;
+    /// Scale of each unknown.
+    fn scales(&self) -> &[f64];
+    /// G(Y), m − 1 values.
+    fn g(&self, y: &DVector<f64>) -> Result<DVector<f64>>;
+    /// ∂G/∂Y at `y` given G(y), (m − 1) × m.
+    fn jac(&self, y: &DVector<f64>, g0: &DVector<f64>) -> Result<DMatrix<f64>>;
+    /// The converged orbit at `y` with its multipliers.
+    fn point(&self, y: &DVector<f64>, jg: &DMatrix<f64>) -> Result<BranchPoint>;
+    /// Initial guess at pitch amplitude `a` \[rad\] from the Hopf eigenvector.
+    fn start(&self, hopf: &HopfPoint, a: f64) -> DVector<f64>;
+    /// Scaled unknowns of a point of a branch of this problem.
+    fn scaled(&self, p: &BranchPoint) -> Result<DVector<f64>>;
+}
+
+/// The problem of `opts.method` for `section` with the scales of `scales` (state
+/// components, T, U: the shooting unknowns' scales).
+fn problem<'a>(
+    section: &'a Section,
+    opts: &BranchOptions,
+    scales: &[f64],
+    hopf: &HopfPoint,
+) -> Box<dyn PeriodicProblem + 'a> {
+    let n = section.n_states();
+    match opts.method {
+        BranchMethod::Shooting => Box::new(Shooting::new(
+            section,
+            opts.steps_per_period,
+            scales.to_vec(),
+        )),
+        BranchMethod::HarmonicBalance => Box::new(harmonic::HarmonicBalance::new(
+            section,
+            opts.harmonics,
+            opts.steps_per_period,
+            &scales[..n],
+            0.1 * hopf.omega,
+            scales[n + 1],
+            hopf.omega,
+        )),
+    }
+}
+
+fn closure_row(p: &dyn PeriodicProblem, c: &Closure, y: &DVector<f64>) -> (DVector<f64>, f64) {
+    let m = p.unknowns();
+    match c {
+        Closure::Alpha(a) => {
+            let i = p.amplitude_index();
+            let mut r = DVector::zeros(m);
+            r[i] = 1.0;
+            (r, y[i] - a)
+        }
+        Closure::Arclength(yk, tk, ds) => ((*tk).clone(), (y - *yk).dot(tk) - ds),
+        Closure::Speed(us) => {
+            let mut r = DVector::zeros(m);
+            r[m - 1] = 1.0;
+            (r, y[m - 1] - us)
+        }
+    }
+}
+
+/// The Jacobian of G with one more row, LU-factored.
+fn augmented(jg: &DMatrix<f64>, row: &DVector<f64>) -> nalgebra::LU<f64, Dyn, Dyn> {
+    let m = jg.ncols();
+    let mut a = DMatrix::zeros(m, m);
+    a.rows_mut(0, m - 1).copy_from(jg);
+    a.set_row(m - 1, &row.transpose());
+    a.lu()
+}
+
+/// Chord Newton for G(Y) = 0 plus the closure, from `y`. `chord` is a factored
+/// approximation of the full Jacobian (the previous point's Jacobian with the previous
+/// tangent as last row); without it, or when convergence is slow, the Jacobian is
+/// computed once at the current iterate. Returns the solution, ∂G/∂Y there and the
+/// iterations used.
+fn newton(
+    p: &dyn PeriodicProblem,
+    mut y: DVector<f64>,
+    closure: &Closure,
+    chord: Option<&nalgebra::LU<f64, Dyn, Dyn>>,
+    tol: f64,
+    max_iter: usize,
+) -> Result<(DVector<f64>, DMatrix<f64>, usize)> {
+    let m = p.unknowns();
+    let mut own = None;
+    let mut refreshed = false;
+    let mut last = f64::INFINITY;
+    for it in 0..max_iter {
+        let g = p.g(&y)?;
+        let (row, c) = closure_row(p, closure, &y);
+        let mut r = DVector::zeros(m);
+        r.rows_mut(0, m - 1).copy_from(&g);
+        r[m - 1] = c;
+        let norm = r.amax();
+        if !norm.is_finite() {
+            return Err(Error::numerical("newton", "non-finite residual"));
+        }
+        if norm < tol {
+            let j = p.jac(&y, &g)?;
+            return Ok((y, j, it));
+        }
+        let slow = norm > 0.5 * last || it == 3;
+        if (chord.is_none() && own.is_none()) || (slow && !refreshed) {
+            own = Some(augmented(&p.jac(&y, &g)?, &row));
+            refreshed = true;
+        } else if norm > 2.0 * last && refreshed {
+            return Err(Error::numerical(
+                "newton",
+                format!("residual grows ({last:.3e} → {norm:.3e})"),
+            ));
+        }
+        last = norm;
+        let lu = own.as_ref().or(chord).expect("a factored Jacobian");
+        let dy = lu
+            .solve(&(-r))
+            .ok_or_else(|| Error::numerical("newton", "singular Jacobian"))?;
+        y += dy;
+    }
+    Err(Error::numerical(
+        "newton",
+        format!("no convergence in {max_iter} iterations (residual {last:.3e})"),
+    ))
+}
+
+/// Tangent of the solution curve: null vector of the Jacobian of G, oriented along
+/// `prev`; also returns the factored [∂G/∂Y; prevᵀ] (the next point's chord matrix).
+fn tangent(
+    jg: &DMatrix<f64>,
+    prev: &DVector<f64>,
+) -> Result<(DVector<f64>, nalgebra::LU<f64, Dyn, Dyn>)> {
+    let m = jg.ncols();
+    let lu = augmented(jg, prev);
+    let mut rhs = DVector::zeros(m);
+    rhs[m - 1] = 1.0;
+    let t = lu
+        .solve(&rhs)
+        .ok_or_else(|| Error::numerical("tangent", "singular extended Jacobian"))?;
+    let nrm = t.norm();
+    if !(nrm.is_finite() && nrm > 0.0) {
+        return Err(Error::numerical("tangent", "degenerate tangent"));
+    }
+    Ok((t / nrm, lu))
+}
+
+/// Non-trivial Floquet multipliers of a monodromy matrix (the trivial multiplier 1 removed
+/// as the eigenvalue closest to 1) and their largest modulus.
+fn floquet(mono: DMatrix<f64>) -> Result<(Vec<Complex64>, f64)> {
+    let mut mu = eigenvalues(&mono)?;
+    if let Some((k, _)) = mu
+        .iter()
+        .enumerate()
+        .min_by(|a, b| (a.1 - 1.0).norm().total_cmp(&(b.1 - 1.0).norm()))
+    {
+        mu.remove(k);
+    }
+    let max_floquet = mu.iter().map(|m| m.norm()).fold(0.0, f64::max);
+    Ok((mu, max_floquet))
 }
 
 /// The shooting problem of one section in scaled unknowns Y = (z₀, T, U) / scales.
@@ -353,18 +556,32 @@ impl<'a> Shooting<'a> {
         }
         Ok(Flow { end: z, samples })
     }
+}
 
-    /// Periodicity and phase residuals G(Y) (n + 1 values, scaled).
-    fn g(&self, y: &DVector<f64>, record: bool) -> Result<(DVector<f64>, Flow)> {
+impl PeriodicProblem for Shooting<'_> {
+    fn unknowns(&self) -> usize {
+        self.n + 2
+    }
+
+    fn amplitude_index(&self) -> usize {
+        1
+    }
+
+    fn scales(&self) -> &[f64] {
+        &self.scales
+    }
+
+    /// Periodicity and phase residuals (n + 1 values, scaled).
+    fn g(&self, y: &DVector<f64>) -> Result<DVector<f64>> {
         let (z, t, u) = self.unscale(y);
-        let f = self.flow(&z, t, u, record)?;
+        let f = self.flow(&z, t, u, false)?;
         let n = self.n;
         let mut g = DVector::zeros(n + 1);
         for i in 0..n {
             g[i] = (f.end[i] - z[i]) / self.scales[i];
         }
         g[n] = y[3];
-        Ok((g, f))
+        Ok(g)
     }
 
     /// Forward-difference Jacobian of G at `y` given G(y).
@@ -375,106 +592,10 @@ impl<'a> Shooting<'a> {
             let d = 1e-7 * (1.0 + y[c].abs());
             let mut yp = y.clone();
             yp[c] += d;
-            let (gp, _) = self.g(&yp, false)?;
+            let gp = self.g(&yp)?;
             j.set_column(c, &((gp - g0) / d));
         }
         Ok(j)
-    }
-
-    fn closure_row(&self, c: &Closure, y: &DVector<f64>) -> (DVector<f64>, f64) {
-        let m = self.n + 2;
-        match c {
-            Closure::Alpha(a) => {
-                let mut r = DVector::zeros(m);
-                r[1] = 1.0;
-                (r, y[1] - a)
-            }
-            Closure::Arclength(yk, tk, ds) => ((*tk).clone(), (y - *yk).dot(tk) - ds),
-            Closure::Speed(us) => {
-                let mut r = DVector::zeros(m);
-                r[m - 1] = 1.0;
-                (r, y[m - 1] - us)
-            }
-        }
-    }
-
-    /// Newton (chord, Jacobian refreshed once when slow) from `y`; returns the solution,
-    /// G and the Jacobian of G at the solution, and the iterations used.
-    fn newton(
-        &self,
-        mut y: DVector<f64>,
-        closure: &Closure,
-        jac: Option<&DMatrix<f64>>,
-        tol: f64,
-        max_iter: usize,
-    ) -> Result<(DVector<f64>, DMatrix<f64>, usize)> {
-        let m = self.n + 2;
-        let mut jg = match jac {
-            Some(j) => j.clone(),
-            None => {
-                let (g0, _) = self.g(&y, false)?;
-                self.jac(&y, &g0)?
-            }
-        };
-        let mut refreshed = jac.is_none();
-        let mut last = f64::INFINITY;
-        for it in 0..max_iter {
-            let (g, _) = self.g(&y, false)?;
-            let (row, c) = self.closure_row(closure, &y);
-            let mut r = DVector::zeros(m);
-            r.rows_mut(0, m - 1).copy_from(&g);
-            r[m - 1] = c;
-            let norm = r.amax();
-            if !norm.is_finite() {
-                return Err(Error::numerical("newton", "non-finite residual"));
-            }
-            if norm < tol {
-                let j = self.jac(&y, &g)?;
-                return Ok((y, j, it));
-            }
-            if (norm > 0.5 * last || it == 3) && !refreshed {
-                jg = self.jac(&y, &g)?;
-                refreshed = true;
-            } else if norm > 2.0 * last && refreshed {
-                return Err(Error::numerical(
-                    "newton",
-                    format!("residual grows ({last:.3e} → {norm:.3e})"),
-                ));
-            }
-            last = norm;
-            let mut a = DMatrix::zeros(m, m);
-            a.rows_mut(0, m - 1).copy_from(&jg);
-            a.set_row(m - 1, &row.transpose());
-            let dy = a
-                .lu()
-                .solve(&(-r))
-                .ok_or_else(|| Error::numerical("newton", "singular Jacobian"))?;
-            y += dy;
-        }
-        Err(Error::numerical(
-            "newton",
-            format!("no convergence in {max_iter} iterations (residual {last:.3e})"),
-        ))
-    }
-
-    /// Tangent of the solution curve: null vector of the Jacobian of G, oriented along
-    /// `prev`.
-    fn tangent(&self, jg: &DMatrix<f64>, prev: &DVector<f64>) -> Result<DVector<f64>> {
-        let m = self.n + 2;
-        let mut a = DMatrix::zeros(m, m);
-        a.rows_mut(0, m - 1).copy_from(jg);
-        a.set_row(m - 1, &prev.transpose());
-        let mut rhs = DVector::zeros(m);
-        rhs[m - 1] = 1.0;
-        let t = a
-            .lu()
-            .solve(&rhs)
-            .ok_or_else(|| Error::numerical("tangent", "singular extended Jacobian"))?;
-        let nrm = t.norm();
-        if !(nrm.is_finite() && nrm > 0.0) {
-            return Err(Error::numerical("tangent", "degenerate tangent"));
-        }
-        Ok(t / nrm)
     }
 
     /// The orbit at `y` (converged) with its multipliers from the Jacobian `jg`.
@@ -490,15 +611,7 @@ impl<'a> Shooting<'a> {
         for i in 0..n {
             mono[(i, i)] += 1.0;
         }
-        let mut mu = eigenvalues(&mono)?;
-        if let Some((k, _)) = mu
-            .iter()
-            .enumerate()
-            .min_by(|a, b| (a.1 - 1.0).norm().total_cmp(&(b.1 - 1.0).norm()))
-        {
-            mu.remove(k);
-        }
-        let max_floquet = mu.iter().map(|m| m.norm()).fold(0.0, f64::max);
+        let (mu, max_floquet) = floquet(mono)?;
         Ok(BranchPoint {
             u,
             period: t,
@@ -511,10 +624,23 @@ impl<'a> Shooting<'a> {
             stable: max_floquet < 1.0,
             multipliers: mu.iter().map(|m| [m.re, m.im]).collect(),
             state: z,
+            unknowns: y.iter().copied().collect(),
         })
     }
 
-    fn scaled(&self, p: &BranchPoint) -> DVector<f64> {
+    fn start(&self, hopf: &HopfPoint, a: f64) -> DVector<f64> {
+        let n = self.n;
+        let mut y = DVector::zeros(n + 2);
+        for i in 0..n {
+            y[i] = a * hopf.eigenvector[i].re / self.scales[i];
+        }
+        y[3] = 0.0;
+        y[n] = std::f64::consts::TAU / hopf.omega / self.scales[n];
+        y[n + 1] = hopf.u / self.scales[n + 1];
+        y
+    }
+
+    fn scaled(&self, p: &BranchPoint) -> Result<DVector<f64>> {
         let n = self.n;
         let mut y = DVector::zeros(n + 2);
         for i in 0..n {
@@ -522,7 +648,7 @@ impl<'a> Shooting<'a> {
         }
         y[n] = p.period / self.scales[n];
         y[n + 1] = p.u / self.scales[n + 1];
-        y
+        Ok(y)
     }
 }
 
@@ -609,27 +735,9 @@ impl Section {
     pub fn equilibrium_jacobian(&self, u: f64) -> Result<DMatrix<f64>> {
         let d = SectionDynamics::new(self, u)?;
         let n = d.dim();
-        let fr = self.structure.friction_resolved();
-        let mut j = DMatrix::zeros(n, n);
-        let (mut fp, mut fm) = (vec![0.0; n], vec![0.0; n]);
-        for c in 0..n {
-            let mut h: f64 = 1e-6;
-            if c == 2 && fr[0] > 0.0 {
-                h = h.min(1e-3 * fr[1]);
-            }
-            if c == 3 && fr[2] > 0.0 {
-                h = h.min(1e-3 * fr[3]);
-            }
-            let mut z = vec![0.0; n];
-            z[c] = h;
-            d.rate(&z, &mut fp);
-            z[c] = -h;
-            d.rate(&z, &mut fm);
-            for r in 0..n {
-                j[(r, c)] = (fp[r] - fm[r]) / (2.0 * h);
-            }
-        }
-        Ok(j)
+        let mut j = vec![0.0; n * n];
+        d.jacobian(&vec![0.0; n], &mut j, &mut vec![0.0; 3 * n]);
+        Ok(DMatrix::from_row_slice(n, n, &j))
     }
 
     /// Largest real part of the oscillatory eigenvalues (|Im| > 1e-6 ω_α) of the
@@ -725,7 +833,6 @@ impl Section {
     ) -> Result<Branch> {
         opts.check()?;
         self.check_smooth()?;
-        let n = self.n_states();
         let t_h = std::f64::consts::TAU / hopf.omega;
         let vmax = hopf
             .eigenvector
@@ -739,17 +846,13 @@ impl Section {
             .collect();
         scales.push(0.1 * t_h);
         scales.push(0.1 * hopf.u);
-        let sh = Shooting::new(self, opts.steps_per_period, scales);
+        let sh = problem(self, opts, &scales, hopf);
+        let sh = sh.as_ref();
+        let ai = sh.amplitude_index();
         let start = |a: f64| -> Result<(DVector<f64>, DMatrix<f64>)> {
-            let mut y = DVector::zeros(n + 2);
-            for i in 0..n {
-                y[i] = a * hopf.eigenvector[i].re / sh.scales[i];
-            }
-            y[3] = 0.0;
-            y[n] = t_h / sh.scales[n];
-            y[n + 1] = hopf.u / sh.scales[n + 1];
-            let c = Closure::Alpha(a / sh.scales[1]);
-            sh.newton(y, &c, None, opts.newton_tol, 3 * opts.max_newton)
+            let y = sh.start(hopf, a);
+            let c = Closure::Alpha(a / sh.scales()[ai]);
+            newton(sh, y, &c, None, opts.newton_tol, 3 * opts.max_newton)
                 .map(|(y, j, _)| (y, j))
                 .map_err(|e| {
                     Error::numerical(
@@ -775,11 +878,10 @@ impl Section {
             });
         }
         let sec = &y1 - &y0;
-        let mut t = sh.tangent(&j1, &(&sec / sec.norm()))?;
+        let (mut t, mut chord) = tangent(&j1, &(&sec / sec.norm()))?;
         let mut ts = vec![sec.clone() / sec.norm(), t.clone()];
         let mut arc = vec![0.0, sec.norm()];
         let mut yk = y1;
-        let mut jk = j1;
         let mut ds = opts.ds;
         let mut events = Vec::new();
         let stop;
@@ -790,14 +892,13 @@ impl Section {
             }
             let pred = &yk + &t * ds;
             let c = Closure::Arclength(&yk, &t, ds);
-            let res = sh
-                .newton(pred, &c, Some(&jk), opts.newton_tol, opts.max_newton)
+            let res = newton(sh, pred, &c, Some(&chord), opts.newton_tol, opts.max_newton)
                 .and_then(|(y, j, it)| {
-                    let tn = sh.tangent(&j, &t)?;
-                    Ok((y, j, it, tn))
+                    let (tn, lu) = tangent(&j, &t)?;
+                    Ok((y, j, it, tn, lu))
                 });
             let accepted = match res {
-                Ok((y, j, it, tn)) if tn.dot(&t) > 0.8 => Some((y, j, it, tn)),
+                Ok((y, j, it, tn, lu)) if tn.dot(&t) > 0.8 => Some((y, j, it, tn, lu)),
                 Ok(_) => None,
                 Err(e) => {
                     if ds * 0.5 < opts.ds_min {
@@ -817,7 +918,7 @@ impl Section {
                     None
                 }
             };
-            let Some((y, j, it, tn)) = accepted else {
+            let Some((y, j, it, tn, lu)) = accepted else {
                 ds *= 0.5;
                 if ds < opts.ds_min {
                     let last = points.last().expect("two start points");
@@ -856,7 +957,7 @@ impl Section {
             points.push(p);
             ts.push(tn.clone());
             // Events between k−1 and k.
-            let ui = n + 1;
+            let ui = sh.unknowns() - 1;
             let fold = ts[k - 1][ui] * ts[k][ui] < 0.0;
             if fold {
                 let s3 = [arc[k - 2], arc[k - 1], arc[k]];
@@ -900,7 +1001,7 @@ impl Section {
                 amplitude_alpha: points[k].amplitude_alpha,
             });
             yk = y;
-            jk = j;
+            chord = lu;
             t = tn;
             if it <= 3 {
                 ds = (ds * 1.5).min(opts.ds_max);
@@ -922,7 +1023,7 @@ impl Section {
             events,
             stop,
             criticality,
-            scales: sh.scales,
+            scales,
         })
     }
 
@@ -979,7 +1080,8 @@ impl Section {
         stable: bool,
         opts: &BranchOptions,
     ) -> Result<BranchPoint> {
-        let sh = Shooting::new(self, opts.steps_per_period, branch.scales.clone());
+        let sh = problem(self, opts, &branch.scales, &branch.hopf);
+        let sh = sh.as_ref();
         let seg = branch.points.windows(2).find(|w| {
             w[0].stable == stable
                 && w[1].stable == stable
@@ -997,10 +1099,10 @@ impl Section {
             )
         })?;
         let f = (u - w[0].u) / (w[1].u - w[0].u);
-        let y = sh.scaled(&w[0]) * (1.0 - f) + sh.scaled(&w[1]) * f;
-        let n = self.n_states();
-        let c = Closure::Speed(u / sh.scales[n + 1]);
-        let (y, j, _) = sh.newton(y, &c, None, opts.newton_tol, 3 * opts.max_newton)?;
+        let y = sh.scaled(&w[0])? * (1.0 - f) + sh.scaled(&w[1])? * f;
+        let m = sh.unknowns();
+        let c = Closure::Speed(u / sh.scales()[m - 1]);
+        let (y, j, _) = newton(sh, y, &c, None, opts.newton_tol, 3 * opts.max_newton)?;
         sh.point(&y, &j)
     }
 }
@@ -1278,8 +1380,21 @@ mod tests {
     /// the onset follows U − U_F ∝ A² (log-log slope 2 over the first orbits).
     #[test]
     fn supercritical_branch_matches_time_integration() {
+        supercritical(&BranchOptions::default());
+    }
+
+    /// The same reference by harmonic balance (5 harmonics).
+    #[test]
+    fn supercritical_branch_by_harmonic_balance_matches_time_integration() {
+        supercritical(&BranchOptions {
+            method: BranchMethod::HarmonicBalance,
+            ..BranchOptions::default()
+        });
+    }
+
+    fn supercritical(opts: &BranchOptions) {
+        let opts = *opts;
         let s = hp1_cubic_pitch();
-        let opts = BranchOptions::default();
         let set = s.lco_branches(1.5, 3.0, &opts, &no_obs).unwrap();
         let b = &set.branches[0];
         assert_eq!(b.criticality, "supercritical");
@@ -1338,8 +1453,21 @@ mod tests {
     /// sweep to 0.1 %.
     #[test]
     fn subcritical_branch_has_a_fold_and_matches_down_sweep() {
+        subcritical(&BranchOptions::default());
+    }
+
+    /// The same reference by harmonic balance (5 harmonics).
+    #[test]
+    fn subcritical_branch_by_harmonic_balance_has_a_fold_and_matches_down_sweep() {
+        subcritical(&BranchOptions {
+            method: BranchMethod::HarmonicBalance,
+            ..BranchOptions::default()
+        });
+    }
+
+    fn subcritical(opts: &BranchOptions) {
+        let opts = *opts;
         let s = hp1_soft_hard();
-        let opts = BranchOptions::default();
         let set = s.lco_branches(1.0, 3.0, &opts, &no_obs).unwrap();
         let b = &set.branches[0];
         assert_eq!(b.criticality, "subcritical");
