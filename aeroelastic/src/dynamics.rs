@@ -31,8 +31,11 @@ pub struct SectionDynamics<'a> {
 }
 
 impl<'a> SectionDynamics<'a> {
-    /// Dynamics of `section` at wind speed `u` \[m/s\] (`u = 0` is still air: the
-    /// aerodynamic forces of the model at zero speed).
+    /// Dynamics of `section` at wind speed `u` \[m/s\] (`u = 0` is still air: the zero-speed
+    /// limit of every model, its apparent mass M_a with no other force and frozen lag
+    /// states — models written in U-normalised variables cannot be evaluated at U = 0; a
+    /// force a model would carry at zero speed, such as a constant offset of
+    /// [`crate::effects`], is dropped with the rest).
     ///
     /// # Errors
     /// [`Error::InvalidParameter`] when `u` is negative or not finite;
@@ -138,6 +141,9 @@ impl<'a> SectionDynamics<'a> {
     /// Aerodynamic forces (L, M) per unit span at state `z` [N/m, N·m/m].
     #[inline]
     pub fn aero_forces(&self, z: &[f64]) -> [f64; 2] {
+        if self.flow.u == 0.0 {
+            return [0.0; 2];
+        }
         self.section
             .aero
             .forces(&self.flow, [z[0], z[1]], [z[2], z[3]], &z[4..4 + self.nlag])
@@ -150,15 +156,69 @@ impl<'a> SectionDynamics<'a> {
         let q = [z[0], z[1]];
         let qd = [z[2], z[3]];
         let lag = &z[4..4 + self.nlag];
-        let f = self.section.aero.forces(&self.flow, q, qd, lag);
+        let still = self.flow.u == 0.0;
+        let f = if still {
+            [0.0; 2]
+        } else {
+            self.section.aero.forces(&self.flow, q, qd, lag)
+        };
         let r = self.section.structure.restoring_with(q, qd, &self.friction);
         let g = [f[0] - r[0], f[1] - r[1]];
         dz[0] = qd[0];
         dz[1] = qd[1];
         dz[2] = self.minv[(0, 0)] * g[0] + self.minv[(0, 1)] * g[1];
         dz[3] = self.minv[(1, 0)] * g[0] + self.minv[(1, 1)] * g[1];
-        self.section
-            .aero
-            .lag_rates(&self.flow, q, qd, lag, &mut dz[4..4 + self.nlag]);
+        if still {
+            dz[4..4 + self.nlag].fill(0.0);
+        } else {
+            self.section
+                .aero
+                .lag_rates(&self.flow, q, qd, lag, &mut dz[4..4 + self.nlag]);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::reference::flat_plate_table;
+    use crate::tunnel::{free_record, FreeOptions};
+
+    /// A derivative table is written in U-normalised variables (q̇B/U): evaluated at U = 0
+    /// its forces are 0·∞ = NaN. Still air is the zero-speed limit instead: the structure
+    /// with the total mass M_s − M_a, no other force, frozen lag states.
+    #[test]
+    fn still_air_is_the_apparent_mass_limit_for_every_model() {
+        let s = flat_plate_table(2);
+        let d = SectionDynamics::new(&s, 0.0).unwrap();
+        let n = d.dim();
+        let z: Vec<f64> = (0..n).map(|i| 0.01 * (i as f64 + 1.0)).collect();
+        let mut dz = vec![0.0; n];
+        d.rate(&z, &mut dz);
+        assert!(dz.iter().all(|v| v.is_finite()), "{dz:?}");
+        assert!(dz[4..].iter().all(|&v| v == 0.0), "lag rates {dz:?}");
+        let r = s.structure.restoring([z[0], z[1]], [z[2], z[3]]);
+        let minv = s.total_mass(0.0).try_inverse().unwrap();
+        for c in 0..2 {
+            let want = -(minv[(c, 0)] * r[0] + minv[(c, 1)] * r[1]);
+            assert!(
+                (dz[2 + c] - want).abs() <= 1e-12 * want.abs(),
+                "{c}: {} vs {want}",
+                dz[2 + c]
+            );
+        }
+        // and the virtual tunnel records a still-air decay of it
+        let opts = FreeOptions {
+            duration: 2.0,
+            initial: [0.0, 0.05, 0.0, 0.0],
+            ..FreeOptions::new(1)
+        };
+        let (rec, run) = free_record(&s, 0.0, "still", &opts, 1).unwrap();
+        assert!(run.left_bound_at.is_none());
+        assert!(rec.alpha.iter().all(|v| v.is_finite()));
+        assert_eq!(
+            rec.alpha.len(),
+            (opts.rate * opts.duration).round() as usize
+        );
     }
 }

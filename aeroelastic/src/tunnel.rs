@@ -1200,10 +1200,11 @@ pub struct FreeRun {
     pub left_bound_at: Option<f64>,
 }
 
-/// One free-response record of `section` at wind speed `u` (SI per unit span).
+/// One free-response record of `section` at wind speed `u` (SI per unit span; `u = 0` is a
+/// still-air decay).
 ///
 /// # Errors
-/// [`Error::InvalidParameter`] for bad options or `u ≤ 0`; [`Error::Numerical`] when
+/// [`Error::InvalidParameter`] for bad options or `u < 0`; [`Error::Numerical`] when
 /// M_s − M_a is singular.
 pub fn free_record(
     section: &Section,
@@ -1213,11 +1214,18 @@ pub fn free_record(
     seed: u64,
 ) -> Result<(Record, FreeRun)> {
     opts.check()?;
-    positive("wind_speed", u)?;
+    if !(u.is_finite() && u >= 0.0) {
+        return Err(Error::param("wind_speed", u, "must be finite and ≥ 0"));
+    }
     let b = section.aero.chord();
-    let k_model = section
-        .aero
-        .with_reduced_frequency(b * section.structure.omega_alpha() / u);
+    // Still air (U = 0): the model's zero-speed forces (apparent mass), no K to evaluate at.
+    let k_model = if u > 0.0 {
+        section
+            .aero
+            .with_reduced_frequency(b * section.structure.omega_alpha() / u)
+    } else {
+        None
+    };
     // The section at the pitch frequency's K when the model's coefficients depend on K.
     let k_section;
     let sec = match k_model {
