@@ -128,15 +128,8 @@ impl IdentifiedOptions {
     }
 }
 
-/// Which reduced frequency a table is over.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
-#[serde(rename_all = "snake_case")]
-pub enum ReducedFrequency {
-    /// K_α = Bω_α/U (α-terms).
-    KAlpha,
-    /// K_h = Bω_h/U (h-terms).
-    KH,
-}
+pub use identify::eq19::ReducedFrequency;
+use identify::eq19::EQ19;
 
 /// One aggregated table point: the median over the cases at one K, and its spread.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
@@ -235,19 +228,6 @@ const MOMENT_NAMES: [Derivative; 4] = [
     Derivative::A2,
     Derivative::A3,
     Derivative::A4,
-];
-/// Terms and K of derivative index 1..4 (d1 = h_dot over K_h, d2 = alpha_dot over K_α…).
-const LINEAR: [(&str, ReducedFrequency); 4] = [
-    ("h_dot", ReducedFrequency::KH),
-    ("alpha_dot", ReducedFrequency::KAlpha),
-    ("alpha", ReducedFrequency::KAlpha),
-    ("h", ReducedFrequency::KH),
-];
-/// N1..N3: term, powers, k_power.
-const NONLINEAR: [(&str, [u32; 4], i32); 3] = [
-    ("alpha*alpha_dot", [1, 1, 0, 0], 3),
-    ("alpha^3", [3, 0, 0, 0], 6),
-    ("alpha_dot^3", [0, 3, 0, 0], 3),
 ];
 
 /// Robust standard deviation 1.4826·MAD around `med`.
@@ -534,7 +514,7 @@ impl IdentifiedLaw {
         for (channel, names) in [(Channel::Lift, LIFT_NAMES), (Channel::Moment, MOMENT_NAMES)] {
             for (i, derivative) in names.into_iter().enumerate() {
                 let name = derivative.name();
-                let (term, over) = LINEAR[i];
+                let (term, over) = (EQ19[i].name, EQ19[i].over);
                 let mut pts = Vec::new();
                 let mut missing = Vec::new();
                 for c in &cases {
@@ -635,9 +615,10 @@ impl IdentifiedLaw {
         let q: Vec<QEntry> = derivatives
             .iter()
             .map(|s| {
-                let index = ["H1", "H2", "H3", "H4", "A1", "A2", "A3", "A4"]
+                let index = LIFT_NAMES
                     .iter()
-                    .position(|n| *n == s.name);
+                    .chain(&MOMENT_NAMES)
+                    .position(|d| d.name() == s.name);
                 let tail = index.filter(|_| opts.extrapolation == Extrapolation::Theodorsen);
                 QEntry::new(&s.points, tail)
             })
@@ -672,7 +653,8 @@ impl IdentifiedLaw {
         let mut nonlinear = Vec::new();
         let mut terms = Vec::new();
         for channel in [Channel::Lift, Channel::Moment] {
-            for (j, (term, powers, k_power)) in NONLINEAR.iter().enumerate() {
+            for (j, t) in EQ19[4..].iter().enumerate() {
+                let (term, powers, k_power) = (t.name, &t.powers, &t.k_power);
                 let mut pts = Vec::new();
                 let mut n_null = 0;
                 for c in &cases {

@@ -423,9 +423,9 @@ pub fn finite_block_factor(n_blocks: usize, level: f64) -> f64 {
 /// Eq. 19 names of a force, in [`EQ19_TERMS`] order.
 fn eq19_names(moment: bool) -> [&'static str; 7] {
     if moment {
-        ["A1", "A2", "A3", "A4", "N1", "N2", "N3"]
+        crate::eq19::MOMENT_NAMES
     } else {
-        ["H1", "H2", "H3", "H4", "N1", "N2", "N3"]
+        crate::eq19::LIFT_NAMES
     }
 }
 

@@ -17,27 +17,82 @@ use serde::{Deserialize, Serialize};
 
 use crate::{Error, Result};
 
-/// The seven Eq. 19 terms in the order (d1, d2, d3, d4, N1, N2, N3).
+/// Which reduced frequency a term (or a table of its values) is over.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum ReducedFrequency {
+    /// K_α = Bω_α/U (α-terms).
+    KAlpha,
+    /// K_h = Bω_h/U (h-terms).
+    KH,
+}
+
+/// One term of Eq. 19: the library term, the reduced frequency and power that turn its
+/// coefficient ξ into the Eq. 19 value (value = ξ / K^`k_power`), and its powers of the
+/// library variables (α, Bα̇/U, h/B, ḣ/U).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Eq19Term {
+    /// Library term name (DATA_FORMAT.md).
+    pub name: &'static str,
+    /// The reduced frequency that scales it.
+    pub over: ReducedFrequency,
+    /// Power of that reduced frequency.
+    pub k_power: i32,
+    /// Powers of (α, Bα̇/U, h/B, ḣ/U).
+    pub powers: [u32; 4],
+}
+
+/// The seven Eq. 19 terms in the order (d1, d2, d3, d4, N1, N2, N3): the one table that
+/// identification, the identified law and the figures read.
+pub const EQ19: [Eq19Term; 7] = {
+    use ReducedFrequency::{KAlpha, KH};
+    const fn t(
+        name: &'static str,
+        over: ReducedFrequency,
+        k_power: i32,
+        powers: [u32; 4],
+    ) -> Eq19Term {
+        Eq19Term {
+            name,
+            over,
+            k_power,
+            powers,
+        }
+    }
+    [
+        t("h_dot", KH, 1, [0, 0, 0, 1]),
+        t("alpha_dot", KAlpha, 1, [0, 1, 0, 0]),
+        t("alpha", KAlpha, 2, [1, 0, 0, 0]),
+        t("h", KH, 2, [0, 0, 1, 0]),
+        t("alpha*alpha_dot", KAlpha, 3, [1, 1, 0, 0]),
+        t("alpha^3", KAlpha, 6, [3, 0, 0, 0]),
+        t("alpha_dot^3", KAlpha, 3, [0, 3, 0, 0]),
+    ]
+};
+
+/// The names of [`EQ19`], in its order.
 pub const EQ19_TERMS: [&str; 7] = [
-    "h_dot",
-    "alpha_dot",
-    "alpha",
-    "h",
-    "alpha*alpha_dot",
-    "alpha^3",
-    "alpha_dot^3",
+    EQ19[0].name,
+    EQ19[1].name,
+    EQ19[2].name,
+    EQ19[3].name,
+    EQ19[4].name,
+    EQ19[5].name,
+    EQ19[6].name,
 ];
 
-/// Which reduced frequency and power scale each Eq. 19 term: (uses K_α, power).
-const SCALING: [(bool, i32); 7] = [
-    (false, 1),
-    (true, 1),
-    (true, 2),
-    (false, 2),
-    (true, 3),
-    (true, 6),
-    (true, 3),
-];
+/// Names of the Eq. 19 values of the lift, in [`EQ19`] order (H1*..H4*, N1*..N3*).
+pub const LIFT_NAMES: [&str; 7] = ["H1", "H2", "H3", "H4", "N1", "N2", "N3"];
+/// Names of the Eq. 19 values of the moment, in [`EQ19`] order (A1*..A4*, N1*..N3*).
+pub const MOMENT_NAMES: [&str; 7] = ["A1", "A2", "A3", "A4", "N1", "N2", "N3"];
+
+/// The reduced frequency of `t` among (K_α, K_h).
+fn k_of(t: &Eq19Term, k_alpha: Option<f64>, k_h: Option<f64>) -> Option<f64> {
+    match t.over {
+        ReducedFrequency::KAlpha => k_alpha,
+        ReducedFrequency::KH => k_h,
+    }
+}
 
 /// The Eq. 19 values of one force in order (d1, d2, d3, d4, N1, N2, N3), where d are
 /// A1*..A4* (moment) or H1*..H4* (lift).
@@ -49,10 +104,9 @@ impl Eq19Values {
     /// `None` when unidentifiable) and the reduced frequencies K_α, K_h.
     pub fn from_coefficients(xi: [Option<f64>; 7], k_alpha: Option<f64>, k_h: Option<f64>) -> Self {
         let mut out = [None; 7];
-        for (i, (&(uses_alpha, pow), x)) in SCALING.iter().zip(xi).enumerate() {
-            let k = if uses_alpha { k_alpha } else { k_h };
-            out[i] = match (x, k) {
-                (Some(x), Some(k)) if k.is_finite() && k != 0.0 => Some(x / k.powi(pow)),
+        for (i, (t, x)) in EQ19.iter().zip(xi).enumerate() {
+            out[i] = match (x, k_of(t, k_alpha, k_h)) {
+                (Some(x), Some(k)) if k.is_finite() && k != 0.0 => Some(x / k.powi(t.k_power)),
                 _ => None,
             };
         }
@@ -64,10 +118,9 @@ impl Eq19Values {
     /// missing).
     pub fn to_coefficients(&self, k_alpha: Option<f64>, k_h: Option<f64>) -> [Option<f64>; 7] {
         let mut out = [None; 7];
-        for (i, (&(uses_alpha, pow), d)) in SCALING.iter().zip(self.0).enumerate() {
-            let k = if uses_alpha { k_alpha } else { k_h };
-            out[i] = match (d, k) {
-                (Some(d), Some(k)) if k.is_finite() => Some(d * k.powi(pow)),
+        for (i, (t, d)) in EQ19.iter().zip(self.0).enumerate() {
+            out[i] = match (d, k_of(t, k_alpha, k_h)) {
+                (Some(d), Some(k)) if k.is_finite() => Some(d * k.powi(t.k_power)),
                 _ => None,
             };
         }

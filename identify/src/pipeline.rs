@@ -507,9 +507,9 @@ impl Identification {
                     gf.support.join(", ")
                 );
                 let names = if force == "moment" {
-                    ["A1", "A2", "A3", "A4"]
+                    crate::eq19::MOMENT_NAMES
                 } else {
-                    ["H1", "H2", "H3", "H4"]
+                    crate::eq19::LIFT_NAMES
                 };
                 let _ = writeln!(
                     s,
@@ -571,10 +571,10 @@ impl Identification {
             for c in &e.cases {
                 let mut line = format!("  {:<20}", c.id);
                 for (force, names) in [
-                    (&c.lift, ["H1", "H2", "H3", "H4"]),
-                    (&c.moment, ["A1", "A2", "A3", "A4"]),
+                    (&c.lift, crate::eq19::LIFT_NAMES),
+                    (&c.moment, crate::eq19::MOMENT_NAMES),
                 ] {
-                    for n in names {
+                    for &n in &names[..4] {
                         if let Some(iv) = force.eq19.get(n) {
                             let _ = write!(line, " {n} [{:.4}, {:.4}]", iv.lower, iv.upper);
                         }

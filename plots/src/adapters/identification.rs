@@ -49,32 +49,12 @@ impl Force {
 
     /// Eq. 19 names and values of a case, in the order H1..H4 (A1..A4), N1..N3.
     fn eq19(self, c: &CaseResult) -> [(&'static str, Option<f64>); 7] {
-        match self {
-            Force::Lift => {
-                let e = &c.lift.eq19;
-                [
-                    ("H1", e.H1),
-                    ("H2", e.H2),
-                    ("H3", e.H3),
-                    ("H4", e.H4),
-                    ("N1", e.N1),
-                    ("N2", e.N2),
-                    ("N3", e.N3),
-                ]
-            }
-            Force::Moment => {
-                let e = &c.moment.eq19;
-                [
-                    ("A1", e.A1),
-                    ("A2", e.A2),
-                    ("A3", e.A3),
-                    ("A4", e.A4),
-                    ("N1", e.N1),
-                    ("N2", e.N2),
-                    ("N3", e.N3),
-                ]
-            }
-        }
+        use identify::eq19::{Eq19Values, LIFT_NAMES, MOMENT_NAMES};
+        let (names, values) = match self {
+            Force::Lift => (LIFT_NAMES, Eq19Values::from(c.lift.eq19)),
+            Force::Moment => (MOMENT_NAMES, Eq19Values::from(c.moment.eq19)),
+        };
+        std::array::from_fn(|i| (names[i], values.0[i]))
     }
 }
 
