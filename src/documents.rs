@@ -27,7 +27,7 @@ pub struct FlutterRun {
     /// The run's label in tables and figures.
     pub label: String,
     /// Aerodynamic model of the run (`theodorsen`, `truth`, `identified`, …).
-    pub model: String,
+    pub model: crate::study_spec::StudyModel,
     /// Semi-chord b = B/2 \[m\].
     pub semi_chord: f64,
     /// Still-air pitch frequency ω_α \[rad/s\]; reduced speed = U/(b·ω_α).

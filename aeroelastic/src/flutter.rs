@@ -14,10 +14,12 @@ use crate::{Error, Result};
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
 pub enum FlutterMethod {
     /// p-method: eigenvalues of the state matrix of the time-domain realisation (lag
-    /// states included; Theodorsen → Jones' lags, tables → Roger RFA).
+    /// states included; Theodorsen → Jones' lags, tables → Roger RFA). Read also as `p`.
+    #[serde(alias = "p")]
     P,
     /// p-k method: det(p² M + p C + K − H(ω)) = 0 with the exact frequency response H
-    /// evaluated at ω = Im p (iterated to convergence).
+    /// evaluated at ω = Im p (iterated to convergence). Read also as `pk`.
+    #[serde(alias = "pk")]
     Pk,
 }
 

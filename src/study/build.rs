@@ -26,7 +26,9 @@ use aeroelastic::identified::{IdentifiedLaw, IdentifiedOptions};
 use aeroelastic::tunnel::{self, Campaign, ForcedOptions};
 use identify::pipeline::Identification;
 
-use super::spec::{AeroSpec, PreprocessSpec, StructureSpec, Study, SyntheticSpec, VirtualSpec};
+use super::spec::{
+    AeroSpec, PreprocessSpec, StructureSpec, Study, StudyModel, SyntheticSpec, VirtualSpec,
+};
 
 /// The cases of the identification stage.
 pub struct Cases {
@@ -209,7 +211,7 @@ pub fn virtual_model(
     let Some(a) = &v.aero else {
         anyhow::bail!("[data.virtual]: no model");
     };
-    aero_with_terms(linear_aero_chord(&a.model, chord, a)?, a).context("[data.virtual.aero]")
+    aero_with_terms(linear_aero_chord(a.model, chord, a)?, a).context("[data.virtual.aero]")
 }
 
 fn virtual_campaign(
@@ -418,7 +420,7 @@ pub fn structure(s: &StructureSpec) -> anyhow::Result<Structure> {
 /// # Errors
 /// An unknown model or invalid parameters.
 pub fn linear_aero(
-    model: &str,
+    model: StudyModel,
     s: &StructureSpec,
     a: &AeroSpec,
 ) -> anyhow::Result<Arc<dyn AeroModel>> {
@@ -430,30 +432,30 @@ pub fn linear_aero(
 /// # Errors
 /// An unknown model or invalid parameters.
 pub fn linear_aero_chord(
-    model: &str,
+    model: StudyModel,
     chord: f64,
     a: &AeroSpec,
 ) -> anyhow::Result<Arc<dyn AeroModel>> {
     let m: Arc<dyn AeroModel> = match model {
-        "theodorsen" => Arc::new(TheodorsenAero::new(chord, a.elastic_axis)?),
-        "quasi_steady" => Arc::new(QuasiSteady::new(
+        StudyModel::Theodorsen => Arc::new(TheodorsenAero::new(chord, a.elastic_axis)?),
+        StudyModel::QuasiSteady => Arc::new(QuasiSteady::new(
             chord,
             a.elastic_axis,
             QuasiSteadyKind::QuasiSteady,
             true,
         )?),
-        "steady" => Arc::new(QuasiSteady::new(
+        StudyModel::Steady => Arc::new(QuasiSteady::new(
             chord,
             a.elastic_axis,
             QuasiSteadyKind::Steady,
             false,
         )?),
-        "flat_plate_table" => Arc::new(DerivativeTable::flat_plate(
+        StudyModel::FlatPlateTable => Arc::new(DerivativeTable::flat_plate(
             chord,
             &aeroelastic::reference::flat_plate_k_grid(),
             a.n_lag,
         )?),
-        other => anyhow::bail!("aero model `{other}` is not available"),
+        other => anyhow::bail!("aero model `{other}` is not a linear model of [aero]"),
     };
     Ok(m)
 }
@@ -528,17 +530,17 @@ pub fn truth_model(study: &Study, s: &StructureSpec) -> anyhow::Result<Arc<dyn A
 /// A model of the study by name: the linear ones, `identified`, `truth`.
 fn named_aero(
     study: &Study,
-    model: &str,
+    model: StudyModel,
     s: &StructureSpec,
     a: &AeroSpec,
     derived: &Derived,
 ) -> anyhow::Result<Arc<dyn AeroModel>> {
     match model {
-        "identified" => match &derived.identified {
+        StudyModel::Identified => match &derived.identified {
             Some(m) => Ok(Arc::new(m.clone())),
             None => anyhow::bail!("the identified model is not available (no identification)"),
         },
-        "truth" => truth_model(study, s),
+        StudyModel::Truth => truth_model(study, s),
         _ => linear_aero(model, s, a),
     }
 }
@@ -548,7 +550,11 @@ fn named_aero(
 ///
 /// # Errors
 /// As [`structure`] and [`linear_aero`].
-pub fn linear_section(study: &Study, model: &str, derived: &Derived) -> anyhow::Result<Section> {
+pub fn linear_section(
+    study: &Study,
+    model: StudyModel,
+    derived: &Derived,
+) -> anyhow::Result<Section> {
     let (Some(s), Some(a)) = (&study.spec.structure, &study.spec.aero) else {
         anyhow::bail!("[structure] and [aero] are required");
     };
@@ -567,7 +573,7 @@ pub fn nonlinear_section(study: &Study, derived: &Derived) -> anyhow::Result<Sec
     let (Some(s), Some(a)) = (&study.spec.structure, &study.spec.aero) else {
         anyhow::bail!("[structure] and [aero] are required");
     };
-    let aero = aero_with_terms(named_aero(study, &a.model, s, a, derived)?, a)?;
+    let aero = aero_with_terms(named_aero(study, a.model, s, a, derived)?, a)?;
     Ok(Section::new(structure(s)?, aero, s.rho)?)
 }
 

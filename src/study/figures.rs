@@ -21,7 +21,7 @@ use serde::{Deserialize, Serialize};
 use super::files::{ensure_dir, read_json, write_json};
 use super::paper::{DeltaFit, DeltaFits, ForceDecomposition, ForceLoop, LoopSet, PaperFigures};
 use super::run::{names, FlutterRun, LcoStage};
-use super::spec::Study;
+use super::spec::{Study, StudyModel};
 
 /// One drawn figure, as listed in `figures.json`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -272,8 +272,8 @@ fn round_trip_table(report: &mut Report, out: &Path, reduced: bool) -> anyhow::R
     } else {
         vec![]
     };
-    let truth = runs.iter().find(|r| r.model == "truth");
-    let model = runs.iter().find(|r| r.model != "truth");
+    let truth = runs.iter().find(|r| r.model == StudyModel::Truth);
+    let model = runs.iter().find(|r| r.model != StudyModel::Truth);
     if let (Some(t), Some(m)) = (truth, model) {
         let (td, md) = (t.analysis.divergence_speed, m.analysis.divergence_speed);
         let cell =
@@ -775,7 +775,7 @@ pub fn render_all(study: &Study, out: &Path) -> anyhow::Result<Vec<FigureEntry>>
                 fig.flutter_interval = flutter_runs
                     .iter()
                     .flatten()
-                    .filter(|r| r.model == "identified")
+                    .filter(|r| r.model == StudyModel::Identified)
                     .find_map(|r| r.ensemble.as_ref())
                     .and_then(|e| flutter_interval(e, &scale));
                 caption.push_str(&format!(

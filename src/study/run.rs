@@ -14,7 +14,7 @@ use identify::series::{case_series, SeriesOptions};
 use super::build;
 use super::files::{ensure_dir, num, write_json, write_text, Csv};
 use super::paper::{self, PaperFigures};
-use super::spec::Study;
+use super::spec::{Study, StudyModel};
 use crate::progress::CountBar;
 use crate::progress::IdentifyBar;
 
@@ -104,11 +104,14 @@ pub fn run_study(study: &Study, out: &Path, quiet: bool) -> anyhow::Result<Timin
             crate::ui::say!("{}", id.summary_table());
         }
         let s = &study.spec;
-        let wants_identified = s.aero.as_ref().is_some_and(|a| a.model == "identified")
+        let wants_identified = s
+            .aero
+            .as_ref()
+            .is_some_and(|a| a.model == StudyModel::Identified)
             || s.flutter.as_ref().is_some_and(|f| {
                 f.run
                     .iter()
-                    .any(|r| r.model.as_deref() == Some("identified"))
+                    .any(|r| r.model == Some(StudyModel::Identified))
             });
         if wants_identified {
             derived.identified = Some(timed(&mut timings, "identified model", || {
@@ -127,14 +130,14 @@ pub fn run_study(study: &Study, out: &Path, quiet: bool) -> anyhow::Result<Timin
         let runs = timed(&mut timings, "flutter", || {
             flutter_stage(study, out, &derived)
         })?;
-        let model = study.spec.aero.as_ref().map(|a| a.model.as_str());
-        let speed_of = |m: Option<&str>| {
+        let model = study.spec.aero.as_ref().map(|a| a.model);
+        let speed_of = |m: Option<StudyModel>| {
             runs.iter()
-                .find(|r| Some(r.model.as_str()) == m)
+                .find(|r| Some(r.model) == m)
                 .and_then(|r| r.analysis.flutter.map(|f| f.u))
         };
         flutter_speed = speed_of(model);
-        truth_flutter_speed = speed_of(Some("truth"));
+        truth_flutter_speed = speed_of(Some(StudyModel::Truth));
         if !quiet {
             for r in &runs {
                 match r.analysis.flutter {
@@ -512,7 +515,7 @@ fn flutter_stage(
         vec![super::spec::FlutterRunSpec {
             label: format!("{} (p-k)", a.model),
             model: None,
-            method: "pk".into(),
+            method: FlutterMethod::Pk,
             reference: None,
         }]
     } else {
@@ -527,18 +530,14 @@ fn flutter_stage(
     let bar = CountBar::new("flutter", runs.len());
     let mut results = Vec::new();
     for r in &runs {
-        let model = r.model.clone().unwrap_or_else(|| a.model.clone());
-        let section = build::linear_section(study, &model, derived)?;
-        let method = if r.method == "p" {
-            FlutterMethod::P
-        } else {
-            FlutterMethod::Pk
-        };
+        let model = r.model.unwrap_or(a.model);
+        let section = build::linear_section(study, model, derived)?;
+        let method = r.method;
         let analysis = section
             .flutter(method, &opts)
             .with_context(|| format!("flutter run `{}`", r.label))?;
-        let ensemble = match (&derived.members, model.as_str()) {
-            (Some(m), "identified") => Some(
+        let ensemble = match (&derived.members, model) {
+            (Some(m), StudyModel::Identified) => Some(
                 flutter_ensemble(
                     &section.structure,
                     &m.laws,
@@ -598,7 +597,7 @@ fn flutter_stage(
         };
         let mut row = vec![
             r.label.clone(),
-            r.model.clone(),
+            r.model.to_string(),
             format!("{:?}", r.analysis.method),
             num(fl.map(|f| f.u)),
             num(fl.map(|f| f.omega)),
@@ -714,7 +713,7 @@ fn lco_stage(
         );
     }
     let ensemble = match (&derived.members, study.spec.aero.as_ref()) {
-        (Some(m), Some(a)) if a.model == "identified" => Some(
+        (Some(m), Some(a)) if a.model == StudyModel::Identified => Some(
             lco_ensemble(
                 &section.structure,
                 &m.laws,
@@ -942,7 +941,7 @@ fn branch_stage(
         .spec
         .aero
         .as_ref()
-        .map_or_else(|| section.aero.name(), |a| a.model.clone());
+        .map_or_else(|| section.aero.name(), |a| a.model.to_string());
     let doc = aeroelastic::documents::branch_document(
         &format!("{} [structure]", names::STUDY),
         &model,

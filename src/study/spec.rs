@@ -384,7 +384,7 @@ pub struct AeroSpec {
     /// `theodorsen`, `quasi_steady`, `steady`, `flat_plate_table`, or `identified`: the
     /// Eq. 19 law of this study's own identification (`aeroelastic::identified`; flutter by
     /// p-k on its derivative tables, LCO by K-iterated time integration).
-    pub model: String,
+    pub model: StudyModel,
     /// Elastic axis a [semi-chords aft of mid-chord].
     #[serde(default)]
     pub elastic_axis: f64,
@@ -420,9 +420,9 @@ pub struct FlutterRunSpec {
     pub label: String,
     /// Aerodynamic model (as `[aero].model`, or `truth`: the model of `[data.virtual]`;
     /// default the study's).
-    pub model: Option<String>,
+    pub model: Option<StudyModel>,
     /// `"p"` or `"pk"`.
-    pub method: String,
+    pub method: aeroelastic::flutter::FlutterMethod,
     /// Published values.
     pub reference: Option<FlutterReference>,
 }
@@ -696,13 +696,16 @@ impl Study {
         let spec: StudySpec = toml::from_str(text).map_err(|e| {
             let line = e.span().map(|s| lines.line(s.start)).unwrap_or(0);
             let msg = e.message().trim().to_string();
-            // serde names the key in its message (`unknown field `x``, `missing field`)
+            // serde names the key in its message (`unknown field `x``, `missing field`);
+            // a bad value (an unknown model or method name, a wrong type) is named by the
+            // key of the line it stands on
             let key = msg
                 .split('`')
                 .nth(1)
                 .filter(|_| msg.contains("field"))
-                .unwrap_or("(syntax)")
-                .to_string();
+                .map(str::to_string)
+                .or_else(|| e.span().and_then(|s| key_at(text, s.start)))
+                .unwrap_or_else(|| "(syntax)".to_string());
             SpecError {
                 path: display.clone(),
                 line,
@@ -1148,7 +1151,7 @@ impl Study {
         }
         if let Some(a) = &s.aero {
             check_aero("aero", a, s.data.is_some())?;
-            if a.model == "identified" && !a.nonlinear.is_empty() {
+            if a.model == StudyModel::Identified && !a.nonlinear.is_empty() {
                 return err(
                     "aero.nonlinear",
                     "the identified model brings its own nonlinear terms; remove [[aero.nonlinear]]"
@@ -1203,21 +1206,9 @@ impl Study {
                 );
             }
             for (i, r) in f.run.iter().enumerate() {
-                if !matches!(r.method.as_str(), "p" | "pk") {
-                    return err(
-                        &format!("flutter.run[{i}].method"),
-                        format!("`{}`: expected p or pk", r.method),
-                    );
-                }
-                if let Some(m) = &r.model {
+                if let Some(m) = r.model {
                     let k = format!("flutter.run[{i}].model");
-                    if m == "truth" {
-                        if !has_virtual {
-                            return err(&k, "`truth` needs a [data.virtual] source".into());
-                        }
-                    } else {
-                        check_model(&k, m, s.data.is_some())?;
-                    }
+                    check_model(&k, m, s.data.is_some(), has_virtual)?;
                 }
             }
         }
@@ -1343,36 +1334,110 @@ impl Study {
     }
 }
 
-/// Aerodynamic model names of `[aero].model`.
-pub const AERO_MODELS: [&str; 5] = [
-    "theodorsen",
-    "quasi_steady",
-    "steady",
-    "flat_plate_table",
-    "identified",
-];
+/// The dotted key (`table.array[i].key`) of the `key = value` line holding byte `offset`
+/// of `text`, from the nearest table header above it; `None` off a `key = value` line.
+fn key_at(text: &str, offset: usize) -> Option<String> {
+    let start = text[..offset.min(text.len())]
+        .rfind('\n')
+        .map_or(0, |i| i + 1);
+    let line = text[start..].lines().next()?;
+    let leaf = line.split_once('=')?.0.trim();
+    if leaf.is_empty() || leaf.starts_with('[') {
+        return None;
+    }
+    let above = &text[..start];
+    let header = above
+        .lines()
+        .rev()
+        .map(str::trim)
+        .find(|l| l.starts_with('['));
+    let table = match header {
+        Some(h) if h.starts_with("[[") => {
+            let name = h.trim_start_matches('[').trim_end_matches(']').trim();
+            let count = above
+                .lines()
+                .map(str::trim)
+                .filter(|l| {
+                    l.starts_with("[[")
+                        && l.trim_start_matches('[').trim_end_matches(']').trim() == name
+                })
+                .count();
+            format!("{name}[{}].", count.saturating_sub(1))
+        }
+        Some(h) => format!(
+            "{}.",
+            h.trim_start_matches('[').trim_end_matches(']').trim()
+        ),
+        None => String::new(),
+    };
+    Some(format!("{table}{leaf}"))
+}
 
-/// Checks a model name; `identified` only where `allow_identified` (a study with data).
-fn check_model(k: &str, m: &str, allow_identified: bool) -> Result<(), (String, String)> {
-    if m == "identified" && !allow_identified {
-        return Err((
+/// An aerodynamic model of a study by name (`[aero].model`, `[[flutter.run]].model`): a
+/// linear model built from `[aero]`, the study's own identified law, or the truth model of
+/// `[data.virtual]` (flutter runs only).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum StudyModel {
+    /// Theodorsen (Jones' lags in time).
+    Theodorsen,
+    /// Quasi-steady thin aerofoil with noncirculatory terms.
+    QuasiSteady,
+    /// Steady thin aerofoil.
+    Steady,
+    /// Flat-plate derivative table with an RFA of `n_lag` lags.
+    FlatPlateTable,
+    /// The Eq. 19 law of this study's identification.
+    Identified,
+    /// The truth model of `[data.virtual]` (flutter runs only).
+    Truth,
+}
+
+impl StudyModel {
+    /// The name as written in the study file and the result documents.
+    pub fn name(self) -> &'static str {
+        match self {
+            StudyModel::Theodorsen => "theodorsen",
+            StudyModel::QuasiSteady => "quasi_steady",
+            StudyModel::Steady => "steady",
+            StudyModel::FlatPlateTable => "flat_plate_table",
+            StudyModel::Identified => "identified",
+            StudyModel::Truth => "truth",
+        }
+    }
+}
+
+impl std::fmt::Display for StudyModel {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// Checks where a model may be used: `identified` only where `allow_identified` (a study
+/// with data), `truth` only where `allow_truth` (a flutter run of a study with
+/// `[data.virtual]`).
+fn check_model(
+    k: &str,
+    m: StudyModel,
+    allow_identified: bool,
+    allow_truth: bool,
+) -> Result<(), (String, String)> {
+    match m {
+        StudyModel::Identified if !allow_identified => Err((
             k.to_string(),
             "`identified` needs [data] (the model comes from this study's identification)".into(),
-        ));
-    }
-    if AERO_MODELS.contains(&m) {
-        Ok(())
-    } else {
-        Err((
+        )),
+        StudyModel::Truth if !allow_truth => Err((
             k.to_string(),
-            format!("`{m}`: expected one of {}", AERO_MODELS.join(", ")),
-        ))
+            "`truth` needs a [data.virtual] source and is a flutter-run model only".into(),
+        )),
+        _ => Ok(()),
     }
 }
 
 /// Checks an `[aero]`-like table whose dotted prefix is `prefix`.
 fn check_aero(prefix: &str, a: &AeroSpec, allow_identified: bool) -> Result<(), (String, String)> {
-    check_model(&format!("{prefix}.model"), &a.model, allow_identified)?;
+    check_model(&format!("{prefix}.model"), a.model, allow_identified, false)?;
     if !(a.elastic_axis.is_finite() && a.elastic_axis.abs() <= 1.0) {
         return Err((
             format!("{prefix}.elastic_axis"),
@@ -1448,6 +1513,19 @@ mod tests {
         let e = parse(text).unwrap_err();
         assert_eq!(e.key, "flutter.run[1].method", "{e}");
         assert_eq!(e.line, 16, "{e}");
+    }
+
+    /// Model names are an enum: a misspelt one is refused at parsing, by key and line, with
+    /// the names that exist; `truth` is a flutter-run model only.
+    #[test]
+    fn unknown_or_misplaced_model_names_the_key() {
+        let base = "name = \"x\"\n[structure]\nmu = 20.0\nr_alpha2 = 0.25\nsigma = 0.5\n[aero]\n";
+        let e = parse(&format!("{base}model = \"theodorsn\"\n")).unwrap_err();
+        assert_eq!((e.key.as_str(), e.line), ("aero.model", 7), "{e}");
+        assert!(e.message.contains("theodorsen"), "{e}");
+        let e = parse(&format!("{base}model = \"truth\"\n")).unwrap_err();
+        assert_eq!(e.key, "aero.model", "{e}");
+        assert!(e.message.contains("flutter-run model only"), "{e}");
     }
 
     #[test]
