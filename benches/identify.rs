@@ -15,7 +15,7 @@ use std::time::Instant;
 use criterion::{criterion_group, criterion_main, Criterion};
 use identify::identifiability::priority_order;
 use identify::library::{Library, LibraryKind};
-use identify::metrics::{candidate_tones, HarmonicFit};
+use identify::metrics::{candidate_tones, HarmonicProjector};
 use identify::pipeline::{identify, IdentifySettings};
 use identify::record::{CaseMeta, Forcing, NondimCase};
 use identify::regress::CaseFactor;
@@ -136,7 +136,7 @@ fn stage_breakdown(cases: &[NondimCase]) {
         let t2 = Instant::now();
         let tones = candidate_tones(&c.forcing, 5, c.len() as f64 * c.dt, c.dt);
         let freqs: Vec<f64> = tones.iter().map(|t| t.freq).collect();
-        let h = HarmonicFit::new(&freqs, c.len(), c.dt).unwrap();
+        let h = HarmonicProjector::new(&freqs, c.len(), c.dt).unwrap();
         let cols = h.column_amplitudes(theta.as_ref());
         let t3 = Instant::now();
         std::hint::black_box((&f, &cols));

@@ -8,7 +8,7 @@ use identify::dataset::{
 };
 use identify::pipeline::{identify, IdentifySettings};
 use identify::preprocess::PreprocessOptions;
-use identify::record::{CaseMeta, Section};
+use identify::record::{CaseMeta, SectionGeometry};
 use identify::synthetic::{forced_record, HarmonicMotion, PolynomialLaw, Sampling};
 use identify::workflow::prepare_dataset;
 
@@ -28,7 +28,7 @@ fn term_name(p: [u8; 4]) -> String {
 #[test]
 fn demo_law_is_recovered_from_a_written_data_set() {
     let tmp = tempfile::tempdir().unwrap();
-    let section = Section {
+    let section = SectionGeometry {
         chord: 0.25,
         span: 0.75,
         air_density: 1.225,
@@ -181,7 +181,7 @@ fn identify_json(
 #[test]
 fn lift_up_data_set_declared_as_such_identifies_like_scanlan() {
     let tmp = tempfile::tempdir().unwrap();
-    let section = Section {
+    let section = SectionGeometry {
         chord: 0.25,
         span: 0.75,
         air_density: 1.225,

@@ -49,10 +49,10 @@ const TAU: f64 = 2.0 * std::f64::consts::PI;
 )]
 #[serde(rename_all = "snake_case")]
 pub enum Form {
-    /// The first form of each effect (see [`Effect`]).
+    /// The first form of each effect (see [`InjectedEffect`]).
     #[default]
     Primary,
-    /// The second form of each effect (see [`Effect`]).
+    /// The second form of each effect (see [`InjectedEffect`]).
     Alternate,
 }
 
@@ -72,7 +72,7 @@ pub enum Form {
 /// | buffeting | Dryden/von Kármán-like w, C_Lα = 2π | same w through a first-order Sears admittance |
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case")]
-pub enum Effect {
+pub enum InjectedEffect {
     /// Mean angle offset α₀ \[rad\] (typical 0.05°–1.5°): the rig reads α while the model
     /// sits at α + α₀ (mounting or zero error).
     StaticOffset {
@@ -152,7 +152,7 @@ pub enum Effect {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct Injection {
     /// The effect and its parameters.
-    pub effect: Effect,
+    pub effect: InjectedEffect,
     /// Its functional form.
     pub form: Form,
 }
@@ -236,7 +236,7 @@ pub fn forcing_series(
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     for inj in effects {
         let s = match &inj.effect {
-            Effect::VortexShedding { c_lift, depth } => {
+            InjectedEffect::VortexShedding { c_lift, depth } => {
                 let (st, bw, env) = shedding_form(inj.form);
                 let fs = st * u / depth;
                 let theta0 = rng.random_range(0.0..TAU);
@@ -263,7 +263,7 @@ pub fn forcing_series(
                     c_moment: cm,
                 }
             }
-            Effect::Buffeting {
+            InjectedEffect::Buffeting {
                 intensity,
                 length_scale,
                 x_ea,
@@ -318,7 +318,7 @@ pub enum Part {
     },
     /// Moment polynomial terms c·α^p₀ (Bα̇/U)^p₁ (h/B)^p₂ (ḣ/U)^p₃.
     Polynomial(Vec<([i32; 4], f64)>),
-    /// Dynamic stall with one separation state (see [`Effect::DynamicStall`]).
+    /// Dynamic stall with one separation state (see [`InjectedEffect::DynamicStall`]).
     Stall {
         /// α_crit \[rad\].
         alpha_crit: f64,
@@ -655,23 +655,29 @@ fn aero_parts(effects: &[Injection], free: bool) -> Vec<Part> {
     let mut parts = Vec::new();
     for inj in effects {
         match (&inj.effect, inj.form) {
-            (Effect::StaticOffset { alpha0 }, Form::Primary) if free => {
+            (InjectedEffect::StaticOffset { alpha0 }, Form::Primary) if free => {
                 parts.push(Part::AngleOffset(*alpha0))
             }
-            (Effect::StaticOffset { alpha0 }, Form::Alternate) => parts.push(Part::SteadyOffset {
-                alpha0: *alpha0,
-                x_ea: 0.35,
-            }),
-            (Effect::HigherOrder { c }, Form::Primary) => parts.push(Part::Polynomial(vec![
-                ([5, 0, 0, 0], *c),
-                ([3, 0, 1, 0], *c),
-            ])),
-            (Effect::HigherOrder { c }, Form::Alternate) => parts.push(Part::Polynomial(vec![
-                ([4, 1, 0, 0], *c),
-                ([2, 0, 2, 0], *c),
-            ])),
+            (InjectedEffect::StaticOffset { alpha0 }, Form::Alternate) => {
+                parts.push(Part::SteadyOffset {
+                    alpha0: *alpha0,
+                    x_ea: 0.35,
+                })
+            }
+            (InjectedEffect::HigherOrder { c }, Form::Primary) => {
+                parts.push(Part::Polynomial(vec![
+                    ([5, 0, 0, 0], *c),
+                    ([3, 0, 1, 0], *c),
+                ]))
+            }
+            (InjectedEffect::HigherOrder { c }, Form::Alternate) => {
+                parts.push(Part::Polynomial(vec![
+                    ([4, 1, 0, 0], *c),
+                    ([2, 0, 2, 0], *c),
+                ]))
+            }
             (
-                Effect::DynamicStall {
+                InjectedEffect::DynamicStall {
                     alpha_crit,
                     lag_chords,
                     x_ea,
@@ -683,8 +689,12 @@ fn aero_parts(effects: &[Injection], free: bool) -> Vec<Part> {
                 x_ea: *x_ea,
                 form,
             }),
-            (Effect::TimeDelay { tau }, Form::Primary) if free => parts.push(Part::PadeDelay(*tau)),
-            (Effect::TimeDelay { tau }, Form::Alternate) => parts.push(Part::FirstOrderLag(*tau)),
+            (InjectedEffect::TimeDelay { tau }, Form::Primary) if free => {
+                parts.push(Part::PadeDelay(*tau))
+            }
+            (InjectedEffect::TimeDelay { tau }, Form::Alternate) => {
+                parts.push(Part::FirstOrderLag(*tau))
+            }
             _ => {}
         }
     }
@@ -697,7 +707,7 @@ fn primary_offset(effects: &[Injection]) -> f64 {
     effects
         .iter()
         .map(|i| match (&i.effect, i.form) {
-            (Effect::StaticOffset { alpha0 }, Form::Primary) => *alpha0,
+            (InjectedEffect::StaticOffset { alpha0 }, Form::Primary) => *alpha0,
             _ => 0.0,
         })
         .sum()
@@ -747,7 +757,7 @@ pub fn forced_case_forces(
     let tau: f64 = effects
         .iter()
         .map(|i| match (&i.effect, i.form) {
-            (Effect::TimeDelay { tau }, Form::Primary) => *tau,
+            (InjectedEffect::TimeDelay { tau }, Form::Primary) => *tau,
             _ => 0.0,
         })
         .sum();
@@ -765,7 +775,7 @@ pub fn forced_case_forces(
         dm += ma;
     }
     for inj in effects {
-        if let Effect::AddedMass { fraction, rig } = &inj.effect {
+        if let InjectedEffect::AddedMass { fraction, rig } = &inj.effect {
             dm += match inj.form {
                 Form::Primary => {
                     Matrix2::new(rig[0][0], rig[0][1], rig[1][0], rig[1][1]) * *fraction
@@ -776,7 +786,7 @@ pub fn forced_case_forces(
     }
     let has_added = effects
         .iter()
-        .any(|i| matches!(i.effect, Effect::AddedMass { .. }));
+        .any(|i| matches!(i.effect, InjectedEffect::AddedMass { .. }));
     if tau != 0.0 || has_added {
         for i in 0..n {
             let t = i as f64 * dt;
@@ -809,8 +819,8 @@ pub fn stiffest_rate(effects: &[Injection]) -> f64 {
     effects
         .iter()
         .map(|i| match (&i.effect, i.form) {
-            (Effect::TimeDelay { tau }, Form::Primary) => 12f64.sqrt() / tau,
-            (Effect::TimeDelay { tau }, Form::Alternate) => 1.0 / tau,
+            (InjectedEffect::TimeDelay { tau }, Form::Primary) => 12f64.sqrt() / tau,
+            (InjectedEffect::TimeDelay { tau }, Form::Alternate) => 1.0 / tau,
             _ => 0.0,
         })
         .fold(0.0, f64::max)
@@ -842,13 +852,13 @@ pub fn free_section(
     };
     for inj in effects {
         match (&inj.effect, inj.form) {
-            (Effect::StructuralCubic { kappa }, Form::Primary) => {
+            (InjectedEffect::StructuralCubic { kappa }, Form::Primary) => {
                 st.pitch_stiffness_terms.push(PolyTerm {
                     power: 3,
                     coefficient: kappa * k_a,
                 })
             }
-            (Effect::StructuralCubic { kappa }, Form::Alternate) => {
+            (InjectedEffect::StructuralCubic { kappa }, Form::Alternate) => {
                 st.pitch_stiffness_terms.push(PolyTerm {
                     power: 3,
                     coefficient: 0.5 * kappa * k_a,
@@ -858,13 +868,15 @@ pub fn free_section(
                     coefficient: 10.0 * kappa * k_a,
                 });
             }
-            (Effect::Freeplay { half_gap }, Form::Primary) => st.pitch_freeplay = *half_gap,
-            (Effect::Freeplay { half_gap }, Form::Alternate) => parts.push(Part::SmoothFreeplay {
-                k_alpha: k_a,
-                delta: *half_gap,
-                eps: (half_gap / 3.0).max(1e-9),
-            }),
-            (Effect::Friction { moment }, Form::Primary) => {
+            (InjectedEffect::Freeplay { half_gap }, Form::Primary) => st.pitch_freeplay = *half_gap,
+            (InjectedEffect::Freeplay { half_gap }, Form::Alternate) => {
+                parts.push(Part::SmoothFreeplay {
+                    k_alpha: k_a,
+                    delta: *half_gap,
+                    eps: (half_gap / 3.0).max(1e-9),
+                })
+            }
+            (InjectedEffect::Friction { moment }, Form::Primary) => {
                 st.friction = Some(Friction {
                     heave_force: 0.0,
                     pitch_moment: *moment,
@@ -872,7 +884,7 @@ pub fn free_section(
                     pitch_smoothing: None,
                 })
             }
-            (Effect::Friction { moment }, Form::Alternate) => parts.push(Part::Stribeck {
+            (InjectedEffect::Friction { moment }, Form::Alternate) => parts.push(Part::Stribeck {
                 kinetic: *moment,
                 breakaway: 1.6 * moment,
                 v_s: 0.05,
@@ -984,7 +996,7 @@ mod tests {
         assert_eq!(s.at(0.75)[0], 2.0);
         assert_eq!(s.at(10.0)[0], 3.0);
         let inj = [Injection {
-            effect: Effect::Buffeting {
+            effect: InjectedEffect::Buffeting {
                 intensity: 0.02,
                 length_scale: 0.1,
                 x_ea: 0.35,

@@ -48,7 +48,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use identify::dataset::{
     AngleUnit, CaseSpec, ForceUnit, LengthUnit, Manifest, MomentUnit, StructureSpec, Units,
 };
-use identify::record::{CaseKind, CaseMeta, Record, Section as DataSection};
+use identify::record::{CaseKind, CaseMeta, Record, SectionGeometry};
 use nalgebra::{DMatrix, DVector, Matrix2};
 use num_complex::Complex64;
 use rand::{Rng, SeedableRng};
@@ -530,7 +530,7 @@ pub struct ForcedOptions {
     /// Data-set name.
     pub name: String,
     /// Section geometry and air (chord must equal the model's).
-    pub section: DataSection,
+    pub section: SectionGeometry,
     /// Sampling rate \[Hz\].
     pub rate: f64,
     /// Record duration \[s\].
@@ -553,7 +553,7 @@ impl ForcedOptions {
     pub fn paper(seed: u64) -> Self {
         ForcedOptions {
             name: "virtual wind tunnel: forced motion".into(),
-            section: DataSection {
+            section: SectionGeometry {
                 chord: 0.25,
                 span: 0.75,
                 air_density: 1.225,
@@ -1407,7 +1407,7 @@ pub fn free_dataset(
             opts.rate,
             opts.duration
         )),
-        section: DataSection {
+        section: SectionGeometry {
             chord: b,
             span: opts.span,
             air_density: section.rho,

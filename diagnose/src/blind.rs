@@ -24,12 +24,12 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 use aeroelastic::aero::{AeroModel, Flow};
-use aeroelastic::effects::{self, Effect as Inj, Form, Injection};
+use aeroelastic::effects::{self, Form, InjectedEffect as Inj, Injection};
 use aeroelastic::files::{LoadedModel, StructureFile};
 use aeroelastic::section::Section;
 use aeroelastic::tunnel::{self, case_seed, Campaign, FreeOptions, SensorNoise};
 use identify::dataset::{CaseSpec, Dataset, Manifest};
-use identify::record::{CaseKind, Record, Section as DataSection};
+use identify::record::{CaseKind, Record, SectionGeometry};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
@@ -393,7 +393,7 @@ fn forced_set(
     let mut manifest = Manifest {
         name: "blind data set: forced motion".into(),
         description: Some("Virtual wind tunnel, forced motion (blind benchmark).".into()),
-        section: DataSection {
+        section: SectionGeometry {
             chord,
             span: sc.span,
             air_density: rho,
@@ -495,7 +495,7 @@ fn free_set(
         description: Some(
             "Virtual wind tunnel, free response on springs (blind benchmark).".into(),
         ),
-        section: DataSection {
+        section: SectionGeometry {
             chord,
             span: sc.span,
             air_density: base.rho,

@@ -5,12 +5,12 @@
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use identify::preprocess::{prepare, PreprocessOptions};
-use identify::record::{CaseMeta, Section};
+use identify::record::{CaseMeta, SectionGeometry};
 use identify::synthetic::{forced_record, HarmonicMotion, PolynomialLaw, Sampling};
 use std::hint::black_box;
 
 fn demo_case(with_freqs: bool) -> identify::record::Record {
-    let section = Section {
+    let section = SectionGeometry {
         chord: 0.25,
         span: 0.75,
         air_density: 1.225,

@@ -8,7 +8,7 @@
 //! harmonics and combination tones |m f_α + n f_h|, 1 ≤ |m| + |n| ≤ N (default N = 5),
 //! between 1/T and Nyquist − 1/T (T the record length), candidates closer than the
 //! resolution 1/T merged into the one of lowest order. The complex amplitudes of all
-//! candidates (and the mean) are fitted together by least squares ([`HarmonicFit`]); unlike
+//! candidates (and the mean) are fitted together by least squares ([`HarmonicProjector`]); unlike
 //! FFT bins this is exact when the record is not a whole number of periods (no leakage
 //! between the fitted tones). The key frequencies of a force are its k largest candidates
 //! (default k = 6).
@@ -161,7 +161,7 @@ pub fn candidate_tones(forcing: &Forcing, max_order: u32, duration: f64, dt: f64
 /// stored: it is generated in blocks of [`HARMONIC_BLOCK`] rows while projecting, so the
 /// memory of a fit is O(tones² + block), independent of n.
 #[derive(Debug, Clone)]
-pub struct HarmonicFit {
+pub struct HarmonicProjector {
     freqs: Vec<f64>,
     n: usize,
     dt: f64,
@@ -171,13 +171,13 @@ pub struct HarmonicFit {
     chol: Vec<f64>,
 }
 
-/// Rows of the harmonic basis generated at a time by [`HarmonicFit`] (a multiple of the
+/// Rows of the harmonic basis generated at a time by [`HarmonicProjector`] (a multiple of the
 /// 256-sample re-anchoring period of its rotation recurrence).
 pub const HARMONIC_BLOCK: usize = 4096;
 /// Samples between exact re-anchorings of the rotation recurrence of the basis.
 const ANCHOR: usize = 256;
 
-impl HarmonicFit {
+impl HarmonicProjector {
     /// Prepares the fit for `n` samples at interval `dt` \[s\] and tones `freqs` \[Hz\].
     ///
     /// # Errors
@@ -243,7 +243,7 @@ impl HarmonicFit {
                 freqs.len()
             ))
         })?;
-        Ok(HarmonicFit {
+        Ok(HarmonicProjector {
             freqs: freqs.to_vec(),
             n,
             dt,
@@ -367,7 +367,7 @@ impl HarmonicFit {
         })
     }
 
-    /// As [`HarmonicFit::column_amplitudes`] for an n × `p` matrix that is never held
+    /// As [`HarmonicProjector::column_amplitudes`] for an n × `p` matrix that is never held
     /// whole: `fill(r0, out)` writes its rows `r0 .. r0 + out.nrows()` into `out`
     /// (`out.nrows()` × `p`), for consecutive blocks of at most [`HARMONIC_BLOCK`] rows
     /// covering 0..n, once each. Memory: O(([`HARMONIC_BLOCK`])·(p + tones)).
@@ -398,7 +398,7 @@ fn to_amplitudes(x: &[f64]) -> Vec<Complex64> {
 pub struct KeyFrequencies {
     /// The key tones, largest measured amplitude first.
     pub tones: Vec<Tone>,
-    /// Index of each key tone in the candidate list of the [`HarmonicFit`].
+    /// Index of each key tone in the candidate list of the [`HarmonicProjector`].
     pub index: Vec<usize>,
     /// Measured complex amplitudes A_i at the key tones.
     pub amplitudes: Vec<Complex64>,
@@ -546,7 +546,7 @@ mod tests {
     #[test]
     fn harmonic_gram_closed_form_matches_direct_sums() {
         let freqs = [0.7, 1.3, 2.0, 3.3];
-        let fit = HarmonicFit::new(&freqs, 777, 1.0 / 100.0).unwrap();
+        let fit = HarmonicProjector::new(&freqs, 777, 1.0 / 100.0).unwrap();
         let m = 1 + 2 * freqs.len();
         let mut b = vec![0.0; 777 * m];
         fit.basis_rows(0, 777, &mut b);
@@ -580,7 +580,7 @@ mod tests {
         let freqs = [0.7, 1.3, 2.0];
         let dt = 1.0 / 512.0;
         let n = 2 * HARMONIC_BLOCK + 1000;
-        let fit = HarmonicFit::new(&freqs, n, dt).unwrap();
+        let fit = HarmonicProjector::new(&freqs, n, dt).unwrap();
         let m = 1 + 2 * freqs.len();
         for (r0, rows) in [(0, 300), (255, 2), (1000, 5000), (n - 7, 7)] {
             let mut b = vec![0.0; rows * m];
@@ -644,7 +644,7 @@ mod tests {
             let dur = n as f64 * dt;
             let tones = candidate_tones(&fc, 5, dur, dt);
             let freqs: Vec<f64> = tones.iter().map(|t| t.freq).collect();
-            let fit = HarmonicFit::new(&freqs, n, dt).unwrap();
+            let fit = HarmonicProjector::new(&freqs, n, dt).unwrap();
             let y = signal(n, dt, &parts, 0.4);
             let (mean, all) = fit.amplitudes(&y);
             assert!((mean - 0.4).abs() < 1e-10);

@@ -18,7 +18,7 @@ use serde::{Deserialize, Serialize};
 use crate::eq19::{Eq19Values, LiftEq19, MomentEq19, EQ19_TERMS};
 use crate::identifiability::{self, BasisMode, CaseIdentifiability, RankOptions};
 use crate::library::{Library, LibraryKind};
-use crate::metrics::{self, HarmonicFit};
+use crate::metrics::{self, HarmonicProjector};
 use crate::record::NondimCase;
 use crate::regress::adapter::{self, PysindyOptions};
 use crate::regress::path::{self, DeltaPath, KeyProjection, PathOptions};
@@ -756,7 +756,7 @@ fn prepare_case(
     let mut key_freqs = [Vec::new(), Vec::new()];
     if !tones.is_empty() {
         let freqs: Vec<f64> = tones.iter().map(|t| t.freq).collect();
-        let fit = HarmonicFit::new(&freqs, n, case.dt).map_err(|e| Error::Numerical {
+        let fit = HarmonicProjector::new(&freqs, n, case.dt).map_err(|e| Error::Numerical {
             context: format!("case `{id}`: key frequencies"),
             message: e.to_string(),
         })?;

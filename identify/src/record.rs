@@ -10,7 +10,7 @@ use crate::{Error, Result};
 
 /// Geometry and air of the section model (manifest `[section]`), SI.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
-pub struct Section {
+pub struct SectionGeometry {
     /// Chord (deck width) B \[m\].
     pub chord: f64,
     /// Span of the model \[m\]; divides total forces into forces per unit span.
@@ -194,7 +194,7 @@ impl PreparedCase {
     ///
     /// # Errors
     /// As [`PreparedCase::nondimensional`].
-    pub fn into_nondimensional(self, section: &Section) -> Result<NondimCase> {
+    pub fn into_nondimensional(self, section: &SectionGeometry) -> Result<NondimCase> {
         let b = section.chord;
         let u = self.meta.wind_speed;
         let rho = section.air_density;
@@ -239,7 +239,7 @@ impl PreparedCase {
     /// # Errors
     /// [`Error::InvalidData`] when U ≤ 0 or not finite (no nondimensional form exists),
     /// or when the section has a non-positive chord or air density.
-    pub fn nondimensional(&self, section: &Section) -> Result<NondimCase> {
+    pub fn nondimensional(&self, section: &SectionGeometry) -> Result<NondimCase> {
         let u = self.meta.wind_speed;
         let bad = |field: &str, message: String| Error::InvalidData {
             case: self.meta.id.clone(),

@@ -10,7 +10,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 
-use crate::record::{CaseKind, CaseMeta, Record, Section};
+use crate::record::{CaseKind, CaseMeta, Record, SectionGeometry};
 use crate::{Error, Result};
 
 /// A monomial term of the law: powers of (α, Bα̇/U, h/B, ḣ/U) and its coefficient.
@@ -125,7 +125,7 @@ impl Default for Sampling {
 /// [`Error::InvalidOption`] for a non-positive rate, duration, chord or wind speed.
 pub fn forced_record(
     meta: CaseMeta,
-    section: &Section,
+    section: &SectionGeometry,
     motion: &HarmonicMotion,
     law: &PolynomialLaw,
     sampling: &Sampling,
@@ -206,7 +206,7 @@ mod tests {
 
     #[test]
     fn forces_follow_the_law_without_noise() {
-        let section = Section {
+        let section = SectionGeometry {
             chord: 0.25,
             span: 0.75,
             air_density: 1.225,
@@ -247,7 +247,7 @@ mod tests {
 
     #[test]
     fn zero_wind_speed_is_rejected() {
-        let section = Section {
+        let section = SectionGeometry {
             chord: 0.25,
             span: 0.75,
             air_density: 1.225,

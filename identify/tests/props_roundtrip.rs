@@ -15,7 +15,7 @@ use identify::dataset::{
     read_dataset, write_dataset, AngleUnit, CaseSpec, ForceUnit, LengthUnit, Manifest, MomentUnit,
     StructureSpec, Units,
 };
-use identify::record::{CaseKind, Record, Section};
+use identify::record::{CaseKind, Record, SectionGeometry};
 use proptest::prelude::*;
 use proptest::test_runner::RngSeed;
 
@@ -297,7 +297,7 @@ fn dataset() -> impl Strategy<Value = (Manifest, Vec<Record>)> {
                         Manifest {
                             name: name.clone(),
                             description: description.clone(),
-                            section: Section {
+                            section: SectionGeometry {
                                 chord,
                                 span,
                                 air_density: rho,

@@ -94,7 +94,7 @@ fn id_num(v: f64) -> String {
 }
 
 fn synthetic(study: &Study, sy: &SyntheticSpec, out: &Path) -> anyhow::Result<Dataset> {
-    let section = identify::record::Section {
+    let section = identify::record::SectionGeometry {
         chord: sy.section.chord,
         span: sy.section.span,
         air_density: sy.section.air_density,

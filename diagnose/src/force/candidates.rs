@@ -45,7 +45,7 @@ use super::data::{CaseData, Node};
 use std::collections::HashMap;
 use std::sync::Arc;
 
-use super::law::{self, Aug, FitCache, NodeFit};
+use super::law::{self, Aug, NodeCache, NodeFit};
 use super::linalg::{dot, solve_spd};
 use super::{fold_residuals, Fold, ForceOptions};
 use identify::library::Term;
@@ -123,7 +123,7 @@ pub(crate) fn score_all(
     folds: &[Fold],
     before: &[[Vec<f64>; 2]],
     opts: &ForceOptions,
-    cache: &FitCache,
+    cache: &NodeCache,
 ) -> Vec<(Scored, f64)> {
     use rayon::prelude::*;
     opts.candidates
@@ -142,7 +142,7 @@ fn score_one(
     folds: &[Fold],
     before: &[[Vec<f64>; 2]],
     k: CandidateKind,
-    cache: &FitCache,
+    cache: &NodeCache,
 ) -> Scored {
     match k {
         CandidateKind::StaticOffset => shared(cases, nodes, folds, k, &static_offset_cols),
@@ -509,7 +509,7 @@ pub(crate) fn delayed_cases(cases: &[CaseData], tau: f64) -> Vec<CaseData> {
 /// from the other training nodes by the held-out rule ([`law::node_coefficients`]) and its
 /// residual energy is ‖r_n‖² + ‖R_n(â_n − a_n)‖² (a_n the node's own least-squares fit,
 /// X_n = Q_n R_n; dependent columns ignored), weighted by the node's mean 1/σ̂².
-fn delay_criterion(sh: &[CaseData], nodes: &[Node], f: &Fold, tau: f64, cache: &FitCache) -> f64 {
+fn delay_criterion(sh: &[CaseData], nodes: &[Node], f: &Fold, tau: f64, cache: &NodeCache) -> f64 {
     let fits = law::node_fits(sh, nodes, &f.train, &f.supports, cache, tau.to_bits());
     let mut e = 0.0;
     for c in 0..2 {
@@ -554,7 +554,7 @@ pub const DELAY_GRID: [f64; 6] = [0.0, 1e-3, 3e-3, 8e-3, 0.02, 0.05];
 /// the cross-configuration consistency of the linear transfers ([`delay_criterion`]: a
 /// delay is a phase ωτ that depends on U as well as K, which the pooled prediction over K
 /// cannot absorb), then scored on the held-out nodes. One shared parameter (τ).
-fn time_delay(cases: &[CaseData], nodes: &[Node], folds: &[Fold], cache: &FitCache) -> Scored {
+fn time_delay(cases: &[CaseData], nodes: &[Node], folds: &[Fold], cache: &NodeCache) -> Scored {
     let mut res = vec![[Vec::new(), Vec::new()]; cases.len()];
     let mut taus = Vec::new();
     // delayed copies by τ, shared by the folds (the grid is the same in every fold)

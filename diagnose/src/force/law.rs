@@ -100,7 +100,7 @@ type FitKey = (usize, u64, usize, Vec<Term>);
 
 /// Node factorisations shared by every fold and candidate of one force-level run.
 #[derive(Debug, Default)]
-pub(crate) struct FitCache(Mutex<HashMap<FitKey, Arc<NodeChan>>>);
+pub(crate) struct NodeCache(Mutex<HashMap<FitKey, Arc<NodeChan>>>);
 
 fn build_chan(cases: &[CaseData], node: &Node, sup: &[Term], c: usize) -> NodeChan {
     let cols: Vec<Vec<f64>> = sup
@@ -155,7 +155,7 @@ pub(crate) fn node_fits(
     nodes: &[Node],
     train: &[usize],
     supports: &Supports,
-    cache: &FitCache,
+    cache: &NodeCache,
     version: u64,
 ) -> Vec<NodeFit> {
     train

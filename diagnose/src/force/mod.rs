@@ -51,7 +51,7 @@ use crate::report::LevelResult;
 use crate::{Error, Result};
 
 use data::{CaseData, Node};
-use law::{Aug, FitCache, NodeFit, Supports};
+use law::{Aug, NodeCache, NodeFit, Supports};
 
 pub use candidates::CandidateKind;
 
@@ -195,7 +195,7 @@ fn build_fold(
     nodes: &[Node],
     settings: &IdentifySettings,
     dataset: &str,
-    cache: &FitCache,
+    cache: &NodeCache,
 ) -> Result<Fold> {
     let train: Vec<usize> = (0..nodes.len()).filter(|&n| fold_of[n] != index).collect();
     let test: Vec<usize> = (0..nodes.len()).filter(|&n| fold_of[n] == index).collect();
@@ -400,7 +400,7 @@ pub fn force_level_profiled(
             None => p,
         });
     }
-    let cache = FitCache::default();
+    let cache = NodeCache::default();
     let folds: Vec<Fold> = (0..scheme.folds)
         .map(|k| build_fold(k, &fold_of, &cases, &nodes, &opts.identify, &name, &cache))
         .collect::<Result<_>>()?;

@@ -14,7 +14,7 @@ use toml::Spanned;
 
 use super::convention::{Angular, Convention, Linear};
 use super::units::{AngleUnit, ForceUnit, LengthUnit, MomentUnit, UnitName, Units};
-use crate::record::{CaseKind, CaseMeta, Section};
+use crate::record::{CaseKind, CaseMeta, SectionGeometry};
 use crate::{Error, Result};
 
 /// The exact value of the manifest's `format` key.
@@ -99,7 +99,7 @@ pub struct Manifest {
     /// Free text.
     pub description: Option<String>,
     /// Geometry and air, SI.
-    pub section: Section,
+    pub section: SectionGeometry,
     /// Structure per unit span; required when any case is free.
     pub structure: Option<StructureSpec>,
     /// Units of the CSV columns.
@@ -516,7 +516,7 @@ impl<'a> Cx<'a> {
         let sec_prefix = "section.";
         let sec = root.req_table("section", sec_prefix)?;
         sec.check_keys(&["chord", "span", "air_density"])?;
-        let section = Section {
+        let section = SectionGeometry {
             chord: sec.req_pos("chord", "m")?,
             span: sec.req_pos("span", "m")?,
             air_density: sec.req_pos("air_density", "kg/m^3")?,

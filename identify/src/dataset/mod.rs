@@ -21,7 +21,7 @@ pub use self::manifest::{
 };
 pub use self::units::{AngleUnit, ForceUnit, LengthUnit, MomentUnit, Units};
 pub use self::write::write_dataset;
-pub use crate::record::{CaseKind, CaseMeta, Record, Section};
+pub use crate::record::{CaseKind, CaseMeta, Record, SectionGeometry};
 
 use crate::Result;
 

@@ -272,7 +272,7 @@ fn full_manifest() -> Manifest {
     Manifest {
         name: "mixed \u{00e9} units".into(),
         description: Some("line one\nline \"two\"".into()),
-        section: Section {
+        section: SectionGeometry {
             chord: 0.25,
             span: 0.75,
             air_density: 1.225,

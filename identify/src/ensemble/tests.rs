@@ -9,7 +9,7 @@ const CHORD: f64 = 0.25;
 /// Four configuration-D-like cases (α at 2 Hz, h at 1.3 Hz, 10 s at 512 Hz) of the demo
 /// law at U = 6, 8, 10, 12 m/s, paper-like noise from `seed`.
 fn cases(seed: u64, duration: f64) -> Vec<NondimCase> {
-    let section = crate::record::Section {
+    let section = crate::record::SectionGeometry {
         chord: CHORD,
         span: 0.75,
         air_density: 1.225,

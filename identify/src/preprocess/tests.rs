@@ -361,7 +361,7 @@ fn harmonic_acceptance_sweep() {
 /// 10 s at 512 Hz, rig-like noise (`noise = false`: none).
 fn demo_case(noise: bool) -> Record {
     use crate::synthetic::{forced_record, HarmonicMotion, PolynomialLaw, Sampling};
-    let section = crate::record::Section {
+    let section = crate::record::SectionGeometry {
         chord: 0.25,
         span: 0.75,
         air_density: 1.225,
@@ -499,7 +499,7 @@ fn demo_case_motion_is_exactly_single_frequency_per_dof() {
 fn demo_case_identifiability_matches_the_noise_free_case() {
     use crate::identifiability::{analyse, CaseIdentifiability, RankOptions};
     use crate::library::{Library, LibraryKind};
-    let section = crate::record::Section {
+    let section = crate::record::SectionGeometry {
         chord: 0.25,
         span: 0.75,
         air_density: 1.225,
@@ -580,7 +580,7 @@ fn two_frequency_pitch_keeps_both_components() {
 /// errors (U = 0).
 #[test]
 fn into_nondimensional_equals_nondimensional() {
-    let section = crate::record::Section {
+    let section = crate::record::SectionGeometry {
         chord: 0.25,
         span: 0.75,
         air_density: 1.225,

@@ -12,13 +12,13 @@ use identify::dataset::{
 };
 use identify::pipeline::{identify, Identification, IdentifySettings};
 use identify::preprocess::PreprocessOptions;
-use identify::record::{CaseMeta, Record, Section};
+use identify::record::{CaseMeta, Record, SectionGeometry};
 use identify::synthetic::{forced_record, HarmonicMotion, PolynomialLaw, Sampling};
 use identify::workflow::prepare_dataset;
 
-/// Section of every synthetic campaign (B = 0.25 m as the paper's plate).
-pub fn section(span: f64) -> Section {
-    Section {
+/// Section geometry of every synthetic campaign (B = 0.25 m as the paper's plate).
+pub fn section(span: f64) -> SectionGeometry {
+    SectionGeometry {
         chord: 0.25,
         span,
         air_density: 1.225,
