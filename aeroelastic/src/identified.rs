@@ -152,7 +152,7 @@ pub struct TablePoint {
 
 /// A derivative (H1*..H4*, A1*..A4*) or N* tabulated over its own K.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
-pub struct Series {
+pub struct TableSeries {
     /// Name: `H1`..`H4`, `A1`..`A4`, or `lift N1`.. `moment N3`.
     pub name: String,
     /// The library term it multiplies (`h_dot`, `alpha*alpha_dot`…).
@@ -192,9 +192,9 @@ pub struct IdentifiedTables {
     /// Case ids used.
     pub cases: Vec<String>,
     /// H1*..H4*, A1*..A4* over their own K.
-    pub derivatives: Vec<Series>,
+    pub derivatives: Vec<TableSeries>,
     /// N* terms (non-zero somewhere) over K_α.
-    pub nonlinear: Vec<Series>,
+    pub nonlinear: Vec<TableSeries>,
     /// Terms outside Eq. 19.
     pub outside: Vec<OutsideTerm>,
     /// Range of K_α of the cases.
@@ -581,7 +581,7 @@ impl IdentifiedLaw {
                         }
                     }
                 }
-                derivatives.push(Series {
+                derivatives.push(TableSeries {
                     name: name.to_string(),
                     term: term.to_string(),
                     over,
@@ -683,7 +683,7 @@ impl IdentifiedLaw {
                         k_power: *k_power,
                     },
                 });
-                nonlinear.push(Series {
+                nonlinear.push(TableSeries {
                     name,
                     term: term.to_string(),
                     over: ReducedFrequency::KAlpha,
@@ -813,7 +813,7 @@ impl IdentifiedLaw {
     }
 
     /// A series (derivative `A2`…, or `moment N3`…) by name.
-    pub fn series(&self, name: &str) -> Option<&Series> {
+    pub fn series(&self, name: &str) -> Option<&TableSeries> {
         self.tables
             .derivatives
             .iter()

@@ -27,7 +27,7 @@ use aeroelastic::tunnel::{self, Campaign, ForcedOptions};
 use identify::pipeline::Identification;
 
 use super::spec::{
-    AeroSpec, PreprocessSpec, StructureSpec, Study, StudyModel, SyntheticSpec, VirtualSpec,
+    AeroSpec, PreprocessSpec, Study, StudyModel, SyntheticSpec, TypicalSectionSpec, VirtualSpec,
 };
 
 /// The cases of the identification stage.
@@ -393,7 +393,7 @@ fn prepare_with_bar(dataset: Dataset, pre: &PreprocessOptions) -> anyhow::Result
 ///
 /// # Errors
 /// Out-of-range parameters, naming the field.
-pub fn structure(s: &StructureSpec) -> anyhow::Result<Structure> {
+pub fn structure(s: &TypicalSectionSpec) -> anyhow::Result<Structure> {
     let mut st = Structure::from_nondimensional(&NondimStructure {
         mu: s.mu,
         r_alpha2: s.r_alpha2,
@@ -421,7 +421,7 @@ pub fn structure(s: &StructureSpec) -> anyhow::Result<Structure> {
 /// An unknown model or invalid parameters.
 pub fn linear_aero(
     model: StudyModel,
-    s: &StructureSpec,
+    s: &TypicalSectionSpec,
     a: &AeroSpec,
 ) -> anyhow::Result<Arc<dyn AeroModel>> {
     linear_aero_chord(model, 2.0 * s.semi_chord, a)
@@ -515,7 +515,7 @@ pub fn identified_model(study: &Study, id: &Identification) -> anyhow::Result<No
 ///
 /// # Errors
 /// No virtual source, or as [`virtual_model`].
-pub fn truth_model(study: &Study, s: &StructureSpec) -> anyhow::Result<Arc<dyn AeroModel>> {
+pub fn truth_model(study: &Study, s: &TypicalSectionSpec) -> anyhow::Result<Arc<dyn AeroModel>> {
     let Some(v) = study
         .spec
         .data
@@ -531,7 +531,7 @@ pub fn truth_model(study: &Study, s: &StructureSpec) -> anyhow::Result<Arc<dyn A
 fn named_aero(
     study: &Study,
     model: StudyModel,
-    s: &StructureSpec,
+    s: &TypicalSectionSpec,
     a: &AeroSpec,
     derived: &Derived,
 ) -> anyhow::Result<Arc<dyn AeroModel>> {

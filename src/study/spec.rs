@@ -24,7 +24,7 @@ pub struct StudySpec {
     /// Identification settings (defaults when omitted and `[data]` is given).
     pub identify: Option<IdentifySpec>,
     /// Structure of the aeroelastic section (flutter / LCO stages).
-    pub structure: Option<StructureSpec>,
+    pub structure: Option<TypicalSectionSpec>,
     /// Aerodynamic model of the aeroelastic section.
     pub aero: Option<AeroSpec>,
     /// Flutter stage.
@@ -331,7 +331,7 @@ impl Default for PreprocessSpec {
 /// `[structure]`: a typical section in Hodges & Pierce's nondimensional form.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct StructureSpec {
+pub struct TypicalSectionSpec {
     /// Mass ratio μ = m/(πρb²).
     pub mu: f64,
     /// r² = I_α/(m b²).
