@@ -7,7 +7,7 @@
 
 use std::sync::Arc;
 
-use aeroelastic::branch::{BranchOptions, BranchProgress};
+use aeroelastic::branch::{BranchMethod, BranchOptions, BranchProgress};
 use aeroelastic::lco::{Classification, KIteration, LcoOptions};
 use aeroelastic::reference::hp1_cubic_pitch;
 use aeroelastic::section::Section;
@@ -19,8 +19,12 @@ fn no_obs(_: BranchProgress) {}
 /// integration started from the orbit with its pitch raised 5 %; returns the relative
 /// amplitude difference.
 fn check_against_time_integration(s: &Section, b: &aeroelastic::branch::Branch, u: f64) -> f64 {
-    let opts = BranchOptions::default();
-    let orbit = s.orbit_on_branch(b, u, true, &opts).expect("orbit");
+    check_with(s, b, u, &BranchOptions::default())
+}
+
+/// [`check_against_time_integration`] for a branch continued with `opts`.
+fn check_with(s: &Section, b: &aeroelastic::branch::Branch, u: f64, opts: &BranchOptions) -> f64 {
+    let orbit = s.orbit_on_branch(b, u, true, opts).expect("orbit");
     let mut y0 = orbit.state.clone();
     y0[1] *= 1.05;
     let r = s
@@ -61,13 +65,22 @@ fn hp1_cubic_pitch_friction() -> (Section, Section) {
     (base, s)
 }
 
-/// The stable orbits of the friction branch match time integration to 0.1 %.
+/// The stable orbits of the friction branch match time integration to 0.1 %, by shooting
+/// and by harmonic balance (the tanh of the regularised friction needs more harmonics than
+/// a polynomial spring: 9).
 #[test]
 fn friction_branch_matches_time_integration() {
+    friction_branch(&BranchOptions::default());
+    friction_branch(&BranchOptions {
+        method: BranchMethod::HarmonicBalance,
+        harmonics: 9,
+        ..BranchOptions::default()
+    });
+}
+
+fn friction_branch(opts: &BranchOptions) {
     let (_, s) = hp1_cubic_pitch_friction();
-    let set = s
-        .lco_branches(1.5, 4.0, &BranchOptions::default(), &no_obs)
-        .expect("branches");
+    let set = s.lco_branches(1.5, 4.0, opts, &no_obs).expect("branches");
     assert!(!set.branches.is_empty());
     let b = &set.branches[0];
     let stable: Vec<_> = b.points.iter().filter(|p| p.stable).collect();
@@ -80,9 +93,13 @@ fn friction_branch_matches_time_integration() {
     let (u0, u1) = (stable[0].u, stable[stable.len() - 1].u);
     let mut worst: f64 = 0.0;
     for f in [0.25, 0.5, 0.75] {
-        worst = worst.max(check_against_time_integration(&s, b, u0 + f * (u1 - u0)));
+        worst = worst.max(check_with(&s, b, u0 + f * (u1 - u0), opts));
     }
-    assert!(worst < 1e-3, "largest amplitude difference {worst:.2e}");
+    assert!(
+        worst < 1e-3,
+        "{:?}: largest amplitude difference {worst:.2e}",
+        opts.method
+    );
 }
 
 /// The friction branch differs from the friction-free one (the test above would pass
