@@ -786,6 +786,12 @@ pub fn forced_forces(
     Ok((lift, moment))
 }
 
+/// A descriptor converted from SI for the manifest, rounded to 12 significant digits so that
+/// a value given in degrees comes back as written (6, not 6.000000000000001, after rad → deg).
+fn tidy(x: f64) -> f64 {
+    format!("{x:.11e}").parse().unwrap_or(x)
+}
+
 /// Manifest case of a forced case (descriptors in the manifest's units).
 fn forced_spec(case: &ForcedCase, units: &Units, still: bool) -> CaseSpec {
     let mut spec = CaseSpec::forced(&case.id, format!("cases/{}.csv", case.id), case.wind_speed);
@@ -793,13 +799,15 @@ fn forced_spec(case: &ForcedCase, units: &Units, still: bool) -> CaseSpec {
     spec.amplitude_ratio = case.amplitude_ratio;
     if case.motion.pitch.len() == 1 {
         spec.freq_pitch = Some(case.motion.pitch[0].freq);
-        spec.amplitude = Some(units.pitch.from_si(case.motion.pitch[0].amplitude.abs()));
+        spec.amplitude = Some(tidy(
+            units.pitch.from_si(case.motion.pitch[0].amplitude.abs()),
+        ));
     }
     if case.motion.heave.len() == 1 {
         spec.freq_heave = Some(case.motion.heave[0].freq);
     }
     if case.motion.mean_pitch != 0.0 {
-        spec.mean_pitch = Some(units.pitch.from_si(case.motion.mean_pitch));
+        spec.mean_pitch = Some(tidy(units.pitch.from_si(case.motion.mean_pitch)));
     }
     if still {
         spec.nowind_file = Some(format!("cases/{}.still.csv", case.id).into());
@@ -1419,6 +1427,19 @@ pub fn free_dataset(
         extra: Some(extra),
     };
     Ok((manifest, records, runs))
+}
+
+#[cfg(test)]
+mod tidy_tests {
+    /// Degrees that went through radians are written as given.
+    #[test]
+    fn descriptors_come_back_as_written() {
+        for d in [3.0, 6.0, 0.1, 24.0, 1.5, 7.3] {
+            let back = f64::to_degrees(f64::to_radians(d));
+            assert_eq!(super::tidy(back), d, "{d} → {back}");
+        }
+        assert_eq!(super::tidy(1.0 / 3.0), 0.333333333333);
+    }
 }
 
 #[cfg(test)]
