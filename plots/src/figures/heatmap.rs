@@ -178,7 +178,14 @@ impl Figure for HeatmapGridFigure {
                 .y_label_area_size(68)
                 .build_cartesian_2d((0..nx - 1).into_segmented(), (0..ny - 1).into_segmented())
                 .ctx(kind)?;
-            mesh!(m = chart, self.x_label.as_str(), self.y_label.as_str());
+            // The panels of a row share the wind-speed axis: its name only on the first
+            // column, so that a colour bar's label never stands next to another y label.
+            let y_label = if i % nc == 0 {
+                self.y_label.as_str()
+            } else {
+                ""
+            };
+            mesh!(m = chart, self.x_label.as_str(), y_label);
             m.disable_mesh()
                 .x_labels(nx)
                 .y_labels(ny)
