@@ -3,19 +3,9 @@
 //! predicted stable branch), the output files, and bad input.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
-fn aeroform(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_aeroform"))
-        .args(args)
-        .output()
-        .expect("run aeroform");
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+mod common;
+use common::aeroform;
 
 fn scenario(name: &str) -> String {
     Path::new(env!("CARGO_MANIFEST_DIR"))

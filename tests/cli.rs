@@ -2,19 +2,9 @@
 //! error naming the place (never a panic), and the default study recovers its known law.
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
-fn aeroform(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_aeroform"))
-        .args(args)
-        .output()
-        .expect("run aeroform");
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+mod common;
+use common::aeroform;
 
 const MANIFEST: &str = r#"format = "aeroform-dataset/1"
 name = "bad-input test"

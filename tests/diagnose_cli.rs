@@ -3,23 +3,13 @@
 //! `forced/`, `free/` and a separate `truth.json` that the command never reads.
 
 use std::path::Path;
-use std::process::Command;
 
 use aeroelastic::effects::Form;
 use diagnose::blind::{generate, write_blind, BlindEffect, BlindScenario};
 use diagnose::Effect;
 
-fn aeroform(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_aeroform"))
-        .args(args)
-        .output()
-        .expect("run aeroform");
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+mod common;
+use common::aeroform;
 
 fn write_set(dir: &Path, effect: BlindEffect, strength: f64, seed: u64) {
     let set = generate(

@@ -4,20 +4,9 @@
 //! blind set → diagnose).
 
 use std::path::Path;
-use std::process::Command;
 
-fn aeroform(dir: &Path, args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_aeroform"))
-        .current_dir(dir)
-        .args(args)
-        .output()
-        .expect("run aeroform");
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+mod common;
+use common::aeroform_in as aeroform;
 
 /// Runs `args` with `--json` (stdout must be exactly one JSON document, returned) and with
 /// `--quiet` into a second folder (stdout must be empty).

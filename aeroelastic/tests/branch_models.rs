@@ -15,14 +15,9 @@ use aeroelastic::structure::Friction;
 
 fn no_obs(_: BranchProgress) {}
 
-/// Branch orbit at `u` against a (K-iterated when the model depends on K) time
+/// Branch orbit at `u` (continued with `opts`) against a (K-iterated when the model depends on K) time
 /// integration started from the orbit with its pitch raised 5 %; returns the relative
 /// amplitude difference.
-fn check_against_time_integration(s: &Section, b: &aeroelastic::branch::Branch, u: f64) -> f64 {
-    check_with(s, b, u, &BranchOptions::default())
-}
-
-/// [`check_against_time_integration`] for a branch continued with `opts`.
 fn check_with(s: &Section, b: &aeroelastic::branch::Branch, u: f64, opts: &BranchOptions) -> f64 {
     let orbit = s.orbit_on_branch(b, u, true, opts).expect("orbit");
     let mut y0 = orbit.state.clone();

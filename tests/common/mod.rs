@@ -1,0 +1,27 @@
+//! Helpers shared by the end-to-end tests (each test file that uses them says `mod common;`).
+
+#![allow(dead_code)] // each test binary uses a subset
+
+use std::path::Path;
+use std::process::Command;
+
+/// Runs the `aeroform` binary with `args`: (success, stdout, stderr).
+pub fn aeroform(args: &[&str]) -> (bool, String, String) {
+    run(Command::new(env!("CARGO_BIN_EXE_aeroform")).args(args))
+}
+
+/// [`aeroform`] with `dir` as the working directory.
+pub fn aeroform_in(dir: &Path, args: &[&str]) -> (bool, String, String) {
+    run(Command::new(env!("CARGO_BIN_EXE_aeroform"))
+        .current_dir(dir)
+        .args(args))
+}
+
+fn run(cmd: &mut Command) -> (bool, String, String) {
+    let out = cmd.output().expect("run aeroform");
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
