@@ -141,6 +141,25 @@ fn sharp_freeplay_and_bad_measured_table_are_refused_by_name() {
     );
 }
 
+/// `aeroform branch` on the Bristol rig model over 12–20 m/s with `extra` arguments.
+fn bristol_branch(extra: &[&str]) -> (bool, String, String) {
+    let (st, m) = (
+        scenario("bristol-spring1.structure.toml"),
+        scenario("bristol-spring1.model.toml"),
+    );
+    let mut args = vec![
+        "branch",
+        "--structure",
+        &st,
+        "--model",
+        &m,
+        "--speeds",
+        "12:20",
+    ];
+    args.extend_from_slice(extra);
+    aeroform(&args)
+}
+
 /// The two orbit discretisations agree on the rig's fold; an unknown method is refused by
 /// name.
 #[test]
@@ -148,19 +167,7 @@ fn harmonic_balance_finds_the_same_bristol_fold_as_shooting() {
     let dir = tmp();
     let fold = |method: &str| -> f64 {
         let out: PathBuf = dir.path().join(method);
-        let (ok, stdout, stderr) = aeroform(&[
-            "branch",
-            "--structure",
-            &scenario("bristol-spring1.structure.toml"),
-            "--model",
-            &scenario("bristol-spring1.model.toml"),
-            "--speeds",
-            "12:20",
-            "--method",
-            method,
-            "--out",
-            &s(&out),
-        ]);
+        let (ok, stdout, stderr) = bristol_branch(&["--method", method, "--out", &s(&out)]);
         assert!(ok, "{stdout}\n{stderr}");
         let json: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(out.join("branch.json")).unwrap())
@@ -178,19 +185,7 @@ fn harmonic_balance_finds_the_same_bristol_fold_as_shooting() {
     let (fs, fh) = (fold("shooting"), fold("harmonic-balance"));
     println!("Bristol fold: shooting {fs:.5} m/s, harmonic balance {fh:.5} m/s");
     assert!((fs - fh).abs() < 1e-4 * fs, "fold {fs} vs {fh}");
-    let (ok, _, stderr) = aeroform(&[
-        "branch",
-        "--structure",
-        &scenario("bristol-spring1.structure.toml"),
-        "--model",
-        &scenario("bristol-spring1.model.toml"),
-        "--speeds",
-        "12:20",
-        "--method",
-        "collocation",
-        "--out",
-        &s(dir.path()),
-    ]);
+    let (ok, _, stderr) = bristol_branch(&["--method", "collocation", "--out", &s(dir.path())]);
     assert!(!ok);
     assert!(
         stderr.contains("collocation") && stderr.contains("harmonic_balance"),

@@ -26,7 +26,7 @@ use std::sync::Arc;
 
 use nalgebra::{DMatrix, DVector};
 
-use super::{floquet, half_peak_to_peak, BranchPoint, HopfPoint, PeriodicProblem};
+use super::{orbit_point, BranchPoint, HopfPoint, PeriodicProblem};
 use crate::aero::AeroModel;
 use crate::dynamics::SectionDynamics;
 use crate::section::Section;
@@ -427,23 +427,9 @@ impl PeriodicProblem for HarmonicBalance<'_> {
         let zf = self.states_on(&self.fine, &x);
         let s: Vec<[f64; 2]> = zf.chunks(n).map(|z| [z[0], z[1]]).collect();
         let mono = self.with_section(omega, u, |d| Ok(self.monodromy(d, &x, omega)))?;
-        let (mu, max_floquet) = floquet(mono)?;
         let w = self.w;
-        let z = zf[..n].to_vec();
-        Ok(BranchPoint {
-            u,
-            period: TAU / omega,
-            omega,
-            amplitude_alpha: half_peak_to_peak(&s, 1),
-            amplitude_h: half_peak_to_peak(&s, 0),
-            amplitude1_alpha: x[w + 1].hypot(x[w + 2]),
-            amplitude1_h: x[1].hypot(x[2]),
-            max_floquet,
-            stable: max_floquet < 1.0,
-            multipliers: mu.iter().map(|m| [m.re, m.im]).collect(),
-            state: z,
-            unknowns: y.iter().copied().collect(),
-        })
+        let a1 = [x[1].hypot(x[2]), x[w + 1].hypot(x[w + 2])];
+        orbit_point(u, omega, &s, a1, mono, zf[..n].to_vec(), y)
     }
 
     fn start(&self, hopf: &HopfPoint, a: f64) -> DVector<f64> {

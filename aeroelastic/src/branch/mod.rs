@@ -468,6 +468,36 @@ fn tangent(
     Ok((t / nrm, lu))
 }
 
+/// One orbit of either discretisation as a [`BranchPoint`]: speed `u` [m/s], frequency
+/// `omega` [rad/s], one period of (h, α) samples (half peak-to-peak amplitudes), the
+/// first-harmonic amplitudes (h, α), the monodromy matrix, a state on the orbit and the
+/// scaled unknowns.
+fn orbit_point(
+    u: f64,
+    omega: f64,
+    samples: &[[f64; 2]],
+    first_harmonic: [f64; 2],
+    monodromy: DMatrix<f64>,
+    state: Vec<f64>,
+    y: &DVector<f64>,
+) -> Result<BranchPoint> {
+    let (mu, max_floquet) = floquet(monodromy)?;
+    Ok(BranchPoint {
+        u,
+        period: std::f64::consts::TAU / omega,
+        omega,
+        amplitude_alpha: half_peak_to_peak(samples, 1),
+        amplitude_h: half_peak_to_peak(samples, 0),
+        amplitude1_alpha: first_harmonic[1],
+        amplitude1_h: first_harmonic[0],
+        max_floquet,
+        stable: max_floquet < 1.0,
+        multipliers: mu.iter().map(|m| [m.re, m.im]).collect(),
+        state,
+        unknowns: y.iter().copied().collect(),
+    })
+}
+
 /// Non-trivial Floquet multipliers of a monodromy matrix (the trivial multiplier 1 removed
 /// as the eigenvalue closest to 1) and their largest modulus.
 fn floquet(mono: DMatrix<f64>) -> Result<(Vec<Complex64>, f64)> {
@@ -603,29 +633,14 @@ impl PeriodicProblem for Shooting<'_> {
         let (z, t, u) = self.unscale(y);
         let f = self.flow(&z, t, u, true)?;
         let s = f.samples.unwrap_or_default();
-        let (amp_h, amp_a) = (half_peak_to_peak(&s, 0), half_peak_to_peak(&s, 1));
-        let (a1_h, a1_a) = (first_harmonic(&s, 0), first_harmonic(&s, 1));
         // Monodromy in scaled variables: M_s = S⁻¹ (∂φ/∂z₀) S = J_zz + I (same spectrum).
         let n = self.n;
         let mut mono = jg.view((0, 0), (n, n)).into_owned();
         for i in 0..n {
             mono[(i, i)] += 1.0;
         }
-        let (mu, max_floquet) = floquet(mono)?;
-        Ok(BranchPoint {
-            u,
-            period: t,
-            omega: std::f64::consts::TAU / t,
-            amplitude_alpha: amp_a,
-            amplitude_h: amp_h,
-            amplitude1_alpha: a1_a,
-            amplitude1_h: a1_h,
-            max_floquet,
-            stable: max_floquet < 1.0,
-            multipliers: mu.iter().map(|m| [m.re, m.im]).collect(),
-            state: z,
-            unknowns: y.iter().copied().collect(),
-        })
+        let a1 = [first_harmonic(&s, 0), first_harmonic(&s, 1)];
+        orbit_point(u, std::f64::consts::TAU / t, &s, a1, mono, z, y)
     }
 
     fn start(&self, hopf: &HopfPoint, a: f64) -> DVector<f64> {
