@@ -485,11 +485,14 @@ def branch(
     max_points: int = 200,
     steps_per_period: int = 128,
     chord: Optional[float] = None,
+    method: str = "shooting",
+    harmonics: int = 5,
 ) -> Branch:
     """LCO branches by continuation, as ``aeroform branch``: from every Hopf point of the
     linear flutter analysis in the speed range ``speeds`` (``"a:b"`` or ``(a, b)`` [m/s]),
-    periodic orbits continued in U by single shooting and pseudo-arclength, stability by
-    Floquet multipliers, folds marked. ``measured``: a CSV of measured amplitudes
+    periodic orbits continued in U by pseudo-arclength (``method``: ``"shooting"`` or
+    ``"harmonic_balance"`` with ``harmonics`` harmonics), stability by Floquet multipliers,
+    folds marked. ``measured``: a CSV of measured amplitudes
     (columns ``branch, wind_speed_m_s, heave_amp_m, pitch_amp_rad``) compared with the
     branch of the same stability. Returns the content of ``branch.json`` as a
     :class:`Branch` (``.csv``, ``.columns()``, ``.to_frame()``)."""
@@ -510,7 +513,8 @@ def branch(
     meas = None if measured is None else os.fspath(measured)
     with _Files(structure, model) as f:
         doc, csv = _core.branch(
-            f.structure, f.model, lo, hi, meas, max_points, steps_per_period, chord
+            f.structure, f.model, lo, hi, meas, max_points, steps_per_period, chord,
+            method, harmonics,
         )
     out = Branch(json.loads(doc))
     out.csv = csv

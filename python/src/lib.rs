@@ -418,7 +418,7 @@ fn lco(
 /// is a CSV of measured amplitudes (columns `branch`, `wind_speed_m_s`, `heave_amp_m`,
 /// `pitch_amp_rad`) whose distances to the predicted branches are reported.
 #[pyfunction]
-#[pyo3(signature = (structure, model, u_min, u_max, measured = None, max_points = 200, steps_per_period = 128, chord = None))]
+#[pyo3(signature = (structure, model, u_min, u_max, measured = None, max_points = 200, steps_per_period = 128, chord = None, method = "shooting", harmonics = 5))]
 #[allow(clippy::too_many_arguments)]
 fn branch(
     py: Python<'_>,
@@ -430,7 +430,17 @@ fn branch(
     max_points: usize,
     steps_per_period: usize,
     chord: Option<f64>,
+    method: &str,
+    harmonics: usize,
 ) -> PyResult<(String, String)> {
+    // the library's own (serde) names: `shooting`, `harmonic_balance`
+    let method: aeroelastic::branch::BranchMethod = {
+        use serde::de::IntoDeserializer;
+        let name = method.replace('-', "_");
+        let d: serde::de::value::StrDeserializer<serde::de::value::Error> =
+            name.as_str().into_deserializer();
+        serde::Deserialize::deserialize(d).map_err(|e| err(format!("method: {e}")))?
+    };
     py.detach(|| {
         let pair = LoadedPair::load(&structure, &model, chord).map_err(|e| e.to_string())?;
         let measured = match &measured {
@@ -442,6 +452,8 @@ fn branch(
         let opts = BranchOptions {
             max_points,
             steps_per_period,
+            method,
+            harmonics,
             ..BranchOptions::default()
         };
         let set = pair

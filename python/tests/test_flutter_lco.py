@@ -82,3 +82,17 @@ def test_branch_equals_the_cli(tmp_path):
     assert len(cols["U_m_s"]) == n and cols["stable"].dtype == bool
     # Both stabilities are present on a subcritical branch.
     assert cols["stable"].any() and not cols["stable"].all()
+
+
+def test_branch_by_harmonic_balance_finds_the_same_fold(tmp_path):
+    run_cli("branch", "--structure", BS, "--model", BM, "--speeds", "12:20",
+            "--method", "harmonic_balance", "--out", tmp_path)
+    cli = json.loads((tmp_path / "branch.json").read_text())
+    hb = aeroform.branch(str(BS), str(BM), (12.0, 20.0), method="harmonic_balance")
+    assert max_difference(cli, hb) == 0.0
+    assert hb["settings"]["options"]["method"] == "harmonic_balance"
+    sh = aeroform.branch(str(BS), str(BM), (12.0, 20.0))
+    f_hb, f_sh = hb["folds"][0]["U_m_s"], sh["folds"][0]["U_m_s"]
+    assert abs(f_hb - f_sh) < 1e-4 * f_sh
+    with pytest.raises(aeroform.AeroformError, match="collocation"):
+        aeroform.branch(str(BS), str(BM), (12.0, 20.0), method="collocation")
