@@ -38,7 +38,7 @@ pub struct BranchArgs {
     #[arg(long, default_value_t = 128)]
     pub steps_per_period: usize,
     /// Orbit discretisation: `shooting` or `harmonic_balance`.
-    #[arg(long, default_value = "shooting", value_parser = parse_method)]
+    #[arg(long, default_value = "shooting")]
     pub method: BranchMethod,
     /// Harmonics of the harmonic-balance series.
     #[arg(long, default_value_t = 5)]
@@ -151,15 +151,6 @@ pub(crate) fn branch_figure(
             })
             .collect(),
     }
-}
-
-/// `--method` by the library's own (serde) names.
-fn parse_method(s: &str) -> Result<BranchMethod, String> {
-    use serde::de::IntoDeserializer;
-    let name = s.replace('-', "_");
-    let d: serde::de::value::StrDeserializer<serde::de::value::Error> =
-        name.as_str().into_deserializer();
-    serde::Deserialize::deserialize(d).map_err(|e| format!("{e}"))
 }
 
 /// Runs `aeroform branch`.

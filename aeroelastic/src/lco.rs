@@ -528,7 +528,10 @@ pub struct SweepPlan {
 impl Section {
     /// The section with its aerodynamic model's coefficients evaluated at reduced frequency
     /// `k` (`None` when the model does not depend on K).
-    fn at_reduced_frequency(&self, k: f64) -> Result<Option<Section>> {
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] naming `k_eval` when the model cannot be evaluated at `k`.
+    pub(crate) fn at_reduced_frequency(&self, k: f64) -> Result<Option<Section>> {
         if self.aero.reduced_frequency().is_none() {
             return Ok(None);
         }

@@ -433,14 +433,7 @@ fn branch(
     method: &str,
     harmonics: usize,
 ) -> PyResult<(String, String)> {
-    // the library's own (serde) names: `shooting`, `harmonic_balance`
-    let method: aeroelastic::branch::BranchMethod = {
-        use serde::de::IntoDeserializer;
-        let name = method.replace('-', "_");
-        let d: serde::de::value::StrDeserializer<serde::de::value::Error> =
-            name.as_str().into_deserializer();
-        serde::Deserialize::deserialize(d).map_err(|e| err(format!("method: {e}")))?
-    };
+    let method: aeroelastic::branch::BranchMethod = method.parse().map_err(err)?;
     py.detach(|| {
         let pair = LoadedPair::load(&structure, &model, chord).map_err(|e| e.to_string())?;
         let measured = match &measured {

@@ -22,12 +22,10 @@
 //! orbit (J evaluated on the series, so no nonlinear integration is needed).
 
 use std::f64::consts::TAU;
-use std::sync::Arc;
 
 use nalgebra::{DMatrix, DVector};
 
 use super::{orbit_point, BranchPoint, HopfPoint, PeriodicProblem};
-use crate::aero::AeroModel;
 use crate::dynamics::SectionDynamics;
 use crate::section::Section;
 use crate::{Error, Result};
@@ -136,7 +134,7 @@ impl<'a> HarmonicBalance<'a> {
             proj,
             fine,
             var,
-            k_dependent: section.aero.with_reduced_frequency(1.0).is_some(),
+            k_dependent: section.aero.reduced_frequency().is_some(),
             linear_aero: section.aero.is_linear(),
         }
     }
@@ -160,17 +158,13 @@ impl<'a> HarmonicBalance<'a> {
                 format!("non-physical iterate ω = {omega} rad/s, U = {u} m/s"),
             ));
         }
-        if self.k_dependent {
-            let k = self.section.aero.chord() * omega / u;
-            let m: Arc<dyn AeroModel> =
-                self.section.aero.with_reduced_frequency(k).ok_or_else(|| {
-                    Error::numerical("harmonic balance", format!("no model at K = {k}"))
-                })?;
-            let rebuilt = Section::new(self.section.structure.clone(), m, self.section.rho)?;
-            f(&SectionDynamics::new(&rebuilt, u)?)
-        } else {
-            f(&SectionDynamics::new(self.section, u)?)
-        }
+        let rebuilt = self
+            .section
+            .at_reduced_frequency(self.section.aero.chord() * omega / u)?;
+        f(&SectionDynamics::new(
+            rebuilt.as_ref().unwrap_or(self.section),
+            u,
+        )?)
     }
 
     /// States at the N samples, row-major N × n.

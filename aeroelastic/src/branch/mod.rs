@@ -24,13 +24,10 @@
 //!
 //! Units: U [m/s], T \[s\], ω [rad/s], h \[m\] positive down, α \[rad\] positive nose-up.
 
-use std::sync::Arc;
-
 use nalgebra::{DMatrix, DVector, Dyn};
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
-use crate::aero::AeroModel;
 use crate::dynamics::SectionDynamics;
 use crate::flutter::{eigenvalues, eigenvector};
 use crate::integrate::Rk4;
@@ -89,6 +86,25 @@ pub enum BranchMethod {
     /// Harmonic balance (AFT) with `harmonics` harmonics; multipliers from the variational
     /// equation along the series.
     HarmonicBalance,
+}
+
+impl std::str::FromStr for BranchMethod {
+    type Err = Error;
+
+    /// A method by its serde name, `shooting` or `harmonic_balance` (`-` read as `_`).
+    ///
+    /// # Errors
+    /// [`Error::Toml`] (source `method`) naming the unknown value and the known ones.
+    fn from_str(s: &str) -> Result<Self> {
+        use serde::de::IntoDeserializer;
+        let name = s.replace('-', "_");
+        let d: serde::de::value::StrDeserializer<serde::de::value::Error> =
+            name.as_str().into_deserializer();
+        Self::deserialize(d).map_err(|e| Error::Toml {
+            source_name: "method".into(),
+            message: e.to_string(),
+        })
+    }
 }
 
 fn default_harmonics() -> usize {
@@ -519,7 +535,6 @@ struct Shooting<'a> {
     n: usize,
     steps: usize,
     scales: Vec<f64>,
-    k_dependent: bool,
 }
 
 /// Result of one flow evaluation.
@@ -530,13 +545,11 @@ struct Flow {
 
 impl<'a> Shooting<'a> {
     fn new(section: &'a Section, steps: usize, scales: Vec<f64>) -> Self {
-        let k_dependent = section.aero.with_reduced_frequency(1.0).is_some();
         Shooting {
             section,
             n: section.n_states(),
             steps,
             scales,
-            k_dependent,
         }
     }
 
@@ -554,20 +567,10 @@ impl<'a> Shooting<'a> {
                 format!("non-physical iterate T = {t} s, U = {u} m/s"),
             ));
         }
-        let rebuilt;
-        let section = if self.k_dependent {
-            let k = self.section.aero.chord() * (std::f64::consts::TAU / t) / u;
-            let m: Arc<dyn AeroModel> = self
-                .section
-                .aero
-                .with_reduced_frequency(k)
-                .ok_or_else(|| Error::numerical("shooting", format!("no model at K = {k}")))?;
-            rebuilt = Section::new(self.section.structure.clone(), m, self.section.rho)?;
-            &rebuilt
-        } else {
-            self.section
-        };
-        let dynamics = SectionDynamics::new(section, u)?;
+        // K-dependent models at the orbit's own K = B(2π/T)/U
+        let k = self.section.aero.chord() * (std::f64::consts::TAU / t) / u;
+        let rebuilt = self.section.at_reduced_frequency(k)?;
+        let dynamics = SectionDynamics::new(rebuilt.as_ref().unwrap_or(self.section), u)?;
         let dt = t / self.steps as f64;
         let mut z = z0.to_vec();
         let mut work = Rk4::new(self.n);
