@@ -19,7 +19,7 @@
 //!
 //! Models whose coefficients depend on the reduced frequency K = Bω/U (identified Eq. 19
 //! law, [`crate::aero::NonlinearAero`]) are evaluated at the orbit's own K = B(2π/T)/U at
-//! every Newton iterate ([`AeroModel::with_reduced_frequency`]); their Floquet multipliers
+//! every Newton iterate ([`crate::aero::AeroModel::with_reduced_frequency`]); their Floquet multipliers
 //! are those of the system with K frozen at the orbit's value.
 //!
 //! Units: U [m/s], T \[s\], ω [rad/s], h \[m\] positive down, α \[rad\] positive nose-up.
