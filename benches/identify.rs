@@ -8,6 +8,10 @@
 //! δ path and metrics. Before the criterion run, one timed pass of each stage (library,
 //! QR factor, harmonic projection) is printed to show where the time goes.
 //!
+//! A second group compares, side by side, the two ways a 5-fold cross-validation (the
+//! diagnosis's force level) can identify its training sets on 28 of those cases: a full
+//! `identify()` per fold, and the staged API (`prepare` once, `Prepared::identify` per fold).
+//!
 //! Run: `cargo bench --bench identify`.
 
 use std::time::Instant;
@@ -16,7 +20,7 @@ use criterion::{criterion_group, criterion_main, Criterion};
 use identify::identifiability::priority_order;
 use identify::library::{Library, LibraryKind};
 use identify::metrics::{candidate_tones, HarmonicProjector};
-use identify::pipeline::{identify, IdentifySettings};
+use identify::pipeline::{identify, prepare, IdentifySettings};
 use identify::record::{CaseMeta, Forcing, NondimCase};
 use identify::regress::CaseFactor;
 use rand::SeedableRng;
@@ -173,6 +177,35 @@ fn bench(c: &mut Criterion) {
         "448 cases x 10 s x 512 Hz, Paper30, group STLSQ, 50 deltas",
         |b| b.iter(|| identify(&cases, &settings, "bench", &|_| {}).unwrap()),
     );
+    g.finish();
+
+    // 5 folds over the first configuration's first 28 cases; fold k holds out i % 5 == k
+    let first = cases[0].meta.config.clone();
+    let cv: Vec<NondimCase> = cases
+        .iter()
+        .filter(|c| c.meta.config == first)
+        .take(28)
+        .cloned()
+        .collect();
+    let train = |k: usize| -> Vec<usize> { (0..cv.len()).filter(|i| i % 5 != k).collect() };
+    let mut g = c.benchmark_group("five_folds");
+    g.sample_size(10);
+    g.bench_function("identify per fold", |b| {
+        b.iter(|| {
+            for k in 0..5 {
+                let fold: Vec<NondimCase> = train(k).iter().map(|&i| cv[i].clone()).collect();
+                identify(&fold, &settings, "bench", &|_| {}).unwrap();
+            }
+        })
+    });
+    g.bench_function("prepare once, identify subsets", |b| {
+        b.iter(|| {
+            let p = prepare(&cv, &settings, &|_| {}).unwrap();
+            for k in 0..5 {
+                p.identify(&train(k), "bench", &|_| {}).unwrap();
+            }
+        })
+    });
     g.finish();
 }
 

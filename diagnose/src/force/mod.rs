@@ -12,8 +12,10 @@
 //!    dealing could hold out an end node together with its only
 //!    neighbour: the end node was then predicted two spacings away and the effect-free
 //!    gap statistic rose from ≈ 1.5 to ≈ 2.45 on one fold seed in three.)
-//! 2. **Baseline.** Per fold, `identify` (default [`IdentifySettings`]) on the training
-//!    cases selects each configuration's support (union of its groups' supports, lift and
+//! 2. **Baseline.** Every forced case is prepared for identification once
+//!    (`identify::pipeline::prepare`); per fold, the training cases' identification
+//!    (default [`IdentifySettings`]; `Prepared::identify` on their indices, the result of
+//!    `identify` on them alone) selects each configuration's support (union of its groups' supports, lift and
 //!    moment); the law is then one coefficient vector per node, fitted by least squares on
 //!    the node's amplitudes together (the identified law depends on K only, as
 //!    `aeroelastic::identified` aggregates it). A held-out case is predicted from its
@@ -42,7 +44,7 @@ use std::collections::BTreeMap;
 
 use identify::dataset::Dataset;
 use identify::library::Term;
-use identify::pipeline::{identify, IdentifySettings};
+use identify::pipeline::{IdentifySettings, Prepared};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
@@ -193,22 +195,28 @@ fn build_fold(
     fold_of: &[usize],
     cases: &[CaseData],
     nodes: &[Node],
-    settings: &IdentifySettings,
+    prepared: &Prepared<'_>,
     dataset: &str,
     cache: &NodeCache,
 ) -> Result<Fold> {
     let train: Vec<usize> = (0..nodes.len()).filter(|&n| fold_of[n] != index).collect();
     let test: Vec<usize> = (0..nodes.len()).filter(|&n| fold_of[n] == index).collect();
-    let train_cases: Vec<identify::record::NondimCase> = train
+    let train_indices: Vec<usize> = train
         .iter()
-        .flat_map(|&n| nodes[n].cases.iter().map(|&i| cases[i].nd.clone()))
+        .flat_map(|&n| nodes[n].cases.iter().copied())
         .collect();
-    let id = identify(&train_cases, settings, dataset, &|_| {}).map_err(|e| {
-        Error::identify(
-            format!("data set `{dataset}`, fold {index}: baseline identification"),
-            e,
-        )
-    })?;
+    let id = prepared
+        .identify(&train_indices, dataset, &|_| {})
+        .map_err(|e| {
+            Error::identify(
+                format!("data set `{dataset}`, fold {index}: baseline identification"),
+                e,
+            )
+        })?;
+    let train_cases: Vec<&identify::record::NondimCase> = train_indices
+        .iter()
+        .map(|&i| &prepared.cases()[i])
+        .collect();
     let mut supports: Supports = BTreeMap::new();
     for case in &id.cases {
         let Some(nd) = train_cases.iter().find(|c| c.meta.id == case.id) else {
@@ -401,8 +409,15 @@ pub fn force_level_profiled(
         });
     }
     let cache = NodeCache::default();
+    let nd: Vec<identify::record::NondimCase> = cases.iter().map(|c| c.nd.clone()).collect();
+    let prepared = identify::pipeline::prepare(&nd, &opts.identify, &|_| {}).map_err(|e| {
+        Error::identify(
+            format!("data set `{name}`: preparing the identification"),
+            e,
+        )
+    })?;
     let folds: Vec<Fold> = (0..scheme.folds)
-        .map(|k| build_fold(k, &fold_of, &cases, &nodes, &opts.identify, &name, &cache))
+        .map(|k| build_fold(k, &fold_of, &cases, &nodes, &prepared, &name, &cache))
         .collect::<Result<_>>()?;
     lap("folds", &mut prof);
     let before = held_out_residuals(&cases, &nodes, &folds, Aug::NONE);

@@ -8,6 +8,11 @@
 //! group basis and the selection of the sparsest support under the loss limit. Results are
 //! deterministic, independent of the thread count and of the case order (groups sorted by
 //! name, cases by id inside a group); cases are reported in input order.
+//!
+//! The two stages are public: [`prepare`] does the per-case work once and
+//! [`Prepared::identify`] runs the group stage on any subset of the prepared cases (a
+//! cross-validation's folds, a leave-one-out), with the result [`identify`] gives on that
+//! subset alone.
 
 use std::collections::BTreeMap;
 
@@ -420,22 +425,52 @@ fn force_result<E: From<Eq19Values>>(
     }
 }
 
-/// Identifies the force laws of `cases` (see the module documentation).
+/// Identifies the force laws of `cases` (see the module documentation): [`prepare`] then
+/// [`Prepared::identify_all`].
 ///
 /// `observer` receives [`Progress`] on the calling thread between parallel batches.
 ///
 /// # Errors
-/// [`Error::InvalidOption`] for invalid settings; [`Error::InvalidData`] naming the case for
-/// an empty input, duplicate ids, series of unequal length, non-positive dt, non-finite
-/// values or too few samples; [`Error::RankDeficient`] naming the case and its dependencies
-/// when `basis = Full` and a library is rank deficient; [`Error::Numerical`] when an SVD
-/// or a harmonic fit fails.
+/// As [`prepare`] and [`Prepared::identify`].
 pub fn identify(
     cases: &[NondimCase],
     settings: &IdentifySettings,
     dataset_name: &str,
     observer: &dyn Fn(Progress),
 ) -> Result<Identification> {
+    prepare(cases, settings, observer)?.identify_all(dataset_name, observer)
+}
+
+/// The first stage of an identification: every case prepared once (library factorisation
+/// with both targets, identifiability, key-frequency projections), ready to identify any
+/// subset of the cases with [`Prepared::identify`]. Preparing a case does not depend on
+/// the other cases, so identifying a subset gives exactly what [`identify`] gives on those
+/// cases alone, at the cost of the group stage only (a cross-validation's folds prepare
+/// once).
+pub struct Prepared<'c> {
+    cases: &'c [NondimCase],
+    settings: IdentifySettings,
+    lib: Library,
+    order: Vec<usize>,
+    opts: PathOptions,
+    kept: Mask,
+    work: Vec<CaseWork>,
+}
+
+/// Prepares every case of `cases` for identification with `settings` (the first stage of
+/// [`identify`]). `observer` receives [`Progress::Cases`] on the calling thread.
+///
+/// # Errors
+/// [`Error::InvalidOption`] for invalid settings (an unknown kept term names it);
+/// [`Error::InvalidData`] naming the case for an empty input, duplicate ids, series of
+/// unequal length, non-positive dt, non-finite values or too few samples;
+/// [`Error::RankDeficient`] naming the case and its dependencies when `basis = Full` and a
+/// library is rank deficient; [`Error::Numerical`] when an SVD or a harmonic fit fails.
+pub fn prepare<'c>(
+    cases: &'c [NondimCase],
+    settings: &IdentifySettings,
+    observer: &dyn Fn(Progress),
+) -> Result<Prepared<'c>> {
     settings.validate()?;
     if cases.is_empty() {
         return Err(Error::InvalidData {
@@ -455,7 +490,6 @@ pub fn identify(
         }
     }
     let lib = Library::new(settings.library, settings.constant);
-    let names = lib.names();
     let order = identifiability::priority_order(&lib);
     let opts = settings.path_options();
     let deltas = opts.grid();
@@ -465,9 +499,9 @@ pub fn identify(
     }
     let kept = bools_to_mask(&kept_cols);
 
-    // 1. per case, in batches so that progress is reported on this thread
+    // per case, in batches so that progress is reported on this thread
     let total = cases.len();
-    let batch = (4 * rayon::current_num_threads()).max(8);
+    let batch = batch_size();
     let mut work: Vec<CaseWork> = Vec::with_capacity(total);
     for chunk in cases.chunks(batch) {
         let done: Vec<Result<CaseWork>> = chunk
@@ -482,127 +516,206 @@ pub fn identify(
             total,
         });
     }
+    Ok(Prepared {
+        cases,
+        settings: settings.clone(),
+        lib,
+        order,
+        opts,
+        kept,
+        work,
+    })
+}
 
-    // 2. groups: sorted by name, cases by id inside
-    let mut groups: BTreeMap<String, Vec<usize>> = BTreeMap::new();
-    for (i, c) in cases.iter().enumerate() {
-        groups
-            .entry(group_name(c, settings.group_by))
-            .or_default()
-            .push(i);
+/// Parallel batch size: enough tasks per batch to keep every thread busy, few enough
+/// batches that progress moves.
+fn batch_size() -> usize {
+    (4 * rayon::current_num_threads()).max(8)
+}
+
+impl<'c> Prepared<'c> {
+    /// The prepared cases, in input order (the indices [`Prepared::identify`] takes).
+    pub fn cases(&self) -> &'c [NondimCase] {
+        self.cases
     }
-    for members in groups.values_mut() {
-        members.sort_by(|&a, &b| cases[a].meta.id.cmp(&cases[b].meta.id));
+
+    /// Identifies all prepared cases: [`identify`]'s result.
+    ///
+    /// # Errors
+    /// As [`Prepared::identify`].
+    pub fn identify_all(
+        &self,
+        dataset_name: &str,
+        observer: &dyn Fn(Progress),
+    ) -> Result<Identification> {
+        let all: Vec<usize> = (0..self.cases.len()).collect();
+        self.identify(&all, dataset_name, observer)
     }
-    let group_list: Vec<(String, Vec<usize>)> = groups.into_iter().collect();
-    let tasks: Vec<(usize, usize)> = (0..group_list.len())
-        .flat_map(|g| [(g, 0), (g, 1)])
-        .collect();
-    let bases: Vec<Mask> = group_list
-        .iter()
-        .map(|(_, m)| {
-            let idents: Vec<&CaseIdentifiability> = m.iter().map(|&i| &work[i].ident).collect();
-            bools_to_mask(&identifiability::group_basis(&idents))
-        })
-        .collect();
-    let mut outcomes: Vec<Option<GroupOutcome>> = (0..tasks.len()).map(|_| None).collect();
-    let n_tasks = tasks.len();
-    let mut done = 0;
-    for chunk in (0..n_tasks).collect::<Vec<_>>().chunks(batch) {
-        let res: Vec<GroupOutcome> = chunk
-            .par_iter()
-            .map(|&k| {
-                let (g, target) = tasks[k];
-                let members: Vec<&CaseWork> = group_list[g].1.iter().map(|&i| &work[i]).collect();
-                run_group(&members, target, settings, bases[g], kept, &opts)
+
+    /// Identifies the cases `subset` (indices into [`Prepared::cases`]; the result lists
+    /// them in this order): groups, δ paths and selected supports, as [`identify`] on
+    /// those cases alone. `observer` receives [`Progress::Groups`] on the calling thread.
+    ///
+    /// # Errors
+    /// [`Error::InvalidData`] (field `subset`) for an empty subset, an index out of range or
+    /// an index given twice; [`Error::Numerical`] naming the group when a path result is
+    /// missing.
+    pub fn identify(
+        &self,
+        subset: &[usize],
+        dataset_name: &str,
+        observer: &dyn Fn(Progress),
+    ) -> Result<Identification> {
+        let bad = |message: String| Error::InvalidData {
+            case: "-".to_string(),
+            field: "subset".to_string(),
+            message,
+        };
+        if subset.is_empty() {
+            return Err(bad("no case to identify".to_string()));
+        }
+        let mut seen = vec![false; self.cases.len()];
+        for &i in subset {
+            match seen.get_mut(i) {
+                None => {
+                    return Err(bad(format!(
+                        "case index {i} is out of range (0..{})",
+                        self.cases.len()
+                    )))
+                }
+                Some(s) if *s => return Err(bad(format!("case index {i} is given twice"))),
+                Some(s) => *s = true,
+            }
+        }
+        let cases: Vec<&NondimCase> = subset.iter().map(|&i| &self.cases[i]).collect();
+        let work: Vec<&CaseWork> = subset.iter().map(|&i| &self.work[i]).collect();
+        let (settings, lib, opts) = (&self.settings, &self.lib, &self.opts);
+        let names = lib.names();
+        let total = cases.len();
+        let batch = batch_size();
+
+        // groups: sorted by name, cases by id inside (positions in `subset`)
+        let mut groups: BTreeMap<String, Vec<usize>> = BTreeMap::new();
+        for (i, c) in cases.iter().enumerate() {
+            groups
+                .entry(group_name(c, settings.group_by))
+                .or_default()
+                .push(i);
+        }
+        for members in groups.values_mut() {
+            members.sort_by(|&a, &b| cases[a].meta.id.cmp(&cases[b].meta.id));
+        }
+        let group_list: Vec<(String, Vec<usize>)> = groups.into_iter().collect();
+        let tasks: Vec<(usize, usize)> = (0..group_list.len())
+            .flat_map(|g| [(g, 0), (g, 1)])
+            .collect();
+        let bases: Vec<Mask> = group_list
+            .iter()
+            .map(|(_, m)| {
+                let idents: Vec<&CaseIdentifiability> = m.iter().map(|&i| &work[i].ident).collect();
+                bools_to_mask(&identifiability::group_basis(&idents))
             })
             .collect();
-        for (&k, r) in chunk.iter().zip(res) {
-            outcomes[k] = Some(r);
+        let mut outcomes: Vec<Option<GroupOutcome>> = (0..tasks.len()).map(|_| None).collect();
+        let n_tasks = tasks.len();
+        let mut done = 0;
+        for chunk in (0..n_tasks).collect::<Vec<_>>().chunks(batch) {
+            let res: Vec<GroupOutcome> = chunk
+                .par_iter()
+                .map(|&k| {
+                    let (g, target) = tasks[k];
+                    let members: Vec<&CaseWork> =
+                        group_list[g].1.iter().map(|&i| work[i]).collect();
+                    run_group(&members, target, settings, bases[g], self.kept, opts)
+                })
+                .collect();
+            for (&k, r) in chunk.iter().zip(res) {
+                outcomes[k] = Some(r);
+            }
+            done += chunk.len();
+            observer(Progress::Groups {
+                done,
+                total: n_tasks,
+            });
         }
-        done += chunk.len();
-        observer(Progress::Groups {
-            done,
-            total: n_tasks,
-        });
-    }
 
-    // 3. assemble
-    let mut case_coefs: Vec<[Vec<f64>; 2]> = vec![[Vec::new(), Vec::new()]; total];
-    let mut case_group: Vec<usize> = vec![0; total];
-    let mut group_results = Vec::with_capacity(group_list.len());
-    for (g, (name, members)) in group_list.iter().enumerate() {
-        let mut forces = Vec::with_capacity(2);
-        for target in 0..2 {
-            let o = outcomes[2 * g + target]
-                .take()
-                .ok_or_else(|| Error::Numerical {
-                    context: format!("group `{name}`"),
-                    message: "missing path result".to_string(),
-                })?;
-            for (k, &i) in members.iter().enumerate() {
-                case_coefs[i][target] = o.coefficients[k].clone();
-                case_group[i] = g;
+        // assemble
+        let mut case_coefs: Vec<[Vec<f64>; 2]> = vec![[Vec::new(), Vec::new()]; total];
+        let mut case_group: Vec<usize> = vec![0; total];
+        let mut group_results = Vec::with_capacity(group_list.len());
+        for (g, (name, members)) in group_list.iter().enumerate() {
+            let mut forces = Vec::with_capacity(2);
+            for target in 0..2 {
+                let o = outcomes[2 * g + target]
+                    .take()
+                    .ok_or_else(|| Error::Numerical {
+                        context: format!("group `{name}`"),
+                        message: "missing path result".to_string(),
+                    })?;
+                for (k, &i) in members.iter().enumerate() {
+                    case_coefs[i][target] = o.coefficients[k].clone();
+                    case_group[i] = g;
+                }
+                forces.push(group_force(&o.path, &names));
             }
-            forces.push(group_force(&o.path, &names));
+            let lift = forces.pop().ok_or_else(|| Error::Numerical {
+                context: format!("group `{name}`"),
+                message: "missing lift".to_string(),
+            })?;
+            let moment = forces.pop().ok_or_else(|| Error::Numerical {
+                context: format!("group `{name}`"),
+                message: "missing moment".to_string(),
+            })?;
+            group_results.push(GroupResult {
+                name: name.clone(),
+                cases: members.iter().map(|&i| cases[i].meta.id.clone()).collect(),
+                basis: regress::mask_to_vec(bases[g])
+                    .iter()
+                    .map(|&j| names[j].clone())
+                    .collect(),
+                moment,
+                lift,
+            });
         }
-        let lift = forces.pop().ok_or_else(|| Error::Numerical {
-            context: format!("group `{name}`"),
-            message: "missing lift".to_string(),
-        })?;
-        let moment = forces.pop().ok_or_else(|| Error::Numerical {
-            context: format!("group `{name}`"),
-            message: "missing moment".to_string(),
-        })?;
-        group_results.push(GroupResult {
-            name: name.clone(),
-            cases: members.iter().map(|&i| cases[i].meta.id.clone()).collect(),
-            basis: regress::mask_to_vec(bases[g])
-                .iter()
-                .map(|&j| names[j].clone())
-                .collect(),
-            moment,
-            lift,
-        });
-    }
-    let case_results: Vec<CaseResult> = cases
-        .iter()
-        .enumerate()
-        .map(|(i, c)| {
-            let w = &work[i];
-            let basis = bases[case_group[i]];
-            CaseResult {
-                id: c.meta.id.clone(),
-                group: group_list[case_group[i]].0.clone(),
-                wind_speed: c.meta.wind_speed,
-                k_alpha: c.k_alpha(),
-                k_h: c.k_h(),
-                rank: w.ident.rank,
-                dependencies: w.ident.dependency_strings(),
-                mean_pitch: w.centring.as_ref().map(|c| c.mean_pitch),
-                moment: force_result::<MomentEq19>(&lib, c, w, 0, basis, &case_coefs[i][0]),
-                lift: force_result::<LiftEq19>(&lib, c, w, 1, basis, &case_coefs[i][1]),
-            }
+        let case_results: Vec<CaseResult> = cases
+            .iter()
+            .enumerate()
+            .map(|(i, c)| {
+                let w = work[i];
+                let basis = bases[case_group[i]];
+                CaseResult {
+                    id: c.meta.id.clone(),
+                    group: group_list[case_group[i]].0.clone(),
+                    wind_speed: c.meta.wind_speed,
+                    k_alpha: c.k_alpha(),
+                    k_h: c.k_h(),
+                    rank: w.ident.rank,
+                    dependencies: w.ident.dependency_strings(),
+                    mean_pitch: w.centring.as_ref().map(|c| c.mean_pitch),
+                    moment: force_result::<MomentEq19>(lib, c, w, 0, basis, &case_coefs[i][0]),
+                    lift: force_result::<LiftEq19>(lib, c, w, 1, basis, &case_coefs[i][1]),
+                }
+            })
+            .collect();
+        let min_case = (0..total)
+            .min_by_key(|&i| (work[i].ident.rank, i))
+            .unwrap_or(0);
+        Ok(Identification {
+            format: FORMAT.to_string(),
+            dataset: dataset_name.to_string(),
+            settings: settings.clone(),
+            library: LibraryInfo {
+                terms: names.clone(),
+                rank: work[min_case].ident.rank,
+                dependencies: work[min_case].ident.dependency_strings(),
+                rank_case: Some(cases[min_case].meta.id.clone()),
+                priority: self.order.iter().map(|&j| names[j].clone()).collect(),
+            },
+            cases: case_results,
+            groups: group_results,
+            ensemble: None,
         })
-        .collect();
-    let min_case = (0..total)
-        .min_by_key(|&i| (work[i].ident.rank, i))
-        .unwrap_or(0);
-    Ok(Identification {
-        format: FORMAT.to_string(),
-        dataset: dataset_name.to_string(),
-        settings: settings.clone(),
-        library: LibraryInfo {
-            terms: names.clone(),
-            rank: work[min_case].ident.rank,
-            dependencies: work[min_case].ident.dependency_strings(),
-            rank_case: Some(cases[min_case].meta.id.clone()),
-            priority: order.iter().map(|&j| names[j].clone()).collect(),
-        },
-        cases: case_results,
-        groups: group_results,
-        ensemble: None,
-    })
+    }
 }
 
 #[cfg(test)]
