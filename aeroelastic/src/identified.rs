@@ -49,9 +49,9 @@ use crate::aero::{
     term_name, AeroModel, Channel, Coefficient, DerivativeTable, NonlinearAero, NonlinearTerm,
     RfaFit,
 };
-use crate::optim::Spline;
 use crate::theodorsen::{flat_plate_derivatives, Derivative, Derivatives};
 use crate::{Error, Result};
+use identify::numerics::interp::Spline;
 
 /// What to do with a derivative that is `null` (not identifiable) in a case.
 #[derive(

@@ -163,73 +163,6 @@ pub fn nelder_mead<F: FnMut(&[f64]) -> f64>(
     (simplex[best].clone(), vals[best])
 }
 
-/// Natural cubic spline through (x_i, y_i), x strictly increasing; constant extrapolation
-/// (the end values) outside [x_0, x_{n−1}].
-#[derive(Debug, Clone)]
-pub struct Spline {
-    x: Vec<f64>,
-    y: Vec<f64>,
-    m: Vec<f64>,
-}
-
-impl Spline {
-    /// Builds the spline. Panics (a programming bug) if the lengths differ or n < 2.
-    #[track_caller]
-    pub fn new(x: &[f64], y: &[f64]) -> Self {
-        assert!(
-            x.len() == y.len() && x.len() >= 2,
-            "spline needs ≥ 2 points of equal length"
-        );
-        let n = x.len();
-        let mut m = vec![0.0; n];
-        if n > 2 {
-            // Tridiagonal system for the second derivatives (natural ends).
-            let mut c = vec![0.0; n];
-            let mut d = vec![0.0; n];
-            for i in 1..n - 1 {
-                let h0 = x[i] - x[i - 1];
-                let h1 = x[i + 1] - x[i];
-                let a = h0;
-                let b = 2.0 * (h0 + h1);
-                let cc = h1;
-                let r = 6.0 * ((y[i + 1] - y[i]) / h1 - (y[i] - y[i - 1]) / h0);
-                let denom = b - a * c[i - 1];
-                c[i] = cc / denom;
-                d[i] = (r - a * d[i - 1]) / denom;
-            }
-            for i in (1..n - 1).rev() {
-                m[i] = d[i] - c[i] * m[i + 1];
-            }
-        }
-        Spline {
-            x: x.to_vec(),
-            y: y.to_vec(),
-            m,
-        }
-    }
-
-    /// Value at `t` (clamped to the end values outside the knots).
-    pub fn eval(&self, t: f64) -> f64 {
-        let n = self.x.len();
-        if t <= self.x[0] {
-            return self.y[0];
-        }
-        if t >= self.x[n - 1] {
-            return self.y[n - 1];
-        }
-        let i = match self.x.partition_point(|&v| v <= t) {
-            0 => 0,
-            p => (p - 1).min(n - 2),
-        };
-        let h = self.x[i + 1] - self.x[i];
-        let a = (self.x[i + 1] - t) / h;
-        let b = (t - self.x[i]) / h;
-        a * self.y[i]
-            + b * self.y[i + 1]
-            + ((a * a * a - a) * self.m[i] + (b * b * b - b) * self.m[i + 1]) * h * h / 6.0
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -250,17 +183,5 @@ mod tests {
             4000,
         );
         assert!(v < 1e-10 && (x[0] - 1.0).abs() < 1e-4, "{x:?} {v}");
-    }
-
-    #[test]
-    fn spline_reproduces_smooth_function() {
-        let x: Vec<f64> = (0..=40).map(|i| i as f64 * 0.1).collect();
-        let y: Vec<f64> = x.iter().map(|v| v.sin()).collect();
-        let s = Spline::new(&x, &y);
-        for t in [0.55, 1.234, 2.9, 3.71] {
-            assert!((s.eval(t) - f64::sin(t)).abs() < 2e-5, "{t}");
-        }
-        assert_eq!(s.eval(-1.0), 0.0);
-        assert_eq!(s.eval(10.0), y[40]);
     }
 }

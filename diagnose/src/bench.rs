@@ -417,20 +417,10 @@ fn summary_of(outcomes: &[BlindOutcome]) -> BlindSummary {
 
 /// The confusion matrix as a Markdown table (rows truth, columns verdict).
 pub fn confusion_markdown(rows: &[String], cols: &[String], m: &[Vec<usize>]) -> String {
+    // a verdict name gets its short label; anything else (not a verdict) is shown as is
     let short = |s: &str| -> String {
-        match s {
-            "static_offset" => "offset".into(),
-            "added_mass" => "mass".into(),
-            "time_delay" => "delay".into(),
-            "higher_order" => "h.order".into(),
-            "dynamic_stall" => "stall".into(),
-            "vortex_shedding" => "shed".into(),
-            "structural_cubic" => "s.cubic".into(),
-            "freeplay" => "freepl".into(),
-            "friction" => "frict".into(),
-            "unexplained" => "unexpl".into(),
-            other => other.into(),
-        }
+        crate::effect::Verdict::from_name(s)
+            .map_or_else(|_| s.to_string(), |v| v.short_label().into())
     };
     let mut s = String::from("| truth \\ verdict |");
     for c in cols {

@@ -129,6 +129,23 @@ impl Effect {
         }
     }
 
+    /// A short column label for tables (`offset`, `mass`, …).
+    pub fn short_label(self) -> &'static str {
+        match self {
+            Effect::StaticOffset => "offset",
+            Effect::AddedMass => "mass",
+            Effect::TimeDelay => "delay",
+            Effect::HigherOrder => "h.order",
+            Effect::DynamicStall => "stall",
+            Effect::VortexShedding => "shed",
+            Effect::StructuralCubic => "s.cubic",
+            Effect::Freeplay => "freepl",
+            Effect::Friction => "frict",
+            Effect::StructuralPolynomial => "s.poly",
+            Effect::StructuralDamping => "s.damp",
+        }
+    }
+
     /// The level the effect acts at.
     pub fn level(self) -> Level {
         match self {
@@ -186,6 +203,16 @@ impl Verdict {
             Verdict::None => "none",
             Verdict::Unexplained => "unexplained",
             Verdict::Extrapolation => "extrapolation",
+        }
+    }
+
+    /// A short column label for tables: [`Effect::short_label`], `none`, `unexpl`, `extrap`.
+    pub fn short_label(self) -> &'static str {
+        match self {
+            Verdict::Effect(e) => e.short_label(),
+            Verdict::None => "none",
+            Verdict::Unexplained => "unexpl",
+            Verdict::Extrapolation => "extrap",
         }
     }
 

@@ -44,9 +44,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::eq19::{Eq19Values, LiftEq19, MomentEq19, EQ19_TERMS};
 use crate::library::Library;
+use crate::numerics::qr;
 use crate::pipeline::{Identification, RegressorChoice, TermMap};
 use crate::record::NondimCase;
-use crate::regress::small;
 use crate::{Error, Result};
 
 /// Default confidence level of the intervals (90 %).
@@ -298,7 +298,7 @@ impl ForceBlocks {
                 }
                 a[q * m..].copy_from_slice(&y[r0..r1]);
                 let nref = q.min(m);
-                let diag = small::householder_qr(&mut a, m, q + 1, nref);
+                let diag = qr::householder_qr(&mut a, m, q + 1, nref);
                 // [R_b | z_b], q × (q + 1) column-major
                 let mut t = vec![0.0; q * (q + 1)];
                 for c in 0..=q {
@@ -344,7 +344,7 @@ impl ForceBlocks {
                 rhs[u * q + i] = w * t[q * q + i];
             }
         }
-        let (x, _) = small::lstsq(&a, m, q, &rhs, 0.0);
+        let (x, _) = qr::lstsq(&a, m, q, &rhs, 0.0);
         x.iter().zip(&self.scales).map(|(v, s)| v / s).collect()
     }
 }

@@ -324,7 +324,7 @@ fn describe_dependency(
         }
     }
     let b: Vec<f64> = (0..m).map(|i| f.r[(i, k)]).collect();
-    let (x, _) = crate::regress::small::lstsq(&a, m, q, &b, 0.0);
+    let (x, _) = crate::numerics::qr::lstsq(&a, m, q, &b, 0.0);
     let big = x.iter().fold(0.0f64, |acc, v| acc.max(v.abs()));
     let combination = basis_pos
         .iter()

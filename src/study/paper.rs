@@ -171,7 +171,7 @@ fn fit(x: &[Vec<f64>; 4], y: &[f64], terms: &[String]) -> Option<(Vec<f64>, f64,
             a[j * n + i] = t.eval_at([x[0][i], x[1][i], x[2][i], x[3][i]]);
         }
     }
-    let (c, rss) = identify::regress::small::lstsq(&a, n, q, y, 0.0);
+    let (c, rss) = identify::numerics::qr::lstsq(&a, n, q, y, 0.0);
     let mean = y.iter().sum::<f64>() / n as f64;
     let tss: f64 = y.iter().map(|v| (v - mean).powi(2)).sum();
     let model = (0..n)

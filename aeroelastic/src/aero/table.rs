@@ -7,9 +7,10 @@ use serde::{Deserialize, Serialize};
 
 use super::{AeroModel, Flow};
 use crate::error::positive;
-use crate::optim::{nelder_mead, Spline};
+use crate::optim::nelder_mead;
 use crate::theodorsen::{flat_plate_derivatives, Derivatives};
 use crate::{Error, Result};
+use identify::numerics::interp::Spline;
 
 /// Roger's rational-function approximation of the nondimensional transfer matrix
 /// (C_L, C_M)ᵀ = Q(p̄) (h/B, α)ᵀ, p̄ = iK (Laplace variable in units of U/B):

@@ -24,6 +24,7 @@
 //!
 //! Units: U [m/s], T \[s\], ω [rad/s], h \[m\] positive down, α \[rad\] positive nose-up.
 
+use identify::numerics::interp::lagrange;
 use nalgebra::{DMatrix, DVector, Dyn};
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
@@ -992,7 +993,7 @@ impl Section {
                 ];
                 let (u_f, a_f, h_f) = match parabola_vertex(s3, u3) {
                     Some((sv, uv)) if sv >= s3[0] && sv <= s3[2] => {
-                        (uv, interp3(s3, a3, sv), interp3(s3, h3, sv))
+                        (uv, quadratic(s3, a3, sv), quadratic(s3, h3, sv))
                     }
                     _ => (points[k - 1].u, a3[1], h3[1]),
                 };
@@ -1313,12 +1314,9 @@ pub fn measured_distances(
         .collect()
 }
 
-/// Quadratic interpolation through three points at `x`.
-fn interp3(s: [f64; 3], v: [f64; 3], x: f64) -> f64 {
-    let l0 = (x - s[1]) * (x - s[2]) / ((s[0] - s[1]) * (s[0] - s[2]));
-    let l1 = (x - s[0]) * (x - s[2]) / ((s[1] - s[0]) * (s[1] - s[2]));
-    let l2 = (x - s[0]) * (x - s[1]) / ((s[2] - s[0]) * (s[2] - s[1]));
-    v[0] * l0 + v[1] * l1 + v[2] * l2
+/// The parabola through (s_i, v_i), i = 0‥2, at `x`.
+fn quadratic(s: [f64; 3], v: [f64; 3], x: f64) -> f64 {
+    lagrange(&[(s[0], v[0]), (s[1], v[1]), (s[2], v[2])], x)
 }
 
 /// Kind of multiplier crossing between two points without a turning point, if the number

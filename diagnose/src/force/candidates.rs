@@ -529,15 +529,9 @@ fn delay_criterion(sh: &[CaseData], nodes: &[Node], f: &Fold, tau: f64, cache: &
             }
             let qr = &nf.ch[c].qr;
             let r = &nf.ch[c].res_y;
-            let mut en = dot(r, r);
-            for k in 0..qr.kept.len() {
-                let mut v = 0.0;
-                for l in k..qr.kept.len() {
-                    let col = qr.kept[l];
-                    v += qr.r[k][l - k] * (ahat[col] - a[col]);
-                }
-                en += v * v;
-            }
+            let d: Vec<f64> = ahat.iter().zip(a).map(|(x, y)| x - y).collect();
+            let rd = qr.r_times(&d);
+            let en = dot(r, r) + dot(&rd, &rd);
             let w = nf.ch[c].w_mean;
             e += w * w * en;
         }

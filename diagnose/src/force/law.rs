@@ -13,7 +13,10 @@ use std::sync::{Arc, Mutex};
 use identify::library::Term;
 
 use super::data::{CaseData, Node};
-use super::linalg::{dot, solve_spd, Qr};
+use identify::numerics::interp::lagrange;
+use identify::numerics::qr::ThinQr;
+
+use super::linalg::{dot, solve_spd};
 
 /// Relative tolerance of dropped (dependent) columns.
 const QR_TOL: f64 = 1e-9;
@@ -30,7 +33,7 @@ pub(crate) type Supports = std::collections::BTreeMap<String, [Vec<Term>; 2]>;
 /// on the node with the same support).
 #[derive(Debug)]
 pub(crate) struct NodeChan {
-    pub qr: Qr,
+    pub qr: ThinQr,
     /// Mean over the stacked samples of the noise weight 1/σ̂.
     pub w_mean: f64,
     /// n_cases / Σ σ̂ of the node's cases (weight of the selection statistics).
@@ -113,7 +116,7 @@ fn build_chan(cases: &[CaseData], node: &Node, sup: &[Term], c: usize) -> NodeCh
         })
         .collect();
     let refs: Vec<&[f64]> = cols.iter().map(|v| v.as_slice()).collect();
-    let qr = Qr::new(&refs, QR_TOL);
+    let qr = ThinQr::new(&refs, QR_TOL);
     let y: Vec<f64> = node
         .cases
         .iter()
@@ -338,19 +341,14 @@ pub(crate) fn interpolate_scalar(xy: &[(f64, f64)], x: f64) -> f64 {
                 return a.1 + slope * d;
             }
             if n == 2 {
-                let w = (x - x0) / (xl - x0);
-                return xy[0].1 * (1.0 - w) + xy[1].1 * w;
+                return lagrange(xy, x);
             }
             // three nearest nodes
             let mut idx: Vec<usize> = (0..n).collect();
             idx.sort_by(|&i, &j| (xy[i].0 - x).abs().total_cmp(&(xy[j].0 - x).abs()));
             let mut three = [idx[0], idx[1], idx[2]];
             three.sort();
-            let (p0, p1, p2) = (xy[three[0]], xy[three[1]], xy[three[2]]);
-            let l0 = (x - p1.0) * (x - p2.0) / ((p0.0 - p1.0) * (p0.0 - p2.0));
-            let l1 = (x - p0.0) * (x - p2.0) / ((p1.0 - p0.0) * (p1.0 - p2.0));
-            let l2 = (x - p0.0) * (x - p1.0) / ((p2.0 - p0.0) * (p2.0 - p1.0));
-            p0.1 * l0 + p1.1 * l1 + p2.1 * l2
+            lagrange(&three.map(|i| xy[i]), x)
         }
     }
 }

@@ -16,29 +16,9 @@ use std::ops::Range;
 use realfft::RealFftPlanner;
 
 use super::harmonic::noise_sigma;
+use crate::numerics::interp::uniform_cubic as interpolate_cubic;
 use crate::record::Record;
 use crate::{Error, Result};
-
-/// Value of the uniformly sampled `x` at fractional index `u` by 4-point cubic Lagrange
-/// interpolation (nodes ⌊u⌋−1 … ⌊u⌋+2, shifted inwards at the ends). `u` is clamped to
-/// `[0, n−1]`. Error for a sinusoid of ω·dt per sample: ≤ 0.0234 (ω dt)⁴ of its amplitude.
-///
-/// # Panics
-/// When `x` has fewer than 4 samples (a programming error: callers check lengths).
-#[track_caller]
-pub fn interpolate_cubic(x: &[f64], u: f64) -> f64 {
-    let n = x.len();
-    assert!(n >= 4, "cubic interpolation needs 4 samples, got {n}");
-    let u = u.clamp(0.0, (n - 1) as f64);
-    let j = (u.floor() as usize).saturating_sub(1).min(n - 4);
-    let s = u - j as f64; // in [0, 3]
-    let (s0, s1, s2, s3) = (s, s - 1.0, s - 2.0, s - 3.0);
-    let w0 = -s1 * s2 * s3 / 6.0;
-    let w1 = s0 * s2 * s3 / 2.0;
-    let w2 = -s0 * s1 * s3 / 2.0;
-    let w3 = s0 * s1 * s2 / 6.0;
-    w0 * x[j] + w1 * x[j + 1] + w2 * x[j + 2] + w3 * x[j + 3]
-}
 
 /// Signal centred on its mean and scaled to unit standard deviation (None if constant).
 fn normalised(x: &[f64]) -> Option<Vec<f64>> {
@@ -294,12 +274,9 @@ fn bad(case: &str, field: &str, message: String) -> Error {
 /// 0.1 %, neither α nor h moves, or the runs overlap on fewer than 3 samples.
 pub fn subtract_nowind(wind: &Record, still: &Record) -> Result<(Vec<f64>, Vec<f64>, f64)> {
     let id = wind.meta.id.as_str();
-    let get = |r: &Record, name: &str, which: &str| -> Result<Vec<f64>> {
-        let col = match name {
-            "lift" => r.lift.as_ref(),
-            _ => r.moment.as_ref(),
-        };
-        col.cloned().ok_or_else(|| {
+    // the column and its name travel together: (field, name) pairs, no name dispatch
+    let get = |col: &Option<Vec<f64>>, name: &str, which: &str| -> Result<Vec<f64>> {
+        col.clone().ok_or_else(|| {
             bad(
                 id,
                 &format!("{which}{name}"),
@@ -307,10 +284,13 @@ pub fn subtract_nowind(wind: &Record, still: &Record) -> Result<(Vec<f64>, Vec<f
             )
         })
     };
-    let (lw, mw) = (get(wind, "lift", "")?, get(wind, "moment", "")?);
+    let (lw, mw) = (
+        get(&wind.lift, "lift", "")?,
+        get(&wind.moment, "moment", "")?,
+    );
     let (ls, ms) = (
-        get(still, "lift", "nowind.")?,
-        get(still, "moment", "nowind.")?,
+        get(&still.lift, "lift", "nowind.")?,
+        get(&still.moment, "moment", "nowind.")?,
     );
     for (name, v) in [
         ("alpha", &wind.alpha),

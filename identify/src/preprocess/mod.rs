@@ -26,7 +26,7 @@ mod align;
 mod harmonic;
 mod sg;
 
-pub use self::align::{align_lag, interpolate_cubic, nowind_overlap, subtract_nowind};
+pub use self::align::{align_lag, nowind_overlap, subtract_nowind};
 pub use self::harmonic::{
     dominant_frequency, harmonic_fit, noise_sigma, refine_frequency, significant_harmonic_fit,
     HarmonicComponent, HarmonicFit,

@@ -4,7 +4,7 @@
 //! 2-norm; an all-zero column keeps scale 1) and its columns are permuted into the
 //! identifiability priority order ([`crate::identifiability::priority_order`]). The targets
 //! are appended as extra columns and the whole n × (p + t) matrix is factorised once,
-//! `[Θ_s P | y_1 … y_t] = Q R_ext` (Householder, [`super::small::householder_qr`], row-blocked;
+//! `[Θ_s P | y_1 … y_t] = Q R_ext` (Householder, [`crate::numerics::qr::householder_qr`], row-blocked;
 //! not `faer`'s QR: it is rank-revealing and skips dependent columns, leaving an echelon
 //! form in which |R_kk| is no longer the greedy residual of column k). Then for any subset
 //! S of columns,
@@ -259,9 +259,9 @@ impl CaseFactor {
             let mut i0 = 0;
             while i0 + bs <= rows {
                 copy(&mut buf, bs, 0, src, rows, r0, i0, bs);
-                super::small::householder_qr(&mut buf, bs, ncols, ncols);
+                crate::numerics::qr::householder_qr(&mut buf, bs, ncols, ncols);
                 if stacked == STACK_BLOCKS {
-                    super::small::householder_qr(&mut stack, sm, ncols, ncols);
+                    crate::numerics::qr::householder_qr(&mut stack, sm, ncols, ncols);
                     for c in 0..ncols {
                         let col = &mut stack[c * sm..(c + 1) * sm];
                         col[c + 1..].fill(0.0);
@@ -292,7 +292,7 @@ impl CaseFactor {
             a[c * m + stacked * ncols..(c + 1) * m].copy_from_slice(&tail[c * rem..(c + 1) * rem]);
         }
         drop(stack);
-        super::small::householder_qr(&mut a, m, ncols, p);
+        crate::numerics::qr::householder_qr(&mut a, m, ncols, p);
         let r = Mat::<f64>::from_fn(p, p, |i, j| if i <= j { a[j * m + i] } else { 0.0 });
         let targets: Vec<TargetFactor> = (0..nt)
             .map(|t| {
@@ -369,7 +369,7 @@ impl CaseFactor {
                 a[c * m + i] = self.r[(i, k)];
             }
         }
-        let (x, rss_rows) = super::small::lstsq(&a, m, q, &tf.qty[..m], ridge);
+        let (x, rss_rows) = crate::numerics::qr::lstsq(&a, m, q, &tf.qty[..m], ridge);
         let tail: f64 = tf.qty[m..].iter().map(|v| v * v).sum();
         let mut out = vec![0.0; q];
         for (c, &(_, i)) in cols.iter().enumerate() {

@@ -18,7 +18,6 @@ pub mod adapter;
 pub mod factor;
 pub mod path;
 pub mod pysindy;
-pub mod small;
 
 use std::collections::HashMap;
 

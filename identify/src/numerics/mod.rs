@@ -1,9 +1,13 @@
 //! Small numeric kernels shared by every crate of the workspace (it sits in `identify`, the
 //! lowest one): dense symmetric positive-definite solves by Cholesky factorisation, the
-//! median and the median absolute deviation, and the SplitMix64 seed mixer.
+//! Householder QR ([`qr`]), interpolation ([`interp`]), the median and the median absolute
+//! deviation, and the SplitMix64 seed mixer.
 //!
 //! Each kernel has one implementation and one failure signal: a solve that meets a
 //! non-positive pivot returns [`NotPositiveDefinite`] naming the pivot, never a silent NaN.
+
+pub mod interp;
+pub mod qr;
 
 /// A Cholesky factorisation met a pivot at or below its floor: the matrix is not
 /// (numerically) positive definite, i.e. column `index` is (nearly) a combination of the
