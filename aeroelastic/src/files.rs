@@ -617,6 +617,22 @@ damping_pitch = 0.005
         )
         .unwrap_err();
         assert!(e.to_string().contains("static_unbalance"), "{e}");
+        // a wrong-typed value inside the flattened table still names its key and line
+        let e = StructureFile::parse(
+            &RIG.replace("freq_pitch = 3.5", "freq_pitch = \"a\""),
+            "rig.toml",
+        )
+        .unwrap_err();
+        let m = e.to_string();
+        assert!(
+            m.contains("rig.toml") && m.contains("line 6: key `freq_pitch`"),
+            "{m}"
+        );
+        let e = StructureFile::parse(&format!("{RIG}[friction]\npitch_momentt = 1.0\n"), "r")
+            .unwrap_err();
+        assert!(e.to_string().contains("pitch_momentt"), "{e}");
+        // the file is the modal form of the shared spec
+        assert_eq!(f.spec().resolve().unwrap(), s);
     }
 
     #[test]

@@ -687,6 +687,57 @@ mod tests {
     }
 
     #[test]
+    fn spec_forms_resolve_to_the_same_structure() {
+        let p = hp1();
+        let s = Structure::from_nondimensional(&p).unwrap();
+        let cubic = Nonlinearities {
+            pitch_stiffness_terms: vec![PolyTerm {
+                power: 3,
+                coefficient: 2.0 * p.k_alpha(),
+            }],
+            ..Nonlinearities::none()
+        };
+        let nd = StructureSpec::Nondimensional {
+            linear: p,
+            nonlinear: cubic.clone(),
+        }
+        .resolve()
+        .unwrap();
+        assert_eq!(nd.k_alpha, s.k_alpha);
+        assert_eq!(nd.pitch_stiffness_terms[0].coefficient, 2.0 * s.k_alpha);
+        assert_eq!(StructureSpec::Si(nd.clone()).resolve().unwrap(), nd);
+        let tau = 2.0 * std::f64::consts::PI;
+        let modal = ModalStructure {
+            mass: s.mass,
+            inertia: s.inertia_alpha,
+            static_unbalance: s.static_unbalance,
+            freq_heave: s.omega_h() / tau,
+            freq_pitch: s.omega_alpha() / tau,
+            damping_heave: 0.0,
+            damping_pitch: 0.0,
+        };
+        let m = StructureSpec::Modal {
+            linear: modal,
+            nonlinear: cubic,
+        }
+        .resolve()
+        .unwrap();
+        assert!((m.k_alpha / s.k_alpha - 1.0).abs() < 1e-12);
+        assert!((m.k_h / s.k_h - 1.0).abs() < 1e-12);
+        assert_eq!(m.nonlinearities(), nd.nonlinearities());
+        let mut bad = modal;
+        bad.inertia = -1.0;
+        let e = Structure::from_modal(&bad).unwrap_err();
+        assert!(e.to_string().contains("`inertia`"), "{e}");
+        // the study's defaults
+        let d: NondimStructure = toml::from_str("mu = 20.0\nr_alpha2 = 0.25\nsigma = 0.5").unwrap();
+        assert_eq!(
+            (d.semi_chord, d.omega_alpha, d.rho, d.x_alpha),
+            (1.0, 1.0, 1.0, 0.0)
+        );
+    }
+
+    #[test]
     fn freeplay_polynomial_and_friction_restoring() {
         let mut s = Structure::from_rig(2.0, 0.1, 0.0, 100.0, 10.0, 0.0, 0.0).unwrap();
         s.pitch_freeplay = 0.02;
