@@ -90,11 +90,7 @@ pub fn run(args: &DiagnoseArgs) -> anyhow::Result<()> {
     let mut chord = free.as_ref().map(|f| f.manifest.section.chord);
     if let Some(s) = &args.structure {
         let sf = StructureFile::read(s).with_context(|| format!("reading {}", s.display()))?;
-        if !sf.heave_stiffness_terms.is_empty()
-            || !sf.pitch_stiffness_terms.is_empty()
-            || sf.pitch_freeplay > 0.0
-            || sf.friction.is_some()
-        {
+        if !sf.nonlinear.is_empty() {
             bail!(
                 "{}: the diagnosis's nominal structure is linear (stiffness terms, freeplay and \
                  friction are what the catalogue looks for); remove them",
@@ -102,15 +98,7 @@ pub fn run(args: &DiagnoseArgs) -> anyhow::Result<()> {
             );
         }
         chord = sf.chord.or(chord);
-        opts.system.structure = Some(identify::dataset::StructureSpec {
-            mass: sf.mass,
-            inertia: sf.inertia,
-            static_unbalance: sf.static_unbalance,
-            freq_heave: sf.freq_heave,
-            freq_pitch: sf.freq_pitch,
-            damping_heave: sf.damping_heave,
-            damping_pitch: sf.damping_pitch,
-        });
+        opts.system.structure = Some(sf.linear);
     }
     // Every input is read and checked before the output folder is touched.
     enum Input {

@@ -237,7 +237,7 @@ fn check_study_is_bounded(s: &Study) {
     if let Some(a) = &sp.aero {
         assert!(a.elastic_axis.is_finite() && (1..=8).contains(&a.n_lag));
     }
-    if let Some(st) = &sp.structure {
+    if let Some(st) = &sp.structure.as_ref().map(|s| s.linear) {
         for v in [
             st.mu,
             st.r_alpha2,

@@ -43,6 +43,7 @@
 //! `identification.json` ([`IdentifiedLaw`]). Unknown keys are errors naming the key and
 //! the file; a key that the `kind` does not use is an error naming it too.
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -52,55 +53,90 @@ use crate::aero::{
     AeroModel, Channel, Coefficient, DerivativeTable, DynamicStallAero, NonlinearAero,
     NonlinearTerm, QuasiSteady, QuasiSteadyKind, TheodorsenAero,
 };
-use crate::error::{non_negative, positive};
+use crate::error::positive;
 use crate::identified::{IdentifiedLaw, IdentifiedOptions, IdentifiedTables, MissingDerivative};
-use crate::structure::{Friction, PolyTerm, Structure};
+use crate::structure::{Nonlinearities, Structure, StructureSpec};
 use crate::theodorsen::Derivatives;
 use crate::{Error, Result};
+use identify::dataset::ModalStructure;
 
 fn default_rho() -> f64 {
     1.225
 }
 
-/// A structure file (see the module docs).
+/// A structure file (see the module docs): the file form of a
+/// [`StructureSpec::Modal`] — air density and chord, then the keys of
+/// [`ModalStructure`] and of [`Nonlinearities`] side by side in one flat table.
+///
+/// Unknown keys are rejected ([`StructureFile::parse`] names the key and the file).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
-#[serde(deny_unknown_fields)]
 pub struct StructureFile {
-    /// Air density ρ \[kg/m³\].
+    /// Air density ρ \[kg/m³\], > 0 (default 1.225).
     #[serde(default = "default_rho")]
     pub air_density: f64,
-    /// Chord B \[m\] (used when the model file does not give one).
+    /// Chord B \[m\] (used when the model file does not give one), > 0.
     #[serde(default)]
     pub chord: Option<f64>,
-    /// Mass per unit span \[kg/m\].
-    pub mass: f64,
-    /// Pitch inertia about the elastic axis \[kg·m²/m\].
-    pub inertia: f64,
-    /// Static unbalance \[kg·m/m\], + when the mass centre is aft of the elastic axis.
-    #[serde(default)]
-    pub static_unbalance: f64,
-    /// Uncoupled heave frequency \[Hz\] (≥ 0; 0 = no heave spring).
-    pub freq_heave: f64,
-    /// Uncoupled pitch frequency \[Hz\] (> 0).
-    pub freq_pitch: f64,
-    /// Heave damping ratio.
-    #[serde(default)]
-    pub damping_heave: f64,
-    /// Pitch damping ratio.
-    #[serde(default)]
-    pub damping_pitch: f64,
-    /// Extra heave stiffness terms.
-    #[serde(default)]
-    pub heave_stiffness_terms: Vec<PolyTerm>,
-    /// Extra pitch stiffness terms.
-    #[serde(default)]
-    pub pitch_stiffness_terms: Vec<PolyTerm>,
-    /// Pitch freeplay half gap \[rad\].
-    #[serde(default)]
-    pub pitch_freeplay: f64,
-    /// Coulomb friction.
-    #[serde(default)]
-    pub friction: Option<Friction>,
+    /// The linear structure (frequency form).
+    #[serde(flatten)]
+    pub linear: ModalStructure,
+    /// The nonlinear terms.
+    #[serde(flatten)]
+    pub nonlinear: Nonlinearities,
+    /// Keys that are none of the above: must be empty (serde's `deny_unknown_fields` does not
+    /// combine with `flatten`, so [`StructureFile::parse`] checks it).
+    #[serde(flatten, skip_serializing)]
+    #[schemars(skip)]
+    unknown: BTreeMap<String, toml::Value>,
+}
+
+/// The keys of a structure file, in documented order (for the unknown-key message).
+const STRUCTURE_FILE_KEYS: [&str; 13] = [
+    "air_density",
+    "chord",
+    "mass",
+    "inertia",
+    "static_unbalance",
+    "freq_heave",
+    "freq_pitch",
+    "damping_heave",
+    "damping_pitch",
+    "heave_stiffness_terms",
+    "pitch_stiffness_terms",
+    "pitch_freeplay",
+    "friction",
+];
+
+/// The key of a `#[serde(flatten)]`-composed table that serde cannot name: the first key of
+/// `table` (in key order) whose value alone does not deserialize into `T`, with serde's
+/// message (e.g. `invalid type: string "a", expected f64`). Serde buffers flattened tables,
+/// so a wrong-typed value there reaches the caller without its key or position; this names
+/// it again. `None` when every value alone is fine (the error is then about the table as
+/// a whole, e.g. a missing key, which serde names itself).
+pub fn flattened_bad_key<T: serde::de::DeserializeOwned>(
+    table: &toml::Table,
+) -> Option<(String, String)> {
+    table.iter().find_map(|(k, v)| {
+        let mut one = toml::Table::new();
+        one.insert(k.clone(), v.clone());
+        match toml::Value::Table(one).try_into::<T>() {
+            Err(e) if !e.message().starts_with("missing field") => {
+                Some((k.clone(), e.message().trim().to_string()))
+            }
+            _ => None,
+        }
+    })
+}
+
+/// 1-based line of the top-level `key` in a TOML text (0 when not found).
+fn key_line(text: &str, key: &str) -> usize {
+    let Ok(t) = toml::de::DeTable::parse(text) else {
+        return 0;
+    };
+    t.get_ref()
+        .iter()
+        .find(|(k, _)| k.get_ref() == key)
+        .map_or(0, |(k, _)| text[..k.span().start].matches('\n').count() + 1)
 }
 
 fn read_text(path: &Path) -> Result<String> {
@@ -136,10 +172,49 @@ impl StructureFile {
     pub fn parse(text: &str, source: &str) -> Result<Self> {
         let f: StructureFile = toml::from_str(text).map_err(|e| Error::Toml {
             source_name: source.to_string(),
-            message: e.to_string(),
+            message: text
+                .parse::<toml::Table>()
+                .ok()
+                .and_then(|t| flattened_bad_key::<StructureFile>(&t))
+                .map(|(key, message)| {
+                    let line = key_line(text, &key);
+                    format!("line {line}: key `{key}`: {message}")
+                })
+                .unwrap_or_else(|| e.to_string()),
         })?;
+        if let Some(key) = f.unknown.keys().next() {
+            return Err(Error::Toml {
+                source_name: source.to_string(),
+                message: format!(
+                    "line {}: unknown field `{key}`, expected one of {}",
+                    key_line(text, key),
+                    STRUCTURE_FILE_KEYS
+                        .iter()
+                        .map(|k| format!("`{k}`"))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            });
+        }
         f.structure().map_err(|e| in_file(source, e))?;
         Ok(f)
+    }
+
+    /// A structure file holding `spec` (air density ρ \[kg/m³\], optional chord \[m\]);
+    /// not validated ([`StructureFile::structure`] does).
+    pub fn new(
+        air_density: f64,
+        chord: Option<f64>,
+        linear: ModalStructure,
+        nonlinear: Nonlinearities,
+    ) -> Self {
+        StructureFile {
+            air_density,
+            chord,
+            linear,
+            nonlinear,
+            unknown: BTreeMap::new(),
+        }
     }
 
     /// Reads a structure file.
@@ -148,6 +223,14 @@ impl StructureFile {
     /// [`Error::Io`] when it cannot be read; otherwise as [`StructureFile::parse`].
     pub fn read(path: &Path) -> Result<Self> {
         Self::parse(&read_text(path)?, &path.display().to_string())
+    }
+
+    /// The shared structure spec of this file ([`StructureSpec::Modal`]).
+    pub fn spec(&self) -> StructureSpec {
+        StructureSpec::Modal {
+            linear: self.linear,
+            nonlinear: self.nonlinear.clone(),
+        }
     }
 
     /// The structure (see the module docs for the conversion).
@@ -160,43 +243,7 @@ impl StructureFile {
         if let Some(c) = self.chord {
             positive("chord", c)?;
         }
-        positive("mass", self.mass)?;
-        positive("inertia", self.inertia)?;
-        non_negative("freq_heave", self.freq_heave)?;
-        positive("freq_pitch", self.freq_pitch)?;
-        non_negative("damping_heave", self.damping_heave)?;
-        non_negative("damping_pitch", self.damping_pitch)?;
-        let tau = 2.0 * std::f64::consts::PI;
-        let (wh, wa) = (tau * self.freq_heave, tau * self.freq_pitch);
-        let s = Structure {
-            mass: self.mass,
-            inertia_alpha: self.inertia,
-            static_unbalance: self.static_unbalance,
-            k_h: self.mass * wh * wh,
-            k_alpha: self.inertia * wa * wa,
-            c_h: 2.0 * self.damping_heave * self.mass * wh,
-            c_alpha: 2.0 * self.damping_pitch * self.inertia * wa,
-            heave_stiffness_terms: self.heave_stiffness_terms.clone(),
-            pitch_stiffness_terms: self.pitch_stiffness_terms.clone(),
-            pitch_freeplay: self.pitch_freeplay,
-            friction: self.friction,
-        };
-        s.validate().map_err(|e| match e {
-            Error::InvalidParameter {
-                field,
-                value,
-                message,
-            } => Error::InvalidParameter {
-                field: match field.as_str() {
-                    "inertia_alpha" => "inertia".into(),
-                    _ => field,
-                },
-                value,
-                message,
-            },
-            other => other,
-        })?;
-        Ok(s)
+        self.spec().resolve()
     }
 }
 
@@ -570,6 +617,22 @@ damping_pitch = 0.005
         )
         .unwrap_err();
         assert!(e.to_string().contains("static_unbalance"), "{e}");
+        // a wrong-typed value inside the flattened table still names its key and line
+        let e = StructureFile::parse(
+            &RIG.replace("freq_pitch = 3.5", "freq_pitch = \"a\""),
+            "rig.toml",
+        )
+        .unwrap_err();
+        let m = e.to_string();
+        assert!(
+            m.contains("rig.toml") && m.contains("line 6: key `freq_pitch`"),
+            "{m}"
+        );
+        let e = StructureFile::parse(&format!("{RIG}[friction]\npitch_momentt = 1.0\n"), "r")
+            .unwrap_err();
+        assert!(e.to_string().contains("pitch_momentt"), "{e}");
+        // the file is the modal form of the shared spec
+        assert_eq!(f.spec().resolve().unwrap(), s);
     }
 
     #[test]

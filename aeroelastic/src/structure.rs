@@ -11,6 +11,8 @@
 use nalgebra::Matrix2;
 use serde::{Deserialize, Serialize};
 
+use identify::dataset::ModalStructure;
+
 use crate::error::{finite, non_negative, positive};
 use crate::{Error, Result};
 
@@ -56,7 +58,8 @@ impl Friction {
     }
 }
 
-/// Structural parameters of the section per unit span, SI units.
+/// Structural parameters of the section per unit span, SI units: the one resolved type every
+/// analysis simulates with (and the [`StructureSpec::Si`] form).
 ///
 /// Loadable from TOML ([`Structure::from_toml_str`]); unknown keys are rejected.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
@@ -95,30 +98,196 @@ pub struct Structure {
 }
 
 /// Nondimensional description of a typical section (Hodges & Pierce notation) plus the
-/// dimensional scales needed to build a [`Structure`].
+/// dimensional scales needed to build a [`Structure`]: the linear part of the
+/// [`StructureSpec::Nondimensional`] form (a study file's `[structure]`).
+///
+/// Serde form: the keys below, unknown keys rejected; `mu`, `r_alpha2` and `sigma` are
+/// required, `semi_chord`, `omega_alpha` and `rho` default to 1 (a problem in units of b,
+/// 1/ω_α and ρ), `x_alpha` and the damping ratios to 0.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct NondimStructure {
-    /// Mass ratio μ = m / (πρb²).
+    /// Mass ratio μ = m / (πρb²), > 0.
     pub mu: f64,
-    /// Squared radius of gyration about the elastic axis r² = I_α / (m b²).
+    /// Squared radius of gyration about the elastic axis r² = I_α / (m b²), > x_α².
     pub r_alpha2: f64,
-    /// Frequency ratio σ = ω_h / ω_α (uncoupled).
+    /// Frequency ratio σ = ω_h / ω_α (uncoupled), ≥ 0.
     pub sigma: f64,
     /// Mass-centre offset aft of the elastic axis x_α in semi-chords (x_α = e − a).
+    #[serde(default)]
     pub x_alpha: f64,
-    /// Semi-chord b = B/2 \[m\].
+    /// Semi-chord b = B/2 \[m\], > 0.
+    #[serde(default = "one")]
     pub semi_chord: f64,
-    /// Uncoupled pitch natural frequency ω_α = sqrt(k_α/I_α) \[rad/s\].
+    /// Uncoupled pitch natural frequency ω_α = sqrt(k_α/I_α) \[rad/s\], > 0.
+    #[serde(default = "one")]
     pub omega_alpha: f64,
-    /// Air density ρ \[kg/m³\] used in μ.
+    /// Air density ρ \[kg/m³\] used in μ, > 0.
+    #[serde(default = "one")]
     pub rho: f64,
-    /// Heave damping ratio ζ_h (c_h = 2 ζ_h m ω_h).
+    /// Heave damping ratio ζ_h (c_h = 2 ζ_h m ω_h), ≥ 0.
     #[serde(default)]
     pub zeta_h: f64,
-    /// Pitch damping ratio ζ_α (c_α = 2 ζ_α I_α ω_α).
+    /// Pitch damping ratio ζ_α (c_α = 2 ζ_α I_α ω_α), ≥ 0.
     #[serde(default)]
     pub zeta_alpha: f64,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+impl NondimStructure {
+    /// Mass per unit span m = μπρb² \[kg/m\].
+    pub fn mass(&self) -> f64 {
+        let b = self.semi_chord;
+        self.mu * std::f64::consts::PI * self.rho * b * b
+    }
+
+    /// Pitch inertia about the elastic axis I_α = r² m b² \[kg·m²/m\].
+    pub fn inertia_alpha(&self) -> f64 {
+        let b = self.semi_chord;
+        self.r_alpha2 * self.mass() * b * b
+    }
+
+    /// Pitch stiffness k_α = I_α ω_α² \[N·m/rad per m span\] (what a relative pitch
+    /// cubic k multiplies: the term k_α k α³).
+    pub fn k_alpha(&self) -> f64 {
+        self.inertia_alpha() * self.omega_alpha * self.omega_alpha
+    }
+}
+
+/// The nonlinear restoring terms of a structure, declared once for every
+/// [`StructureSpec`] form: polynomial stiffness terms, pitch freeplay and Coulomb friction
+/// (the meaning, units and sign conventions of the same-named [`Structure`] fields).
+///
+/// Serde form: the keys below (all optional), unknown keys rejected.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct Nonlinearities {
+    /// Extra heave stiffness terms Σ c_p h^p.
+    #[serde(default)]
+    pub heave_stiffness_terms: Vec<PolyTerm>,
+    /// Extra pitch stiffness terms Σ c_p d^p on the spring deflection d.
+    #[serde(default)]
+    pub pitch_stiffness_terms: Vec<PolyTerm>,
+    /// Pitch freeplay half gap δ \[rad\] (zero stiffness for |α| < δ); 0 = none.
+    #[serde(default)]
+    pub pitch_freeplay: f64,
+    /// Coulomb friction, if any.
+    #[serde(default)]
+    pub friction: Option<Friction>,
+}
+
+impl Nonlinearities {
+    /// No nonlinear term (a linear structure).
+    pub fn none() -> Self {
+        Self::default()
+    }
+
+    /// Whether there is no nonlinear term at all (no polynomial term, no freeplay, no
+    /// friction table).
+    pub fn is_empty(&self) -> bool {
+        self.heave_stiffness_terms.is_empty()
+            && self.pitch_stiffness_terms.is_empty()
+            && self.pitch_freeplay == 0.0
+            && self.friction.is_none()
+    }
+}
+
+/// The structure of the section in one of its three input forms, each resolving to the one
+/// SI working type [`Structure`] ([`StructureSpec::resolve`]).
+///
+/// - [`StructureSpec::Si`]: springs and dampers in SI, i.e. a [`Structure`] itself (with
+///   its own nonlinear fields).
+/// - [`StructureSpec::Modal`]: masses, uncoupled frequencies \[Hz\] and damping ratios
+///   ([`ModalStructure`]: a structure file, a data-set manifest's `[structure]`).
+/// - [`StructureSpec::Nondimensional`]: Hodges & Pierce parameters ([`NondimStructure`]:
+///   a study file's `[structure]`).
+///
+/// Serde form: externally tagged (`{ modal = { linear = {…}, nonlinear = {…} } }`); the
+/// files keep their flat layouts and build the spec in code.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+pub enum StructureSpec {
+    /// SI springs and dampers (and nonlinear terms): the structure as it is simulated.
+    Si(Structure),
+    /// Frequency form: k = m (2πf)², c = 2ζ m 2πf per DOF (m → I_α in pitch).
+    Modal {
+        /// The linear structure.
+        linear: ModalStructure,
+        /// The nonlinear terms.
+        #[serde(default)]
+        nonlinear: Nonlinearities,
+    },
+    /// Nondimensional form (see [`Structure::from_nondimensional`]).
+    Nondimensional {
+        /// The linear structure (with its dimensional scales b, ω_α, ρ).
+        linear: NondimStructure,
+        /// The nonlinear terms, SI.
+        #[serde(default)]
+        nonlinear: Nonlinearities,
+    },
+}
+
+impl StructureSpec {
+    /// The SI structure this spec describes, validated.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] naming the first bad field in the spec's own key names:
+    /// `mass`, `inertia`, `freq_pitch`… for the modal form ([`Structure::from_modal`]),
+    /// `mu`, `r_alpha2`… for the nondimensional form, the [`Structure`] field names for the
+    /// SI form and for the nonlinear terms (`pitch_stiffness_terms[1].power`…; see
+    /// [`Structure::validate`]).
+    pub fn resolve(&self) -> Result<Structure> {
+        let (linear, nonlinear) = match self {
+            StructureSpec::Si(s) => {
+                s.validate()?;
+                return Ok(s.clone());
+            }
+            StructureSpec::Modal { linear, nonlinear } => {
+                (Structure::from_modal(linear)?, nonlinear)
+            }
+            StructureSpec::Nondimensional { linear, nonlinear } => {
+                (Structure::from_nondimensional(linear)?, nonlinear)
+            }
+        };
+        let s = linear.with_nonlinearities(nonlinear.clone());
+        s.validate().map_err(|e| match self {
+            StructureSpec::Modal { .. } => modal_field_names(e),
+            _ => e,
+        })?;
+        Ok(s)
+    }
+
+    /// The nonlinear terms of the spec (those of the [`Structure`] for the SI form).
+    pub fn nonlinearities(&self) -> Nonlinearities {
+        match self {
+            StructureSpec::Si(s) => s.nonlinearities(),
+            StructureSpec::Modal { nonlinear, .. }
+            | StructureSpec::Nondimensional { nonlinear, .. } => nonlinear.clone(),
+        }
+    }
+}
+
+/// A [`Structure::validate`] error in the key names of the modal form (`inertia_alpha` →
+/// `inertia`).
+fn modal_field_names(e: Error) -> Error {
+    match e {
+        Error::InvalidParameter {
+            field,
+            value,
+            message,
+        } => Error::InvalidParameter {
+            field: match field.as_str() {
+                "inertia_alpha" => "inertia".into(),
+                _ => field,
+            },
+            value,
+            message,
+        },
+        other => other,
+    }
 }
 
 impl Structure {
@@ -182,15 +351,15 @@ impl Structure {
             ));
         }
         let b = p.semi_chord;
-        let m = p.mu * std::f64::consts::PI * p.rho * b * b;
-        let i_a = p.r_alpha2 * m * b * b;
+        let m = p.mass();
+        let i_a = p.inertia_alpha();
         let w_h = p.sigma * p.omega_alpha;
         let s = Structure {
             mass: m,
             inertia_alpha: i_a,
             static_unbalance: m * p.x_alpha * b,
             k_h: m * w_h * w_h,
-            k_alpha: i_a * p.omega_alpha * p.omega_alpha,
+            k_alpha: p.k_alpha(),
             c_h: 2.0 * p.zeta_h * m * w_h,
             c_alpha: 2.0 * p.zeta_alpha * i_a * p.omega_alpha,
             heave_stiffness_terms: Vec::new(),
@@ -200,6 +369,60 @@ impl Structure {
         };
         s.validate()?;
         Ok(s)
+    }
+
+    /// Builds a linear structure from the modal (frequency) form: k_h = m (2πf_h)²,
+    /// k_α = I_α (2πf_α)², c_h = 2ζ_h m 2πf_h, c_α = 2ζ_α I_α 2πf_α.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] naming the bad modal key: `mass` or `inertia` ≤ 0,
+    /// `freq_heave` < 0, `freq_pitch` ≤ 0, a damping ratio < 0, `static_unbalance` with
+    /// S_α² ≥ m I_α (see [`Structure::validate`]).
+    pub fn from_modal(p: &ModalStructure) -> Result<Self> {
+        positive("mass", p.mass)?;
+        positive("inertia", p.inertia)?;
+        non_negative("freq_heave", p.freq_heave)?;
+        positive("freq_pitch", p.freq_pitch)?;
+        non_negative("damping_heave", p.damping_heave)?;
+        non_negative("damping_pitch", p.damping_pitch)?;
+        let tau = 2.0 * std::f64::consts::PI;
+        let (wh, wa) = (tau * p.freq_heave, tau * p.freq_pitch);
+        let s = Structure {
+            mass: p.mass,
+            inertia_alpha: p.inertia,
+            static_unbalance: p.static_unbalance,
+            k_h: p.mass * wh * wh,
+            k_alpha: p.inertia * wa * wa,
+            c_h: 2.0 * p.damping_heave * p.mass * wh,
+            c_alpha: 2.0 * p.damping_pitch * p.inertia * wa,
+            heave_stiffness_terms: Vec::new(),
+            pitch_stiffness_terms: Vec::new(),
+            pitch_freeplay: 0.0,
+            friction: None,
+        };
+        s.validate().map_err(modal_field_names)?;
+        Ok(s)
+    }
+
+    /// This structure with its nonlinear terms replaced by `n` (not validated).
+    pub fn with_nonlinearities(self, n: Nonlinearities) -> Self {
+        Structure {
+            heave_stiffness_terms: n.heave_stiffness_terms,
+            pitch_stiffness_terms: n.pitch_stiffness_terms,
+            pitch_freeplay: n.pitch_freeplay,
+            friction: n.friction,
+            ..self
+        }
+    }
+
+    /// The nonlinear terms of this structure.
+    pub fn nonlinearities(&self) -> Nonlinearities {
+        Nonlinearities {
+            heave_stiffness_terms: self.heave_stiffness_terms.clone(),
+            pitch_stiffness_terms: self.pitch_stiffness_terms.clone(),
+            pitch_freeplay: self.pitch_freeplay,
+            friction: self.friction,
+        }
     }
 
     /// Parses a TOML table with the fields of [`Structure`] (SI), rejecting unknown keys,
@@ -461,6 +684,57 @@ mod tests {
         )
         .unwrap_err();
         assert!(e.to_string().contains("`mass`"), "{e}");
+    }
+
+    #[test]
+    fn spec_forms_resolve_to_the_same_structure() {
+        let p = hp1();
+        let s = Structure::from_nondimensional(&p).unwrap();
+        let cubic = Nonlinearities {
+            pitch_stiffness_terms: vec![PolyTerm {
+                power: 3,
+                coefficient: 2.0 * p.k_alpha(),
+            }],
+            ..Nonlinearities::none()
+        };
+        let nd = StructureSpec::Nondimensional {
+            linear: p,
+            nonlinear: cubic.clone(),
+        }
+        .resolve()
+        .unwrap();
+        assert_eq!(nd.k_alpha, s.k_alpha);
+        assert_eq!(nd.pitch_stiffness_terms[0].coefficient, 2.0 * s.k_alpha);
+        assert_eq!(StructureSpec::Si(nd.clone()).resolve().unwrap(), nd);
+        let tau = 2.0 * std::f64::consts::PI;
+        let modal = ModalStructure {
+            mass: s.mass,
+            inertia: s.inertia_alpha,
+            static_unbalance: s.static_unbalance,
+            freq_heave: s.omega_h() / tau,
+            freq_pitch: s.omega_alpha() / tau,
+            damping_heave: 0.0,
+            damping_pitch: 0.0,
+        };
+        let m = StructureSpec::Modal {
+            linear: modal,
+            nonlinear: cubic,
+        }
+        .resolve()
+        .unwrap();
+        assert!((m.k_alpha / s.k_alpha - 1.0).abs() < 1e-12);
+        assert!((m.k_h / s.k_h - 1.0).abs() < 1e-12);
+        assert_eq!(m.nonlinearities(), nd.nonlinearities());
+        let mut bad = modal;
+        bad.inertia = -1.0;
+        let e = Structure::from_modal(&bad).unwrap_err();
+        assert!(e.to_string().contains("`inertia`"), "{e}");
+        // the study's defaults
+        let d: NondimStructure = toml::from_str("mu = 20.0\nr_alpha2 = 0.25\nsigma = 0.5").unwrap();
+        assert_eq!(
+            (d.semi_chord, d.omega_alpha, d.rho, d.x_alpha),
+            (1.0, 1.0, 1.0, 0.0)
+        );
     }
 
     #[test]

@@ -46,7 +46,7 @@ use std::path::Path;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use identify::dataset::{
-    AngleUnit, CaseSpec, ForceUnit, LengthUnit, Manifest, MomentUnit, StructureSpec, Units,
+    AngleUnit, CaseSpec, ForceUnit, LengthUnit, Manifest, ModalStructure, MomentUnit, Units,
 };
 use identify::record::{CaseKind, CaseMeta, Record, SectionGeometry};
 use nalgebra::{DMatrix, DVector, Matrix2};
@@ -1185,10 +1185,10 @@ impl FreeOptions {
 /// # Errors
 /// [`Error::InvalidParameter`] naming `structure.k_h` when k_h = 0 (a free heave DOF has no
 /// natural frequency for the manifest).
-pub fn structure_spec(s: &Structure) -> Result<StructureSpec> {
+pub fn structure_spec(s: &Structure) -> Result<ModalStructure> {
     positive("structure.k_h", s.k_h)?;
     let (wh, wa) = (s.omega_h(), s.omega_alpha());
-    Ok(StructureSpec {
+    Ok(ModalStructure {
         mass: s.mass,
         inertia: s.inertia_alpha,
         static_unbalance: s.static_unbalance,

@@ -125,22 +125,24 @@ pub struct Nondim {
 impl Nondim {
     /// The parameters of a structure file for half-chord `b`.
     pub fn of(file: &StructureFile, b: f64) -> Self {
-        let m = file.mass;
+        let s = &file.linear;
+        let m = s.mass;
         Nondim {
             mu: m / (std::f64::consts::PI * file.air_density * b * b),
-            sigma: file.freq_heave / file.freq_pitch,
-            x_alpha: file.static_unbalance / (m * b),
-            r2: file.inertia / (m * b * b),
+            sigma: s.freq_heave / s.freq_pitch,
+            x_alpha: s.static_unbalance / (m * b),
+            r2: s.inertia / (m * b * b),
         }
     }
 
     /// `file` with these parameters (half-chord `b`).
     pub fn apply(&self, file: &StructureFile, b: f64) -> StructureFile {
         let mut f = file.clone();
-        f.mass = self.mu * std::f64::consts::PI * f.air_density * b * b;
-        f.static_unbalance = self.x_alpha * f.mass * b;
-        f.inertia = self.r2 * f.mass * b * b;
-        f.freq_heave = self.sigma * f.freq_pitch;
+        let s = &mut f.linear;
+        s.mass = self.mu * std::f64::consts::PI * f.air_density * b * b;
+        s.static_unbalance = self.x_alpha * s.mass * b;
+        s.inertia = self.r2 * s.mass * b * b;
+        s.freq_heave = self.sigma * s.freq_pitch;
         f
     }
 }

@@ -390,8 +390,9 @@ fn explore_truth_model() {
 #[ignore]
 fn explore_segments() {
     use aeroelastic::files::LoadedModel;
+    use aeroelastic::structure::{Nonlinearities, StructureSpec};
     use diagnose::system::residual::{prepare_run, ResidualSettings};
-    use diagnose::system::{sim_law, LinearStructure};
+    use diagnose::system::sim_law;
     use std::sync::Arc;
     let sc = BlindScenario::default();
     let truth = LoadedModel::parse(&sc.truth_model, "truth", std::path::Path::new("."), None)
@@ -406,7 +407,12 @@ fn explore_segments() {
     let o = opts();
     let law = sim_law(&b.forced, &o).unwrap();
     let ident: Arc<dyn aeroelastic::aero::AeroModel> = Arc::new(law.model().clone());
-    let st = LinearStructure::from_spec(&b.free.manifest.structure.unwrap());
+    let st = StructureSpec::Modal {
+        linear: b.free.manifest.structure.unwrap(),
+        nonlinear: Nonlinearities::none(),
+    }
+    .resolve()
+    .unwrap();
     let s = ResidualSettings {
         half_window: 26,
         order: 4,

@@ -12,8 +12,8 @@
 //! (checked at 1e-14 relative); the time base is refitted by least squares (1e-9).
 
 use identify::dataset::{
-    read_dataset, write_dataset, AngleUnit, CaseSpec, ForceUnit, LengthUnit, Manifest, MomentUnit,
-    StructureSpec, Units,
+    read_dataset, write_dataset, AngleUnit, CaseSpec, ForceUnit, LengthUnit, Manifest,
+    ModalStructure, MomentUnit, Units,
 };
 use identify::record::{CaseKind, Record, SectionGeometry};
 use proptest::prelude::*;
@@ -277,7 +277,7 @@ fn dataset() -> impl Strategy<Value = (Manifest, Vec<Record>)> {
                     0.0f64..1.0,
                 )
                     .prop_map(|(mass, inertia, su, fh, fp, zh, zp)| {
-                        StructureSpec {
+                        ModalStructure {
                             mass,
                             inertia,
                             static_unbalance: su,

@@ -9,7 +9,7 @@ use aeroelastic::aero::{
     QuasiSteadyKind, TheodorsenAero,
 };
 use aeroelastic::section::Section;
-use aeroelastic::structure::{NondimStructure, PolyTerm, Structure};
+use aeroelastic::structure::Structure;
 use anyhow::Context;
 use identify::dataset::{
     read_dataset, write_dataset, AngleUnit, CaseSpec, Dataset, ForceUnit, LengthUnit, Manifest,
@@ -27,7 +27,7 @@ use aeroelastic::tunnel::{self, Campaign, ForcedOptions};
 use identify::pipeline::Identification;
 
 use super::spec::{
-    AeroSpec, PreprocessSpec, Study, StudyModel, SyntheticSpec, TypicalSectionSpec, VirtualSpec,
+    AeroSpec, PreprocessSpec, Study, StudyModel, StudyStructure, SyntheticSpec, VirtualSpec,
 };
 
 /// The cases of the identification stage.
@@ -393,26 +393,8 @@ fn prepare_with_bar(dataset: Dataset, pre: &PreprocessOptions) -> anyhow::Result
 ///
 /// # Errors
 /// Out-of-range parameters, naming the field.
-pub fn structure(s: &TypicalSectionSpec) -> anyhow::Result<Structure> {
-    let mut st = Structure::from_nondimensional(&NondimStructure {
-        mu: s.mu,
-        r_alpha2: s.r_alpha2,
-        sigma: s.sigma,
-        x_alpha: s.x_alpha,
-        semi_chord: s.semi_chord,
-        omega_alpha: s.omega_alpha,
-        rho: s.rho,
-        zeta_h: s.zeta_h,
-        zeta_alpha: s.zeta_alpha,
-    })
-    .context("[structure]")?;
-    if s.pitch_cubic != 0.0 {
-        st.pitch_stiffness_terms.push(PolyTerm {
-            power: 3,
-            coefficient: s.pitch_cubic * st.k_alpha,
-        });
-    }
-    Ok(st)
+pub fn structure(s: &StudyStructure) -> anyhow::Result<Structure> {
+    s.spec().resolve().context("[structure]")
 }
 
 /// A linear aerodynamic model by name, chord B = 2b, elastic axis `a`.
@@ -421,10 +403,10 @@ pub fn structure(s: &TypicalSectionSpec) -> anyhow::Result<Structure> {
 /// An unknown model or invalid parameters.
 pub fn linear_aero(
     model: StudyModel,
-    s: &TypicalSectionSpec,
+    s: &StudyStructure,
     a: &AeroSpec,
 ) -> anyhow::Result<Arc<dyn AeroModel>> {
-    linear_aero_chord(model, 2.0 * s.semi_chord, a)
+    linear_aero_chord(model, 2.0 * s.linear.semi_chord, a)
 }
 
 /// A linear aerodynamic model by name for chord `chord` \[m\].
@@ -489,9 +471,12 @@ pub fn member_laws(study: &Study, id: &Identification) -> anyhow::Result<Members
     let Some(s) = &study.spec.structure else {
         anyhow::bail!("the ensemble's laws need [structure] (its chord)");
     };
-    let (laws, e) =
-        aeroelastic::ensemble::member_laws(id, &IdentifiedOptions::new(2.0 * s.semi_chord), None)
-            .context("building the ensemble's laws")?;
+    let (laws, e) = aeroelastic::ensemble::member_laws(
+        id,
+        &IdentifiedOptions::new(2.0 * s.linear.semi_chord),
+        None,
+    )
+    .context("building the ensemble's laws")?;
     Ok(Members {
         laws,
         ensemble: e.clone(),
@@ -506,8 +491,9 @@ pub fn identified_model(study: &Study, id: &Identification) -> anyhow::Result<No
     let Some(s) = &study.spec.structure else {
         anyhow::bail!("the identified model needs [structure] (its chord)");
     };
-    let law = IdentifiedLaw::from_identification(id, &IdentifiedOptions::new(2.0 * s.semi_chord))
-        .context("building the identified Eq. 19 model")?;
+    let law =
+        IdentifiedLaw::from_identification(id, &IdentifiedOptions::new(2.0 * s.linear.semi_chord))
+            .context("building the identified Eq. 19 model")?;
     Ok(law.model().clone())
 }
 
@@ -515,7 +501,7 @@ pub fn identified_model(study: &Study, id: &Identification) -> anyhow::Result<No
 ///
 /// # Errors
 /// No virtual source, or as [`virtual_model`].
-pub fn truth_model(study: &Study, s: &TypicalSectionSpec) -> anyhow::Result<Arc<dyn AeroModel>> {
+pub fn truth_model(study: &Study, s: &StudyStructure) -> anyhow::Result<Arc<dyn AeroModel>> {
     let Some(v) = study
         .spec
         .data
@@ -524,14 +510,14 @@ pub fn truth_model(study: &Study, s: &TypicalSectionSpec) -> anyhow::Result<Arc<
     else {
         anyhow::bail!("the `truth` model needs a [data.virtual] source");
     };
-    virtual_model(study, v, 2.0 * s.semi_chord)
+    virtual_model(study, v, 2.0 * s.linear.semi_chord)
 }
 
 /// A model of the study by name: the linear ones, `identified`, `truth`.
 fn named_aero(
     study: &Study,
     model: StudyModel,
-    s: &TypicalSectionSpec,
+    s: &StudyStructure,
     a: &AeroSpec,
     derived: &Derived,
 ) -> anyhow::Result<Arc<dyn AeroModel>> {
@@ -561,7 +547,7 @@ pub fn linear_section(
     Ok(Section::new(
         structure(s)?,
         named_aero(study, model, s, a, derived)?,
-        s.rho,
+        s.linear.rho,
     )?)
 }
 
@@ -574,7 +560,7 @@ pub fn nonlinear_section(study: &Study, derived: &Derived) -> anyhow::Result<Sec
         anyhow::bail!("[structure] and [aero] are required");
     };
     let aero = aero_with_terms(named_aero(study, a.model, s, a, derived)?, a)?;
-    Ok(Section::new(structure(s)?, aero, s.rho)?)
+    Ok(Section::new(structure(s)?, aero, s.linear.rho)?)
 }
 
 /// `inner` plus the nonlinear terms of `a` (constant coefficients).

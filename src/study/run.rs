@@ -554,8 +554,8 @@ fn flutter_stage(
         results.push(FlutterRun {
             label: r.label.clone(),
             model,
-            semi_chord: s.semi_chord,
-            omega_alpha: s.omega_alpha,
+            semi_chord: s.linear.semi_chord,
+            omega_alpha: s.linear.omega_alpha,
             analysis,
             reference: r.reference,
             ensemble,
@@ -667,7 +667,7 @@ fn lco_stage(
         let truth = aeroelastic::section::Section::new(
             build::structure(s)?,
             build::truth_model(study, s)?,
-            s.rho,
+            s.linear.rho,
         )?;
         let plan = SweepPlan {
             perturbation_up: truth.perturbation(l.perturbation_deg.to_radians()),
@@ -702,7 +702,7 @@ fn lco_stage(
         let omega = if r.omega > 0.0 {
             r.omega
         } else {
-            s.omega_alpha
+            s.linear.omega_alpha
         };
         let period = std::f64::consts::TAU / omega;
         let steps = (l.phase_periods * 400.0).ceil() as usize;
@@ -729,8 +729,8 @@ fn lco_stage(
     };
     let stage = LcoStage {
         model: section.aero.name(),
-        semi_chord: s.semi_chord,
-        omega_alpha: s.omega_alpha,
+        semi_chord: s.linear.semi_chord,
+        omega_alpha: s.linear.omega_alpha,
         flutter_speed,
         up,
         down,

@@ -3,6 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
+use aeroelastic::structure::{NondimStructure, Nonlinearities, PolyTerm, StructureSpec};
 use identify::pipeline::IdentifySettings;
 use serde::{Deserialize, Serialize};
 use toml::de::{DeTable, DeValue};
@@ -24,7 +25,7 @@ pub struct StudySpec {
     /// Identification settings (defaults when omitted and `[data]` is given).
     pub identify: Option<IdentifySpec>,
     /// Structure of the aeroelastic section (flutter / LCO stages).
-    pub structure: Option<TypicalSectionSpec>,
+    pub structure: Option<StudyStructure>,
     /// Aerodynamic model of the aeroelastic section.
     pub aero: Option<AeroSpec>,
     /// Flutter stage.
@@ -328,41 +329,60 @@ impl Default for PreprocessSpec {
     }
 }
 
-/// `[structure]`: a typical section in Hodges & Pierce's nondimensional form.
+/// `[structure]`: a typical section in Hodges & Pierce's nondimensional form — the shared
+/// [`NondimStructure`] (with its defaults: `semi_chord`, `omega_alpha`, `rho` = 1;
+/// `x_alpha`, `zeta_h`, `zeta_alpha` = 0) plus the study's relative pitch cubic.
+///
+/// Unknown keys are rejected by [`Study::parse`] (naming `structure.KEY` and its line).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct TypicalSectionSpec {
-    /// Mass ratio μ = m/(πρb²).
-    pub mu: f64,
-    /// r² = I_α/(m b²).
-    pub r_alpha2: f64,
-    /// ω_h/ω_α.
-    pub sigma: f64,
-    /// Mass-centre offset aft of the elastic axis \[semi-chords\].
-    #[serde(default)]
-    pub x_alpha: f64,
-    /// Semi-chord b \[m\].
-    #[serde(default = "unit")]
-    pub semi_chord: f64,
-    /// ω_α \[rad/s\].
-    #[serde(default = "unit")]
-    pub omega_alpha: f64,
-    /// Air density ρ \[kg/m³\].
-    #[serde(default = "unit")]
-    pub rho: f64,
-    /// Heave damping ratio.
-    #[serde(default)]
-    pub zeta_h: f64,
-    /// Pitch damping ratio.
-    #[serde(default)]
-    pub zeta_alpha: f64,
-    /// Cubic pitch spring k_α3/k_α [1/rad²] (k_α(α + k α³)).
+pub struct StudyStructure {
+    /// The linear structure (keys `mu`, `r_alpha2`, `sigma`, …, flat in `[structure]`).
+    #[serde(flatten)]
+    pub linear: NondimStructure,
+    /// Cubic pitch spring k_α3/k_α [1/rad²] (restoring moment k_α(α + k α³)); default 0.
     #[serde(default)]
     pub pitch_cubic: f64,
+    /// Keys that are none of the above: must be empty (`deny_unknown_fields` does not
+    /// combine with `flatten`; [`Study::parse`] checks it).
+    #[serde(flatten, skip_serializing)]
+    unknown: std::collections::BTreeMap<String, toml::Value>,
 }
 
-fn unit() -> f64 {
-    1.0
+/// The keys of `[structure]`, in documented order (for the unknown-key message).
+const STRUCTURE_KEYS: [&str; 10] = [
+    "mu",
+    "r_alpha2",
+    "sigma",
+    "x_alpha",
+    "semi_chord",
+    "omega_alpha",
+    "rho",
+    "zeta_h",
+    "zeta_alpha",
+    "pitch_cubic",
+];
+
+impl StudyStructure {
+    /// The shared structure spec: [`StructureSpec::Nondimensional`] whose nonlinear terms
+    /// are the pitch cubic as a pitch polynomial term k_α·k·α³ (none when k = 0).
+    pub fn spec(&self) -> StructureSpec {
+        let mut nonlinear = Nonlinearities::none();
+        if self.pitch_cubic != 0.0 {
+            nonlinear.pitch_stiffness_terms.push(PolyTerm {
+                power: 3,
+                coefficient: self.pitch_cubic * self.linear.k_alpha(),
+            });
+        }
+        StructureSpec::Nondimensional {
+            linear: self.linear,
+            nonlinear,
+        }
+    }
+
+    /// The first key of the table that is not a `[structure]` key, if any.
+    fn unknown_key(&self) -> Option<&str> {
+        self.unknown.keys().next().map(String::as_str)
+    }
 }
 
 /// A nonlinear aerodynamic term added to a linear model.
@@ -704,12 +724,29 @@ impl Study {
                 .nth(1)
                 .filter(|_| msg.contains("field"))
                 .map(str::to_string)
-                .or_else(|| e.span().and_then(|s| key_at(text, s.start)))
-                .unwrap_or_else(|| "(syntax)".to_string());
+                .or_else(|| e.span().and_then(|s| key_at(text, s.start)));
+            // `[structure]` is flattened: serde reports a wrong-typed value there without
+            // its key; find the key again
+            if key.is_none() {
+                let culprit = text
+                    .parse::<toml::Table>()
+                    .ok()
+                    .and_then(|t| t.get("structure").and_then(|v| v.as_table()).cloned())
+                    .and_then(|t| aeroelastic::files::flattened_bad_key::<StudyStructure>(&t));
+                if let Some((k, message)) = culprit {
+                    let key = format!("structure.{k}");
+                    return SpecError {
+                        path: display.clone(),
+                        line: lines.line_of(&key),
+                        key,
+                        message,
+                    };
+                }
+            }
             SpecError {
                 path: display.clone(),
                 line,
-                key,
+                key: key.unwrap_or_else(|| "(syntax)".to_string()),
                 message: msg,
             }
         })?;
@@ -803,6 +840,19 @@ impl Study {
     fn validate(&self) -> Result<(), (String, String)> {
         let s = &self.spec;
         let err = |k: &str, m: String| Err((k.to_string(), m));
+        if let Some(k) = s.structure.as_ref().and_then(StudyStructure::unknown_key) {
+            return err(
+                &format!("structure.{k}"),
+                format!(
+                    "unknown field `{k}`, expected one of {}",
+                    STRUCTURE_KEYS
+                        .iter()
+                        .map(|k| format!("`{k}`"))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            );
+        }
         if s.name.is_empty()
             || !s
                 .name
@@ -1112,7 +1162,8 @@ impl Study {
                 "the flutter, LCO and branch stages need [structure] and [aero]".into(),
             );
         }
-        if let Some(st) = &s.structure {
+        if let Some(outer) = &s.structure {
+            let st = &outer.linear;
             for (k, v) in [
                 ("structure.mu", st.mu),
                 ("structure.r_alpha2", st.r_alpha2),
@@ -1139,7 +1190,7 @@ impl Study {
                 10.0,
                 "semi-chords",
             ))?;
-            fin("structure.pitch_cubic", st.pitch_cubic)?;
+            fin("structure.pitch_cubic", outer.pitch_cubic)?;
             for (k, v) in [
                 ("structure.zeta_h", st.zeta_h),
                 ("structure.zeta_alpha", st.zeta_alpha),

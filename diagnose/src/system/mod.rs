@@ -17,6 +17,7 @@ use std::sync::Arc;
 
 use aeroelastic::aero::AeroModel;
 use aeroelastic::identified::{IdentifiedLaw, IdentifiedOptions};
+use aeroelastic::structure::{Nonlinearities, Structure, StructureSpec};
 use identify::dataset::Dataset;
 use identify::pipeline::{identify, IdentifySettings};
 use identify::preprocess::PreprocessOptions;
@@ -26,7 +27,7 @@ use crate::effect::{Effect, Level};
 use crate::report::{CandidateScore, CaseGap, LevelResult};
 use crate::{Error, Result};
 
-pub use residual::{LinearStructure, ResidualSettings, RunResidual};
+pub use residual::{ResidualSettings, RunResidual};
 
 /// Options of [`system_level`].
 #[derive(Debug, Clone, PartialEq)]
@@ -62,7 +63,7 @@ pub struct SystemOptions {
     /// and the bifurcation diagram (default true; off saves the simulations' time).
     pub simulate: bool,
     /// Nominal structure of the sim; `None` (default): the free data set's `[structure]`.
-    pub structure: Option<identify::dataset::StructureSpec>,
+    pub structure: Option<identify::dataset::ModalStructure>,
 }
 
 impl Default for SystemOptions {
@@ -166,7 +167,7 @@ fn sim_identification(
 /// Prepared free runs of a data set for a given aerodynamic model.
 pub(crate) struct Prepared {
     pub runs: Vec<RunResidual>,
-    pub structure: LinearStructure,
+    pub structure: Structure,
 }
 
 pub(crate) fn prepare_free(
@@ -182,7 +183,12 @@ pub(crate) fn prepare_free(
              (the sim needs the nominal structure)",
         )
     })?;
-    let structure = LinearStructure::from_spec(&spec);
+    let structure = StructureSpec::Modal {
+        linear: spec,
+        nonlinear: Nonlinearities::none(),
+    }
+    .resolve()
+    .map_err(|e| Error::aeroelastic(format!("data set `{name}`: nominal [structure]"), e))?;
     let recs: Vec<_> = free
         .records
         .iter()

@@ -19,43 +19,13 @@
 use std::sync::Arc;
 
 use aeroelastic::aero::{linearize, AeroModel, Flow};
+use aeroelastic::structure::Structure;
 use identify::preprocess::{noise_sigma, savitzky_golay_derivative};
 use identify::record::Record;
 use nalgebra::Matrix2;
 use realfft::num_complex::Complex64;
 
 use crate::{Error, Result};
-
-/// Nominal linear structure of the free data set (manifest `[structure]`), SI per unit
-/// span: mass, damping and stiffness matrices.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct LinearStructure {
-    /// Mass matrix [[m, S_α], [S_α, I_α]].
-    pub mass: Matrix2<f64>,
-    /// Damping matrix diag(c_h, c_α).
-    pub damping: Matrix2<f64>,
-    /// Stiffness matrix diag(k_h, k_α).
-    pub stiffness: Matrix2<f64>,
-}
-
-impl LinearStructure {
-    /// From the manifest's `[structure]`: k = m ω², c = 2 ζ m ω per DOF (m → I_α for
-    /// pitch), ω = 2π f.
-    pub fn from_spec(s: &identify::dataset::StructureSpec) -> Self {
-        let tau = 2.0 * std::f64::consts::PI;
-        let (wh, wa) = (tau * s.freq_heave, tau * s.freq_pitch);
-        LinearStructure {
-            mass: Matrix2::new(s.mass, s.static_unbalance, s.static_unbalance, s.inertia),
-            damping: Matrix2::new(
-                2.0 * s.damping_heave * s.mass * wh,
-                0.0,
-                0.0,
-                2.0 * s.damping_pitch * s.inertia * wa,
-            ),
-            stiffness: Matrix2::new(s.mass * wh * wh, 0.0, 0.0, s.inertia * wa * wa),
-        }
-    }
-}
 
 /// The aerodynamic model of a still-air run (U = 0): no aerodynamic force at all. Any
 /// apparent mass of the air is part of the structure a still-air decay measures, so a
@@ -360,19 +330,18 @@ fn sg(x: &[f64], dt: f64, s: &ResidualSettings, id: &str, what: &str) -> Result<
 /// Structural residual M_s q̈ + C_s q̇ + K_s q − F at sample i, per DOF.
 #[inline]
 fn residual_at(
-    st: &LinearStructure,
+    st: &Structure,
     q: &[Vec<f64>; 2],
     qd: &[Vec<f64>; 2],
     qdd: &[Vec<f64>; 2],
     f: &[Vec<f64>; 2],
     i: usize,
 ) -> [f64; 2] {
+    let (ms, cs, ks) = (st.mass_matrix(), st.damping_matrix(), st.stiffness_matrix());
     [0, 1].map(|c| {
         let mut v = -f[c][i];
         for j in 0..2 {
-            v += st.mass[(c, j)] * qdd[j][i]
-                + st.damping[(c, j)] * qd[j][i]
-                + st.stiffness[(c, j)] * q[j][i];
+            v += ms[(c, j)] * qdd[j][i] + cs[(c, j)] * qd[j][i] + ks[(c, j)] * q[j][i];
         }
         v
     })
@@ -389,7 +358,7 @@ pub fn prepare_run(
     rec: &Record,
     model: &Arc<dyn AeroModel>,
     rho: f64,
-    st: &LinearStructure,
+    st: &Structure,
     s: &ResidualSettings,
 ) -> Result<RunResidual> {
     let id = rec.meta.id.as_str();
@@ -446,6 +415,7 @@ pub fn prepare_run(
     let lag0 = vec![0.0; run_model.n_lag()];
     let mut r = [Vec::with_capacity(i1 - i0), Vec::with_capacity(i1 - i0)];
     let mut ss = [0.0; 2];
+    let ks = st.stiffness_matrix();
     for i in i0..i1 {
         let v = residual_at(st, &q, &qd, &qdd, &force, i);
         for c in 0..2 {
@@ -454,7 +424,7 @@ pub fn prepare_run(
             // balances it), so the run is normalised by its elastic force K_s q instead:
             // the force the inertia must balance
             let sf = if u == 0.0 {
-                st.stiffness[(c, 0)] * q[0][i] + st.stiffness[(c, 1)] * q[1][i]
+                ks[(c, 0)] * q[0][i] + ks[(c, 1)] * q[1][i]
             } else {
                 v[c] + force[c][i]
             };
@@ -507,7 +477,7 @@ pub fn prepare_run(
 fn noise_kernels(
     model: &dyn AeroModel,
     flow: &Flow,
-    st: &LinearStructure,
+    st: &Structure,
     s: &ResidualSettings,
     dt: f64,
     id: &str,

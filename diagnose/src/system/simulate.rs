@@ -10,7 +10,9 @@ use aeroelastic::integrate::{Control, OdeSystem, StopReason};
 
 use crate::effect::Effect;
 
-use super::residual::{dominant_frequency, LinearStructure, RunResidual};
+use aeroelastic::structure::Structure;
+
+use super::residual::{dominant_frequency, RunResidual};
 
 /// A fitted augmentation used in a simulation: effect, grid values, coefficients.
 #[derive(Debug, Clone)]
@@ -72,7 +74,7 @@ impl Augment {
 pub(crate) fn simulate(
     model: &Arc<dyn AeroModel>,
     rho: f64,
-    st: &LinearStructure,
+    st: &Structure,
     run: &RunResidual,
     aug: Option<&Augment>,
     substeps: usize,
@@ -84,7 +86,7 @@ pub(crate) fn simulate(
     let ma = model.apparent_mass(&flow);
     let dm = aug.map(|a| a.added_mass()).unwrap_or([[0.0; 2]; 2]);
     let tau = aug.map(|a| a.delay()).unwrap_or(0.0);
-    let mut mt = st.mass - ma;
+    let mut mt = st.mass_matrix() - ma;
     for i in 0..2 {
         for j in 0..2 {
             // The fitted augmentation is r − ΔM q̈: the structure carries M_s − ΔM.
@@ -108,7 +110,8 @@ pub(crate) fn simulate(
     let sys = Augmented {
         model: model.as_ref(),
         flow,
-        st,
+        damping: st.damping_matrix(),
+        stiffness: st.stiffness_matrix(),
         aug,
         minv,
         q_dyn,
@@ -155,7 +158,10 @@ pub(crate) fn simulate(
 struct Augmented<'a> {
     model: &'a dyn AeroModel,
     flow: Flow,
-    st: &'a LinearStructure,
+    /// Structural damping matrix C_s.
+    damping: nalgebra::Matrix2<f64>,
+    /// Structural stiffness matrix K_s.
+    stiffness: nalgebra::Matrix2<f64>,
     aug: Option<&'a Augment>,
     minv: nalgebra::Matrix2<f64>,
     q_dyn: f64,
@@ -192,7 +198,7 @@ impl OdeSystem for Augmented<'_> {
             // r_aug = r − Φθ: the augmentation acts like an aerodynamic force.
             g[c] = f[c] - self.tau * fdot[c] + extra[c];
             for j in 0..2 {
-                g[c] -= self.st.damping[(c, j)] * qd[j] + self.st.stiffness[(c, j)] * q[j];
+                g[c] -= self.damping[(c, j)] * qd[j] + self.stiffness[(c, j)] * q[j];
             }
         }
         let minv = &self.minv;
@@ -415,7 +421,7 @@ fn point(u: f64, o: &Observables) -> crate::report::BifurcationPoint {
 pub(crate) fn compare(
     model: &Arc<dyn AeroModel>,
     rho: f64,
-    st: &LinearStructure,
+    st: &Structure,
     runs: &[RunResidual],
     aug: Option<&Augment>,
 ) -> SimResult {

@@ -20,23 +20,38 @@ use crate::{Error, Result};
 /// The exact value of the manifest's `format` key.
 pub const FORMAT: &str = "aeroform-dataset/1";
 
-/// Structural properties per unit span (manifest `[structure]`), SI.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct StructureSpec {
+/// The linear structure of the 2-DOF section per unit span in "frequency" (modal) form: the
+/// masses and the uncoupled still-air natural frequencies and damping ratios, SI. It is the
+/// manifest's `[structure]` table and the linear part of a structure file
+/// (`aeroelastic::files::StructureFile`); `aeroelastic::structure::ModalStructure::Modal`
+/// resolves it to stiffnesses k_h = m (2πf_h)², k_α = I_α (2πf_α)² and dampers
+/// c_h = 2ζ_h m 2πf_h, c_α = 2ζ_α I_α 2πf_α.
+///
+/// Serde form: the keys below, unknown keys rejected; `static_unbalance` and the damping
+/// ratios default to 0 (a manifest requires every key, checked by [`Manifest::parse`]).
+#[derive(
+    Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize, schemars::JsonSchema,
+)]
+#[serde(deny_unknown_fields)]
+pub struct ModalStructure {
     /// Mass per unit span m \[kg/m\], > 0.
     pub mass: f64,
     /// Mass moment of inertia about the elastic axis I_α \[kg·m²/m\], > 0.
     pub inertia: f64,
     /// Static unbalance S_α = m·x_α \[kg·m/m\], positive when the mass centre is aft of the
     /// elastic axis.
+    #[serde(default)]
     pub static_unbalance: f64,
-    /// Still-air natural frequency of heave \[Hz\], > 0.
+    /// Still-air uncoupled natural frequency of heave \[Hz\]: > 0 in a manifest, ≥ 0 in a
+    /// structure file (0 = no heave spring).
     pub freq_heave: f64,
-    /// Still-air natural frequency of pitch \[Hz\], > 0.
+    /// Still-air uncoupled natural frequency of pitch \[Hz\], > 0.
     pub freq_pitch: f64,
     /// Damping ratio of heave (fraction of critical), ≥ 0.
+    #[serde(default)]
     pub damping_heave: f64,
     /// Damping ratio of pitch (fraction of critical), ≥ 0.
+    #[serde(default)]
     pub damping_pitch: f64,
 }
 
@@ -101,7 +116,7 @@ pub struct Manifest {
     /// Geometry and air, SI.
     pub section: SectionGeometry,
     /// Structure per unit span; required when any case is free.
-    pub structure: Option<StructureSpec>,
+    pub structure: Option<ModalStructure>,
     /// Units of the CSV columns.
     pub units: Units,
     /// Sign convention of the CSV columns (`[convention]`; Scanlan when absent).
@@ -534,7 +549,7 @@ impl<'a> Cx<'a> {
                     "damping_heave",
                     "damping_pitch",
                 ])?;
-                Some(StructureSpec {
+                Some(ModalStructure {
                     mass: st.req_pos("mass", "kg/m")?,
                     inertia: st.req_pos("inertia", "kg m^2/m")?,
                     static_unbalance: st.req_f64("static_unbalance")?,

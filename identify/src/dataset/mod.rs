@@ -17,7 +17,7 @@ use std::path::{Path, PathBuf};
 pub use self::convention::{Angular, Convention, Linear};
 pub use self::csv::{check_sampling, parse_case_csv, read_case_csv, CaseTable};
 pub use self::manifest::{
-    is_valid_case_id, CaseSpec, Manifest, StructureSpec, FORMAT, PLAUSIBLE_MAX,
+    is_valid_case_id, CaseSpec, Manifest, ModalStructure, FORMAT, PLAUSIBLE_MAX,
 };
 pub use self::units::{AngleUnit, ForceUnit, LengthUnit, MomentUnit, Units};
 pub use self::write::write_dataset;

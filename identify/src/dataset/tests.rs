@@ -277,7 +277,7 @@ fn full_manifest() -> Manifest {
             span: 0.75,
             air_density: 1.225,
         },
-        structure: Some(StructureSpec {
+        structure: Some(ModalStructure {
             mass: 1.09,
             inertia: 0.0057,
             static_unbalance: -0.01,
