@@ -404,6 +404,28 @@ impl Structure {
         Ok(s)
     }
 
+    /// The modal (frequency) form of this structure's linear part, the inverse of
+    /// [`Structure::from_modal`]: frequencies sqrt(k/m)/2π of the uncoupled modes and
+    /// damping ratios c/(2 m ω) (a data-set manifest's `[structure]`; the nonlinear terms
+    /// are not part of it).
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] naming `structure.k_h` when k_h = 0 (a free heave DOF
+    /// has no natural frequency).
+    pub fn modal(&self) -> Result<ModalStructure> {
+        positive("structure.k_h", self.k_h)?;
+        let (wh, wa) = (self.omega_h(), self.omega_alpha());
+        Ok(ModalStructure {
+            mass: self.mass,
+            inertia: self.inertia_alpha,
+            static_unbalance: self.static_unbalance,
+            freq_heave: wh / (2.0 * std::f64::consts::PI),
+            freq_pitch: wa / (2.0 * std::f64::consts::PI),
+            damping_heave: self.c_h / (2.0 * self.mass * wh),
+            damping_pitch: self.c_alpha / (2.0 * self.inertia_alpha * wa),
+        })
+    }
+
     /// This structure with its nonlinear terms replaced by `n` (not validated).
     pub fn with_nonlinearities(self, n: Nonlinearities) -> Self {
         Structure {

@@ -45,9 +45,7 @@
 use std::path::Path;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use identify::dataset::{
-    AngleUnit, CaseSpec, ForceUnit, LengthUnit, Manifest, ModalStructure, MomentUnit, Units,
-};
+use identify::dataset::{AngleUnit, CaseSpec, ForceUnit, LengthUnit, Manifest, MomentUnit, Units};
 use identify::record::{CaseKind, CaseMeta, Record, SectionGeometry};
 use nalgebra::{DMatrix, DVector, Matrix2};
 use num_complex::Complex64;
@@ -62,7 +60,6 @@ use crate::dynamics::SectionDynamics;
 use crate::error::{non_negative, positive};
 use crate::integrate::{rk4, Bound, Control, OdeSystem, Rk4, StopReason};
 use crate::section::Section;
-use crate::structure::Structure;
 use crate::{Error, Result};
 
 /// One sine component a·sin(2πf t + φ).
@@ -1178,27 +1175,6 @@ impl FreeOptions {
     }
 }
 
-/// The manifest `[structure]` of a structure: frequencies sqrt(k/m)/2π of the uncoupled
-/// modes and damping ratios c/(2 m ω) (nonlinear stiffness, freeplay and friction cannot be
-/// written there; [`free_dataset`] puts the whole structure in `[extra]`).
-///
-/// # Errors
-/// [`Error::InvalidParameter`] naming `structure.k_h` when k_h = 0 (a free heave DOF has no
-/// natural frequency for the manifest).
-pub fn structure_spec(s: &Structure) -> Result<ModalStructure> {
-    positive("structure.k_h", s.k_h)?;
-    let (wh, wa) = (s.omega_h(), s.omega_alpha());
-    Ok(ModalStructure {
-        mass: s.mass,
-        inertia: s.inertia_alpha,
-        static_unbalance: s.static_unbalance,
-        freq_heave: wh / (2.0 * std::f64::consts::PI),
-        freq_pitch: wa / (2.0 * std::f64::consts::PI),
-        damping_heave: s.c_h / (2.0 * s.mass * wh),
-        damping_pitch: s.c_alpha / (2.0 * s.inertia_alpha * wa),
-    })
-}
-
 /// Result of one free run besides the record.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct FreeRun {
@@ -1352,7 +1328,7 @@ pub fn free_record(
 /// under `[extra] structure`).
 ///
 /// # Errors
-/// As [`free_record`] and [`structure_spec`]; [`Error::InvalidParameter`] for an empty or
+/// As [`free_record`] and [`crate::structure::Structure::modal`]; [`Error::InvalidParameter`] for an empty or
 /// repeated speed list.
 pub fn free_dataset(
     section: &Section,
@@ -1365,7 +1341,7 @@ pub fn free_dataset(
         .map(|u| format!("free-U{}", num_label(*u)))
         .collect();
     check_ids(ids.iter().map(String::as_str))?;
-    let spec = structure_spec(&section.structure)?;
+    let spec = section.structure.modal()?;
     let done = AtomicUsize::new(0);
     let results: Vec<Result<(Record, FreeRun)>> = speeds
         .par_iter()

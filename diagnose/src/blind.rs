@@ -500,7 +500,7 @@ fn free_set(
             span: sc.span,
             air_density: base.rho,
         },
-        structure: Some(tunnel::structure_spec(&base.structure).map_err(ae("blind: rig"))?),
+        structure: Some(base.structure.modal().map_err(ae("blind: rig"))?),
         units: tunnel::paper_units(),
         convention: Default::default(),
         cases: specs,
