@@ -1,0 +1,23 @@
+//! Diagnoses one set of the drawn-shapes blind benchmark and prints its diagnosis JSON
+//! (a debugging aid): `cargo run --release -p diagnose --example blind_one -- INDEX [N SEED]`.
+
+use diagnose::bench::{draw_specs, CampaignShape};
+use diagnose::bench_run::{run_one, BlindOptions};
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let index: usize = args.first().and_then(|a| a.parse().ok()).unwrap_or(0);
+    let n: usize = args.get(1).and_then(|a| a.parse().ok()).unwrap_or(330);
+    let seed: u64 = args.get(2).and_then(|a| a.parse().ok()).unwrap_or(2026);
+    let mut opts = BlindOptions::new(n, seed);
+    opts.shapes = true;
+    let mut spec = draw_specs(n, seed)[index].clone();
+    spec.shape = Some(CampaignShape::draw(spec.seed));
+    match run_one(&spec, &opts) {
+        Ok((o, d)) => {
+            eprintln!("{} -> {} ({:.2})", spec.truth, o.verdict, o.confidence);
+            println!("{}", serde_json::to_string_pretty(&d).unwrap_or_default());
+        }
+        Err(e) => eprintln!("error: {e}"),
+    }
+}
