@@ -10,6 +10,6 @@ pub mod paper;
 pub mod run;
 /// The study-file parser lives in the library target (`aeroform::study_spec`) so that the
 /// fuzz target and tests can call it.
-pub use aeroform::study_spec as spec;
+pub use ::study::spec;
 
 pub use spec::Study;
