@@ -31,6 +31,15 @@ fn is_input_error(c: &(dyn std::error::Error + 'static)) -> bool {
     {
         return true;
     }
+    if let Some(e) = c.downcast_ref::<study::Error>() {
+        // the transparent variants hide the wrapped error from the chain: look inside
+        return match e {
+            study::Error::Usage(_) | study::Error::Spec(_) => true,
+            study::Error::Identify(e) => is_input_error(e),
+            study::Error::Aeroelastic(e) => is_input_error(e),
+            _ => false,
+        };
+    }
     if let Some(e) = c.downcast_ref::<identify::Error>() {
         use identify::Error as E;
         return matches!(

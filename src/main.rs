@@ -4,6 +4,7 @@
 mod branch_cmd;
 mod diagnose_cmd;
 mod exit;
+mod figures;
 mod flutter_cmd;
 mod identify_cmd;
 mod interrupt;
@@ -12,7 +13,6 @@ mod outdir;
 mod plot_cmd;
 mod progress;
 mod run_cmd;
-mod study;
 mod sweep_cmd;
 mod tunnel_cmd;
 mod ui;

@@ -7,7 +7,9 @@ use std::path::PathBuf;
 use anyhow::Context;
 use clap::Args;
 
-use crate::study::{figures::render_all, run::names, Study};
+use crate::figures::render_all;
+use study::run::names;
+use study::Study;
 
 /// Flags of `aeroform plot`.
 #[derive(Debug, Args)]

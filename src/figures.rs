@@ -18,10 +18,10 @@ use plots::adapters::term_label;
 use plots::{column_label, Figure, Report, Series, SeriesKind, TimePanel, TimeSeriesFigure};
 use serde::{Deserialize, Serialize};
 
-use super::files::{ensure_dir, read_json, write_json};
-use super::paper::{DeltaFit, DeltaFits, ForceDecomposition, ForceLoop, LoopSet, PaperFigures};
-use super::run::{names, FlutterRun, LcoStage};
-use super::spec::{Study, StudyModel};
+use study::files::{ensure_dir, read_json, write_json};
+use study::paper::{DeltaFit, DeltaFits, ForceDecomposition, ForceLoop, LoopSet, PaperFigures};
+use study::run::{names, FlutterRun, LcoStage};
+use study::spec::{Study, StudyModel};
 
 /// One drawn figure, as listed in `figures.json`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -874,7 +874,7 @@ fn truth_axis(study: &Study) -> f64 {
         .data
         .as_ref()
         .and_then(|d| d.virtual_tunnel.as_ref())
-        .and_then(|v| super::build::virtual_model(study, v, 0.25).ok())
+        .and_then(|v| study::build::virtual_model(study, v, 0.25).ok())
         .and_then(|m| m.elastic_axis())
         .unwrap_or(0.0)
 }
