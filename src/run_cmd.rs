@@ -44,7 +44,7 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     let dir = crate::outdir::OutDir::begin(&out, "run", args.force)?;
     let mut timings = run_study(&study, dir.path(), &crate::progress::Terminal::new())?;
     let t = Instant::now();
-    crate::figures::render_all(&study, dir.path())?;
+    plots::study_report::render_all(&study, dir.path(), &crate::version())?;
     timings.push(("figures+report", t.elapsed().as_secs_f64()));
     dir.commit()?;
     crate::ui::say!(
