@@ -214,7 +214,7 @@ pub fn phase_figure(
 }
 
 /// The bifurcation diagram of `set`: stable branches solid, unstable dashed, Hopf points
-/// and folds marked, `sweep` (time-integration points, pitch amplitude [deg]) and the
+/// and folds marked, `sweep` (time-integration points, pitch amplitude \[deg\]) and the
 /// measured points of `dist` on top (first-harmonic amplitudes when measured points are
 /// given, to compare like with like). Used by `aeroform branch` and the study
 /// report ([`crate::study_report`]).
