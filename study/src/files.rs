@@ -10,6 +10,9 @@ use serde::Serialize;
 use crate::error::{Error, Result};
 
 /// Creates a folder (and parents), naming it on failure.
+///
+/// # Errors
+/// [`Error::Io`] naming the folder.
 pub fn ensure_dir(dir: &Path) -> Result<()> {
     std::fs::create_dir_all(dir).map_err(|source| Error::Io {
         context: format!("cannot create output folder {}", dir.display()),
@@ -18,6 +21,10 @@ pub fn ensure_dir(dir: &Path) -> Result<()> {
 }
 
 /// Writes `value` as pretty JSON (trailing newline) atomically.
+///
+/// # Errors
+/// [`Error::Json`] when `value` cannot be serialised, [`Error::Identify`] when the file
+/// cannot be written (naming it).
 pub fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<()> {
     let mut text = serde_json::to_string_pretty(value).map_err(|source| Error::Json {
         context: format!("serialising {}", path.display()),
@@ -29,6 +36,10 @@ pub fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<()> {
 }
 
 /// Reads a JSON result file.
+///
+/// # Errors
+/// [`Error::Io`] when it cannot be read, [`Error::Json`] when it is not a `T`; both name the
+/// file.
 pub fn read_json<T: DeserializeOwned>(path: &Path) -> Result<T> {
     let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
         context: format!("reading {}", path.display()),
@@ -41,6 +52,9 @@ pub fn read_json<T: DeserializeOwned>(path: &Path) -> Result<T> {
 }
 
 /// Writes text atomically.
+///
+/// # Errors
+/// [`Error::Identify`] when the file cannot be written (naming it).
 pub fn write_text(path: &Path, text: &str) -> Result<()> {
     identify::io::write_atomic(path, text.as_bytes())?;
     Ok(())
@@ -91,6 +105,9 @@ impl Csv {
     }
 
     /// Writes the table atomically.
+    ///
+    /// # Errors
+    /// [`Error::Identify`] when the file cannot be written (naming it).
     pub fn write(&self, path: &Path) -> Result<()> {
         write_text(path, &self.text())
     }

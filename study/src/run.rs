@@ -1,4 +1,5 @@
-//! Runs a study end to end: data → identification → flutter → LCO → figures and report.
+//! Runs the stages of a study: data → identification → flutter → LCO → branch, each
+//! writing its result files (the figures and report are drawn from them by `plots`).
 //! Orchestration only: every number comes from `identify` / `aeroelastic`.
 
 use std::path::Path;
@@ -77,11 +78,16 @@ fn timed<T>(
     Ok(r)
 }
 
-/// Runs `study` and writes everything under `out`; returns the stage timings.
+/// Runs the stages of `study` (data, identify, flutter, LCO, branch — those the study has)
+/// and writes their result files under `out`; returns the wall time of each stage \[s\].
+/// Progress bars and the lines a terminal shows go to `obs`. The figures and the report
+/// are not drawn here: the caller draws them from the result files
+/// (`plots::study_report::render_all`).
 ///
 /// # Errors
-/// The first failing stage, with its context; files written before the failure are
-/// complete (atomic writes), nothing half-written remains.
+/// The first failing stage, with its context ([`crate::Error`]); an
+/// `outputs.series_cases` id not in the data is [`crate::Error::Usage`]. Files written
+/// before the failure are complete (atomic writes), nothing half-written remains.
 pub fn run_study(study: &Study, out: &Path, obs: &dyn Observer) -> Result<Timings> {
     ensure_dir(out)?;
     let mut timings = Timings::new();
