@@ -7,7 +7,7 @@ use std::path::PathBuf;
 
 use aeroelastic::branch::{
     measured_distances, read_measured_amplitudes, BranchMethod, BranchOptions, BranchProgress,
-    BranchSet, EventKind, MeasuredDistance, StopReason,
+    StopReason,
 };
 use anyhow::Context;
 use clap::Args;
@@ -73,83 +73,6 @@ fn stop_text(s: &StopReason) -> String {
         StopReason::Equilibrium { u } => format!("returned to the equilibrium at U = {u:.4} m/s"),
         StopReason::MaxPoints => "point limit reached".into(),
         StopReason::NotConverged { message, .. } => format!("did not converge {message}"),
-    }
-}
-
-/// The bifurcation diagram of `set`: stable branches solid, unstable dashed, Hopf points
-/// and folds marked, `sweep` (time-integration points, pitch amplitude [deg]) and the
-/// measured points of `dist` on top (first-harmonic amplitudes when measured points are
-/// given, to compare like with like). Used by `aeroform branch` and the study's
-/// `[branch]` stage.
-pub(crate) fn branch_figure(
-    set: &BranchSet,
-    dist: &[MeasuredDistance],
-    sweep: Vec<plots::DiagramPoint>,
-) -> plots::BranchDiagramFigure {
-    use plots::{BranchCurve, DiagramPoint};
-    // With measured points, compare like with like: first-harmonic amplitudes.
-    let first = !dist.is_empty();
-    let amp = |p: &aeroelastic::branch::BranchPoint| {
-        if first {
-            p.amplitude1_alpha.to_degrees()
-        } else {
-            p.amplitude_alpha.to_degrees()
-        }
-    };
-    plots::BranchDiagramFigure {
-        title: "LCO branches by continuation".into(),
-        u_label: "U [m/s]".into(),
-        amplitude_label: if first {
-            "first-harmonic pitch amplitude [deg]".into()
-        } else {
-            "pitch amplitude (half peak-to-peak) [deg]".into()
-        },
-        branches: set
-            .branches
-            .iter()
-            .map(|b| BranchCurve {
-                u: b.points.iter().map(|p| p.u).collect(),
-                amplitude: b.points.iter().map(amp).collect(),
-                stable: b.points.iter().map(|p| p.stable).collect(),
-            })
-            .collect(),
-        hopf: set
-            .hopf_points
-            .iter()
-            .map(|h| DiagramPoint {
-                u: h.u,
-                amplitude: 0.0,
-                stable: false,
-            })
-            .collect(),
-        folds: set
-            .branches
-            .iter()
-            .flat_map(|b| {
-                b.events
-                    .iter()
-                    .filter(|e| e.kind == EventKind::Fold)
-                    .map(|e| DiagramPoint {
-                        u: e.u,
-                        amplitude: if first {
-                            // first-harmonic amplitude of the orbit nearest the fold
-                            amp(&b.points[e.index.saturating_sub(1)])
-                        } else {
-                            e.amplitude_alpha.to_degrees()
-                        },
-                        stable: false,
-                    })
-            })
-            .collect(),
-        sweep,
-        measured: dist
-            .iter()
-            .map(|d| DiagramPoint {
-                u: d.measured.u,
-                amplitude: d.measured.amplitude_alpha.to_degrees(),
-                stable: d.measured.stable,
-            })
-            .collect(),
     }
 }
 
@@ -257,7 +180,7 @@ pub fn run(args: &BranchArgs) -> anyhow::Result<()> {
     let path = args.out.join("branch.json");
     identify::io::write_atomic(&path, format!("{json:#}\n").as_bytes())?;
     let fig = plots::save(
-        &branch_figure(&set, &dist, vec![]),
+        &plots::adapters::aeroelastic::branch_figure(&set, &dist, vec![]),
         &args.out,
         "branch_diagram",
     )

@@ -116,7 +116,7 @@ pub fn run(args: &DiagnoseArgs) -> anyhow::Result<()> {
     };
     let dir = crate::outdir::OutDir::begin(&out, "diagnose", args.force)?;
     let t = std::time::Instant::now();
-    let version = crate::study::figures::version();
+    let version = crate::version();
     let spinner =
         crate::progress::Spinner::new("diagnose", "held-out folds, candidates and verdict");
     let diag = match (&input, &free) {

@@ -1,6 +1,7 @@
-//! The JSON documents the `aeroform` binary itself writes (the study's `flutter.json`,
-//! `lco.json` and `coefficients.columns.json`, the `--timing-json` file of `identify`, the
-//! `--json` documents of `run` and `tunnel`), and [`schemas`]: the JSON Schema of every
+//! The JSON documents the `aeroform` binary itself writes (the `--timing-json` file of
+//! `identify`, the `--json` documents of `tunnel`; the study's `flutter.json`, `lco.json`,
+//! `coefficients.columns.json` and the `--json` document of `run` live in
+//! [`study::documents`] and are re-exported here), and [`schemas`]: the JSON Schema of every
 //! JSON result document aeroform writes, generated from the Rust types that write it
 //! (DATA_FORMAT.md, `docs/schemas/`).
 //!
@@ -8,89 +9,10 @@
 //! [`aeroelastic::documents`], `identification.json` in [`identify::pipeline`] and
 //! `diagnosis.json` in [`diagnose::report`]; this is the lowest crate that sees them all.
 
-use std::collections::BTreeMap;
-
-use aeroelastic::ensemble::{FlutterEnsemble, LcoEnsemble};
-use aeroelastic::flutter::FlutterAnalysis;
-use aeroelastic::lco::LcoResult;
-use aeroelastic::trajectory::Trajectory;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
-use crate::study_spec::FlutterReference;
-
-/// One flutter analysis of a study (one `[[flutter.run]]`); the study's `flutter.json` is
-/// an array of them, in the order of the runs. Scanlan's convention (h positive down, α
-/// positive nose-up); SI units.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
-pub struct FlutterRun {
-    /// The run's label in tables and figures.
-    pub label: String,
-    /// Aerodynamic model of the run (`theodorsen`, `truth`, `identified`, …).
-    pub model: crate::study_spec::StudyModel,
-    /// Semi-chord b = B/2 \[m\].
-    pub semi_chord: f64,
-    /// Still-air pitch frequency ω_α \[rad/s\]; reduced speed = U/(b·ω_α).
-    pub omega_alpha: f64,
-    /// The analysis: method, one branch per structural mode (V–g, V–f), flutter point,
-    /// divergence speed, failed points.
-    pub analysis: FlutterAnalysis,
-    /// Published values the run is compared with; `null` when the study names none.
-    pub reference: Option<FlutterReference>,
-    /// Intervals over the bootstrap members of the identified law (`[identify] ensemble`,
-    /// runs of the `identified` model only); absent otherwise.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub ensemble: Option<FlutterEnsemble>,
-}
-
-/// The LCO stage of a study as saved in its `lco.json`. Scanlan's convention; SI units
-/// (amplitudes in rad and m).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
-pub struct LcoStage {
-    /// Aerodynamic model of the sweeps (`theodorsen`, `identified`, …).
-    pub model: String,
-    /// Semi-chord b = B/2 \[m\].
-    pub semi_chord: f64,
-    /// Still-air pitch frequency ω_α \[rad/s\].
-    pub omega_alpha: f64,
-    /// Linear flutter speed of the same model \[m/s\], if a flutter run of it exists;
-    /// `null` otherwise.
-    pub flutter_speed: Option<f64>,
-    /// Upward sweep, increasing U.
-    pub up: Vec<LcoResult>,
-    /// Downward sweep, increasing U (empty without `up_down`).
-    pub down: Vec<LcoResult>,
-    /// Trajectories drawn in the phase-portrait figure.
-    pub phase: Vec<Trajectory>,
-    /// Linear flutter speed of the truth model \[m/s\] (`compare_truth`); absent without.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub truth_flutter_speed: Option<f64>,
-    /// Upward sweep of the truth model of `[data.virtual]` (`compare_truth`); absent
-    /// when empty.
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub truth_up: Vec<LcoResult>,
-    /// Downward sweep of the truth model, increasing U (`compare_truth`); absent when
-    /// empty.
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub truth_down: Vec<LcoResult>,
-    /// LCO amplitude intervals over the bootstrap members of the identified law at every
-    /// speed of the sweep (`[identify] ensemble` with the `identified` model), each member
-    /// run from the upward sweep's perturbation; absent otherwise.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub ensemble: Option<LcoEnsemble>,
-}
-
-/// One term column of a study's `coefficients.csv`, as listed in
-/// `coefficients.columns.json` (an array of them, in column order).
-#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
-pub struct CoefficientColumn {
-    /// The CSV column name (letters, digits and `_`: `alpha2_h`, `const`).
-    pub column: String,
-    /// The library term it holds, as named in `identification.json` (`alpha^2*h`, `1`).
-    pub term: String,
-    /// The term as shown in figures and the report (`α²·h/B`).
-    pub display: String,
-}
+pub use study::documents::{CoefficientColumn, FlutterRun, LcoStage, RunSummary};
 
 /// The file written by `aeroform identify --timing-json FILE`: wall time of each stage.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
@@ -105,23 +27,6 @@ pub struct IdentifyTiming {
     pub total_s: f64,
     /// Number of cases identified.
     pub cases: usize,
-}
-
-/// The document `aeroform run --json` prints on stdout.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
-pub struct RunSummary {
-    /// The study's name.
-    pub study: String,
-    /// The output folder.
-    pub out: String,
-    /// The study's seed, as a string (a u64 does not fit every JSON reader).
-    pub seed: String,
-    /// Wall time of each stage \[s\], by stage name.
-    pub timings_s: BTreeMap<String, f64>,
-    /// Wall time of the whole run \[s\].
-    pub total_s: f64,
-    /// The content of the study's `figures.json`: the figures drawn.
-    pub figures: serde_json::Value,
 }
 
 /// The document `aeroform tunnel blind --json` prints on stdout.

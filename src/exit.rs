@@ -31,6 +31,29 @@ fn is_input_error(c: &(dyn std::error::Error + 'static)) -> bool {
     {
         return true;
     }
+    // `Context` variants hold their source boxed: the chain shows the box, look inside
+    if let Some(e) = c.downcast_ref::<Box<study::Error>>() {
+        return is_input_error(&**e);
+    }
+    if let Some(e) = c.downcast_ref::<Box<plots::Error>>() {
+        return is_input_error(&**e);
+    }
+    if let Some(e) = c.downcast_ref::<study::Error>() {
+        // the transparent variants hide the wrapped error from the chain: look inside
+        return match e {
+            study::Error::Usage(_) | study::Error::Spec(_) => true,
+            study::Error::Identify(e) => is_input_error(e),
+            study::Error::Aeroelastic(e) => is_input_error(e),
+            _ => false,
+        };
+    }
+    if let Some(e) = c.downcast_ref::<plots::Error>() {
+        return match e {
+            plots::Error::Write(e) => is_input_error(e),
+            plots::Error::Study(e) => is_input_error(e),
+            _ => false,
+        };
+    }
     if let Some(e) = c.downcast_ref::<identify::Error>() {
         use identify::Error as E;
         return matches!(
@@ -81,5 +104,37 @@ mod tests {
         let io = identify::Error::io("a", std::io::Error::other("disk"));
         assert_eq!(code(&anyhow::Error::from(io)), 1);
         assert_eq!(code(&anyhow::anyhow!("plain")), 1);
+        // through the study and plots crates' own context wrappers
+        let csv = || identify::Error::Csv {
+            path: "a.csv".into(),
+            line: 3,
+            field: "h".into(),
+            message: "x".into(),
+        };
+        let r: Result<(), identify::Error> = Err(csv());
+        let s = study::Context::context(r, "reading").unwrap_err();
+        assert_eq!(code(&anyhow::Error::from(s)), 2);
+        let r: Result<(), identify::Error> = Err(csv());
+        let s = study::Context::context(r, "reading").unwrap_err();
+        let p = plots::Error::Study(study::Error::Context {
+            context: "outer".into(),
+            source: Box::new(s),
+        });
+        assert_eq!(code(&anyhow::Error::from(p)), 2);
+        let u = study::Error::Usage("bad key".into());
+        let r: Result<(), study::Error> = Err(u);
+        assert_eq!(
+            code(&anyhow::Error::from(
+                study::Context::context(r, "stage").unwrap_err()
+            )),
+            2
+        );
+        let r: Result<(), std::io::Error> = Err(std::io::Error::other("disk"));
+        let r = r.map_err(|source| study::Error::Io {
+            context: "x".into(),
+            source,
+        });
+        let s = study::Context::context(r, "stage").unwrap_err();
+        assert_eq!(code(&anyhow::Error::from(s)), 1);
     }
 }

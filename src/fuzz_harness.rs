@@ -7,7 +7,7 @@
 //! Input layouts:
 //! - [`dataset`]: the `manifest.toml` text, then zero or more files, each introduced by a
 //!   line `@@ NAME` (see [`split_dataset_input`]).
-//! - [`study`]: the study-file TOML text.
+//! - [`study()`]: the study-file TOML text.
 //! - [`identification`]: the `identification.json` text.
 //! - [`cli`]: lines `FLAG VALUE` of the numeric command-line flags.
 

@@ -12,7 +12,6 @@ mod outdir;
 mod plot_cmd;
 mod progress;
 mod run_cmd;
-mod study;
 mod sweep_cmd;
 mod tunnel_cmd;
 mod ui;
@@ -104,6 +103,17 @@ fn main() -> ExitCode {
             ExitCode::from(exit::code(&e))
         }
     }
+}
+
+/// `aeroform <version> (<git describe>)` of the commit the binary was built from (captured
+/// by `build.rs`; `commit unknown` when it was built outside a git checkout): the
+/// `version` row of the study and diagnosis reports.
+fn version() -> String {
+    format!(
+        "aeroform {} ({})",
+        env!("CARGO_PKG_VERSION"),
+        env!("AEROFORM_GIT")
+    )
 }
 
 /// Creates the output folder (and parents), with a message naming it on failure.

@@ -7,7 +7,9 @@ use std::path::PathBuf;
 use anyhow::Context;
 use clap::Args;
 
-use crate::study::{figures::render_all, run::names, Study};
+use plots::study_report::render_all;
+use study::run::names;
+use study::Study;
 
 /// Flags of `aeroform plot`.
 #[derive(Debug, Args)]
@@ -25,7 +27,7 @@ pub fn run(args: &PlotArgs) -> anyhow::Result<()> {
         .with_context(|| format!("{} is not a study output folder", args.outdir.display()))?;
     // relative data paths are not needed: nothing is recomputed
     let study = Study::parse(&text, &path, &args.outdir)?;
-    let figs = render_all(&study, &args.outdir)?;
+    let figs = render_all(&study, &args.outdir, &crate::version())?;
     crate::ui::say!(
         "redrew {} figures and {}",
         figs.len(),

@@ -131,11 +131,6 @@ impl CountBar {
         self.bar.set_message(msg);
     }
 
-    /// One unit done.
-    pub fn inc(&self) {
-        self.bar.inc(1);
-    }
-
     /// `n` units done.
     pub fn inc_by(&self, n: usize) {
         self.bar.inc(n as u64);
@@ -144,5 +139,53 @@ impl CountBar {
     /// Removes the bar.
     pub fn finish(&self) {
         self.bar.finish_and_clear();
+    }
+}
+
+/// The terminal's [`study::Observer`]: lines through [`crate::ui::say!`] (nothing under
+/// `--quiet`/`--json`), a [`CountBar`] per counter, an [`IdentifyBar`] for the
+/// identification.
+pub struct Terminal {
+    identify: IdentifyBar,
+}
+
+impl Terminal {
+    /// An observer with no bar shown yet.
+    pub fn new() -> Self {
+        Terminal {
+            identify: IdentifyBar::new(),
+        }
+    }
+}
+
+impl study::Counter for CountBar {
+    fn inc(&self, n: usize) {
+        self.inc_by(n);
+    }
+
+    fn sweep(&self, progress: SweepProgress) {
+        self.observe_sweep(progress);
+    }
+
+    fn finish(&self) {
+        CountBar::finish(self);
+    }
+}
+
+impl study::Observer for Terminal {
+    fn say(&self, line: &str) {
+        crate::ui::say!("{line}");
+    }
+
+    fn counter(&self, label: &'static str, total: usize) -> Box<dyn study::Counter + '_> {
+        Box::new(CountBar::new(label, total))
+    }
+
+    fn identify(&self, progress: Progress) {
+        self.identify.observe(progress);
+    }
+
+    fn identify_done(&self) {
+        self.identify.finish();
     }
 }

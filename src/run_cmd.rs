@@ -6,7 +6,8 @@ use std::time::Instant;
 
 use clap::Args;
 
-use crate::study::{run::run_study, Study};
+use study::run::{names, run_study};
+use study::Study;
 
 /// Flags of `aeroform run`.
 #[derive(Debug, Args)]
@@ -41,7 +42,10 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
         .unwrap_or_else(|| PathBuf::from("out").join(&study.spec.name));
     let t0 = Instant::now();
     let dir = crate::outdir::OutDir::begin(&out, "run", args.force)?;
-    let timings = run_study(&study, dir.path(), crate::ui::silent())?;
+    let mut timings = run_study(&study, dir.path(), &crate::progress::Terminal::new())?;
+    let t = Instant::now();
+    plots::study_report::render_all(&study, dir.path(), &crate::version())?;
+    timings.push(("figures+report", t.elapsed().as_secs_f64()));
     dir.commit()?;
     crate::ui::say!(
         "study `{}` ({}) done; results in {}",
@@ -55,8 +59,7 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
     let total = t0.elapsed().as_secs_f64();
     crate::ui::say!("  {:<16} {:>8.2} s", "total", total);
     if crate::ui::mode().json {
-        let figures: serde_json::Value =
-            crate::study::files::read_json(&out.join(crate::study::run::names::FIGURE_LIST))?;
+        let figures: serde_json::Value = study::files::read_json(&out.join(names::FIGURE_LIST))?;
         crate::ui::document(&aeroform::documents::RunSummary {
             study: study.spec.name.clone(),
             out: out.display().to_string(),

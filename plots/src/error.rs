@@ -72,9 +72,57 @@ pub enum Error {
         /// Font file name.
         name: &'static str,
     },
-    /// A file could not be written (from [`identify::io::write_atomic`], which names the path).
+    /// A file could not be written (from [`identify::io::write_atomic`], which names the path),
+    /// or `identification.json` could not be read.
     #[error(transparent)]
     Write(#[from] identify::Error),
+    /// A result file of a study could not be read or written (the study crate's error,
+    /// naming the path).
+    #[error(transparent)]
+    Study(#[from] study::Error),
+    /// A file of a study folder could not be read.
+    #[error("{context}")]
+    Io {
+        /// What was being read, naming the path.
+        context: String,
+        /// The system's error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A value could not be turned into JSON.
+    #[error(transparent)]
+    Json(#[from] serde_json::Error),
+    /// `source`, with what was being done in front (`drawing figure vg`, `writing
+    /// report.html`).
+    #[error("{context}")]
+    Context {
+        /// What was being done.
+        context: String,
+        /// The error itself.
+        #[source]
+        source: Box<Error>,
+    },
+}
+
+/// Puts what was being done in front of an error ([`Error::Context`]).
+pub(crate) trait Context<T> {
+    /// Wraps the error with the context `f()`, computed only on error.
+    fn with_context<F: FnOnce() -> String>(self, f: F) -> Result<T>;
+    /// Wraps the error with the fixed context `context`.
+    fn context(self, context: &str) -> Result<T>;
+}
+
+impl<T, E: Into<Error>> Context<T> for std::result::Result<T, E> {
+    fn with_context<F: FnOnce() -> String>(self, f: F) -> Result<T> {
+        self.map_err(|e| Error::Context {
+            context: f(),
+            source: Box::new(e.into()),
+        })
+    }
+
+    fn context(self, context: &str) -> Result<T> {
+        self.with_context(|| context.to_string())
+    }
 }
 
 /// Turns any displayable plotters error into [`Error::Drawing`] for figure `figure`.

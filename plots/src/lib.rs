@@ -5,7 +5,8 @@
 //! [`FigureFiles`] (paths and the SVG text). Text is drawn with the bundled DejaVu Sans
 //! (registered once as `"sans-serif"`); no system font is used. Non-finite values are
 //! skipped; a figure with nothing finite to draw is an [`Error::NoData`], never a panic.
-//! [`Report`] builds a self-contained HTML page with inline SVG figures.
+//! [`Report`] builds a self-contained HTML page with inline SVG figures;
+//! [`study_report::render_all`] draws every figure and the report of a study output folder.
 
 #![warn(missing_docs)]
 
@@ -17,6 +18,7 @@ pub mod render;
 pub mod report;
 pub mod rich;
 pub mod scaled;
+pub mod study_report;
 pub mod style;
 mod vector;
 

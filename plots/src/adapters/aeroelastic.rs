@@ -6,8 +6,9 @@ use aeroelastic::lco::{Classification, LcoResult};
 use aeroelastic::trajectory::Trajectory;
 
 use crate::{
-    AmplitudeInterval, BifurcationFigure, BifurcationPoint, FlutterPoint, ModeBranch,
-    PhasePortraitFigure, ResponseClass, Series, SeriesKind, SpeedInterval, Sweep, VgFigure,
+    AmplitudeInterval, BifurcationFigure, BifurcationPoint, BranchCurve, BranchDiagramFigure,
+    DiagramPoint, FlutterPoint, ModeBranch, PhasePortraitFigure, ResponseClass, Series, SeriesKind,
+    SpeedInterval, Sweep, VgFigure,
 };
 
 /// Axis scaling of speed and frequency in the aeroelastic figures.
@@ -207,6 +208,82 @@ pub fn phase_figure(
                     t.alpha.iter().map(|a| a.to_degrees()).collect(),
                     t.alpha_dot.iter().map(|a| a.to_degrees()).collect(),
                 )
+            })
+            .collect(),
+    }
+}
+
+/// The bifurcation diagram of `set`: stable branches solid, unstable dashed, Hopf points
+/// and folds marked, `sweep` (time-integration points, pitch amplitude \[deg\]) and the
+/// measured points of `dist` on top (first-harmonic amplitudes when measured points are
+/// given, to compare like with like). Used by `aeroform branch` and the study
+/// report ([`crate::study_report`]).
+pub fn branch_figure(
+    set: &aeroelastic::branch::BranchSet,
+    dist: &[aeroelastic::branch::MeasuredDistance],
+    sweep: Vec<DiagramPoint>,
+) -> BranchDiagramFigure {
+    // With measured points, compare like with like: first-harmonic amplitudes.
+    let first = !dist.is_empty();
+    let amp = |p: &aeroelastic::branch::BranchPoint| {
+        if first {
+            p.amplitude1_alpha.to_degrees()
+        } else {
+            p.amplitude_alpha.to_degrees()
+        }
+    };
+    BranchDiagramFigure {
+        title: "LCO branches by continuation".into(),
+        u_label: "U [m/s]".into(),
+        amplitude_label: if first {
+            "first-harmonic pitch amplitude [deg]".into()
+        } else {
+            "pitch amplitude (half peak-to-peak) [deg]".into()
+        },
+        branches: set
+            .branches
+            .iter()
+            .map(|b| BranchCurve {
+                u: b.points.iter().map(|p| p.u).collect(),
+                amplitude: b.points.iter().map(amp).collect(),
+                stable: b.points.iter().map(|p| p.stable).collect(),
+            })
+            .collect(),
+        hopf: set
+            .hopf_points
+            .iter()
+            .map(|h| DiagramPoint {
+                u: h.u,
+                amplitude: 0.0,
+                stable: false,
+            })
+            .collect(),
+        folds: set
+            .branches
+            .iter()
+            .flat_map(|b| {
+                b.events
+                    .iter()
+                    .filter(|e| e.kind == aeroelastic::branch::EventKind::Fold)
+                    .map(|e| DiagramPoint {
+                        u: e.u,
+                        amplitude: if first {
+                            // first-harmonic amplitude of the orbit nearest the fold
+                            amp(&b.points[e.index.saturating_sub(1)])
+                        } else {
+                            e.amplitude_alpha.to_degrees()
+                        },
+                        stable: false,
+                    })
+            })
+            .collect(),
+        sweep,
+        measured: dist
+            .iter()
+            .map(|d| DiagramPoint {
+                u: d.measured.u,
+                amplitude: d.measured.amplitude_alpha.to_degrees(),
+                stable: d.measured.stable,
             })
             .collect(),
     }

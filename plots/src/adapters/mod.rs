@@ -16,48 +16,7 @@ pub mod aeroelastic;
 pub mod diagnosis;
 pub mod identification;
 
-/// Display label of a library term name (`alpha`, `alpha_dot`, `h`, `h_dot` joined by `*`,
-/// powers `^2`, `^3`): the nondimensional variables α, Bα'/U, h/B, h'/U, powers as
-/// superscripts, factors joined by `·`. Unknown factors are kept verbatim.
-///
-/// ```
-/// use plots::adapters::term_label;
-/// assert_eq!(term_label("alpha*alpha_dot"), "α·Bα'/U");
-/// assert_eq!(term_label("alpha_dot^3"), "(Bα'/U)³");
-/// assert_eq!(term_label("alpha^2*h"), "α²·h/B");
-/// ```
-pub fn term_label(name: &str) -> String {
-    if name.trim() == "1" {
-        return "1".into();
-    }
-    name.split('*')
-        .map(|f| {
-            let (var, pow) = match f.trim().split_once('^') {
-                Some((v, p)) => (v.trim(), p.trim()),
-                None => (f.trim(), ""),
-            };
-            let (base, compound) = match var {
-                "alpha" => ("α", false),
-                "alpha_dot" => ("Bα'/U", true),
-                "h" => ("h/B", true),
-                "h_dot" => ("h'/U", true),
-                other => (other, false),
-            };
-            let sup = match pow {
-                "" | "1" => "",
-                "2" => "²",
-                "3" => "³",
-                _ => "",
-            };
-            match (sup.is_empty(), compound) {
-                (true, _) => base.to_string(),
-                (false, true) => format!("({base}){sup}"),
-                (false, false) => format!("{base}{sup}"),
-            }
-        })
-        .collect::<Vec<_>>()
-        .join("·")
-}
+pub use study::documents::term_label;
 
 /// Label of an Eq. 19 coefficient (`"A2"` → `"A2*"`; `N` terms keep their channel:
 /// `("lift", "N1")` → `"N1* (lift)"` is left to the caller; this only appends the star).

@@ -4,34 +4,58 @@
 
 use std::path::Path;
 
-use anyhow::Context;
 use serde::de::DeserializeOwned;
 use serde::Serialize;
 
+use crate::error::{Error, Result};
+
 /// Creates a folder (and parents), naming it on failure.
-pub fn ensure_dir(dir: &Path) -> anyhow::Result<()> {
-    std::fs::create_dir_all(dir)
-        .with_context(|| format!("cannot create output folder {}", dir.display()))
+///
+/// # Errors
+/// [`Error::Io`] naming the folder.
+pub fn ensure_dir(dir: &Path) -> Result<()> {
+    std::fs::create_dir_all(dir).map_err(|source| Error::Io {
+        context: format!("cannot create output folder {}", dir.display()),
+        source,
+    })
 }
 
 /// Writes `value` as pretty JSON (trailing newline) atomically.
-pub fn write_json<T: Serialize>(path: &Path, value: &T) -> anyhow::Result<()> {
-    let mut text = serde_json::to_string_pretty(value)
-        .with_context(|| format!("serialising {}", path.display()))?;
+///
+/// # Errors
+/// [`Error::Json`] when `value` cannot be serialised, [`Error::Identify`] when the file
+/// cannot be written (naming it).
+pub fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<()> {
+    let mut text = serde_json::to_string_pretty(value).map_err(|source| Error::Json {
+        context: format!("serialising {}", path.display()),
+        source,
+    })?;
     text.push('\n');
     identify::io::write_atomic(path, text.as_bytes())?;
     Ok(())
 }
 
 /// Reads a JSON result file.
-pub fn read_json<T: DeserializeOwned>(path: &Path) -> anyhow::Result<T> {
-    let text =
-        std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-    serde_json::from_str(&text).with_context(|| format!("parsing {}", path.display()))
+///
+/// # Errors
+/// [`Error::Io`] when it cannot be read, [`Error::Json`] when it is not a `T`; both name the
+/// file.
+pub fn read_json<T: DeserializeOwned>(path: &Path) -> Result<T> {
+    let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
+        context: format!("reading {}", path.display()),
+        source,
+    })?;
+    serde_json::from_str(&text).map_err(|source| Error::Json {
+        context: format!("parsing {}", path.display()),
+        source,
+    })
 }
 
 /// Writes text atomically.
-pub fn write_text(path: &Path, text: &str) -> anyhow::Result<()> {
+///
+/// # Errors
+/// [`Error::Identify`] when the file cannot be written (naming it).
+pub fn write_text(path: &Path, text: &str) -> Result<()> {
     identify::io::write_atomic(path, text.as_bytes())?;
     Ok(())
 }
@@ -81,7 +105,10 @@ impl Csv {
     }
 
     /// Writes the table atomically.
-    pub fn write(&self, path: &Path) -> anyhow::Result<()> {
+    ///
+    /// # Errors
+    /// [`Error::Identify`] when the file cannot be written (naming it).
+    pub fn write(&self, path: &Path) -> Result<()> {
         write_text(path, &self.text())
     }
 }

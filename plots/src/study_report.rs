@@ -3,25 +3,26 @@
 
 use std::path::Path;
 
-use anyhow::Context;
-use identify::pipeline::Identification;
-use identify::record::CaseMeta;
-use identify::series::CaseSeries;
-use plots::adapters::aeroelastic::{
+use crate::adapters::aeroelastic::{
     amplitude_intervals, bifurcation_figure, flutter_interval, phase_figure, vg_figure, AxisScale,
 };
-use plots::adapters::identification::{
+use crate::adapters::identification::{
     delta_path_figure, derivative_figure, heatmap_figures, library_figure, mean_angle_figure,
     quality_histogram, spectrum_figure, time_series_figure, Force,
 };
-use plots::adapters::term_label;
-use plots::{column_label, Figure, Report, Series, SeriesKind, TimePanel, TimeSeriesFigure};
+use crate::adapters::term_label;
+use crate::{column_label, Figure, Report, Series, SeriesKind, TimePanel, TimeSeriesFigure};
+use identify::pipeline::Identification;
+use identify::record::CaseMeta;
+use identify::series::CaseSeries;
 use serde::{Deserialize, Serialize};
 
-use super::files::{ensure_dir, read_json, write_json};
-use super::paper::{DeltaFit, DeltaFits, ForceDecomposition, ForceLoop, LoopSet, PaperFigures};
-use super::run::{names, FlutterRun, LcoStage};
-use super::spec::{Study, StudyModel};
+use crate::error::{Context, Error, Result};
+
+use study::files::{ensure_dir, read_json, write_json};
+use study::paper::{DeltaFit, DeltaFits, ForceDecomposition, ForceLoop, LoopSet, PaperFigures};
+use study::run::{names, FlutterRun, LcoStage};
+use study::spec::{Study, StudyModel};
 
 /// One drawn figure, as listed in `figures.json`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -50,15 +51,9 @@ impl Canvas<'_> {
         self.kinds.iter().any(|k| k == kind)
     }
 
-    fn draw<F: Figure>(
-        &mut self,
-        kind: &str,
-        stem: &str,
-        caption: String,
-        fig: &F,
-    ) -> anyhow::Result<()> {
+    fn draw<F: Figure>(&mut self, kind: &str, stem: &str, caption: String, fig: &F) -> Result<()> {
         let files =
-            plots::save(fig, self.dir, stem).with_context(|| format!("drawing figure {stem}"))?;
+            crate::save(fig, self.dir, stem).with_context(|| format!("drawing figure {stem}"))?;
         self.drawn.push(Drawn {
             entry: FigureEntry {
                 kind: kind.into(),
@@ -114,7 +109,7 @@ fn pretty_csv(text: &str) -> Vec<Vec<String>> {
     text.lines()
         .filter(|l| !l.trim().is_empty())
         .map(|l| {
-            plots::report::split_csv_line(l)
+            crate::report::split_csv_line(l)
                 .iter()
                 .map(|c| pretty_cell(c))
                 .collect()
@@ -258,10 +253,12 @@ fn files_section(report: &mut Report, out: &Path, figures: &[FigureEntry]) {
 
 /// The truth-vs-model table of `round_trip.csv` with the divergence speeds of the truth and
 /// model flutter runs (from `flutter.json`) as a row after the flutter speed.
-fn round_trip_table(report: &mut Report, out: &Path, reduced: bool) -> anyhow::Result<()> {
+fn round_trip_table(report: &mut Report, out: &Path, reduced: bool) -> Result<()> {
     let path = out.join(names::ROUND_TRIP);
-    let text =
-        std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
+    let text = std::fs::read_to_string(&path).map_err(|source| Error::Io {
+        context: format!("reading {}", path.display()),
+        source,
+    })?;
     let mut rows = pretty_csv(&text);
     if rows.is_empty() {
         report.text(format!("{} is empty.", names::ROUND_TRIP));
@@ -319,22 +316,14 @@ fn round_trip_table(report: &mut Report, out: &Path, reduced: bool) -> anyhow::R
     Ok(())
 }
 
-/// `aeroform <version> (<git describe>)` of the commit the binary was built from (captured
-/// by `build.rs`; `commit unknown` when it was built outside a git checkout).
-pub(crate) fn version() -> String {
-    format!(
-        "aeroform {} ({})",
-        env!("CARGO_PKG_VERSION"),
-        env!("AEROFORM_GIT")
-    )
-}
-
 /// Draws every figure of the study from the results in `out`, writes `figures.json` and
-/// `report.html`; returns the figure list.
+/// `report.html`; returns the figure list. `version` is the text of the report's
+/// `version` row (the binary's `aeroform <version> (<git describe>)`).
 ///
 /// # Errors
-/// A missing or malformed result file, a figure that cannot be drawn, a write failure.
-pub fn render_all(study: &Study, out: &Path) -> anyhow::Result<Vec<FigureEntry>> {
+/// A missing or malformed result file ([`Error::Study`], naming it), a figure that cannot
+/// be drawn ([`Error::Context`] naming the figure), a write failure.
+pub fn render_all(study: &Study, out: &Path, version: &str) -> Result<Vec<FigureEntry>> {
     let dir = out.join(names::FIGURES);
     ensure_dir(&dir)?;
     let mut cv = Canvas {
@@ -352,7 +341,7 @@ pub fn render_all(study: &Study, out: &Path) -> anyhow::Result<Vec<FigureEntry>>
     let mut summary: Vec<(String, String)> = vec![
         ("study".into(), s.name.clone()),
         ("seed".into(), s.seed.to_string()),
-        ("version".into(), version()),
+        ("version".into(), version.to_string()),
     ];
 
     // ---- identification
@@ -690,7 +679,7 @@ pub fn render_all(study: &Study, out: &Path) -> anyhow::Result<Vec<FigureEntry>>
                             e.flutter_speed.found
                         ))
                     ),
-                    &plots::VgFigure {
+                    &crate::VgFigure {
                         flutter_interval: r
                             .ensemble
                             .as_ref()
@@ -874,7 +863,7 @@ fn truth_axis(study: &Study) -> f64 {
         .data
         .as_ref()
         .and_then(|d| d.virtual_tunnel.as_ref())
-        .and_then(|v| super::build::virtual_model(study, v, 0.25).ok())
+        .and_then(|v| study::build::virtual_model(study, v, 0.25).ok())
         .and_then(|m| m.elastic_axis())
         .unwrap_or(0.0)
 }
@@ -1065,7 +1054,7 @@ fn branch_section(
     report: &mut Report,
     out: &Path,
     with_sweep: bool,
-) -> anyhow::Result<()> {
+) -> Result<()> {
     use aeroelastic::branch::{Branch, BranchOptions, BranchSet, HopfPoint, MeasuredDistance};
     #[derive(serde::Deserialize)]
     struct Settings {
@@ -1092,7 +1081,7 @@ fn branch_section(
             .up
             .iter()
             .filter(|r| r.classification == aeroelastic::lco::Classification::Lco)
-            .map(|r| plots::DiagramPoint {
+            .map(|r| crate::DiagramPoint {
                 u: r.u,
                 amplitude: r.amplitude_alpha.to_degrees(),
                 stable: true,
@@ -1111,7 +1100,7 @@ fn branch_section(
                 if n_sweep > 0 { format!(", {n_sweep} time-integration LCOs of the upward sweep on top") } else { String::new() },
                 if doc.measured.is_empty() { String::new() } else { format!(", {} measured points", doc.measured.len()) }
             ),
-            &crate::branch_cmd::branch_figure(&set, &doc.measured, sweep),
+            &crate::adapters::aeroelastic::branch_figure(&set, &doc.measured, sweep),
         )?;
     }
     report.section("LCO branches by continuation");
@@ -1163,7 +1152,7 @@ mod tests {
         assert_eq!(pretty_cell("0"), "0");
         assert_eq!(pretty_cell("D-U4-A6"), "D-U4-A6");
         assert_eq!(
-            plots::report::split_csv_line("a,\"b,c\",\"d\"\"e\""),
+            crate::report::split_csv_line("a,\"b,c\",\"d\"\"e\""),
             vec!["a", "b,c", "d\"e"]
         );
     }

@@ -4,13 +4,14 @@
 use std::path::Path;
 use std::sync::Arc;
 
+use crate::error::{Context, Error, Result};
+use crate::observe::Observer;
 use aeroelastic::aero::{
     AeroModel, Channel, Coefficient, DerivativeTable, NonlinearAero, NonlinearTerm, QuasiSteady,
     QuasiSteadyKind, TheodorsenAero,
 };
 use aeroelastic::section::Section;
 use aeroelastic::structure::Structure;
-use anyhow::Context;
 use identify::dataset::{
     read_dataset, write_dataset, AngleUnit, CaseSpec, Dataset, ForceUnit, LengthUnit, Manifest,
     MomentUnit, Units,
@@ -26,7 +27,7 @@ use aeroelastic::identified::{IdentifiedLaw, IdentifiedOptions};
 use aeroelastic::tunnel::{self, Campaign, ForcedOptions};
 use identify::pipeline::Identification;
 
-use super::spec::{
+use crate::spec::{
     AeroSpec, PreprocessSpec, Study, StudyModel, StudyStructure, SyntheticSpec, VirtualSpec,
 };
 
@@ -39,7 +40,7 @@ pub struct Cases {
     /// Regression inputs.
     pub cases: Vec<NondimCase>,
     /// Wind-on and still-air balance forces of the shown cases (paper Figs. 4/5).
-    pub forces: Vec<super::paper::ForceDecomposition>,
+    pub forces: Vec<crate::paper::ForceDecomposition>,
 }
 
 impl Cases {
@@ -67,11 +68,11 @@ pub fn preprocess(p: &PreprocessSpec) -> PreprocessOptions {
     }
 }
 
-fn law(sy: &SyntheticSpec) -> anyhow::Result<PolynomialLaw> {
+fn law(sy: &SyntheticSpec) -> Result<PolynomialLaw> {
     if sy.law.preset == "demo" {
         return Ok(PolynomialLaw::demo());
     }
-    let conv = |terms: &[super::spec::LawTermSpec]| -> anyhow::Result<Vec<LawTerm>> {
+    let conv = |terms: &[crate::spec::LawTermSpec]| -> Result<Vec<LawTerm>> {
         terms
             .iter()
             .map(|t| {
@@ -93,7 +94,7 @@ fn id_num(v: f64) -> String {
     format!("{v}")
 }
 
-fn synthetic(study: &Study, sy: &SyntheticSpec, out: &Path) -> anyhow::Result<Dataset> {
+fn synthetic(study: &Study, sy: &SyntheticSpec, out: &Path) -> Result<Dataset> {
     let section = identify::record::SectionGeometry {
         chord: sy.section.chord,
         span: sy.section.span,
@@ -182,7 +183,7 @@ fn synthetic(study: &Study, sy: &SyntheticSpec, out: &Path) -> anyhow::Result<Da
     };
     let root = out.join("dataset");
     if sy.write_dataset {
-        super::files::ensure_dir(&root.join("cases"))?;
+        crate::files::ensure_dir(&root.join("cases"))?;
         write_dataset(&root, &manifest, &records)
             .with_context(|| format!("writing the data set to {}", root.display()))?;
     }
@@ -197,11 +198,7 @@ fn synthetic(study: &Study, sy: &SyntheticSpec, out: &Path) -> anyhow::Result<Da
 ///
 /// # Errors
 /// The model file cannot be read or parsed, or the inline model is invalid.
-pub fn virtual_model(
-    study: &Study,
-    v: &VirtualSpec,
-    chord: f64,
-) -> anyhow::Result<Arc<dyn AeroModel>> {
+pub fn virtual_model(study: &Study, v: &VirtualSpec, chord: f64) -> Result<Arc<dyn AeroModel>> {
     if let Some(p) = &v.model {
         let path = study.base.join(p);
         let m = LoadedModel::load(&path, Some(chord))
@@ -209,7 +206,7 @@ pub fn virtual_model(
         return Ok(m.model);
     }
     let Some(a) = &v.aero else {
-        anyhow::bail!("[data.virtual]: no model");
+        return Err(Error::Study("[data.virtual]: no model".into()));
     };
     aero_with_terms(linear_aero_chord(a.model, chord, a)?, a).context("[data.virtual.aero]")
 }
@@ -218,7 +215,8 @@ fn virtual_campaign(
     study: &Study,
     v: &VirtualSpec,
     out: &Path,
-) -> anyhow::Result<(Dataset, String)> {
+    obs: &dyn Observer,
+) -> Result<(Dataset, String)> {
     let campaign = match v.campaign.strip_prefix("config=") {
         Some(c) => Campaign::paper_config(c).context("data.virtual.campaign")?,
         None => Campaign::paper(),
@@ -231,13 +229,13 @@ fn virtual_campaign(
     }
     let model = virtual_model(study, v, opts.section.chord)?;
     let cases = campaign.cases();
-    let bar = crate::progress::CountBar::new("tunnel", cases.len());
-    let r = tunnel::forced_dataset(&*model, &cases, &opts, &|_| bar.inc());
+    let bar = obs.counter("tunnel", cases.len());
+    let r = tunnel::forced_dataset(&*model, &cases, &opts, &|_| bar.inc(1));
     bar.finish();
     let (manifest, records) = r.context("data.virtual: forced campaign")?;
     let root = out.join("dataset");
     if v.write_dataset {
-        super::files::ensure_dir(&root.join("cases"))?;
+        crate::files::ensure_dir(&root.join("cases"))?;
         tunnel::write(&root, &manifest, &records)
             .with_context(|| format!("writing the data set to {}", root.display()))?;
     }
@@ -268,7 +266,7 @@ fn virtual_campaign(
 ///
 /// # Errors
 /// Reading or generating the data, or preprocessing a case (the message names it).
-pub fn cases(study: &Study, out: &Path) -> anyhow::Result<Option<Cases>> {
+pub fn cases(study: &Study, out: &Path, obs: &dyn Observer) -> Result<Option<Cases>> {
     let Some(d) = &study.spec.data else {
         return Ok(None);
     };
@@ -310,14 +308,14 @@ pub fn cases(study: &Study, out: &Path) -> anyhow::Result<Option<Cases>> {
         let src = ds.manifest.description.clone().unwrap_or_default();
         (ds, src)
     } else if let Some(v) = &d.virtual_tunnel {
-        virtual_campaign(study, v, out)?
+        virtual_campaign(study, v, out, obs)?
     } else if let Some(p) = &d.dataset {
         let dir = study.base.join(p);
         let ds =
             read_dataset(&dir).with_context(|| format!("reading data set {}", dir.display()))?;
         (ds, format!("data set {}", p.display()))
     } else {
-        anyhow::bail!("[data]: no source");
+        return Err(Error::Study("[data]: no source".into()));
     };
     let name = dataset.manifest.name.clone();
     let forces = if study
@@ -336,13 +334,15 @@ pub fn cases(study: &Study, out: &Path) -> anyhow::Result<Option<Cases>> {
         } else {
             wanted.clone()
         };
-        super::paper::force_decompositions(&dataset, &ids)
+        crate::paper::force_decompositions(&dataset, &ids)
     } else {
         vec![]
     };
-    let prepared = prepare_with_bar(dataset, &pre)?;
+    let prepared = prepare_with_bar(dataset, &pre, obs)?;
     if prepared.is_empty() {
-        anyhow::bail!("the data have no forced-motion case to identify");
+        return Err(Error::Study(
+            "the data have no forced-motion case to identify".into(),
+        ));
     }
     Ok(Some(Cases {
         name,
@@ -355,14 +355,18 @@ pub fn cases(study: &Study, out: &Path) -> anyhow::Result<Option<Cases>> {
 /// Preprocesses a data set in chunks (each chunk in parallel inside
 /// [`prepare_dataset`]) so that a progress bar can follow; same result and order as one
 /// call on the whole data set.
-fn prepare_with_bar(dataset: Dataset, pre: &PreprocessOptions) -> anyhow::Result<Vec<NondimCase>> {
+fn prepare_with_bar(
+    dataset: Dataset,
+    pre: &PreprocessOptions,
+    obs: &dyn Observer,
+) -> Result<Vec<NondimCase>> {
     const CHUNK: usize = 32;
     let Dataset {
         root,
         manifest,
         records,
     } = dataset;
-    let bar = crate::progress::CountBar::new("prepare", records.len());
+    let bar = obs.counter("prepare", records.len());
     let mut out = Vec::with_capacity(records.len());
     let mut rest = records;
     while !rest.is_empty() {
@@ -382,7 +386,7 @@ fn prepare_with_bar(dataset: Dataset, pre: &PreprocessOptions) -> anyhow::Result
             }
         };
         out.extend(prepared.cases);
-        bar.inc_by(n);
+        bar.inc(n);
         rest = tail;
     }
     bar.finish();
@@ -393,7 +397,7 @@ fn prepare_with_bar(dataset: Dataset, pre: &PreprocessOptions) -> anyhow::Result
 ///
 /// # Errors
 /// Out-of-range parameters, naming the field.
-pub fn structure(s: &StudyStructure) -> anyhow::Result<Structure> {
+pub fn structure(s: &StudyStructure) -> Result<Structure> {
     s.spec().resolve().context("[structure]")
 }
 
@@ -405,7 +409,7 @@ pub fn linear_aero(
     model: StudyModel,
     s: &StudyStructure,
     a: &AeroSpec,
-) -> anyhow::Result<Arc<dyn AeroModel>> {
+) -> Result<Arc<dyn AeroModel>> {
     linear_aero_chord(model, 2.0 * s.linear.semi_chord, a)
 }
 
@@ -417,7 +421,7 @@ pub fn linear_aero_chord(
     model: StudyModel,
     chord: f64,
     a: &AeroSpec,
-) -> anyhow::Result<Arc<dyn AeroModel>> {
+) -> Result<Arc<dyn AeroModel>> {
     let m: Arc<dyn AeroModel> = match model {
         StudyModel::Theodorsen => Arc::new(TheodorsenAero::new(chord, a.elastic_axis)?),
         StudyModel::QuasiSteady => Arc::new(QuasiSteady::new(
@@ -437,7 +441,11 @@ pub fn linear_aero_chord(
             &aeroelastic::reference::flat_plate_k_grid(),
             a.n_lag,
         )?),
-        other => anyhow::bail!("aero model `{other}` is not a linear model of [aero]"),
+        other => {
+            return Err(Error::Study(format!(
+                "aero model `{other}` is not a linear model of [aero]"
+            )))
+        }
     };
     Ok(m)
 }
@@ -467,9 +475,11 @@ pub struct Members {
 ///
 /// # Errors
 /// No `[structure]`, or the ensemble section does not match the identification.
-pub fn member_laws(study: &Study, id: &Identification) -> anyhow::Result<Members> {
+pub fn member_laws(study: &Study, id: &Identification) -> Result<Members> {
     let Some(s) = &study.spec.structure else {
-        anyhow::bail!("the ensemble's laws need [structure] (its chord)");
+        return Err(Error::Study(
+            "the ensemble's laws need [structure] (its chord)".into(),
+        ));
     };
     let (laws, e) = aeroelastic::ensemble::member_laws(
         id,
@@ -487,9 +497,11 @@ pub fn member_laws(study: &Study, id: &Identification) -> anyhow::Result<Members
 ///
 /// # Errors
 /// The law cannot be built (too few reduced frequencies, a null derivative, …).
-pub fn identified_model(study: &Study, id: &Identification) -> anyhow::Result<NonlinearAero> {
+pub fn identified_model(study: &Study, id: &Identification) -> Result<NonlinearAero> {
     let Some(s) = &study.spec.structure else {
-        anyhow::bail!("the identified model needs [structure] (its chord)");
+        return Err(Error::Study(
+            "the identified model needs [structure] (its chord)".into(),
+        ));
     };
     let law =
         IdentifiedLaw::from_identification(id, &IdentifiedOptions::new(2.0 * s.linear.semi_chord))
@@ -501,14 +513,16 @@ pub fn identified_model(study: &Study, id: &Identification) -> anyhow::Result<No
 ///
 /// # Errors
 /// No virtual source, or as [`virtual_model`].
-pub fn truth_model(study: &Study, s: &StudyStructure) -> anyhow::Result<Arc<dyn AeroModel>> {
+pub fn truth_model(study: &Study, s: &StudyStructure) -> Result<Arc<dyn AeroModel>> {
     let Some(v) = study
         .spec
         .data
         .as_ref()
         .and_then(|d| d.virtual_tunnel.as_ref())
     else {
-        anyhow::bail!("the `truth` model needs a [data.virtual] source");
+        return Err(Error::Study(
+            "the `truth` model needs a [data.virtual] source".into(),
+        ));
     };
     virtual_model(study, v, 2.0 * s.linear.semi_chord)
 }
@@ -520,11 +534,13 @@ fn named_aero(
     s: &StudyStructure,
     a: &AeroSpec,
     derived: &Derived,
-) -> anyhow::Result<Arc<dyn AeroModel>> {
+) -> Result<Arc<dyn AeroModel>> {
     match model {
         StudyModel::Identified => match &derived.identified {
             Some(m) => Ok(Arc::new(m.clone())),
-            None => anyhow::bail!("the identified model is not available (no identification)"),
+            None => Err(Error::Study(
+                "the identified model is not available (no identification)".into(),
+            )),
         },
         StudyModel::Truth => truth_model(study, s),
         _ => linear_aero(model, s, a),
@@ -536,13 +552,9 @@ fn named_aero(
 ///
 /// # Errors
 /// As [`structure`] and [`linear_aero`].
-pub fn linear_section(
-    study: &Study,
-    model: StudyModel,
-    derived: &Derived,
-) -> anyhow::Result<Section> {
+pub fn linear_section(study: &Study, model: StudyModel, derived: &Derived) -> Result<Section> {
     let (Some(s), Some(a)) = (&study.spec.structure, &study.spec.aero) else {
-        anyhow::bail!("[structure] and [aero] are required");
+        return Err(Error::Study("[structure] and [aero] are required".into()));
     };
     Ok(Section::new(
         structure(s)?,
@@ -555,9 +567,9 @@ pub fn linear_section(
 ///
 /// # Errors
 /// As [`linear_section`]; invalid nonlinear terms.
-pub fn nonlinear_section(study: &Study, derived: &Derived) -> anyhow::Result<Section> {
+pub fn nonlinear_section(study: &Study, derived: &Derived) -> Result<Section> {
     let (Some(s), Some(a)) = (&study.spec.structure, &study.spec.aero) else {
-        anyhow::bail!("[structure] and [aero] are required");
+        return Err(Error::Study("[structure] and [aero] are required".into()));
     };
     let aero = aero_with_terms(named_aero(study, a.model, s, a, derived)?, a)?;
     Ok(Section::new(structure(s)?, aero, s.linear.rho)?)
@@ -567,10 +579,7 @@ pub fn nonlinear_section(study: &Study, derived: &Derived) -> anyhow::Result<Sec
 ///
 /// # Errors
 /// Invalid nonlinear terms.
-pub fn aero_with_terms(
-    inner: Arc<dyn AeroModel>,
-    a: &AeroSpec,
-) -> anyhow::Result<Arc<dyn AeroModel>> {
+pub fn aero_with_terms(inner: Arc<dyn AeroModel>, a: &AeroSpec) -> Result<Arc<dyn AeroModel>> {
     let aero: Arc<dyn AeroModel> = if a.nonlinear.is_empty() {
         inner
     } else {
@@ -588,7 +597,7 @@ pub fn aero_with_terms(
                     coefficient: Coefficient::Constant(t.coefficient),
                 })
             })
-            .collect::<anyhow::Result<Vec<_>>>()?;
+            .collect::<Result<Vec<_>>>()?;
         // constant coefficients: the evaluation K is irrelevant
         Arc::new(NonlinearAero::new(inner, terms, 1.0)?)
     };

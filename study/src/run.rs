@@ -1,22 +1,22 @@
-//! Runs a study end to end: data → identification → flutter → LCO → figures and report.
+//! Runs the stages of a study: data → identification → flutter → LCO → branch, each
+//! writing its result files (the figures and report are drawn from them by `plots`).
 //! Orchestration only: every number comes from `identify` / `aeroelastic`.
 
 use std::path::Path;
 use std::time::Instant;
 
+use crate::error::{Context, Error, Result};
 use aeroelastic::ensemble::{flutter_ensemble, lco_ensemble, LcoEnsemble};
 use aeroelastic::flutter::{FlutterMethod, FlutterOptions};
 use aeroelastic::lco::{Classification, KIteration, LcoOptions, LcoResult, SweepPlan};
-use anyhow::Context;
 use identify::pipeline::Identification;
 use identify::series::{case_series, SeriesOptions};
 
-use super::build;
-use super::files::{ensure_dir, num, write_json, write_text, Csv};
-use super::paper::{self, PaperFigures};
-use super::spec::{Study, StudyModel};
-use crate::progress::CountBar;
-use crate::progress::IdentifyBar;
+use crate::build;
+use crate::files::{ensure_dir, num, write_json, write_text, Csv};
+use crate::observe::Observer;
+use crate::paper::{self, PaperFigures};
+use crate::spec::{Study, StudyModel};
 
 /// File names of the results (relative to the output folder).
 pub mod names {
@@ -62,7 +62,7 @@ pub mod names {
     pub const REPORT: &str = "report.html";
 }
 
-pub use aeroform::documents::{FlutterRun, LcoStage};
+pub use crate::documents::{FlutterRun, LcoStage};
 
 /// Wall time of each stage \[s\].
 pub type Timings = Vec<(&'static str, f64)>;
@@ -70,23 +70,28 @@ pub type Timings = Vec<(&'static str, f64)>;
 fn timed<T>(
     timings: &mut Timings,
     stage: &'static str,
-    f: impl FnOnce() -> anyhow::Result<T>,
-) -> anyhow::Result<T> {
+    f: impl FnOnce() -> Result<T>,
+) -> Result<T> {
     let t = Instant::now();
     let r = f()?;
     timings.push((stage, t.elapsed().as_secs_f64()));
     Ok(r)
 }
 
-/// Runs `study` and writes everything under `out`; returns the stage timings.
+/// Runs the stages of `study` (data, identify, flutter, LCO, branch — those the study has)
+/// and writes their result files under `out`; returns the wall time of each stage \[s\].
+/// Progress bars and the lines a terminal shows go to `obs`. The figures and the report
+/// are not drawn here: the caller draws them from the result files
+/// (`plots::study_report::render_all`).
 ///
 /// # Errors
-/// The first failing stage, with its context; files written before the failure are
-/// complete (atomic writes), nothing half-written remains.
-pub fn run_study(study: &Study, out: &Path, quiet: bool) -> anyhow::Result<Timings> {
+/// The first failing stage, with its context ([`crate::Error`]); an
+/// `outputs.series_cases` id not in the data is [`crate::Error::Usage`]. Files written
+/// before the failure are complete (atomic writes), nothing half-written remains.
+pub fn run_study(study: &Study, out: &Path, obs: &dyn Observer) -> Result<Timings> {
     ensure_dir(out)?;
     let mut timings = Timings::new();
-    let cases = timed(&mut timings, "data", || build::cases(study, out))?;
+    let cases = timed(&mut timings, "data", || build::cases(study, out, obs))?;
     if let Some(cases) = &cases {
         // the last check of the spec that needs the data: before any result is written
         series_case_indices(study, cases)?;
@@ -94,15 +99,15 @@ pub fn run_study(study: &Study, out: &Path, quiet: bool) -> anyhow::Result<Timin
     write_text(&out.join(names::STUDY), &study.text)?;
     let mut derived = build::Derived::default();
     if let Some(cases) = &cases {
-        if !quiet {
-            crate::ui::say!("data: {} cases; {}", cases.cases.len(), cases.source);
-        }
+        obs.say(&format!(
+            "data: {} cases; {}",
+            cases.cases.len(),
+            cases.source
+        ));
         let id = timed(&mut timings, "identify", || {
-            identify_stage(study, cases, out)
+            identify_stage(study, cases, out, obs)
         })?;
-        if !quiet {
-            crate::ui::say!("{}", id.summary_table());
-        }
+        obs.say(&id.summary_table());
         let s = &study.spec;
         let wants_identified = s
             .aero
@@ -128,7 +133,7 @@ pub fn run_study(study: &Study, out: &Path, quiet: bool) -> anyhow::Result<Timin
     let mut truth_flutter_speed = None;
     if study.spec.flutter.is_some() {
         let runs = timed(&mut timings, "flutter", || {
-            flutter_stage(study, out, &derived)
+            flutter_stage(study, out, &derived, obs)
         })?;
         let model = study.spec.aero.as_ref().map(|a| a.model);
         let speed_of = |m: Option<StudyModel>| {
@@ -138,49 +143,45 @@ pub fn run_study(study: &Study, out: &Path, quiet: bool) -> anyhow::Result<Timin
         };
         flutter_speed = speed_of(model);
         truth_flutter_speed = speed_of(Some(StudyModel::Truth));
-        if !quiet {
-            for r in &runs {
-                match r.analysis.flutter {
-                    Some(f) => crate::ui::say!(
-                        "flutter [{}]: U_F = {:.4} m/s (U/(bω_α) = {:.4}), ω_F/ω_α = {:.4}",
-                        r.label,
-                        f.u,
-                        f.u_reduced,
-                        f.omega_ratio
-                    ),
-                    None => crate::ui::say!("flutter [{}]: stable over the scan", r.label),
-                }
+        for r in &runs {
+            match r.analysis.flutter {
+                Some(f) => obs.say(&format!(
+                    "flutter [{}]: U_F = {:.4} m/s (U/(bω_α) = {:.4}), ω_F/ω_α = {:.4}",
+                    r.label, f.u, f.u_reduced, f.omega_ratio
+                )),
+                None => obs.say(&format!("flutter [{}]: stable over the scan", r.label)),
             }
         }
     }
     if study.spec.lco.is_some() {
         timed(&mut timings, "lco", || {
-            lco_stage(study, out, [flutter_speed, truth_flutter_speed], &derived)
+            lco_stage(
+                study,
+                out,
+                [flutter_speed, truth_flutter_speed],
+                &derived,
+                obs,
+            )
         })?;
     }
     if study.spec.branch.is_some() {
         let set = timed(&mut timings, "branch", || {
             branch_stage(study, out, &derived)
         })?;
-        if !quiet {
-            for (i, b) in set.branches.iter().enumerate() {
-                let folds = b
-                    .events
-                    .iter()
-                    .filter(|e| e.kind == aeroelastic::branch::EventKind::Fold)
-                    .count();
-                crate::ui::say!(
-                    "branch {i}: Hopf point U = {:.4} m/s ({}), {} orbits, {folds} fold(s)",
-                    b.hopf.u,
-                    b.criticality,
-                    b.points.len()
-                );
-            }
+        for (i, b) in set.branches.iter().enumerate() {
+            let folds = b
+                .events
+                .iter()
+                .filter(|e| e.kind == aeroelastic::branch::EventKind::Fold)
+                .count();
+            obs.say(&format!(
+                "branch {i}: Hopf point U = {:.4} m/s ({}), {} orbits, {folds} fold(s)",
+                b.hopf.u,
+                b.criticality,
+                b.points.len()
+            ));
         }
     }
-    timed(&mut timings, "figures+report", || {
-        super::figures::render_all(study, out).map(|_| ())
-    })?;
     Ok(timings)
 }
 
@@ -188,8 +189,8 @@ pub fn run_study(study: &Study, out: &Path, quiet: bool) -> anyhow::Result<Timin
 /// the last case.
 ///
 /// # Errors
-/// A listed case id that is not in the data ([`crate::exit::Usage`], naming the key).
-fn series_case_indices(study: &Study, cases: &build::Cases) -> anyhow::Result<Vec<usize>> {
+/// A listed case id that is not in the data ([`Error::Usage`], naming the key).
+fn series_case_indices(study: &Study, cases: &build::Cases) -> Result<Vec<usize>> {
     let wanted = &study.spec.outputs.series_cases;
     if wanted.is_empty() {
         let mut v = vec![0];
@@ -206,11 +207,10 @@ fn series_case_indices(study: &Study, cases: &build::Cases) -> anyhow::Result<Ve
                 .iter()
                 .position(|c| &c.meta.id == w)
                 .ok_or_else(|| {
-                    crate::exit::Usage(format!(
+                    Error::Usage(format!(
                         "{}: key `outputs.series_cases`: no case `{w}` in the data",
                         study.path.display()
                     ))
-                    .into()
                 })
         })
         .collect()
@@ -220,12 +220,12 @@ fn identify_stage(
     study: &Study,
     cases: &build::Cases,
     out: &Path,
-) -> anyhow::Result<Identification> {
+    obs: &dyn Observer,
+) -> Result<Identification> {
     let settings = study.spec.identify.clone().unwrap_or_default().settings;
-    let bar = IdentifyBar::new();
     let result =
-        identify::pipeline::identify(&cases.cases, &settings, &cases.name, &|p| bar.observe(p));
-    bar.finish();
+        identify::pipeline::identify(&cases.cases, &settings, &cases.name, &|p| obs.identify(p));
+    obs.identify_done();
     let mut id = result.context("identification")?;
     let spec = study.spec.identify.clone().unwrap_or_default();
     if let Some(n) = spec.ensemble {
@@ -251,13 +251,13 @@ fn identify_stage(
                 .unwrap_or_else(|_| t.replace(|c: char| !c.is_ascii_alphanumeric(), "_"))
         })
         .collect();
-    let columns: Vec<aeroform::documents::CoefficientColumn> = safe
+    let columns: Vec<crate::documents::CoefficientColumn> = safe
         .iter()
         .zip(&id.library.terms)
-        .map(|(s, t)| aeroform::documents::CoefficientColumn {
+        .map(|(s, t)| crate::documents::CoefficientColumn {
             column: s.clone(),
             term: t.clone(),
-            display: plots::adapters::term_label(t),
+            display: crate::documents::term_label(t),
         })
         .collect();
     write_json(&out.join(names::COEFFICIENT_COLUMNS), &columns)?;
@@ -437,7 +437,7 @@ fn paper_figures(study: &Study, cases: &build::Cases, id: &Identification) -> Pa
 /// Table IV: per channel and true term, the true value and the mean and standard deviation
 /// of the identified coefficient over the noise realisations, how often the term was
 /// selected, and how often the whole support was exactly the true one.
-fn table_iv(id: &Identification, t: &super::spec::TableIvSpec, out: &Path) -> anyhow::Result<()> {
+fn table_iv(id: &Identification, t: &crate::spec::TableIvSpec, out: &Path) -> Result<()> {
     let mut csv = Csv::new(&[
         "channel",
         "term",
@@ -505,14 +505,17 @@ fn flutter_stage(
     study: &Study,
     out: &Path,
     derived: &build::Derived,
-) -> anyhow::Result<Vec<FlutterRun>> {
+    obs: &dyn Observer,
+) -> Result<Vec<FlutterRun>> {
     let (Some(f), Some(s), Some(a)) =
         (&study.spec.flutter, &study.spec.structure, &study.spec.aero)
     else {
-        anyhow::bail!("[flutter] needs [structure] and [aero]");
+        return Err(Error::Study(
+            "[flutter] needs [structure] and [aero]".into(),
+        ));
     };
-    let runs: Vec<super::spec::FlutterRunSpec> = if f.run.is_empty() {
-        vec![super::spec::FlutterRunSpec {
+    let runs: Vec<crate::spec::FlutterRunSpec> = if f.run.is_empty() {
+        vec![crate::spec::FlutterRunSpec {
             label: format!("{} (p-k)", a.model),
             model: None,
             method: FlutterMethod::Pk,
@@ -527,7 +530,7 @@ fn flutter_stage(
         n_speeds: f.n_speeds,
         tol_rel: f.tol_rel,
     };
-    let bar = CountBar::new("flutter", runs.len());
+    let bar = obs.counter("flutter", runs.len());
     let mut results = Vec::new();
     for r in &runs {
         let model = r.model.unwrap_or(a.model);
@@ -550,7 +553,7 @@ fn flutter_stage(
             ),
             _ => None,
         };
-        bar.inc();
+        bar.inc(1);
         results.push(FlutterRun {
             label: r.label.clone(),
             model,
@@ -635,9 +638,10 @@ fn lco_stage(
     out: &Path,
     [flutter_speed, truth_flutter_speed]: [Option<f64>; 2],
     derived: &build::Derived,
-) -> anyhow::Result<()> {
+    obs: &dyn Observer,
+) -> Result<()> {
     let (Some(l), Some(s)) = (&study.spec.lco, &study.spec.structure) else {
-        anyhow::bail!("[lco] needs [structure]");
+        return Err(Error::Study("[lco] needs [structure]".into()));
     };
     let section = build::nonlinear_section(study, derived)?;
     let opts = LcoOptions {
@@ -648,8 +652,8 @@ fn lco_stage(
     };
     let up0 = section.perturbation(l.perturbation_deg.to_radians());
     let total = l.speeds.len() * if l.up_down { 2 } else { 1 };
-    let bar = CountBar::new("LCO", total * if l.compare_truth { 2 } else { 1 });
-    let observer = |p| bar.observe_sweep(p);
+    let bar = obs.counter("LCO", total * if l.compare_truth { 2 } else { 1 });
+    let observer = |p| bar.sweep(p);
     // One sweep API for every model: K-dependent models (the identified law) iterate K
     // to each limit cycle's own, the others are run once per speed.
     let plan = SweepPlan {
@@ -796,7 +800,7 @@ fn lco_stage(
 
 /// `lco_intervals.csv`: per speed, the pitch and heave amplitude intervals of the
 /// ensemble members that settle on an LCO, and how many decay, diverge or do not settle.
-fn lco_intervals(e: &LcoEnsemble, out: &Path) -> anyhow::Result<()> {
+fn lco_intervals(e: &LcoEnsemble, out: &Path) -> Result<()> {
     let mut csv = Csv::new(&[
         "U_m_s",
         "level",
@@ -835,7 +839,7 @@ fn lco_intervals(e: &LcoEnsemble, out: &Path) -> anyhow::Result<()> {
 
 /// `round_trip.csv`: truth vs `[aero]` model, flutter speed and LCO pitch amplitude per
 /// speed and sweep, with the relative error (model/truth − 1).
-fn round_trip_table(stage: &LcoStage, out: &Path) -> anyhow::Result<()> {
+fn round_trip_table(stage: &LcoStage, out: &Path) -> Result<()> {
     let mut csv = Csv::new(&[
         "quantity",
         "U_m_s",
@@ -907,9 +911,9 @@ fn branch_stage(
     study: &Study,
     out: &Path,
     derived: &build::Derived,
-) -> anyhow::Result<aeroelastic::branch::BranchSet> {
+) -> Result<aeroelastic::branch::BranchSet> {
     let Some(b) = &study.spec.branch else {
-        anyhow::bail!("no [branch] stage");
+        return Err(Error::Study("no [branch] stage".into()));
     };
     let section = build::nonlinear_section(study, derived)?;
     let opts = aeroelastic::branch::BranchOptions {

@@ -12,9 +12,9 @@ use identify::record::NondimCase;
 use serde::{Deserialize, Serialize};
 
 /// Seconds of record kept for the time-series figures (from the start of the record).
-const WINDOW_S: f64 = 3.0;
+pub const WINDOW_S: f64 = 3.0;
 /// Forcing periods kept for a force loop (the last ones of the record).
-const LOOP_PERIODS: f64 = 2.0;
+pub const LOOP_PERIODS: f64 = 2.0;
 /// Loops per figure (evenly spaced over the available wind speeds or amplitudes).
 const MAX_LOOPS: usize = 4;
 
