@@ -9,6 +9,32 @@
 pub mod interp;
 pub mod qr;
 
+/// Golden-section maximisation of a unimodal `f` on `[a, b]`: the midpoint of the final
+/// bracket, narrowed until it is at most `tol` wide (one evaluation of `f` per step,
+/// the bracket shrinking by 0.618 each). Ties keep the left part.
+pub fn golden_section_max(mut a: f64, mut b: f64, tol: f64, mut f: impl FnMut(f64) -> f64) -> f64 {
+    let r = (5f64.sqrt() - 1.0) / 2.0;
+    let mut c = b - r * (b - a);
+    let mut d = a + r * (b - a);
+    let (mut fc, mut fd) = (f(c), f(d));
+    while (b - a).abs() > tol {
+        if fc >= fd {
+            b = d;
+            d = c;
+            fd = fc;
+            c = b - r * (b - a);
+            fc = f(c);
+        } else {
+            a = c;
+            c = d;
+            fc = fd;
+            d = a + r * (b - a);
+            fd = f(d);
+        }
+    }
+    0.5 * (a + b)
+}
+
 /// A Cholesky factorisation met a pivot at or below its floor: the matrix is not
 /// (numerically) positive definite, i.e. column `index` is (nearly) a combination of the
 /// columns before it.
@@ -217,6 +243,12 @@ mod tests {
                 .index,
             0
         );
+    }
+
+    #[test]
+    fn golden_section_finds_the_maximum() {
+        let x = golden_section_max(-1.0, 3.0, 1e-10, |x| -(x - 0.7) * (x - 0.7));
+        assert!((x - 0.7).abs() < 1e-9, "{x}");
     }
 
     #[test]

@@ -163,27 +163,7 @@ fn refine_lag(pairs: &[(Vec<f64>, Vec<f64>)], dt_a: f64, dt_b: f64, d0: f64) -> 
         }
         s
     };
-    let (mut lo, mut hi) = (-dt_b, dt_b);
-    let g = (5f64.sqrt() - 1.0) / 2.0;
-    let mut c = hi - g * (hi - lo);
-    let mut d = lo + g * (hi - lo);
-    let (mut fc, mut fd) = (obj(c), obj(d));
-    while hi - lo > 1e-7 * dt_b {
-        if fc >= fd {
-            hi = d;
-            d = c;
-            fd = fc;
-            c = hi - g * (hi - lo);
-            fc = obj(c);
-        } else {
-            lo = c;
-            c = d;
-            fc = fd;
-            d = lo + g * (hi - lo);
-            fd = obj(d);
-        }
-    }
-    d0 + 0.5 * (lo + hi)
+    d0 + crate::numerics::golden_section_max(-dt_b, dt_b, 1e-7 * dt_b, obj)
 }
 
 /// Indices `i` of the wind-on record (`n_a` samples every `dt_a` s) whose time

@@ -938,31 +938,6 @@ mod tests {
         }
     }
 
-    /// Golden-section maximisation of `f` on `[a, b]` to an absolute tolerance `tol`.
-    fn golden_max(mut a: f64, mut b: f64, tol: f64, mut f: impl FnMut(f64) -> f64) -> f64 {
-        let r = (5f64.sqrt() - 1.0) / 2.0;
-        let mut c = b - r * (b - a);
-        let mut d = a + r * (b - a);
-        let mut fc = f(c);
-        let mut fd = f(d);
-        while (b - a).abs() > tol {
-            if fc >= fd {
-                b = d;
-                d = c;
-                fd = fc;
-                c = b - r * (b - a);
-                fc = f(c);
-            } else {
-                a = c;
-                c = d;
-                fc = fd;
-                d = a + r * (b - a);
-                fd = f(d);
-            }
-        }
-        0.5 * (a + b)
-    }
-
     /// Reference maximiser (the previous implementation, derivative-free): coordinate
     /// ascent, each coordinate by a 17-point grid over ±span/T then golden section.
     fn reference_refine(xs: &[&[f64]], dt: f64, freqs: &[f64], span: f64) -> Vec<f64> {
@@ -984,7 +959,7 @@ mod tests {
                     .map(|j| f0 - w + j as f64 * h)
                     .max_by(|a, b| obj(*a).total_cmp(&obj(*b)))
                     .unwrap();
-                f[k] = golden_max(fb - h, fb + h, 1e-10 / t, obj);
+                f[k] = crate::numerics::golden_section_max(fb - h, fb + h, 1e-10 / t, obj);
             }
         }
         f
