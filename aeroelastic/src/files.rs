@@ -273,7 +273,8 @@ pub enum ModelKind {
 pub struct NonlinearSpec {
     /// Term name (DATA_FORMAT.md), degree 2 or 3.
     pub term: String,
-    /// `lift` or `moment`.
+    /// `lift` or `moment` (read by [`Channel::from_name`] when the model is built, so that
+    /// an error names `nonlinear[i].channel`).
     pub channel: String,
     /// Constant nondimensional coefficient.
     #[serde(default)]
@@ -486,16 +487,13 @@ impl LoadedModel {
             let field = |x: &str| format!("nonlinear[{}].{x}", i + 1);
             let powers = NonlinearTerm::powers_of(&n.term)
                 .map_err(|e| toml_err(format!("{}: {e}", field("term"))))?;
-            let channel = match n.channel.as_str() {
-                "lift" => Channel::Lift,
-                "moment" => Channel::Moment,
-                other => {
-                    return Err(toml_err(format!(
-                        "{} = \"{other}\": expected \"lift\" or \"moment\"",
-                        field("channel")
-                    )))
-                }
-            };
+            let channel = Channel::from_name(&n.channel).ok_or_else(|| {
+                toml_err(format!(
+                    "{} = \"{}\": expected \"lift\" or \"moment\"",
+                    field("channel"),
+                    n.channel
+                ))
+            })?;
             let coefficient = match (n.coefficient, &n.k, &n.values, n.k_power) {
                 (Some(c), None, None, None) => Coefficient::Constant(c),
                 (None, Some(k), Some(v), Some(p)) => Coefficient::OverK {

@@ -7,7 +7,7 @@ use std::sync::Arc;
 use crate::error::{Context, Error, Result};
 use crate::observe::Observer;
 use aeroelastic::aero::{
-    AeroModel, Channel, Coefficient, DerivativeTable, NonlinearAero, NonlinearTerm, QuasiSteady,
+    AeroModel, Coefficient, DerivativeTable, NonlinearAero, NonlinearTerm, QuasiSteady,
     QuasiSteadyKind, TheodorsenAero,
 };
 use aeroelastic::section::Section;
@@ -588,11 +588,7 @@ pub fn aero_with_terms(inner: Arc<dyn AeroModel>, a: &AeroSpec) -> Result<Arc<dy
             .iter()
             .map(|t| {
                 Ok(NonlinearTerm {
-                    channel: if t.channel == "lift" {
-                        Channel::Lift
-                    } else {
-                        Channel::Moment
-                    },
+                    channel: t.channel,
                     powers: Term::parse(&t.term)?.powers.map(u32::from),
                     coefficient: Coefficient::Constant(t.coefficient),
                 })

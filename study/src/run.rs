@@ -449,15 +449,17 @@ fn table_iv(id: &Identification, t: &crate::spec::TableIvSpec, out: &Path) -> Re
         "exact_support_in",
     ]);
     let truth = identify::paper::TABLE_IV_TERMS;
-    for (channel, coefs) in [("moment", t.moment), ("lift", t.lift)] {
+    type GroupForce = fn(&identify::pipeline::GroupResult) -> &identify::pipeline::GroupForce;
+    type CaseTerms = fn(&identify::pipeline::CaseResult) -> &identify::pipeline::TermMap;
+    let channels: [(&str, _, GroupForce, CaseTerms); 2] = [
+        ("moment", t.moment, |g| &g.moment, |c| &c.moment.terms),
+        ("lift", t.lift, |g| &g.lift, |c| &c.lift.terms),
+    ];
+    for (channel, coefs, group_force, case_terms) in channels {
         let n = id.cases.len();
         let mut exact = 0;
         for g in &id.groups {
-            let s = if channel == "moment" {
-                &g.moment.support
-            } else {
-                &g.lift.support
-            };
+            let s = &group_force(g).support;
             let mut s: Vec<&str> = s.iter().map(String::as_str).collect();
             s.sort_unstable();
             let mut tr = truth.to_vec();
@@ -470,14 +472,7 @@ fn table_iv(id: &Identification, t: &crate::spec::TableIvSpec, out: &Path) -> Re
             let vals: Vec<f64> = id
                 .cases
                 .iter()
-                .map(|c| {
-                    let tm = if channel == "moment" {
-                        &c.moment.terms
-                    } else {
-                        &c.lift.terms
-                    };
-                    tm.get(term).unwrap_or(0.0)
-                })
+                .map(|c| case_terms(c).get(term).unwrap_or(0.0))
                 .collect();
             let mean = vals.iter().sum::<f64>() / n as f64;
             let sd = if n > 1 {

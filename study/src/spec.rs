@@ -390,7 +390,8 @@ impl StudyStructure {
 #[serde(deny_unknown_fields)]
 pub struct AeroTermSpec {
     /// `"lift"` or `"moment"`.
-    pub channel: String,
+    #[serde(with = "aeroelastic::aero::channel_name")]
+    pub channel: aeroelastic::aero::Channel,
     /// Library term name of degree ≥ 2, e.g. `alpha_dot^3`.
     pub term: String,
     /// Nondimensional coefficient.
@@ -1513,12 +1514,6 @@ fn check_aero(prefix: &str, a: &AeroSpec, allow_identified: bool) -> Result<(), 
         }
     }
     for (i, t) in a.nonlinear.iter().enumerate() {
-        if !matches!(t.channel.as_str(), "lift" | "moment") {
-            return Err((
-                format!("{prefix}.nonlinear[{i}].channel"),
-                format!("`{}`: expected lift or moment", t.channel),
-            ));
-        }
         match identify::library::Term::parse(&t.term) {
             Ok(term) if term.degree() >= 2 => {}
             Ok(_) => {
@@ -1577,6 +1572,18 @@ mod tests {
         let e = parse(&format!("{base}model = \"truth\"\n")).unwrap_err();
         assert_eq!(e.key, "aero.model", "{e}");
         assert!(e.message.contains("flutter-run model only"), "{e}");
+        // a nonlinear term's channel is typed: a bad name is refused at parse, by key
+        let e = parse(&format!(
+            "{base}model = \"theodorsen\"\n[[aero.nonlinear]]\nchannel = \"pitch\"\n\
+             term = \"alpha^3\"\ncoefficient = 1.0\n"
+        ))
+        .unwrap_err();
+        assert_eq!(
+            (e.key.as_str(), e.line),
+            ("aero.nonlinear[0].channel", 9),
+            "{e}"
+        );
+        assert!(e.message.contains("expected \"lift\" or \"moment\""), "{e}");
     }
 
     #[test]

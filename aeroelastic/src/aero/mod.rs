@@ -21,7 +21,7 @@ mod stall;
 mod table;
 mod unsteady;
 
-pub use nonlinear::{term_name, Channel, Coefficient, NonlinearAero, NonlinearTerm};
+pub use nonlinear::{channel_name, term_name, Channel, Coefficient, NonlinearAero, NonlinearTerm};
 pub use quasi_steady::{QuasiSteady, QuasiSteadyKind};
 pub use stall::DynamicStallAero;
 pub use table::{DerivativeTable, RfaFit};

@@ -19,6 +19,49 @@ pub enum Channel {
     Moment,
 }
 
+impl Channel {
+    /// The name of the channel in input files: `lift` or `moment`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Channel::Lift => "lift",
+            Channel::Moment => "moment",
+        }
+    }
+
+    /// The channel of an input-file name ([`Channel::name`]); `None` for anything else.
+    pub fn from_name(name: &str) -> Option<Channel> {
+        [Channel::Lift, Channel::Moment]
+            .into_iter()
+            .find(|c| c.name() == name)
+    }
+}
+
+/// Serde form of a [`Channel`] in input files (model files, study `[aero]`): the string
+/// `"lift"` or `"moment"`; for `#[serde(with = "…")]` on a field of type [`Channel`].
+pub mod channel_name {
+    use serde::{de::Error as _, Deserialize, Deserializer, Serializer};
+
+    use super::Channel;
+
+    /// Writes [`Channel::name`].
+    ///
+    /// # Errors
+    /// The serializer's.
+    pub fn serialize<S: Serializer>(c: &Channel, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(c.name())
+    }
+
+    /// Reads `lift` or `moment`.
+    ///
+    /// # Errors
+    /// A custom error naming the value and the accepted names for anything else.
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<Channel, D::Error> {
+        let s = String::deserialize(d)?;
+        Channel::from_name(&s)
+            .ok_or_else(|| D::Error::custom(format!("`{s}`: expected \"lift\" or \"moment\"")))
+    }
+}
+
 /// Coefficient of a nonlinear term.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub enum Coefficient {
