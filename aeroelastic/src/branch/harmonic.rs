@@ -27,6 +27,7 @@ use nalgebra::{DMatrix, DVector};
 
 use super::{orbit_point, BranchPoint, HopfPoint, PeriodicProblem};
 use crate::dynamics::SectionDynamics;
+use crate::integrate::{OdeSystem, Rk4};
 use crate::section::Section;
 use crate::{Error, Result};
 
@@ -321,38 +322,46 @@ impl<'a> HarmonicBalance<'a> {
         let z = self.states_on(&self.var, x);
         let jac = self.jacobians(d, &z);
         let h = TAU / omega / self.steps as f64;
-        // Row-major n × n products without allocation: out = J · (Φ + c·K).
-        let apply = |j: &[f64], phi: &[f64], k: &[f64], c: f64, out: &mut [f64]| {
-            for r in 0..n {
-                for col in 0..n {
-                    let mut acc = 0.0;
-                    for m in 0..n {
-                        acc += j[r * n + m] * (phi[m * n + col] + c * k[m * n + col]);
-                    }
-                    out[r * n + col] = acc;
-                }
-            }
+        let sys = Variational {
+            n,
+            half_step: 0.5 * h,
+            jacobians: &jac,
         };
         let mut phi = vec![0.0; nn];
         for i in 0..n {
             phi[i * n + i] = 1.0;
         }
-        let zero = vec![0.0; nn];
-        let (mut k1, mut k2, mut k3, mut k4) =
-            (vec![0.0; nn], vec![0.0; nn], vec![0.0; nn], vec![0.0; nn]);
+        let mut rk4 = Rk4::new(nn);
         for step in 0..self.steps {
-            let j0 = &jac[2 * step * nn..(2 * step + 1) * nn];
-            let j1 = &jac[(2 * step + 1) * nn..(2 * step + 2) * nn];
-            let j2 = &jac[(2 * step + 2) * nn..(2 * step + 3) * nn];
-            apply(j0, &phi, &zero, 0.0, &mut k1);
-            apply(j1, &phi, &k1, 0.5 * h, &mut k2);
-            apply(j1, &phi, &k2, 0.5 * h, &mut k3);
-            apply(j2, &phi, &k3, h, &mut k4);
-            for i in 0..nn {
-                phi[i] += h / 6.0 * (k1[i] + 2.0 * (k2[i] + k3[i]) + k4[i]);
-            }
+            rk4.step(&sys, step as f64 * h, h, &mut phi);
         }
         DMatrix::from_row_slice(n, n, &phi)
+    }
+}
+
+/// The variational equation Φ' = J(t) Φ of an orbit for the fixed-step RK4 of
+/// [`HarmonicBalance`]'s monodromy: Φ row-major n × n, J(t) the rate's Jacobian sampled on
+/// the half steps of the grid (`jacobians[k]` at t = k·h/2, row-major n × n each).
+struct Variational<'a> {
+    n: usize,
+    half_step: f64,
+    jacobians: &'a [f64],
+}
+
+impl OdeSystem for Variational<'_> {
+    fn dim(&self) -> usize {
+        self.n * self.n
+    }
+
+    fn rate(&self, t: f64, phi: &[f64], out: &mut [f64]) {
+        let (n, nn) = (self.n, self.n * self.n);
+        let k = (t / self.half_step).round() as usize;
+        let j = &self.jacobians[k * nn..(k + 1) * nn];
+        for r in 0..n {
+            for col in 0..n {
+                out[r * n + col] = (0..n).map(|m| j[r * n + m] * phi[m * n + col]).sum();
+            }
+        }
     }
 }
 
