@@ -385,6 +385,22 @@ impl LoadedModel {
             message: m,
         };
         let f: ModelFile = toml::from_str(text).map_err(|e| toml_err(e.to_string()))?;
+        Self::from_spec(&f, source, base, chord)
+    }
+
+    /// Builds the model a parsed model file describes (the one constructor of every model
+    /// kind, used by model files and by a study's `[aero]`); `source` names it in errors,
+    /// `base` is the folder relative paths are resolved against, `chord` the fallback chord.
+    ///
+    /// # Errors
+    /// [`Error::Toml`] naming `source` and the key (not used by the kind, missing for it,
+    /// a bad nonlinear term); [`Error::InvalidParameter`] naming `source: field`; the errors
+    /// of the model constructors and of [`IdentifiedLaw::read`].
+    pub fn from_spec(f: &ModelFile, source: &str, base: &Path, chord: Option<f64>) -> Result<Self> {
+        let toml_err = |m: String| Error::Toml {
+            source_name: source.to_string(),
+            message: m,
+        };
         let kind_name = serde_json::to_string(&f.kind).unwrap_or_default();
         let used: &[&str] = match f.kind {
             ModelKind::Theodorsen | ModelKind::DynamicStall => &["chord", "elastic_axis"],

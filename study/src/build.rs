@@ -6,10 +6,8 @@ use std::sync::Arc;
 
 use crate::error::{Context, Error, Result};
 use crate::observe::Observer;
-use aeroelastic::aero::{
-    AeroModel, Coefficient, DerivativeTable, NonlinearAero, NonlinearTerm, QuasiSteady,
-    QuasiSteadyKind, TheodorsenAero,
-};
+use aeroelastic::aero::{AeroModel, Coefficient, NonlinearAero, NonlinearTerm};
+use aeroelastic::files::{ModelFile, ModelKind};
 use aeroelastic::section::Section;
 use aeroelastic::structure::Structure;
 use identify::dataset::{
@@ -422,32 +420,29 @@ pub fn linear_aero_chord(
     chord: f64,
     a: &AeroSpec,
 ) -> Result<Arc<dyn AeroModel>> {
-    let m: Arc<dyn AeroModel> = match model {
-        StudyModel::Theodorsen => Arc::new(TheodorsenAero::new(chord, a.elastic_axis)?),
-        StudyModel::QuasiSteady => Arc::new(QuasiSteady::new(
-            chord,
-            a.elastic_axis,
-            QuasiSteadyKind::QuasiSteady,
-            true,
-        )?),
-        StudyModel::Steady => Arc::new(QuasiSteady::new(
-            chord,
-            a.elastic_axis,
-            QuasiSteadyKind::Steady,
-            false,
-        )?),
-        StudyModel::FlatPlateTable => Arc::new(DerivativeTable::flat_plate(
-            chord,
-            &aeroelastic::reference::flat_plate_k_grid(),
-            a.n_lag,
-        )?),
-        other => {
-            return Err(Error::Study(format!(
-                "aero model `{other}` is not a linear model of [aero]"
-            )))
-        }
+    let Some(kind) = model.linear_kind() else {
+        return Err(Error::Study(format!(
+            "aero model `{model}` is not a linear model of [aero]"
+        )));
     };
-    Ok(m)
+    // the study's linear models as model files describe them: `steady` without the
+    // noncirculatory terms, the flat-plate table on the reference K grid
+    let quasi = matches!(kind, ModelKind::QuasiSteady | ModelKind::Steady);
+    let table = kind == ModelKind::FlatPlateTable;
+    let spec = ModelFile {
+        kind,
+        chord: Some(chord),
+        elastic_axis: (!table).then_some(a.elastic_axis),
+        noncirculatory: quasi.then_some(kind == ModelKind::QuasiSteady),
+        rfa_lags: table.then_some(a.n_lag),
+        k: table.then(aeroelastic::reference::flat_plate_k_grid),
+        derivatives: None,
+        file: None,
+        groups: None,
+        missing: None,
+        nonlinear: Vec::new(),
+    };
+    Ok(LoadedModel::from_spec(&spec, "[aero]", Path::new("."), None)?.model)
 }
 
 /// Models derived from the study's own data: the identified law (when `[aero]` or a

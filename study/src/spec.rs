@@ -1446,6 +1446,20 @@ pub enum StudyModel {
 }
 
 impl StudyModel {
+    /// The model-file kind of a linear model (`theodorsen`, `quasi_steady`, `steady`,
+    /// `flat_plate_table`); `None` for `identified` and `truth`, which come from the
+    /// study's data.
+    pub fn linear_kind(self) -> Option<aeroelastic::files::ModelKind> {
+        use aeroelastic::files::ModelKind;
+        match self {
+            StudyModel::Theodorsen => Some(ModelKind::Theodorsen),
+            StudyModel::QuasiSteady => Some(ModelKind::QuasiSteady),
+            StudyModel::Steady => Some(ModelKind::Steady),
+            StudyModel::FlatPlateTable => Some(ModelKind::FlatPlateTable),
+            StudyModel::Identified | StudyModel::Truth => None,
+        }
+    }
+
     /// The name as written in the study file and the result documents.
     pub fn name(self) -> &'static str {
         match self {
