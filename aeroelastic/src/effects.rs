@@ -853,22 +853,24 @@ pub fn free_section(
     for inj in effects {
         match (&inj.effect, inj.form) {
             (InjectedEffect::StructuralCubic { kappa }, Form::Primary) => {
-                st.pitch_stiffness_terms.push(PolyTerm {
+                st.nonlinear.pitch_stiffness_terms.push(PolyTerm {
                     power: 3,
                     coefficient: kappa * k_a,
                 })
             }
             (InjectedEffect::StructuralCubic { kappa }, Form::Alternate) => {
-                st.pitch_stiffness_terms.push(PolyTerm {
+                st.nonlinear.pitch_stiffness_terms.push(PolyTerm {
                     power: 3,
                     coefficient: 0.5 * kappa * k_a,
                 });
-                st.pitch_stiffness_terms.push(PolyTerm {
+                st.nonlinear.pitch_stiffness_terms.push(PolyTerm {
                     power: 5,
                     coefficient: 10.0 * kappa * k_a,
                 });
             }
-            (InjectedEffect::Freeplay { half_gap }, Form::Primary) => st.pitch_freeplay = *half_gap,
+            (InjectedEffect::Freeplay { half_gap }, Form::Primary) => {
+                st.nonlinear.pitch_freeplay = *half_gap
+            }
             (InjectedEffect::Freeplay { half_gap }, Form::Alternate) => {
                 parts.push(Part::SmoothFreeplay {
                     k_alpha: k_a,
@@ -877,7 +879,7 @@ pub fn free_section(
                 })
             }
             (InjectedEffect::Friction { moment }, Form::Primary) => {
-                st.friction = Some(Friction {
+                st.nonlinear.friction = Some(Friction {
                     heave_force: 0.0,
                     pitch_moment: *moment,
                     heave_smoothing: None,

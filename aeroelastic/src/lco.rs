@@ -831,7 +831,7 @@ mod tests {
 
     fn cubic_hp1() -> (Section, f64) {
         let mut st = hp1_structure();
-        st.pitch_stiffness_terms.push(PolyTerm {
+        st.nonlinear.pitch_stiffness_terms.push(PolyTerm {
             power: 3,
             coefficient: 10.0 * st.k_alpha,
         });
@@ -916,11 +916,11 @@ mod tests {
         // Softening cubic + hardening quintic pitch spring: subcritical Hopf with a fold.
         let mut st = hp1_structure();
         let k = st.k_alpha;
-        st.pitch_stiffness_terms.push(PolyTerm {
+        st.nonlinear.pitch_stiffness_terms.push(PolyTerm {
             power: 3,
             coefficient: -20.0 * k,
         });
-        st.pitch_stiffness_terms.push(PolyTerm {
+        st.nonlinear.pitch_stiffness_terms.push(PolyTerm {
             power: 5,
             coefficient: 1200.0 * k,
         });

@@ -138,7 +138,7 @@ pub fn flutter_options() -> FlutterOptions {
 /// U/(bω_α) = 2.1704). b = 1 m, ω_α = 1 rad/s, ρ = 1 kg/m³.
 pub fn hp1_cubic_pitch() -> Section {
     let mut st = hp1_structure();
-    st.pitch_stiffness_terms.push(PolyTerm {
+    st.nonlinear.pitch_stiffness_terms.push(PolyTerm {
         power: 3,
         coefficient: 10.0 * st.k_alpha,
     });

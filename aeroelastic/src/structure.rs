@@ -83,18 +83,10 @@ pub struct Structure {
     /// Pitch viscous damping c_α [N·m·s/rad per m span].
     #[serde(default)]
     pub c_alpha: f64,
-    /// Extra heave stiffness terms Σ c_p h^p.
+    /// The nonlinear restoring terms (polynomial stiffness, pitch freeplay, friction); none
+    /// by default. In TOML the table `[nonlinear]`.
     #[serde(default)]
-    pub heave_stiffness_terms: Vec<PolyTerm>,
-    /// Extra pitch stiffness terms Σ c_p d^p on the spring deflection d.
-    #[serde(default)]
-    pub pitch_stiffness_terms: Vec<PolyTerm>,
-    /// Pitch freeplay half gap δ \[rad\] (zero stiffness for |α| < δ); 0 = none.
-    #[serde(default)]
-    pub pitch_freeplay: f64,
-    /// Coulomb friction, if any.
-    #[serde(default)]
-    pub friction: Option<Friction>,
+    pub nonlinear: Nonlinearities,
 }
 
 /// Nondimensional description of a typical section (Hodges & Pierce notation) plus the
@@ -158,8 +150,9 @@ impl NondimStructure {
 }
 
 /// The nonlinear restoring terms of a structure, declared once for every
-/// [`StructureSpec`] form: polynomial stiffness terms, pitch freeplay and Coulomb friction
-/// (the meaning, units and sign conventions of the same-named [`Structure`] fields).
+/// [`StructureSpec`] form and held by [`Structure::nonlinear`]: polynomial stiffness terms
+/// (heave on h \[m\], pitch on the spring deflection d \[rad\]), pitch freeplay and Coulomb
+/// friction (the restoring terms of the module docs).
 ///
 /// Serde form: the keys below (all optional), unknown keys rejected.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
@@ -315,10 +308,7 @@ impl Structure {
             k_alpha,
             c_h,
             c_alpha,
-            heave_stiffness_terms: Vec::new(),
-            pitch_stiffness_terms: Vec::new(),
-            pitch_freeplay: 0.0,
-            friction: None,
+            nonlinear: Nonlinearities::none(),
         };
         s.validate()?;
         Ok(s)
@@ -362,10 +352,7 @@ impl Structure {
             k_alpha: p.k_alpha(),
             c_h: 2.0 * p.zeta_h * m * w_h,
             c_alpha: 2.0 * p.zeta_alpha * i_a * p.omega_alpha,
-            heave_stiffness_terms: Vec::new(),
-            pitch_stiffness_terms: Vec::new(),
-            pitch_freeplay: 0.0,
-            friction: None,
+            nonlinear: Nonlinearities::none(),
         };
         s.validate()?;
         Ok(s)
@@ -395,10 +382,7 @@ impl Structure {
             k_alpha: p.inertia * wa * wa,
             c_h: 2.0 * p.damping_heave * p.mass * wh,
             c_alpha: 2.0 * p.damping_pitch * p.inertia * wa,
-            heave_stiffness_terms: Vec::new(),
-            pitch_stiffness_terms: Vec::new(),
-            pitch_freeplay: 0.0,
-            friction: None,
+            nonlinear: Nonlinearities::none(),
         };
         s.validate().map_err(modal_field_names)?;
         Ok(s)
@@ -429,22 +413,14 @@ impl Structure {
     /// This structure with its nonlinear terms replaced by `n` (not validated).
     pub fn with_nonlinearities(self, n: Nonlinearities) -> Self {
         Structure {
-            heave_stiffness_terms: n.heave_stiffness_terms,
-            pitch_stiffness_terms: n.pitch_stiffness_terms,
-            pitch_freeplay: n.pitch_freeplay,
-            friction: n.friction,
+            nonlinear: n,
             ..self
         }
     }
 
     /// The nonlinear terms of this structure.
     pub fn nonlinearities(&self) -> Nonlinearities {
-        Nonlinearities {
-            heave_stiffness_terms: self.heave_stiffness_terms.clone(),
-            pitch_stiffness_terms: self.pitch_stiffness_terms.clone(),
-            pitch_freeplay: self.pitch_freeplay,
-            friction: self.friction,
-        }
+        self.nonlinear.clone()
     }
 
     /// Parses a TOML table with the fields of [`Structure`] (SI), rejecting unknown keys,
@@ -488,8 +464,14 @@ impl Structure {
         non_negative("c_h", self.c_h)?;
         non_negative("c_alpha", self.c_alpha)?;
         for (name, terms) in [
-            ("heave_stiffness_terms", &self.heave_stiffness_terms),
-            ("pitch_stiffness_terms", &self.pitch_stiffness_terms),
+            (
+                "heave_stiffness_terms",
+                &self.nonlinear.heave_stiffness_terms,
+            ),
+            (
+                "pitch_stiffness_terms",
+                &self.nonlinear.pitch_stiffness_terms,
+            ),
         ] {
             for (i, t) in terms.iter().enumerate() {
                 if t.power < 2 {
@@ -502,8 +484,8 @@ impl Structure {
                 finite(&format!("{name}[{i}].coefficient"), t.coefficient)?;
             }
         }
-        non_negative("pitch_freeplay", self.pitch_freeplay)?;
-        if let Some(f) = &self.friction {
+        non_negative("pitch_freeplay", self.nonlinear.pitch_freeplay)?;
+        if let Some(f) = &self.nonlinear.friction {
             non_negative("friction.heave_force", f.heave_force)?;
             non_negative("friction.pitch_moment", f.pitch_moment)?;
             if let Some(e) = f.heave_smoothing {
@@ -550,17 +532,18 @@ impl Structure {
 
     /// Whether the restoring forces are exactly linear (no polynomial, freeplay, friction).
     pub fn is_linear(&self) -> bool {
-        self.heave_stiffness_terms.is_empty()
-            && self.pitch_stiffness_terms.is_empty()
-            && self.pitch_freeplay == 0.0
+        self.nonlinear.heave_stiffness_terms.is_empty()
+            && self.nonlinear.pitch_stiffness_terms.is_empty()
+            && self.nonlinear.pitch_freeplay == 0.0
             && self
+                .nonlinear
                 .friction
                 .is_none_or(|f| f.heave_force == 0.0 && f.pitch_moment == 0.0)
     }
 
     /// Resolved friction (F_c, ε_h, T_c, ε_α) with defaults applied; zeros when absent.
     pub(crate) fn friction_resolved(&self) -> [f64; 4] {
-        match &self.friction {
+        match &self.nonlinear.friction {
             None => [0.0, 1.0, 0.0, 1.0],
             Some(f) => {
                 let eh = f.heave_smoothing.unwrap_or_else(|| {
@@ -591,15 +574,15 @@ impl Structure {
     pub(crate) fn restoring_with(&self, q: [f64; 2], qd: [f64; 2], fr: &[f64; 4]) -> [f64; 2] {
         let h = q[0];
         let mut fh = self.c_h * qd[0] + self.k_h * h;
-        for t in &self.heave_stiffness_terms {
+        for t in &self.nonlinear.heave_stiffness_terms {
             fh += t.coefficient * h.powi(t.power as i32);
         }
         let a = q[1];
-        let d = if self.pitch_freeplay > 0.0 {
-            if a > self.pitch_freeplay {
-                a - self.pitch_freeplay
-            } else if a < -self.pitch_freeplay {
-                a + self.pitch_freeplay
+        let d = if self.nonlinear.pitch_freeplay > 0.0 {
+            if a > self.nonlinear.pitch_freeplay {
+                a - self.nonlinear.pitch_freeplay
+            } else if a < -self.nonlinear.pitch_freeplay {
+                a + self.nonlinear.pitch_freeplay
             } else {
                 0.0
             }
@@ -607,7 +590,7 @@ impl Structure {
             a
         };
         let mut ma = self.c_alpha * qd[1] + self.k_alpha * d;
-        for t in &self.pitch_stiffness_terms {
+        for t in &self.nonlinear.pitch_stiffness_terms {
             ma += t.coefficient * d.powi(t.power as i32);
         }
         if fr[0] > 0.0 {
@@ -662,7 +645,7 @@ mod tests {
         let e = Structure::from_nondimensional(&p).unwrap_err();
         assert!(e.to_string().contains("r_alpha2"), "{e}");
         let mut s = Structure::from_nondimensional(&hp1()).unwrap();
-        s.pitch_stiffness_terms.push(PolyTerm {
+        s.nonlinear.pitch_stiffness_terms.push(PolyTerm {
             power: 1,
             coefficient: 3.0,
         });
@@ -684,15 +667,16 @@ mod tests {
             k_h = 1000.0
             k_alpha = 50.0
             c_alpha = 0.1
+            [nonlinear]
             pitch_freeplay = 0.01
-            [[pitch_stiffness_terms]]
+            [[nonlinear.pitch_stiffness_terms]]
             power = 3
             coefficient = 500.0
-            [friction]
+            [nonlinear.friction]
             pitch_moment = 0.05
         "#;
         let s = Structure::from_toml_str(text).unwrap();
-        assert_eq!(s.pitch_stiffness_terms[0].power, 3);
+        assert_eq!(s.nonlinear.pitch_stiffness_terms[0].power, 3);
         assert_eq!(s.c_h, 0.0);
         let back = Structure::from_toml_str(&toml::to_string(&s).unwrap()).unwrap();
         assert_eq!(back, s);
@@ -701,6 +685,11 @@ mod tests {
         )
         .unwrap_err();
         assert!(e.to_string().contains("k_beta"), "{e}");
+        let e = Structure::from_toml_str(
+            "mass = 1.0\ninertia_alpha = 1.0\nk_h = 1.0\nk_alpha = 1.0\n[nonlinear]\nfreeplay = 0.1\n",
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("freeplay"), "{e}");
         let e = Structure::from_toml_str(
             "mass = -1.0\ninertia_alpha = 1.0\nk_h = 1.0\nk_alpha = 1.0\n",
         )
@@ -726,7 +715,10 @@ mod tests {
         .resolve()
         .unwrap();
         assert_eq!(nd.k_alpha, s.k_alpha);
-        assert_eq!(nd.pitch_stiffness_terms[0].coefficient, 2.0 * s.k_alpha);
+        assert_eq!(
+            nd.nonlinear.pitch_stiffness_terms[0].coefficient,
+            2.0 * s.k_alpha
+        );
         assert_eq!(StructureSpec::Si(nd.clone()).resolve().unwrap(), nd);
         let tau = 2.0 * std::f64::consts::PI;
         let modal = ModalStructure {
@@ -762,8 +754,8 @@ mod tests {
     #[test]
     fn freeplay_polynomial_and_friction_restoring() {
         let mut s = Structure::from_rig(2.0, 0.1, 0.0, 100.0, 10.0, 0.0, 0.0).unwrap();
-        s.pitch_freeplay = 0.02;
-        s.pitch_stiffness_terms.push(PolyTerm {
+        s.nonlinear.pitch_freeplay = 0.02;
+        s.nonlinear.pitch_stiffness_terms.push(PolyTerm {
             power: 3,
             coefficient: 1000.0,
         });
@@ -776,7 +768,7 @@ mod tests {
         let want = 10.0 * d + 1000.0 * d.powi(3);
         assert!((s.restoring([0.0, 0.05], [0.0, 0.0])[1] - want).abs() < 1e-14);
         assert!((s.restoring([0.0, -0.05], [0.0, 0.0])[1] + want).abs() < 1e-14);
-        s.friction = Some(Friction {
+        s.nonlinear.friction = Some(Friction {
             heave_force: 0.0,
             pitch_moment: 0.3,
             heave_smoothing: None,

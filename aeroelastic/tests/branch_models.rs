@@ -50,7 +50,7 @@ fn hp1_cubic_pitch_friction() -> (Section, Section) {
     let t_c = 0.01 * st.k_alpha;
     let zeta = 0.02;
     let eps = t_c / (2.0 * zeta * (st.k_alpha * st.inertia_alpha).sqrt());
-    st.friction = Some(Friction {
+    st.nonlinear.friction = Some(Friction {
         heave_force: 0.0,
         pitch_moment: t_c,
         heave_smoothing: None,
@@ -124,7 +124,7 @@ fn friction_changes_the_branch() {
 fn default_smoothing_has_no_hopf() {
     let base = hp1_cubic_pitch();
     let mut st = base.structure.clone();
-    st.friction = Some(Friction {
+    st.nonlinear.friction = Some(Friction {
         heave_force: 0.0,
         pitch_moment: 0.01 * st.k_alpha,
         heave_smoothing: None,

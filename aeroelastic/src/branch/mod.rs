@@ -733,10 +733,10 @@ impl Section {
     /// # Errors
     /// [`Error::InvalidParameter`] naming `structure.pitch_freeplay`.
     pub fn check_smooth(&self) -> Result<()> {
-        if self.structure.pitch_freeplay > 0.0 {
+        if self.structure.nonlinear.pitch_freeplay > 0.0 {
             return Err(Error::param(
                 "structure.pitch_freeplay",
-                self.structure.pitch_freeplay,
+                self.structure.nonlinear.pitch_freeplay,
                 "a sharp freeplay gap is not differentiable: continuation of periodic orbits \
                  needs a smooth vector field; replace it by a smooth stiffness polynomial \
                  (e.g. the hardening terms of a fitted smoothed gap) or use time integration \
@@ -1375,7 +1375,7 @@ mod tests {
     #[test]
     fn freeplay_is_refused_with_the_field_name() {
         let mut s = hp1_cubic_pitch();
-        s.structure.pitch_freeplay = 0.01;
+        s.structure.nonlinear.pitch_freeplay = 0.01;
         let e = s
             .lco_branches(1.0, 3.0, &BranchOptions::default(), &no_obs)
             .unwrap_err();
@@ -1451,7 +1451,7 @@ mod tests {
     pub(crate) fn hp1_soft_hard() -> Section {
         let mut s = hp1_cubic_pitch();
         let k = hp1_structure().k_alpha;
-        s.structure.pitch_stiffness_terms = vec![
+        s.structure.nonlinear.pitch_stiffness_terms = vec![
             PolyTerm {
                 power: 3,
                 coefficient: -3.0 * k,
