@@ -91,6 +91,23 @@ pub enum Error {
 }
 
 impl Error {
+    /// This error with the field of an [`Error::InvalidParameter`] rewritten by `f` (a file
+    /// name prefixed, a key renamed to an input form's own name); other errors unchanged.
+    pub fn map_field(self, f: impl FnOnce(String) -> String) -> Self {
+        match self {
+            Error::InvalidParameter {
+                field,
+                value,
+                message,
+            } => Error::InvalidParameter {
+                field: f(field),
+                value,
+                message,
+            },
+            other => other,
+        }
+    }
+
     /// Shorthand for [`Error::InvalidParameter`].
     pub fn param(field: impl Into<String>, value: f64, message: impl Into<String>) -> Self {
         Error::InvalidParameter {

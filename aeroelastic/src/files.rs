@@ -90,23 +90,6 @@ pub struct StructureFile {
     unknown: BTreeMap<String, toml::Value>,
 }
 
-/// The keys of a structure file, in documented order (for the unknown-key message).
-const STRUCTURE_FILE_KEYS: [&str; 13] = [
-    "air_density",
-    "chord",
-    "mass",
-    "inertia",
-    "static_unbalance",
-    "freq_heave",
-    "freq_pitch",
-    "damping_heave",
-    "damping_pitch",
-    "heave_stiffness_terms",
-    "pitch_stiffness_terms",
-    "pitch_freeplay",
-    "friction",
-];
-
 /// The key of a `#[serde(flatten)]`-composed table that serde cannot name: the first key of
 /// `table` (in key order) whose value alone does not deserialize into `T`, with serde's
 /// message (e.g. `invalid type: string "a", expected f64`). Serde buffers flattened tables,
@@ -148,18 +131,7 @@ fn read_text(path: &Path) -> Result<String> {
 
 /// Prefixes the field of an [`Error::InvalidParameter`] with the file name.
 fn in_file(path: &str, e: Error) -> Error {
-    match e {
-        Error::InvalidParameter {
-            field,
-            value,
-            message,
-        } => Error::InvalidParameter {
-            field: format!("{path}: {field}"),
-            value,
-            message,
-        },
-        other => other,
-    }
+    e.map_field(|field| format!("{path}: {field}"))
 }
 
 impl StructureFile {
@@ -188,8 +160,10 @@ impl StructureFile {
                 message: format!(
                     "line {}: unknown field `{key}`, expected one of {}",
                     key_line(text, key),
-                    STRUCTURE_FILE_KEYS
+                    ["air_density", "chord"]
                         .iter()
+                        .chain(&ModalStructure::KEYS)
+                        .chain(&Nonlinearities::KEYS)
                         .map(|k| format!("`{k}`"))
                         .collect::<Vec<_>>()
                         .join(", ")

@@ -173,6 +173,14 @@ pub struct Nonlinearities {
 }
 
 impl Nonlinearities {
+    /// The keys of the nonlinear terms, in documented order.
+    pub const KEYS: [&'static str; 4] = [
+        "heave_stiffness_terms",
+        "pitch_stiffness_terms",
+        "pitch_freeplay",
+        "friction",
+    ];
+
     /// No nonlinear term (a linear structure).
     pub fn none() -> Self {
         Self::default()
@@ -245,7 +253,10 @@ impl StructureSpec {
                 (Structure::from_nondimensional(linear)?, nonlinear)
             }
         };
-        let s = linear.with_nonlinearities(nonlinear.clone());
+        let s = Structure {
+            nonlinear: nonlinear.clone(),
+            ..linear
+        };
         s.validate().map_err(|e| match self {
             StructureSpec::Modal { .. } => modal_field_names(e),
             _ => e,
@@ -256,7 +267,7 @@ impl StructureSpec {
     /// The nonlinear terms of the spec (those of the [`Structure`] for the SI form).
     pub fn nonlinearities(&self) -> Nonlinearities {
         match self {
-            StructureSpec::Si(s) => s.nonlinearities(),
+            StructureSpec::Si(s) => s.nonlinear.clone(),
             StructureSpec::Modal { nonlinear, .. }
             | StructureSpec::Nondimensional { nonlinear, .. } => nonlinear.clone(),
         }
@@ -266,21 +277,10 @@ impl StructureSpec {
 /// A [`Structure::validate`] error in the key names of the modal form (`inertia_alpha` →
 /// `inertia`).
 fn modal_field_names(e: Error) -> Error {
-    match e {
-        Error::InvalidParameter {
-            field,
-            value,
-            message,
-        } => Error::InvalidParameter {
-            field: match field.as_str() {
-                "inertia_alpha" => "inertia".into(),
-                _ => field,
-            },
-            value,
-            message,
-        },
-        other => other,
-    }
+    e.map_field(|field| match field.as_str() {
+        "inertia_alpha" => "inertia".into(),
+        _ => field,
+    })
 }
 
 impl Structure {
@@ -408,19 +408,6 @@ impl Structure {
             damping_heave: self.c_h / (2.0 * self.mass * wh),
             damping_pitch: self.c_alpha / (2.0 * self.inertia_alpha * wa),
         })
-    }
-
-    /// This structure with its nonlinear terms replaced by `n` (not validated).
-    pub fn with_nonlinearities(self, n: Nonlinearities) -> Self {
-        Structure {
-            nonlinear: n,
-            ..self
-        }
-    }
-
-    /// The nonlinear terms of this structure.
-    pub fn nonlinearities(&self) -> Nonlinearities {
-        self.nonlinear.clone()
     }
 
     /// Parses a TOML table with the fields of [`Structure`] (SI), rejecting unknown keys,
@@ -738,7 +725,7 @@ mod tests {
         .unwrap();
         assert!((m.k_alpha / s.k_alpha - 1.0).abs() < 1e-12);
         assert!((m.k_h / s.k_h - 1.0).abs() < 1e-12);
-        assert_eq!(m.nonlinearities(), nd.nonlinearities());
+        assert_eq!(m.nonlinear, nd.nonlinear);
         let mut bad = modal;
         bad.inertia = -1.0;
         let e = Structure::from_modal(&bad).unwrap_err();

@@ -55,6 +55,20 @@ pub struct ModalStructure {
     pub damping_pitch: f64,
 }
 
+impl ModalStructure {
+    /// The keys of the modal form, in documented order (a manifest's `[structure]`, the
+    /// linear part of a structure file).
+    pub const KEYS: [&'static str; 7] = [
+        "mass",
+        "inertia",
+        "static_unbalance",
+        "freq_heave",
+        "freq_pitch",
+        "damping_heave",
+        "damping_pitch",
+    ];
+}
+
 /// One `[[case]]` table of the manifest. Values are in the manifest's units
 /// (`amplitude` and `mean_pitch` in `units.pitch`); [`Manifest::case_meta`] converts to SI.
 #[derive(Debug, Clone, PartialEq)]
@@ -540,15 +554,7 @@ impl<'a> Cx<'a> {
         let structure = match root.opt_table("structure", "structure.")? {
             None => None,
             Some(st) => {
-                st.check_keys(&[
-                    "mass",
-                    "inertia",
-                    "static_unbalance",
-                    "freq_heave",
-                    "freq_pitch",
-                    "damping_heave",
-                    "damping_pitch",
-                ])?;
+                st.check_keys(&ModalStructure::KEYS)?;
                 Some(ModalStructure {
                     mass: st.req_pos("mass", "kg/m")?,
                     inertia: st.req_pos("inertia", "kg m^2/m")?,
