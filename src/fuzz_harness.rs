@@ -235,7 +235,8 @@ fn check_study_is_bounded(s: &Study) {
         assert!(l.perturbation_down_deg.is_finite());
     }
     if let Some(a) = &sp.aero {
-        assert!(a.elastic_axis.is_finite() && (1..=8).contains(&a.n_lag));
+        assert!(a.elastic_axis.is_none_or(f64::is_finite));
+        assert!(a.rfa_lags.is_none_or(|n| (1..=8).contains(&n)));
     }
     if let Some(st) = &sp.structure.as_ref().map(|s| s.linear) {
         for v in [

@@ -25,14 +25,14 @@
 //! kind = "theodorsen"   # | "quasi_steady" | "steady" | "flat_plate_table" | "derivative_table" | "identified" | "dynamic_stall"
 //! chord = 0.25          # \[m\] (all kinds; for "identified" optional when given elsewhere)
 //! elastic_axis = -0.3   # a, semi-chords aft of mid-chord (theodorsen, dynamic_stall, quasi_steady, steady; default 0)
-//! noncirculatory = true # quasi_steady, steady (default true)
+//! noncirculatory = true # quasi_steady (default true), steady (default false)
 //! rfa_lags = 3          # flat_plate_table, derivative_table, identified (default 3)
-//! k = [0.1, 0.2, …]     # flat_plate_table: the K grid
+//! k = [0.1, 0.2, …]     # flat_plate_table: the K grid (default: reference::flat_plate_k_grid)
 //! # derivative_table: [[derivatives]] k = 0.5, h1 = …, h2, h3, h4, a1, a2, a3, a4
 //! # identified: file = "identification.json" (relative to the model file),
 //! #             groups = ["D"], missing = "error" | "skip" | "flat_plate" | "zero"
 //!
-//! [[nonlinear]]         # any number; names as in DATA_FORMAT.md, degree 2..3
+//! [[nonlinear]]         # any number; names as in DATA_FORMAT.md, total degree ≥ 2
 //! term = "alpha_dot^3"
 //! channel = "moment"    # "lift" | "moment"
 //! coefficient = -100.0  # constant nondimensional coefficient, or an Eq. 19 table:
@@ -41,7 +41,9 @@
 //!
 //! A path ending in `.json` (or a file starting with `{`) is read as an
 //! `identification.json` ([`IdentifiedLaw`]). Unknown keys are errors naming the key and
-//! the file; a key that the `kind` does not use is an error naming it too.
+//! the file; a key that the `kind` does not use is an error naming it too. A study's
+//! `[aero]` table is the same [`ModelFile`], where `model` and `n_lag` may be written for
+//! `kind` and `rfa_lags`.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -241,15 +243,63 @@ pub enum ModelKind {
     DynamicStall,
 }
 
-/// One `[[nonlinear]]` entry of a model file.
+impl ModelKind {
+    /// Every kind, in declaration order.
+    pub const ALL: [ModelKind; 7] = [
+        ModelKind::Theodorsen,
+        ModelKind::QuasiSteady,
+        ModelKind::Steady,
+        ModelKind::FlatPlateTable,
+        ModelKind::DerivativeTable,
+        ModelKind::Identified,
+        ModelKind::DynamicStall,
+    ];
+
+    /// The name as written in model files and result documents (`theodorsen`, …).
+    pub fn name(self) -> &'static str {
+        match self {
+            ModelKind::Theodorsen => "theodorsen",
+            ModelKind::QuasiSteady => "quasi_steady",
+            ModelKind::Steady => "steady",
+            ModelKind::FlatPlateTable => "flat_plate_table",
+            ModelKind::DerivativeTable => "derivative_table",
+            ModelKind::Identified => "identified",
+            ModelKind::DynamicStall => "dynamic_stall",
+        }
+    }
+
+    /// The optional keys of a model file this kind uses (besides `kind` and `nonlinear`).
+    pub fn keys(self) -> &'static [&'static str] {
+        match self {
+            ModelKind::Theodorsen | ModelKind::DynamicStall => &["chord", "elastic_axis"],
+            ModelKind::QuasiSteady | ModelKind::Steady => {
+                &["chord", "elastic_axis", "noncirculatory"]
+            }
+            ModelKind::FlatPlateTable => &["chord", "rfa_lags", "k"],
+            ModelKind::DerivativeTable => &["chord", "rfa_lags", "derivatives"],
+            ModelKind::Identified => &["chord", "rfa_lags", "file", "groups", "missing"],
+        }
+    }
+}
+
+impl std::fmt::Display for ModelKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// One `[[nonlinear]]` entry of a model file or of a study's `[aero]`: an aerodynamic
+/// monomial (DATA_FORMAT.md name, total degree ≥ 2) on the lift or the moment, with a
+/// constant nondimensional coefficient or an Eq. 19 table over K.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct NonlinearSpec {
-    /// Term name (DATA_FORMAT.md), degree 2 or 3.
+    /// Term name (DATA_FORMAT.md), total degree ≥ 2, e.g. `alpha_dot^3`.
     pub term: String,
-    /// `lift` or `moment` (read by [`Channel::from_name`] when the model is built, so that
-    /// an error names `nonlinear[i].channel`).
-    pub channel: String,
+    /// `lift` or `moment`.
+    #[serde(with = "crate::aero::channel_name")]
+    #[schemars(with = "String")]
+    pub channel: Channel,
     /// Constant nondimensional coefficient.
     #[serde(default)]
     pub coefficient: Option<f64>,
@@ -264,11 +314,56 @@ pub struct NonlinearSpec {
     pub k_power: Option<i32>,
 }
 
+impl NonlinearSpec {
+    /// The term this entry describes (the one conversion of a written nonlinear term).
+    ///
+    /// # Errors
+    /// `(field, message)` with `field` relative to the entry: `term` when the name does not
+    /// parse or its total degree is below 2; `coefficient` when neither or both of
+    /// `coefficient` and the table (`k`, `values`, `k_power`) are given, or the constant is
+    /// not finite. (The table's own checks are [`NonlinearAero::new`]'s.)
+    pub fn to_term(&self) -> std::result::Result<NonlinearTerm, (&'static str, String)> {
+        let powers = NonlinearTerm::powers_of(&self.term).map_err(|e| {
+            let m = match e {
+                Error::InvalidParameter { message, .. } => message,
+                other => other.to_string(),
+            };
+            ("term", m)
+        })?;
+        if powers.iter().sum::<u32>() < 2 {
+            return Err(("term", format!("`{}`: total degree must be ≥ 2", self.term)));
+        }
+        let coefficient = match (self.coefficient, &self.k, &self.values, self.k_power) {
+            (Some(c), None, None, None) if c.is_finite() => Coefficient::Constant(c),
+            (Some(c), None, None, None) => {
+                return Err(("coefficient", format!("{c} must be finite")))
+            }
+            (None, Some(k), Some(v), Some(p)) => Coefficient::OverK {
+                k: k.clone(),
+                values: v.clone(),
+                k_power: p,
+            },
+            _ => {
+                return Err((
+                    "coefficient",
+                    "give either `coefficient` or all of `k`, `values`, `k_power`".into(),
+                ))
+            }
+        };
+        Ok(NonlinearTerm {
+            channel: self.channel,
+            powers,
+            coefficient,
+        })
+    }
+}
+
 /// A model file (see the module docs).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ModelFile {
-    /// Model kind.
+    /// Model kind (`model` is accepted for it, the key of a study's `[aero]`).
+    #[serde(alias = "model")]
     pub kind: ModelKind,
     /// Chord B \[m\].
     #[serde(default)]
@@ -276,13 +371,14 @@ pub struct ModelFile {
     /// Elastic axis a (semi-chords aft of mid-chord).
     #[serde(default)]
     pub elastic_axis: Option<f64>,
-    /// Noncirculatory terms (quasi-steady kinds).
+    /// Noncirculatory terms (quasi-steady kinds; default true for `quasi_steady`, false for
+    /// `steady`).
     #[serde(default)]
     pub noncirculatory: Option<bool>,
-    /// RFA lag roots.
-    #[serde(default)]
+    /// RFA lag roots (`n_lag` is accepted for it, the key of a study's `[aero]`).
+    #[serde(default, alias = "n_lag")]
     pub rfa_lags: Option<usize>,
-    /// K grid of `flat_plate_table`.
+    /// K grid of `flat_plate_table` (default [`crate::reference::flat_plate_k_grid`]).
     #[serde(default)]
     pub k: Option<Vec<f64>>,
     /// Rows of `derivative_table`.
@@ -300,6 +396,63 @@ pub struct ModelFile {
     /// Nonlinear terms added to the model.
     #[serde(default)]
     pub nonlinear: Vec<NonlinearSpec>,
+}
+
+impl ModelFile {
+    /// A file of kind `kind` with no optional key and no nonlinear term.
+    pub fn of_kind(kind: ModelKind) -> Self {
+        ModelFile {
+            kind,
+            chord: None,
+            elastic_axis: None,
+            noncirculatory: None,
+            rfa_lags: None,
+            k: None,
+            derivatives: None,
+            file: None,
+            groups: None,
+            missing: None,
+            nonlinear: Vec::new(),
+        }
+    }
+
+    /// The optional keys that are given, in declaration order.
+    pub fn present_keys(&self) -> impl Iterator<Item = &'static str> + '_ {
+        [
+            ("chord", self.chord.is_some()),
+            ("elastic_axis", self.elastic_axis.is_some()),
+            ("noncirculatory", self.noncirculatory.is_some()),
+            ("rfa_lags", self.rfa_lags.is_some()),
+            ("k", self.k.is_some()),
+            ("derivatives", self.derivatives.is_some()),
+            ("file", self.file.is_some()),
+            ("groups", self.groups.is_some()),
+            ("missing", self.missing.is_some()),
+        ]
+        .into_iter()
+        .filter_map(|(name, present)| present.then_some(name))
+    }
+
+    /// This file as kind `kind`: the keys `kind` uses are kept, the others dropped, the
+    /// nonlinear terms kept (a study's flutter runs of other kinds take `[aero]`'s
+    /// parameters this way).
+    pub fn for_kind(&self, kind: ModelKind) -> Self {
+        let keep = kind.keys();
+        let k = |name: &str| keep.contains(&name);
+        ModelFile {
+            kind,
+            chord: self.chord.filter(|_| k("chord")),
+            elastic_axis: self.elastic_axis.filter(|_| k("elastic_axis")),
+            noncirculatory: self.noncirculatory.filter(|_| k("noncirculatory")),
+            rfa_lags: self.rfa_lags.filter(|_| k("rfa_lags")),
+            k: self.k.clone().filter(|_| k("k")),
+            derivatives: self.derivatives.clone().filter(|_| k("derivatives")),
+            file: self.file.clone().filter(|_| k("file")),
+            groups: self.groups.clone().filter(|_| k("groups")),
+            missing: self.missing.filter(|_| k("missing")),
+            nonlinear: self.nonlinear.clone(),
+        }
+    }
 }
 
 /// A loaded aerodynamic model.
@@ -375,32 +528,11 @@ impl LoadedModel {
             source_name: source.to_string(),
             message: m,
         };
-        let kind_name = serde_json::to_string(&f.kind).unwrap_or_default();
-        let used: &[&str] = match f.kind {
-            ModelKind::Theodorsen | ModelKind::DynamicStall => &["chord", "elastic_axis"],
-            ModelKind::QuasiSteady | ModelKind::Steady => {
-                &["chord", "elastic_axis", "noncirculatory"]
-            }
-            ModelKind::FlatPlateTable => &["chord", "rfa_lags", "k"],
-            ModelKind::DerivativeTable => &["chord", "rfa_lags", "derivatives"],
-            ModelKind::Identified => &["chord", "rfa_lags", "file", "groups", "missing"],
-        };
-        for (name, present) in [
-            ("chord", f.chord.is_some()),
-            ("elastic_axis", f.elastic_axis.is_some()),
-            ("noncirculatory", f.noncirculatory.is_some()),
-            ("rfa_lags", f.rfa_lags.is_some()),
-            ("k", f.k.is_some()),
-            ("derivatives", f.derivatives.is_some()),
-            ("file", f.file.is_some()),
-            ("groups", f.groups.is_some()),
-            ("missing", f.missing.is_some()),
-        ] {
-            if present && !used.contains(&name) {
-                return Err(toml_err(format!(
-                    "key `{name}` is not used by kind = {kind_name}"
-                )));
-            }
+        let kind_name = format!("\"{}\"", f.kind);
+        if let Some(name) = f.present_keys().find(|k| !f.kind.keys().contains(k)) {
+            return Err(toml_err(format!(
+                "key `{name}` is not used by kind = {kind_name}"
+            )));
         }
         let need = |name: &str| toml_err(format!("missing key `{name}` for kind = {kind_name}"));
         let chord = f.chord.or(chord);
@@ -433,7 +565,7 @@ impl LoadedModel {
                             chord.ok_or_else(|| need("chord"))?,
                             a,
                             k,
-                            f.noncirculatory.unwrap_or(true),
+                            f.noncirculatory.unwrap_or(f.kind == ModelKind::QuasiSteady),
                         )
                         .map_err(wrap)?,
                     ),
@@ -444,7 +576,8 @@ impl LoadedModel {
                 Arc::new(
                     DerivativeTable::flat_plate(
                         chord.ok_or_else(|| need("chord"))?,
-                        f.k.as_deref().ok_or_else(|| need("k"))?,
+                        &f.k.clone()
+                            .unwrap_or_else(crate::reference::flat_plate_k_grid),
                         lags,
                     )
                     .map_err(wrap)?,
@@ -472,38 +605,15 @@ impl LoadedModel {
                 (law.table().clone() as Arc<dyn AeroModel>, Some(law))
             }
         };
-        let mut terms = Vec::new();
-        for (i, n) in f.nonlinear.iter().enumerate() {
-            let field = |x: &str| format!("nonlinear[{}].{x}", i + 1);
-            let powers = NonlinearTerm::powers_of(&n.term)
-                .map_err(|e| toml_err(format!("{}: {e}", field("term"))))?;
-            let channel = Channel::from_name(&n.channel).ok_or_else(|| {
-                toml_err(format!(
-                    "{} = \"{}\": expected \"lift\" or \"moment\"",
-                    field("channel"),
-                    n.channel
-                ))
-            })?;
-            let coefficient = match (n.coefficient, &n.k, &n.values, n.k_power) {
-                (Some(c), None, None, None) => Coefficient::Constant(c),
-                (None, Some(k), Some(v), Some(p)) => Coefficient::OverK {
-                    k: k.clone(),
-                    values: v.clone(),
-                    k_power: p,
-                },
-                _ => {
-                    return Err(toml_err(format!(
-                        "{}: give either `coefficient` or all of `k`, `values`, `k_power`",
-                        field("coefficient")
-                    )))
-                }
-            };
-            terms.push(NonlinearTerm {
-                channel,
-                powers,
-                coefficient,
-            });
-        }
+        let terms = f
+            .nonlinear
+            .iter()
+            .enumerate()
+            .map(|(i, n)| {
+                n.to_term()
+                    .map_err(|(field, m)| toml_err(format!("nonlinear[{}].{field}: {m}", i + 1)))
+            })
+            .collect::<Result<Vec<_>>>()?;
         let tables = identified.as_ref().map(|l| l.tables.clone());
         if let Some(law) = identified {
             if terms.is_empty() {
@@ -663,7 +773,11 @@ damping_pitch = 0.005
             None,
         )
         .unwrap_err();
-        assert!(e.to_string().contains("m.toml: nonlinear[1].powers"), "{e}");
+        assert!(
+            e.to_string()
+                .contains("m.toml: nonlinear[1].term: `alpha`: total degree must be ≥ 2"),
+            "{e}"
+        );
         let e = LoadedModel::parse(
             "kind = \"theodorsen\"\nchord = 0.25\n[[nonlinear]]\nterm = \"alpha^3\"\nchannel = \"pitch\"\ncoefficient = 1.0\n",
             "m.toml",
@@ -671,7 +785,11 @@ damping_pitch = 0.005
             None,
         )
         .unwrap_err();
-        assert!(e.to_string().contains("nonlinear[1].channel"), "{e}");
+        let m = e.to_string();
+        assert!(
+            m.contains("line 5") && m.contains("`pitch`: expected \"lift\" or \"moment\""),
+            "{m}"
+        );
         let ft = LoadedModel::parse(
             "kind = \"flat_plate_table\"\nchord = 0.25\nk = [0.2, 0.4, 0.6, 0.8, 1.0, 1.2, 1.5]\n",
             "m.toml",
@@ -680,5 +798,64 @@ damping_pitch = 0.005
         )
         .unwrap();
         assert_eq!(ft.model.n_lag(), 6);
+    }
+
+    #[test]
+    fn a_model_file_takes_the_study_key_names_and_documented_defaults() {
+        let base = Path::new(".");
+        // `model` and `n_lag` (a study's [aero] keys) are the same keys as `kind` and
+        // `rfa_lags`; a flat-plate table without `k` is on the reference grid
+        let a = LoadedModel::parse(
+            "model = \"flat_plate_table\"\nn_lag = 2\n",
+            "m.toml",
+            base,
+            Some(0.3),
+        )
+        .unwrap();
+        let b = LoadedModel::from_spec(
+            &ModelFile {
+                chord: Some(0.3),
+                rfa_lags: Some(2),
+                k: Some(crate::reference::flat_plate_k_grid()),
+                ..ModelFile::of_kind(ModelKind::FlatPlateTable)
+            },
+            "m",
+            base,
+            None,
+        )
+        .unwrap();
+        let flow = crate::aero::Flow { rho: 1.2, u: 7.0 };
+        assert_eq!(a.model.n_lag(), 4, "2 lag roots, 2 states each");
+        assert_eq!(
+            a.model.frequency_response(&flow, 9.0),
+            b.model.frequency_response(&flow, 9.0)
+        );
+        // `steady` leaves the noncirculatory terms out unless asked, `quasi_steady` keeps them
+        let name = |t: &str| {
+            LoadedModel::parse(t, "m.toml", base, Some(0.3))
+                .unwrap()
+                .model
+                .name()
+        };
+        assert_eq!(name("kind = \"steady\"\n"), "steady");
+        assert_ne!(name("kind = \"steady\"\nnoncirculatory = true\n"), "steady");
+        assert_eq!(
+            name("kind = \"quasi_steady\"\n"),
+            name("kind = \"quasi_steady\"\nnoncirculatory = true\n")
+        );
+        // another kind keeps only the keys it uses
+        let f: ModelFile = toml::from_str(
+            "model = \"theodorsen\"\nelastic_axis = -0.3\nn_lag = 4\n[[nonlinear]]\nterm = \"alpha^3\"\nchannel = \"lift\"\ncoefficient = 2.0\n",
+        )
+        .unwrap();
+        let t = f.for_kind(ModelKind::FlatPlateTable);
+        assert_eq!(t.present_keys().collect::<Vec<_>>(), ["rfa_lags"]);
+        assert_eq!(t.nonlinear, f.nonlinear);
+        assert_eq!(
+            f.for_kind(ModelKind::Steady)
+                .present_keys()
+                .collect::<Vec<_>>(),
+            ["elastic_axis"]
+        );
     }
 }

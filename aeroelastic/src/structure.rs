@@ -147,6 +147,41 @@ impl NondimStructure {
     pub fn k_alpha(&self) -> f64 {
         self.inertia_alpha() * self.omega_alpha * self.omega_alpha
     }
+
+    /// The nondimensional form of the modal (frequency) form `m` for air density `rho`
+    /// \[kg/m³\] and semi-chord `semi_chord` \[m\]: μ = m/(πρb²), σ = f_h/f_α,
+    /// x_α = S_α/(m b), r² = I_α/(m b²), ω_α = 2πf_α, the damping ratios kept. The inverse
+    /// of [`NondimStructure::modal`]; no check (see [`Structure::from_nondimensional`]).
+    pub fn from_modal(m: &ModalStructure, rho: f64, semi_chord: f64) -> Self {
+        let b = semi_chord;
+        NondimStructure {
+            mu: m.mass / (std::f64::consts::PI * rho * b * b),
+            r_alpha2: m.inertia / (m.mass * b * b),
+            sigma: m.freq_heave / m.freq_pitch,
+            x_alpha: m.static_unbalance / (m.mass * b),
+            semi_chord: b,
+            omega_alpha: 2.0 * std::f64::consts::PI * m.freq_pitch,
+            rho,
+            zeta_h: m.damping_heave,
+            zeta_alpha: m.damping_pitch,
+        }
+    }
+
+    /// The modal (frequency) form: m = μπρb², I_α = r² m b², S_α = x_α m b,
+    /// f_α = ω_α/2π, f_h = σ f_α, the damping ratios kept.
+    pub fn modal(&self) -> ModalStructure {
+        let m = self.mass();
+        let f_alpha = self.omega_alpha / (2.0 * std::f64::consts::PI);
+        ModalStructure {
+            mass: m,
+            inertia: self.inertia_alpha(),
+            static_unbalance: self.x_alpha * m * self.semi_chord,
+            freq_heave: self.sigma * f_alpha,
+            freq_pitch: f_alpha,
+            damping_heave: self.zeta_h,
+            damping_pitch: self.zeta_alpha,
+        }
+    }
 }
 
 /// The nonlinear restoring terms of a structure, declared once for every
@@ -619,6 +654,44 @@ mod tests {
         assert!((s.omega_h() / s.omega_alpha() - 0.4).abs() < 1e-12);
         assert!((s.static_unbalance / (s.mass * b) - 0.1).abs() < 1e-12);
         assert!((s.omega_alpha() - 10.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn nondimensional_and_modal_forms_are_inverse() {
+        let p = NondimStructure {
+            zeta_h: 0.01,
+            zeta_alpha: 0.02,
+            ..hp1()
+        };
+        let m = p.modal();
+        // the modal form resolves to the structure the nondimensional form resolves to
+        let (a, b) = (
+            Structure::from_nondimensional(&p).unwrap(),
+            Structure::from_modal(&m).unwrap(),
+        );
+        for (x, y) in [
+            (a.mass, b.mass),
+            (a.inertia_alpha, b.inertia_alpha),
+            (a.static_unbalance, b.static_unbalance),
+            (a.k_h, b.k_h),
+            (a.k_alpha, b.k_alpha),
+            (a.c_h, b.c_h),
+            (a.c_alpha, b.c_alpha),
+        ] {
+            assert!((x - y).abs() <= 1e-12 * x.abs().max(1e-300), "{x} vs {y}");
+        }
+        let q = NondimStructure::from_modal(&m, p.rho, p.semi_chord);
+        for (x, y) in [
+            (p.mu, q.mu),
+            (p.r_alpha2, q.r_alpha2),
+            (p.sigma, q.sigma),
+            (p.x_alpha, q.x_alpha),
+            (p.omega_alpha, q.omega_alpha),
+            (p.zeta_h, q.zeta_h),
+            (p.zeta_alpha, q.zeta_alpha),
+        ] {
+            assert!((x - y).abs() <= 1e-14 * x.abs(), "{x} vs {y}");
+        }
     }
 
     #[test]

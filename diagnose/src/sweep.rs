@@ -13,6 +13,7 @@ use std::path::{Path, PathBuf};
 use aeroelastic::documents::{flutter_point_json, LoadedPair};
 use aeroelastic::files::{LoadedModel, StructureFile};
 use aeroelastic::flutter::FlutterMethod;
+use aeroelastic::structure::NondimStructure;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use serde_json::{json, Value};
@@ -107,44 +108,6 @@ pub struct Grid {
     /// Squared radii of gyration r² (semi-chords²).
     #[serde(default)]
     pub r2: Option<Vec<f64>>,
-}
-
-/// Nondimensional structural parameters of one point.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct Nondim {
-    /// μ = m/(πρb²).
-    pub mu: f64,
-    /// σ = ω_h/ω_α.
-    pub sigma: f64,
-    /// x_α = S_α/(m b).
-    pub x_alpha: f64,
-    /// r² = I_α/(m b²).
-    pub r2: f64,
-}
-
-impl Nondim {
-    /// The parameters of a structure file for half-chord `b`.
-    pub fn of(file: &StructureFile, b: f64) -> Self {
-        let s = &file.linear;
-        let m = s.mass;
-        Nondim {
-            mu: m / (std::f64::consts::PI * file.air_density * b * b),
-            sigma: s.freq_heave / s.freq_pitch,
-            x_alpha: s.static_unbalance / (m * b),
-            r2: s.inertia / (m * b * b),
-        }
-    }
-
-    /// `file` with these parameters (half-chord `b`).
-    pub fn apply(&self, file: &StructureFile, b: f64) -> StructureFile {
-        let mut f = file.clone();
-        let s = &mut f.linear;
-        s.mass = self.mu * std::f64::consts::PI * f.air_density * b * b;
-        s.static_unbalance = self.x_alpha * s.mass * b;
-        s.inertia = self.r2 * s.mass * b * b;
-        s.freq_heave = self.sigma * s.freq_pitch;
-        f
-    }
 }
 
 fn sweep_err(source: &str, message: impl Into<String>) -> Error {
@@ -521,7 +484,7 @@ struct MapBase {
     file: StructureFile,
     model: LoadedModel,
     b: f64,
-    nondim: Nondim,
+    nondim: NondimStructure,
 }
 
 impl MapBase {
@@ -537,7 +500,7 @@ impl MapBase {
         let file = StructureFile::read(&m.structure).map_err(ctx)?;
         let model = LoadedModel::load(&m.model, m.chord.or(file.chord)).map_err(ctx)?;
         let b = model.model.chord() / 2.0;
-        let nondim = Nondim::of(&file, b);
+        let nondim = NondimStructure::from_modal(&file.linear, file.air_density, b);
         Ok(MapBase {
             file,
             model,
@@ -546,13 +509,15 @@ impl MapBase {
         })
     }
 
-    fn point(&self, g: &Grid, index: usize) -> Nondim {
+    /// The structure of grid point `index`: the file's, with the grid's μ, σ, x_α, r²
+    /// (the pitch frequency, the damping ratios and the nonlinear terms kept).
+    fn point(&self, g: &Grid, index: usize) -> NondimStructure {
         let axes = [&g.mu, &g.sigma, &g.x_alpha, &g.r2];
         let base = [
             self.nondim.mu,
             self.nondim.sigma,
             self.nondim.x_alpha,
-            self.nondim.r2,
+            self.nondim.r_alpha2,
         ];
         let mut rest = index;
         let mut v = base;
@@ -562,16 +527,22 @@ impl MapBase {
                 rest /= axis.len();
             }
         }
-        Nondim {
+        NondimStructure {
             mu: v[0],
             sigma: v[1],
             x_alpha: v[2],
-            r2: v[3],
+            r_alpha2: v[3],
+            ..self.nondim
         }
     }
 
-    fn compute_point(&self, m: &MapSpec, p: &Nondim) -> std::result::Result<Value, String> {
-        let file = p.apply(&self.file, self.b);
+    fn compute_point(
+        &self,
+        m: &MapSpec,
+        p: &NondimStructure,
+    ) -> std::result::Result<Value, String> {
+        let mut file = self.file.clone();
+        file.linear = p.modal();
         let pair = LoadedPair::from_parts(file, self.model.clone()).map_err(|e| e.to_string())?;
         let meth = method(&m.method, "sweep").map_err(|e| e.to_string())?;
         let fa = pair
@@ -603,7 +574,7 @@ impl MapBase {
             "mu": p.mu,
             "sigma": p.sigma,
             "x_alpha": p.x_alpha,
-            "r2": p.r2,
+            "r2": p.r_alpha2,
         });
         let res = self.compute_point(m, &p);
         match res {

@@ -764,7 +764,7 @@ pub fn render_all(study: &Study, out: &Path, version: &str) -> Result<Vec<Figure
                 fig.flutter_interval = flutter_runs
                     .iter()
                     .flatten()
-                    .filter(|r| r.model == StudyModel::Identified)
+                    .filter(|r| r.model == StudyModel::IDENTIFIED)
                     .find_map(|r| r.ensemble.as_ref())
                     .and_then(|e| flutter_interval(e, &scale));
                 caption.push_str(&format!(

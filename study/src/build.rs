@@ -6,7 +6,7 @@ use std::sync::Arc;
 
 use crate::error::{Context, Error, Result};
 use crate::observe::Observer;
-use aeroelastic::aero::{AeroModel, Coefficient, NonlinearAero, NonlinearTerm};
+use aeroelastic::aero::{AeroModel, NonlinearAero};
 use aeroelastic::files::{ModelFile, ModelKind};
 use aeroelastic::section::Section;
 use aeroelastic::structure::Structure;
@@ -25,9 +25,7 @@ use aeroelastic::identified::{IdentifiedLaw, IdentifiedOptions};
 use aeroelastic::tunnel::{self, Campaign, ForcedOptions};
 use identify::pipeline::Identification;
 
-use crate::spec::{
-    AeroSpec, PreprocessSpec, Study, StudyModel, StudyStructure, SyntheticSpec, VirtualSpec,
-};
+use crate::spec::{PreprocessSpec, Study, StudyModel, StudyStructure, SyntheticSpec, VirtualSpec};
 
 /// The cases of the identification stage.
 pub struct Cases {
@@ -206,7 +204,7 @@ pub fn virtual_model(study: &Study, v: &VirtualSpec, chord: f64) -> Result<Arc<d
     let Some(a) = &v.aero else {
         return Err(Error::Study("[data.virtual]: no model".into()));
     };
-    aero_with_terms(linear_aero_chord(a.model, chord, a)?, a).context("[data.virtual.aero]")
+    model_of(a.kind, chord, a, true).context("[data.virtual.aero]")
 }
 
 fn virtual_campaign(
@@ -399,50 +397,29 @@ pub fn structure(s: &StudyStructure) -> Result<Structure> {
     s.spec().resolve().context("[structure]")
 }
 
-/// A linear aerodynamic model by name, chord B = 2b, elastic axis `a`.
+/// The model of kind `kind` with the parameters of the study's model table `a` (the
+/// keys `kind` uses; [`ModelFile::for_kind`]) for the chord `chord` \[m\], with `a`'s
+/// nonlinear terms when `terms`, built by the one model constructor
+/// [`LoadedModel::from_spec`].
 ///
 /// # Errors
-/// An unknown model or invalid parameters.
-pub fn linear_aero(
-    model: StudyModel,
-    s: &StudyStructure,
-    a: &AeroSpec,
-) -> Result<Arc<dyn AeroModel>> {
-    linear_aero_chord(model, 2.0 * s.linear.semi_chord, a)
-}
-
-/// A linear aerodynamic model by name for chord `chord` \[m\].
-///
-/// # Errors
-/// An unknown model or invalid parameters.
-pub fn linear_aero_chord(
-    model: StudyModel,
+/// `identified` (the study's own law comes from [`Derived`]) or invalid parameters.
+pub fn model_of(
+    kind: ModelKind,
     chord: f64,
-    a: &AeroSpec,
+    a: &ModelFile,
+    terms: bool,
 ) -> Result<Arc<dyn AeroModel>> {
-    let Some(kind) = model.linear_kind() else {
-        return Err(Error::Study(format!(
-            "aero model `{model}` is not a linear model of [aero]"
-        )));
-    };
-    // the study's linear models as model files describe them: `steady` without the
-    // noncirculatory terms, the flat-plate table on the reference K grid
-    let quasi = matches!(kind, ModelKind::QuasiSteady | ModelKind::Steady);
-    let table = kind == ModelKind::FlatPlateTable;
-    let spec = ModelFile {
-        kind,
-        chord: Some(chord),
-        elastic_axis: (!table).then_some(a.elastic_axis),
-        noncirculatory: quasi.then_some(kind == ModelKind::QuasiSteady),
-        rfa_lags: table.then_some(a.n_lag),
-        k: table.then(aeroelastic::reference::flat_plate_k_grid),
-        derivatives: None,
-        file: None,
-        groups: None,
-        missing: None,
-        nonlinear: Vec::new(),
-    };
-    Ok(LoadedModel::from_spec(&spec, "[aero]", Path::new("."), None)?.model)
+    if kind == ModelKind::Identified {
+        return Err(Error::Study(
+            "the study's `identified` model comes from its identification, not from [aero]".into(),
+        ));
+    }
+    let mut spec = a.for_kind(kind);
+    if !terms {
+        spec.nonlinear.clear();
+    }
+    Ok(LoadedModel::from_spec(&spec, "[aero]", Path::new("."), Some(chord))?.model)
 }
 
 /// Models derived from the study's own data: the identified law (when `[aero]` or a
@@ -466,6 +443,20 @@ pub struct Members {
     pub ensemble: identify::ensemble::Ensemble,
 }
 
+/// The options of the study's identified law: the chord 2b, and `[aero]`'s `n_lag`,
+/// `groups` and `missing` (the keys an `identified` model file uses; the defaults of
+/// [`IdentifiedOptions::new`] without them).
+fn identified_options(study: &Study, s: &StudyStructure) -> IdentifiedOptions {
+    let mut o = IdentifiedOptions::new(2.0 * s.linear.semi_chord);
+    if let Some(a) = &study.spec.aero {
+        let f = a.for_kind(ModelKind::Identified);
+        o.rfa_lags = f.rfa_lags.unwrap_or(o.rfa_lags);
+        o.groups = f.groups;
+        o.missing = f.missing.unwrap_or(o.missing);
+    }
+    o
+}
+
 /// The laws of every bootstrap member of `id` for the study's chord 2b.
 ///
 /// # Errors
@@ -476,12 +467,8 @@ pub fn member_laws(study: &Study, id: &Identification) -> Result<Members> {
             "the ensemble's laws need [structure] (its chord)".into(),
         ));
     };
-    let (laws, e) = aeroelastic::ensemble::member_laws(
-        id,
-        &IdentifiedOptions::new(2.0 * s.linear.semi_chord),
-        None,
-    )
-    .context("building the ensemble's laws")?;
+    let (laws, e) = aeroelastic::ensemble::member_laws(id, &identified_options(study, s), None)
+        .context("building the ensemble's laws")?;
     Ok(Members {
         laws,
         ensemble: e.clone(),
@@ -498,9 +485,8 @@ pub fn identified_model(study: &Study, id: &Identification) -> Result<NonlinearA
             "the identified model needs [structure] (its chord)".into(),
         ));
     };
-    let law =
-        IdentifiedLaw::from_identification(id, &IdentifiedOptions::new(2.0 * s.linear.semi_chord))
-            .context("building the identified Eq. 19 model")?;
+    let law = IdentifiedLaw::from_identification(id, &identified_options(study, s))
+        .context("building the identified Eq. 19 model")?;
     Ok(law.model().clone())
 }
 
@@ -522,23 +508,25 @@ pub fn truth_model(study: &Study, s: &StudyStructure) -> Result<Arc<dyn AeroMode
     virtual_model(study, v, 2.0 * s.linear.semi_chord)
 }
 
-/// A model of the study by name: the linear ones, `identified`, `truth`.
+/// A model of the study by name: `identified` (from `derived`), `truth`, or a kind built
+/// with `[aero]`'s parameters (with its nonlinear terms when `terms`).
 fn named_aero(
     study: &Study,
     model: StudyModel,
     s: &StudyStructure,
-    a: &AeroSpec,
+    a: &ModelFile,
     derived: &Derived,
+    terms: bool,
 ) -> Result<Arc<dyn AeroModel>> {
     match model {
-        StudyModel::Identified => match &derived.identified {
+        StudyModel::IDENTIFIED => match &derived.identified {
             Some(m) => Ok(Arc::new(m.clone())),
             None => Err(Error::Study(
                 "the identified model is not available (no identification)".into(),
             )),
         },
         StudyModel::Truth => truth_model(study, s),
-        _ => linear_aero(model, s, a),
+        StudyModel::Kind(kind) => model_of(kind, 2.0 * s.linear.semi_chord, a, terms),
     }
 }
 
@@ -553,7 +541,7 @@ pub fn linear_section(study: &Study, model: StudyModel, derived: &Derived) -> Re
     };
     Ok(Section::new(
         structure(s)?,
-        named_aero(study, model, s, a, derived)?,
+        named_aero(study, model, s, a, derived, false)?,
         s.linear.rho,
     )?)
 }
@@ -566,31 +554,6 @@ pub fn nonlinear_section(study: &Study, derived: &Derived) -> Result<Section> {
     let (Some(s), Some(a)) = (&study.spec.structure, &study.spec.aero) else {
         return Err(Error::Study("[structure] and [aero] are required".into()));
     };
-    let aero = aero_with_terms(named_aero(study, a.model, s, a, derived)?, a)?;
+    let aero = named_aero(study, StudyModel::Kind(a.kind), s, a, derived, true)?;
     Ok(Section::new(structure(s)?, aero, s.linear.rho)?)
-}
-
-/// `inner` plus the nonlinear terms of `a` (constant coefficients).
-///
-/// # Errors
-/// Invalid nonlinear terms.
-pub fn aero_with_terms(inner: Arc<dyn AeroModel>, a: &AeroSpec) -> Result<Arc<dyn AeroModel>> {
-    let aero: Arc<dyn AeroModel> = if a.nonlinear.is_empty() {
-        inner
-    } else {
-        let terms = a
-            .nonlinear
-            .iter()
-            .map(|t| {
-                Ok(NonlinearTerm {
-                    channel: t.channel,
-                    powers: Term::parse(&t.term)?.powers.map(u32::from),
-                    coefficient: Coefficient::Constant(t.coefficient),
-                })
-            })
-            .collect::<Result<Vec<_>>>()?;
-        // constant coefficients: the evaluation K is irrelevant
-        Arc::new(NonlinearAero::new(inner, terms, 1.0)?)
-    };
-    Ok(aero)
 }

@@ -7,6 +7,7 @@ use std::time::Instant;
 
 use crate::error::{Context, Error, Result};
 use aeroelastic::ensemble::{flutter_ensemble, lco_ensemble, LcoEnsemble};
+use aeroelastic::files::ModelKind;
 use aeroelastic::flutter::{FlutterMethod, FlutterOptions};
 use aeroelastic::lco::{Classification, KIteration, LcoOptions, LcoResult, SweepPlan};
 use identify::pipeline::Identification;
@@ -112,11 +113,11 @@ pub fn run_study(study: &Study, out: &Path, obs: &dyn Observer) -> Result<Timing
         let wants_identified = s
             .aero
             .as_ref()
-            .is_some_and(|a| a.model == StudyModel::Identified)
+            .is_some_and(|a| a.kind == ModelKind::Identified)
             || s.flutter.as_ref().is_some_and(|f| {
                 f.run
                     .iter()
-                    .any(|r| r.model == Some(StudyModel::Identified))
+                    .any(|r| r.model == Some(StudyModel::IDENTIFIED))
             });
         if wants_identified {
             derived.identified = Some(timed(&mut timings, "identified model", || {
@@ -135,7 +136,7 @@ pub fn run_study(study: &Study, out: &Path, obs: &dyn Observer) -> Result<Timing
         let runs = timed(&mut timings, "flutter", || {
             flutter_stage(study, out, &derived, obs)
         })?;
-        let model = study.spec.aero.as_ref().map(|a| a.model);
+        let model = study.spec.aero.as_ref().map(|a| StudyModel::Kind(a.kind));
         let speed_of = |m: Option<StudyModel>| {
             runs.iter()
                 .find(|r| Some(r.model) == m)
@@ -511,7 +512,7 @@ fn flutter_stage(
     };
     let runs: Vec<crate::spec::FlutterRunSpec> = if f.run.is_empty() {
         vec![crate::spec::FlutterRunSpec {
-            label: format!("{} (p-k)", a.model),
+            label: format!("{} (p-k)", a.kind),
             model: None,
             method: FlutterMethod::Pk,
             reference: None,
@@ -528,14 +529,14 @@ fn flutter_stage(
     let bar = obs.counter("flutter", runs.len());
     let mut results = Vec::new();
     for r in &runs {
-        let model = r.model.unwrap_or(a.model);
+        let model = r.model.unwrap_or(StudyModel::Kind(a.kind));
         let section = build::linear_section(study, model, derived)?;
         let method = r.method;
         let analysis = section
             .flutter(method, &opts)
             .with_context(|| format!("flutter run `{}`", r.label))?;
         let ensemble = match (&derived.members, model) {
-            (Some(m), StudyModel::Identified) => Some(
+            (Some(m), StudyModel::IDENTIFIED) => Some(
                 flutter_ensemble(
                     &section.structure,
                     &m.laws,
@@ -712,7 +713,7 @@ fn lco_stage(
         );
     }
     let ensemble = match (&derived.members, study.spec.aero.as_ref()) {
-        (Some(m), Some(a)) if a.model == StudyModel::Identified => Some(
+        (Some(m), Some(a)) if a.kind == ModelKind::Identified => Some(
             lco_ensemble(
                 &section.structure,
                 &m.laws,
@@ -940,7 +941,7 @@ fn branch_stage(
         .spec
         .aero
         .as_ref()
-        .map_or_else(|| section.aero.name(), |a| a.model.to_string());
+        .map_or_else(|| section.aero.name(), |a| a.kind.to_string());
     let doc = aeroelastic::documents::branch_document(
         &format!("{} [structure]", names::STUDY),
         &model,

@@ -3,6 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
+use aeroelastic::files::{ModelFile, ModelKind};
 use aeroelastic::structure::{NondimStructure, Nonlinearities, PolyTerm, StructureSpec};
 use identify::pipeline::IdentifySettings;
 use serde::{Deserialize, Serialize};
@@ -26,8 +27,11 @@ pub struct StudySpec {
     pub identify: Option<IdentifySpec>,
     /// Structure of the aeroelastic section (flutter / LCO stages).
     pub structure: Option<StudyStructure>,
-    /// Aerodynamic model of the aeroelastic section.
-    pub aero: Option<AeroSpec>,
+    /// Aerodynamic model of the aeroelastic section: a model file's keys
+    /// ([`ModelFile`], `model` for `kind`, `n_lag` for `rfa_lags`); the chord is the
+    /// structure's 2b; `identified` without `file` is this study's identified law; keys its
+    /// kind does not use are the parameters of the flutter runs of other kinds.
+    pub aero: Option<ModelFile>,
     /// Flutter stage.
     pub flutter: Option<FlutterSpec>,
     /// LCO stage.
@@ -67,7 +71,7 @@ pub struct VirtualSpec {
     /// Model TOML file (`aeroelastic::files`), relative to the study file.
     pub model: Option<PathBuf>,
     /// Inline model, keys as `[aero]` (chord 0.25 m, the rig's).
-    pub aero: Option<AeroSpec>,
+    pub aero: Option<ModelFile>,
     /// `"paper"` (Tables I–II, 448 cases) or `"config=X"` (configuration X only, 64 cases).
     #[serde(default = "paper")]
     pub campaign: String,
@@ -383,42 +387,6 @@ impl StudyStructure {
     fn unknown_key(&self) -> Option<&str> {
         self.unknown.keys().next().map(String::as_str)
     }
-}
-
-/// A nonlinear aerodynamic term added to a linear model.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct AeroTermSpec {
-    /// `"lift"` or `"moment"`.
-    #[serde(with = "aeroelastic::aero::channel_name")]
-    pub channel: aeroelastic::aero::Channel,
-    /// Library term name of degree ≥ 2, e.g. `alpha_dot^3`.
-    pub term: String,
-    /// Nondimensional coefficient.
-    pub coefficient: f64,
-}
-
-/// `[aero]`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct AeroSpec {
-    /// `theodorsen`, `quasi_steady`, `steady`, `flat_plate_table`, or `identified`: the
-    /// Eq. 19 law of this study's own identification (`aeroelastic::identified`; flutter by
-    /// p-k on its derivative tables, LCO by K-iterated time integration).
-    pub model: StudyModel,
-    /// Elastic axis a [semi-chords aft of mid-chord].
-    #[serde(default)]
-    pub elastic_axis: f64,
-    /// Lag roots of the table's rational-function approximation.
-    #[serde(default = "four")]
-    pub n_lag: usize,
-    /// Nonlinear terms.
-    #[serde(default)]
-    pub nonlinear: Vec<AeroTermSpec>,
-}
-
-fn four() -> usize {
-    4
 }
 
 /// Published values a flutter run is compared with.
@@ -1203,7 +1171,7 @@ impl Study {
         }
         if let Some(a) = &s.aero {
             check_aero("aero", a, s.data.is_some())?;
-            if a.model == StudyModel::Identified && !a.nonlinear.is_empty() {
+            if a.kind == ModelKind::Identified && !a.nonlinear.is_empty() {
                 return err(
                     "aero.nonlinear",
                     "the identified model brings its own nonlinear terms; remove [[aero.nonlinear]]"
@@ -1426,50 +1394,68 @@ fn key_at(text: &str, offset: usize) -> Option<String> {
 }
 
 /// An aerodynamic model of a study by name (`[aero].model`, `[[flutter.run]].model`): a
-/// linear model built from `[aero]`, the study's own identified law, or the truth model of
-/// `[data.virtual]` (flutter runs only).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
-#[serde(rename_all = "snake_case")]
+/// model kind built with `[aero]`'s parameters (`identified`: this study's identified law),
+/// or the truth model of `[data.virtual]` (flutter runs only). Written as the kind's name
+/// ([`ModelKind::name`]) or `truth`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum StudyModel {
-    /// Theodorsen (Jones' lags in time).
-    Theodorsen,
-    /// Quasi-steady thin aerofoil with noncirculatory terms.
-    QuasiSteady,
-    /// Steady thin aerofoil.
-    Steady,
-    /// Flat-plate derivative table with an RFA of `n_lag` lags.
-    FlatPlateTable,
-    /// The Eq. 19 law of this study's identification.
-    Identified,
+    /// A model kind with `[aero]`'s parameters.
+    Kind(ModelKind),
     /// The truth model of `[data.virtual]` (flutter runs only).
     Truth,
 }
 
 impl StudyModel {
-    /// The model-file kind of a linear model (`theodorsen`, `quasi_steady`, `steady`,
-    /// `flat_plate_table`); `None` for `identified` and `truth`, which come from the
-    /// study's data.
-    pub fn linear_kind(self) -> Option<aeroelastic::files::ModelKind> {
-        use aeroelastic::files::ModelKind;
-        match self {
-            StudyModel::Theodorsen => Some(ModelKind::Theodorsen),
-            StudyModel::QuasiSteady => Some(ModelKind::QuasiSteady),
-            StudyModel::Steady => Some(ModelKind::Steady),
-            StudyModel::FlatPlateTable => Some(ModelKind::FlatPlateTable),
-            StudyModel::Identified | StudyModel::Truth => None,
-        }
-    }
+    /// This study's identified law.
+    pub const IDENTIFIED: StudyModel = StudyModel::Kind(ModelKind::Identified);
 
     /// The name as written in the study file and the result documents.
     pub fn name(self) -> &'static str {
         match self {
-            StudyModel::Theodorsen => "theodorsen",
-            StudyModel::QuasiSteady => "quasi_steady",
-            StudyModel::Steady => "steady",
-            StudyModel::FlatPlateTable => "flat_plate_table",
-            StudyModel::Identified => "identified",
+            StudyModel::Kind(k) => k.name(),
             StudyModel::Truth => "truth",
         }
+    }
+}
+
+impl Serialize for StudyModel {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(self.name())
+    }
+}
+
+impl<'de> Deserialize<'de> for StudyModel {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        use serde::de::{value::StrDeserializer, Error as _};
+        let name = String::deserialize(d)?;
+        if name == "truth" {
+            return Ok(StudyModel::Truth);
+        }
+        ModelKind::deserialize(StrDeserializer::<D::Error>::new(&name))
+            .map(StudyModel::Kind)
+            .map_err(|_| {
+                let known: Vec<&str> = ModelKind::ALL.iter().map(|k| k.name()).collect();
+                D::Error::custom(format!(
+                    "unknown model `{name}`: expected one of {}, truth",
+                    known.join(", ")
+                ))
+            })
+    }
+}
+
+impl schemars::JsonSchema for StudyModel {
+    fn schema_name() -> std::borrow::Cow<'static, str> {
+        "StudyModel".into()
+    }
+
+    fn json_schema(g: &mut schemars::SchemaGenerator) -> schemars::Schema {
+        schemars::json_schema!({
+            "description": "An aerodynamic model of a study: a model kind built with [aero]'s parameters (`identified`: the study's identified law), or `truth`, the model of [data.virtual].",
+            "anyOf": [
+                g.subschema_for::<ModelKind>(),
+                { "const": "truth", "description": "The truth model of [data.virtual] (flutter runs only)." }
+            ]
+        })
     }
 }
 
@@ -1489,7 +1475,7 @@ fn check_model(
     allow_truth: bool,
 ) -> Result<(), (String, String)> {
     match m {
-        StudyModel::Identified if !allow_identified => Err((
+        StudyModel::IDENTIFIED if !allow_identified => Err((
             k.to_string(),
             "`identified` needs [data] (the model comes from this study's identification)".into(),
         )),
@@ -1501,42 +1487,55 @@ fn check_model(
     }
 }
 
-/// Checks an `[aero]`-like table whose dotted prefix is `prefix`.
-fn check_aero(prefix: &str, a: &AeroSpec, allow_identified: bool) -> Result<(), (String, String)> {
-    check_model(&format!("{prefix}.model"), a.model, allow_identified, false)?;
-    if !(a.elastic_axis.is_finite() && a.elastic_axis.abs() <= 1.0) {
+/// Checks an `[aero]`-like table (a [`ModelFile`]) whose dotted prefix is `prefix`: a kind
+/// the study can build (not `dynamic_stall`; `identified` only where `allow_identified`),
+/// no `chord` (the study's) and no `file` (an `identified` model is the study's own), an
+/// elastic axis on the chord, 1..=8 lag roots, nonlinear terms that convert
+/// ([`aeroelastic::files::NonlinearSpec::to_term`]).
+fn check_aero(prefix: &str, a: &ModelFile, allow_identified: bool) -> Result<(), (String, String)> {
+    let key = |k: &str| format!("{prefix}.{k}");
+    check_model(
+        &key("model"),
+        StudyModel::Kind(a.kind),
+        allow_identified,
+        false,
+    )?;
+    if a.kind == ModelKind::DynamicStall {
         return Err((
-            format!("{prefix}.elastic_axis"),
-            format!(
-                "{} must be finite and on the chord, in [-1, 1] semi-chords",
-                a.elastic_axis
-            ),
+            key("model"),
+            "`dynamic_stall` is a model-file kind only (`aeroform lco --model`), not a study's"
+                .into(),
         ));
     }
-    if !(1..=8).contains(&a.n_lag) {
+    if a.chord.is_some() {
         return Err((
-            format!("{prefix}.n_lag"),
-            format!("{} must be in 1..=8", a.n_lag),
+            key("chord"),
+            "the chord of a study's model is the structure's (2 semi_chord; 0.25 m for [data.virtual])"
+                .into(),
         ));
     }
-    for (i, t) in a.nonlinear.iter().enumerate() {
-        if !t.coefficient.is_finite() {
+    if a.file.is_some() {
+        return Err((
+            key("file"),
+            "a study's `identified` model is its own identification; give no `file`".into(),
+        ));
+    }
+    if let Some(e) = a.elastic_axis {
+        if !(e.is_finite() && e.abs() <= 1.0) {
             return Err((
-                format!("{prefix}.nonlinear[{i}].coefficient"),
-                format!("{} must be finite", t.coefficient),
+                key("elastic_axis"),
+                format!("{e} must be finite and on the chord, in [-1, 1] semi-chords"),
             ));
         }
     }
+    if let Some(n) = a.rfa_lags {
+        if !(1..=8).contains(&n) {
+            return Err((key("n_lag"), format!("{n} must be in 1..=8")));
+        }
+    }
     for (i, t) in a.nonlinear.iter().enumerate() {
-        match identify::library::Term::parse(&t.term) {
-            Ok(term) if term.degree() >= 2 => {}
-            Ok(_) => {
-                return Err((
-                    format!("{prefix}.nonlinear[{i}].term"),
-                    format!("`{}`: degree must be ≥ 2", t.term),
-                ))
-            }
-            Err(e) => return Err((format!("{prefix}.nonlinear[{i}].term"), e.to_string())),
+        if let Err((field, m)) = t.to_term() {
+            return Err((key(&format!("nonlinear[{i}].{field}")), m));
         }
     }
     Ok(())
@@ -1583,9 +1582,27 @@ mod tests {
         let e = parse(&format!("{base}model = \"theodorsn\"\n")).unwrap_err();
         assert_eq!((e.key.as_str(), e.line), ("aero.model", 7), "{e}");
         assert!(e.message.contains("theodorsen"), "{e}");
+        // [aero] is a model file: `truth` is no kind of it (a flutter-run model only)
         let e = parse(&format!("{base}model = \"truth\"\n")).unwrap_err();
+        assert_eq!((e.key.as_str(), e.line), ("aero.model", 7), "{e}");
+        assert!(e.message.contains("unknown variant `truth`"), "{e}");
+        let e = parse(&format!(
+            "{base}model = \"theodorsen\"\n[flutter]\nu_min = 0.1\nu_max = 3.0\n[[flutter.run]]\nlabel = \"t\"\nmodel = \"truth\"\nmethod = \"pk\"\n"
+        ))
+        .unwrap_err();
+        assert_eq!(e.key, "flutter.run[0].model", "{e}");
+        assert!(e.message.contains("[data.virtual]"), "{e}");
+        // the chord of a study's model is the structure's; a study cannot run dynamic stall
+        let e = parse(&format!("{base}model = \"theodorsen\"\nchord = 0.3\n")).unwrap_err();
+        assert_eq!(e.key, "aero.chord", "{e}");
+        let e = parse(&format!("{base}model = \"dynamic_stall\"\n")).unwrap_err();
         assert_eq!(e.key, "aero.model", "{e}");
-        assert!(e.message.contains("flutter-run model only"), "{e}");
+        let e = parse(&format!(
+            "{base}model = \"theodorsen\"\n[[aero.nonlinear]]\nchannel = \"lift\"\nterm = \"h\"\ncoefficient = 1.0\n"
+        ))
+        .unwrap_err();
+        assert_eq!(e.key, "aero.nonlinear[0].term", "{e}");
+        assert!(e.message.contains("total degree must be ≥ 2"), "{e}");
         // a nonlinear term's channel is typed: a bad name is refused at parse, by key
         let e = parse(&format!(
             "{base}model = \"theodorsen\"\n[[aero.nonlinear]]\nchannel = \"pitch\"\n\

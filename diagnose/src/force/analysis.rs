@@ -500,7 +500,7 @@ fn locate(
 }
 
 /// |DFT|² of x zero-padded to m points.
-fn periodogram_full(x: &[f64], m: usize) -> Vec<f64> {
+pub(super) fn periodogram_full(x: &[f64], m: usize) -> Vec<f64> {
     let mut planner = realfft::RealFftPlanner::<f64>::new();
     let fft = planner.plan_fft_forward(m);
     let mut input = vec![0.0; m];

@@ -653,16 +653,10 @@ fn remove_line(r: &[f64], dt: f64, f: f64) -> Vec<f64> {
 /// |DFT|²·2/n of x zero-padded to m points (≈ the energy a least-squares line at a bin
 /// frequency removes).
 fn periodogram(x: &[f64], m: usize) -> Vec<f64> {
-    let mut planner = realfft::RealFftPlanner::<f64>::new();
-    let fft = planner.plan_fft_forward(m);
-    let mut input = vec![0.0; m];
-    input[..x.len()].copy_from_slice(x);
-    let mut out = fft.make_output_vec();
-    if fft.process(&mut input, &mut out).is_err() {
-        return vec![0.0; m / 2 + 1];
-    }
     let n = x.len() as f64;
-    out.iter().map(|z| 2.0 * z.norm_sqr() / n).collect()
+    let mut p = super::analysis::periodogram_full(x, m);
+    p.iter_mut().for_each(|v| *v = 2.0 * *v / n);
+    p
 }
 
 /// The forcing tones |m f_α + n f_h| of order ≤ 9 (pitch only: m f_α), sorted (see
