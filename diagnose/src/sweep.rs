@@ -65,8 +65,8 @@ pub struct MapSpec {
     /// Flutter scan speeds [m/s] (≥ 2; from the lowest to the highest).
     pub speeds: Vec<f64>,
     /// `"pk"` (default) or `"p"`.
-    #[serde(default = "default_method")]
-    pub method: String,
+    #[serde(default = "default_method", with = "method_name")]
+    pub method: FlutterMethod,
     /// The grid axes.
     #[serde(default)]
     pub grid: Grid,
@@ -81,8 +81,32 @@ pub struct MapSpec {
     pub alpha0_down: f64,
 }
 
-fn default_method() -> String {
-    "pk".into()
+fn default_method() -> FlutterMethod {
+    FlutterMethod::Pk
+}
+
+/// The sweep file's names of the flutter methods, `pk` and `p` (serde form of
+/// [`MapSpec::method`]).
+mod method_name {
+    use aeroelastic::flutter::FlutterMethod;
+    use serde::{de::Error as _, Deserialize, Deserializer, Serializer};
+
+    pub fn serialize<S: Serializer>(m: &FlutterMethod, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(match m {
+            FlutterMethod::Pk => "pk",
+            FlutterMethod::P => "p",
+        })
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<FlutterMethod, D::Error> {
+        match String::deserialize(d)?.as_str() {
+            "pk" => Ok(FlutterMethod::Pk),
+            "p" => Ok(FlutterMethod::P),
+            other => Err(D::Error::custom(format!(
+                "`method` = \"{other}\": expected \"pk\" or \"p\""
+            ))),
+        }
+    }
 }
 fn default_alpha0() -> f64 {
     2.0
@@ -208,7 +232,6 @@ impl SweepSpec {
                         ));
                     }
                 }
-                method(&m.method, source)?;
                 for (name, x) in [("alpha0", m.alpha0), ("alpha0_down", m.alpha0_down)] {
                     if !x.is_finite() {
                         return Err(sweep_err(source, format!("`{name}` = {x}: must be finite")));
@@ -467,18 +490,6 @@ pub fn merge(parts: &[(String, Value)]) -> Result<Value> {
     spec.assemble(items)
 }
 
-/// Method name → method.
-fn method(name: &str, source: &str) -> Result<FlutterMethod> {
-    match name {
-        "pk" => Ok(FlutterMethod::Pk),
-        "p" => Ok(FlutterMethod::P),
-        other => Err(sweep_err(
-            source,
-            format!("`method` = \"{other}\": expected \"pk\" or \"p\""),
-        )),
-    }
-}
-
 /// The files of a map loaded once.
 struct MapBase {
     file: StructureFile,
@@ -544,7 +555,7 @@ impl MapBase {
         let mut file = self.file.clone();
         file.linear = p.modal();
         let pair = LoadedPair::from_parts(file, self.model.clone()).map_err(|e| e.to_string())?;
-        let meth = method(&m.method, "sweep").map_err(|e| e.to_string())?;
+        let meth = m.method;
         let fa = pair
             .flutter(meth, &m.speeds)
             .map_err(|e| format!("flutter: {e}"))?;

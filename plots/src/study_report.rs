@@ -332,7 +332,10 @@ pub fn render_all(study: &Study, out: &Path, version: &str) -> Result<Vec<Figure
         drawn: vec![],
     };
     let s = &study.spec;
-    let reduced = s.flutter.as_ref().is_some_and(|f| f.axes == "reduced");
+    let reduced = s
+        .flutter
+        .as_ref()
+        .is_some_and(|f| f.axes == study::spec::Axes::Reduced);
     let mut report = Report::new(format!("aeroform study: {}", s.name));
     report.section("Summary");
     if !s.description.is_empty() {
@@ -660,12 +663,12 @@ pub fn render_all(study: &Study, out: &Path, version: &str) -> Result<Vec<Figure
     if let (Some(f), Some(runs)) = (&s.flutter, &flutter_runs) {
         if cv.wants("vg") {
             for (i, r) in runs.iter().enumerate() {
-                let mut scale = if f.axes == "reduced" {
+                let mut scale = if f.axes == study::spec::Axes::Reduced {
                     AxisScale::reduced(r.semi_chord, r.omega_alpha)
                 } else {
                     AxisScale::si()
                 };
-                scale.damping_g = f.damping == "g";
+                scale.damping_g = f.damping == study::spec::DampingAxis::G;
                 cv.draw(
                     "vg",
                     &format!("vg_{i}"),
@@ -740,7 +743,11 @@ pub fn render_all(study: &Study, out: &Path, version: &str) -> Result<Vec<Figure
     // ---- LCO
     if let Some(l) = &s.lco {
         let stage: LcoStage = read_json(&out.join(names::LCO))?;
-        let scale = if s.flutter.as_ref().is_some_and(|f| f.axes == "reduced") {
+        let scale = if s
+            .flutter
+            .as_ref()
+            .is_some_and(|f| f.axes == study::spec::Axes::Reduced)
+        {
             AxisScale::reduced(stage.semi_chord, stage.omega_alpha)
         } else {
             AxisScale::si()

@@ -25,7 +25,10 @@ use aeroelastic::identified::{IdentifiedLaw, IdentifiedOptions};
 use aeroelastic::tunnel::{self, Campaign, ForcedOptions};
 use identify::pipeline::Identification;
 
-use crate::spec::{PreprocessSpec, Study, StudyModel, StudyStructure, SyntheticSpec, VirtualSpec};
+use crate::spec::{
+    LawPreset, PreprocessSpec, Study, StudyModel, StudyStructure, SyntheticSpec, VelocityChoice,
+    VirtualSpec,
+};
 
 /// The cases of the identification stage.
 pub struct Cases {
@@ -49,13 +52,13 @@ impl Cases {
 /// Preprocessing options of the study.
 pub fn preprocess(p: &PreprocessSpec) -> PreprocessOptions {
     PreprocessOptions {
-        velocity: match p.velocity.as_str() {
-            "harmonic" => VelocityMethod::Harmonic,
-            "sg" => VelocityMethod::SavitzkyGolay {
+        velocity: match p.velocity {
+            VelocityChoice::Harmonic => VelocityMethod::Harmonic,
+            VelocityChoice::Sg => VelocityMethod::SavitzkyGolay {
                 half_window: p.sg_half_window,
                 order: p.sg_order,
             },
-            _ => VelocityMethod::Auto,
+            VelocityChoice::Auto => VelocityMethod::Auto,
         },
         subtract_nowind: p.subtract_nowind,
         sg_half_window: p.sg_half_window,
@@ -65,7 +68,7 @@ pub fn preprocess(p: &PreprocessSpec) -> PreprocessOptions {
 }
 
 fn law(sy: &SyntheticSpec) -> Result<PolynomialLaw> {
-    if sy.law.preset == "demo" {
+    if sy.law.preset == LawPreset::Demo {
         return Ok(PolynomialLaw::demo());
     }
     let conv = |terms: &[crate::spec::LawTermSpec]| -> Result<Vec<LawTerm>> {
@@ -160,7 +163,10 @@ fn synthetic(study: &Study, sy: &SyntheticSpec, out: &Path) -> Result<Dataset> {
             sy.config.len(),
             sy.speeds.len(),
             sy.amplitudes_deg.len(),
-            sy.law.preset,
+            match sy.law.preset {
+                LawPreset::Demo => "demo",
+                LawPreset::Custom => "custom",
+            },
             sy.force_noise,
             sy.heave_noise,
             sy.pitch_noise

@@ -142,8 +142,8 @@ pub struct LawTermSpec {
 #[serde(deny_unknown_fields)]
 pub struct LawSpec {
     /// `"demo"` (identify's demonstration law) or `"custom"` (the lists below).
-    #[serde(default = "demo")]
-    pub preset: String,
+    #[serde(default)]
+    pub preset: LawPreset,
     /// Terms of C_L (custom law).
     #[serde(default)]
     pub lift: Vec<LawTermSpec>,
@@ -152,14 +152,21 @@ pub struct LawSpec {
     pub moment: Vec<LawTermSpec>,
 }
 
-fn demo() -> String {
-    "demo".into()
+/// `[data.synthetic.law] preset`.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum LawPreset {
+    /// identify's demonstration law.
+    #[default]
+    Demo,
+    /// The law of the `lift` and `moment` lists.
+    Custom,
 }
 
 impl Default for LawSpec {
     fn default() -> Self {
         LawSpec {
-            preset: demo(),
+            preset: LawPreset::Demo,
             lift: vec![],
             moment: vec![],
         }
@@ -295,9 +302,9 @@ fn ensemble_level() -> f64 {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PreprocessSpec {
-    /// `"auto"`, `"harmonic"` or `"sg"` (Savitzky–Golay).
-    #[serde(default = "auto")]
-    pub velocity: String,
+    /// How velocities are obtained: `"auto"`, `"harmonic"` or `"sg"` (Savitzky–Golay).
+    #[serde(default)]
+    pub velocity: VelocityChoice,
     /// Subtract still-air runs.
     #[serde(default = "yes")]
     pub subtract_nowind: bool,
@@ -309,9 +316,20 @@ pub struct PreprocessSpec {
     pub sg_order: usize,
 }
 
-fn auto() -> String {
-    "auto".into()
+/// `[identify.preprocess] velocity`: the velocity method of preprocessing
+/// ([`identify::preprocess::VelocityMethod`]; `sg` takes the spec's window and order).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum VelocityChoice {
+    /// Harmonic fit for periodic records, Savitzky–Golay otherwise.
+    #[default]
+    Auto,
+    /// Harmonic fit.
+    Harmonic,
+    /// Savitzky–Golay differentiation.
+    Sg,
 }
+
 fn yes() -> bool {
     true
 }
@@ -325,7 +343,7 @@ fn sg_order() -> usize {
 impl Default for PreprocessSpec {
     fn default() -> Self {
         PreprocessSpec {
-            velocity: auto(),
+            velocity: VelocityChoice::Auto,
             subtract_nowind: true,
             sg_half_window: sg_half(),
             sg_order: sg_order(),
@@ -431,19 +449,37 @@ pub struct FlutterSpec {
     #[serde(default = "tol")]
     pub tol_rel: f64,
     /// Axes of the figures: `"si"` (m/s, Hz) or `"reduced"` (U/(bω_α), ω/ω_α).
-    #[serde(default = "si")]
-    pub axes: String,
+    #[serde(default)]
+    pub axes: Axes,
     /// Damping axis of the V–g figures: `"zeta"` (damping ratio ζ = −Re p/|p|) or `"g"`
     /// (structural damping g = 2ζ, the NASTRAN convention).
-    #[serde(default = "zeta")]
-    pub damping: String,
+    #[serde(default)]
+    pub damping: DampingAxis,
     /// Analyses (default: one p-k analysis of `[aero]`).
     #[serde(default)]
     pub run: Vec<FlutterRunSpec>,
 }
 
-fn zeta() -> String {
-    "zeta".into()
+/// `[flutter] axes`: the units of the flutter figures' axes.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Axes {
+    /// U in m/s, frequencies in Hz.
+    #[default]
+    Si,
+    /// U/(bω_α) and ω/ω_α.
+    Reduced,
+}
+
+/// `[flutter] damping`: the damping axis of the V–g figures.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DampingAxis {
+    /// Damping ratio ζ = −Re p/|p|.
+    #[default]
+    Zeta,
+    /// Structural damping g = 2ζ (the NASTRAN convention).
+    G,
 }
 
 fn eighty() -> usize {
@@ -451,9 +487,6 @@ fn eighty() -> usize {
 }
 fn tol() -> f64 {
     1e-9
-}
-fn si() -> String {
-    "si".into()
 }
 
 /// `[lco]`.
@@ -1036,15 +1069,6 @@ impl Study {
                         return err(k, format!("{v} must be finite and ≥ 0"));
                     }
                 }
-                match sy.law.preset.as_str() {
-                    "demo" | "custom" => {}
-                    p => {
-                        return err(
-                            "data.synthetic.law.preset",
-                            format!("`{p}`: expected `demo` or `custom`"),
-                        )
-                    }
-                }
                 for (ch, terms) in [("lift", &sy.law.lift), ("moment", &sy.law.moment)] {
                     for (i, t) in terms.iter().enumerate() {
                         if let Err(e) = identify::library::Term::parse(&t.term) {
@@ -1108,15 +1132,6 @@ impl Study {
             return err(
                 "identify.ensemble_level",
                 format!("{}: expected a level in (0, 1)", id.ensemble_level),
-            );
-        }
-        if !matches!(id.preprocess.velocity.as_str(), "auto" | "harmonic" | "sg") {
-            return err(
-                "identify.preprocess.velocity",
-                format!(
-                    "`{}`: expected auto, harmonic or sg",
-                    id.preprocess.velocity
-                ),
             );
         }
         if (s.flutter.is_some() || s.lco.is_some() || s.branch.is_some())
@@ -1212,18 +1227,6 @@ impl Study {
             }
             if f.n_speeds < 2 {
                 return err("flutter.n_speeds", "must be ≥ 2".into());
-            }
-            if !matches!(f.axes.as_str(), "si" | "reduced") {
-                return err(
-                    "flutter.axes",
-                    format!("`{}`: expected si or reduced", f.axes),
-                );
-            }
-            if !matches!(f.damping.as_str(), "zeta" | "g") {
-                return err(
-                    "flutter.damping",
-                    format!("`{}`: expected zeta or g", f.damping),
-                );
             }
             for (i, r) in f.run.iter().enumerate() {
                 if let Some(m) = r.model {
@@ -1615,6 +1618,23 @@ mod tests {
             "{e}"
         );
         assert!(e.message.contains("expected \"lift\" or \"moment\""), "{e}");
+    }
+
+    /// Option names are enums: a misspelt one is refused at parsing with its key and line.
+    #[test]
+    fn option_names_are_refused_by_key_and_line() {
+        let base = "name = \"x\"\n[structure]\nmu = 20.0\nr_alpha2 = 0.25\nsigma = 0.5\n[aero]\nmodel = \"theodorsen\"\n[flutter]\nu_min = 0.1\nu_max = 3.0\n";
+        for (line, key) in [
+            ("axes = \"reducd\"", "flutter.axes"),
+            ("damping = \"h\"", "flutter.damping"),
+        ] {
+            let e = parse(&format!("{base}{line}\n")).unwrap_err();
+            assert_eq!((e.key.as_str(), e.line), (key, 11), "{e}");
+            assert!(e.message.contains("unknown variant"), "{e}");
+        }
+        let ok = parse(&format!("{base}axes = \"reduced\"\ndamping = \"g\"\n")).unwrap();
+        let f = ok.spec.flutter.unwrap();
+        assert_eq!((f.axes, f.damping), (Axes::Reduced, DampingAxis::G));
     }
 
     #[test]
