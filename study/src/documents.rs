@@ -105,43 +105,44 @@ pub struct RunSummary {
     pub figures: serde_json::Value,
 }
 
-/// Display label of a library term name (`alpha`, `alpha_dot`, `h`, `h_dot` joined by `*`,
-/// powers `^2`, `^3`): the nondimensional variables α, Bα'/U, h/B, h'/U, powers as
-/// superscripts, factors joined by `·`. Unknown factors are kept verbatim.
+/// Display label of a library term name (parsed by [`identify::library::Term::parse`]):
+/// the nondimensional variables α, Bα'/U, h/B, h'/U in that order, powers as superscripts,
+/// factors joined by `·`; `1` for the constant. A name that does not parse is kept verbatim.
 ///
 /// ```
 /// use study::documents::term_label;
 /// assert_eq!(term_label("alpha*alpha_dot"), "α·Bα'/U");
 /// assert_eq!(term_label("alpha_dot^3"), "(Bα'/U)³");
 /// assert_eq!(term_label("alpha^2*h"), "α²·h/B");
+/// assert_eq!(term_label("1"), "1");
+/// assert_eq!(term_label("beta"), "beta");
 /// ```
 pub fn term_label(name: &str) -> String {
-    if name.trim() == "1" {
+    const BASES: [(&str, bool); 4] = [("α", false), ("Bα'/U", true), ("h/B", true), ("h'/U", true)];
+    const SUPERSCRIPTS: [char; 10] = ['⁰', '¹', '²', '³', '⁴', '⁵', '⁶', '⁷', '⁸', '⁹'];
+    let Ok(term) = identify::library::Term::parse(name) else {
+        return name.to_string();
+    };
+    if term.degree() == 0 {
         return "1".into();
     }
-    name.split('*')
-        .map(|f| {
-            let (var, pow) = match f.trim().split_once('^') {
-                Some((v, p)) => (v.trim(), p.trim()),
-                None => (f.trim(), ""),
-            };
-            let (base, compound) = match var {
-                "alpha" => ("α", false),
-                "alpha_dot" => ("Bα'/U", true),
-                "h" => ("h/B", true),
-                "h_dot" => ("h'/U", true),
-                other => (other, false),
-            };
-            let sup = match pow {
-                "" | "1" => "",
-                "2" => "²",
-                "3" => "³",
-                _ => "",
-            };
-            match (sup.is_empty(), compound) {
-                (true, _) => base.to_string(),
-                (false, true) => format!("({base}){sup}"),
-                (false, false) => format!("{base}{sup}"),
+    term.powers
+        .iter()
+        .zip(BASES)
+        .filter(|(p, _)| **p > 0)
+        .map(|(&p, (base, compound))| {
+            if p == 1 {
+                return base.to_string();
+            }
+            let sup: String = p
+                .to_string()
+                .chars()
+                .filter_map(|d| d.to_digit(10).map(|d| SUPERSCRIPTS[d as usize]))
+                .collect();
+            if compound {
+                format!("({base}){sup}")
+            } else {
+                format!("{base}{sup}")
             }
         })
         .collect::<Vec<_>>()
