@@ -540,7 +540,7 @@ fn named_aero(
 /// flutter analysis).
 ///
 /// # Errors
-/// As [`structure`] and [`linear_aero`].
+/// As [`structure`] and [`model_of`].
 pub fn linear_section(study: &Study, model: StudyModel, derived: &Derived) -> Result<Section> {
     let (Some(s), Some(a)) = (&study.spec.structure, &study.spec.aero) else {
         return Err(Error::Study("[structure] and [aero] are required".into()));
