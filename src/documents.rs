@@ -12,7 +12,7 @@
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
-pub use study::documents::{CoefficientColumn, FlutterRun, LcoStage, RunSummary};
+pub use study::documents::{CoefficientColumn, RunSummary};
 
 /// The file written by `aeroform identify --timing-json FILE`: wall time of each stage.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
@@ -124,12 +124,11 @@ pub fn schemas() -> Vec<(&'static str, serde_json::Value)> {
         ("blind", schema_of::<diagnose::bench::BlindReport>()),
         (
             "study-flutter",
-            array_schema_of::<FlutterRun>(
-                "The `flutter.json` of a study: one flutter analysis per `[[flutter.run]]`, in \
-                 the order of the runs.",
+            array_schema_of::<aeroelastic::documents::FlutterDoc>(
+                "The `flutter.json` of a study: one `aeroform-flutter/1` document per \
+                 `[[flutter.run]]`, in the order of the runs.",
             ),
         ),
-        ("study-lco", schema_of::<LcoStage>()),
         (
             "coefficients.columns",
             array_schema_of::<CoefficientColumn>(

@@ -93,7 +93,7 @@ pub fn run(args: &LcoArgs) -> anyhow::Result<()> {
             r.amplitude_h * 1e3,
             r.omega / (2.0 * std::f64::consts::PI)
         );
-        lco_run_document(&structure_name, &model_name, &r)
+        lco_run_document(&structure_name, &model_name, &l.section, &r)
     } else {
         let speeds = sweep_speeds.clone();
         let bar = CountBar::new("LCO", 2 * speeds.len());
@@ -133,7 +133,7 @@ pub fn run(args: &LcoArgs) -> anyhow::Result<()> {
         if !band.is_empty() {
             crate::ui::say!("hysteresis at U = {band:?}");
         }
-        lco_sweep_document(&structure_name, &model_name, &h)
+        lco_sweep_document(&structure_name, &model_name, &l.section, &h)
     };
     let mut doc = doc;
     if let Some(n) = args.ensemble {

@@ -14,8 +14,8 @@ use std::process::Command;
 
 use aeroelastic::documents::{BranchDoc, FlutterDoc, LcoDoc};
 use aeroform::documents::{
-    CoefficientColumn, FlutterRun, IdentifyTiming, LcoStage, RunSummary, TunnelBlindSummary,
-    TunnelForcedSummary, TunnelFreeSummary,
+    CoefficientColumn, IdentifyTiming, RunSummary, TunnelBlindSummary, TunnelForcedSummary,
+    TunnelFreeSummary,
 };
 use serde::de::DeserializeOwned;
 use serde::Serialize;
@@ -500,16 +500,12 @@ fn written_documents_follow_their_schemas_and_types() {
     let stdout = aeroform(d, &["run", "--out", "qs", "--json"]);
     round_trips::<RunSummary>("run-stdout", "run --json", &stdout_value("run", &stdout));
     let qs = d.join("qs");
-    round_trips::<Vec<FlutterRun>>(
+    round_trips::<Vec<FlutterDoc>>(
         "study-flutter",
         "study flutter.json",
         &read_value(&qs.join("flutter.json")),
     );
-    round_trips::<LcoStage>(
-        "study-lco",
-        "study lco.json",
-        &read_value(&qs.join("lco.json")),
-    );
+    round_trips::<LcoDoc>("lco", "study lco.json", &read_value(&qs.join("lco.json")));
     round_trips::<identify::pipeline::Identification>(
         "identification",
         "study identification.json",

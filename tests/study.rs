@@ -560,7 +560,7 @@ fn branch_stage_writes_the_branch_and_its_figure() {
     let lco: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("lco.json")).unwrap()).unwrap();
     let mut compared = 0;
-    for r in lco["up"].as_array().unwrap() {
+    for r in lco["sweep"]["up"].as_array().unwrap() {
         if r["classification"] != "Lco" {
             continue;
         }

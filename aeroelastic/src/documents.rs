@@ -26,6 +26,7 @@ use crate::flutter::{FlutterAnalysis, FlutterMethod, FlutterOptions, FlutterPoin
 use crate::lco::{Hysteresis, KIteration, LcoOptions, LcoResult, SweepPlan, SweepProgress};
 use crate::section::Section;
 use crate::structure::Structure;
+use crate::trajectory::Trajectory;
 use crate::Result;
 
 /// Relative tolerance on the critical speed used by `aeroform flutter`.
@@ -337,16 +338,37 @@ impl CriticalPoint {
     }
 }
 
-/// The `flutter.json` document of `aeroform flutter` and of the Python binding's
-/// `flutter` (format `aeroform-flutter/1`): the flutter analysis of one structure/model
-/// pair. Scanlan's convention: h positive down, α positive nose-up; SI units.
+/// Published values a flutter analysis is compared with (a study's
+/// `[[flutter.run]] reference`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct FlutterReference {
+    /// Published reduced flutter speed U_F/(bω_α), b the semi-chord.
+    pub u_reduced: Option<f64>,
+    /// Published flutter frequency ratio ω_F/ω_α.
+    pub omega_ratio: Option<f64>,
+    /// Published reduced divergence speed U_D/(bω_α).
+    pub divergence: Option<f64>,
+}
+
+/// The `flutter.json` document (format `aeroform-flutter/1`) of `aeroform flutter`, of the
+/// Python binding's `flutter` and of each run of a study's flutter stage (a study's
+/// `flutter.json` is an array of them, one per `[[flutter.run]]`): the flutter analysis of
+/// one structure/model pair. Scanlan's convention: h positive down, α positive nose-up; SI
+/// units.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct FlutterDoc {
     /// Format tag, `aeroform-flutter/1`.
     pub format: String,
-    /// The structure file, as named on the command line.
+    /// The run's label in tables and figures (a study's `[[flutter.run]] label`); absent
+    /// for `aeroform flutter`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub label: Option<String>,
+    /// The structure file as named on the command line (`<study file> [structure]` in a
+    /// study).
     pub structure: String,
-    /// The model file (model TOML or `identification.json`), as named on the command line.
+    /// The model file (model TOML or `identification.json`) as named on the command line;
+    /// in a study the run's model (`theodorsen`, `identified`, `truth`, …).
     pub model: String,
     /// Name of the aerodynamic model (`theodorsen`, `quasi_steady`, `identified`, …).
     pub model_name: String,
@@ -354,6 +376,9 @@ pub struct FlutterDoc {
     pub air_density: f64,
     /// Full chord B \[m\].
     pub chord: f64,
+    /// Uncoupled still-air pitch frequency ω_α \[rad/s\]: reduced speed = U/(bω_α) with
+    /// b = B/2.
+    pub omega_alpha: f64,
     /// The flutter point with its frequencies; `null` when no mode crosses zero damping in
     /// the scanned range.
     pub critical: Option<CriticalPoint>,
@@ -365,29 +390,74 @@ pub struct FlutterDoc {
     /// What the identified law was built from; `null` unless the model is an
     /// `identification.json`.
     pub identified: Option<IdentifiedTables>,
+    /// Published values the run is compared with (a study's `[[flutter.run]]
+    /// reference`); absent without.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reference: Option<FlutterReference>,
     /// Flutter and divergence over the members of the identification's bootstrap ensemble
-    /// (`--ensemble N`); absent without.
+    /// (`--ensemble N`, a study's `[identify] ensemble`); absent without.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub ensemble: Option<FlutterEnsemble>,
 }
 
+impl FlutterDoc {
+    /// The document of the analysis `fa` of `section`; `structure` and `model` name the
+    /// inputs, `identified` what an identified law was built from. Without label,
+    /// reference or ensemble (set the fields to add them).
+    pub fn new(
+        structure: &str,
+        model: &str,
+        section: &Section,
+        fa: &FlutterAnalysis,
+        identified: Option<IdentifiedTables>,
+    ) -> Self {
+        let b = section.aero.chord();
+        FlutterDoc {
+            format: FLUTTER_FORMAT.to_string(),
+            label: None,
+            structure: structure.to_string(),
+            model: model.to_string(),
+            model_name: fa.model.clone(),
+            air_density: section.rho,
+            chord: b,
+            omega_alpha: section.structure.omega_alpha(),
+            critical: fa.flutter.as_ref().map(|f| CriticalPoint::new(f, b)),
+            divergence_speed: fa.divergence_speed,
+            analysis: fa.clone(),
+            identified,
+            reference: None,
+            ensemble: None,
+        }
+    }
+}
+
 document_io!(FlutterDoc, FLUTTER_FORMAT, "flutter.json");
 
-/// The `lco.json` document of `aeroform lco` and of the Python binding's `lco` (format
-/// `aeroform-lco/1`): either one run (`run`) or an upward and a downward sweep (`sweep`,
-/// `hysteresis_speeds`). Scanlan's convention; SI units (amplitudes in rad and m).
+/// The `lco.json` document (format `aeroform-lco/1`) of `aeroform lco`, of the Python
+/// binding's `lco` and of a study's LCO stage: either one run (`run`) or an upward and a
+/// downward sweep (`sweep`, `hysteresis_speeds`), with a study's phase portraits and truth
+/// sweeps when it has them. Scanlan's convention; SI units (amplitudes in rad and m).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct LcoDoc {
     /// Format tag, `aeroform-lco/1`.
     pub format: String,
-    /// The structure file, as named on the command line.
+    /// The structure file as named on the command line (`<study file> [structure]` in a
+    /// study).
     pub structure: String,
-    /// The model file, as named on the command line.
+    /// The model file as named on the command line; in a study its `[aero]` model
+    /// (`theodorsen`, `identified`, …).
     pub model: String,
+    /// Name of the aerodynamic model with its nonlinear terms (`theodorsen+nonlinear`, …).
+    pub model_name: String,
+    /// Full chord B \[m\].
+    pub chord: f64,
+    /// Uncoupled still-air pitch frequency ω_α \[rad/s\] (reduced speed U/(bω_α), b = B/2).
+    pub omega_alpha: f64,
     /// The run at one speed (`--speed`); absent for a sweep.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub run: Option<LcoResult>,
-    /// The upward and downward sweeps (`--sweep`); absent for one run.
+    /// The upward and downward sweeps (`--sweep`, a study's `[lco]`; the downward one empty
+    /// without `up_down`); absent for one run.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sweep: Option<Hysteresis>,
     /// Speeds \[m/s\] at which the two sweeps disagree (one settles on an LCO, the other
@@ -395,10 +465,61 @@ pub struct LcoDoc {
     /// `sweep`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub hysteresis_speeds: Option<Vec<f64>>,
+    /// Linear flutter speed of the same model \[m/s\] (a study with a flutter run of it);
+    /// absent otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub flutter_speed: Option<f64>,
+    /// Trajectories of a study's phase-portrait figure; absent when empty.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub phase: Vec<Trajectory>,
+    /// The same sweeps of the truth model of a study's `[data.virtual]` (`compare_truth`);
+    /// absent without.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub truth: Option<TruthSweeps>,
     /// LCO amplitudes over the members of the identification's bootstrap ensemble
-    /// (`--ensemble N`), one point per speed; absent without.
+    /// (`--ensemble N`, a study's `[identify] ensemble`), one point per speed; absent
+    /// without.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub ensemble: Option<LcoEnsemble>,
+}
+
+/// `truth` of `lco.json`: the sweeps of a study's truth model beside those of its model.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct TruthSweeps {
+    /// Linear flutter speed of the truth model \[m/s\]; `null` when none was computed.
+    pub flutter_speed: Option<f64>,
+    /// Upward and downward sweeps of the truth model, increasing U.
+    pub sweep: Hysteresis,
+}
+
+impl LcoDoc {
+    /// A document of `section` with neither run nor sweep (set them, or use
+    /// [`lco_run_document`] / [`lco_sweep_document`]); `structure` and `model` name the
+    /// inputs.
+    pub fn new(structure: &str, model: &str, section: &Section) -> Self {
+        LcoDoc {
+            format: LCO_FORMAT.to_string(),
+            structure: structure.to_string(),
+            model: model.to_string(),
+            model_name: section.aero.name(),
+            chord: section.aero.chord(),
+            omega_alpha: section.structure.omega_alpha(),
+            run: None,
+            sweep: None,
+            hysteresis_speeds: None,
+            flutter_speed: None,
+            phase: Vec::new(),
+            truth: None,
+            ensemble: None,
+        }
+    }
+
+    /// Sets the sweeps and their hysteresis band.
+    pub fn with_sweep(mut self, sweep: Hysteresis) -> Self {
+        self.hysteresis_speeds = Some(sweep.band());
+        self.sweep = Some(sweep);
+        self
+    }
 }
 
 document_io!(LcoDoc, LCO_FORMAT, "lco.json");
@@ -536,57 +657,46 @@ pub fn flutter_point_json(fa: &FlutterAnalysis, chord: f64) -> Value {
 }
 
 /// The `flutter.json` document (`aeroform-flutter/1`) of the analysis `fa` of `pair`;
-/// `structure` and `model` name the inputs. Without an ensemble (set
-/// [`FlutterDoc::ensemble`] to add one).
+/// `structure` and `model` name the inputs ([`FlutterDoc::new`]).
 pub fn flutter_document(
     structure: &str,
     model: &str,
     pair: &LoadedPair,
     fa: &FlutterAnalysis,
 ) -> FlutterDoc {
-    let b = pair.section.aero.chord();
-    FlutterDoc {
-        format: FLUTTER_FORMAT.to_string(),
-        structure: structure.to_string(),
-        model: model.to_string(),
-        model_name: fa.model.clone(),
-        air_density: pair.file.air_density,
-        chord: b,
-        critical: fa.flutter.as_ref().map(|f| CriticalPoint::new(f, b)),
-        divergence_speed: fa.divergence_speed,
-        analysis: fa.clone(),
-        identified: pair.model.identified.clone(),
-        ensemble: None,
-    }
+    FlutterDoc::new(
+        structure,
+        model,
+        &pair.section,
+        fa,
+        pair.model.identified.clone(),
+    )
 }
 
-/// The `lco.json` document (`aeroform-lco/1`) of one run; `structure` and `model` name
-/// the inputs. Without an ensemble (set [`LcoDoc::ensemble`] to add one).
-pub fn lco_run_document(structure: &str, model: &str, run: &LcoResult) -> LcoDoc {
+/// The `lco.json` document (`aeroform-lco/1`) of one run of `section`; `structure` and
+/// `model` name the inputs. Without an ensemble (set [`LcoDoc::ensemble`] to add one).
+pub fn lco_run_document(
+    structure: &str,
+    model: &str,
+    section: &Section,
+    run: &LcoResult,
+) -> LcoDoc {
     LcoDoc {
-        format: LCO_FORMAT.to_string(),
-        structure: structure.to_string(),
-        model: model.to_string(),
         run: Some(run.clone()),
-        sweep: None,
-        hysteresis_speeds: None,
-        ensemble: None,
+        ..LcoDoc::new(structure, model, section)
     }
 }
 
-/// The `lco.json` document (`aeroform-lco/1`) of an upward/downward sweep; `structure`
-/// and `model` name the inputs. Without an ensemble (set [`LcoDoc::ensemble`] to add
-/// one).
-pub fn lco_sweep_document(structure: &str, model: &str, sweep: &Hysteresis) -> LcoDoc {
-    LcoDoc {
-        format: LCO_FORMAT.to_string(),
-        structure: structure.to_string(),
-        model: model.to_string(),
-        run: None,
-        sweep: Some(sweep.clone()),
-        hysteresis_speeds: Some(sweep.band()),
-        ensemble: None,
-    }
+/// The `lco.json` document (`aeroform-lco/1`) of an upward/downward sweep of `section`;
+/// `structure` and `model` name the inputs. Without an ensemble (set [`LcoDoc::ensemble`]
+/// to add one).
+pub fn lco_sweep_document(
+    structure: &str,
+    model: &str,
+    section: &Section,
+    sweep: &Hysteresis,
+) -> LcoDoc {
+    LcoDoc::new(structure, model, section).with_sweep(sweep.clone())
 }
 
 #[cfg(test)]

@@ -19,9 +19,11 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Context, Error, Result};
 
+use aeroelastic::documents::{FlutterDoc, LcoDoc};
+use study::documents::run_model;
 use study::files::{ensure_dir, read_json, write_json};
 use study::paper::{DeltaFit, DeltaFits, ForceDecomposition, ForceLoop, LoopSet, PaperFigures};
-use study::run::{names, FlutterRun, LcoStage};
+use study::run::names;
 use study::spec::{Study, StudyModel};
 
 /// One drawn figure, as listed in `figures.json`.
@@ -264,13 +266,17 @@ fn round_trip_table(report: &mut Report, out: &Path, reduced: bool) -> Result<()
         report.text(format!("{} is empty.", names::ROUND_TRIP));
         return Ok(());
     }
-    let runs: Vec<FlutterRun> = if out.join(names::FLUTTER).exists() {
+    let runs: Vec<FlutterDoc> = if out.join(names::FLUTTER).exists() {
         read_json(&out.join(names::FLUTTER))?
     } else {
         vec![]
     };
-    let truth = runs.iter().find(|r| r.model == StudyModel::Truth);
-    let model = runs.iter().find(|r| r.model != StudyModel::Truth);
+    let truth = runs
+        .iter()
+        .find(|r| run_model(r) == Some(StudyModel::Truth));
+    let model = runs
+        .iter()
+        .find(|r| run_model(r) != Some(StudyModel::Truth));
     if let (Some(t), Some(m)) = (truth, model) {
         let (td, md) = (t.analysis.divergence_speed, m.analysis.divergence_speed);
         let cell =
@@ -655,7 +661,7 @@ pub fn render_all(study: &Study, out: &Path, version: &str) -> Result<Vec<Figure
     }
 
     // ---- flutter
-    let flutter_runs: Option<Vec<FlutterRun>> = s
+    let flutter_runs: Option<Vec<FlutterDoc>> = s
         .flutter
         .is_some()
         .then(|| read_json(&out.join(names::FLUTTER)))
@@ -663,8 +669,9 @@ pub fn render_all(study: &Study, out: &Path, version: &str) -> Result<Vec<Figure
     if let (Some(f), Some(runs)) = (&s.flutter, &flutter_runs) {
         if cv.wants("vg") {
             for (i, r) in runs.iter().enumerate() {
+                let label = r.label.as_deref().unwrap_or_default();
                 let mut scale = if f.axes == study::spec::Axes::Reduced {
-                    AxisScale::reduced(r.semi_chord, r.omega_alpha)
+                    AxisScale::reduced(0.5 * r.chord, r.omega_alpha)
                 } else {
                     AxisScale::si()
                 };
@@ -674,7 +681,7 @@ pub fn render_all(study: &Study, out: &Path, version: &str) -> Result<Vec<Figure
                     &format!("vg_{i}"),
                     format!(
                         "{}: damping ratio and frequency of the aeroelastic modes against wind speed.{}",
-                        r.label,
+                        label,
                         r.ensemble.as_ref().map_or(String::new(), |e| format!(
                             " Shaded band and error bar: the flutter speed's {} % interval over {} block-bootstrap members of the identification ({} with flutter in the scan).",
                             pretty_cell(&format!("{}", 100.0 * e.level)),
@@ -687,7 +694,7 @@ pub fn render_all(study: &Study, out: &Path, version: &str) -> Result<Vec<Figure
                             .ensemble
                             .as_ref()
                             .and_then(|e| flutter_interval(e, &scale)),
-                        ..vg_figure(&r.analysis, &format!("V–g / V–f: {}", r.label), &scale)
+                        ..vg_figure(&r.analysis, &format!("V–g / V–f: {label}"), &scale)
                     },
                 )?;
             }
@@ -698,7 +705,7 @@ pub fn render_all(study: &Study, out: &Path, version: &str) -> Result<Vec<Figure
         let rows: Vec<Vec<String>> = runs
             .iter()
             .map(|r| {
-                let scale = r.semi_chord * r.omega_alpha;
+                let scale = 0.5 * r.chord * r.omega_alpha;
                 let fl = r.analysis.flutter;
                 let ud = r.analysis.divergence_speed.map(|u| u / scale);
                 let rf = r.reference;
@@ -707,7 +714,7 @@ pub fn render_all(study: &Study, out: &Path, version: &str) -> Result<Vec<Figure
                     _ => None,
                 };
                 vec![
-                    r.label.clone(),
+                    r.label.clone().unwrap_or_default(),
                     cell(fl.map(|f| f.u_reduced)),
                     cell(fl.map(|f| f.omega_ratio)),
                     cell(ud),
@@ -742,20 +749,25 @@ pub fn render_all(study: &Study, out: &Path, version: &str) -> Result<Vec<Figure
 
     // ---- LCO
     if let Some(l) = &s.lco {
-        let stage: LcoStage = read_json(&out.join(names::LCO))?;
+        let stage: LcoDoc = read_json(&out.join(names::LCO))?;
+        let empty = aeroelastic::lco::Hysteresis {
+            up: vec![],
+            down: vec![],
+        };
+        let sweep = stage.sweep.as_ref().unwrap_or(&empty);
         let scale = if s
             .flutter
             .as_ref()
             .is_some_and(|f| f.axes == study::spec::Axes::Reduced)
         {
-            AxisScale::reduced(stage.semi_chord, stage.omega_alpha)
+            AxisScale::reduced(0.5 * stage.chord, stage.omega_alpha)
         } else {
             AxisScale::si()
         };
         if cv.wants("bifurcation") {
             let mut fig = bifurcation_figure(
-                &stage.up,
-                &stage.down,
+                &sweep.up,
+                &sweep.down,
                 stage.flutter_speed,
                 "LCO sweeps",
                 &scale,
@@ -763,7 +775,7 @@ pub fn render_all(study: &Study, out: &Path, version: &str) -> Result<Vec<Figure
             let mut caption = format!(
                 "LCO pitch amplitude against wind speed, upward (▲) and downward (▼) sweeps{}; model: {}.",
                 if stage.flutter_speed.is_some() { ", linear flutter speed marked" } else { "" },
-                stage.model
+                stage.model_name
             );
             if let Some(e) = &stage.ensemble {
                 (fig.intervals, fig.interval_label) = amplitude_intervals(e, &scale);
@@ -771,7 +783,7 @@ pub fn render_all(study: &Study, out: &Path, version: &str) -> Result<Vec<Figure
                 fig.flutter_interval = flutter_runs
                     .iter()
                     .flatten()
-                    .filter(|r| r.model == StudyModel::IDENTIFIED)
+                    .filter(|r| run_model(r) == Some(StudyModel::IDENTIFIED))
                     .find_map(|r| r.ensemble.as_ref())
                     .and_then(|e| flutter_interval(e, &scale));
                 caption.push_str(&format!(
@@ -782,15 +794,15 @@ pub fn render_all(study: &Study, out: &Path, version: &str) -> Result<Vec<Figure
                 ));
             }
             cv.draw("bifurcation", "bifurcation", caption, &fig)?;
-            if !stage.truth_up.is_empty() {
+            if let Some(truth) = stage.truth.as_ref().filter(|t| !t.sweep.up.is_empty()) {
                 cv.draw(
                     "bifurcation",
                     "bifurcation-truth",
                     "LCO pitch amplitude against wind speed of the truth model of the virtual campaign (same structure, same sweeps), truth linear flutter speed marked.".to_string(),
                     &bifurcation_figure(
-                        &stage.truth_up,
-                        &stage.truth_down,
-                        stage.truth_flutter_speed,
+                        &truth.sweep.up,
+                        &truth.sweep.down,
+                        truth.flutter_speed,
                         "LCO sweeps of the truth model",
                         &scale,
                     ),
@@ -1011,7 +1023,7 @@ fn table_iii(report: &mut Report, d: &DeltaFits) {
 
 /// The intervals of the flutter runs that have an ensemble (`[identify] ensemble`): U_F,
 /// f_F and U_D, median and interval, and how many members found each.
-fn ensemble_flutter_table(report: &mut Report, runs: &[FlutterRun]) {
+fn ensemble_flutter_table(report: &mut Report, runs: &[FlutterDoc]) {
     let rows: Vec<Vec<String>> = runs
         .iter()
         .filter_map(|r| r.ensemble.as_ref().map(|e| (r, e)))
@@ -1025,7 +1037,7 @@ fn ensemble_flutter_table(report: &mut Report, runs: &[FlutterRun]) {
                 let cell =
                     |v: Option<f64>| v.map_or("—".into(), |x| pretty_cell(&format!("{x:e}")));
                 vec![
-                    r.label.clone(),
+                    r.label.clone().unwrap_or_default(),
                     name.to_string(),
                     cell(q.interval.map(|i| i.median)),
                     cell(q.interval.map(|i| i.lower)),
@@ -1083,9 +1095,11 @@ fn branch_section(
         u_range: doc.settings.u_range_m_s,
     };
     let sweep = if with_sweep {
-        let stage: LcoStage = read_json(&out.join(names::LCO))?;
+        let stage: LcoDoc = read_json(&out.join(names::LCO))?;
         stage
-            .up
+            .sweep
+            .map(|h| h.up)
+            .unwrap_or_default()
             .iter()
             .filter(|r| r.classification == aeroelastic::lco::Classification::Lco)
             .map(|r| crate::DiagramPoint {

@@ -393,7 +393,7 @@ fn lco(
                 let r = pair
                     .lco_run(u, alpha0.to_radians())
                     .map_err(|e| format!("LCO run at U = {u} m/s: {e}"))?;
-                lco_run_document(&s, &m, &r)
+                lco_run_document(&s, &m, &pair.section, &r)
             }
             (None, Some(speeds)) => {
                 let h = pair
@@ -404,7 +404,7 @@ fn lco(
                         &|_| {},
                     )
                     .map_err(|e| format!("LCO sweep: {e}"))?;
-                lco_sweep_document(&s, &m, &h)
+                lco_sweep_document(&s, &m, &pair.section, &h)
             }
             (None, None) => unreachable!("checked above"),
         };

@@ -1,79 +1,24 @@
-//! The JSON documents a study writes besides the libraries' own: the study's
-//! `flutter.json` ([`FlutterRun`], an array), `lco.json` ([`LcoStage`]),
+//! The JSON documents a study writes besides the libraries' own (its `flutter.json` is an
+//! array of [`FlutterDoc`], its `lco.json` an [`aeroelastic::documents::LcoDoc`]):
 //! `coefficients.columns.json` ([`CoefficientColumn`], an array) and the summary
 //! `aeroform run --json` prints ([`RunSummary`]). Their JSON Schemas are generated with
 //! the others by `aeroform::documents::schemas`.
 
 use std::collections::BTreeMap;
 
-use aeroelastic::ensemble::{FlutterEnsemble, LcoEnsemble};
-use aeroelastic::flutter::FlutterAnalysis;
-use aeroelastic::lco::LcoResult;
-use aeroelastic::trajectory::Trajectory;
+use aeroelastic::documents::FlutterDoc;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
-use crate::spec::FlutterReference;
+use crate::spec::StudyModel;
 
-/// One flutter analysis of a study (one `[[flutter.run]]`); the study's `flutter.json` is
-/// an array of them, in the order of the runs. Scanlan's convention (h positive down, α
-/// positive nose-up); SI units.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
-pub struct FlutterRun {
-    /// The run's label in tables and figures.
-    pub label: String,
-    /// Aerodynamic model of the run (`theodorsen`, `truth`, `identified`, …).
-    pub model: crate::spec::StudyModel,
-    /// Semi-chord b = B/2 \[m\].
-    pub semi_chord: f64,
-    /// Still-air pitch frequency ω_α \[rad/s\]; reduced speed = U/(b·ω_α).
-    pub omega_alpha: f64,
-    /// The analysis: method, one branch per structural mode (V–g, V–f), flutter point,
-    /// divergence speed, failed points.
-    pub analysis: FlutterAnalysis,
-    /// Published values the run is compared with; `null` when the study names none.
-    pub reference: Option<FlutterReference>,
-    /// Intervals over the bootstrap members of the identified law (`[identify] ensemble`,
-    /// runs of the `identified` model only); absent otherwise.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub ensemble: Option<FlutterEnsemble>,
-}
-
-/// The LCO stage of a study as saved in its `lco.json`. Scanlan's convention; SI units
-/// (amplitudes in rad and m).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
-pub struct LcoStage {
-    /// Aerodynamic model of the sweeps (`theodorsen`, `identified`, …).
-    pub model: String,
-    /// Semi-chord b = B/2 \[m\].
-    pub semi_chord: f64,
-    /// Still-air pitch frequency ω_α \[rad/s\].
-    pub omega_alpha: f64,
-    /// Linear flutter speed of the same model \[m/s\], if a flutter run of it exists;
-    /// `null` otherwise.
-    pub flutter_speed: Option<f64>,
-    /// Upward sweep, increasing U.
-    pub up: Vec<LcoResult>,
-    /// Downward sweep, increasing U (empty without `up_down`).
-    pub down: Vec<LcoResult>,
-    /// Trajectories drawn in the phase-portrait figure.
-    pub phase: Vec<Trajectory>,
-    /// Linear flutter speed of the truth model \[m/s\] (`compare_truth`); absent without.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub truth_flutter_speed: Option<f64>,
-    /// Upward sweep of the truth model of `[data.virtual]` (`compare_truth`); absent
-    /// when empty.
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub truth_up: Vec<LcoResult>,
-    /// Downward sweep of the truth model, increasing U (`compare_truth`); absent when
-    /// empty.
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub truth_down: Vec<LcoResult>,
-    /// LCO amplitude intervals over the bootstrap members of the identified law at every
-    /// speed of the sweep (`[identify] ensemble` with the `identified` model), each member
-    /// run from the upward sweep's perturbation; absent otherwise.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub ensemble: Option<LcoEnsemble>,
+/// The study model of a run of a study's `flutter.json` (its `model`, written from
+/// [`StudyModel::name`]); `None` for a document not written by a study.
+pub fn run_model(doc: &FlutterDoc) -> Option<StudyModel> {
+    StudyModel::deserialize(
+        serde::de::value::StrDeserializer::<serde::de::value::Error>::new(&doc.model),
+    )
+    .ok()
 }
 
 /// One term column of a study's `coefficients.csv`, as listed in

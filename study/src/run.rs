@@ -6,6 +6,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use crate::error::{Context, Error, Result};
+use aeroelastic::documents::{FlutterDoc, LcoDoc, TruthSweeps};
 use aeroelastic::ensemble::{flutter_ensemble, lco_ensemble, LcoEnsemble};
 use aeroelastic::files::ModelKind;
 use aeroelastic::flutter::{FlutterMethod, FlutterOptions};
@@ -63,7 +64,10 @@ pub mod names {
     pub const REPORT: &str = "report.html";
 }
 
-pub use crate::documents::{FlutterRun, LcoStage};
+/// How a study's result documents name its structure (`study.toml [structure]`).
+fn structure_name() -> String {
+    format!("{} [structure]", names::STUDY)
+}
 
 /// Wall time of each stage \[s\].
 pub type Timings = Vec<(&'static str, f64)>;
@@ -139,18 +143,19 @@ pub fn run_study(study: &Study, out: &Path, obs: &dyn Observer) -> Result<Timing
         let model = study.spec.aero.as_ref().map(|a| StudyModel::Kind(a.kind));
         let speed_of = |m: Option<StudyModel>| {
             runs.iter()
-                .find(|r| Some(r.model) == m)
-                .and_then(|r| r.analysis.flutter.map(|f| f.u))
+                .find(|(model, _)| Some(*model) == m)
+                .and_then(|(_, r)| r.analysis.flutter.map(|f| f.u))
         };
         flutter_speed = speed_of(model);
         truth_flutter_speed = speed_of(Some(StudyModel::Truth));
-        for r in &runs {
+        for (_, r) in &runs {
+            let label = r.label.as_deref().unwrap_or_default();
             match r.analysis.flutter {
                 Some(f) => obs.say(&format!(
-                    "flutter [{}]: U_F = {:.4} m/s (U/(bω_α) = {:.4}), ω_F/ω_α = {:.4}",
-                    r.label, f.u, f.u_reduced, f.omega_ratio
+                    "flutter [{label}]: U_F = {:.4} m/s (U/(bω_α) = {:.4}), ω_F/ω_α = {:.4}",
+                    f.u, f.u_reduced, f.omega_ratio
                 )),
-                None => obs.say(&format!("flutter [{}]: stable over the scan", r.label)),
+                None => obs.say(&format!("flutter [{label}]: stable over the scan")),
             }
         }
     }
@@ -502,8 +507,8 @@ fn flutter_stage(
     out: &Path,
     derived: &build::Derived,
     obs: &dyn Observer,
-) -> Result<Vec<FlutterRun>> {
-    let (Some(f), Some(s), Some(a)) =
+) -> Result<Vec<(StudyModel, FlutterDoc)>> {
+    let (Some(f), Some(_), Some(a)) =
         (&study.spec.flutter, &study.spec.structure, &study.spec.aero)
     else {
         return Err(Error::Study(
@@ -550,18 +555,17 @@ fn flutter_stage(
             _ => None,
         };
         bar.inc(1);
-        results.push(FlutterRun {
-            label: r.label.clone(),
-            model,
-            semi_chord: s.linear.semi_chord,
-            omega_alpha: s.linear.omega_alpha,
-            analysis,
+        let doc = FlutterDoc {
+            label: Some(r.label.clone()),
             reference: r.reference,
             ensemble,
-        });
+            ..FlutterDoc::new(&structure_name(), model.name(), &section, &analysis, None)
+        };
+        results.push((model, doc));
     }
     bar.finish();
-    write_json(&out.join(names::FLUTTER), &results)?;
+    let docs: Vec<&FlutterDoc> = results.iter().map(|(_, d)| d).collect();
+    write_json(&out.join(names::FLUTTER), &docs)?;
     let mut csv = Csv::new(&[
         "run",
         "model",
@@ -585,8 +589,8 @@ fn flutter_stage(
         "ensemble_members",
         "ensemble_with_flutter",
     ]);
-    for r in &results {
-        let scale = r.semi_chord * r.omega_alpha;
+    for (_, r) in &results {
+        let scale = 0.5 * r.chord * r.omega_alpha;
         let fl = r.analysis.flutter;
         let ud = r.analysis.divergence_speed;
         let rf = r.reference;
@@ -595,8 +599,8 @@ fn flutter_stage(
             _ => None,
         };
         let mut row = vec![
-            r.label.clone(),
-            r.model.to_string(),
+            r.label.clone().unwrap_or_default(),
+            r.model.clone(),
             format!("{:?}", r.analysis.method),
             num(fl.map(|f| f.u)),
             num(fl.map(|f| f.omega)),
@@ -662,8 +666,7 @@ fn lco_stage(
     let h = section
         .lco_sweeps(&l.speeds, &plan, &opts, &observer)
         .context("LCO sweeps")?;
-    let (up, down) = (h.up, h.down);
-    let (truth_up, truth_down) = if l.compare_truth {
+    let truth = if l.compare_truth {
         let truth = aeroelastic::section::Section::new(
             build::structure(s)?,
             build::truth_model(study, s)?,
@@ -676,20 +679,23 @@ fn lco_stage(
                 .then(|| truth.perturbation(l.perturbation_down_deg.to_radians())),
             k_iteration: KIteration::default(),
         };
-        let h = truth
+        let sweep = truth
             .lco_sweeps(&l.speeds, &plan, &opts, &observer)
             .context("LCO sweeps of the truth model")?;
-        (h.up, h.down)
+        Some(TruthSweeps {
+            flutter_speed: truth_flutter_speed,
+            sweep,
+        })
     } else {
-        (vec![], vec![])
+        None
     };
     bar.finish();
     // phase portraits: a few cycles from the final state of the nearest upward run
     let mut phase = Vec::new();
     for &u in &l.phase_speeds {
-        let Some(r) = up
-            .iter()
-            .min_by(|a, b| (a.u - u).abs().total_cmp(&(b.u - u).abs()))
+        let Some(r) =
+            h.up.iter()
+                .min_by(|a, b| (a.u - u).abs().total_cmp(&(b.u - u).abs()))
         else {
             continue;
         };
@@ -727,18 +733,17 @@ fn lco_stage(
         ),
         _ => None,
     };
-    let stage = LcoStage {
-        model: section.aero.name(),
-        semi_chord: s.linear.semi_chord,
-        omega_alpha: s.linear.omega_alpha,
+    let model = study
+        .spec
+        .aero
+        .as_ref()
+        .map_or_else(|| section.aero.name(), |a| a.kind.to_string());
+    let stage = LcoDoc {
         flutter_speed,
-        up,
-        down,
         phase,
-        truth_flutter_speed,
-        truth_up,
-        truth_down,
+        truth,
         ensemble,
+        ..LcoDoc::new(&structure_name(), &model, &section).with_sweep(h)
     };
     write_json(&out.join(names::LCO), &stage)?;
     if let Some(e) = &stage.ensemble {
@@ -758,12 +763,14 @@ fn lco_stage(
         "rhs_evals",
         "k_eval",
     ]);
+    let (sweep, truth) = (stage.sweep.as_ref(), stage.truth.as_ref().map(|t| &t.sweep));
     for (name, rs) in [
-        ("up", &stage.up),
-        ("down", &stage.down),
-        ("truth-up", &stage.truth_up),
-        ("truth-down", &stage.truth_down),
+        ("up", sweep.map(|h| &h.up)),
+        ("down", sweep.map(|h| &h.down)),
+        ("truth-up", truth.map(|h| &h.up)),
+        ("truth-down", truth.map(|h| &h.down)),
     ] {
+        let Some(rs) = rs else { continue };
         for r in rs.iter() {
             let class = match r.classification {
                 Classification::Decay => "decay",
@@ -835,7 +842,10 @@ fn lco_intervals(e: &LcoEnsemble, out: &Path) -> Result<()> {
 
 /// `round_trip.csv`: truth vs `[aero]` model, flutter speed and LCO pitch amplitude per
 /// speed and sweep, with the relative error (model/truth − 1).
-fn round_trip_table(stage: &LcoStage, out: &Path) -> Result<()> {
+fn round_trip_table(stage: &LcoDoc, out: &Path) -> Result<()> {
+    let (Some(model), Some(truth)) = (&stage.sweep, &stage.truth) else {
+        return Ok(());
+    };
     let mut csv = Csv::new(&[
         "quantity",
         "U_m_s",
@@ -852,9 +862,9 @@ fn round_trip_table(stage: &LcoStage, out: &Path) -> Result<()> {
     csv.rows.push(vec![
         "flutter_speed_m_s".into(),
         String::new(),
-        num(stage.truth_flutter_speed),
+        num(truth.flutter_speed),
         num(stage.flutter_speed),
-        num(rel(stage.truth_flutter_speed, stage.flutter_speed)),
+        num(rel(truth.flutter_speed, stage.flutter_speed)),
         String::new(),
         String::new(),
     ]);
@@ -868,8 +878,8 @@ fn round_trip_table(stage: &LcoStage, out: &Path) -> Result<()> {
         .to_string()
     };
     for (q, truth, model) in [
-        ("lco_amplitude_deg_up", &stage.truth_up, &stage.up),
-        ("lco_amplitude_deg_down", &stage.truth_down, &stage.down),
+        ("lco_amplitude_deg_up", &truth.sweep.up, &model.up),
+        ("lco_amplitude_deg_down", &truth.sweep.down, &model.down),
     ] {
         for (t, m) in truth.iter().zip(model.iter()) {
             let (ta, ma) = (
@@ -942,12 +952,7 @@ fn branch_stage(
         .aero
         .as_ref()
         .map_or_else(|| section.aero.name(), |a| a.kind.to_string());
-    let doc = aeroelastic::documents::branch_document(
-        &format!("{} [structure]", names::STUDY),
-        &model,
-        &set,
-        &dist,
-    );
+    let doc = aeroelastic::documents::branch_document(&structure_name(), &model, &set, &dist);
     write_text(&out.join(names::BRANCH), &format!("{:#}\n", doc.to_value()))?;
     write_text(
         &out.join(names::BRANCH_CSV),

@@ -407,17 +407,7 @@ impl StudyStructure {
     }
 }
 
-/// Published values a flutter run is compared with.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct FlutterReference {
-    /// Published reduced flutter speed U_F/(bω_α), b the semi-chord.
-    pub u_reduced: Option<f64>,
-    /// Published flutter frequency ratio ω_F/ω_α.
-    pub omega_ratio: Option<f64>,
-    /// Published reduced divergence speed U_D/(bω_α).
-    pub divergence: Option<f64>,
-}
+pub use aeroelastic::documents::FlutterReference;
 
 /// One flutter analysis of `[flutter]`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
