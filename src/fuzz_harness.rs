@@ -220,7 +220,11 @@ fn check_study_is_bounded(s: &Study) {
             assert!(t.sigma.is_finite());
         }
         if let Some(v) = &d.virtual_tunnel {
-            let cases = if v.campaign == "paper" { 448.0 } else { 64.0 };
+            let cases = if v.campaign == aeroelastic::tunnel::CampaignName::Paper {
+                448.0
+            } else {
+                64.0
+            };
             let records = cases * if v.still_air { 2.0 } else { 1.0 };
             let samples = records * (v.duration * 512.0).ceil();
             assert!(samples <= MAX_SAMPLES, "{samples} samples");

@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use aeroelastic::files::LoadedModel;
-use aeroelastic::tunnel::{self, Campaign, ForcedOptions, FreeOptions, TunnelProgress};
+use aeroelastic::tunnel::{self, ForcedOptions, FreeOptions, TunnelProgress};
 use anyhow::Context;
 use clap::{Args, Subcommand};
 
@@ -58,7 +58,7 @@ pub struct ForcedArgs {
     pub model: PathBuf,
     /// `paper` (configurations A–G) or `config=X` (one configuration).
     #[arg(long, default_value = "paper")]
-    pub campaign: String,
+    pub campaign: aeroelastic::tunnel::CampaignName,
     /// Output data-set folder.
     #[arg(long, default_value = "out/forced")]
     pub out: PathBuf,
@@ -170,13 +170,7 @@ fn manifest_json(dir: &std::path::Path) -> anyhow::Result<serde_json::Value> {
 }
 
 fn forced(a: &ForcedArgs) -> anyhow::Result<()> {
-    let campaign = match a.campaign.as_str() {
-        "paper" => Campaign::paper(),
-        c => match c.strip_prefix("config=") {
-            Some(x) => Campaign::paper_config(x).context("--campaign")?,
-            None => anyhow::bail!("--campaign `{c}`: expected `paper` or `config=X` (X in A..G)"),
-        },
-    };
+    let campaign = a.campaign.campaign().context("--campaign")?;
     let mut opts = ForcedOptions::paper(a.seed);
     if a.still_air {
         opts = opts.with_paper_still_air();

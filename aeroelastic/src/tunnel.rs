@@ -232,6 +232,72 @@ fn num_label(x: f64) -> String {
     }
 }
 
+/// The name of a forced campaign of the paper's grid, as written in a study
+/// (`[data.virtual] campaign`) and on the command line (`tunnel forced --campaign`):
+/// `paper` (configurations A–G, 448 cases) or `config=X` (configuration X only, 64 cases).
+/// Parsed once ([`std::str::FromStr`], serde as that string); the configuration is
+/// checked against the paper's when parsed.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub enum CampaignName {
+    /// The whole paper grid.
+    #[default]
+    Paper,
+    /// One configuration of the paper (`A`..`G`).
+    Config(String),
+}
+
+impl std::str::FromStr for CampaignName {
+    type Err = String;
+
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        if s == "paper" {
+            return Ok(CampaignName::Paper);
+        }
+        match s.strip_prefix("config=") {
+            Some(c) if paper_configurations().iter().any(|x| x.name == c) => {
+                Ok(CampaignName::Config(c.to_string()))
+            }
+            _ => Err(format!("`{s}`: expected `paper` or `config=X`, X in A..G")),
+        }
+    }
+}
+
+impl std::fmt::Display for CampaignName {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            CampaignName::Paper => f.write_str("paper"),
+            CampaignName::Config(c) => write!(f, "config={c}"),
+        }
+    }
+}
+
+impl Serialize for CampaignName {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        s.collect_str(self)
+    }
+}
+
+impl<'de> Deserialize<'de> for CampaignName {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        String::deserialize(d)?
+            .parse()
+            .map_err(serde::de::Error::custom)
+    }
+}
+
+impl CampaignName {
+    /// The campaign it names.
+    ///
+    /// # Errors
+    /// As [`Campaign::paper_config`] (not for a parsed name).
+    pub fn campaign(&self) -> Result<Campaign> {
+        match self {
+            CampaignName::Paper => Ok(Campaign::paper()),
+            CampaignName::Config(c) => Campaign::paper_config(c),
+        }
+    }
+}
+
 impl Campaign {
     /// The paper's campaign (Tables I–II): configurations A–G ([`paper_configurations`]),
     /// pitch amplitudes (Table II) 3, 6, …, 24 deg, wind speeds 3, 4, …, 10 m/s (448 cases).
@@ -1424,6 +1490,31 @@ mod tests {
     use crate::aero::{state_space_response, TheodorsenAero};
 
     fn no_obs(_: TunnelProgress) {}
+
+    #[test]
+    fn campaign_names_parse_once_and_name_the_bad_value() {
+        for text in ["paper", "config=A", "config=G"] {
+            let n: CampaignName = text.parse().unwrap();
+            assert_eq!(n.to_string(), text);
+            let j = serde_json::to_string(&n).unwrap();
+            assert_eq!(serde_json::from_str::<CampaignName>(&j).unwrap(), n);
+        }
+        assert_eq!(
+            "config=D"
+                .parse::<CampaignName>()
+                .unwrap()
+                .campaign()
+                .unwrap()
+                .cases()
+                .len(),
+            64
+        );
+        assert_eq!(CampaignName::Paper.campaign().unwrap().cases().len(), 448);
+        for bad in ["Paper", "config=Q", "config=", "D"] {
+            let e = bad.parse::<CampaignName>().unwrap_err();
+            assert!(e.contains(&format!("`{bad}`")) && e.contains("A..G"), "{e}");
+        }
+    }
 
     #[test]
     fn campaign_matches_the_paper_grid() {

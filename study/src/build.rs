@@ -22,7 +22,7 @@ use identify::workflow::prepare_dataset;
 
 use aeroelastic::files::LoadedModel;
 use aeroelastic::identified::{IdentifiedLaw, IdentifiedOptions};
-use aeroelastic::tunnel::{self, Campaign, ForcedOptions};
+use aeroelastic::tunnel::{self, ForcedOptions};
 use identify::pipeline::Identification;
 
 use crate::spec::{
@@ -219,10 +219,7 @@ fn virtual_campaign(
     out: &Path,
     obs: &dyn Observer,
 ) -> Result<(Dataset, String)> {
-    let campaign = match v.campaign.strip_prefix("config=") {
-        Some(c) => Campaign::paper_config(c).context("data.virtual.campaign")?,
-        None => Campaign::paper(),
-    };
+    let campaign = v.campaign.campaign().context("data.virtual.campaign")?;
     let mut opts = ForcedOptions::paper(study.spec.seed);
     opts.name = format!("{} (virtual wind tunnel)", study.spec.name);
     opts.duration = v.duration;

@@ -73,8 +73,8 @@ pub struct VirtualSpec {
     /// Inline model, keys as `[aero]` (chord 0.25 m, the rig's).
     pub aero: Option<ModelFile>,
     /// `"paper"` (Tables I–II, 448 cases) or `"config=X"` (configuration X only, 64 cases).
-    #[serde(default = "paper")]
-    pub campaign: String,
+    #[serde(default)]
+    pub campaign: aeroelastic::tunnel::CampaignName,
     /// Still-air runs (0.82 kg uniform plate) subtracted in preprocessing.
     #[serde(default)]
     pub still_air: bool,
@@ -84,10 +84,6 @@ pub struct VirtualSpec {
     /// Also write the data set (manifest + CSV) under `OUT/dataset`.
     #[serde(default)]
     pub write_dataset: bool,
-}
-
-fn paper() -> String {
-    "paper".into()
 }
 
 /// Section geometry of synthetic data.
@@ -897,8 +893,11 @@ impl Study {
                 }
                 pos("data.virtual.duration", v.duration)?;
                 // the paper campaign: 7 configurations × 64 cases; one configuration: 64
-                let records =
-                    if v.campaign == "paper" { 448 } else { 64 } * if v.still_air { 2 } else { 1 };
+                let records = if v.campaign == aeroelastic::tunnel::CampaignName::Paper {
+                    448
+                } else {
+                    64
+                } * if v.still_air { 2 } else { 1 };
                 lim(samples(
                     "data.virtual.duration",
                     "data.virtual.duration",
@@ -906,21 +905,6 @@ impl Study {
                     v.duration,
                     512.0,
                 ))?;
-                if v.campaign != "paper" {
-                    let c = v.campaign.strip_prefix("config=").unwrap_or("");
-                    if !aeroelastic::tunnel::paper_configurations()
-                        .iter()
-                        .any(|x| x.name == c)
-                    {
-                        return err(
-                            "data.virtual.campaign",
-                            format!(
-                                "`{}`: expected `paper` or `config=X`, X in A..G",
-                                v.campaign
-                            ),
-                        );
-                    }
-                }
                 if let Some(a) = &v.aero {
                     check_aero("data.virtual.aero", a, false)?;
                 }
