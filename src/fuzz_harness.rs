@@ -374,6 +374,6 @@ pub fn identification(data: &[u8]) {
         let _ = m.frequency_response(&flow, 20.0);
         let lag = vec![0.0; m.n_lag()];
         let _ = m.forces(&flow, [0.001, 0.02], [0.01, 0.1], &lag);
-        let _ = law.series("A2");
+        let _ = law.series(aeroelastic::theodorsen::Derivative::A2);
     }
 }

@@ -812,13 +812,9 @@ impl IdentifiedLaw {
         &self.table
     }
 
-    /// A series (derivative `A2`…, or `moment N3`…) by name.
-    pub fn series(&self, name: &str) -> Option<&TableSeries> {
-        self.tables
-            .derivatives
-            .iter()
-            .chain(&self.tables.nonlinear)
-            .find(|s| s.name == name)
+    /// The tabulated series of flutter derivative `d`, if the law has one.
+    pub fn series(&self, d: Derivative) -> Option<&TableSeries> {
+        self.tables.derivatives.iter().find(|s| s.name == d.name())
     }
 }
 
@@ -992,7 +988,7 @@ mod tests {
         let id = identification(grid_cases(|_| 0.1));
         let law = IdentifiedLaw::from_identification(&id, &IdentifiedOptions::new(0.25)).unwrap();
         // Each derivative over its own K: 8 points each, 3 cases per point.
-        let a2 = law.series("A2").unwrap();
+        let a2 = law.series(Derivative::A2).unwrap();
         assert_eq!(a2.over, ReducedFrequency::KAlpha);
         assert_eq!(a2.points.len(), 8);
         assert!(a2.points.iter().all(|p| p.n == 3));
@@ -1002,7 +998,7 @@ mod tests {
             assert!((p.value - want).abs() < 1e-12, "{} vs {want}", p.value);
             assert!((p.max - p.min - 0.31).abs() < 1e-12);
         }
-        let a1 = law.series("A1").unwrap();
+        let a1 = law.series(Derivative::A1).unwrap();
         assert_eq!(a1.over, ReducedFrequency::KH);
         assert!((a1.points[0].k - 2.042 / 10.0).abs() < 1e-12);
         // Resampled table: A1 at a K_α node (between K_h nodes) is the flat plate to
@@ -1065,12 +1061,12 @@ mod tests {
         let mut o = IdentifiedOptions::new(0.25);
         o.missing = MissingDerivative::FlatPlate;
         let law = IdentifiedLaw::from_identification(&id, &o).unwrap();
-        let a4 = law.series("A4").unwrap();
+        let a4 = law.series(Derivative::A4).unwrap();
         assert_eq!(a4.points.iter().map(|p| p.filled).sum::<usize>(), 1);
         o.missing = MissingDerivative::Skip;
         let law = IdentifiedLaw::from_identification(&id, &o).unwrap();
         assert_eq!(
-            law.series("A4")
+            law.series(Derivative::A4)
                 .unwrap()
                 .points
                 .iter()
