@@ -213,6 +213,13 @@ pub struct LevelResult {
     pub gap_statistic: f64,
     /// Threshold of the gap test.
     pub gap_threshold: f64,
+    /// Force level: the same statistic over the held-out cases whose reduced frequency
+    /// lies inside the K range their fold was trained on (same configuration), i.e. whose
+    /// prediction interpolates; absent when no held-out case does (and at the system
+    /// level). A gap above threshold that these cases do not show, and that no candidate
+    /// removes, comes from extrapolating the law to held-out wind speeds.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub interpolated_gap_statistic: Option<f64>,
     /// Ids of the held-out cases (every case is held out once).
     pub held_out_cases: Vec<String>,
     /// Every candidate of this level, best first.

@@ -7,11 +7,15 @@
 //!    `unexplained`. A force-level gap that no aerodynamic candidate removes is not handed
 //!    to the free-response level: structural effects cannot leave forced-motion residuals,
 //!    so naming one would force a name on a gap no candidate explains.
+//!    Exception: a gap that the held-out cases interpolating in K do not show and that no
+//!    candidate removes is the law's extrapolation to the held-out wind speeds (the law of
+//!    every case covers them), and the force level counts as clean.
 //! 2. **System level.** With a clean force level, a significant free-response gap is named
 //!    by the best system-level candidate under the same rule, else `unexplained`.
 //!    Before any candidate is named, a gap that lies where the sim is extrapolated is
 //!    `extrapolation` ([`crate::report::Coverage::explains_gap`]: the free runs outside
-//!    the forced K/amplitude range carry most of it and the covered runs are clean).
+//!    the forced K/amplitude range carry most of it and the covered runs are clean). A gap
+//!    no candidate removes while no free run is covered at all is `extrapolation` too.
 //! 3. Otherwise `none`.
 //!
 //! Shrink is reported two ways. `shrink` = 1 − after/before (DATA_FORMAT.md), whose best
@@ -194,6 +198,30 @@ fn decide_level(levels: &[LevelResult], li: usize, rules: &VerdictRules) -> Deci
                 Some((_, c, s)) => (format!("the best candidate `{}`", c.effect), s),
                 None => ("no candidate significantly".to_string(), 0.0),
             };
+            // No run inside the forced range: the gap cannot be told from the model's
+            // extrapolation, so it is not claimed as an unmodelled effect.
+            if let Some(cov) = level.coverage.as_ref().filter(|c| {
+                c.covered_gap_statistic.is_none()
+                    && c.any_outside()
+                    && c.extrapolated_share >= crate::system::coverage::MIN_SHARE
+            }) {
+                return Decision {
+                    verdict: Verdict::Extrapolation,
+                    confidence: cov.extrapolated_share.clamp(0.0, 1.0),
+                    reason: format!(
+                        "{} held-out gap {:.4} is {:.1}× its noise level {:.4}, all of it in runs \
+                         outside the forced K/amplitude range (no run is covered), and {what} \
+                         removes only {:.0} % of its excess: extrapolation, not a named effect",
+                        level.level.name(),
+                        level.before,
+                        level.before / level.noise_level.max(f64::MIN_POSITIVE),
+                        level.noise_level,
+                        100.0 * shrink.max(0.0)
+                    ),
+                    level: Some(li),
+                    candidate: None,
+                };
+            }
             Decision {
                 verdict: Verdict::Unexplained,
                 confidence: (1.0 - shrink.max(0.0)).clamp(0.0, 1.0),
@@ -213,6 +241,18 @@ fn decide_level(levels: &[LevelResult], li: usize, rules: &VerdictRules) -> Deci
     }
 }
 
+/// Whether a significant force-level gap is only the law's extrapolation to held-out wind
+/// speeds: the held-out cases that interpolate in K show no significant gap
+/// ([`LevelResult::interpolated_gap_statistic`]) and no candidate removes
+/// [`VerdictRules::min_excess_shrink`] of it. Such a level counts as clean: every case is
+/// covered by the law identified on all of them.
+fn cross_validation_extrapolation(level: &LevelResult, rules: &VerdictRules) -> bool {
+    level
+        .interpolated_gap_statistic
+        .is_some_and(|x| x <= level.gap_threshold)
+        && best_candidate(level).is_none_or(|(_, _, shrink)| shrink < rules.min_excess_shrink)
+}
+
 /// Decides the verdict from the levels (force level first, then system level; see the
 /// module docs).
 pub fn decide(levels: &[LevelResult], rules: &VerdictRules) -> Decision {
@@ -221,6 +261,7 @@ pub fn decide(levels: &[LevelResult], rules: &VerdictRules) -> Decision {
         if let Some(li) = levels.iter().position(|l| {
             l.level == want
                 && (l.significant_gap || l.coverage.as_ref().is_some_and(|c| c.explains_gap))
+                && !cross_validation_extrapolation(l, rules)
         }) {
             return decide_level(levels, li, rules);
         }
@@ -445,6 +486,7 @@ mod tests {
             bifurcation: None,
             fold_scheme: None,
             coverage: None,
+            interpolated_gap_statistic: None,
         }
     }
 
@@ -487,6 +529,111 @@ mod tests {
         );
         let d = decide(&[f, s], &VerdictRules::default());
         assert_eq!(d.verdict, Verdict::Unexplained);
+    }
+
+    /// A force-level gap that the held-out cases interpolating in K do not show, and that
+    /// no candidate removes, is cross-validation extrapolation: the verdict comes from the
+    /// free response. A candidate that removes it is still named at the force level.
+    #[test]
+    fn a_force_gap_only_at_extrapolated_wind_speeds_defers_to_the_free_response() {
+        let f = |c: Vec<CandidateScore>, interpolated: Option<f64>| LevelResult {
+            interpolated_gap_statistic: interpolated,
+            ..level(Level::Aerodynamic, 0.2, 0.1, true, c)
+        };
+        let s = level(Level::Structural, 0.1, 0.1, false, vec![]);
+        let weak = || vec![cand(Effect::HigherOrder, 0.2, 0.19, true, 1.0)];
+        let d = decide(&[f(weak(), Some(0.5)), s.clone()], &VerdictRules::default());
+        assert_eq!(d.verdict, Verdict::None, "{}", d.reason);
+        // the interpolating cases show the gap too: unexplained as before
+        let d = decide(&[f(weak(), Some(5.0)), s.clone()], &VerdictRules::default());
+        assert_eq!(d.verdict, Verdict::Unexplained, "{}", d.reason);
+        // no interpolating case at all: unexplained as before
+        let d = decide(&[f(weak(), None), s.clone()], &VerdictRules::default());
+        assert_eq!(d.verdict, Verdict::Unexplained, "{}", d.reason);
+        // a candidate that removes the gap is named even so
+        let strong = vec![cand(Effect::TimeDelay, 0.2, 0.11, true, 1.0)];
+        let d = decide(&[f(strong, Some(0.5)), s], &VerdictRules::default());
+        assert_eq!(
+            d.verdict,
+            Verdict::Effect(Effect::TimeDelay),
+            "{}",
+            d.reason
+        );
+    }
+
+    /// With no free run inside the forced range, a free-response gap no candidate removes is
+    /// the model's extrapolation, not an unmodelled effect; one covered run is enough to
+    /// keep `unexplained`, and a candidate that removes the gap is still named.
+    #[test]
+    fn an_uncovered_gap_no_candidate_removes_is_extrapolation() {
+        let f = level(Level::Aerodynamic, 0.1, 0.1, false, vec![]);
+        let run = |id: &str, covered: bool| crate::report::RunCoverage {
+            id: id.into(),
+            wind_speed: 2.0,
+            k_h: Some(0.9),
+            k_alpha: Some(0.5),
+            amplitude_alpha_deg: 2.0,
+            amplitude_h_m: 0.001,
+            covered,
+            outside: if covered {
+                vec![]
+            } else {
+                vec!["k_alpha".into()]
+            },
+            before: 0.5,
+        };
+        let coverage = |covered: Option<f64>, runs| crate::report::Coverage {
+            k_h_range: [0.3, 0.8],
+            k_alpha_range: [0.1, 0.3],
+            amplitude_alpha_deg_range: [6.0, 24.0],
+            margin: 0.1,
+            runs,
+            extrapolated_share: 1.0,
+            covered_gap_statistic: covered,
+            linear_before: 0.5,
+            linear_gap_statistic: 5.0,
+            tails_before: Some(0.9),
+            tails_shrink: Some(-0.3),
+            sim_tables: "linear".into(),
+            explains_gap: false,
+            suggestions: vec![],
+        };
+        let s = |cov, c: Vec<CandidateScore>| LevelResult {
+            coverage: Some(cov),
+            ..level(Level::Structural, 0.5, 0.1, true, c)
+        };
+        let weak = || vec![cand(Effect::Friction, 0.5, 0.45, true, 1.0)];
+        let d = decide(
+            &[
+                f.clone(),
+                s(coverage(None, vec![run("free-1", false)]), weak()),
+            ],
+            &VerdictRules::default(),
+        );
+        assert_eq!(d.verdict, Verdict::Extrapolation, "{}", d.reason);
+        assert!(d.reason.contains("no run is covered"), "{}", d.reason);
+        let d = decide(
+            &[
+                f.clone(),
+                s(
+                    coverage(Some(4.0), vec![run("free-1", false), run("free-2", true)]),
+                    weak(),
+                ),
+            ],
+            &VerdictRules::default(),
+        );
+        assert_eq!(d.verdict, Verdict::Unexplained, "{}", d.reason);
+        let d = decide(
+            &[
+                f,
+                s(
+                    coverage(None, vec![run("free-1", false)]),
+                    vec![cand(Effect::Freeplay, 0.5, 0.12, true, 1.0)],
+                ),
+            ],
+            &VerdictRules::default(),
+        );
+        assert_eq!(d.verdict, Verdict::Effect(Effect::Freeplay), "{}", d.reason);
     }
 
     #[test]

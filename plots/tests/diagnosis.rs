@@ -149,6 +149,7 @@ fn aero_level() -> LevelResult {
         where_.push(w);
     }
     LevelResult {
+        interpolated_gap_statistic: None,
         level: Level::Aerodynamic,
         metric: "normalised force residual".into(),
         before: 0.12,
@@ -238,6 +239,7 @@ fn structural_level() -> LevelResult {
         })
         .collect();
     LevelResult {
+        interpolated_gap_statistic: None,
         level: Level::Structural,
         metric: "normalised free-response residual".into(),
         before: 0.05,

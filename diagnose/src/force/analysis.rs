@@ -20,7 +20,7 @@ use crate::report::{
 
 use super::candidates::{significance, Scored};
 use super::data::{CaseData, Node, CHANNELS};
-use super::{gaps, noise_gaps, ForceOptions};
+use super::{gaps, gaps_of, noise_gaps, noise_of, ForceOptions};
 
 /// Noise-unit energy Σ (r/σ̂)² of residuals.
 fn energy_w(cases: &[CaseData], res: &[[Vec<f64>; 2]]) -> f64 {
@@ -41,7 +41,7 @@ fn energy_w(cases: &[CaseData], res: &[[Vec<f64>; 2]]) -> f64 {
 /// Builds the level result.
 pub(crate) fn assemble(
     cases: &[CaseData],
-    _nodes: &[Node],
+    nodes: &[Node],
     fold_of: &[usize],
     before: &[[Vec<f64>; 2]],
     scored: Vec<Scored>,
@@ -53,6 +53,40 @@ pub(crate) fn assemble(
         g.combined / noise.combined
     } else {
         f64::INFINITY
+    };
+    // The held-out cases whose K lies inside the K range their fold was trained on (same
+    // configuration): their prediction interpolates; the others extrapolate only because
+    // cross-validation held their wind speed out (the law of every case covers them).
+    let inside: Vec<bool> = cases
+        .iter()
+        .map(|c| {
+            let f = fold_of[c.node];
+            let (lo, hi) = nodes
+                .iter()
+                .enumerate()
+                .filter(|(n, nd)| fold_of[*n] != f && nd.config == c.config)
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), (_, nd)| {
+                    (lo.min(nd.k_alpha), hi.max(nd.k_alpha))
+                });
+            let k = nodes[c.node].k_alpha;
+            k >= lo * (1.0 - 1e-9) && k <= hi * (1.0 + 1e-9)
+        })
+        .collect();
+    let inside_stat = {
+        let (ci, ri): (Vec<&CaseData>, Vec<&[Vec<f64>; 2]>) = cases
+            .iter()
+            .zip(before)
+            .zip(&inside)
+            .filter(|(_, &k)| k)
+            .map(|((c, r), _)| (c, r))
+            .unzip();
+        if ci.is_empty() {
+            None
+        } else {
+            let gi = gaps_of(ci.iter().copied().zip(ri.iter().copied()));
+            let ni = noise_of(ci.iter().copied());
+            (ni.combined > 0.0).then(|| gi.combined / ni.combined)
+        }
     };
     let n_samples: f64 = cases.iter().map(|c| 2.0 * c.n as f64).sum();
     let e_before = energy_w(cases, before);
@@ -132,6 +166,7 @@ pub(crate) fn assemble(
         significant_gap: stat > opts.gap_threshold,
         gap_statistic: stat,
         gap_threshold: opts.gap_threshold,
+        interpolated_gap_statistic: inside_stat,
         held_out_cases: cases.iter().map(|c| c.nd.meta.id.clone()).collect(),
         candidates: cands.into_iter().map(|(c, _)| c).collect(),
         where_,

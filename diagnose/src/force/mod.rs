@@ -330,9 +330,24 @@ pub struct Gaps {
 
 /// Gap of residuals `res[case][channel]` (C units) in forces: Σ(r·scale)²/Σ(F)².
 pub(crate) fn gaps(cases: &[CaseData], res: &[[Vec<f64>; 2]]) -> Gaps {
+    gaps_of(cases.iter().zip(res))
+}
+
+/// Noise level of the gap of some cases ([`noise_gaps`]).
+pub(crate) fn noise_of<'a>(cases: impl Iterator<Item = &'a CaseData>) -> Gaps {
+    let cases: Vec<&CaseData> = cases.collect();
+    let res: Vec<[Vec<f64>; 2]> = cases
+        .iter()
+        .map(|c| [0, 1].map(|k| vec![c.sigma[k]; c.n]))
+        .collect();
+    gaps_of(cases.into_iter().zip(&res))
+}
+
+/// [`gaps`] of (case, residuals) pairs.
+pub(crate) fn gaps_of<'a>(pairs: impl Iterator<Item = (&'a CaseData, &'a [Vec<f64>; 2])>) -> Gaps {
     let mut num = [0.0; 2];
     let mut den = [0.0; 2];
-    for (case, r) in cases.iter().zip(res) {
+    for (case, r) in pairs {
         for c in 0..2 {
             let s2 = case.scale[c] * case.scale[c];
             num[c] += s2 * r[c].iter().map(|v| v * v).sum::<f64>();
@@ -354,11 +369,7 @@ pub(crate) fn gaps(cases: &[CaseData], res: &[[Vec<f64>; 2]]) -> Gaps {
 
 /// Noise level of the gap: Σr² replaced by Σ n σ̂².
 pub(crate) fn noise_gaps(cases: &[CaseData]) -> Gaps {
-    let res: Vec<[Vec<f64>; 2]> = cases
-        .iter()
-        .map(|c| [0, 1].map(|k| vec![c.sigma[k]; c.n]))
-        .collect();
-    gaps(cases, &res)
+    noise_of(cases.iter())
 }
 
 /// The force level of the diagnosis on a forced-motion data set (see the module

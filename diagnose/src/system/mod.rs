@@ -490,6 +490,7 @@ fn level_and_runs(
         (vec![], None)
     };
     let level = LevelResult {
+        interpolated_gap_statistic: None,
         level: Level::Structural,
         metric: "held-out normalised equation error of the free response".into(),
         before,
