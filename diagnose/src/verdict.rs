@@ -200,34 +200,30 @@ fn decide_level(levels: &[LevelResult], li: usize, rules: &VerdictRules) -> Deci
             };
             // No run inside the forced range: the gap cannot be told from the model's
             // extrapolation, so it is not claimed as an unmodelled effect.
-            if let Some(cov) = level.coverage.as_ref().filter(|c| {
+            let uncovered = level.coverage.as_ref().filter(|c| {
                 c.covered_gap_statistic.is_none()
                     && c.any_outside()
                     && c.extrapolated_share >= crate::system::coverage::MIN_SHARE
-            }) {
-                return Decision {
-                    verdict: Verdict::Extrapolation,
-                    confidence: cov.extrapolated_share.clamp(0.0, 1.0),
-                    reason: format!(
-                        "{} held-out gap {:.4} is {:.1}× its noise level {:.4}, all of it in runs \
-                         outside the forced K/amplitude range (no run is covered), and {what} \
-                         removes only {:.0} % of its excess: extrapolation, not a named effect",
-                        level.level.name(),
-                        level.before,
-                        level.before / level.noise_level.max(f64::MIN_POSITIVE),
-                        level.noise_level,
-                        100.0 * shrink.max(0.0)
-                    ),
-                    level: Some(li),
-                    candidate: None,
-                };
-            }
+            });
+            let (verdict, confidence, tail) = match uncovered {
+                Some(cov) => (
+                    Verdict::Extrapolation,
+                    cov.extrapolated_share.clamp(0.0, 1.0),
+                    ", all of it in runs outside the forced K/amplitude range (no run is \
+                     covered): extrapolation, not a named effect",
+                ),
+                None => (
+                    Verdict::Unexplained,
+                    (1.0 - shrink.max(0.0)).clamp(0.0, 1.0),
+                    "",
+                ),
+            };
             Decision {
-                verdict: Verdict::Unexplained,
-                confidence: (1.0 - shrink.max(0.0)).clamp(0.0, 1.0),
+                verdict,
+                confidence,
                 reason: format!(
                     "{} held-out gap {:.4} is {:.1}× its noise level {:.4}, and {what} removes \
-                     only {:.0} % of its excess",
+                     only {:.0} % of its excess{tail}",
                     level.level.name(),
                     level.before,
                     level.before / level.noise_level.max(f64::MIN_POSITIVE),

@@ -650,21 +650,20 @@ fn lco_stage(
         max_periods: l.max_periods,
         ..LcoOptions::default()
     };
-    let up0 = section.perturbation(l.perturbation_deg.to_radians());
     let total = l.speeds.len() * if l.up_down { 2 } else { 1 };
     let bar = obs.counter("LCO", total * if l.compare_truth { 2 } else { 1 });
     let observer = |p| bar.sweep(p);
     // One sweep API for every model: K-dependent models (the identified law) iterate K
     // to each limit cycle's own, the others are run once per speed.
-    let plan = SweepPlan {
-        perturbation_up: up0,
+    let plan = |sec: &aeroelastic::section::Section| SweepPlan {
+        perturbation_up: sec.perturbation(l.perturbation_deg.to_radians()),
         perturbation_down: l
             .up_down
-            .then(|| section.perturbation(l.perturbation_down_deg.to_radians())),
+            .then(|| sec.perturbation(l.perturbation_down_deg.to_radians())),
         k_iteration: KIteration::default(),
     };
     let h = section
-        .lco_sweeps(&l.speeds, &plan, &opts, &observer)
+        .lco_sweeps(&l.speeds, &plan(&section), &opts, &observer)
         .context("LCO sweeps")?;
     let truth = if l.compare_truth {
         let truth = aeroelastic::section::Section::new(
@@ -672,15 +671,8 @@ fn lco_stage(
             build::truth_model(study, s)?,
             s.linear.rho,
         )?;
-        let plan = SweepPlan {
-            perturbation_up: truth.perturbation(l.perturbation_deg.to_radians()),
-            perturbation_down: l
-                .up_down
-                .then(|| truth.perturbation(l.perturbation_down_deg.to_radians())),
-            k_iteration: KIteration::default(),
-        };
         let sweep = truth
-            .lco_sweeps(&l.speeds, &plan, &opts, &observer)
+            .lco_sweeps(&l.speeds, &plan(&truth), &opts, &observer)
             .context("LCO sweeps of the truth model")?;
         Some(TruthSweeps {
             flutter_speed: truth_flutter_speed,

@@ -72,22 +72,16 @@ pub(crate) fn assemble(
             k >= lo * (1.0 - 1e-9) && k <= hi * (1.0 + 1e-9)
         })
         .collect();
-    let inside_stat = {
-        let (ci, ri): (Vec<&CaseData>, Vec<&[Vec<f64>; 2]>) = cases
+    let inside_cases = || {
+        cases
             .iter()
             .zip(before)
             .zip(&inside)
             .filter(|(_, &k)| k)
-            .map(|((c, r), _)| (c, r))
-            .unzip();
-        if ci.is_empty() {
-            None
-        } else {
-            let gi = gaps_of(ci.iter().copied().zip(ri.iter().copied()));
-            let ni = noise_of(ci.iter().copied());
-            (ni.combined > 0.0).then(|| gi.combined / ni.combined)
-        }
+            .map(|(pair, _)| pair)
     };
+    let inside_noise = noise_of(inside_cases().map(|(c, _)| c)).combined;
+    let inside_stat = (inside_noise > 0.0).then(|| gaps_of(inside_cases()).combined / inside_noise);
     let n_samples: f64 = cases.iter().map(|c| 2.0 * c.n as f64).sum();
     let e_before = energy_w(cases, before);
     let mut cands: Vec<(CandidateScore, usize)> = scored
