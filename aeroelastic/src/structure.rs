@@ -623,6 +623,53 @@ impl Structure {
         }
         [fh, ma]
     }
+
+    /// Analytic ∂R/∂(h, α, ḣ, α̇) of [`Structure::restoring_with`] (rows F_h, M_α): the
+    /// linear springs and dampers, p·c·x^(p−1) of each polynomial term, F_c/ε·sech²(v/ε) of
+    /// the regularised friction `fr` (as [`Structure::friction_resolved`]); inside a freeplay
+    /// gap the pitch spring's slope is 0 (one-sided at its edges).
+    pub(crate) fn restoring_derivatives(
+        &self,
+        q: [f64; 2],
+        qd: [f64; 2],
+        fr: &[f64; 4],
+    ) -> [[f64; 4]; 2] {
+        let mut out = [[0.0; 4]; 2];
+        let h = q[0];
+        out[0][0] = self.k_h;
+        for t in &self.nonlinear.heave_stiffness_terms {
+            out[0][0] += t.coefficient * t.power as f64 * h.powi(t.power as i32 - 1);
+        }
+        out[0][2] = self.c_h;
+        let a = q[1];
+        let gap = self.nonlinear.pitch_freeplay;
+        let (d, slope) = if gap > 0.0 {
+            if a > gap {
+                (a - gap, 1.0)
+            } else if a < -gap {
+                (a + gap, 1.0)
+            } else {
+                (0.0, 0.0)
+            }
+        } else {
+            (a, 1.0)
+        };
+        let mut ka = self.k_alpha;
+        for t in &self.nonlinear.pitch_stiffness_terms {
+            ka += t.coefficient * t.power as f64 * d.powi(t.power as i32 - 1);
+        }
+        out[1][1] = slope * ka;
+        out[1][3] = self.c_alpha;
+        if fr[0] > 0.0 {
+            let c = (qd[0] / fr[1]).cosh();
+            out[0][2] += fr[0] / fr[1] / (c * c);
+        }
+        if fr[2] > 0.0 {
+            let c = (qd[1] / fr[3]).cosh();
+            out[1][3] += fr[2] / fr[3] / (c * c);
+        }
+        out
+    }
 }
 
 #[cfg(test)]

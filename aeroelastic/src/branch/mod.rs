@@ -35,6 +35,7 @@ use crate::integrate::Rk4;
 use crate::section::Section;
 use crate::{Error, Result};
 
+mod condensed;
 mod harmonic;
 
 /// Settings of the continuation. Scaled variables: the state is divided by
@@ -372,6 +373,17 @@ fn problem<'a>(
             opts.steps_per_period,
             scales.to_vec(),
         )),
+        BranchMethod::HarmonicBalance if condensed::applies(section) => {
+            Box::new(condensed::CondensedBalance::new(
+                section,
+                opts.harmonics,
+                opts.steps_per_period,
+                &scales[..n],
+                0.1 * hopf.omega,
+                scales[n + 1],
+                hopf.omega,
+            ))
+        }
         BranchMethod::HarmonicBalance => Box::new(harmonic::HarmonicBalance::new(
             section,
             opts.harmonics,

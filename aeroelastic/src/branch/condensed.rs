@@ -1,0 +1,973 @@
+//! Harmonic balance condensed onto the structure's nonlinear channels: the form
+//! [`super::BranchMethod::HarmonicBalance`] takes when the aerodynamic model is linear and
+//! independent of the reduced frequency (Theodorsen, Theodorsen–Jones, RFA tables): then the
+//! only nonlinear terms are the structure's springs and friction, and the linear states can
+//! be eliminated per harmonic exactly.
+//!
+//! Split ż = A z − B_m g(q, q̇): A = ∂f/∂z at the origin (the equilibrium Jacobian the Hopf
+//! points come from), B_m the columns of (M_s − M_a)⁻¹ in the acceleration rows and
+//! g = R(q, q̇) − S₀(q, q̇) the structure's restoring force beyond its linearisation S₀ at
+//! rest. With every state a series of H harmonics in θ = ωt, harmonic k of the states is
+//! z_k = −(ikω − A)⁻¹ B_m G_k (k = 0: z₀ = A⁻¹ B_m G₀), G_k the harmonics of g. The unknowns
+//! are only the harmonics Y of the channels g depends on (pitch α always, heave h, ḣ and α̇
+//! when a term uses them), ω and U; the equations are Y − C z(Y) = 0 with C the channel
+//! rows and the phase condition b_α1 = 0. This is the same Galerkin solution as the full
+//! harmonic balance ([`super::harmonic`]) with the same H and samples, in m(2H + 1) + 2
+//! unknowns instead of n(2H + 1) + 2.
+//!
+//! Jacobian: ∂Y terms exact (AFT of the analytic ∂g/∂y, [`Structure::restoring_derivatives`]),
+//! ∂/∂ω from ∂z_k/∂ω = −ik(ikω − A)⁻¹ z_k, ∂/∂U a forward difference.
+//!
+//! Floquet multipliers: the variational equation δż = A δz + B_m F(t) C₄ δz, F = −∂g/∂q₄
+//! along the orbit, by the exponential trapezoidal rule: over each step e^{Ah} is exact and
+//! the forcing q = F C₄ Φ is linear between the step ends,
+//! Φ_{j+1} = e^{Ah} Φ_j + (Γ₀ − Γ₁) q_j + Γ₁ q_{j+1}, Γ₀ = ∫₀ʰ e^{A(h−τ)} dτ B_m,
+//! Γ₁ = ∫₀ʰ e^{A(h−τ)} τ/h dτ B_m (implicit in q_{j+1}: a 2 × 2 solve per step). The rule is
+//! symmetric, so its error is even in h and one Richardson step with N and N/2 steps,
+//! (4 M_N − M_{N/2})/3, makes it fourth order.
+
+use std::cell::RefCell;
+use std::f64::consts::TAU;
+
+use nalgebra::{DMatrix, DVector};
+use num_complex::Complex64;
+
+use super::{orbit_point, BranchPoint, HopfPoint, PeriodicProblem};
+use crate::dynamics::SectionDynamics;
+use crate::section::Section;
+use crate::{Error, Result};
+
+/// Forces of g: heave F_h and pitch M_α.
+const P: usize = 2;
+
+/// Whether `section` can be condensed: aerodynamics linear and independent of K, and a
+/// structure without a sharp freeplay (refused earlier anyway).
+pub(super) fn applies(section: &Section) -> bool {
+    section.aero.is_linear()
+        && section.aero.reduced_frequency().is_none()
+        && section.structure.nonlinear.pitch_freeplay == 0.0
+}
+
+/// LU factors of a small complex matrix with partial pivoting (row-major).
+struct ComplexLu {
+    n: usize,
+    lu: Vec<Complex64>,
+    piv: Vec<usize>,
+}
+
+impl ComplexLu {
+    /// Factors `a` (n × n, row-major, consumed); `None` when singular.
+    fn new(mut a: Vec<Complex64>, n: usize) -> Option<Self> {
+        let mut piv = (0..n).collect::<Vec<_>>();
+        for k in 0..n {
+            let p = (k..n)
+                .max_by(|&i, &j| a[i * n + k].l1_norm().total_cmp(&a[j * n + k].l1_norm()))?;
+            let pivot = a[p * n + k].l1_norm();
+            if pivot == 0.0 || !pivot.is_finite() {
+                return None;
+            }
+            if p != k {
+                for c in 0..n {
+                    a.swap(k * n + c, p * n + c);
+                }
+                piv.swap(k, p);
+            }
+            let d = a[k * n + k].inv();
+            for i in k + 1..n {
+                let f = a[i * n + k] * d;
+                a[i * n + k] = f;
+                for c in k + 1..n {
+                    let v = a[k * n + c];
+                    a[i * n + c] -= f * v;
+                }
+            }
+        }
+        Some(ComplexLu { n, lu: a, piv })
+    }
+
+    /// Solves in place for one right-hand side.
+    fn solve(&self, b: &mut [Complex64]) {
+        let n = self.n;
+        let x: Vec<Complex64> = self.piv.iter().map(|&p| b[p]).collect();
+        b.copy_from_slice(&x);
+        for i in 0..n {
+            let mut s = b[i];
+            for c in 0..i {
+                s -= self.lu[i * n + c] * b[c];
+            }
+            b[i] = s;
+        }
+        for i in (0..n).rev() {
+            let mut s = b[i];
+            for c in i + 1..n {
+                s -= self.lu[i * n + c] * b[c];
+            }
+            b[i] = s / self.lu[i * n + i];
+        }
+    }
+}
+
+/// The linear part at one (ω, U): A, B_m, S₀, (M_s − M_a)⁻¹ and per harmonic k = 0 … H
+/// the dynamic matrix D_k and the lag-state transfer L_k.
+struct Linear {
+    omega: f64,
+    u: f64,
+    /// A, row-major n × n.
+    a: Vec<f64>,
+    /// B_m, row-major n × 2.
+    bm: Vec<f64>,
+    /// ∂R/∂q₄ at rest.
+    s0: [[f64; 4]; 2],
+    /// (M_s − M_a)⁻¹.
+    minv: [[f64; 2]; 2],
+    /// D_k = s²I − A_vq − sA_vv − A_vx L_k, s = ikω (2 × 2 per harmonic).
+    d: Vec<[[Complex64; 2]; 2]>,
+    /// L_k = (sI − A_xx)⁻¹ (A_xq + sA_xv) (lag states × 2 per harmonic, row-major).
+    lag: Vec<Vec<Complex64>>,
+}
+
+/// The condensed harmonic-balance problem of one section in scaled unknowns
+/// Y = (heave and pitch coefficients, ω, U) / scales.
+pub(super) struct CondensedBalance<'a> {
+    section: &'a Section,
+    n: usize,
+    /// Coefficients per displacement, 2H + 1.
+    w: usize,
+    /// AFT samples N.
+    ns: usize,
+    /// Steps of the variational integration (even).
+    steps: usize,
+    friction: [f64; 4],
+    /// Which of (h, α, ḣ, α̇) the nonlinear force g depends on.
+    uses: [bool; 4],
+    /// Which of g's components (F_h, M_α) is not identically zero.
+    forces: [bool; 2],
+    scales: Vec<f64>,
+    /// Scale of each residual row (displacement scale × ω_Hopf²).
+    row_scales: Vec<f64>,
+    /// Q: basis[j·w + c].
+    basis: Vec<f64>,
+    /// d/dθ of the basis at the samples.
+    dbasis: Vec<f64>,
+    /// P: proj[c·N + j].
+    proj: Vec<f64>,
+    /// Points of the amplitude grid.
+    fine_len: usize,
+    /// e^{ikθ_j} at the amplitude grid (fine_len × (H + 1)).
+    fine_trig: Vec<Complex64>,
+    /// e^{ikθ_j} at the N + 1 ends of the variational steps ((N + 1) × (H + 1)).
+    step_trig: Vec<Complex64>,
+    /// The linear part of the last (ω, U) evaluated.
+    cache: RefCell<Option<Linear>>,
+}
+
+/// Value at θ of the function of coefficient `c` (0: 1; 2k − 1: cos kθ; 2k: sin kθ) and
+/// of its derivative.
+fn basis_fn(c: usize, theta: f64) -> (f64, f64) {
+    if c == 0 {
+        (1.0, 0.0)
+    } else {
+        let k = c.div_ceil(2) as f64;
+        let (s, co) = (k * theta).sin_cos();
+        if c % 2 == 1 {
+            (co, -k * s)
+        } else {
+            (s, k * co)
+        }
+    }
+}
+
+/// Complex harmonic k of a real coefficient vector (a_k − i b_k; k = 0: a₀).
+fn complex(v: &[f64], k: usize) -> Complex64 {
+    if k == 0 {
+        Complex64::new(v[0], 0.0)
+    } else {
+        Complex64::new(v[2 * k - 1], -v[2 * k])
+    }
+}
+
+impl<'a> CondensedBalance<'a> {
+    /// `harmonics` H, `steps` variational steps per period; `state_scales` one per state,
+    /// then the ω and U scales and ω at the Hopf point.
+    pub(super) fn new(
+        section: &'a Section,
+        harmonics: usize,
+        steps: usize,
+        state_scales: &[f64],
+        omega_scale: f64,
+        u_scale: f64,
+        omega_hopf: f64,
+    ) -> Self {
+        let w = 2 * harmonics + 1;
+        let ns = 8 * harmonics + 4;
+        let mut basis = vec![0.0; ns * w];
+        let mut dbasis = vec![0.0; ns * w];
+        let mut proj = vec![0.0; w * ns];
+        for j in 0..ns {
+            let th = TAU * j as f64 / ns as f64;
+            for c in 0..w {
+                let (v, dv) = basis_fn(c, th);
+                basis[j * w + c] = v;
+                dbasis[j * w + c] = dv;
+                proj[c * ns + j] = if c == 0 { 1.0 } else { 2.0 } / ns as f64 * v;
+            }
+        }
+        let mut scales = Vec::with_capacity(2 * w + 2);
+        let mut row_scales = Vec::with_capacity(2 * w);
+        for &s in &state_scales[..2] {
+            scales.extend(std::iter::repeat_n(s, w));
+            row_scales.extend(std::iter::repeat_n(s * omega_hopf * omega_hopf, w));
+        }
+        scales.push(omega_scale);
+        scales.push(u_scale);
+        let steps = steps.max(4).next_multiple_of(2);
+        let fine_len = 16 * harmonics.max(4);
+        let trig = |points: usize, len: usize| -> Vec<Complex64> {
+            (0..points)
+                .flat_map(|j| {
+                    let th = TAU * j as f64 / len as f64;
+                    (0..=harmonics).map(move |k| Complex64::from_polar(1.0, k as f64 * th))
+                })
+                .collect()
+        };
+        let nl = &section.structure.nonlinear;
+        let friction = section.structure.friction_resolved();
+        let uses = [
+            !nl.heave_stiffness_terms.is_empty(),
+            !nl.pitch_stiffness_terms.is_empty(),
+            friction[0] > 0.0,
+            friction[2] > 0.0,
+        ];
+        CondensedBalance {
+            section,
+            n: section.n_states(),
+            uses,
+            forces: [uses[0] || uses[2], uses[1] || uses[3]],
+            friction,
+            w,
+            ns,
+            steps,
+            fine_trig: trig(fine_len, fine_len),
+            step_trig: trig(steps + 1, steps),
+            scales,
+            row_scales,
+            basis,
+            dbasis,
+            proj,
+            fine_len,
+            cache: RefCell::new(None),
+        }
+    }
+
+    fn m(&self) -> usize {
+        2 * self.w
+    }
+
+    fn unscale(&self, y: &DVector<f64>) -> (Vec<f64>, f64, f64) {
+        let m = self.m();
+        let x = (0..m).map(|i| y[i] * self.scales[i]).collect();
+        (x, y[m] * self.scales[m], y[m + 1] * self.scales[m + 1])
+    }
+
+    /// Runs `f` on the linear part at (ω, U) (rebuilt when either changed).
+    fn linear<T>(&self, omega: f64, u: f64, f: impl FnOnce(&Linear) -> T) -> Result<T> {
+        if !(omega.is_finite() && omega > 0.0 && u.is_finite() && u > 0.0) {
+            return Err(Error::numerical(
+                "harmonic balance",
+                format!("non-physical iterate ω = {omega} rad/s, U = {u} m/s"),
+            ));
+        }
+        let mut cache = self.cache.borrow_mut();
+        let reuse = match cache.take() {
+            Some(l) if l.u == u && l.omega == omega => Some(l),
+            Some(l) if l.u == u => Some(self.harmonics_at(l, omega)?),
+            _ => None,
+        };
+        let lin = match reuse {
+            Some(l) => l,
+            None => self.build_linear(omega, u)?,
+        };
+        let out = f(&lin);
+        *cache = Some(lin);
+        Ok(out)
+    }
+
+    fn build_linear(&self, omega: f64, u: f64) -> Result<Linear> {
+        let n = self.n;
+        let d = SectionDynamics::new(self.section, u)?;
+        let mut a = vec![0.0; n * n];
+        d.jacobian(&vec![0.0; n], &mut a, &mut vec![0.0; 3 * n]);
+        // The analytic S₀ (so that g has no spurious linear part); A's structural part is
+        // made consistent with it (they differ by the central differences' rounding).
+        let s0 = self
+            .section
+            .structure
+            .restoring_derivatives([0.0; 2], [0.0; 2], &self.friction);
+        let s0_fd = d.structure_jacobian(&[0.0; 4]);
+        let mi = d.mass_inverse();
+        let minv = [[mi[(0, 0)], mi[(0, 1)]], [mi[(1, 0)], mi[(1, 1)]]];
+        for r in 0..2 {
+            for c in 0..4 {
+                a[(2 + r) * n + c] -= (0..2)
+                    .map(|p| minv[r][p] * (s0[p][c] - s0_fd[p][c]))
+                    .sum::<f64>();
+            }
+        }
+        let mut bm = vec![0.0; n * P];
+        for r in 0..2 {
+            for p in 0..P {
+                bm[(2 + r) * P + p] = minv[r][p];
+            }
+        }
+        let lin = Linear {
+            omega: f64::NAN,
+            u,
+            a,
+            bm,
+            s0,
+            minv,
+            d: Vec::new(),
+            lag: Vec::new(),
+        };
+        self.harmonics_at(lin, omega)
+    }
+
+    /// D_k and L_k of `lin` at frequency ω.
+    fn harmonics_at(&self, mut lin: Linear, omega: f64) -> Result<Linear> {
+        let (n, nl) = (self.n, self.n - 4);
+        let a = &lin.a;
+        lin.d.clear();
+        lin.lag.clear();
+        for k in 0..=(self.w - 1) / 2 {
+            let s = Complex64::new(0.0, k as f64 * omega);
+            let mut l = vec![Complex64::new(0.0, 0.0); nl * 2];
+            if nl > 0 {
+                let x: Vec<Complex64> = (0..nl * nl)
+                    .map(|i| {
+                        let (r, c) = (i / nl, i % nl);
+                        let diag = if r == c { s } else { Complex64::new(0.0, 0.0) };
+                        diag - a[(4 + r) * n + 4 + c]
+                    })
+                    .collect();
+                let lu = ComplexLu::new(x, nl).ok_or_else(|| {
+                    Error::numerical(
+                        "harmonic balance",
+                        format!(
+                            "the lag states resonate at harmonic {k} (ω = {omega} rad/s, U = {} \
+                             m/s): sI − A_xx is singular",
+                            lin.u
+                        ),
+                    )
+                })?;
+                for q in 0..2 {
+                    let mut col: Vec<Complex64> = (0..nl)
+                        .map(|r| a[(4 + r) * n + q] + s * a[(4 + r) * n + 2 + q])
+                        .collect();
+                    lu.solve(&mut col);
+                    for r in 0..nl {
+                        l[r * 2 + q] = col[r];
+                    }
+                }
+            }
+            let mut d = [[Complex64::new(0.0, 0.0); 2]; 2];
+            for (r, row) in d.iter_mut().enumerate() {
+                for (q, dq) in row.iter_mut().enumerate() {
+                    let mut v = -a[(2 + r) * n + q] - s * a[(2 + r) * n + 2 + q];
+                    for i in 0..nl {
+                        v -= a[(2 + r) * n + 4 + i] * l[i * 2 + q];
+                    }
+                    if r == q {
+                        v += s * s;
+                    }
+                    *dq = v;
+                }
+            }
+            lin.d.push(d);
+            lin.lag.push(l);
+        }
+        lin.omega = omega;
+        Ok(lin)
+    }
+
+    /// The four structural states (h, α, ḣ, α̇) at the AFT samples (those g does not use
+    /// left 0).
+    fn samples(&self, x: &[f64], omega: f64) -> Vec<[f64; 4]> {
+        let w = self.w;
+        let mut out = vec![[0.0; 4]; self.ns];
+        for (c, table, factor) in [
+            (0, &self.basis, 1.0),
+            (1, &self.basis, 1.0),
+            (2, &self.dbasis, omega),
+            (3, &self.dbasis, omega),
+        ] {
+            if !self.uses[c] {
+                continue;
+            }
+            let xc = &x[(c % 2) * w..(c % 2 + 1) * w];
+            for (o, b) in out.iter_mut().zip(table.chunks_exact(w)) {
+                o[c] = factor * b.iter().zip(xc).map(|(p, v)| p * v).sum::<f64>();
+            }
+        }
+        out
+    }
+
+    /// g = R − S₀q₄ at a structural state.
+    fn force(&self, s0: &[[f64; 4]; 2], q: &[f64; 4]) -> [f64; 2] {
+        let r = self
+            .section
+            .structure
+            .restoring_with([q[0], q[1]], [q[2], q[3]], &self.friction);
+        let mut g = [0.0; 2];
+        for p in 0..P {
+            g[p] = r[p] - (0..4).map(|c| s0[p][c] * q[c]).sum::<f64>();
+        }
+        g
+    }
+
+    /// Harmonic coefficients of g (P × w) from the displacement coefficients.
+    fn force_harmonics(&self, lin: &Linear, x: &[f64]) -> Vec<f64> {
+        let (w, ns) = (self.w, self.ns);
+        let g: Vec<[f64; 2]> = self
+            .samples(x, lin.omega)
+            .iter()
+            .map(|q| self.force(&lin.s0, q))
+            .collect();
+        let mut out = vec![0.0; P * w];
+        for p in (0..P).filter(|&p| self.forces[p]) {
+            for (o, pr) in out[p * w..(p + 1) * w]
+                .iter_mut()
+                .zip(self.proj.chunks_exact(ns))
+            {
+                *o = pr.iter().zip(&g).map(|(a, b)| a * b[p]).sum();
+            }
+        }
+        out
+    }
+
+    /// Unscaled residual D_k Q_k + (M_s − M_a)⁻¹ G_k as real coefficients (2w values).
+    fn residual(&self, x: &[f64], omega: f64, u: f64) -> Result<Vec<f64>> {
+        let w = self.w;
+        let r = self.linear(omega, u, |lin| {
+            let gh = self.force_harmonics(lin, x);
+            let mut r = vec![0.0; 2 * w];
+            for r_ in 0..2 {
+                for c in 0..w {
+                    r[r_ * w + c] = (0..P).map(|p| lin.minv[r_][p] * gh[p * w + c]).sum();
+                }
+            }
+            for (k, d) in lin.d.iter().enumerate() {
+                for (r_, row) in d.iter().enumerate() {
+                    let v: Complex64 = (0..2)
+                        .map(|q| row[q] * complex(&x[q * w..(q + 1) * w], k))
+                        .sum();
+                    if k == 0 {
+                        r[r_ * w] += v.re;
+                    } else {
+                        r[r_ * w + 2 * k - 1] += v.re;
+                        r[r_ * w + 2 * k] -= v.im;
+                    }
+                }
+            }
+            r
+        })?;
+        if r.iter().any(|v| !v.is_finite()) {
+            return Err(Error::numerical(
+                "harmonic balance",
+                format!("non-finite residual at U = {u} m/s"),
+            ));
+        }
+        Ok(r)
+    }
+
+    /// Every state's harmonics z_k = (q_k, ikω q_k, L_k q_k), k = 0 … H.
+    fn states(&self, lin: &Linear, x: &[f64]) -> Vec<Vec<Complex64>> {
+        let (n, w) = (self.n, self.w);
+        (0..=(w - 1) / 2)
+            .map(|k| {
+                let s = Complex64::new(0.0, k as f64 * lin.omega);
+                let q = [complex(&x[..w], k), complex(&x[w..], k)];
+                let mut z = vec![q[0], q[1], s * q[0], s * q[1]];
+                let l = &lin.lag[k];
+                z.extend((0..n - 4).map(|i| l[i * 2] * q[0] + l[i * 2 + 1] * q[1]));
+                z
+            })
+            .collect()
+    }
+
+    /// Monodromy matrix of the variational equation along the orbit with state harmonics
+    /// `zk`, by the Richardson-extrapolated exponential trapezoidal rule.
+    fn monodromy(&self, lin: &Linear, zk: &[Vec<Complex64>]) -> DMatrix<f64> {
+        let n = self.n;
+        let steps = self.steps;
+        let h = TAU / lin.omega / steps as f64;
+        // F_j = −(∂R/∂q₄ − S₀) at θ_j = 2πj/N, j = 0 … N.
+        let f: Vec<[[f64; 4]; 2]> = (0..=steps)
+            .map(|j| {
+                let hk = zk.len();
+                let mut q = [0.0; 4];
+                for (z, e) in zk.iter().zip(&self.step_trig[j * hk..(j + 1) * hk]) {
+                    for (c, qc) in q.iter_mut().enumerate() {
+                        *qc += (z[c] * e).re;
+                    }
+                }
+                let d = self.section.structure.restoring_derivatives(
+                    [q[0], q[1]],
+                    [q[2], q[3]],
+                    &self.friction,
+                );
+                let mut out = [[0.0; 4]; 2];
+                for p in 0..P {
+                    for c in 0..4 {
+                        out[p][c] = -(d[p][c] - lin.s0[p][c]);
+                    }
+                }
+                out
+            })
+            .collect();
+        let (e, g0, g1) = propagators(&lin.a, &lin.bm, n, h);
+        let fine = trapezoid(n, &e, &g0, &g1, &f, 1);
+        let (e2, g02, g12) = doubled(n, &e, &g0, &g1);
+        let coarse = trapezoid(n, &e2, &g02, &g12, &f, 2);
+        let mut m = DMatrix::zeros(n, n);
+        for r in 0..n {
+            for c in 0..n {
+                m[(r, c)] = (4.0 * fine[r * n + c] - coarse[r * n + c]) / 3.0;
+            }
+        }
+        m
+    }
+}
+
+/// Row-major product of an (r × k) and a (k × c) matrix.
+fn matmul(a: &[f64], b: &[f64], r: usize, k: usize, c: usize) -> Vec<f64> {
+    let mut out = vec![0.0; r * c];
+    matmul_into(a, b, r, k, c, &mut out);
+    out
+}
+
+/// `out` = a b (row-major, a r × k, b k × c).
+fn matmul_into(a: &[f64], b: &[f64], r: usize, k: usize, c: usize, out: &mut [f64]) {
+    out.fill(0.0);
+    for i in 0..r {
+        let o = &mut out[i * c..(i + 1) * c];
+        for l in 0..k {
+            let v = a[i * k + l];
+            if v == 0.0 {
+                continue;
+            }
+            for (o, x) in o.iter_mut().zip(&b[l * c..(l + 1) * c]) {
+                *o += v * x;
+            }
+        }
+    }
+}
+
+/// e^{Ah}, Γ₀ = ∫₀ʰ e^{A(h−τ)} dτ B and Γ₁ = ∫₀ʰ e^{A(h−τ)} τ/h dτ B (B n × P) by a Taylor
+/// series on h/2^s with ‖A‖₁h/2^s ≤ 1/2 (terms to 1e-17), then s doublings.
+fn propagators(a: &[f64], b: &[f64], n: usize, h: f64) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+    let norm = (0..n)
+        .map(|c| (0..n).map(|r| a[r * n + c].abs()).sum::<f64>())
+        .fold(0.0, f64::max);
+    let mut s = 0;
+    while norm * h / f64::from(1u32 << s) > 0.5 && s < 30 {
+        s += 1;
+    }
+    let hs = h / f64::from(1u32 << s);
+    let ah: Vec<f64> = a.iter().map(|v| v * hs).collect();
+    let mut e = vec![0.0; n * n];
+    let mut pw = vec![0.0; n * n];
+    for i in 0..n {
+        e[i * n + i] = 1.0;
+        pw[i * n + i] = 1.0;
+    }
+    // Γ₀ = hs Σ (Ahs)^k/(k+1)! B, Γ₁ = hs Σ (Ahs)^k/(k+2)! B.
+    let mut g0 = vec![0.0; n * P];
+    let mut g1 = vec![0.0; n * P];
+    let mut v = b.to_vec();
+    let mut fact = 1.0; // k!
+                        // ‖Ahs‖ ≤ 1/2: term k is below 2⁻ᵏ/k!, under 1e-17 from k = 15.
+    for k in 0..16 {
+        let kf = k as f64;
+        for (i, x) in v.iter().enumerate() {
+            g0[i] += hs * x / (fact * (kf + 1.0));
+            g1[i] += hs * x / (fact * (kf + 1.0) * (kf + 2.0));
+        }
+        if k > 0 {
+            pw = matmul(&pw, &ah, n, n, n);
+            for (ei, p) in e.iter_mut().zip(&pw) {
+                *ei += p / fact;
+            }
+        }
+        v = matmul(&ah, &v, n, n, P);
+        fact *= kf + 1.0;
+    }
+    for _ in 0..s {
+        (e, g0, g1) = doubled(n, &e, &g0, &g1);
+    }
+    (e, g0, g1)
+}
+
+/// The propagators of step 2h from those of step h: e^{2Ah} = E², Γ₀(2h) = EΓ₀ + Γ₀,
+/// Γ₁(2h) = (EΓ₁ + Γ₀ + Γ₁)/2.
+fn doubled(n: usize, e: &[f64], g0: &[f64], g1: &[f64]) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+    let eg0 = matmul(e, g0, n, n, P);
+    let eg1 = matmul(e, g1, n, n, P);
+    let n1 = (0..n * P).map(|i| 0.5 * (eg1[i] + g0[i] + g1[i])).collect();
+    let n0 = (0..n * P).map(|i| eg0[i] + g0[i]).collect();
+    (matmul(e, e, n, n, n), n0, n1)
+}
+
+/// Monodromy (row-major) of Φ' = AΦ + B F(t) C₄ Φ by the exponential trapezoidal rule with
+/// propagators (E, Γ₀, Γ₁) of one step, using every `stride`-th sample of `f`: per step
+/// Φ_{j+1} = EΦ_j + (Γ₀ − Γ₁)q_j + Γ₁q_{j+1}, q = F C₄ Φ, (I − F_{j+1}C₄Γ₁) q_{j+1} =
+/// F_{j+1}C₄(EΦ_j + (Γ₀ − Γ₁)q_j). Fixed-size arrays for the common state counts.
+fn trapezoid(
+    n: usize,
+    e: &[f64],
+    g0: &[f64],
+    g1: &[f64],
+    f: &[[[f64; 4]; 2]],
+    stride: usize,
+) -> Vec<f64> {
+    match n {
+        4 => trapezoid_n::<4>(e, g0, g1, f, stride),
+        5 => trapezoid_n::<5>(e, g0, g1, f, stride),
+        6 => trapezoid_n::<6>(e, g0, g1, f, stride),
+        7 => trapezoid_n::<7>(e, g0, g1, f, stride),
+        8 => trapezoid_n::<8>(e, g0, g1, f, stride),
+        10 => trapezoid_n::<10>(e, g0, g1, f, stride),
+        12 => trapezoid_n::<12>(e, g0, g1, f, stride),
+        _ => trapezoid_dyn(n, e, g0, g1, f, stride),
+    }
+}
+
+fn trapezoid_n<const N: usize>(
+    e: &[f64],
+    g0: &[f64],
+    g1: &[f64],
+    f: &[[[f64; 4]; 2]],
+    stride: usize,
+) -> Vec<f64> {
+    let mut em = [[0.0; N]; N];
+    let mut ga = [[0.0; P]; N];
+    let mut gb = [[0.0; P]; N];
+    for r in 0..N {
+        for c in 0..N {
+            em[r][c] = e[r * N + c];
+        }
+        for p in 0..P {
+            ga[r][p] = g0[r * P + p] - g1[r * P + p];
+            gb[r][p] = g1[r * P + p];
+        }
+    }
+    let forcing = |fj: &[[f64; 4]; 2], phi: &[[f64; N]; N]| -> [[f64; N]; P] {
+        let mut q = [[0.0; N]; P];
+        for p in 0..P {
+            for c in 0..4 {
+                let v = fj[p][c];
+                if v != 0.0 {
+                    for col in 0..N {
+                        q[p][col] += v * phi[c][col];
+                    }
+                }
+            }
+        }
+        q
+    };
+    let mut phi = [[0.0; N]; N];
+    for (i, row) in phi.iter_mut().enumerate() {
+        row[i] = 1.0;
+    }
+    let mut q = forcing(&f[0], &phi);
+    let steps = (f.len() - 1) / stride;
+    for j in 0..steps {
+        let fj = &f[(j + 1) * stride];
+        let mut x = [[0.0; N]; N];
+        for r in 0..N {
+            for l in 0..N {
+                let v = em[r][l];
+                for col in 0..N {
+                    x[r][col] += v * phi[l][col];
+                }
+            }
+            for p in 0..P {
+                let v = ga[r][p];
+                for col in 0..N {
+                    x[r][col] += v * q[p][col];
+                }
+            }
+        }
+        let rhs = forcing(fj, &x);
+        let mut k = [[0.0; P]; P];
+        for p in 0..P {
+            for r in 0..P {
+                let fc: f64 = (0..4).map(|c| fj[p][c] * gb[c][r]).sum();
+                k[p][r] = if p == r { 1.0 } else { 0.0 } - fc;
+            }
+        }
+        let det = k[0][0] * k[1][1] - k[0][1] * k[1][0];
+        let mut qn = [[0.0; N]; P];
+        for col in 0..N {
+            let (r0, r1) = (rhs[0][col], rhs[1][col]);
+            qn[0][col] = (k[1][1] * r0 - k[0][1] * r1) / det;
+            qn[1][col] = (k[0][0] * r1 - k[1][0] * r0) / det;
+        }
+        for r in 0..N {
+            for p in 0..P {
+                let v = gb[r][p];
+                for col in 0..N {
+                    x[r][col] += v * qn[p][col];
+                }
+            }
+        }
+        phi = x;
+        q = qn;
+    }
+    phi.iter().flatten().copied().collect()
+}
+
+/// [`trapezoid`] for any state count.
+fn trapezoid_dyn(
+    n: usize,
+    e: &[f64],
+    g0: &[f64],
+    g1: &[f64],
+    f: &[[[f64; 4]; 2]],
+    stride: usize,
+) -> Vec<f64> {
+    let ga: Vec<f64> = g0.iter().zip(g1).map(|(a, b)| a - b).collect();
+    let forcing = |fj: &[[f64; 4]; 2], phi: &[f64], q: &mut [f64]| {
+        q.fill(0.0);
+        for p in 0..P {
+            for c in 0..4 {
+                let v = fj[p][c];
+                if v != 0.0 {
+                    for (o, x) in q[p * n..(p + 1) * n]
+                        .iter_mut()
+                        .zip(&phi[c * n..(c + 1) * n])
+                    {
+                        *o += v * x;
+                    }
+                }
+            }
+        }
+    };
+    let add = |g: &[f64], q: &[f64], x: &mut [f64]| {
+        for r in 0..n {
+            for p in 0..P {
+                let v = g[r * P + p];
+                for (o, w) in x[r * n..(r + 1) * n].iter_mut().zip(&q[p * n..(p + 1) * n]) {
+                    *o += v * w;
+                }
+            }
+        }
+    };
+    let mut phi = vec![0.0; n * n];
+    for i in 0..n {
+        phi[i * n + i] = 1.0;
+    }
+    let (mut q, mut qn, mut rhs) = (vec![0.0; P * n], vec![0.0; P * n], vec![0.0; P * n]);
+    let mut x = vec![0.0; n * n];
+    forcing(&f[0], &phi, &mut q);
+    for j in 0..(f.len() - 1) / stride {
+        let fj = &f[(j + 1) * stride];
+        matmul_into(e, &phi, n, n, n, &mut x);
+        add(&ga, &q, &mut x);
+        forcing(fj, &x, &mut rhs);
+        let mut k = [[0.0; P]; P];
+        for p in 0..P {
+            for r in 0..P {
+                let fc: f64 = (0..4).map(|c| fj[p][c] * g1[c * P + r]).sum();
+                k[p][r] = if p == r { 1.0 } else { 0.0 } - fc;
+            }
+        }
+        let det = k[0][0] * k[1][1] - k[0][1] * k[1][0];
+        for col in 0..n {
+            let (r0, r1) = (rhs[col], rhs[n + col]);
+            qn[col] = (k[1][1] * r0 - k[0][1] * r1) / det;
+            qn[n + col] = (k[0][0] * r1 - k[1][0] * r0) / det;
+        }
+        add(g1, &qn, &mut x);
+        std::mem::swap(&mut phi, &mut x);
+        std::mem::swap(&mut q, &mut qn);
+    }
+    phi
+}
+
+impl PeriodicProblem for CondensedBalance<'_> {
+    fn unknowns(&self) -> usize {
+        self.m() + 2
+    }
+
+    fn amplitude_index(&self) -> usize {
+        self.w + 1
+    }
+
+    fn scales(&self) -> &[f64] {
+        &self.scales
+    }
+
+    fn g(&self, y: &DVector<f64>) -> Result<DVector<f64>> {
+        let (x, omega, u) = self.unscale(y);
+        let r = self.residual(&x, omega, u)?;
+        let m = self.m();
+        let mut g = DVector::zeros(m + 1);
+        for i in 0..m {
+            g[i] = r[i] / self.row_scales[i];
+        }
+        g[m] = y[self.w + 2];
+        Ok(g)
+    }
+
+    /// Exact in the coefficients (the dynamic matrices and the AFT of the analytic ∂g);
+    /// forward differences in ω and U.
+    fn jac(&self, y: &DVector<f64>, g0: &DVector<f64>) -> Result<DMatrix<f64>> {
+        let (x, omega, u) = self.unscale(y);
+        let (w, ns) = (self.w, self.ns);
+        let m = self.m();
+        let mut out = DMatrix::zeros(m + 1, m + 2);
+        self.linear(omega, u, |lin| {
+            let q = self.samples(&x, omega);
+            // ∂g_p/∂(q_c, v_c) at the samples.
+            let dg: Vec<[[f64; 4]; 2]> = q
+                .iter()
+                .map(|q| {
+                    let d = self.section.structure.restoring_derivatives(
+                        [q[0], q[1]],
+                        [q[2], q[3]],
+                        &self.friction,
+                    );
+                    let mut o = [[0.0; 4]; 2];
+                    for p in 0..P {
+                        for c in 0..4 {
+                            o[p][c] = d[p][c] - lin.s0[p][c];
+                        }
+                    }
+                    o
+                })
+                .collect();
+            // ∂G_p/∂X_c = P diag(∂g_p/∂q_c) Q + ω P diag(∂g_p/∂v_c) Q' (w × w).
+            let mut dgx = vec![0.0; P * 2 * w * w];
+            let mut pv = vec![0.0; ns];
+            for p in (0..P).filter(|&p| self.forces[p]) {
+                for c in 0..2 {
+                    let blk = &mut dgx[(p * 2 + c) * w * w..(p * 2 + c + 1) * w * w];
+                    for (var, table, factor) in
+                        [(c, &self.basis, 1.0), (2 + c, &self.dbasis, omega)]
+                    {
+                        if !self.uses[var] {
+                            continue;
+                        }
+                        for r in 0..w {
+                            let pr = &self.proj[r * ns..(r + 1) * ns];
+                            for (j, v) in pv.iter_mut().enumerate() {
+                                *v = factor * pr[j] * dg[j][p][var];
+                            }
+                            let row = &mut blk[r * w..(r + 1) * w];
+                            for (v, b) in pv.iter().zip(table.chunks_exact(w)) {
+                                for (o, bs) in row.iter_mut().zip(b) {
+                                    *o += v * bs;
+                                }
+                            }
+                        }
+                    }
+                }
+            }
+            for r in 0..2 {
+                for c in 0..2 {
+                    for p in 0..P {
+                        let mi = lin.minv[r][p];
+                        if mi == 0.0 {
+                            continue;
+                        }
+                        let blk = &dgx[(p * 2 + c) * w * w..(p * 2 + c + 1) * w * w];
+                        for i in 0..w {
+                            for s in 0..w {
+                                out[(r * w + i, c * w + s)] += mi * blk[i * w + s];
+                            }
+                        }
+                    }
+                    // D_k mixes the (cos, sin) pair of harmonic k.
+                    for (k, d) in lin.d.iter().enumerate() {
+                        let v = d[r][c];
+                        if k == 0 {
+                            out[(r * w, c * w)] += v.re;
+                        } else {
+                            let (ca, sb) = (2 * k - 1, 2 * k);
+                            out[(r * w + ca, c * w + ca)] += v.re;
+                            out[(r * w + ca, c * w + sb)] += v.im;
+                            out[(r * w + sb, c * w + ca)] -= v.im;
+                            out[(r * w + sb, c * w + sb)] += v.re;
+                        }
+                    }
+                }
+            }
+        })?;
+        for c in 0..m {
+            for r in 0..m {
+                out[(r, c)] *= self.scales[c] / self.row_scales[r];
+            }
+        }
+        for col in [m, m + 1] {
+            let d = 1e-7 * (1.0 + y[col].abs());
+            let mut yp = y.clone();
+            yp[col] += d;
+            let gp = self.g(&yp)?;
+            out.set_column(col, &((gp - g0) / d));
+        }
+        out[(m, self.w + 2)] = 1.0;
+        Ok(out)
+    }
+
+    fn point(&self, y: &DVector<f64>, _jg: &DMatrix<f64>) -> Result<BranchPoint> {
+        let (x, omega, u) = self.unscale(y);
+        let n = self.n;
+        let (zk, mono) = self.linear(omega, u, |lin| {
+            let zk = self.states(lin, &x);
+            let mono = self.monodromy(lin, &zk);
+            (zk, mono)
+        })?;
+        let s: Vec<[f64; 2]> = (0..self.fine_len)
+            .map(|q| {
+                let hk = zk.len();
+                let mut v = [0.0; 2];
+                for (z, e) in zk.iter().zip(&self.fine_trig[q * hk..(q + 1) * hk]) {
+                    for (c, vc) in v.iter_mut().enumerate() {
+                        *vc += (z[c] * e).re;
+                    }
+                }
+                v
+            })
+            .collect();
+        let state: Vec<f64> = (0..n).map(|i| zk.iter().map(|z| z[i].re).sum()).collect();
+        let a1 = [zk[1][0].norm(), zk[1][1].norm()];
+        orbit_point(u, omega, &s, a1, mono, state, y)
+    }
+
+    fn start(&self, hopf: &HopfPoint, a: f64) -> DVector<f64> {
+        let m = self.m();
+        let w = self.w;
+        let mut y = DVector::zeros(m + 2);
+        for c in 0..2 {
+            let v = hopf.eigenvector[c];
+            y[c * w + 1] = a * v.re / self.scales[c * w + 1];
+            y[c * w + 2] = -a * v.im / self.scales[c * w + 2];
+        }
+        y[w + 2] = 0.0;
+        y[m] = hopf.omega / self.scales[m];
+        y[m + 1] = hopf.u / self.scales[m + 1];
+        y
+    }
+
+    fn scaled(&self, p: &BranchPoint) -> Result<DVector<f64>> {
+        if p.unknowns.len() != self.unknowns() {
+            return Err(Error::numerical(
+                "orbit_on_branch",
+                "the branch points carry no harmonic-balance coefficients of this problem (a \
+                 branch read back from branch.json, or of another method): continue the branch \
+                 again",
+            ));
+        }
+        Ok(DVector::from_column_slice(&p.unknowns))
+    }
+}
