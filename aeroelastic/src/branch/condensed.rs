@@ -45,20 +45,25 @@ const P: usize = 2;
 pub(super) fn applies(section: &Section) -> bool {
     section.aero.is_linear()
         && section.aero.reduced_frequency().is_none()
+        && section.n_states() <= 20
         && section.structure.nonlinear.pitch_freeplay == 0.0
 }
 
-/// LU factors of a small complex matrix with partial pivoting (row-major).
+/// Row interchanges of an LU factorisation, in place, of a small complex matrix (partial
+/// pivoting, row-major; the factors stay in the matrix).
 struct ComplexLu {
     n: usize,
-    lu: Vec<Complex64>,
-    piv: Vec<usize>,
+    /// Row swapped with row k at step k.
+    swaps: [usize; 16],
 }
 
 impl ComplexLu {
-    /// Factors `a` (n × n, row-major, consumed); `None` when singular.
-    fn new(mut a: Vec<Complex64>, n: usize) -> Option<Self> {
-        let mut piv = (0..n).collect::<Vec<_>>();
+    /// Factors `a` (n × n, row-major) in place; `None` when singular or n > 16.
+    fn new(a: &mut [Complex64], n: usize) -> Option<Self> {
+        if n > 16 {
+            return None;
+        }
+        let mut swaps = [0; 16];
         for k in 0..n {
             let p = (k..n)
                 .max_by(|&i, &j| a[i * n + k].l1_norm().total_cmp(&a[j * n + k].l1_norm()))?;
@@ -66,11 +71,11 @@ impl ComplexLu {
             if pivot == 0.0 || !pivot.is_finite() {
                 return None;
             }
+            swaps[k] = p;
             if p != k {
                 for c in 0..n {
                     a.swap(k * n + c, p * n + c);
                 }
-                piv.swap(k, p);
             }
             let d = a[k * n + k].inv();
             for i in k + 1..n {
@@ -82,27 +87,28 @@ impl ComplexLu {
                 }
             }
         }
-        Some(ComplexLu { n, lu: a, piv })
+        Some(ComplexLu { n, swaps })
     }
 
-    /// Solves in place for one right-hand side.
-    fn solve(&self, b: &mut [Complex64]) {
+    /// Solves in place for one right-hand side with the factors `lu` of [`ComplexLu::new`].
+    fn solve(&self, lu: &[Complex64], b: &mut [Complex64]) {
         let n = self.n;
-        let x: Vec<Complex64> = self.piv.iter().map(|&p| b[p]).collect();
-        b.copy_from_slice(&x);
+        for k in 0..n {
+            b.swap(k, self.swaps[k]);
+        }
         for i in 0..n {
             let mut s = b[i];
             for c in 0..i {
-                s -= self.lu[i * n + c] * b[c];
+                s -= lu[i * n + c] * b[c];
             }
             b[i] = s;
         }
         for i in (0..n).rev() {
             let mut s = b[i];
             for c in i + 1..n {
-                s -= self.lu[i * n + c] * b[c];
+                s -= lu[i * n + c] * b[c];
             }
-            b[i] = s / self.lu[i * n + i];
+            b[i] = s / lu[i * n + i];
         }
     }
 }
@@ -122,6 +128,8 @@ struct Linear {
     minv: [[f64; 2]; 2],
     /// D_k = s²I − A_vq − sA_vv − A_vx L_k, s = ikω (2 × 2 per harmonic).
     d: Vec<[[Complex64; 2]; 2]>,
+    /// dD_k/ds.
+    dd: Vec<[[Complex64; 2]; 2]>,
     /// L_k = (sI − A_xx)⁻¹ (A_xq + sA_xv) (lag states × 2 per harmonic, row-major).
     lag: Vec<Vec<Complex64>>,
 }
@@ -327,6 +335,7 @@ impl<'a> CondensedBalance<'a> {
             s0,
             minv,
             d: Vec::new(),
+            dd: Vec::new(),
             lag: Vec::new(),
         };
         self.harmonics_at(lin, omega)
@@ -336,20 +345,25 @@ impl<'a> CondensedBalance<'a> {
     fn harmonics_at(&self, mut lin: Linear, omega: f64) -> Result<Linear> {
         let (n, nl) = (self.n, self.n - 4);
         let a = &lin.a;
+        let zero = Complex64::new(0.0, 0.0);
         lin.d.clear();
+        lin.dd.clear();
         lin.lag.clear();
+        let mut x = vec![zero; nl * nl];
+        let mut cols = vec![zero; 4 * nl];
         for k in 0..=(self.w - 1) / 2 {
             let s = Complex64::new(0.0, k as f64 * omega);
-            let mut l = vec![Complex64::new(0.0, 0.0); nl * 2];
+            // L = (sI − A_xx)⁻¹(A_xq + sA_xv) and dL/ds = (sI − A_xx)⁻¹(A_xv − L).
+            let mut l = vec![zero; nl * 2];
+            let mut dls = vec![zero; nl * 2];
             if nl > 0 {
-                let x: Vec<Complex64> = (0..nl * nl)
-                    .map(|i| {
-                        let (r, c) = (i / nl, i % nl);
-                        let diag = if r == c { s } else { Complex64::new(0.0, 0.0) };
-                        diag - a[(4 + r) * n + 4 + c]
-                    })
-                    .collect();
-                let lu = ComplexLu::new(x, nl).ok_or_else(|| {
+                for r in 0..nl {
+                    for c in 0..nl {
+                        let diag = if r == c { s } else { zero };
+                        x[r * nl + c] = diag - a[(4 + r) * n + 4 + c];
+                    }
+                }
+                let lu = ComplexLu::new(&mut x, nl).ok_or_else(|| {
                     Error::numerical(
                         "harmonic balance",
                         format!(
@@ -359,30 +373,48 @@ impl<'a> CondensedBalance<'a> {
                         ),
                     )
                 })?;
-                for q in 0..2 {
-                    let mut col: Vec<Complex64> = (0..nl)
-                        .map(|r| a[(4 + r) * n + q] + s * a[(4 + r) * n + 2 + q])
-                        .collect();
-                    lu.solve(&mut col);
+                let (c0, rest) = cols.split_at_mut(nl);
+                let (c1, rest) = rest.split_at_mut(nl);
+                let (d0, d1) = rest.split_at_mut(nl);
+                for (q, col) in [c0, c1].into_iter().enumerate() {
+                    for (r, v) in col.iter_mut().enumerate() {
+                        *v = a[(4 + r) * n + q] + s * a[(4 + r) * n + 2 + q];
+                    }
+                    lu.solve(&x, col);
                     for r in 0..nl {
                         l[r * 2 + q] = col[r];
                     }
                 }
+                for (q, col) in [d0, d1].into_iter().enumerate() {
+                    for (r, v) in col.iter_mut().enumerate() {
+                        *v = a[(4 + r) * n + 2 + q] - l[r * 2 + q];
+                    }
+                    lu.solve(&x, col);
+                    for r in 0..nl {
+                        dls[r * 2 + q] = col[r];
+                    }
+                }
             }
-            let mut d = [[Complex64::new(0.0, 0.0); 2]; 2];
-            for (r, row) in d.iter_mut().enumerate() {
-                for (q, dq) in row.iter_mut().enumerate() {
+            let mut d = [[zero; 2]; 2];
+            let mut dd = [[zero; 2]; 2];
+            for r in 0..2 {
+                for q in 0..2 {
                     let mut v = -a[(2 + r) * n + q] - s * a[(2 + r) * n + 2 + q];
+                    let mut dv = Complex64::new(-a[(2 + r) * n + 2 + q], 0.0);
                     for i in 0..nl {
                         v -= a[(2 + r) * n + 4 + i] * l[i * 2 + q];
+                        dv -= a[(2 + r) * n + 4 + i] * dls[i * 2 + q];
                     }
                     if r == q {
                         v += s * s;
+                        dv += 2.0 * s;
                     }
-                    *dq = v;
+                    d[r][q] = v;
+                    dd[r][q] = dv;
                 }
             }
             lin.d.push(d);
+            lin.dd.push(dd);
             lin.lag.push(l);
         }
         lin.omega = omega;
@@ -525,9 +557,9 @@ impl<'a> CondensedBalance<'a> {
             })
             .collect();
         let (e, g0, g1) = propagators(&lin.a, &lin.bm, n, h);
-        let fine = trapezoid(n, &e, &g0, &g1, &f, 1);
+        let fine = trapezoid(n, &e, &g0, &g1, &f, 1, self.forces);
         let (e2, g02, g12) = doubled(n, &e, &g0, &g1);
-        let coarse = trapezoid(n, &e2, &g02, &g12, &f, 2);
+        let coarse = trapezoid(n, &e2, &g02, &g12, &f, 2, self.forces);
         let mut m = DMatrix::zeros(n, n);
         for r in 0..n {
             for c in 0..n {
@@ -628,15 +660,16 @@ fn trapezoid(
     g1: &[f64],
     f: &[[[f64; 4]; 2]],
     stride: usize,
+    active: [bool; P],
 ) -> Vec<f64> {
     match n {
-        4 => trapezoid_n::<4>(e, g0, g1, f, stride),
-        5 => trapezoid_n::<5>(e, g0, g1, f, stride),
-        6 => trapezoid_n::<6>(e, g0, g1, f, stride),
-        7 => trapezoid_n::<7>(e, g0, g1, f, stride),
-        8 => trapezoid_n::<8>(e, g0, g1, f, stride),
-        10 => trapezoid_n::<10>(e, g0, g1, f, stride),
-        12 => trapezoid_n::<12>(e, g0, g1, f, stride),
+        4 => trapezoid_n::<4>(e, g0, g1, f, stride, active),
+        5 => trapezoid_n::<5>(e, g0, g1, f, stride, active),
+        6 => trapezoid_n::<6>(e, g0, g1, f, stride, active),
+        7 => trapezoid_n::<7>(e, g0, g1, f, stride, active),
+        8 => trapezoid_n::<8>(e, g0, g1, f, stride, active),
+        10 => trapezoid_n::<10>(e, g0, g1, f, stride, active),
+        12 => trapezoid_n::<12>(e, g0, g1, f, stride, active),
         _ => trapezoid_dyn(n, e, g0, g1, f, stride),
     }
 }
@@ -647,6 +680,7 @@ fn trapezoid_n<const N: usize>(
     g1: &[f64],
     f: &[[[f64; 4]; 2]],
     stride: usize,
+    active: [bool; P],
 ) -> Vec<f64> {
     let mut em = [[0.0; N]; N];
     let mut ga = [[0.0; P]; N];
@@ -690,7 +724,7 @@ fn trapezoid_n<const N: usize>(
                     x[r][col] += v * phi[l][col];
                 }
             }
-            for p in 0..P {
+            for p in (0..P).filter(|&p| active[p]) {
                 let v = ga[r][p];
                 for col in 0..N {
                     x[r][col] += v * q[p][col];
@@ -713,7 +747,7 @@ fn trapezoid_n<const N: usize>(
             qn[1][col] = (k[0][0] * r1 - k[1][0] * r0) / det;
         }
         for r in 0..N {
-            for p in 0..P {
+            for p in (0..P).filter(|&p| active[p]) {
                 let v = gb[r][p];
                 for col in 0..N {
                     x[r][col] += v * qn[p][col];
@@ -873,6 +907,37 @@ impl PeriodicProblem for CondensedBalance<'_> {
                     }
                 }
             }
+            // ∂/∂ω: Σ_k ik dD_k/ds Q_k, plus P diag(∂g/∂v_c) Q'X_c of velocity terms.
+            let mut dw = vec![0.0; 2 * w];
+            for (k, dd) in lin.dd.iter().enumerate().skip(1) {
+                let ik = Complex64::new(0.0, k as f64);
+                for (r, row) in dd.iter().enumerate() {
+                    let v: Complex64 = (0..2)
+                        .map(|c| ik * row[c] * complex(&x[c * w..(c + 1) * w], k))
+                        .sum();
+                    dw[r * w + 2 * k - 1] += v.re;
+                    dw[r * w + 2 * k] -= v.im;
+                }
+            }
+            for c in (0..2).filter(|&c| self.uses[2 + c]) {
+                let xc = &x[c * w..(c + 1) * w];
+                let dv: Vec<f64> = self
+                    .dbasis
+                    .chunks_exact(w)
+                    .map(|b| b.iter().zip(xc).map(|(p, v)| p * v).sum())
+                    .collect();
+                for p in (0..P).filter(|&p| self.forces[p]) {
+                    for (i, pr) in self.proj.chunks_exact(ns).enumerate() {
+                        let gv: f64 = (0..ns).map(|j| pr[j] * dg[j][p][2 + c] * dv[j]).sum();
+                        for r in 0..2 {
+                            dw[r * w + i] += lin.minv[r][p] * gv;
+                        }
+                    }
+                }
+            }
+            for (i, v) in dw.iter().enumerate() {
+                out[(i, m)] = *v;
+            }
             for r in 0..2 {
                 for c in 0..2 {
                     for p in 0..P {
@@ -903,13 +968,14 @@ impl PeriodicProblem for CondensedBalance<'_> {
                 }
             }
         })?;
-        for c in 0..m {
+        for c in 0..=m {
             for r in 0..m {
                 out[(r, c)] *= self.scales[c] / self.row_scales[r];
             }
         }
-        for col in [m, m + 1] {
-            let d = 1e-7 * (1.0 + y[col].abs());
+        {
+            let d = 1e-7 * (1.0 + y[m + 1].abs());
+            let col = m + 1;
             let mut yp = y.clone();
             yp[col] += d;
             let gp = self.g(&yp)?;
@@ -917,6 +983,10 @@ impl PeriodicProblem for CondensedBalance<'_> {
         }
         out[(m, self.w + 2)] = 1.0;
         Ok(out)
+    }
+
+    fn jacobian_at_solution(&self) -> bool {
+        false
     }
 
     fn point(&self, y: &DVector<f64>, _jg: &DMatrix<f64>) -> Result<BranchPoint> {

@@ -352,6 +352,12 @@ trait PeriodicProblem {
     fn jac(&self, y: &DVector<f64>, g0: &DVector<f64>) -> Result<DMatrix<f64>>;
     /// The converged orbit at `y` with its multipliers.
     fn point(&self, y: &DVector<f64>, jg: &DMatrix<f64>) -> Result<BranchPoint>;
+    /// Whether [`PeriodicProblem::point`] needs ∂G/∂Y at the solution itself (shooting: its
+    /// block is the monodromy matrix). When not, Newton hands on the Jacobian of its last
+    /// refresh, within the Newton tolerance of the solution, for the tangent.
+    fn jacobian_at_solution(&self) -> bool {
+        true
+    }
     /// Initial guess at pitch amplitude `a` \[rad\] from the Hopf eigenvector.
     fn start(&self, hopf: &HopfPoint, a: f64) -> DVector<f64>;
     /// Scaled unknowns of a point of a branch of this problem.
@@ -426,8 +432,9 @@ fn augmented(jg: &DMatrix<f64>, row: &DVector<f64>) -> nalgebra::LU<f64, Dyn, Dy
 /// Chord Newton for G(Y) = 0 plus the closure, from `y`. `chord` is a factored
 /// approximation of the full Jacobian (the previous point's Jacobian with the previous
 /// tangent as last row); without it, or when convergence is slow, the Jacobian is
-/// computed once at the current iterate. Returns the solution, ∂G/∂Y there and the
-/// iterations used.
+/// computed once at the current iterate. Returns the solution, ∂G/∂Y there, the
+/// iterations used and, when that ∂G/∂Y is the last refresh's
+/// ([`PeriodicProblem::jacobian_at_solution`] false), its factored [∂G/∂Y; closure row].
 fn newton(
     p: &dyn PeriodicProblem,
     mut y: DVector<f64>,
@@ -435,9 +442,10 @@ fn newton(
     chord: Option<&nalgebra::LU<f64, Dyn, Dyn>>,
     tol: f64,
     max_iter: usize,
-) -> Result<(DVector<f64>, DMatrix<f64>, usize)> {
+) -> Result<Solved> {
     let m = p.unknowns();
     let mut own = None;
+    let mut own_raw = None;
     let mut refreshed = false;
     let mut last = f64::INFINITY;
     for it in 0..max_iter {
@@ -451,12 +459,19 @@ fn newton(
             return Err(Error::numerical("newton", "non-finite residual"));
         }
         if norm < tol {
-            let j = p.jac(&y, &g)?;
-            return Ok((y, j, it));
+            return Ok(match own_raw {
+                Some(j) if !p.jacobian_at_solution() => (y, j, it, own),
+                _ => {
+                    let j = p.jac(&y, &g)?;
+                    (y, j, it, None)
+                }
+            });
         }
         let slow = norm > 0.5 * last || it == 3;
         if (chord.is_none() && own.is_none()) || (slow && !refreshed) {
-            own = Some(augmented(&p.jac(&y, &g)?, &row));
+            let j = p.jac(&y, &g)?;
+            own = Some(augmented(&j, &row));
+            own_raw = Some(j);
             refreshed = true;
         } else if norm > 2.0 * last && refreshed {
             return Err(Error::numerical(
@@ -477,14 +492,25 @@ fn newton(
     ))
 }
 
+/// Newton's result: the solution, ∂G/∂Y, iterations, and the factored [∂G/∂Y; row] when
+/// ∂G/∂Y is the last refresh's.
+type Solved = (
+    DVector<f64>,
+    DMatrix<f64>,
+    usize,
+    Option<nalgebra::LU<f64, Dyn, Dyn>>,
+);
+
 /// Tangent of the solution curve: null vector of the Jacobian of G, oriented along
 /// `prev`; also returns the factored [∂G/∂Y; prevᵀ] (the next point's chord matrix).
+/// `factored` is that matrix when already at hand.
 fn tangent(
     jg: &DMatrix<f64>,
     prev: &DVector<f64>,
+    factored: Option<nalgebra::LU<f64, Dyn, Dyn>>,
 ) -> Result<(DVector<f64>, nalgebra::LU<f64, Dyn, Dyn>)> {
     let m = jg.ncols();
-    let lu = augmented(jg, prev);
+    let lu = factored.unwrap_or_else(|| augmented(jg, prev));
     let mut rhs = DVector::zeros(m);
     rhs[m - 1] = 1.0;
     let t = lu
@@ -525,6 +551,35 @@ fn orbit_point(
         state,
         unknowns: y.iter().copied().collect(),
     })
+}
+
+/// det(2A⊙I) of the bialternate product of `a` (n × n) with the identity: its eigenvalues
+/// are λ_i + λ_j (i < j), so the determinant vanishes where a complex pair of A crosses the
+/// imaginary axis (Hopf) and not where a real eigenvalue crosses zero (Govaerts 2000,
+/// Kuznetsov §10.2). Rows and columns are the pairs (p, q), p > q.
+fn bialternate_determinant(a: &DMatrix<f64>) -> f64 {
+    let n = a.nrows();
+    let pairs: Vec<(usize, usize)> = (1..n).flat_map(|p| (0..p).map(move |q| (p, q))).collect();
+    let m = pairs.len();
+    let mut b = DMatrix::zeros(m, m);
+    for (i, &(p, q)) in pairs.iter().enumerate() {
+        for (j, &(r, s)) in pairs.iter().enumerate() {
+            b[(i, j)] = if r == q {
+                -a[(p, s)]
+            } else if r != p && s == q {
+                a[(p, r)]
+            } else if r == p && s == q {
+                a[(p, p)] + a[(q, q)]
+            } else if r == p && s != q {
+                a[(q, s)]
+            } else if s == p {
+                -a[(q, r)]
+            } else {
+                0.0
+            };
+        }
+    }
+    b.lu().determinant()
 }
 
 /// Non-trivial Floquet multipliers of a monodromy matrix (the trivial multiplier 1 removed
@@ -783,9 +838,45 @@ impl Section {
             .ok_or_else(|| Error::numerical("hopf", format!("no oscillatory mode at U = {u}")))
     }
 
+    /// The speed in [a, b] where the growth rate, of opposite signs `ga` and `gb` at the
+    /// ends, vanishes: regula falsi with the Illinois modification (superlinear on the
+    /// smooth growth rate, the bracket kept), to a bracket of 1e-12 U or a growth rate
+    /// below 1e-15 ω_α.
+    fn growth_root(&self, mut a: f64, mut ga: f64, mut b: f64, mut gb: f64) -> Result<f64> {
+        let tiny = 1e-15 * self.structure.omega_alpha();
+        let mut side = 0;
+        for _ in 0..200 {
+            if b - a <= 1e-12 * b {
+                break;
+            }
+            let mut m = (a * gb - b * ga) / (gb - ga);
+            if !(m > a && m < b) {
+                m = 0.5 * (a + b);
+            }
+            let gm = self.oscillatory_growth(m)?.0;
+            if gm.abs() <= tiny {
+                return Ok(m);
+            }
+            if (gm < 0.0) == (ga < 0.0) {
+                (a, ga) = (m, gm);
+                if side == -1 {
+                    gb *= 0.5;
+                }
+                side = -1;
+            } else {
+                (b, gb) = (m, gm);
+                if side == 1 {
+                    ga *= 0.5;
+                }
+                side = 1;
+            }
+        }
+        Ok(if ga.abs() < gb.abs() { a } else { b })
+    }
+
     /// Hopf points of the equilibrium in [`u_min`, `u_max`] [m/s]: the largest real part
     /// of the oscillatory eigenvalues of [`Section::equilibrium_jacobian`] is scanned at
-    /// `n_scan` speeds and each sign change bisected to 1e-12 U.
+    /// `n_scan` speeds and each sign change solved to 1e-12 U (Illinois regula falsi).
     ///
     /// # Errors
     /// [`Error::InvalidParameter`] for a bad range; as [`Section::equilibrium_jacobian`].
@@ -802,26 +893,26 @@ impl Section {
         let us: Vec<f64> = (0..n_scan)
             .map(|i| u_min + (u_max - u_min) * i as f64 / (n_scan - 1) as f64)
             .collect();
-        let mut g = Vec::with_capacity(n_scan);
+        // Scan the sign of det(2A⊙I) = Π_{i<j}(λ_i + λ_j), which changes where a complex
+        // pair crosses the imaginary axis; the growth rate (eigenvalues) only at the ends of
+        // brackets where it does.
+        let mut psi = Vec::with_capacity(n_scan);
         for &u in &us {
-            g.push(self.oscillatory_growth(u)?.0);
+            psi.push(bialternate_determinant(&self.equilibrium_jacobian(u)?));
         }
         let mut out = Vec::new();
         for i in 1..n_scan {
-            if (g[i - 1] < 0.0) == (g[i] < 0.0) {
+            if (psi[i - 1] < 0.0) == (psi[i] < 0.0) && psi[i - 1] != 0.0 {
                 continue;
             }
-            let (mut a, mut b, ga) = (us[i - 1], us[i], g[i - 1]);
-            while b - a > 1e-12 * b {
-                let m = 0.5 * (a + b);
-                let gm = self.oscillatory_growth(m)?.0;
-                if (gm < 0.0) == (ga < 0.0) {
-                    a = m;
-                } else {
-                    b = m;
-                }
+            let g = [
+                self.oscillatory_growth(us[i - 1])?.0,
+                self.oscillatory_growth(us[i])?.0,
+            ];
+            if (g[0] < 0.0) == (g[1] < 0.0) {
+                continue;
             }
-            let u = 0.5 * (a + b);
+            let u = self.growth_root(us[i - 1], g[0], us[i], g[1])?;
             let (_, lam) = self.oscillatory_growth(u)?;
             let jac = self.equilibrium_jacobian(u)?;
             let v = eigenvector(&jac, lam);
@@ -884,7 +975,7 @@ impl Section {
             let y = sh.start(hopf, a);
             let c = Closure::Alpha(a / sh.scales()[ai]);
             newton(sh, y, &c, None, opts.newton_tol, 3 * opts.max_newton)
-                .map(|(y, j, _)| (y, j))
+                .map(|(y, j, _, _)| (y, j))
                 .map_err(|e| {
                     Error::numerical(
                         "branch start",
@@ -909,7 +1000,7 @@ impl Section {
             });
         }
         let sec = &y1 - &y0;
-        let (mut t, mut chord) = tangent(&j1, &(&sec / sec.norm()))?;
+        let (mut t, mut chord) = tangent(&j1, &(&sec / sec.norm()), None)?;
         let mut ts = vec![sec.clone() / sec.norm(), t.clone()];
         let mut arc = vec![0.0, sec.norm()];
         let mut yk = y1;
@@ -924,8 +1015,9 @@ impl Section {
             let pred = &yk + &t * ds;
             let c = Closure::Arclength(&yk, &t, ds);
             let res = newton(sh, pred, &c, Some(&chord), opts.newton_tol, opts.max_newton)
-                .and_then(|(y, j, it)| {
-                    let (tn, lu) = tangent(&j, &t)?;
+                .and_then(|(y, j, it, lu)| {
+                    // Newton's refresh factored [∂G/∂Y; tᵀ]: the same matrix.
+                    let (tn, lu) = tangent(&j, &t, lu)?;
                     Ok((y, j, it, tn, lu))
                 });
             let accepted = match res {
@@ -1133,7 +1225,7 @@ impl Section {
         let y = sh.scaled(&w[0])? * (1.0 - f) + sh.scaled(&w[1])? * f;
         let m = sh.unknowns();
         let c = Closure::Speed(u / sh.scales()[m - 1]);
-        let (y, j, _) = newton(sh, y, &c, None, opts.newton_tol, 3 * opts.max_newton)?;
+        let (y, j, _, _) = newton(sh, y, &c, None, opts.newton_tol, 3 * opts.max_newton)?;
         sh.point(&y, &j)
     }
 }
@@ -1366,6 +1458,25 @@ mod tests {
     use crate::structure::PolyTerm;
 
     fn no_obs(_: BranchProgress) {}
+
+    /// det(2A⊙I) = Π_{i<j}(λ_i + λ_j) on a non-symmetric matrix with complex eigenvalues.
+    #[test]
+    fn bialternate_determinant_is_the_product_of_eigenvalue_pair_sums() {
+        let a = DMatrix::from_fn(6, 6, |i, j| {
+            ((i * 7 + j * 3) % 11) as f64 * 0.3 - 1.1 + (i == j) as u8 as f64 * 0.2 * i as f64
+        });
+        let ev = eigenvalues(&a).unwrap();
+        let mut prod = Complex64::new(1.0, 0.0);
+        for i in 0..6 {
+            for j in 0..i {
+                prod *= ev[i] + ev[j];
+            }
+        }
+        let d = bialternate_determinant(&a);
+        assert!(prod.im.abs() < 1e-9 * prod.norm(), "{prod}");
+        assert!((d - prod.re).abs() < 1e-9 * prod.norm(), "{d} vs {prod}");
+        assert!(ev.iter().any(|l| l.im.abs() > 1e-3), "{ev:?}");
+    }
 
     #[test]
     fn hopf_point_is_the_linear_flutter_speed() {
