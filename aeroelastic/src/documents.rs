@@ -218,7 +218,7 @@ pub fn branch_method_text(method: BranchMethod) -> &'static str {
             "single shooting (fixed-step RK4) + pseudo-arclength, Floquet multipliers from the monodromy matrix"
         }
         BranchMethod::HarmonicBalance => {
-            "harmonic balance (AFT) + pseudo-arclength, Floquet multipliers from the variational equation along the series"
+            "harmonic balance (AFT) + pseudo-arclength; for linear aerodynamics independent of K condensed onto heave and pitch (lag states eliminated per harmonic) with Floquet multipliers by the exponential trapezoidal rule, otherwise every state with multipliers from RK4 on the variational equation"
         }
     }
 }

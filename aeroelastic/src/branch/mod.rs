@@ -50,8 +50,9 @@ pub struct BranchOptions {
     /// Harmonics H of the harmonic-balance series (ignored by shooting).
     #[serde(default = "default_harmonics")]
     pub harmonics: usize,
-    /// Fixed RK4 steps per period: of the shooting integration, or of the variational
-    /// equation that gives harmonic balance its Floquet multipliers.
+    /// Fixed steps per period: RK4 steps of the shooting integration, or the steps of the
+    /// variational equation that gives harmonic balance its Floquet multipliers (RK4, or
+    /// the exponential trapezoidal rule of the condensed form for linear aerodynamics).
     pub steps_per_period: usize,
     /// Largest number of branch points per Hopf point.
     pub max_points: usize,
@@ -86,7 +87,8 @@ pub enum BranchMethod {
     #[default]
     Shooting,
     /// Harmonic balance (AFT) with `harmonics` harmonics; multipliers from the variational
-    /// equation along the series.
+    /// equation along the series. With linear aerodynamics independent of K it is condensed
+    /// onto heave and pitch (DECISIONS.md).
     HarmonicBalance,
 }
 
