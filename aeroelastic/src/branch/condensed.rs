@@ -134,8 +134,6 @@ struct Linear {
     minv: [[f64; 2]; 2],
     /// D_k = s²I − A_vq − sA_vv − A_vx L_k, s = ikω (2 × 2 per harmonic).
     d: Vec<[[Complex64; 2]; 2]>,
-    /// dD_k/ds.
-    dd: Vec<[[Complex64; 2]; 2]>,
     /// L_k = (sI − A_xx)⁻¹ (A_xq + sA_xv) (lag states × 2 per harmonic, row-major).
     lag: Vec<Vec<Complex64>>,
 }
@@ -341,7 +339,6 @@ impl<'a> CondensedBalance<'a> {
             s0,
             minv,
             d: Vec::new(),
-            dd: Vec::new(),
             lag: Vec::new(),
         };
         self.harmonics_at(lin, omega)
@@ -350,81 +347,108 @@ impl<'a> CondensedBalance<'a> {
     /// D_k and L_k of `lin` at frequency ω.
     fn harmonics_at(&self, mut lin: Linear, omega: f64) -> Result<Linear> {
         let (n, nl) = (self.n, self.n - 4);
-        let a = &lin.a;
         let zero = Complex64::new(0.0, 0.0);
         lin.d.clear();
-        lin.dd.clear();
         lin.lag.clear();
         let mut x = vec![zero; nl * nl];
-        let mut cols = vec![zero; 4 * nl];
+        let mut col = vec![zero; nl];
         for k in 0..=(self.w - 1) / 2 {
             let s = Complex64::new(0.0, k as f64 * omega);
-            // L = (sI − A_xx)⁻¹(A_xq + sA_xv) and dL/ds = (sI − A_xx)⁻¹(A_xv − L).
+            // L = (sI − A_xx)⁻¹(A_xq + sA_xv).
             let mut l = vec![zero; nl * 2];
-            let mut dls = vec![zero; nl * 2];
             if nl > 0 {
-                for r in 0..nl {
-                    for c in 0..nl {
-                        let diag = if r == c { s } else { zero };
-                        x[r * nl + c] = diag - a[(4 + r) * n + 4 + c];
-                    }
-                }
-                let lu = ComplexLu::new(&mut x, nl).ok_or_else(|| {
-                    Error::numerical(
-                        "harmonic balance",
-                        format!(
-                            "the lag states resonate at harmonic {k} (ω = {omega} rad/s, U = {} \
-                             m/s): sI − A_xx is singular",
-                            lin.u
-                        ),
-                    )
-                })?;
-                let (c0, rest) = cols.split_at_mut(nl);
-                let (c1, rest) = rest.split_at_mut(nl);
-                let (d0, d1) = rest.split_at_mut(nl);
-                for (q, col) in [c0, c1].into_iter().enumerate() {
+                let lu = self.lag_factors(&lin, s, &mut x)?;
+                for q in 0..2 {
                     for (r, v) in col.iter_mut().enumerate() {
-                        *v = a[(4 + r) * n + q] + s * a[(4 + r) * n + 2 + q];
+                        *v = lin.a[(4 + r) * n + q] + s * lin.a[(4 + r) * n + 2 + q];
                     }
-                    lu.solve(&x, col);
+                    lu.solve(&x, &mut col);
                     for r in 0..nl {
                         l[r * 2 + q] = col[r];
                     }
                 }
-                for (q, col) in [d0, d1].into_iter().enumerate() {
+            }
+            let a = &lin.a;
+            let mut d = [[zero; 2]; 2];
+            for r in 0..2 {
+                for q in 0..2 {
+                    let mut v = -a[(2 + r) * n + q] - s * a[(2 + r) * n + 2 + q];
+                    for i in 0..nl {
+                        v -= a[(2 + r) * n + 4 + i] * l[i * 2 + q];
+                    }
+                    if r == q {
+                        v += s * s;
+                    }
+                    d[r][q] = v;
+                }
+            }
+            lin.d.push(d);
+            lin.lag.push(l);
+        }
+        lin.omega = omega;
+        Ok(lin)
+    }
+
+    /// Factors of sI − A_xx into `x` (lag states × lag states).
+    fn lag_factors(&self, lin: &Linear, s: Complex64, x: &mut [Complex64]) -> Result<ComplexLu> {
+        let (n, nl) = (self.n, self.n - 4);
+        for r in 0..nl {
+            for c in 0..nl {
+                let diag = if r == c { s } else { Complex64::new(0.0, 0.0) };
+                x[r * nl + c] = diag - lin.a[(4 + r) * n + 4 + c];
+            }
+        }
+        ComplexLu::new(x, nl).ok_or_else(|| {
+            Error::numerical(
+                "harmonic balance",
+                format!(
+                    "the lag states resonate at s = {s} (ω = {} rad/s, U = {} m/s): sI − A_xx \
+                     is singular",
+                    lin.omega, lin.u
+                ),
+            )
+        })
+    }
+
+    /// dD_k/ds = 2sI − A_vv − A_vx dL_k/ds, dL_k/ds = (sI − A_xx)⁻¹(A_xv − L_k), k = 0 … H.
+    fn dynamic_derivatives(&self, lin: &Linear) -> Result<Vec<[[Complex64; 2]; 2]>> {
+        let (n, nl) = (self.n, self.n - 4);
+        let zero = Complex64::new(0.0, 0.0);
+        let a = &lin.a;
+        let mut x = vec![zero; nl * nl];
+        let mut col = vec![zero; nl];
+        let mut out = Vec::with_capacity(lin.lag.len());
+        for (k, l) in lin.lag.iter().enumerate() {
+            let s = Complex64::new(0.0, k as f64 * lin.omega);
+            let mut dls = vec![zero; nl * 2];
+            if nl > 0 {
+                let lu = self.lag_factors(lin, s, &mut x)?;
+                for q in 0..2 {
                     for (r, v) in col.iter_mut().enumerate() {
                         *v = a[(4 + r) * n + 2 + q] - l[r * 2 + q];
                     }
-                    lu.solve(&x, col);
+                    lu.solve(&x, &mut col);
                     for r in 0..nl {
                         dls[r * 2 + q] = col[r];
                     }
                 }
             }
-            let mut d = [[zero; 2]; 2];
             let mut dd = [[zero; 2]; 2];
             for r in 0..2 {
                 for q in 0..2 {
-                    let mut v = -a[(2 + r) * n + q] - s * a[(2 + r) * n + 2 + q];
                     let mut dv = Complex64::new(-a[(2 + r) * n + 2 + q], 0.0);
                     for i in 0..nl {
-                        v -= a[(2 + r) * n + 4 + i] * l[i * 2 + q];
                         dv -= a[(2 + r) * n + 4 + i] * dls[i * 2 + q];
                     }
                     if r == q {
-                        v += s * s;
                         dv += 2.0 * s;
                     }
-                    d[r][q] = v;
                     dd[r][q] = dv;
                 }
             }
-            lin.d.push(d);
-            lin.dd.push(dd);
-            lin.lag.push(l);
+            out.push(dd);
         }
-        lin.omega = omega;
-        Ok(lin)
+        Ok(out)
     }
 
     /// The four structural states (h, α, ḣ, α̇) at the AFT samples (those g does not use
@@ -915,7 +939,7 @@ impl PeriodicProblem for CondensedBalance<'_> {
             }
             // ∂/∂ω: Σ_k ik dD_k/ds Q_k, plus P diag(∂g/∂v_c) Q'X_c of velocity terms.
             let mut dw = vec![0.0; 2 * w];
-            for (k, dd) in lin.dd.iter().enumerate().skip(1) {
+            for (k, dd) in self.dynamic_derivatives(lin)?.iter().enumerate().skip(1) {
                 let ik = Complex64::new(0.0, k as f64);
                 for (r, row) in dd.iter().enumerate() {
                     let v: Complex64 = (0..2)
@@ -973,7 +997,8 @@ impl PeriodicProblem for CondensedBalance<'_> {
                     }
                 }
             }
-        })?;
+            Ok::<(), Error>(())
+        })??;
         for c in 0..=m {
             for r in 0..m {
                 out[(r, c)] *= self.scales[c] / self.row_scales[r];

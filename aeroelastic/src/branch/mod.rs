@@ -1016,12 +1016,16 @@ impl Section {
             }
             let pred = &yk + &t * ds;
             let c = Closure::Arclength(&yk, &t, ds);
-            let res = newton(sh, pred, &c, Some(&chord), opts.newton_tol, opts.max_newton)
-                .and_then(|(y, j, it, lu)| {
+            // A problem whose Jacobian is cheap (no exact one needed at the solution) takes
+            // a fresh one at the predictor instead of the previous point's chord.
+            let chord_here = sh.jacobian_at_solution().then_some(&chord);
+            let res = newton(sh, pred, &c, chord_here, opts.newton_tol, opts.max_newton).and_then(
+                |(y, j, it, lu)| {
                     // Newton's refresh factored [∂G/∂Y; tᵀ]: the same matrix.
                     let (tn, lu) = tangent(&j, &t, lu)?;
                     Ok((y, j, it, tn, lu))
-                });
+                },
+            );
             let accepted = match res {
                 Ok((y, j, it, tn, lu)) if tn.dot(&t) > 0.8 => Some((y, j, it, tn, lu)),
                 Ok(_) => None,
