@@ -1245,15 +1245,7 @@ mod tests {
         let g0: Vec<f64> = (0..n * P).map(|i| v(i + 3, 0.1)).collect();
         let g1: Vec<f64> = (0..n * P).map(|i| v(i + 9, 0.05)).collect();
         let f: Vec<[[f64; 4]; 2]> = (0..17)
-            .map(|j| {
-                let mut o = [[0.0; 4]; 2];
-                for p in 0..2 {
-                    for c in 0..4 {
-                        o[p][c] = v(j * 8 + p * 4 + c, 0.3);
-                    }
-                }
-                o
-            })
+            .map(|j| std::array::from_fn(|p| std::array::from_fn(|c| v(j * 8 + p * 4 + c, 0.3))))
             .collect();
         let a = trapezoid(n, &e, &g0, &g1, &f, 2, [true, true]);
         let b = trapezoid_dyn(n, &e, &g0, &g1, &f, 2);

@@ -72,7 +72,8 @@ pub struct BranchOptions {
     pub amplitude_scale: f64,
     /// The branch stops when the pitch amplitude exceeds this \[rad\].
     pub max_amplitude_alpha: f64,
-    /// Speeds of the Hopf scan over the range (each bracket then bisected).
+    /// Speeds of the Hopf scan over the range (sign of det(2A⊙I); each bracket then solved
+    /// by regula falsi).
     pub n_scan: usize,
 }
 
