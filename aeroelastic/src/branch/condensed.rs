@@ -486,6 +486,16 @@ impl<'a> CondensedBalance<'a> {
         g
     }
 
+    /// ∂g/∂(h, α, ḣ, α̇) = ∂R/∂q₄ − S₀ at a structural state (rows F_h, M_α).
+    fn slopes(&self, s0: &[[f64; 4]; 2], q: &[f64; 4]) -> [[f64; 4]; 2] {
+        let d = self.section.structure.restoring_derivatives(
+            [q[0], q[1]],
+            [q[2], q[3]],
+            &self.friction,
+        );
+        std::array::from_fn(|p| std::array::from_fn(|c| d[p][c] - s0[p][c]))
+    }
+
     /// Harmonic coefficients of g (P × w) from the displacement coefficients.
     fn force_harmonics(&self, lin: &Linear, x: &[f64]) -> Vec<f64> {
         let (w, ns) = (self.w, self.ns);
@@ -572,18 +582,7 @@ impl<'a> CondensedBalance<'a> {
                         *qc += (z[c] * e).re;
                     }
                 }
-                let d = self.section.structure.restoring_derivatives(
-                    [q[0], q[1]],
-                    [q[2], q[3]],
-                    &self.friction,
-                );
-                let mut out = [[0.0; 4]; 2];
-                for p in 0..P {
-                    for c in 0..4 {
-                        out[p][c] = -(d[p][c] - lin.s0[p][c]);
-                    }
-                }
-                out
+                self.slopes(&lin.s0, &q).map(|row| row.map(|v| -v))
             })
             .collect();
         let (e, g0, g1) = propagators(&lin.a, &lin.bm, n, h);
@@ -883,8 +882,8 @@ impl PeriodicProblem for CondensedBalance<'_> {
         Ok(g)
     }
 
-    /// Exact in the coefficients (the dynamic matrices and the AFT of the analytic ∂g);
-    /// forward differences in ω and U.
+    /// Exact in the coefficients (the dynamic matrices and the AFT of the analytic ∂g) and
+    /// in ω (dD_k/ds and the velocity terms of g); a forward difference in U.
     fn jac(&self, y: &DVector<f64>, g0: &DVector<f64>) -> Result<DMatrix<f64>> {
         let (x, omega, u) = self.unscale(y);
         let (w, ns) = (self.w, self.ns);
@@ -893,23 +892,7 @@ impl PeriodicProblem for CondensedBalance<'_> {
         self.linear(omega, u, |lin| {
             let q = self.samples(&x, omega);
             // ∂g_p/∂(q_c, v_c) at the samples.
-            let dg: Vec<[[f64; 4]; 2]> = q
-                .iter()
-                .map(|q| {
-                    let d = self.section.structure.restoring_derivatives(
-                        [q[0], q[1]],
-                        [q[2], q[3]],
-                        &self.friction,
-                    );
-                    let mut o = [[0.0; 4]; 2];
-                    for p in 0..P {
-                        for c in 0..4 {
-                            o[p][c] = d[p][c] - lin.s0[p][c];
-                        }
-                    }
-                    o
-                })
-                .collect();
+            let dg: Vec<[[f64; 4]; 2]> = q.iter().map(|q| self.slopes(&lin.s0, q)).collect();
             // ∂G_p/∂X_c = P diag(∂g_p/∂q_c) Q + ω P diag(∂g_p/∂v_c) Q' (w × w).
             let mut dgx = vec![0.0; P * 2 * w * w];
             let mut pv = vec![0.0; ns];
@@ -1076,7 +1059,7 @@ impl PeriodicProblem for CondensedBalance<'_> {
 #[cfg(test)]
 mod tests {
     use super::super::harmonic::HarmonicBalance;
-    use super::super::{newton, Closure};
+    use super::super::{branch_scales, newton, Closure};
     use super::*;
     use crate::reference::hp1_cubic_pitch;
     use crate::structure::{Friction, PolyTerm};
@@ -1107,18 +1090,7 @@ mod tests {
     /// Scales as the continuation sets them, the Hopf point below 4 m/s.
     fn set_up(s: &Section) -> (HopfPoint, Vec<f64>) {
         let hopf = s.hopf_points(1.0, 4.0, 100).unwrap().remove(0);
-        let vmax = hopf
-            .eigenvector
-            .iter()
-            .map(|c| c.norm())
-            .fold(0.0, f64::max);
-        let mut scales: Vec<f64> = hopf
-            .eigenvector
-            .iter()
-            .map(|c| 0.05 * c.norm().max(1e-3 * vmax))
-            .collect();
-        scales.push(0.1 * TAU / hopf.omega);
-        scales.push(0.1 * hopf.u);
+        let scales = branch_scales(&hopf, 0.05);
         (hopf, scales)
     }
 

@@ -367,6 +367,25 @@ trait PeriodicProblem {
     fn scaled(&self, p: &BranchPoint) -> Result<DVector<f64>>;
 }
 
+/// Scales of the shooting unknowns (z₀, T, U) of the branch from `hopf`: each state
+/// component `amplitude_scale` \[rad\] times its Hopf-eigenvector magnitude (at least 1e-3
+/// of the largest), T by 0.1 T_Hopf, U by 0.1 U_Hopf.
+fn branch_scales(hopf: &HopfPoint, amplitude_scale: f64) -> Vec<f64> {
+    let vmax = hopf
+        .eigenvector
+        .iter()
+        .map(|c| c.norm())
+        .fold(0.0, f64::max);
+    let mut scales: Vec<f64> = hopf
+        .eigenvector
+        .iter()
+        .map(|c| amplitude_scale * c.norm().max(1e-3 * vmax))
+        .collect();
+    scales.push(0.1 * std::f64::consts::TAU / hopf.omega);
+    scales.push(0.1 * hopf.u);
+    scales
+}
+
 /// The problem of `opts.method` for `section` with the scales of `scales` (state
 /// components, T, U: the shooting unknowns' scales).
 fn problem<'a>(
@@ -958,19 +977,7 @@ impl Section {
     ) -> Result<Branch> {
         opts.check()?;
         self.check_smooth()?;
-        let t_h = std::f64::consts::TAU / hopf.omega;
-        let vmax = hopf
-            .eigenvector
-            .iter()
-            .map(|c| c.norm())
-            .fold(0.0, f64::max);
-        let mut scales: Vec<f64> = hopf
-            .eigenvector
-            .iter()
-            .map(|c| opts.amplitude_scale * c.norm().max(1e-3 * vmax))
-            .collect();
-        scales.push(0.1 * t_h);
-        scales.push(0.1 * hopf.u);
+        let scales = branch_scales(hopf, opts.amplitude_scale);
         let sh = problem(self, opts, &scales, hopf);
         let sh = sh.as_ref();
         let ai = sh.amplitude_index();
