@@ -917,10 +917,15 @@ impl Section {
             .collect();
         // Scan the sign of det(2A⊙I) = Π_{i<j}(λ_i + λ_j), which changes where a complex
         // pair crosses the imaginary axis; the growth rate (eigenvalues) only at the ends of
-        // brackets where it does.
+        // brackets where it does. Its n(n − 1)/2 rows outgrow an eigenvalue problem beyond
+        // n = 8 states: there the growth rate itself is scanned.
         let mut psi = Vec::with_capacity(n_scan);
         for &u in &us {
-            psi.push(bialternate_determinant(&self.equilibrium_jacobian(u)?));
+            psi.push(if self.n_states() <= 8 {
+                bialternate_determinant(&self.equilibrium_jacobian(u)?)
+            } else {
+                self.oscillatory_growth(u)?.0
+            });
         }
         let mut out = Vec::new();
         for i in 1..n_scan {
