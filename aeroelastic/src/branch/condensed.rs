@@ -145,10 +145,19 @@ pub(super) struct CondensedBalance<'a> {
     n: usize,
     /// Coefficients per displacement, 2H + 1.
     w: usize,
-    /// AFT samples N.
+    /// AFT samples N (over half the period for a symmetric structure).
     ns: usize,
-    /// Steps of the variational integration (even).
+    /// Steps of the variational integration per period (a multiple of 4).
     steps: usize,
+    /// The harmonics kept: 0 … H, or only the odd ones when the structure is odd
+    /// (half-wave symmetric orbits, `symmetric`).
+    ks: Vec<usize>,
+    /// Coefficient positions (cosine or constant, sine) of each kept harmonic.
+    cpos: Vec<(usize, usize)>,
+    /// Index of harmonic 1 in `ks`.
+    k1: usize,
+    /// Every structural term odd: z(θ + π) = −z(θ), J(t) of period T/2.
+    symmetric: bool,
     friction: [f64; 4],
     /// Which of (h, α, ḣ, α̇) the nonlinear force g depends on.
     uses: [bool; 4],
@@ -173,28 +182,14 @@ pub(super) struct CondensedBalance<'a> {
     cache: RefCell<Option<Linear>>,
 }
 
-/// Value at θ of the function of coefficient `c` (0: 1; 2k − 1: cos kθ; 2k: sin kθ) and
-/// of its derivative.
-fn basis_fn(c: usize, theta: f64) -> (f64, f64) {
-    if c == 0 {
-        (1.0, 0.0)
+/// Value at θ of cos kθ (`sine` false; 1 for k = 0) or sin kθ, and of its derivative.
+fn basis_fn(k: usize, sine: bool, theta: f64) -> (f64, f64) {
+    let kf = k as f64;
+    let (s, co) = (kf * theta).sin_cos();
+    if sine {
+        (s, kf * co)
     } else {
-        let k = c.div_ceil(2) as f64;
-        let (s, co) = (k * theta).sin_cos();
-        if c % 2 == 1 {
-            (co, -k * s)
-        } else {
-            (s, k * co)
-        }
-    }
-}
-
-/// Complex harmonic k of a real coefficient vector (a_k − i b_k; k = 0: a₀).
-fn complex(v: &[f64], k: usize) -> Complex64 {
-    if k == 0 {
-        Complex64::new(v[0], 0.0)
-    } else {
-        Complex64::new(v[2 * k - 1], -v[2 * k])
+        (co, -kf * s)
     }
 }
 
@@ -210,18 +205,49 @@ impl<'a> CondensedBalance<'a> {
         u_scale: f64,
         omega_hopf: f64,
     ) -> Self {
-        let w = 2 * harmonics + 1;
-        let ns = 8 * harmonics + 4;
+        let nl = &section.structure.nonlinear;
+        let symmetric = nl
+            .heave_stiffness_terms
+            .iter()
+            .chain(&nl.pitch_stiffness_terms)
+            .all(|t| t.power % 2 == 1)
+            && nl.pitch_freeplay == 0.0;
+        let ks: Vec<usize> = (0..=harmonics)
+            .filter(|k| !symmetric || k % 2 == 1)
+            .collect();
+        // (k, sine) of each coefficient; positions of each harmonic's pair.
+        let mut coefs = Vec::new();
+        let mut cpos = Vec::new();
+        for &k in &ks {
+            if k == 0 {
+                cpos.push((coefs.len(), usize::MAX));
+                coefs.push((0, false));
+            } else {
+                cpos.push((coefs.len(), coefs.len() + 1));
+                coefs.push((k, false));
+                coefs.push((k, true));
+            }
+        }
+        let w = coefs.len();
+        // AFT samples over the period; a half-wave symmetric g (and its even derivative)
+        // times an odd harmonic repeats itself over the second half, so a symmetric
+        // structure needs only the first half, with double weight.
+        let period = 8 * harmonics + 4;
+        let (ns, weight) = if symmetric {
+            (period / 2, 2.0)
+        } else {
+            (period, 1.0)
+        };
         let mut basis = vec![0.0; ns * w];
         let mut dbasis = vec![0.0; ns * w];
         let mut proj = vec![0.0; w * ns];
         for j in 0..ns {
-            let th = TAU * j as f64 / ns as f64;
-            for c in 0..w {
-                let (v, dv) = basis_fn(c, th);
+            let th = TAU * j as f64 / period as f64;
+            for (c, &(k, sine)) in coefs.iter().enumerate() {
+                let (v, dv) = basis_fn(k, sine, th);
                 basis[j * w + c] = v;
                 dbasis[j * w + c] = dv;
-                proj[c * ns + j] = if c == 0 { 1.0 } else { 2.0 } / ns as f64 * v;
+                proj[c * ns + j] = weight * if k == 0 { 1.0 } else { 2.0 } / period as f64 * v;
             }
         }
         let mut scales = Vec::with_capacity(2 * w + 2);
@@ -232,7 +258,7 @@ impl<'a> CondensedBalance<'a> {
         }
         scales.push(omega_scale);
         scales.push(u_scale);
-        let steps = steps.max(4).next_multiple_of(2);
+        let steps = steps.max(4).next_multiple_of(4);
         let fine_len = 16 * harmonics.max(4);
         let trig = |points: usize, len: usize| -> Vec<Complex64> {
             (0..points)
@@ -242,7 +268,6 @@ impl<'a> CondensedBalance<'a> {
                 })
                 .collect()
         };
-        let nl = &section.structure.nonlinear;
         let friction = section.structure.friction_resolved();
         let uses = [
             !nl.heave_stiffness_terms.is_empty(),
@@ -259,6 +284,10 @@ impl<'a> CondensedBalance<'a> {
             w,
             ns,
             steps,
+            k1: ks.iter().position(|&k| k == 1).expect("H ≥ 1"),
+            ks,
+            cpos,
+            symmetric,
             fine_trig: trig(fine_len, fine_len),
             step_trig: trig(steps + 1, steps),
             scales,
@@ -273,6 +302,32 @@ impl<'a> CondensedBalance<'a> {
 
     fn m(&self) -> usize {
         2 * self.w
+    }
+
+    /// Complex amplitude of the `hi`-th kept harmonic of a coefficient vector `v` of one
+    /// displacement (a_k − i b_k; a₀ for k = 0).
+    fn cplx(&self, v: &[f64], hi: usize) -> Complex64 {
+        let (c, s) = self.cpos[hi];
+        if s == usize::MAX {
+            Complex64::new(v[c], 0.0)
+        } else {
+            Complex64::new(v[c], -v[s])
+        }
+    }
+
+    /// Adds the real coefficients of the complex amplitude `v` of the `hi`-th kept harmonic
+    /// to `r` (one displacement's w values).
+    fn add_harmonic(&self, r: &mut [f64], hi: usize, v: Complex64) {
+        let (c, s) = self.cpos[hi];
+        r[c] += v.re;
+        if s != usize::MAX {
+            r[s] -= v.im;
+        }
+    }
+
+    /// Index of the phase-condition unknown b_α1.
+    fn phase_index(&self) -> usize {
+        self.w + self.cpos[self.k1].1
     }
 
     fn unscale(&self, y: &DVector<f64>) -> (Vec<f64>, f64, f64) {
@@ -352,7 +407,7 @@ impl<'a> CondensedBalance<'a> {
         lin.lag.clear();
         let mut x = vec![zero; nl * nl];
         let mut col = vec![zero; nl];
-        for k in 0..=(self.w - 1) / 2 {
+        for &k in &self.ks {
             let s = Complex64::new(0.0, k as f64 * omega);
             // L = (sI − A_xx)⁻¹(A_xq + sA_xv).
             let mut l = vec![zero; nl * 2];
@@ -410,7 +465,8 @@ impl<'a> CondensedBalance<'a> {
         })
     }
 
-    /// dD_k/ds = 2sI − A_vv − A_vx dL_k/ds, dL_k/ds = (sI − A_xx)⁻¹(A_xv − L_k), k = 0 … H.
+    /// dD_k/ds = 2sI − A_vv − A_vx dL_k/ds, dL_k/ds = (sI − A_xx)⁻¹(A_xv − L_k), for the
+    /// kept harmonics.
     fn dynamic_derivatives(&self, lin: &Linear) -> Result<Vec<[[Complex64; 2]; 2]>> {
         let (n, nl) = (self.n, self.n - 4);
         let zero = Complex64::new(0.0, 0.0);
@@ -418,7 +474,7 @@ impl<'a> CondensedBalance<'a> {
         let mut x = vec![zero; nl * nl];
         let mut col = vec![zero; nl];
         let mut out = Vec::with_capacity(lin.lag.len());
-        for (k, l) in lin.lag.iter().enumerate() {
+        for (&k, l) in self.ks.iter().zip(&lin.lag) {
             let s = Complex64::new(0.0, k as f64 * lin.omega);
             let mut dls = vec![zero; nl * 2];
             if nl > 0 {
@@ -527,17 +583,12 @@ impl<'a> CondensedBalance<'a> {
                     r[r_ * w + c] = (0..P).map(|p| lin.minv[r_][p] * gh[p * w + c]).sum();
                 }
             }
-            for (k, d) in lin.d.iter().enumerate() {
+            for (hi, d) in lin.d.iter().enumerate() {
                 for (r_, row) in d.iter().enumerate() {
                     let v: Complex64 = (0..2)
-                        .map(|q| row[q] * complex(&x[q * w..(q + 1) * w], k))
+                        .map(|q| row[q] * self.cplx(&x[q * w..(q + 1) * w], hi))
                         .sum();
-                    if k == 0 {
-                        r[r_ * w] += v.re;
-                    } else {
-                        r[r_ * w + 2 * k - 1] += v.re;
-                        r[r_ * w + 2 * k] -= v.im;
-                    }
+                    self.add_harmonic(&mut r[r_ * w..(r_ + 1) * w], hi, v);
                 }
             }
             r
@@ -551,37 +602,46 @@ impl<'a> CondensedBalance<'a> {
         Ok(r)
     }
 
-    /// Every state's harmonics z_k = (q_k, ikω q_k, L_k q_k), k = 0 … H.
+    /// Every state's harmonics z_k = (q_k, ikω q_k, L_k q_k) of the kept harmonics.
     fn states(&self, lin: &Linear, x: &[f64]) -> Vec<Vec<Complex64>> {
         let (n, w) = (self.n, self.w);
-        (0..=(w - 1) / 2)
-            .map(|k| {
+        self.ks
+            .iter()
+            .enumerate()
+            .map(|(hi, &k)| {
                 let s = Complex64::new(0.0, k as f64 * lin.omega);
-                let q = [complex(&x[..w], k), complex(&x[w..], k)];
+                let q = [self.cplx(&x[..w], hi), self.cplx(&x[w..], hi)];
                 let mut z = vec![q[0], q[1], s * q[0], s * q[1]];
-                let l = &lin.lag[k];
+                let l = &lin.lag[hi];
                 z.extend((0..n - 4).map(|i| l[i * 2] * q[0] + l[i * 2 + 1] * q[1]));
                 z
             })
             .collect()
     }
 
+    /// Sum of the kept harmonics `zk` of component `c` at the point of a trig table row
+    /// (e^{ikθ}, k = 0 … H).
+    fn at(&self, zk: &[Vec<Complex64>], trig: &[Complex64], c: usize) -> f64 {
+        zk.iter()
+            .zip(&self.ks)
+            .map(|(z, &k)| (z[c] * trig[k]).re)
+            .sum()
+    }
+
     /// Monodromy matrix of the variational equation along the orbit with state harmonics
-    /// `zk`, by the Richardson-extrapolated exponential trapezoidal rule.
+    /// `zk`, by the Richardson-extrapolated exponential trapezoidal rule. For a symmetric
+    /// structure J(t) has period T/2 and M = Φ(T/2)², so half a period is integrated.
     fn monodromy(&self, lin: &Linear, zk: &[Vec<Complex64>]) -> DMatrix<f64> {
         let n = self.n;
         let steps = self.steps;
+        let nh = self.step_trig.len() / (steps + 1);
         let h = TAU / lin.omega / steps as f64;
-        // F_j = −(∂R/∂q₄ − S₀) at θ_j = 2πj/N, j = 0 … N.
-        let f: Vec<[[f64; 4]; 2]> = (0..=steps)
+        let span = if self.symmetric { steps / 2 } else { steps };
+        // F_j = −(∂R/∂q₄ − S₀) at θ_j = 2πj/N, j = 0 … span.
+        let f: Vec<[[f64; 4]; 2]> = (0..=span)
             .map(|j| {
-                let hk = zk.len();
-                let mut q = [0.0; 4];
-                for (z, e) in zk.iter().zip(&self.step_trig[j * hk..(j + 1) * hk]) {
-                    for (c, qc) in q.iter_mut().enumerate() {
-                        *qc += (z[c] * e).re;
-                    }
-                }
+                let trig = &self.step_trig[j * nh..(j + 1) * nh];
+                let q: [f64; 4] = std::array::from_fn(|c| self.at(zk, trig, c));
                 self.slopes(&lin.s0, &q).map(|row| row.map(|v| -v))
             })
             .collect();
@@ -595,7 +655,11 @@ impl<'a> CondensedBalance<'a> {
                 m[(r, c)] = (4.0 * fine[r * n + c] - coarse[r * n + c]) / 3.0;
             }
         }
-        m
+        if self.symmetric {
+            &m * &m
+        } else {
+            m
+        }
     }
 }
 
@@ -863,7 +927,7 @@ impl PeriodicProblem for CondensedBalance<'_> {
     }
 
     fn amplitude_index(&self) -> usize {
-        self.w + 1
+        self.w + self.cpos[self.k1].0
     }
 
     fn scales(&self) -> &[f64] {
@@ -878,7 +942,7 @@ impl PeriodicProblem for CondensedBalance<'_> {
         for i in 0..m {
             g[i] = r[i] / self.row_scales[i];
         }
-        g[m] = y[self.w + 2];
+        g[m] = y[self.phase_index()];
         Ok(g)
     }
 
@@ -922,14 +986,13 @@ impl PeriodicProblem for CondensedBalance<'_> {
             }
             // ∂/∂ω: Σ_k ik dD_k/ds Q_k, plus P diag(∂g/∂v_c) Q'X_c of velocity terms.
             let mut dw = vec![0.0; 2 * w];
-            for (k, dd) in self.dynamic_derivatives(lin)?.iter().enumerate().skip(1) {
-                let ik = Complex64::new(0.0, k as f64);
+            for (hi, dd) in self.dynamic_derivatives(lin)?.iter().enumerate() {
+                let ik = Complex64::new(0.0, self.ks[hi] as f64);
                 for (r, row) in dd.iter().enumerate() {
                     let v: Complex64 = (0..2)
-                        .map(|c| ik * row[c] * complex(&x[c * w..(c + 1) * w], k))
+                        .map(|c| ik * row[c] * self.cplx(&x[c * w..(c + 1) * w], hi))
                         .sum();
-                    dw[r * w + 2 * k - 1] += v.re;
-                    dw[r * w + 2 * k] -= v.im;
+                    self.add_harmonic(&mut dw[r * w..(r + 1) * w], hi, v);
                 }
             }
             for c in (0..2).filter(|&c| self.uses[2 + c]) {
@@ -966,12 +1029,12 @@ impl PeriodicProblem for CondensedBalance<'_> {
                         }
                     }
                     // D_k mixes the (cos, sin) pair of harmonic k.
-                    for (k, d) in lin.d.iter().enumerate() {
+                    for (hi, d) in lin.d.iter().enumerate() {
                         let v = d[r][c];
-                        if k == 0 {
-                            out[(r * w, c * w)] += v.re;
+                        let (ca, sb) = self.cpos[hi];
+                        if sb == usize::MAX {
+                            out[(r * w + ca, c * w + ca)] += v.re;
                         } else {
-                            let (ca, sb) = (2 * k - 1, 2 * k);
                             out[(r * w + ca, c * w + ca)] += v.re;
                             out[(r * w + ca, c * w + sb)] += v.im;
                             out[(r * w + sb, c * w + ca)] -= v.im;
@@ -995,7 +1058,7 @@ impl PeriodicProblem for CondensedBalance<'_> {
             let gp = self.g(&yp)?;
             out.set_column(col, &((gp - g0) / d));
         }
-        out[(m, self.w + 2)] = 1.0;
+        out[(m, self.phase_index())] = 1.0;
         Ok(out)
     }
 
@@ -1011,20 +1074,15 @@ impl PeriodicProblem for CondensedBalance<'_> {
             let mono = self.monodromy(lin, &zk);
             (zk, mono)
         })?;
+        let nh = self.fine_trig.len() / self.fine_len;
         let s: Vec<[f64; 2]> = (0..self.fine_len)
             .map(|q| {
-                let hk = zk.len();
-                let mut v = [0.0; 2];
-                for (z, e) in zk.iter().zip(&self.fine_trig[q * hk..(q + 1) * hk]) {
-                    for (c, vc) in v.iter_mut().enumerate() {
-                        *vc += (z[c] * e).re;
-                    }
-                }
-                v
+                let trig = &self.fine_trig[q * nh..(q + 1) * nh];
+                [self.at(&zk, trig, 0), self.at(&zk, trig, 1)]
             })
             .collect();
         let state: Vec<f64> = (0..n).map(|i| zk.iter().map(|z| z[i].re).sum()).collect();
-        let a1 = [zk[1][0].norm(), zk[1][1].norm()];
+        let a1 = [zk[self.k1][0].norm(), zk[self.k1][1].norm()];
         orbit_point(u, omega, &s, a1, mono, state, y)
     }
 
@@ -1032,12 +1090,13 @@ impl PeriodicProblem for CondensedBalance<'_> {
         let m = self.m();
         let w = self.w;
         let mut y = DVector::zeros(m + 2);
+        let (ca, sb) = self.cpos[self.k1];
         for c in 0..2 {
             let v = hopf.eigenvector[c];
-            y[c * w + 1] = a * v.re / self.scales[c * w + 1];
-            y[c * w + 2] = -a * v.im / self.scales[c * w + 2];
+            y[c * w + ca] = a * v.re / self.scales[c * w + ca];
+            y[c * w + sb] = -a * v.im / self.scales[c * w + sb];
         }
-        y[w + 2] = 0.0;
+        y[self.phase_index()] = 0.0;
         y[m] = hopf.omega / self.scales[m];
         y[m + 1] = hopf.u / self.scales[m + 1];
         y
@@ -1173,11 +1232,16 @@ mod tests {
     /// velocity terms) equals central differences of G.
     #[test]
     fn condensed_jacobian_matches_finite_differences() {
-        let s = every_term();
-        let (hopf, sc) = set_up(&s);
+        for s in [every_term(), hp1_cubic_pitch()] {
+            jacobian_matches_finite_differences(&s);
+        }
+    }
+
+    fn jacobian_matches_finite_differences(s: &Section) {
+        let (hopf, sc) = set_up(s);
         let n = s.n_states();
         let cond =
-            CondensedBalance::new(&s, 4, 64, &sc[..n], 0.1 * hopf.omega, sc[n + 1], hopf.omega);
+            CondensedBalance::new(s, 4, 64, &sc[..n], 0.1 * hopf.omega, sc[n + 1], hopf.omega);
         let c = Closure::Alpha(0.08 / cond.scales()[cond.amplitude_index()]);
         let (mut y, _, _, _) = newton(&cond, cond.start(&hopf, 0.08), &c, None, 1e-11, 60).unwrap();
         // off the solution, so that every term of the residual is exercised
