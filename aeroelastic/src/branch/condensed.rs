@@ -670,8 +670,21 @@ fn matmul(a: &[f64], b: &[f64], r: usize, k: usize, c: usize) -> Vec<f64> {
     out
 }
 
-/// `out` = a b (row-major, a r × k, b k × c).
+/// `out` = a b (row-major, a r × k, b k × c); square products of the common state counts
+/// by fixed-size arrays.
 fn matmul_into(a: &[f64], b: &[f64], r: usize, k: usize, c: usize, out: &mut [f64]) {
+    if r == k && k == c {
+        match r {
+            4 => return square::<4>(a, b, out),
+            5 => return square::<5>(a, b, out),
+            6 => return square::<6>(a, b, out),
+            7 => return square::<7>(a, b, out),
+            8 => return square::<8>(a, b, out),
+            10 => return square::<10>(a, b, out),
+            12 => return square::<12>(a, b, out),
+            _ => {}
+        }
+    }
     out.fill(0.0);
     for i in 0..r {
         let o = &mut out[i * c..(i + 1) * c];
@@ -684,6 +697,24 @@ fn matmul_into(a: &[f64], b: &[f64], r: usize, k: usize, c: usize, out: &mut [f6
                 *o += v * x;
             }
         }
+    }
+}
+
+/// `out` = a b for N × N row-major matrices.
+fn square<const N: usize>(a: &[f64], b: &[f64], out: &mut [f64]) {
+    let mut bm = [[0.0; N]; N];
+    for (r, row) in bm.iter_mut().enumerate() {
+        row.copy_from_slice(&b[r * N..(r + 1) * N]);
+    }
+    for i in 0..N {
+        let mut acc = [0.0; N];
+        for (l, brow) in bm.iter().enumerate() {
+            let v = a[i * N + l];
+            for c in 0..N {
+                acc[c] += v * brow[c];
+            }
+        }
+        out[i * N..(i + 1) * N].copy_from_slice(&acc);
     }
 }
 
@@ -709,9 +740,9 @@ fn propagators(a: &[f64], b: &[f64], n: usize, h: f64) -> (Vec<f64>, Vec<f64>, V
     let mut g0 = vec![0.0; n * P];
     let mut g1 = vec![0.0; n * P];
     let mut v = b.to_vec();
-    let mut fact = 1.0; // k!
-                        // ‖Ahs‖ ≤ 1/2: term k is below 2⁻ᵏ/k!, under 1e-17 from k = 15.
-    for k in 0..16 {
+    // k!; ‖Ahs‖ ≤ 1/2: term k is below 2⁻ᵏ/k!, under 1e-16 from k = 14.
+    let mut fact = 1.0;
+    for k in 0..15 {
         let kf = k as f64;
         for (i, x) in v.iter().enumerate() {
             g0[i] += hs * x / (fact * (kf + 1.0));

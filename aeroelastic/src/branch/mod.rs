@@ -575,33 +575,61 @@ fn orbit_point(
     })
 }
 
-/// det(2A⊙I) of the bialternate product of `a` (n × n) with the identity: its eigenvalues
-/// are λ_i + λ_j (i < j), so the determinant vanishes where a complex pair of A crosses the
-/// imaginary axis (Hopf) and not where a real eigenvalue crosses zero (Govaerts 2000,
-/// Kuznetsov §10.2). Rows and columns are the pairs (p, q), p > q.
-fn bialternate_determinant(a: &DMatrix<f64>) -> f64 {
-    let n = a.nrows();
+/// det(2A⊙I) of the bialternate product of `a` (n × n, row-major) with the identity: its
+/// eigenvalues are λ_i + λ_j (i < j), so the determinant vanishes where a complex pair of A
+/// crosses the imaginary axis (Hopf) and not where a real eigenvalue crosses zero
+/// (Govaerts 2000, Kuznetsov §10.2). Rows and columns are the pairs (p, q), p > q; `work`
+/// holds the m × m matrix, m = n(n − 1)/2 (Gaussian elimination with partial pivoting).
+fn bialternate_determinant(a: &[f64], n: usize, work: &mut Vec<f64>) -> f64 {
     let pairs: Vec<(usize, usize)> = (1..n).flat_map(|p| (0..p).map(move |q| (p, q))).collect();
     let m = pairs.len();
-    let mut b = DMatrix::zeros(m, m);
+    work.clear();
+    work.resize(m * m, 0.0);
+    let at = |r: usize, c: usize| a[r * n + c];
     for (i, &(p, q)) in pairs.iter().enumerate() {
         for (j, &(r, s)) in pairs.iter().enumerate() {
-            b[(i, j)] = if r == q {
-                -a[(p, s)]
+            work[i * m + j] = if r == q {
+                -at(p, s)
             } else if r != p && s == q {
-                a[(p, r)]
+                at(p, r)
             } else if r == p && s == q {
-                a[(p, p)] + a[(q, q)]
+                at(p, p) + at(q, q)
             } else if r == p && s != q {
-                a[(q, s)]
+                at(q, s)
             } else if s == p {
-                -a[(q, r)]
+                -at(q, r)
             } else {
                 0.0
             };
         }
     }
-    b.lu().determinant()
+    let b = work;
+    let mut det = 1.0;
+    for k in 0..m {
+        let piv = (k..m)
+            .max_by(|&x, &y| b[x * m + k].abs().total_cmp(&b[y * m + k].abs()))
+            .unwrap_or(k);
+        if b[piv * m + k] == 0.0 {
+            return 0.0;
+        }
+        if piv != k {
+            for c in 0..m {
+                b.swap(k * m + c, piv * m + c);
+            }
+            det = -det;
+        }
+        let d = b[k * m + k];
+        det *= d;
+        for i in k + 1..m {
+            let f = b[i * m + k] / d;
+            if f != 0.0 {
+                for c in k + 1..m {
+                    b[i * m + c] -= f * b[k * m + c];
+                }
+            }
+        }
+    }
+    det
 }
 
 /// Non-trivial Floquet multipliers of a monodromy matrix (the trivial multiplier 1 removed
@@ -919,10 +947,14 @@ impl Section {
         // pair crosses the imaginary axis; the growth rate (eigenvalues) only at the ends of
         // brackets where it does. Its n(n − 1)/2 rows outgrow an eigenvalue problem beyond
         // n = 8 states: there the growth rate itself is scanned.
+        let n = self.n_states();
+        let (mut a, mut work) = (vec![0.0; n * n], vec![0.0; 3 * n]);
+        let mut b = Vec::new();
         let mut psi = Vec::with_capacity(n_scan);
         for &u in &us {
-            psi.push(if self.n_states() <= 8 {
-                bialternate_determinant(&self.equilibrium_jacobian(u)?)
+            psi.push(if n <= 8 {
+                SectionDynamics::new(self, u)?.jacobian(&vec![0.0; n], &mut a, &mut work);
+                bialternate_determinant(&a, n, &mut b)
             } else {
                 self.oscillatory_growth(u)?.0
             });
@@ -1491,7 +1523,7 @@ mod tests {
                 prod *= ev[i] + ev[j];
             }
         }
-        let d = bialternate_determinant(&a);
+        let d = bialternate_determinant(a.transpose().as_slice(), 6, &mut Vec::new());
         assert!(prod.im.abs() < 1e-9 * prod.norm(), "{prod}");
         assert!((d - prod.re).abs() < 1e-9 * prod.norm(), "{d} vs {prod}");
         assert!(ev.iter().any(|l| l.im.abs() > 1e-3), "{ev:?}");
