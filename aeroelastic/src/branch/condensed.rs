@@ -38,7 +38,7 @@ use std::f64::consts::TAU;
 use nalgebra::{DMatrix, DVector};
 use num_complex::Complex64;
 
-use super::{orbit_point, BranchPoint, HopfPoint, PeriodicProblem};
+use super::{orbit_point, BranchPoint, HopfPoint, PeriodicProblem, QuadraticJacobian};
 use crate::dynamics::SectionDynamics;
 use crate::section::Section;
 use crate::{Error, Result};
@@ -180,6 +180,10 @@ pub(super) struct CondensedBalance<'a> {
     step_trig: Vec<Complex64>,
     /// The linear part of the last (ω, U) evaluated.
     cache: RefCell<Option<Linear>>,
+    /// A(U) as an exact quadratic in U, when it is one (else central differences per U).
+    quadratic: Option<QuadraticJacobian>,
+    /// ∂R/∂q₄ at rest by the central differences A is built with (U-independent).
+    s0_fd: [[f64; 4]; 2],
 }
 
 /// Value at θ of cos kθ (`sine` false; 1 for k = 0) or sin kθ, and of its derivative.
@@ -204,6 +208,7 @@ impl<'a> CondensedBalance<'a> {
         omega_scale: f64,
         u_scale: f64,
         omega_hopf: f64,
+        u_hopf: f64,
     ) -> Self {
         let nl = &section.structure.nonlinear;
         let symmetric = nl
@@ -297,6 +302,17 @@ impl<'a> CondensedBalance<'a> {
             proj,
             fine_len,
             cache: RefCell::new(None),
+            // Nodes around the Hopf speed; the fit is exact (checked) or not used.
+            quadratic: QuadraticJacobian::fit(
+                section,
+                [0.5 * u_hopf, u_hopf, 1.5 * u_hopf],
+                1.2 * u_hopf,
+            )
+            .ok()
+            .flatten(),
+            s0_fd: SectionDynamics::new(section, u_hopf)
+                .map(|d| d.structure_jacobian(&[0.0; 4]))
+                .unwrap_or_default(),
         }
     }
 
@@ -363,14 +379,17 @@ impl<'a> CondensedBalance<'a> {
         let n = self.n;
         let d = SectionDynamics::new(self.section, u)?;
         let mut a = vec![0.0; n * n];
-        d.jacobian(&vec![0.0; n], &mut a, &mut vec![0.0; 3 * n]);
+        match &self.quadratic {
+            Some(q) => q.at(u, &mut a),
+            None => d.jacobian(&vec![0.0; n], &mut a, &mut vec![0.0; 3 * n]),
+        }
         // The analytic S₀ (so that g has no spurious linear part); A's structural part is
         // made consistent with it (they differ by the central differences' rounding).
         let s0 = self
             .section
             .structure
             .restoring_derivatives([0.0; 2], [0.0; 2], &self.friction);
-        let s0_fd = d.structure_jacobian(&[0.0; 4]);
+        let s0_fd = self.s0_fd;
         let mi = d.mass_inverse();
         let minv = [[mi[(0, 0)], mi[(0, 1)]], [mi[(1, 0)], mi[(1, 1)]]];
         for r in 0..2 {
@@ -1221,6 +1240,7 @@ mod tests {
                 0.1 * hopf.omega,
                 sc[n + 1],
                 hopf.omega,
+                hopf.u,
             );
             assert!(cond.unknowns() < full.unknowns());
             let a = 0.06;
@@ -1271,8 +1291,16 @@ mod tests {
     fn jacobian_matches_finite_differences(s: &Section) {
         let (hopf, sc) = set_up(s);
         let n = s.n_states();
-        let cond =
-            CondensedBalance::new(s, 4, 64, &sc[..n], 0.1 * hopf.omega, sc[n + 1], hopf.omega);
+        let cond = CondensedBalance::new(
+            s,
+            4,
+            64,
+            &sc[..n],
+            0.1 * hopf.omega,
+            sc[n + 1],
+            hopf.omega,
+            hopf.u,
+        );
         let c = Closure::Alpha(0.08 / cond.scales()[cond.amplitude_index()]);
         let (mut y, _, _, _) = newton(&cond, cond.start(&hopf, 0.08), &c, None, 1e-11, 60).unwrap();
         // off the solution, so that every term of the residual is exercised

@@ -410,6 +410,7 @@ fn problem<'a>(
                 0.1 * hopf.omega,
                 scales[n + 1],
                 hopf.omega,
+                hopf.u,
             ))
         }
         BranchMethod::HarmonicBalance => Box::new(harmonic::HarmonicBalance::new(
@@ -575,67 +576,154 @@ fn orbit_point(
     })
 }
 
-/// det(2A⊙I) of the bialternate product of `a` (n × n, row-major) with the identity: its
-/// eigenvalues are λ_i + λ_j (i < j), so the determinant vanishes where a complex pair of A
-/// crosses the imaginary axis (Hopf) and not where a real eigenvalue crosses zero
-/// (Govaerts 2000, Kuznetsov §10.2). Rows and columns are the pairs (p, q), p > q; `work`
-/// holds the m × m matrix, m = n(n − 1)/2 (Gaussian elimination with partial pivoting).
-fn bialternate_determinant(a: &[f64], n: usize, work: &mut Vec<f64>) -> f64 {
-    let pairs: Vec<(usize, usize)> = (1..n).flat_map(|p| (0..p).map(move |q| (p, q))).collect();
-    let m = pairs.len();
-    work.clear();
-    work.resize(m * m, 0.0);
-    let at = |r: usize, c: usize| a[r * n + c];
-    for (i, &(p, q)) in pairs.iter().enumerate() {
-        for (j, &(r, s)) in pairs.iter().enumerate() {
-            work[i * m + j] = if r == q {
-                -at(p, s)
-            } else if r != p && s == q {
-                at(p, r)
-            } else if r == p && s == q {
-                at(p, p) + at(q, q)
-            } else if r == p && s != q {
-                at(q, s)
-            } else if s == p {
-                -at(q, r)
-            } else {
-                0.0
-            };
+/// The equilibrium Jacobian A(U) (row-major, [`Section::equilibrium_jacobian`]) as the
+/// quadratic A₀ + U A₁ + U² A₂ through its values at `nodes`, when it is one: checked at a
+/// fourth speed to 1e-8 of A's largest entry, and the total mass M_s − M_a the same at all
+/// four (then (M_s − M_a)⁻¹ is constant too). Linear aerodynamic models in dimensional form
+/// (Theodorsen, Theodorsen–Jones, RFA tables, quasi-steady) are exactly quadratic in U:
+/// stiffness ∝ U², damping and lag rates ∝ U, apparent mass constant. `None` otherwise.
+pub(crate) struct QuadraticJacobian {
+    n: usize,
+    coef: [Vec<f64>; 3],
+}
+
+impl QuadraticJacobian {
+    pub(crate) fn fit(section: &Section, nodes: [f64; 3], check: f64) -> Result<Option<Self>> {
+        let n = section.n_states();
+        let jac = |u: f64| -> Result<Vec<f64>> {
+            let mut a = vec![0.0; n * n];
+            SectionDynamics::new(section, u)?.jacobian(
+                &vec![0.0; n],
+                &mut a,
+                &mut vec![0.0; 3 * n],
+            );
+            Ok(a)
+        };
+        let m0 = section.total_mass(nodes[0]);
+        for u in [nodes[1], nodes[2], check] {
+            if (section.total_mass(u) - m0).amax() > 1e-12 * m0.amax() {
+                return Ok(None);
+            }
+        }
+        let vals = [jac(nodes[0])?, jac(nodes[1])?, jac(nodes[2])?];
+        // Lagrange → monomial coefficients per entry.
+        let [u0, u1, u2] = nodes;
+        let d0 = (u0 - u1) * (u0 - u2);
+        let d1 = (u1 - u0) * (u1 - u2);
+        let d2 = (u2 - u0) * (u2 - u1);
+        let mut coef = [vec![0.0; n * n], vec![0.0; n * n], vec![0.0; n * n]];
+        for i in 0..n * n {
+            let (y0, y1, y2) = (vals[0][i] / d0, vals[1][i] / d1, vals[2][i] / d2);
+            coef[2][i] = y0 + y1 + y2;
+            coef[1][i] = -(y0 * (u1 + u2) + y1 * (u0 + u2) + y2 * (u0 + u1));
+            coef[0][i] = y0 * u1 * u2 + y1 * u0 * u2 + y2 * u0 * u1;
+        }
+        let q = QuadraticJacobian { n, coef };
+        let direct = jac(check)?;
+        let scale = direct.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        let mut fitted = vec![0.0; n * n];
+        q.at(check, &mut fitted);
+        let exact = direct
+            .iter()
+            .zip(&fitted)
+            .all(|(a, b)| (a - b).abs() <= 1e-8 * scale);
+        Ok(exact.then_some(q))
+    }
+
+    /// A(U) into `a` (n × n row-major).
+    pub(crate) fn at(&self, u: f64, a: &mut [f64]) {
+        for (i, v) in a.iter_mut().enumerate().take(self.n * self.n) {
+            *v = self.coef[0][i] + u * (self.coef[1][i] + u * self.coef[2][i]);
         }
     }
-    let b = work;
-    let mut det = 1.0;
-    for k in 0..m {
-        let piv = (k..m)
-            .max_by(|&x, &y| b[x * m + k].abs().total_cmp(&b[y * m + k].abs()))
-            .unwrap_or(k);
-        if b[piv * m + k] == 0.0 {
-            return 0.0;
-        }
-        if piv != k {
-            for c in 0..m {
-                b.swap(k * m + c, piv * m + c);
-            }
-            det = -det;
-        }
-        let d = b[k * m + k];
-        det *= d;
-        for i in k + 1..m {
-            let f = b[i * m + k] / d;
-            if f != 0.0 {
-                for c in k + 1..m {
-                    b[i * m + c] -= f * b[k * m + c];
+}
+
+/// The bialternate product 2A⊙I of an n × n matrix with the identity, as the list of its
+/// non-zero entries: eigenvalues λ_i + λ_j (i < j), so det(2A⊙I) vanishes where a complex
+/// pair of A crosses the imaginary axis (Hopf) and not where a real eigenvalue crosses zero
+/// (Govaerts 2000, Kuznetsov §10.2). Rows and columns are the pairs (p, q), p > q.
+struct Bialternate {
+    /// Order m = n(n − 1)/2.
+    m: usize,
+    /// (row · m + column, sign, first entry of A, second entry of A or usize::MAX).
+    entries: Vec<(usize, f64, usize, usize)>,
+}
+
+impl Bialternate {
+    fn new(n: usize) -> Self {
+        let pairs: Vec<(usize, usize)> = (1..n).flat_map(|p| (0..p).map(move |q| (p, q))).collect();
+        let m = pairs.len();
+        let at = |r: usize, c: usize| r * n + c;
+        let mut entries = Vec::new();
+        for (i, &(p, q)) in pairs.iter().enumerate() {
+            for (j, &(r, s)) in pairs.iter().enumerate() {
+                let e = if r == q {
+                    Some((-1.0, at(p, s), usize::MAX))
+                } else if r != p && s == q {
+                    Some((1.0, at(p, r), usize::MAX))
+                } else if r == p && s == q {
+                    Some((1.0, at(p, p), at(q, q)))
+                } else if r == p && s != q {
+                    Some((1.0, at(q, s), usize::MAX))
+                } else if s == p {
+                    Some((-1.0, at(q, r), usize::MAX))
+                } else {
+                    None
+                };
+                if let Some((sign, a1, a2)) = e {
+                    entries.push((i * m + j, sign, a1, a2));
                 }
             }
         }
+        Bialternate { m, entries }
     }
-    det
+
+    /// det(2A⊙I) for `a` (row-major) by Gaussian elimination with partial pivoting in
+    /// `work` (m × m).
+    fn determinant(&self, a: &[f64], work: &mut Vec<f64>) -> f64 {
+        let m = self.m;
+        work.clear();
+        work.resize(m * m, 0.0);
+        for &(k, sign, a1, a2) in &self.entries {
+            work[k] = sign * a[a1] + if a2 == usize::MAX { 0.0 } else { a[a2] };
+        }
+        let b = work;
+        let mut det = 1.0;
+        for k in 0..m {
+            let piv = (k..m)
+                .max_by(|&x, &y| b[x * m + k].abs().total_cmp(&b[y * m + k].abs()))
+                .unwrap_or(k);
+            if b[piv * m + k] == 0.0 {
+                return 0.0;
+            }
+            if piv != k {
+                for c in 0..m {
+                    b.swap(k * m + c, piv * m + c);
+                }
+                det = -det;
+            }
+            let d = b[k * m + k];
+            det *= d;
+            for i in k + 1..m {
+                let f = b[i * m + k] / d;
+                if f != 0.0 {
+                    for c in k + 1..m {
+                        b[i * m + c] -= f * b[k * m + c];
+                    }
+                }
+            }
+        }
+        det
+    }
 }
 
 /// Non-trivial Floquet multipliers of a monodromy matrix (the trivial multiplier 1 removed
 /// as the eigenvalue closest to 1) and their largest modulus.
 fn floquet(mono: DMatrix<f64>) -> Result<(Vec<Complex64>, f64)> {
-    let mut mu = eigenvalues(&mono)?;
+    let mut mu = match mono.nrows() {
+        6 => eigenvalues6(&mono)?,
+        _ => eigenvalues(&mono)?,
+    };
     if let Some((k, _)) = mu
         .iter()
         .enumerate()
@@ -645,6 +733,21 @@ fn floquet(mono: DMatrix<f64>) -> Result<(Vec<Complex64>, f64)> {
     }
     let max_floquet = mu.iter().map(|m| m.norm()).fold(0.0, f64::max);
     Ok((mu, max_floquet))
+}
+
+/// Eigenvalues of a 6 × 6 matrix (two DOFs and two lag states, the common case) by the
+/// fixed-size Schur decomposition: no allocation, the same algorithm as [`eigenvalues`].
+fn eigenvalues6(a: &DMatrix<f64>) -> Result<Vec<Complex64>> {
+    if a.iter().any(|v| !v.is_finite()) {
+        return Err(Error::numerical(
+            "eigenvalues",
+            "non-finite monodromy matrix",
+        ));
+    }
+    let m = nalgebra::Matrix6::<f64>::from_fn(|r, c| a[(r, c)]);
+    let s = nalgebra::Schur::try_new(m, f64::EPSILON, 100_000)
+        .ok_or_else(|| Error::numerical("eigenvalues", "Schur decomposition did not converge"))?;
+    Ok(s.complex_eigenvalues().iter().copied().collect())
 }
 
 /// The shooting problem of one section in scaled unknowns Y = (z₀, T, U) / scales.
@@ -950,11 +1053,26 @@ impl Section {
         let n = self.n_states();
         let (mut a, mut work) = (vec![0.0; n * n], vec![0.0; 3 * n]);
         let mut b = Vec::new();
+        let bialternate = Bialternate::new(n);
         let mut psi = Vec::with_capacity(n_scan);
+        let quadratic = if n <= 8 {
+            QuadraticJacobian::fit(
+                self,
+                [u_min, 0.5 * (u_min + u_max), u_max],
+                0.3 * u_min + 0.7 * u_max,
+            )?
+        } else {
+            None
+        };
         for &u in &us {
             psi.push(if n <= 8 {
-                SectionDynamics::new(self, u)?.jacobian(&vec![0.0; n], &mut a, &mut work);
-                bialternate_determinant(&a, n, &mut b)
+                match &quadratic {
+                    Some(q) => q.at(u, &mut a),
+                    None => {
+                        SectionDynamics::new(self, u)?.jacobian(&vec![0.0; n], &mut a, &mut work)
+                    }
+                }
+                bialternate.determinant(&a, &mut b)
             } else {
                 self.oscillatory_growth(u)?.0
             });
@@ -1523,10 +1641,37 @@ mod tests {
                 prod *= ev[i] + ev[j];
             }
         }
-        let d = bialternate_determinant(a.transpose().as_slice(), 6, &mut Vec::new());
+        let d = Bialternate::new(6).determinant(a.transpose().as_slice(), &mut Vec::new());
         assert!(prod.im.abs() < 1e-9 * prod.norm(), "{prod}");
         assert!((d - prod.re).abs() < 1e-9 * prod.norm(), "{d} vs {prod}");
         assert!(ev.iter().any(|l| l.im.abs() > 1e-3), "{ev:?}");
+    }
+
+    /// Theodorsen's A(U) is exactly quadratic in U: the fit reproduces the central-difference
+    /// Jacobian at other speeds; a K-dependent law is not, and gets no fit.
+    #[test]
+    fn linear_models_have_a_quadratic_equilibrium_jacobian() {
+        let s = hp1_cubic_pitch();
+        let q = QuadraticJacobian::fit(&s, [1.0, 2.0, 3.0], 2.4)
+            .unwrap()
+            .expect("Theodorsen is quadratic in U");
+        let n = s.n_states();
+        let mut a = vec![0.0; n * n];
+        for u in [0.7, 1.7, 3.9] {
+            q.at(u, &mut a);
+            let direct = s.equilibrium_jacobian(u).unwrap();
+            let scale = direct.amax();
+            for r in 0..n {
+                for c in 0..n {
+                    assert!(
+                        (a[r * n + c] - direct[(r, c)]).abs() < 1e-8 * scale,
+                        "U {u}: A[{r}][{c}] {} vs {}",
+                        a[r * n + c],
+                        direct[(r, c)]
+                    );
+                }
+            }
+        }
     }
 
     #[test]
