@@ -198,18 +198,18 @@ fn basis_fn(k: usize, sine: bool, theta: f64) -> (f64, f64) {
 }
 
 impl<'a> CondensedBalance<'a> {
-    /// `harmonics` H, `steps` variational steps per period; `state_scales` one per state,
-    /// then the ω and U scales and ω at the Hopf point.
+    /// `harmonics` H, `steps` variational steps per period; `scales` those of the shooting
+    /// unknowns (one per state, T, U: [`super::branch_scales`]); ω is scaled by 0.1 ω_Hopf.
     pub(super) fn new(
         section: &'a Section,
         harmonics: usize,
         steps: usize,
-        state_scales: &[f64],
-        omega_scale: f64,
-        u_scale: f64,
-        omega_hopf: f64,
-        u_hopf: f64,
+        scales: &[f64],
+        hopf: &HopfPoint,
     ) -> Self {
+        let n = section.n_states();
+        let (state_scales, u_scale) = (&scales[..n], scales[n + 1]);
+        let (omega_hopf, u_hopf) = (hopf.omega, hopf.u);
         let nl = &section.structure.nonlinear;
         let symmetric = nl
             .heave_stiffness_terms
@@ -234,10 +234,27 @@ impl<'a> CondensedBalance<'a> {
             }
         }
         let w = coefs.len();
-        // AFT samples over the period; a half-wave symmetric g (and its even derivative)
-        // times an odd harmonic repeats itself over the second half, so a symmetric
-        // structure needs only the first half, with double weight.
-        let period = 8 * harmonics + 4;
+        // AFT samples over the period: products of H harmonics up to degree p fold back onto
+        // kept harmonics only with N ≤ (p + 1)H, so a polynomial structure of largest power
+        // p takes (p + 1)H + 1 (rounded up to a multiple of 4) and is projected exactly;
+        // friction (tanh, every degree) takes 8H + 4 as the full harmonic balance. A
+        // half-wave symmetric g (and its even derivative) times an odd harmonic repeats
+        // itself over the second half, so a symmetric structure needs only the first half,
+        // with double weight.
+        let degree = nl
+            .heave_stiffness_terms
+            .iter()
+            .chain(&nl.pitch_stiffness_terms)
+            .map(|t| t.power as usize)
+            .max()
+            .unwrap_or(1);
+        let period = if section.structure.friction_resolved()[0] > 0.0
+            || section.structure.friction_resolved()[2] > 0.0
+        {
+            8 * harmonics + 4
+        } else {
+            ((degree + 1) * harmonics + 1).next_multiple_of(4)
+        };
         let (ns, weight) = if symmetric {
             (period / 2, 2.0)
         } else {
@@ -255,14 +272,14 @@ impl<'a> CondensedBalance<'a> {
                 proj[c * ns + j] = weight * if k == 0 { 1.0 } else { 2.0 } / period as f64 * v;
             }
         }
-        let mut scales = Vec::with_capacity(2 * w + 2);
+        let mut own = Vec::with_capacity(2 * w + 2);
         let mut row_scales = Vec::with_capacity(2 * w);
         for &s in &state_scales[..2] {
-            scales.extend(std::iter::repeat_n(s, w));
+            own.extend(std::iter::repeat_n(s, w));
             row_scales.extend(std::iter::repeat_n(s * omega_hopf * omega_hopf, w));
         }
-        scales.push(omega_scale);
-        scales.push(u_scale);
+        own.push(0.1 * omega_hopf);
+        own.push(u_scale);
         let steps = steps.max(4).next_multiple_of(4);
         let fine_len = 16 * harmonics.max(4);
         let trig = |points: usize, len: usize| -> Vec<Complex64> {
@@ -295,7 +312,7 @@ impl<'a> CondensedBalance<'a> {
             symmetric,
             fine_trig: trig(fine_len, fine_len),
             step_trig: trig(steps + 1, steps),
-            scales,
+            scales: own,
             row_scales,
             basis,
             dbasis,
@@ -525,6 +542,56 @@ impl<'a> CondensedBalance<'a> {
             out.push(dd);
         }
         Ok(out)
+    }
+
+    /// ∂D_k/∂U = −dA_vq − s dA_vv − dA_vx L_k − A_vx ∂L_k/∂U with
+    /// ∂L_k/∂U = (sI − A_xx)⁻¹(dA_xq + s dA_xv + dA_xx L_k), dA = dA/dU of the quadratic
+    /// A(U), for the kept harmonics; `None` without a quadratic A(U). (M_s − M_a)⁻¹ is then
+    /// constant, so the residual's U dependence is all in D_k.
+    fn speed_derivatives(&self, lin: &Linear) -> Result<Option<Vec<[[Complex64; 2]; 2]>>> {
+        let Some(quad) = &self.quadratic else {
+            return Ok(None);
+        };
+        let (n, nl) = (self.n, self.n - 4);
+        let zero = Complex64::new(0.0, 0.0);
+        let a = &lin.a;
+        let mut da = vec![0.0; n * n];
+        quad.derivative_at(lin.u, &mut da);
+        let mut x = vec![zero; nl * nl];
+        let mut col = vec![zero; nl];
+        let mut out = Vec::with_capacity(lin.lag.len());
+        for (&k, l) in self.ks.iter().zip(&lin.lag) {
+            let s = Complex64::new(0.0, k as f64 * lin.omega);
+            let mut dl = vec![zero; nl * 2];
+            if nl > 0 {
+                let lu = self.lag_factors(lin, s, &mut x)?;
+                for q in 0..2 {
+                    for (r, v) in col.iter_mut().enumerate() {
+                        let row = (4 + r) * n;
+                        *v = da[row + q] + s * da[row + 2 + q];
+                        for i in 0..nl {
+                            *v += da[row + 4 + i] * l[i * 2 + q];
+                        }
+                    }
+                    lu.solve(&x, &mut col);
+                    for r in 0..nl {
+                        dl[r * 2 + q] = col[r];
+                    }
+                }
+            }
+            let du: [[Complex64; 2]; 2] = std::array::from_fn(|r| {
+                let row = (2 + r) * n;
+                std::array::from_fn(|q| {
+                    let mut v = -da[row + q] - s * da[row + 2 + q];
+                    for i in 0..nl {
+                        v -= da[row + 4 + i] * l[i * 2 + q] + a[row + 4 + i] * dl[i * 2 + q];
+                    }
+                    v
+                })
+            });
+            out.push(du);
+        }
+        Ok(Some(out))
     }
 
     /// The four structural states (h, α, ḣ, α̇) at the AFT samples (those g does not use
@@ -1012,13 +1079,15 @@ impl PeriodicProblem for CondensedBalance<'_> {
         Ok(g)
     }
 
-    /// Exact in the coefficients (the dynamic matrices and the AFT of the analytic ∂g) and
-    /// in ω (dD_k/ds and the velocity terms of g); a forward difference in U.
+    /// Exact in the coefficients (the dynamic matrices and the AFT of the analytic ∂g), in ω
+    /// (dD_k/ds and the velocity terms of g) and, when A(U) is the exact quadratic, in U
+    /// (∂D_k/∂U); otherwise a forward difference in U.
     fn jac(&self, y: &DVector<f64>, g0: &DVector<f64>) -> Result<DMatrix<f64>> {
         let (x, omega, u) = self.unscale(y);
         let (w, ns) = (self.w, self.ns);
         let m = self.m();
         let mut out = DMatrix::zeros(m + 1, m + 2);
+        let mut analytic_u = false;
         self.linear(omega, u, |lin| {
             let q = self.samples(&x, omega);
             // ∂g_p/∂(q_c, v_c) at the samples.
@@ -1080,6 +1149,22 @@ impl PeriodicProblem for CondensedBalance<'_> {
             for (i, v) in dw.iter().enumerate() {
                 out[(i, m)] = *v;
             }
+            // ∂/∂U: Σ_k ∂D_k/∂U Q_k when A(U) is the exact quadratic.
+            if let Some(du) = self.speed_derivatives(lin)? {
+                let mut col = vec![0.0; 2 * w];
+                for (hi, d) in du.iter().enumerate() {
+                    for (r, row) in d.iter().enumerate() {
+                        let v: Complex64 = (0..2)
+                            .map(|c| row[c] * self.cplx(&x[c * w..(c + 1) * w], hi))
+                            .sum();
+                        self.add_harmonic(&mut col[r * w..(r + 1) * w], hi, v);
+                    }
+                }
+                for (i, v) in col.iter().enumerate() {
+                    out[(i, m + 1)] = *v;
+                }
+                analytic_u = true;
+            }
             for r in 0..2 {
                 for c in 0..2 {
                     for p in 0..P {
@@ -1111,18 +1196,18 @@ impl PeriodicProblem for CondensedBalance<'_> {
             }
             Ok::<(), Error>(())
         })??;
-        for c in 0..=m {
+        let last = if analytic_u { m + 1 } else { m };
+        for c in 0..=last {
             for r in 0..m {
                 out[(r, c)] *= self.scales[c] / self.row_scales[r];
             }
         }
-        {
+        if !analytic_u {
             let d = 1e-7 * (1.0 + y[m + 1].abs());
-            let col = m + 1;
             let mut yp = y.clone();
-            yp[col] += d;
+            yp[m + 1] += d;
             let gp = self.g(&yp)?;
-            out.set_column(col, &((gp - g0) / d));
+            out.set_column(m + 1, &((gp - g0) / d));
         }
         out[(m, self.phase_index())] = 1.0;
         Ok(out)
@@ -1248,16 +1333,7 @@ mod tests {
                 sc[n + 1],
                 hopf.omega,
             );
-            let cond = CondensedBalance::new(
-                &s,
-                5,
-                128,
-                &sc[..n],
-                0.1 * hopf.omega,
-                sc[n + 1],
-                hopf.omega,
-                hopf.u,
-            );
+            let cond = CondensedBalance::new(&s, 5, 128, &sc, &hopf);
             assert!(cond.unknowns() < full.unknowns());
             let a = 0.06;
             let pf = orbit(&full, &hopf, a);
@@ -1306,17 +1382,7 @@ mod tests {
 
     fn jacobian_matches_finite_differences(s: &Section) {
         let (hopf, sc) = set_up(s);
-        let n = s.n_states();
-        let cond = CondensedBalance::new(
-            s,
-            4,
-            64,
-            &sc[..n],
-            0.1 * hopf.omega,
-            sc[n + 1],
-            hopf.omega,
-            hopf.u,
-        );
+        let cond = CondensedBalance::new(s, 4, 64, &sc, &hopf);
         let c = Closure::Alpha(0.08 / cond.scales()[cond.amplitude_index()]);
         let (mut y, _, _, _) = newton(&cond, cond.start(&hopf, 0.08), &c, None, 1e-11, 60).unwrap();
         // off the solution, so that every term of the residual is exercised
@@ -1333,8 +1399,7 @@ mod tests {
             let fd = (cond.g(&yp).unwrap() - cond.g(&ym).unwrap()) / (2.0 * d);
             let scale = fd.amax().max(1e-3);
             for r in 0..fd.len() {
-                // the U column is itself a forward difference
-                let tol = if col == y.len() - 1 { 1e-4 } else { 1e-6 };
+                let tol = 1e-6;
                 assert!(
                     (j[(r, col)] - fd[r]).abs() < tol * scale,
                     "∂G_{r}/∂Y_{col}: {} vs {}",

@@ -406,11 +406,8 @@ fn problem<'a>(
                 section,
                 opts.harmonics,
                 opts.steps_per_period,
-                &scales[..n],
-                0.1 * hopf.omega,
-                scales[n + 1],
-                hopf.omega,
-                hopf.u,
+                scales,
+                hopf,
             ))
         }
         BranchMethod::HarmonicBalance => Box::new(harmonic::HarmonicBalance::new(
@@ -630,6 +627,13 @@ impl QuadraticJacobian {
         Ok(exact.then_some(q))
     }
 
+    /// dA/dU = A₁ + 2U A₂ into `a` (n × n row-major).
+    pub(crate) fn derivative_at(&self, u: f64, a: &mut [f64]) {
+        for (i, v) in a.iter_mut().enumerate().take(self.n * self.n) {
+            *v = self.coef[1][i] + 2.0 * u * self.coef[2][i];
+        }
+    }
+
     /// A(U) into `a` (n × n row-major).
     pub(crate) fn at(&self, u: f64, a: &mut [f64]) {
         for (i, v) in a.iter_mut().enumerate().take(self.n * self.n) {
@@ -690,9 +694,12 @@ impl Bialternate {
         let b = work;
         let mut det = 1.0;
         for k in 0..m {
-            let piv = (k..m)
-                .max_by(|&x, &y| b[x * m + k].abs().total_cmp(&b[y * m + k].abs()))
-                .unwrap_or(k);
+            let mut piv = k;
+            for i in k + 1..m {
+                if b[i * m + k].abs() > b[piv * m + k].abs() {
+                    piv = i;
+                }
+            }
             if b[piv * m + k] == 0.0 {
                 return 0.0;
             }
@@ -704,11 +711,13 @@ impl Bialternate {
             }
             let d = b[k * m + k];
             det *= d;
-            for i in k + 1..m {
-                let f = b[i * m + k] / d;
+            let (top, rest) = b.split_at_mut((k + 1) * m);
+            let pivot_row = &top[k * m + k + 1..(k + 1) * m];
+            for row in rest.chunks_exact_mut(m) {
+                let f = row[k] / d;
                 if f != 0.0 {
-                    for c in k + 1..m {
-                        b[i * m + c] -= f * b[k * m + c];
+                    for (x, p) in row[k + 1..].iter_mut().zip(pivot_row) {
+                        *x -= f * p;
                     }
                 }
             }
@@ -982,7 +991,11 @@ impl Section {
     /// Largest real part of the oscillatory eigenvalues (|Im| > 1e-6 ω_α) of the
     /// equilibrium at `u`, and the eigenvalue.
     fn oscillatory_growth(&self, u: f64) -> Result<(f64, Complex64)> {
-        let ev = eigenvalues(&self.equilibrium_jacobian(u)?)?;
+        let jac = self.equilibrium_jacobian(u)?;
+        let ev = match jac.nrows() {
+            6 => eigenvalues6(&jac)?,
+            _ => eigenvalues(&jac)?,
+        };
         let floor = 1e-6 * self.structure.omega_alpha();
         ev.into_iter()
             .filter(|l| l.im > floor)
