@@ -31,6 +31,13 @@
 //! symmetric, so its error is even in h and one Richardson step with N and N/2 steps,
 //! (4M_N − M_{N/2})/3, makes it fourth order (measured: N = 32 → 64 reduces the multiplier
 //! error 40-fold on the cubic-pitch HP-1 branch).
+//!
+//! Odd structures (every polynomial power odd; friction is odd) have half-wave symmetric
+//! orbits: only odd harmonics are kept, the AFT samples half the period and the monodromy
+//! is Φ(T/2)² (J(t) has period T/2). Polynomial structures are sampled alias-free with
+//! N = (p + 1)H + 1 (p the largest power). For linear models A(U) is an exact quadratic in U
+//! ([`super::QuadraticJacobian`], verified before use), which also gives the U column of the
+//! Jacobian analytically. DECISIONS.md gives the measured effect of each.
 
 use std::cell::RefCell;
 use std::f64::consts::TAU;
