@@ -509,30 +509,45 @@ impl<'a> CondensedBalance<'a> {
         })
     }
 
+    /// (sI − A_xx)⁻¹ applied to the two columns `rhs(r, q)` (r a lag state, q ∈ {h, α}):
+    /// lag states × 2, row-major (empty without lag states).
+    fn lag_solve(
+        &self,
+        lin: &Linear,
+        s: Complex64,
+        rhs: impl Fn(usize, usize) -> Complex64,
+    ) -> Result<Vec<Complex64>> {
+        let nl = self.n - 4;
+        let zero = Complex64::new(0.0, 0.0);
+        let mut out = vec![zero; nl * 2];
+        if nl == 0 {
+            return Ok(out);
+        }
+        let mut x = vec![zero; nl * nl];
+        let lu = self.lag_factors(lin, s, &mut x)?;
+        let mut col = vec![zero; nl];
+        for q in 0..2 {
+            for (r, v) in col.iter_mut().enumerate() {
+                *v = rhs(r, q);
+            }
+            lu.solve(&x, &mut col);
+            for (r, v) in col.iter().enumerate() {
+                out[r * 2 + q] = *v;
+            }
+        }
+        Ok(out)
+    }
+
     /// dD_k/ds = 2sI − A_vv − A_vx dL_k/ds, dL_k/ds = (sI − A_xx)⁻¹(A_xv − L_k), for the
     /// kept harmonics.
     fn dynamic_derivatives(&self, lin: &Linear) -> Result<Vec<[[Complex64; 2]; 2]>> {
         let (n, nl) = (self.n, self.n - 4);
         let zero = Complex64::new(0.0, 0.0);
         let a = &lin.a;
-        let mut x = vec![zero; nl * nl];
-        let mut col = vec![zero; nl];
         let mut out = Vec::with_capacity(lin.lag.len());
         for (&k, l) in self.ks.iter().zip(&lin.lag) {
             let s = Complex64::new(0.0, k as f64 * lin.omega);
-            let mut dls = vec![zero; nl * 2];
-            if nl > 0 {
-                let lu = self.lag_factors(lin, s, &mut x)?;
-                for q in 0..2 {
-                    for (r, v) in col.iter_mut().enumerate() {
-                        *v = a[(4 + r) * n + 2 + q] - l[r * 2 + q];
-                    }
-                    lu.solve(&x, &mut col);
-                    for r in 0..nl {
-                        dls[r * 2 + q] = col[r];
-                    }
-                }
-            }
+            let dls = self.lag_solve(lin, s, |r, q| a[(4 + r) * n + 2 + q] - l[r * 2 + q])?;
             let mut dd = [[zero; 2]; 2];
             for r in 0..2 {
                 for q in 0..2 {
@@ -560,32 +575,20 @@ impl<'a> CondensedBalance<'a> {
             return Ok(None);
         };
         let (n, nl) = (self.n, self.n - 4);
-        let zero = Complex64::new(0.0, 0.0);
         let a = &lin.a;
         let mut da = vec![0.0; n * n];
         quad.derivative_at(lin.u, &mut da);
-        let mut x = vec![zero; nl * nl];
-        let mut col = vec![zero; nl];
         let mut out = Vec::with_capacity(lin.lag.len());
         for (&k, l) in self.ks.iter().zip(&lin.lag) {
             let s = Complex64::new(0.0, k as f64 * lin.omega);
-            let mut dl = vec![zero; nl * 2];
-            if nl > 0 {
-                let lu = self.lag_factors(lin, s, &mut x)?;
-                for q in 0..2 {
-                    for (r, v) in col.iter_mut().enumerate() {
-                        let row = (4 + r) * n;
-                        *v = da[row + q] + s * da[row + 2 + q];
-                        for i in 0..nl {
-                            *v += da[row + 4 + i] * l[i * 2 + q];
-                        }
-                    }
-                    lu.solve(&x, &mut col);
-                    for r in 0..nl {
-                        dl[r * 2 + q] = col[r];
-                    }
-                }
-            }
+            let dl = self.lag_solve(lin, s, |r, q| {
+                let row = (4 + r) * n;
+                da[row + q]
+                    + s * da[row + 2 + q]
+                    + (0..nl)
+                        .map(|i| da[row + 4 + i] * l[i * 2 + q])
+                        .sum::<Complex64>()
+            })?;
             let du: [[Complex64; 2]; 2] = std::array::from_fn(|r| {
                 let row = (2 + r) * n;
                 std::array::from_fn(|q| {
