@@ -509,33 +509,30 @@ impl<'a> CondensedBalance<'a> {
         })
     }
 
-    /// (sI − A_xx)⁻¹ applied to the two columns `rhs(r, q)` (r a lag state, q ∈ {h, α}):
-    /// lag states × 2, row-major (empty without lag states).
+    /// (sI − A_xx)⁻¹ applied to the two columns `rhs(r, q)` (r a lag state, q ∈ {h, α}),
+    /// written into `out` (lag states × 2, row-major); `x` (lag states²) and `col` (lag
+    /// states) are scratch.
     fn lag_solve(
         &self,
         lin: &Linear,
         s: Complex64,
         rhs: impl Fn(usize, usize) -> Complex64,
-    ) -> Result<Vec<Complex64>> {
-        let nl = self.n - 4;
-        let zero = Complex64::new(0.0, 0.0);
-        let mut out = vec![zero; nl * 2];
-        if nl == 0 {
-            return Ok(out);
+        (x, col, out): (&mut [Complex64], &mut [Complex64], &mut [Complex64]),
+    ) -> Result<()> {
+        if self.n == 4 {
+            return Ok(());
         }
-        let mut x = vec![zero; nl * nl];
-        let lu = self.lag_factors(lin, s, &mut x)?;
-        let mut col = vec![zero; nl];
+        let lu = self.lag_factors(lin, s, x)?;
         for q in 0..2 {
             for (r, v) in col.iter_mut().enumerate() {
                 *v = rhs(r, q);
             }
-            lu.solve(&x, &mut col);
+            lu.solve(x, col);
             for (r, v) in col.iter().enumerate() {
                 out[r * 2 + q] = *v;
             }
         }
-        Ok(out)
+        Ok(())
     }
 
     /// dD_k/ds = 2sI − A_vv − A_vx dL_k/ds, dL_k/ds = (sI − A_xx)⁻¹(A_xv − L_k), for the
@@ -544,10 +541,16 @@ impl<'a> CondensedBalance<'a> {
         let (n, nl) = (self.n, self.n - 4);
         let zero = Complex64::new(0.0, 0.0);
         let a = &lin.a;
+        let (mut x, mut col, mut dls) = (vec![zero; nl * nl], vec![zero; nl], vec![zero; 2 * nl]);
         let mut out = Vec::with_capacity(lin.lag.len());
         for (&k, l) in self.ks.iter().zip(&lin.lag) {
             let s = Complex64::new(0.0, k as f64 * lin.omega);
-            let dls = self.lag_solve(lin, s, |r, q| a[(4 + r) * n + 2 + q] - l[r * 2 + q])?;
+            self.lag_solve(
+                lin,
+                s,
+                |r, q| a[(4 + r) * n + 2 + q] - l[r * 2 + q],
+                (&mut x, &mut col, &mut dls),
+            )?;
             let mut dd = [[zero; 2]; 2];
             for r in 0..2 {
                 for q in 0..2 {
@@ -578,17 +581,24 @@ impl<'a> CondensedBalance<'a> {
         let a = &lin.a;
         let mut da = vec![0.0; n * n];
         quad.derivative_at(lin.u, &mut da);
+        let zero = Complex64::new(0.0, 0.0);
+        let (mut x, mut col, mut dl) = (vec![zero; nl * nl], vec![zero; nl], vec![zero; 2 * nl]);
         let mut out = Vec::with_capacity(lin.lag.len());
         for (&k, l) in self.ks.iter().zip(&lin.lag) {
             let s = Complex64::new(0.0, k as f64 * lin.omega);
-            let dl = self.lag_solve(lin, s, |r, q| {
-                let row = (4 + r) * n;
-                da[row + q]
-                    + s * da[row + 2 + q]
-                    + (0..nl)
-                        .map(|i| da[row + 4 + i] * l[i * 2 + q])
-                        .sum::<Complex64>()
-            })?;
+            self.lag_solve(
+                lin,
+                s,
+                |r, q| {
+                    let row = (4 + r) * n;
+                    da[row + q]
+                        + s * da[row + 2 + q]
+                        + (0..nl)
+                            .map(|i| da[row + 4 + i] * l[i * 2 + q])
+                            .sum::<Complex64>()
+                },
+                (&mut x, &mut col, &mut dl),
+            )?;
             let du: [[Complex64; 2]; 2] = std::array::from_fn(|r| {
                 let row = (2 + r) * n;
                 std::array::from_fn(|q| {
