@@ -45,7 +45,9 @@ use std::f64::consts::TAU;
 use nalgebra::{DMatrix, DVector};
 use num_complex::Complex64;
 
-use super::{orbit_point, BranchPoint, HopfPoint, PeriodicProblem, QuadraticJacobian};
+use super::{
+    orbit_point, stored_unknowns, BranchPoint, HopfPoint, PeriodicProblem, QuadraticJacobian,
+};
 use crate::dynamics::SectionDynamics;
 use crate::section::Section;
 use crate::{Error, Result};
@@ -738,7 +740,7 @@ impl<'a> CondensedBalance<'a> {
     /// Monodromy matrix of the variational equation along the orbit with state harmonics
     /// `zk`, by the Richardson-extrapolated exponential trapezoidal rule. For a symmetric
     /// structure J(t) has period T/2 and M = Φ(T/2)², so half a period is integrated.
-    fn monodromy(&self, lin: &Linear, zk: &[Vec<Complex64>]) -> DMatrix<f64> {
+    fn monodromy(&self, lin: &Linear, zk: &[Vec<Complex64>]) -> Result<DMatrix<f64>> {
         let n = self.n;
         let steps = self.steps;
         let nh = self.step_trig.len() / (steps + 1);
@@ -753,20 +755,24 @@ impl<'a> CondensedBalance<'a> {
             })
             .collect();
         let (e, g0, g1) = propagators(&lin.a, &lin.bm, n, h);
-        let fine = trapezoid(n, &e, &g0, &g1, &f, 1, self.forces);
+        let steps_of = |e: &[f64], g0: &[f64], g1: &[f64], stride: usize| {
+            trapezoid(n, e, g0, g1, &f, stride, self.forces).ok_or_else(|| {
+                Error::numerical(
+                    "harmonic balance",
+                    format!("{n} states: the condensed form takes 4 to 20"),
+                )
+            })
+        };
+        let fine = steps_of(&e, &g0, &g1, 1)?;
         let (e2, g02, g12) = doubled(n, &e, &g0, &g1);
-        let coarse = trapezoid(n, &e2, &g02, &g12, &f, 2, self.forces);
+        let coarse = steps_of(&e2, &g02, &g12, 2)?;
         let mut m = DMatrix::zeros(n, n);
         for r in 0..n {
             for c in 0..n {
                 m[(r, c)] = (4.0 * fine[r * n + c] - coarse[r * n + c]) / 3.0;
             }
         }
-        if self.symmetric {
-            &m * &m
-        } else {
-            m
-        }
+        Ok(if self.symmetric { &m * &m } else { m })
     }
 }
 
@@ -898,7 +904,8 @@ fn doubled(n: usize, e: &[f64], g0: &[f64], g1: &[f64]) -> (Vec<f64>, Vec<f64>, 
 /// Monodromy (row-major) of Φ' = AΦ + B F(t) C₄ Φ by the exponential trapezoidal rule with
 /// propagators (E, Γ₀, Γ₁) of one step, using every `stride`-th sample of `f`: per step
 /// Φ_{j+1} = EΦ_j + (Γ₀ − Γ₁)q_j + Γ₁q_{j+1}, q = F C₄ Φ, (I − F_{j+1}C₄Γ₁) q_{j+1} =
-/// F_{j+1}C₄(EΦ_j + (Γ₀ − Γ₁)q_j). Fixed-size arrays for the common state counts.
+/// F_{j+1}C₄(EΦ_j + (Γ₀ − Γ₁)q_j), on fixed-size arrays; `None` for a state count outside
+/// 4 … 20.
 fn trapezoid(
     n: usize,
     e: &[f64],
@@ -907,17 +914,17 @@ fn trapezoid(
     f: &[[[f64; 4]; 2]],
     stride: usize,
     active: [bool; P],
-) -> Vec<f64> {
-    match n {
-        4 => trapezoid_n::<4>(e, g0, g1, f, stride, active),
-        5 => trapezoid_n::<5>(e, g0, g1, f, stride, active),
-        6 => trapezoid_n::<6>(e, g0, g1, f, stride, active),
-        7 => trapezoid_n::<7>(e, g0, g1, f, stride, active),
-        8 => trapezoid_n::<8>(e, g0, g1, f, stride, active),
-        10 => trapezoid_n::<10>(e, g0, g1, f, stride, active),
-        12 => trapezoid_n::<12>(e, g0, g1, f, stride, active),
-        _ => trapezoid_dyn(n, e, g0, g1, f, stride),
+) -> Option<Vec<f64>> {
+    macro_rules! sizes {
+        ($($k:literal),*) => {
+            match n {
+                $($k => Some(trapezoid_n::<$k>(e, g0, g1, f, stride, active)),)*
+                _ => None,
+            }
+        };
     }
+    // Every state count the condensed form takes (`applies`: 4 + at most 16 lag states).
+    sizes!(4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20)
 }
 
 fn trapezoid_n<const N: usize>(
@@ -1004,74 +1011,6 @@ fn trapezoid_n<const N: usize>(
         q = qn;
     }
     phi.iter().flatten().copied().collect()
-}
-
-/// [`trapezoid`] for any state count.
-fn trapezoid_dyn(
-    n: usize,
-    e: &[f64],
-    g0: &[f64],
-    g1: &[f64],
-    f: &[[[f64; 4]; 2]],
-    stride: usize,
-) -> Vec<f64> {
-    let ga: Vec<f64> = g0.iter().zip(g1).map(|(a, b)| a - b).collect();
-    let forcing = |fj: &[[f64; 4]; 2], phi: &[f64], q: &mut [f64]| {
-        q.fill(0.0);
-        for p in 0..P {
-            for c in 0..4 {
-                let v = fj[p][c];
-                if v != 0.0 {
-                    for (o, x) in q[p * n..(p + 1) * n]
-                        .iter_mut()
-                        .zip(&phi[c * n..(c + 1) * n])
-                    {
-                        *o += v * x;
-                    }
-                }
-            }
-        }
-    };
-    let add = |g: &[f64], q: &[f64], x: &mut [f64]| {
-        for r in 0..n {
-            for p in 0..P {
-                let v = g[r * P + p];
-                for (o, w) in x[r * n..(r + 1) * n].iter_mut().zip(&q[p * n..(p + 1) * n]) {
-                    *o += v * w;
-                }
-            }
-        }
-    };
-    let mut phi = vec![0.0; n * n];
-    for i in 0..n {
-        phi[i * n + i] = 1.0;
-    }
-    let (mut q, mut qn, mut rhs) = (vec![0.0; P * n], vec![0.0; P * n], vec![0.0; P * n]);
-    let mut x = vec![0.0; n * n];
-    forcing(&f[0], &phi, &mut q);
-    for j in 0..(f.len() - 1) / stride {
-        let fj = &f[(j + 1) * stride];
-        matmul_into(e, &phi, n, n, n, &mut x);
-        add(&ga, &q, &mut x);
-        forcing(fj, &x, &mut rhs);
-        let mut k = [[0.0; P]; P];
-        for p in 0..P {
-            for r in 0..P {
-                let fc: f64 = (0..4).map(|c| fj[p][c] * g1[c * P + r]).sum();
-                k[p][r] = if p == r { 1.0 } else { 0.0 } - fc;
-            }
-        }
-        let det = k[0][0] * k[1][1] - k[0][1] * k[1][0];
-        for col in 0..n {
-            let (r0, r1) = (rhs[col], rhs[n + col]);
-            qn[col] = (k[1][1] * r0 - k[0][1] * r1) / det;
-            qn[n + col] = (k[0][0] * r1 - k[1][0] * r0) / det;
-        }
-        add(g1, &qn, &mut x);
-        std::mem::swap(&mut phi, &mut x);
-        std::mem::swap(&mut q, &mut qn);
-    }
-    phi
 }
 
 impl PeriodicProblem for CondensedBalance<'_> {
@@ -1243,8 +1182,8 @@ impl PeriodicProblem for CondensedBalance<'_> {
         let (zk, mono) = self.linear(omega, u, |lin| {
             let zk = self.states(lin, &x);
             let mono = self.monodromy(lin, &zk);
-            (zk, mono)
-        })?;
+            mono.map(|m| (zk, m))
+        })??;
         let nh = self.fine_trig.len() / self.fine_len;
         let s: Vec<[f64; 2]> = (0..self.fine_len)
             .map(|q| {
@@ -1274,15 +1213,7 @@ impl PeriodicProblem for CondensedBalance<'_> {
     }
 
     fn scaled(&self, p: &BranchPoint) -> Result<DVector<f64>> {
-        if p.unknowns.len() != self.unknowns() {
-            return Err(Error::numerical(
-                "orbit_on_branch",
-                "the branch points carry no harmonic-balance coefficients of this problem (a \
-                 branch read back from branch.json, or of another method): continue the branch \
-                 again",
-            ));
-        }
-        Ok(DVector::from_column_slice(&p.unknowns))
+        stored_unknowns(p, self.unknowns())
     }
 }
 
@@ -1480,6 +1411,75 @@ mod tests {
         }
     }
 
+    /// A plain dynamic-size implementation of [`trapezoid`]'s rule, the reference of
+    /// `fixed_size_steps_equal_the_dynamic_steps`.
+    fn trapezoid_dyn(
+        n: usize,
+        e: &[f64],
+        g0: &[f64],
+        g1: &[f64],
+        f: &[[[f64; 4]; 2]],
+        stride: usize,
+    ) -> Vec<f64> {
+        let ga: Vec<f64> = g0.iter().zip(g1).map(|(a, b)| a - b).collect();
+        let forcing = |fj: &[[f64; 4]; 2], phi: &[f64], q: &mut [f64]| {
+            q.fill(0.0);
+            for p in 0..P {
+                for c in 0..4 {
+                    let v = fj[p][c];
+                    if v != 0.0 {
+                        for (o, x) in q[p * n..(p + 1) * n]
+                            .iter_mut()
+                            .zip(&phi[c * n..(c + 1) * n])
+                        {
+                            *o += v * x;
+                        }
+                    }
+                }
+            }
+        };
+        let add = |g: &[f64], q: &[f64], x: &mut [f64]| {
+            for r in 0..n {
+                for p in 0..P {
+                    let v = g[r * P + p];
+                    for (o, w) in x[r * n..(r + 1) * n].iter_mut().zip(&q[p * n..(p + 1) * n]) {
+                        *o += v * w;
+                    }
+                }
+            }
+        };
+        let mut phi = vec![0.0; n * n];
+        for i in 0..n {
+            phi[i * n + i] = 1.0;
+        }
+        let (mut q, mut qn, mut rhs) = (vec![0.0; P * n], vec![0.0; P * n], vec![0.0; P * n]);
+        let mut x = vec![0.0; n * n];
+        forcing(&f[0], &phi, &mut q);
+        for j in 0..(f.len() - 1) / stride {
+            let fj = &f[(j + 1) * stride];
+            matmul_into(e, &phi, n, n, n, &mut x);
+            add(&ga, &q, &mut x);
+            forcing(fj, &x, &mut rhs);
+            let mut k = [[0.0; P]; P];
+            for p in 0..P {
+                for r in 0..P {
+                    let fc: f64 = (0..4).map(|c| fj[p][c] * g1[c * P + r]).sum();
+                    k[p][r] = if p == r { 1.0 } else { 0.0 } - fc;
+                }
+            }
+            let det = k[0][0] * k[1][1] - k[0][1] * k[1][0];
+            for col in 0..n {
+                let (r0, r1) = (rhs[col], rhs[n + col]);
+                qn[col] = (k[1][1] * r0 - k[0][1] * r1) / det;
+                qn[n + col] = (k[0][0] * r1 - k[1][0] * r0) / det;
+            }
+            add(g1, &qn, &mut x);
+            std::mem::swap(&mut phi, &mut x);
+            std::mem::swap(&mut q, &mut qn);
+        }
+        phi
+    }
+
     /// The fixed-size variational stepping is the dynamic one.
     #[test]
     fn fixed_size_steps_equal_the_dynamic_steps() {
@@ -1493,7 +1493,7 @@ mod tests {
         let f: Vec<[[f64; 4]; 2]> = (0..17)
             .map(|j| std::array::from_fn(|p| std::array::from_fn(|c| v(j * 8 + p * 4 + c, 0.3))))
             .collect();
-        let a = trapezoid(n, &e, &g0, &g1, &f, 2, [true, true]);
+        let a = trapezoid(n, &e, &g0, &g1, &f, 2, [true, true]).unwrap();
         let b = trapezoid_dyn(n, &e, &g0, &g1, &f, 2);
         for (x, y) in a.iter().zip(&b) {
             assert!((x - y).abs() < 1e-13 * (1.0 + y.abs()), "{x} vs {y}");

@@ -25,7 +25,7 @@ use std::f64::consts::TAU;
 
 use nalgebra::{DMatrix, DVector};
 
-use super::{orbit_point, BranchPoint, HopfPoint, PeriodicProblem};
+use super::{orbit_point, stored_unknowns, BranchPoint, HopfPoint, PeriodicProblem};
 use crate::dynamics::SectionDynamics;
 use crate::integrate::{OdeSystem, Rk4};
 use crate::section::Section;
@@ -450,13 +450,6 @@ impl PeriodicProblem for HarmonicBalance<'_> {
     }
 
     fn scaled(&self, p: &BranchPoint) -> Result<DVector<f64>> {
-        if p.unknowns.len() != self.unknowns() {
-            return Err(Error::numerical(
-                "orbit_on_branch",
-                "the branch points carry no harmonic-balance coefficients (a branch read \
-                 back from branch.json): continue the branch again",
-            ));
-        }
-        Ok(DVector::from_column_slice(&p.unknowns))
+        stored_unknowns(p, self.unknowns())
     }
 }

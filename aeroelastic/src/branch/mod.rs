@@ -367,6 +367,24 @@ trait PeriodicProblem {
     fn scaled(&self, p: &BranchPoint) -> Result<DVector<f64>>;
 }
 
+/// The scaled unknowns a harmonic-balance point stored, when they belong to a problem of `m`
+/// unknowns.
+///
+/// # Errors
+/// [`Error::Numerical`] when they do not (a branch read back from `branch.json`, whose
+/// points keep no coefficients, or one of another method).
+fn stored_unknowns(p: &BranchPoint, m: usize) -> Result<DVector<f64>> {
+    if p.unknowns.len() != m {
+        return Err(Error::numerical(
+            "orbit_on_branch",
+            "the branch points carry no harmonic-balance coefficients of this problem (a \
+             branch read back from branch.json, or of another method): continue the branch \
+             again",
+        ));
+    }
+    Ok(DVector::from_column_slice(&p.unknowns))
+}
+
 /// Scales of the shooting unknowns (z₀, T, U) of the branch from `hopf`: each state
 /// component `amplitude_scale` \[rad\] times its Hopf-eigenvector magnitude (at least 1e-3
 /// of the largest), T by 0.1 T_Hopf, U by 0.1 U_Hopf.
@@ -1064,7 +1082,7 @@ impl Section {
         // brackets where it does. Its n(n − 1)/2 rows outgrow an eigenvalue problem beyond
         // n = 8 states: there the growth rate itself is scanned.
         let n = self.n_states();
-        let (mut a, mut work) = (vec![0.0; n * n], vec![0.0; 3 * n]);
+        let (mut a, mut work, origin) = (vec![0.0; n * n], vec![0.0; 3 * n], vec![0.0; n]);
         let mut b = Vec::new();
         let bialternate = Bialternate::new(n);
         let mut psi = Vec::with_capacity(n_scan);
@@ -1081,9 +1099,7 @@ impl Section {
             psi.push(if n <= 8 {
                 match &quadratic {
                     Some(q) => q.at(u, &mut a),
-                    None => {
-                        SectionDynamics::new(self, u)?.jacobian(&vec![0.0; n], &mut a, &mut work)
-                    }
+                    None => SectionDynamics::new(self, u)?.jacobian(&origin, &mut a, &mut work),
                 }
                 bialternate.determinant(&a, &mut b)
             } else {
