@@ -220,6 +220,15 @@ pub struct LevelResult {
     /// removes, comes from extrapolating the law to held-out wind speeds.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub interpolated_gap_statistic: Option<f64>,
+    /// System level with a forced campaign: the sim's own uncertainty in the same metric,
+    /// from a grouped jackknife over the forced campaign (the law identified again without
+    /// each fold of (configuration, wind speed) groups; see
+    /// [`crate::system::model_energy`]). The gap test's null level is then
+    /// sqrt(noise_level² + model_level²): a gap the law's estimation error can produce is
+    /// not an unmodelled effect. Absent at the force level (its held-out gap already
+    /// carries that error), without a forced campaign, or below 3 groups.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub model_level: Option<f64>,
     /// Ids of the held-out cases (every case is held out once).
     pub held_out_cases: Vec<String>,
     /// Every candidate of this level, best first.
@@ -268,10 +277,11 @@ pub struct Coverage {
     pub margin: f64,
     /// Every free run.
     pub runs: Vec<RunCoverage>,
-    /// Share of the level's excess residual energy (gap² − noise², summed over runs) in the
-    /// runs that leave the range.
+    /// Share of the level's excess residual energy (gap² − null², summed over runs; null:
+    /// the noise and, with a jackknife, the sim's own uncertainty) in the runs that leave
+    /// the range.
     pub extrapolated_share: f64,
-    /// Gap statistic (gap / noise level, as the level's test) over the covered runs alone;
+    /// Gap statistic (gap / null level, as the level's test) over the covered runs alone;
     /// `None` when no run is covered.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub covered_gap_statistic: Option<f64>,

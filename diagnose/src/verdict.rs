@@ -70,6 +70,26 @@ pub fn excess_shrink(before: f64, after: f64, noise: f64) -> f64 {
     }
 }
 
+/// "before is x× its noise level n" for a reason sentence; with the sim's own uncertainty
+/// ([`LevelResult::model_level`]) the null level sqrt(noise² + model²) and both parts.
+fn against_null(level: &LevelResult) -> String {
+    match level.model_level {
+        Some(m) => {
+            let null = level.noise_level.hypot(m);
+            format!(
+                "{:.1}× its null level {null:.4} (noise {:.4}, the law's own uncertainty {m:.4})",
+                level.before / null.max(f64::MIN_POSITIVE),
+                level.noise_level
+            )
+        }
+        None => format!(
+            "{:.1}× its noise level {:.4}",
+            level.before / level.noise_level.max(f64::MIN_POSITIVE),
+            level.noise_level
+        ),
+    }
+}
+
 /// What decided the verdict.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Decision {
@@ -143,7 +163,7 @@ fn decide_level(levels: &[LevelResult], li: usize, rules: &VerdictRules) -> Deci
                 .collect();
             let covered = match cov.covered_gap_statistic {
                 Some(s) => format!(
-                    "the covered runs alone are at {s:.2}× noise (threshold {:.2})",
+                    "the covered runs alone are at {s:.2}× their null level (threshold {:.2})",
                     level.gap_threshold
                 ),
                 None => "no run is covered".to_string(),
@@ -160,12 +180,13 @@ fn decide_level(levels: &[LevelResult], li: usize, rules: &VerdictRules) -> Deci
                 verdict: Verdict::Extrapolation,
                 confidence: cov.extrapolated_share.clamp(0.0, 1.0),
                 reason: format!(
-                    "{} held-out gap {:.4} is {:.1}× its noise level {:.4}, {:.0} % of its \
+                    "{} held-out gap {:.4} is {:.1}× its {} {:.4}, {:.0} % of its \
                      excess in {} run(s) outside the forced K/amplitude range ({}); {covered}{tail}",
                     level.level.name(),
                     cov.linear_before,
                     cov.linear_gap_statistic,
-                    level.noise_level,
+                    if level.model_level.is_some() { "null level" } else { "noise level" },
+                    crate::system::null_level(level),
                     100.0 * cov.extrapolated_share,
                     outside.len(),
                     outside.join(", "),
@@ -180,12 +201,11 @@ fn decide_level(levels: &[LevelResult], li: usize, rules: &VerdictRules) -> Deci
             verdict: Verdict::Effect(c.effect),
             confidence: effect_confidence(level, ci, shrink),
             reason: format!(
-                "{} held-out gap {:.4} is {:.1}× its noise level {:.4}; adding `{}` brings it to \
-                 {:.4} (excess shrink {:.0} %)",
+                "{} held-out gap {:.4} is {}; adding `{}` brings it to {:.4} (excess shrink \
+                 {:.0} %)",
                 level.level.name(),
                 level.before,
-                level.before / level.noise_level.max(f64::MIN_POSITIVE),
-                level.noise_level,
+                against_null(level),
                 c.effect,
                 c.after,
                 100.0 * shrink
@@ -222,12 +242,11 @@ fn decide_level(levels: &[LevelResult], li: usize, rules: &VerdictRules) -> Deci
                 verdict,
                 confidence,
                 reason: format!(
-                    "{} held-out gap {:.4} is {:.1}× its noise level {:.4}, and {what} removes \
-                     only {:.0} % of its excess{tail}",
+                    "{} held-out gap {:.4} is {}, and {what} removes only {:.0} % of its \
+                     excess{tail}",
                     level.level.name(),
                     level.before,
-                    level.before / level.noise_level.max(f64::MIN_POSITIVE),
-                    level.noise_level,
+                    against_null(level),
                     100.0 * shrink.max(0.0)
                 ),
                 level: Some(li),
@@ -483,6 +502,7 @@ mod tests {
             fold_scheme: None,
             coverage: None,
             interpolated_gap_statistic: None,
+            model_level: None,
         }
     }
 
@@ -534,6 +554,7 @@ mod tests {
     fn a_force_gap_only_at_extrapolated_wind_speeds_defers_to_the_free_response() {
         let f = |c: Vec<CandidateScore>, interpolated: Option<f64>| LevelResult {
             interpolated_gap_statistic: interpolated,
+            model_level: None,
             ..level(Level::Aerodynamic, 0.2, 0.1, true, c)
         };
         let s = level(Level::Structural, 0.1, 0.1, false, vec![]);

@@ -161,6 +161,7 @@ pub(crate) fn assemble(
         gap_statistic: stat,
         gap_threshold: opts.gap_threshold,
         interpolated_gap_statistic: inside_stat,
+        model_level: None,
         held_out_cases: cases.iter().map(|c| c.nd.meta.id.clone()).collect(),
         candidates: cands.into_iter().map(|(c, _)| c).collect(),
         where_,

@@ -16,7 +16,8 @@
 //!    (`identify::pipeline::prepare`); per fold, the training cases' identification
 //!    (default [`IdentifySettings`]; `Prepared::identify` on their indices, the result of
 //!    `identify` on them alone) selects each configuration's support (union of its groups' supports, lift and
-//!    moment); the law is then one coefficient vector per node, fitted by least squares on
+//!    moment, plus every nonlinear term any configuration selected: one section, one
+//!    set of nonlinear terms); the law is then one coefficient vector per node, fitted by least squares on
 //!    the node's amplitudes together (the identified law depends on K only, as
 //!    `aeroelastic::identified` aggregates it). A held-out case is predicted from its
 //!    preprocessed motion with the node coefficients of its configuration interpolated at
@@ -252,6 +253,31 @@ fn build_fold(
             for c in s.iter_mut() {
                 if !c.contains(&constant) {
                     c.push(constant);
+                }
+            }
+        }
+    }
+    // Every configuration is the same section: a nonlinear term that any configuration's
+    // identification selects belongs to every configuration's node law. A configuration
+    // whose forcing hides it (Table I's A pitches at 0.7 Hz: α̇³ is a few noise σ per
+    // case, and a per-case fit folds its fundamental into the α̇ coefficient) cannot fit
+    // its amplitudes with one coefficient vector without it, and its held-out gap grows
+    // with amplitude (DECISIONS, "One nonlinear support for every configuration").
+    let mut shared: [Vec<Term>; 2] = [Vec::new(), Vec::new()];
+    for s in supports.values() {
+        for c in 0..2 {
+            for t in &s[c] {
+                if t.degree() >= 2 && !shared[c].contains(t) {
+                    shared[c].push(*t);
+                }
+            }
+        }
+    }
+    for s in supports.values_mut() {
+        for c in 0..2 {
+            for t in &shared[c] {
+                if !s[c].contains(t) {
+                    s[c].push(*t);
                 }
             }
         }

@@ -164,6 +164,115 @@ fn sim_identification(
     Ok((id, law))
 }
 
+/// The forced campaign's grouped-jackknife identifications: the interior (configuration,
+/// wind speed) groups (every wind speed of a configuration but its lowest and highest;
+/// all groups when fewer than two are interior), sorted, are dealt round-robin into
+/// k = min(groups, [`JACKKNIFE_FOLDS`]) folds and the law is identified again without each
+/// fold (in parallel). `None` with fewer than 3 groups or when any fold fails to identify
+/// (the sim is then scored against the noise alone, as without a forced campaign).
+fn jackknife_identifications(
+    forced: &Dataset,
+    opts: &SystemOptions,
+) -> Option<Vec<identify::pipeline::Identification>> {
+    use rayon::prelude::*;
+    let name = forced.manifest.name.as_str();
+    let prepared = identify::workflow::prepare_dataset(forced, &opts.preprocess).ok()?;
+    let key = |m: &identify::record::CaseMeta| {
+        (m.config.clone().unwrap_or_default(), m.wind_speed.to_bits())
+    };
+    let mut groups: Vec<(String, u64)> = prepared.cases.iter().map(|c| key(&c.meta)).collect();
+    groups.sort();
+    groups.dedup();
+    if groups.len() < 3 {
+        return None;
+    }
+    // The end wind speeds of each configuration stay in every fold, so that every
+    // jackknife law covers the K range the full law covers: the variance is then the
+    // estimation error, not the loss of range (which the coverage rule judges). With
+    // fewer than two interior groups every group is dealt (the variance then also
+    // carries the range loss: an overestimate, on campaigns too small to do better).
+    let interior: Vec<(String, u64)> = groups
+        .iter()
+        .enumerate()
+        .filter(|(i, g)| {
+            let first = *i == 0 || groups[i - 1].0 != g.0;
+            let last = *i + 1 == groups.len() || groups[i + 1].0 != g.0;
+            !(first || last)
+        })
+        .map(|(_, g)| g.clone())
+        .collect();
+    if interior.len() >= 2 {
+        groups = interior;
+    }
+    let k = groups.len().min(JACKKNIFE_FOLDS);
+    let fold: Vec<usize> = prepared
+        .cases
+        .iter()
+        .map(|c| groups.iter().position(|g| *g == key(&c.meta)).map_or(usize::MAX, |p| p % k))
+        .collect();
+    (0..k)
+        .into_par_iter()
+        .map(|f| {
+            let cases: Vec<_> = prepared
+                .cases
+                .iter()
+                .zip(&fold)
+                .filter(|(_, &g)| g != f)
+                .map(|(c, _)| c.clone())
+                .collect();
+            identify(&cases, &opts.identify, name, &|_| {}).ok()
+        })
+        .collect()
+}
+
+/// The sim's own uncertainty along each free run, per DOF, in the units of the gap
+/// metric's energy: with the jackknife laws L_i (`ids`, built with `law_opts`) and their
+/// residuals r_i along the run, the jackknife variance (k − 1)/k · Σ_i mean_t((r_i − r̄)²)
+/// / norm². It is what the law's estimation error from the forced campaign puts into the
+/// residual; where a run lies beyond the forced range, deleting the outer groups moves the
+/// law most, and the variance is large. (A bias all the laws share, e.g. the same
+/// extrapolation, is not in it: that is what the coverage rule is for.)
+///
+/// `None` when any jackknife law cannot be built or scored.
+pub fn model_energy(
+    ids: &[identify::pipeline::Identification],
+    law_opts: &IdentifiedOptions,
+    free: &Dataset,
+    opts: &SystemOptions,
+) -> Option<Vec<[f64; 2]>> {
+    use rayon::prelude::*;
+    if ids.len() < 2 {
+        return None;
+    }
+    let runs: Vec<Vec<RunResidual>> = ids
+        .par_iter()
+        .map(|id| {
+            let law = IdentifiedLaw::from_identification(id, law_opts).ok()?;
+            let model: Arc<dyn AeroModel> = Arc::new(law.model().clone());
+            prepare_free(free, &model, opts).ok().map(|p| p.runs)
+        })
+        .collect::<Option<_>>()?;
+    let kf = runs.len() as f64;
+    let out = (0..runs[0].len())
+        .map(|j| {
+            [0, 1].map(|c| {
+                let len = runs[0][j].r[c].len();
+                let mut e = 0.0;
+                for t in 0..len {
+                    let mean = runs.iter().map(|r| r[j].r[c][t]).sum::<f64>() / kf;
+                    e += runs.iter().map(|r| (r[j].r[c][t] - mean).powi(2)).sum::<f64>();
+                }
+                let norm = runs[0][j].norm[c];
+                (kf - 1.0) / kf * e / (len.max(1) as f64 * norm * norm)
+            })
+        })
+        .collect();
+    Some(out)
+}
+
+/// Largest number of folds of the grouped jackknife ([`model_energy`]).
+pub const JACKKNIFE_FOLDS: usize = 5;
+
 /// Prepared free runs of a data set for a given aerodynamic model.
 pub(crate) struct Prepared {
     pub runs: Vec<RunResidual>,
@@ -230,18 +339,38 @@ pub(crate) fn prepare_free(
 /// ([`aeroelastic::identified::Extrapolation::Theodorsen`]) instead of straight lines; the
 /// tables with the smaller gap are the sim whose gap the candidates explain.
 ///
+/// The gap test's null adds the sim's own uncertainty to the noise: the law identified
+/// again in a grouped jackknife over the forced campaign ([`model_energy`],
+/// [`LevelResult::model_level`]); the coverage rule's per-run statistics use the same
+/// per-run null.
+///
 /// # Errors
 /// As [`sim_law`] and [`system_level_with_model`].
 pub fn system_level(forced: &Dataset, free: &Dataset, opts: &SystemOptions) -> Result<LevelResult> {
     opts.check()?;
     let (id, law) = sim_identification(forced, opts)?;
     let model: Arc<dyn AeroModel> = Arc::new(law.model().clone());
-    let (mut level, p) = level_and_runs(&model, free, opts)?;
     let chord = forced.manifest.section.chord;
+    let jack = jackknife_identifications(forced, opts);
+    let jack_energy = |law_opts: &IdentifiedOptions| {
+        jack.as_ref()
+            .and_then(|ids| model_energy(ids, law_opts, free, opts))
+    };
+    let linear_energy = jack_energy(&IdentifiedOptions::new(chord));
+    let (mut level, p) = level_and_runs(&model, free, opts, linear_energy.as_deref())?;
     let range = coverage::ForcedRange::new(&id, forced, chord);
     let before: Vec<f64> = level.cases.iter().map(|c| c.before).collect();
-    let noise: Vec<f64> = level.cases.iter().map(|c| c.noise_level).collect();
-    let mut cov = coverage::assess(&range, &p.runs, &before, &noise);
+    // each run's null level: its noise and the sim's own uncertainty along it
+    let null: Vec<f64> = level
+        .cases
+        .iter()
+        .enumerate()
+        .map(|(j, c)| {
+            let m = linear_energy.as_ref().map_or(0.0, |e| comb(e[j]));
+            c.noise_level.hypot(m)
+        })
+        .collect();
+    let mut cov = coverage::assess(&range, &p.runs, &before, &null);
     cov.linear_before = level.before;
     cov.linear_gap_statistic = level.gap_statistic;
     if cov.any_outside() {
@@ -252,7 +381,8 @@ pub fn system_level(forced: &Dataset, free: &Dataset, opts: &SystemOptions) -> R
         // a failure here only leaves the tails unreported
         if let Ok(tails) = IdentifiedLaw::from_identification(&id, &tails_opts) {
             let tm: Arc<dyn AeroModel> = Arc::new(tails.model().clone());
-            if let Ok((tl, _)) = level_and_runs(&tm, free, opts) {
+            let tails_energy = jack_energy(&tails_opts);
+            if let Ok((tl, _)) = level_and_runs(&tm, free, opts, tails_energy.as_deref()) {
                 if tl.before.is_finite() {
                     cov.tails_before = Some(tl.before);
                     cov.tails_shrink = Some(crate::verdict::plain_shrink(level.before, tl.before));
@@ -266,7 +396,7 @@ pub fn system_level(forced: &Dataset, free: &Dataset, opts: &SystemOptions) -> R
             }
         }
     }
-    cov.decide(level.gap_threshold, level.noise_level);
+    cov.decide(level.gap_threshold, null_level(&level));
     level.coverage = Some(cov);
     Ok(level)
 }
@@ -364,7 +494,9 @@ fn score_candidate(
 /// displacement noise σ̂ ([`identify::preprocess::noise_sigma`] of each run) through the
 /// residual operator's impulse responses (differentiator, aerodynamic filter).
 ///
-/// **Gap test.** statistic = before / noise_level; significant when it exceeds
+/// **Gap test.** statistic = before / null, null = noise_level here (no forced campaign,
+/// no model uncertainty; [`system_level`] adds the identified law's jackknife uncertainty,
+/// [`LevelResult::model_level`]); significant when it exceeds
 /// [`SystemOptions::gap_ratio`] (default 1.25; on effect-free blind sets the statistic is
 /// 1.01–1.09 over 20 seeds, 0 false alarms).
 ///
@@ -383,14 +515,22 @@ pub fn system_level_with_model(
     free: &Dataset,
     opts: &SystemOptions,
 ) -> Result<LevelResult> {
-    level_and_runs(model, free, opts).map(|(level, _)| level)
+    level_and_runs(model, free, opts, None).map(|(level, _)| level)
+}
+
+/// The gap test's null level of a level: sqrt(noise_level² + model_level²).
+pub fn null_level(level: &LevelResult) -> f64 {
+    level.noise_level.hypot(level.model_level.unwrap_or(0.0))
 }
 
 /// [`system_level_with_model`] and the prepared runs it scored.
+/// `model_energy`: the sim's own uncertainty per run and DOF ([`model_energy`]), added to
+/// the noise in the gap test's null.
 fn level_and_runs(
     model: &Arc<dyn AeroModel>,
     free: &Dataset,
     opts: &SystemOptions,
+    model_energy: Option<&[[f64; 2]]>,
 ) -> Result<(LevelResult, Prepared)> {
     opts.check()?;
     let p = prepare_free(free, model, opts)?;
@@ -405,7 +545,10 @@ fn level_and_runs(
     let e_noise = mean2(&noise_runs);
     let before = comb(e_before);
     let noise_level = comb(e_noise);
-    let gap_statistic = before / noise_level.max(f64::MIN_POSITIVE);
+    let model_level = model_energy
+        .filter(|e| e.len() == n)
+        .map(|e| comb(mean2(e)));
+    let gap_statistic = before / noise_level.hypot(model_level.unwrap_or(0.0)).max(f64::MIN_POSITIVE);
     let significant_gap = gap_statistic > opts.gap_ratio;
 
     let mut scored: Vec<(CandidateScore, Scored)> = candidates::CANDIDATES
@@ -491,6 +634,7 @@ fn level_and_runs(
     };
     let level = LevelResult {
         interpolated_gap_statistic: None,
+        model_level,
         level: Level::Structural,
         metric: "held-out normalised equation error of the free response".into(),
         before,
