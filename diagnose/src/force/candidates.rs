@@ -232,17 +232,24 @@ fn higher_order_pool() -> Vec<Pool> {
 }
 
 /// Pool of the `dynamic_stall` selection: lagged dead-zone regressors of the effective
-/// angle, linear and quadratic beyond α_c.
+/// angle, a step (full separation beyond α_c: the saturating separation curves of stall
+/// models), linear and quadratic beyond α_c, each in two structures: the lagged dead zone
+/// itself, and the attached load times a lagged separation amount (Kirchhoff's
+/// C_N = C_Nα·α_e·f(s) with a lagged separation variable s, the structure of
+/// Beddoes–Leishman-type models; see [`stall_column`]).
 fn stall_pool() -> Vec<Pool> {
     let mut v = Vec::new();
     for ac in [4.0f64, 7.0, 10.0, 13.0, 16.0, 19.0, 22.0] {
         for lag in [0.0, 2.0, 6.0] {
-            for power in [1u8, 2] {
-                v.push(Pool::Stall {
-                    alpha_c: ac.to_radians(),
-                    lag_chords: lag,
-                    power,
-                });
+            for power in [0u8, 1, 2] {
+                for kirchhoff in [false, true] {
+                    v.push(Pool::Stall {
+                        alpha_c: ac.to_radians(),
+                        lag_chords: lag,
+                        power,
+                        kirchhoff,
+                    });
+                }
             }
         }
     }
@@ -257,6 +264,7 @@ enum Pool {
         alpha_c: f64,
         lag_chords: f64,
         power: u8,
+        kirchhoff: bool,
     },
 }
 
@@ -268,8 +276,14 @@ impl Pool {
                 alpha_c,
                 lag_chords,
                 power,
+                kirchhoff,
             } => format!(
-                "stall(alpha_c={:.0}deg,lag={lag_chords}B/U,power={power})",
+                "{}(alpha_c={:.0}deg,lag={lag_chords}B/U,power={power})",
+                if *kirchhoff {
+                    "stall_kirchhoff"
+                } else {
+                    "stall"
+                },
                 alpha_c.to_degrees()
             ),
         }
@@ -282,23 +296,47 @@ impl Pool {
                 alpha_c,
                 lag_chords,
                 power,
-            } => stall_column(c, alpha_c, lag_chords, power),
+                kirchhoff,
+            } => stall_column(c, alpha_c, lag_chords, power, kirchhoff),
         }
     }
 }
 
 /// y = L_τ[dz(α_e)], α_e = α + ḣ/U the effective angle (quasi-steady heave plunge),
-/// dz(a) = sign(a)·max(|a| − α_c, 0)^p (p = `power`, 1 or 2), first-order lag
-/// τ = T·B/U started from 10 τ of the harmonic motion before the record.
-fn stall_column(c: &CaseData, alpha_c: f64, lag_chords: f64, power: u8) -> Vec<f64> {
-    let dz = |a: f64| a.signum() * (a.abs() - alpha_c).max(0.0).powi(i32::from(power));
+/// dz(a) = sign(a)·max(|a| − α_c, 0)^p (p = `power`, 1 or 2; 0 is the step
+/// sign(a)·[|a| > α_c]), first-order lag
+/// τ = T·B/U started from 10 τ of the harmonic motion before the record. With `kirchhoff`
+/// the lag acts on the separation amount and the load is the attached one times it:
+/// y = α_e·L_τ[max(|α_e| − α_c, 0)^p] (the lift a lagged separation point removes,
+/// C_Nα·α_e·(f(s) − 1), to first order in the separation).
+fn stall_column(
+    c: &CaseData,
+    alpha_c: f64,
+    lag_chords: f64,
+    power: u8,
+    kirchhoff: bool,
+) -> Vec<f64> {
+    let dz = |a: f64| {
+        let x = a.abs() - alpha_c;
+        let sep = if power == 0 {
+            f64::from(u8::from(x > 0.0))
+        } else {
+            x.max(0.0).powi(i32::from(power))
+        };
+        if kirchhoff {
+            sep
+        } else {
+            a.signum() * sep
+        }
+    };
+    let load = |a: f64, y: f64| if kirchhoff { a * y } else { y };
     let x: Vec<f64> = c.nd.x[0]
         .iter()
         .zip(&c.nd.x[3])
         .map(|(a, h)| a + h)
         .collect();
     if lag_chords <= 0.0 {
-        return x.iter().map(|&a| dz(a)).collect();
+        return x.iter().map(|&a| load(a, dz(a))).collect();
     }
     let tau = lag_chords * c.nd.chord / c.u;
     let a = (-c.dt / tau).exp();
@@ -317,7 +355,7 @@ fn stall_column(c: &CaseData, alpha_c: f64, lag_chords: f64, power: u8) -> Vec<f
     x.iter()
         .map(|&v| {
             y = a * y + (1.0 - a) * dz(v);
-            y
+            load(v, y)
         })
         .collect()
 }

@@ -208,7 +208,12 @@ fn jackknife_identifications(
     let fold: Vec<usize> = prepared
         .cases
         .iter()
-        .map(|c| groups.iter().position(|g| *g == key(&c.meta)).map_or(usize::MAX, |p| p % k))
+        .map(|c| {
+            groups
+                .iter()
+                .position(|g| *g == key(&c.meta))
+                .map_or(usize::MAX, |p| p % k)
+        })
         .collect();
     (0..k)
         .into_par_iter()
@@ -260,7 +265,10 @@ pub fn model_energy(
                 let mut e = 0.0;
                 for t in 0..len {
                     let mean = runs.iter().map(|r| r[j].r[c][t]).sum::<f64>() / kf;
-                    e += runs.iter().map(|r| (r[j].r[c][t] - mean).powi(2)).sum::<f64>();
+                    e += runs
+                        .iter()
+                        .map(|r| (r[j].r[c][t] - mean).powi(2))
+                        .sum::<f64>();
                 }
                 let norm = runs[0][j].norm[c];
                 (kf - 1.0) / kf * e / (len.max(1) as f64 * norm * norm)
@@ -548,7 +556,10 @@ fn level_and_runs(
     let model_level = model_energy
         .filter(|e| e.len() == n)
         .map(|e| comb(mean2(e)));
-    let gap_statistic = before / noise_level.hypot(model_level.unwrap_or(0.0)).max(f64::MIN_POSITIVE);
+    let gap_statistic = before
+        / noise_level
+            .hypot(model_level.unwrap_or(0.0))
+            .max(f64::MIN_POSITIVE);
     let significant_gap = gap_statistic > opts.gap_ratio;
 
     let mut scored: Vec<(CandidateScore, Scored)> = candidates::CANDIDATES

@@ -376,7 +376,10 @@ fn residual_series(
     for (c, o) in out.iter_mut().enumerate() {
         let rest: Vec<f64> = (0..n)
             .map(|i| {
-                (0..2).map(|j| cs[(c, j)] * qd[j][i] + ks[(c, j)] * q[j][i]).sum::<f64>() - f[c][i]
+                (0..2)
+                    .map(|j| cs[(c, j)] * qd[j][i] + ks[(c, j)] * q[j][i])
+                    .sum::<f64>()
+                    - f[c][i]
             })
             .collect();
         let smooth = smooth_as_acceleration(&rest, dt, s.half_window, s.order)
