@@ -368,8 +368,7 @@ fn residual_series(
     f: &[Vec<f64>; 2],
     dt: f64,
     s: &ResidualSettings,
-    id: &str,
-) -> Result<[Vec<f64>; 2]> {
+) -> identify::Result<[Vec<f64>; 2]> {
     let (ms, cs, ks) = (st.mass_matrix(), st.damping_matrix(), st.stiffness_matrix());
     let n = q[0].len();
     let mut out = [vec![0.0; n], vec![0.0; n]];
@@ -382,8 +381,7 @@ fn residual_series(
                     - f[c][i]
             })
             .collect();
-        let smooth = smooth_as_acceleration(&rest, dt, s.half_window, s.order)
-            .map_err(|e| Error::identify(format!("free run `{id}`: residual smoothing"), e))?;
+        let smooth = smooth_as_acceleration(&rest, dt, s.half_window, s.order)?;
         for (i, v) in o.iter_mut().enumerate() {
             *v = ms[(c, 0)] * qdd[0][i] + ms[(c, 1)] * qdd[1][i] + smooth[i];
         }
@@ -457,7 +455,8 @@ pub fn prepare_run(
     let pad = (s.pad / dt).ceil() as usize;
     let force = forces_along(run_model.as_ref(), &flow, &q, &qd, dt, pad);
     let lag0 = vec![0.0; run_model.n_lag()];
-    let whole = residual_series(st, &q, &qd, &qdd, &force, dt, s, id)?;
+    let whole = residual_series(st, &q, &qd, &qdd, &force, dt, s)
+        .map_err(|e| Error::identify(format!("free run `{id}`: residual smoothing"), e))?;
     let r = whole.map(|w| w[i0..i1].to_vec());
     let mut ss = [0.0; 2];
     let (ms, cs, ks) = (st.mass_matrix(), st.damping_matrix(), st.stiffness_matrix());
@@ -550,11 +549,13 @@ fn noise_kernels(
             sg(&qd[1], dt, s, id, "noise kernel")?,
         ];
         let f = forces_along(model, flow, &q, &qd, dt, (s.pad / dt).ceil() as usize);
-        let r = residual_series(st, &q, &qd, &qdd, &f, dt, s, id)?;
-        for i in 2 * m..n - 2 * m {
-            for c in 0..2 {
-                out[c][j] += (r[c][i] / eps).powi(2);
-            }
+        let r = residual_series(st, &q, &qd, &qdd, &f, dt, s)
+            .map_err(|e| Error::identify(format!("free run `{id}`: noise kernel"), e))?;
+        for (o, rc) in out.iter_mut().zip(&r) {
+            o[j] += rc[2 * m..n - 2 * m]
+                .iter()
+                .map(|v| (v / eps).powi(2))
+                .sum::<f64>();
         }
     }
     Ok(out)
