@@ -150,6 +150,7 @@ fn aero_level() -> LevelResult {
     }
     LevelResult {
         interpolated_gap_statistic: None,
+        model_level: None,
         level: Level::Aerodynamic,
         metric: "normalised force residual".into(),
         before: 0.12,
@@ -240,6 +241,7 @@ fn structural_level() -> LevelResult {
         .collect();
     LevelResult {
         interpolated_gap_statistic: None,
+        model_level: None,
         level: Level::Structural,
         metric: "normalised free-response residual".into(),
         before: 0.05,
