@@ -75,7 +75,7 @@ pub fn excess_shrink(before: f64, after: f64, noise: f64) -> f64 {
 fn against_null(level: &LevelResult) -> String {
     match level.model_level {
         Some(m) => {
-            let null = level.noise_level.hypot(m);
+            let null = crate::system::null_level(level);
             format!(
                 "{:.1}× its null level {null:.4} (noise {:.4}, the law's own uncertainty {m:.4})",
                 level.before / null.max(f64::MIN_POSITIVE),

@@ -137,14 +137,19 @@ impl SystemOptions {
 /// [`Error::Aeroelastic`] naming the data set when preprocessing, identification or the
 /// law fails.
 pub fn sim_law(forced: &Dataset, opts: &SystemOptions) -> Result<IdentifiedLaw> {
-    sim_identification(forced, opts).map(|(_, law)| law)
+    sim_identification(forced, opts).map(|(_, law, _)| law)
 }
 
-/// [`sim_law`] together with the identification it was built from.
+/// [`sim_law`] together with the identification it was built from and the preprocessed
+/// forced cases (the jackknife reuses them).
 fn sim_identification(
     forced: &Dataset,
     opts: &SystemOptions,
-) -> Result<(identify::pipeline::Identification, IdentifiedLaw)> {
+) -> Result<(
+    identify::pipeline::Identification,
+    IdentifiedLaw,
+    Vec<identify::record::NondimCase>,
+)> {
     let name = forced.manifest.name.clone();
     if !forced.records.iter().any(|r| r.kind == CaseKind::Forced) {
         return Err(Error::data(
@@ -161,26 +166,26 @@ fn sim_identification(
         &IdentifiedOptions::new(forced.manifest.section.chord),
     )
     .map_err(|e| Error::aeroelastic(format!("data set `{name}`: identified law"), e))?;
-    Ok((id, law))
+    Ok((id, law, prepared.cases))
 }
 
-/// The forced campaign's grouped-jackknife identifications: the interior (configuration,
+/// The grouped-jackknife identifications of the forced campaign `cases` (data set
+/// `name`, preprocessed as for the sim's law): the interior (configuration,
 /// wind speed) groups (every wind speed of a configuration but its lowest and highest;
 /// all groups when fewer than two are interior), sorted, are dealt round-robin into
 /// k = min(groups, [`JACKKNIFE_FOLDS`]) folds and the law is identified again without each
 /// fold (in parallel). `None` with fewer than 3 groups or when any fold fails to identify
 /// (the sim is then scored against the noise alone, as without a forced campaign).
 fn jackknife_identifications(
-    forced: &Dataset,
+    cases: &[identify::record::NondimCase],
+    name: &str,
     opts: &SystemOptions,
 ) -> Option<Vec<identify::pipeline::Identification>> {
     use rayon::prelude::*;
-    let name = forced.manifest.name.as_str();
-    let prepared = identify::workflow::prepare_dataset(forced, &opts.preprocess).ok()?;
     let key = |m: &identify::record::CaseMeta| {
         (m.config.clone().unwrap_or_default(), m.wind_speed.to_bits())
     };
-    let mut groups: Vec<(String, u64)> = prepared.cases.iter().map(|c| key(&c.meta)).collect();
+    let mut groups: Vec<(String, u64)> = cases.iter().map(|c| key(&c.meta)).collect();
     groups.sort();
     groups.dedup();
     if groups.len() < 3 {
@@ -205,8 +210,7 @@ fn jackknife_identifications(
         groups = interior;
     }
     let k = groups.len().min(JACKKNIFE_FOLDS);
-    let fold: Vec<usize> = prepared
-        .cases
+    let fold: Vec<usize> = cases
         .iter()
         .map(|c| {
             groups
@@ -218,14 +222,13 @@ fn jackknife_identifications(
     (0..k)
         .into_par_iter()
         .map(|f| {
-            let cases: Vec<_> = prepared
-                .cases
+            let train: Vec<_> = cases
                 .iter()
                 .zip(&fold)
                 .filter(|(_, &g)| g != f)
                 .map(|(c, _)| c.clone())
                 .collect();
-            identify(&cases, &opts.identify, name, &|_| {}).ok()
+            identify(&train, &opts.identify, name, &|_| {}).ok()
         })
         .collect()
 }
@@ -356,10 +359,10 @@ pub(crate) fn prepare_free(
 /// As [`sim_law`] and [`system_level_with_model`].
 pub fn system_level(forced: &Dataset, free: &Dataset, opts: &SystemOptions) -> Result<LevelResult> {
     opts.check()?;
-    let (id, law) = sim_identification(forced, opts)?;
+    let (id, law, cases) = sim_identification(forced, opts)?;
     let model: Arc<dyn AeroModel> = Arc::new(law.model().clone());
     let chord = forced.manifest.section.chord;
-    let jack = jackknife_identifications(forced, opts);
+    let jack = jackknife_identifications(&cases, &forced.manifest.name, opts);
     let jack_energy = |law_opts: &IdentifiedOptions| {
         jack.as_ref()
             .and_then(|ids| model_energy(ids, law_opts, free, opts))
