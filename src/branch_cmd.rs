@@ -147,14 +147,14 @@ pub fn run(args: &BranchArgs) -> anyhow::Result<()> {
             let f =
                 |v: Option<f64>, k: f64| v.map_or("—".to_string(), |x| format!("{:.3}", x * k));
             crate::ui::say!(
-                "{:>9.3} {:>9} {:>14.3} {:>14} {:>12} {:>12}{}",
+                "{:>9.3} {:>9} {:>14} {:>14} {:>12} {:>12}{}",
                 d.measured.u,
                 if d.measured.stable {
                     "stable"
                 } else {
                     "unstable"
                 },
-                d.measured.amplitude_alpha.to_degrees(),
+                f(d.measured.amplitude_alpha, 180.0 / std::f64::consts::PI),
                 f(d.predicted_alpha, 180.0 / std::f64::consts::PI),
                 f(d.d_alpha, 180.0 / std::f64::consts::PI),
                 f(d.d_h, 1e3),

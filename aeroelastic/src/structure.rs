@@ -199,6 +199,14 @@ pub struct Nonlinearities {
     /// Extra pitch stiffness terms Σ c_p d^p on the spring deflection d.
     #[serde(default)]
     pub pitch_stiffness_terms: Vec<PolyTerm>,
+    /// Amplitude-dependent heave damping Σ c_p h^p ḣ [N s/m^(p+1)] (power p ≥ 1; p = 2 is
+    /// the damping c_h(1 + d h²) with c_2 = c_h d); c > 0 dissipates.
+    #[serde(default)]
+    pub heave_damping_terms: Vec<PolyTerm>,
+    /// Amplitude-dependent pitch damping Σ c_p α^p α̇ [N m s/rad^(p+1)] (power p ≥ 1, on α,
+    /// not on the freeplay deflection); c > 0 dissipates.
+    #[serde(default)]
+    pub pitch_damping_terms: Vec<PolyTerm>,
     /// Pitch freeplay half gap δ \[rad\] (zero stiffness for |α| < δ); 0 = none.
     #[serde(default)]
     pub pitch_freeplay: f64,
@@ -209,9 +217,11 @@ pub struct Nonlinearities {
 
 impl Nonlinearities {
     /// The keys of the nonlinear terms, in documented order.
-    pub const KEYS: [&'static str; 4] = [
+    pub const KEYS: [&'static str; 6] = [
         "heave_stiffness_terms",
         "pitch_stiffness_terms",
+        "heave_damping_terms",
+        "pitch_damping_terms",
         "pitch_freeplay",
         "friction",
     ];
@@ -226,6 +236,8 @@ impl Nonlinearities {
     pub fn is_empty(&self) -> bool {
         self.heave_stiffness_terms.is_empty()
             && self.pitch_stiffness_terms.is_empty()
+            && self.heave_damping_terms.is_empty()
+            && self.pitch_damping_terms.is_empty()
             && self.pitch_freeplay == 0.0
             && self.friction.is_none()
     }
@@ -506,6 +518,21 @@ impl Structure {
                 finite(&format!("{name}[{i}].coefficient"), t.coefficient)?;
             }
         }
+        for (name, terms) in [
+            ("heave_damping_terms", &self.nonlinear.heave_damping_terms),
+            ("pitch_damping_terms", &self.nonlinear.pitch_damping_terms),
+        ] {
+            for (i, t) in terms.iter().enumerate() {
+                if t.power < 1 {
+                    return Err(Error::param(
+                        format!("{name}[{i}].power"),
+                        t.power as f64,
+                        "must be >= 1 (the constant term is c_h / c_alpha)",
+                    ));
+                }
+                finite(&format!("{name}[{i}].coefficient"), t.coefficient)?;
+            }
+        }
         non_negative("pitch_freeplay", self.nonlinear.pitch_freeplay)?;
         if let Some(f) = &self.nonlinear.friction {
             non_negative("friction.heave_force", f.heave_force)?;
@@ -556,6 +583,8 @@ impl Structure {
     pub fn is_linear(&self) -> bool {
         self.nonlinear.heave_stiffness_terms.is_empty()
             && self.nonlinear.pitch_stiffness_terms.is_empty()
+            && self.nonlinear.heave_damping_terms.is_empty()
+            && self.nonlinear.pitch_damping_terms.is_empty()
             && self.nonlinear.pitch_freeplay == 0.0
             && self
                 .nonlinear
@@ -599,6 +628,9 @@ impl Structure {
         for t in &self.nonlinear.heave_stiffness_terms {
             fh += t.coefficient * h.powi(t.power as i32);
         }
+        for t in &self.nonlinear.heave_damping_terms {
+            fh += t.coefficient * h.powi(t.power as i32) * qd[0];
+        }
         let a = q[1];
         let d = if self.nonlinear.pitch_freeplay > 0.0 {
             if a > self.nonlinear.pitch_freeplay {
@@ -614,6 +646,9 @@ impl Structure {
         let mut ma = self.c_alpha * qd[1] + self.k_alpha * d;
         for t in &self.nonlinear.pitch_stiffness_terms {
             ma += t.coefficient * d.powi(t.power as i32);
+        }
+        for t in &self.nonlinear.pitch_damping_terms {
+            ma += t.coefficient * a.powi(t.power as i32) * qd[1];
         }
         if fr[0] > 0.0 {
             fh += fr[0] * (qd[0] / fr[1]).tanh();
@@ -641,6 +676,11 @@ impl Structure {
             out[0][0] += t.coefficient * t.power as f64 * h.powi(t.power as i32 - 1);
         }
         out[0][2] = self.c_h;
+        for t in &self.nonlinear.heave_damping_terms {
+            let p = t.power as i32;
+            out[0][0] += t.coefficient * p as f64 * h.powi(p - 1) * qd[0];
+            out[0][2] += t.coefficient * h.powi(p);
+        }
         let a = q[1];
         let gap = self.nonlinear.pitch_freeplay;
         let (d, slope) = if gap > 0.0 {
@@ -660,6 +700,11 @@ impl Structure {
         }
         out[1][1] = slope * ka;
         out[1][3] = self.c_alpha;
+        for t in &self.nonlinear.pitch_damping_terms {
+            let p = t.power as i32;
+            out[1][1] += t.coefficient * p as f64 * a.powi(p - 1) * qd[1];
+            out[1][3] += t.coefficient * a.powi(p);
+        }
         if fr[0] > 0.0 {
             let c = (qd[0] / fr[1]).cosh();
             out[0][2] += fr[0] / fr[1] / (c * c);

@@ -180,7 +180,7 @@ pub fn parameter_range(effect: BlindEffect, form: Form) -> Option<(&'static str,
             Freeplay => ("half gap [deg]", 0.001, 1.0),
             Friction => ("T_c [N*m/m]", 1e-5, 3e-3),
             // catalogue effects the generator does not inject (real-rig structure)
-            StructuralPolynomial | StructuralDamping => return None,
+            StructuralPolynomial | StructuralDamping | AerodynamicScale => return None,
         },
     })
 }
@@ -239,7 +239,7 @@ fn injection(
                 half_gap: p.to_radians(),
             },
             Friction => Inj::Friction { moment: p },
-            StructuralPolynomial | StructuralDamping => return (vec![], vec![]),
+            StructuralPolynomial | StructuralDamping | AerodynamicScale => return (vec![], vec![]),
         },
     };
     (vec![Injection { effect: e, form }], params)

@@ -80,12 +80,15 @@ pub enum Effect {
     /// Amplitude-dependent structural damping, c₂q²q̇ per DOF (damping that grows with
     /// amplitude, the opposite trend of dry friction).
     StructuralDamping,
+    /// A scale on the aerodynamic lift and moment (a 2-D model on a finite rig: tip
+    /// losses, an uncertain effective span). Fitted at the bifurcation level only.
+    AerodynamicScale,
 }
 
 impl Effect {
-    /// The whole catalogue: DESIGN.md §5's nine effects, then the structural polynomial
-    /// and amplitude-dependent damping added for real rigs.
-    pub const ALL: [Effect; 11] = [
+    /// The whole catalogue: DESIGN.md §5's nine effects, then the structural polynomial,
+    /// amplitude-dependent damping and the aerodynamic scale added for real rigs.
+    pub const ALL: [Effect; 12] = [
         Effect::StaticOffset,
         Effect::AddedMass,
         Effect::TimeDelay,
@@ -97,6 +100,7 @@ impl Effect {
         Effect::Friction,
         Effect::StructuralPolynomial,
         Effect::StructuralDamping,
+        Effect::AerodynamicScale,
     ];
 
     /// The effects the withheld-effect generator injects (DESIGN.md §5's nine).
@@ -126,6 +130,7 @@ impl Effect {
             Effect::Friction => "friction",
             Effect::StructuralPolynomial => "structural_polynomial",
             Effect::StructuralDamping => "structural_damping",
+            Effect::AerodynamicScale => "aerodynamic_scale",
         }
     }
 
@@ -143,6 +148,7 @@ impl Effect {
             Effect::Friction => "frict",
             Effect::StructuralPolynomial => "s.poly",
             Effect::StructuralDamping => "s.damp",
+            Effect::AerodynamicScale => "a.scale",
         }
     }
 
@@ -259,7 +265,7 @@ mod tests {
         }
         names.sort();
         names.dedup();
-        assert_eq!(names.len(), 11);
+        assert_eq!(names.len(), 12);
         assert_eq!(Verdict::from_name("none").unwrap(), Verdict::None);
         assert_eq!(
             Verdict::from_name("unexplained").unwrap().level(),

@@ -5,12 +5,15 @@
 //! * [`report`]: the result types and the `diagnosis.json` document;
 //! * [`force`]: the force level (forced-motion records);
 //! * [`system`]: the system level (free-response records);
+//! * [`bifurcation`]: the bifurcation level (a measured bifurcation diagram: Hopf, folds,
+//!   LCO branches, by continuation inside the fit);
 //! * [`verdict`]: from the levels' findings to one verdict;
 //! * [`blind`]: the withheld-effect data-set generator (the diagnosis never reads it);
 //! * [`mod@bench`]: the withheld-effect benchmark statistics;
 //! * [`sweep`]: large jobs split into independent items (shards, Dask tasks) and merged.
 
 pub mod bench;
+pub mod bifurcation;
 pub mod bench_run;
 pub mod blind;
 pub mod effect;

@@ -225,6 +225,11 @@ impl<'a> CondensedBalance<'a> {
             .iter()
             .chain(&nl.pitch_stiffness_terms)
             .all(|t| t.power % 2 == 1)
+            && nl
+                .heave_damping_terms
+                .iter()
+                .chain(&nl.pitch_damping_terms)
+                .all(|t| t.power % 2 == 0)
             && nl.pitch_freeplay == 0.0;
         let ks: Vec<usize> = (0..=harmonics)
             .filter(|k| !symmetric || k % 2 == 1)
@@ -255,6 +260,12 @@ impl<'a> CondensedBalance<'a> {
             .iter()
             .chain(&nl.pitch_stiffness_terms)
             .map(|t| t.power as usize)
+            .chain(
+                nl.heave_damping_terms
+                    .iter()
+                    .chain(&nl.pitch_damping_terms)
+                    .map(|t| t.power as usize + 1),
+            )
             .max()
             .unwrap_or(1);
         let period = if section.structure.friction_resolved()[0] > 0.0

@@ -1445,31 +1445,39 @@ impl Section {
     }
 }
 
-/// One measured LCO amplitude (a row of a table like
-/// `bristol-spring1-lco-amplitudes.csv`): first-harmonic amplitudes at one speed.
+/// One measured point of a bifurcation diagram (a row of a table like
+/// `bristol-spring1-lco-amplitudes.csv`, or a point extracted from an LCO record):
+/// first-harmonic amplitudes and frequency of a periodic orbit at one speed. Any of the
+/// amplitudes and the frequency may be missing (e.g. a heave-only table), not both
+/// amplitudes.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct MeasuredAmplitude {
-    /// Line in the file (1-based).
+    /// Line in the file (1-based; 0 for a point extracted from a record).
     pub line: usize,
     /// Branch the point was measured on (`stable` / `unstable`).
     pub stable: bool,
     /// Wind speed [m/s].
     pub u: f64,
-    /// First-harmonic heave amplitude \[m\] (peak).
-    pub amplitude_h: f64,
-    /// First-harmonic pitch amplitude \[rad\] (peak).
-    pub amplitude_alpha: f64,
+    /// First-harmonic heave amplitude \[m\] (peak), if measured.
+    pub amplitude_h: Option<f64>,
+    /// First-harmonic pitch amplitude \[rad\] (peak), if measured.
+    pub amplitude_alpha: Option<f64>,
+    /// Frequency of the orbit \[Hz\], if measured.
+    #[serde(default)]
+    pub frequency_hz: Option<f64>,
 }
 
-/// Reads a measured-amplitude table: CSV with a header naming at least `branch`,
-/// `wind_speed_m_s`, `heave_amp_m`, `pitch_amp_rad` (other columns ignored; the last
-/// column may contain commas); lines starting with `#` are comments; `branch` is
-/// `stable` or `unstable`.
+/// Reads a measured bifurcation diagram: CSV with a header naming `branch` (`stable` or
+/// `unstable`), `wind_speed_m_s` and at least one of `heave_amp_m` [m] and `pitch_amp_rad`
+/// \[rad\] (first-harmonic peak amplitudes), optionally `freq_hz` \[Hz\]; other columns are
+/// ignored (the last column may contain commas); lines starting with `#` are comments. A
+/// missing value is an empty field, `nan` or `-`; every row needs a speed and at least one
+/// amplitude (docs/DATA_FORMAT.md, "Measured bifurcation diagram").
 ///
 /// # Errors
 /// [`Error::Io`] when the file cannot be read; [`Error::InvalidTable`] naming the file,
-/// the line and the column for a missing column, a bad number or an unknown branch name,
-/// or a table without data rows.
+/// the line and the column for a missing column, a bad or negative number, a row without
+/// any amplitude or an unknown branch name, or a table without data rows.
 pub fn read_measured_amplitudes(path: &std::path::Path) -> Result<Vec<MeasuredAmplitude>> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::Io {
         path: path.display().to_string(),
@@ -1487,9 +1495,15 @@ pub fn parse_measured_amplitudes(text: &str, source: &str) -> Result<Vec<Measure
         table: source.to_string(),
         message: format!("line {line}: {msg}"),
     };
-    let mut header: Option<Vec<String>> = None;
-    let mut cols = [0usize; 4];
-    let names = ["branch", "wind_speed_m_s", "heave_amp_m", "pitch_amp_rad"];
+    // (branch, speed) required; heave, pitch, frequency optional columns.
+    const NAMES: [&str; 5] = [
+        "branch",
+        "wind_speed_m_s",
+        "heave_amp_m",
+        "pitch_amp_rad",
+        "freq_hz",
+    ];
+    let mut header: Option<(usize, [Option<usize>; 5])> = None;
     let mut out = Vec::new();
     for (i, raw) in text.lines().enumerate() {
         let line = i + 1;
@@ -1497,63 +1511,86 @@ pub fn parse_measured_amplitudes(text: &str, source: &str) -> Result<Vec<Measure
         if l.is_empty() || l.starts_with('#') {
             continue;
         }
-        match &header {
-            None => {
-                let h: Vec<String> = l.split(',').map(|c| c.trim().to_string()).collect();
-                for (k, name) in names.iter().enumerate() {
-                    cols[k] = h.iter().position(|c| c == name).ok_or_else(|| {
-                        bad(
-                            line,
-                            format!("header has no column `{name}` (columns: {})", h.join(", ")),
-                        )
-                    })?;
-                }
-                header = Some(h);
-            }
-            Some(h) => {
-                let f: Vec<&str> = l.splitn(h.len(), ',').map(str::trim).collect();
-                if f.len() < h.len() {
+        let Some((width, cols)) = header else {
+            let h: Vec<&str> = l.split(',').map(str::trim).collect();
+            let cols = NAMES.map(|name| h.iter().position(|c| *c == name));
+            for k in 0..2 {
+                if cols[k].is_none() {
                     return Err(bad(
                         line,
-                        format!("{} fields, the header has {}", f.len(), h.len()),
+                        format!(
+                            "header has no column `{}` (columns: {})",
+                            NAMES[k],
+                            h.join(", ")
+                        ),
                     ));
                 }
-                let num = |k: usize| -> Result<f64> {
-                    let v: f64 = f[cols[k]].parse().map_err(|_| {
-                        bad(
-                            line,
-                            format!("column `{}`: `{}` is not a number", names[k], f[cols[k]]),
-                        )
-                    })?;
-                    if !v.is_finite() || v < 0.0 {
-                        return Err(bad(
-                            line,
-                            format!("column `{}`: {v} must be finite and ≥ 0", names[k]),
-                        ));
-                    }
-                    Ok(v)
-                };
-                let stable = match f[cols[0]] {
-                    "stable" => true,
-                    "unstable" => false,
-                    other => {
-                        return Err(bad(
-                            line,
-                            format!(
-                                "column `branch`: `{other}` is neither `stable` nor `unstable`"
-                            ),
-                        ))
-                    }
-                };
-                out.push(MeasuredAmplitude {
-                    line,
-                    stable,
-                    u: num(1)?,
-                    amplitude_h: num(2)?,
-                    amplitude_alpha: num(3)?,
-                });
             }
+            if cols[2].is_none() && cols[3].is_none() {
+                return Err(bad(
+                    line,
+                    format!(
+                        "header has neither `heave_amp_m` nor `pitch_amp_rad` (columns: {})",
+                        h.join(", ")
+                    ),
+                ));
+            }
+            header = Some((h.len(), cols));
+            continue;
+        };
+        let f: Vec<&str> = l.splitn(width, ',').map(str::trim).collect();
+        if f.len() < width {
+            return Err(bad(
+                line,
+                format!("{} fields, the header has {width}", f.len()),
+            ));
         }
+        let num = |k: usize| -> Result<Option<f64>> {
+            let Some(c) = cols[k] else { return Ok(None) };
+            let s = f[c];
+            if s.is_empty() || s == "-" || s.eq_ignore_ascii_case("nan") {
+                return Ok(None);
+            }
+            let v: f64 = s.parse().map_err(|_| {
+                bad(
+                    line,
+                    format!("column `{}`: `{s}` is not a number", NAMES[k]),
+                )
+            })?;
+            if !v.is_finite() || v < 0.0 {
+                return Err(bad(
+                    line,
+                    format!("column `{}`: {v} must be finite and ≥ 0", NAMES[k]),
+                ));
+            }
+            Ok(Some(v))
+        };
+        let stable = match f[cols[0].expect("checked")] {
+            "stable" => true,
+            "unstable" => false,
+            other => {
+                return Err(bad(
+                    line,
+                    format!("column `branch`: `{other}` is neither `stable` nor `unstable`"),
+                ))
+            }
+        };
+        let u = num(1)?.ok_or_else(|| bad(line, "column `wind_speed_m_s`: no value".into()))?;
+        let (amplitude_h, amplitude_alpha) = (num(2)?, num(3)?);
+        if amplitude_h.is_none() && amplitude_alpha.is_none() {
+            return Err(bad(
+                line,
+                "neither `heave_amp_m` nor `pitch_amp_rad` has a value".into(),
+            ));
+        }
+        out.push(MeasuredAmplitude {
+            line,
+            stable,
+            u,
+            amplitude_h,
+            amplitude_alpha,
+            frequency_hz: num(4)?.filter(|&v| v > 0.0),
+        });
     }
     if out.is_empty() {
         return Err(Error::InvalidTable {
@@ -1575,9 +1612,12 @@ pub struct MeasuredDistance {
     pub predicted_alpha: Option<f64>,
     /// Predicted first-harmonic heave amplitude there \[m\].
     pub predicted_h: Option<f64>,
-    /// Predicted − measured pitch amplitude \[rad\].
+    /// Predicted frequency there \[Hz\].
+    #[serde(default)]
+    pub predicted_frequency_hz: Option<f64>,
+    /// Predicted − measured pitch amplitude \[rad\] (`None` when either is missing).
     pub d_alpha: Option<f64>,
-    /// Predicted − measured heave amplitude \[m\].
+    /// Predicted − measured heave amplitude \[m\] (`None` when either is missing).
     pub d_h: Option<f64>,
     /// Distance in speed to the nearest predicted orbit of the same stability \[m/s\]
     /// (0 when a segment covers the speed); `None` (`null`) when no predicted orbit has
@@ -1585,8 +1625,41 @@ pub struct MeasuredDistance {
     pub speed_gap: Option<f64>,
 }
 
+/// The predicted orbit at a measured point's speed on the branches of `set`: the
+/// segment of the same stability that covers `m.u` and whose first-harmonic amplitude is
+/// closest to the measured one (pitch when measured, else heave), linearly interpolated
+/// in U. Returns (pitch \[rad\], heave \[m\], frequency \[Hz\]).
+pub fn predicted_at(set: &BranchSet, m: &MeasuredAmplitude) -> Option<(f64, f64, f64)> {
+    let mut best: Option<(f64, (f64, f64, f64))> = None;
+    for b in &set.branches {
+        for w in b.points.windows(2) {
+            if w[0].stable != m.stable || w[1].stable != m.stable {
+                continue;
+            }
+            if (w[0].u - m.u) * (w[1].u - m.u) > 0.0 || w[0].u == w[1].u {
+                continue;
+            }
+            let f = (m.u - w[0].u) / (w[1].u - w[0].u);
+            let lerp = |a: f64, b: f64| a * (1.0 - f) + b * f;
+            let a = lerp(w[0].amplitude1_alpha, w[1].amplitude1_alpha);
+            let h = lerp(w[0].amplitude1_h, w[1].amplitude1_h);
+            let hz = lerp(w[0].omega, w[1].omega) / std::f64::consts::TAU;
+            let miss = match (m.amplitude_alpha, m.amplitude_h) {
+                (Some(ma), _) => (a - ma).abs(),
+                (None, Some(mh)) => (h - mh).abs(),
+                (None, None) => 0.0,
+            };
+            if best.is_none_or(|(bm, _)| miss < bm) {
+                best = Some((miss, (a, h, hz)));
+            }
+        }
+    }
+    best.map(|b| b.1)
+}
+
 /// Distances of measured points to the predicted branches of the same stability
-/// (first-harmonic amplitudes, linear interpolation in U between branch points).
+/// (first-harmonic amplitudes, linear interpolation in U between branch points;
+/// [`predicted_at`]).
 pub fn measured_distances(
     set: &BranchSet,
     measured: &[MeasuredAmplitude],
@@ -1594,35 +1667,22 @@ pub fn measured_distances(
     measured
         .iter()
         .map(|m| {
-            let mut best: Option<(f64, f64)> = None;
-            let mut gap = f64::INFINITY;
-            for b in &set.branches {
-                for p in b.points.iter().filter(|p| p.stable == m.stable) {
-                    gap = gap.min((p.u - m.u).abs());
-                }
-                for w in b.points.windows(2) {
-                    if w[0].stable != m.stable || w[1].stable != m.stable {
-                        continue;
-                    }
-                    if (w[0].u - m.u) * (w[1].u - m.u) > 0.0 || w[0].u == w[1].u {
-                        continue;
-                    }
-                    let f = (m.u - w[0].u) / (w[1].u - w[0].u);
-                    let a = w[0].amplitude1_alpha * (1.0 - f) + w[1].amplitude1_alpha * f;
-                    let h = w[0].amplitude1_h * (1.0 - f) + w[1].amplitude1_h * f;
-                    if best.is_none_or(|(ba, _)| {
-                        (a - m.amplitude_alpha).abs() < (ba - m.amplitude_alpha).abs()
-                    }) {
-                        best = Some((a, h));
-                    }
-                }
-            }
+            let gap = set
+                .branches
+                .iter()
+                .flat_map(|b| b.points.iter())
+                .filter(|p| p.stable == m.stable)
+                .map(|p| (p.u - m.u).abs())
+                .fold(f64::INFINITY, f64::min);
+            let best = predicted_at(set, m);
+            let diff = |p: Option<f64>, q: Option<f64>| Some(p? - q?);
             MeasuredDistance {
                 measured: m.clone(),
                 predicted_alpha: best.map(|b| b.0),
                 predicted_h: best.map(|b| b.1),
-                d_alpha: best.map(|b| b.0 - m.amplitude_alpha),
-                d_h: best.map(|b| b.1 - m.amplitude_h),
+                predicted_frequency_hz: best.map(|b| b.2),
+                d_alpha: diff(best.map(|b| b.0), m.amplitude_alpha),
+                d_h: diff(best.map(|b| b.1), m.amplitude_h),
                 speed_gap: if best.is_some() {
                     Some(0.0)
                 } else {

@@ -280,10 +280,12 @@ pub fn branch_figure(
         sweep,
         measured: dist
             .iter()
-            .map(|d| DiagramPoint {
-                u: d.measured.u,
-                amplitude: d.measured.amplitude_alpha.to_degrees(),
-                stable: d.measured.stable,
+            .filter_map(|d| {
+                Some(DiagramPoint {
+                    u: d.measured.u,
+                    amplitude: d.measured.amplitude_alpha?.to_degrees(),
+                    stable: d.measured.stable,
+                })
             })
             .collect(),
     }

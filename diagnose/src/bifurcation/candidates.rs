@@ -1,0 +1,387 @@
+//! The catalogue at the bifurcation level: each candidate is a parametrised change of the
+//! nominal section (a structural term of [`aeroelastic::structure::Nonlinearities`], a mass
+//! change, or a scale on the aerodynamic loads) that the continuation can follow. The fit
+//! works on scaled parameters θ (value = scale · θ, scales from the nominal structure and
+//! the measured amplitudes, so that θ = 1 is a change of the order of the linear term at
+//! the largest measured amplitude).
+//!
+//! Sign conventions (DESIGN §2: h down, α nose-up; the extra forces are *restoring*, on
+//! the left of M q̈ + R(q, q̇) = F_aero, so a positive stiffness coefficient resists the
+//! displacement):
+//! - stiffness: extra restoring force k₂h² + k₃h³ [N/m², N/m³], extra restoring moment
+//!   k₂α² + k₃α³ [N m/rad², N m/rad³] (k₃ > 0 hardens);
+//! - damping: extra damping force c₂h²ḣ, moment c₂α²α̇ (c₂ > 0 dissipates);
+//! - friction: Coulomb moment T_c tanh(α̇/ε) opposing α̇ (T_c ≥ 0);
+//! - added mass: Δm added to the heaving mass, ΔI_α to the pitch inertia;
+//! - aerodynamic scale: lift and moment (and their apparent mass) times s.
+//!
+//! Not at this level: freeplay (a sharp gap is not a smooth vector field; continuation
+//! refuses it) and a force delay (no delay states in the section model); the report lists
+//! them as not fitted.
+
+use std::sync::Arc;
+
+use aeroelastic::aero::{AeroModel, Flow};
+use aeroelastic::section::Section;
+use aeroelastic::structure::{Friction, PolyTerm};
+use nalgebra::Matrix2;
+use num_complex::Complex64;
+use serde::{Deserialize, Serialize};
+
+use crate::{Effect, Result};
+
+/// One parameter of a candidate.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct ParameterSpec {
+    /// Name (`k3_pitch`, …).
+    pub name: String,
+    /// SI unit per unit span.
+    pub unit: String,
+    /// What the value means, with its sign convention.
+    pub convention: String,
+    /// Value of θ = 1.
+    pub scale: f64,
+}
+
+/// Which change a candidate makes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Change {
+    /// Pitch stiffness terms of these powers.
+    PitchStiffness(&'static [u32]),
+    /// Pitch stiffness powers, then heave stiffness powers.
+    PitchHeaveStiffness(&'static [u32], &'static [u32]),
+    /// Pitch damping c₂α²α̇.
+    PitchDamping,
+    /// Pitch and heave damping c₂α²α̇, c₂h²ḣ.
+    PitchHeaveDamping,
+    /// Coulomb friction in pitch.
+    PitchFriction,
+    /// Δm, ΔI_α.
+    AddedMass,
+    /// Scale on the aerodynamic loads.
+    AeroScale,
+}
+
+/// A candidate of the bifurcation level.
+#[derive(Debug, Clone)]
+pub struct BranchCandidate {
+    /// Catalogue effect.
+    pub effect: Effect,
+    /// Which DOFs or form (`pitch`, `pitch+heave`, …).
+    pub variant: String,
+    /// Parameters, in θ order.
+    pub parameters: Vec<ParameterSpec>,
+    /// Index of the candidate it extends (nested: its parameters are a prefix of these), if
+    /// any.
+    pub extends: Option<usize>,
+    change: Change,
+}
+
+/// Reference amplitudes of the measured diagram: the largest pitch \[rad\] and heave \[m\]
+/// amplitudes (a default where a DOF is not measured).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct Scales {
+    /// Pitch \[rad\].
+    pub alpha: f64,
+    /// Heave \[m\].
+    pub h: f64,
+}
+
+fn p(name: &str, unit: &str, convention: &str, scale: f64) -> ParameterSpec {
+    ParameterSpec {
+        name: name.into(),
+        unit: unit.into(),
+        convention: convention.into(),
+        scale,
+    }
+}
+
+fn stiffness_param(dof: &str, power: u32, k: f64, amp: f64) -> ParameterSpec {
+    let (sym, unit, what) = if dof == "pitch" {
+        ("α", format!("N m/rad^{power}"), "moment")
+    } else {
+        ("h", format!("N/m^{power}"), "force")
+    };
+    p(
+        &format!("k{power}_{dof}"),
+        &unit,
+        &format!(
+            "extra restoring {what} k{power}·{sym}^{power} ({sym} positive {}; k > 0 resists \
+             positive {sym}{})",
+            if dof == "pitch" { "nose-up" } else { "down" },
+            if power % 2 == 1 { ": hardening" } else { "" }
+        ),
+        k / amp.powi(power as i32 - 1),
+    )
+}
+
+/// The catalogue of the bifurcation level for `base` and measured amplitudes `s`, nested
+/// candidates after the ones they extend (whose parameters come first in theirs).
+pub fn catalogue(base: &Section, s: Scales) -> Vec<BranchCandidate> {
+    let st = &base.structure;
+    let (ka, kh) = (st.k_alpha, st.k_h.max(1e-3 * st.k_alpha / (s.h * s.h)));
+    // A damping scale of a 5 % damping ratio on the uncoupled mode at the reference
+    // amplitude (the nominal c may be zero).
+    let ca = 0.1 * (st.k_alpha * st.inertia_alpha).sqrt();
+    let ch = 0.1 * (kh * st.mass).sqrt();
+    let mut out = vec![
+        BranchCandidate {
+            effect: Effect::StructuralCubic,
+            variant: "pitch".into(),
+            parameters: vec![stiffness_param("pitch", 3, ka, s.alpha)],
+            extends: None,
+            change: Change::PitchStiffness(&[3]),
+        },
+        BranchCandidate {
+            effect: Effect::StructuralPolynomial,
+            variant: "pitch".into(),
+            parameters: vec![
+                stiffness_param("pitch", 3, ka, s.alpha),
+                stiffness_param("pitch", 2, ka, s.alpha),
+            ],
+            extends: Some(0),
+            change: Change::PitchStiffness(&[3, 2]),
+        },
+        BranchCandidate {
+            effect: Effect::StructuralPolynomial,
+            variant: "pitch, to the fifth power".into(),
+            parameters: vec![
+                stiffness_param("pitch", 3, ka, s.alpha),
+                stiffness_param("pitch", 2, ka, s.alpha),
+                stiffness_param("pitch", 5, ka, s.alpha),
+            ],
+            extends: Some(1),
+            change: Change::PitchStiffness(&[3, 2, 5]),
+        },
+        BranchCandidate {
+            effect: Effect::StructuralPolynomial,
+            variant: "pitch, heave cubic".into(),
+            parameters: vec![
+                stiffness_param("pitch", 3, ka, s.alpha),
+                stiffness_param("pitch", 2, ka, s.alpha),
+                stiffness_param("heave", 3, kh, s.h),
+            ],
+            extends: Some(1),
+            change: Change::PitchHeaveStiffness(&[3, 2], &[3]),
+        },
+        BranchCandidate {
+            effect: Effect::StructuralPolynomial,
+            variant: "pitch+heave".into(),
+            parameters: vec![
+                stiffness_param("pitch", 3, ka, s.alpha),
+                stiffness_param("pitch", 2, ka, s.alpha),
+                stiffness_param("heave", 3, kh, s.h),
+                stiffness_param("heave", 2, kh, s.h),
+            ],
+            extends: Some(3),
+            change: Change::PitchHeaveStiffness(&[3, 2], &[3, 2]),
+        },
+        BranchCandidate {
+            effect: Effect::StructuralDamping,
+            variant: "pitch".into(),
+            parameters: vec![p(
+                "c2_pitch",
+                "N m s/rad^3",
+                "extra pitch damping moment c2·α²·α̇ (c2 > 0 dissipates)",
+                ca / (s.alpha * s.alpha),
+            )],
+            extends: None,
+            change: Change::PitchDamping,
+        },
+        BranchCandidate {
+            effect: Effect::StructuralDamping,
+            variant: "pitch+heave".into(),
+            parameters: vec![
+                p(
+                    "c2_pitch",
+                    "N m s/rad^3",
+                    "extra pitch damping moment c2·α²·α̇ (c2 > 0 dissipates)",
+                    ca / (s.alpha * s.alpha),
+                ),
+                p(
+                    "c2_heave",
+                    "N s/m^3",
+                    "extra heave damping force c2·h²·ḣ (c2 > 0 dissipates)",
+                    ch / (s.h * s.h),
+                ),
+            ],
+            extends: Some(5),
+            change: Change::PitchHeaveDamping,
+        },
+        BranchCandidate {
+            effect: Effect::Friction,
+            variant: "pitch".into(),
+            parameters: vec![p(
+                "friction_pitch",
+                "N m",
+                "Coulomb moment T_c·tanh(α̇/ε) opposing α̇ (T_c = |θ|·scale ≥ 0)",
+                0.02 * ka * s.alpha,
+            )],
+            extends: None,
+            change: Change::PitchFriction,
+        },
+        BranchCandidate {
+            effect: Effect::AddedMass,
+            variant: "heave+pitch".into(),
+            parameters: vec![
+                p(
+                    "added_mass",
+                    "kg",
+                    "mass added to the heaving mass m",
+                    0.1 * st.mass,
+                ),
+                p(
+                    "added_inertia",
+                    "kg m^2",
+                    "inertia added to I_α about the elastic axis",
+                    0.1 * st.inertia_alpha,
+                ),
+            ],
+            extends: None,
+            change: Change::AddedMass,
+        },
+        BranchCandidate {
+            effect: Effect::AerodynamicScale,
+            variant: "lift+moment".into(),
+            parameters: vec![p(
+                "aero_scale_minus_1",
+                "1",
+                "aerodynamic lift and moment (with their apparent mass) times 1 + value \
+                 (value < 0: less load than the 2-D model, e.g. a finite span)",
+                0.1,
+            )],
+            extends: None,
+            change: Change::AeroScale,
+        },
+    ];
+    for c in &mut out {
+        c.parameters.iter_mut().for_each(|q| q.scale = q.scale.abs());
+    }
+    out
+}
+
+impl BranchCandidate {
+    /// The physical parameter values of the scaled `theta`.
+    pub fn values(&self, theta: &[f64]) -> Vec<f64> {
+        self.parameters
+            .iter()
+            .zip(theta)
+            .map(|(q, t)| {
+                if self.change == Change::PitchFriction {
+                    q.scale * t.abs()
+                } else {
+                    q.scale * t
+                }
+            })
+            .collect()
+    }
+
+    /// Label `effect (variant)`.
+    pub fn label(&self) -> String {
+        format!("{} ({})", self.effect.name(), self.variant)
+    }
+
+    /// The nominal section with this candidate's change at scaled parameters `theta`.
+    ///
+    /// # Errors
+    /// [`crate::Error::Aeroelastic`] when the changed structure is invalid (e.g. a mass
+    /// change that makes the mass matrix indefinite).
+    pub fn apply(&self, base: &Section, theta: &[f64]) -> Result<Section> {
+        let v = self.values(theta);
+        let mut st = base.structure.clone();
+        let mut aero = base.aero.clone();
+        let push = |terms: &mut Vec<PolyTerm>, power: u32, c: f64| {
+            match terms.iter_mut().find(|t| t.power == power) {
+                Some(t) => t.coefficient += c,
+                None => terms.push(PolyTerm {
+                    power,
+                    coefficient: c,
+                }),
+            }
+        };
+        match self.change {
+            Change::PitchStiffness(powers) => {
+                for (pw, c) in powers.iter().zip(&v) {
+                    push(&mut st.nonlinear.pitch_stiffness_terms, *pw, *c);
+                }
+            }
+            Change::PitchHeaveStiffness(pa, ph) => {
+                for (pw, c) in pa.iter().zip(&v) {
+                    push(&mut st.nonlinear.pitch_stiffness_terms, *pw, *c);
+                }
+                for (pw, c) in ph.iter().zip(&v[pa.len()..]) {
+                    push(&mut st.nonlinear.heave_stiffness_terms, *pw, *c);
+                }
+            }
+            Change::PitchDamping => push(&mut st.nonlinear.pitch_damping_terms, 2, v[0]),
+            Change::PitchHeaveDamping => {
+                push(&mut st.nonlinear.pitch_damping_terms, 2, v[0]);
+                push(&mut st.nonlinear.heave_damping_terms, 2, v[1]);
+            }
+            Change::PitchFriction => {
+                let f = st.nonlinear.friction.get_or_insert(Friction {
+                    heave_force: 0.0,
+                    pitch_moment: 0.0,
+                    heave_smoothing: None,
+                    pitch_smoothing: None,
+                });
+                f.pitch_moment += v[0];
+            }
+            Change::AddedMass => {
+                st.mass += v[0];
+                st.inertia_alpha += v[1];
+            }
+            Change::AeroScale => {
+                aero = Arc::new(ScaledAero {
+                    inner: base.aero.clone(),
+                    scale: 1.0 + v[0],
+                });
+            }
+        }
+        Section::new(st, aero, base.rho).map_err(|e| crate::Error::aeroelastic(self.label(), e))
+    }
+}
+
+/// An aerodynamic model whose loads are those of `inner` times `scale` (lift and moment,
+/// apparent mass included; lag states unchanged).
+#[derive(Debug, Clone)]
+pub struct ScaledAero {
+    /// The model scaled.
+    pub inner: Arc<dyn AeroModel>,
+    /// Factor on every load.
+    pub scale: f64,
+}
+
+impl AeroModel for ScaledAero {
+    fn name(&self) -> String {
+        format!("{} × {:.4}", self.inner.name(), self.scale)
+    }
+    fn chord(&self) -> f64 {
+        self.inner.chord()
+    }
+    fn n_lag(&self) -> usize {
+        self.inner.n_lag()
+    }
+    fn apparent_mass(&self, flow: &Flow) -> Matrix2<f64> {
+        self.inner.apparent_mass(flow) * self.scale
+    }
+    fn forces(&self, flow: &Flow, q: [f64; 2], qd: [f64; 2], lag: &[f64]) -> [f64; 2] {
+        let f = self.inner.forces(flow, q, qd, lag);
+        [f[0] * self.scale, f[1] * self.scale]
+    }
+    fn is_linear(&self) -> bool {
+        self.inner.is_linear()
+    }
+    fn lag_rates(&self, flow: &Flow, q: [f64; 2], qd: [f64; 2], lag: &[f64], out: &mut [f64]) {
+        self.inner.lag_rates(flow, q, qd, lag, out)
+    }
+    fn frequency_response(&self, flow: &Flow, omega: f64) -> Matrix2<Complex64> {
+        self.inner.frequency_response(flow, omega) * Complex64::new(self.scale, 0.0)
+    }
+    fn settle_time(&self, flow: &Flow) -> f64 {
+        self.inner.settle_time(flow)
+    }
+    fn elastic_axis(&self) -> Option<f64> {
+        self.inner.elastic_axis()
+    }
+}
