@@ -27,14 +27,23 @@ pub struct DiagnoseArgs {
     /// be repeated (e.g. LCO records and a still-air decay of the same rig).
     #[arg(long)]
     pub free: Vec<PathBuf>,
-    /// The sim's aerodynamic model for free-response data alone: a model file
-    /// (`*.model.toml`) or an `identification.json`; needs `--free` and no forced data set.
-    #[arg(long, requires = "free", conflicts_with = "dataset")]
+    /// The sim's aerodynamic model for free-response data or a measured bifurcation
+    /// diagram alone: a model file (`*.model.toml`) or an `identification.json`; needs
+    /// `--free` or `--measured-branch` and no forced data set.
+    #[arg(long, conflicts_with = "dataset")]
     pub model: Option<PathBuf>,
     /// Nominal structure file (`*.structure.toml`) replacing the free data set's
     /// `[structure]`.
-    #[arg(long, requires = "free")]
+    #[arg(long)]
     pub structure: Option<PathBuf>,
+    /// Diagnose at the bifurcation level: a measured bifurcation diagram, either a CSV
+    /// table (docs/DATA_FORMAT.md, "Measured bifurcation diagram") or a free-response data
+    /// set of LCO records (one point per record). Needs `--model`; the structure is
+    /// `--structure` or the `[structure]` of the records' (or the first `--free`) data set;
+    /// `--free` data sets give still-air decays (structure first). Writes
+    /// `bifurcation.json`, figures and `diagnosis.html`.
+    #[arg(long, requires = "model", conflicts_with_all = ["dataset", "blind"])]
+    pub measured_branch: Option<PathBuf>,
     /// Output folder (created if missing); default `out/diagnosis` or `out/blind`.
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -71,6 +80,15 @@ pub fn run(args: &DiagnoseArgs) -> anyhow::Result<()> {
             return blind_shard(n, args.seed, s, &out);
         }
         return blind(n, args.seed, args.shapes, &out, args.force);
+    }
+    if let Some(m) = &args.measured_branch {
+        return crate::bifurcation_cmd::run(args, m);
+    }
+    if args.model.is_some() && args.free.is_empty() {
+        bail!("--model needs --free FREE (free-response records) or --measured-branch");
+    }
+    if args.structure.is_some() && args.free.is_empty() {
+        bail!("--structure needs --free FREE or --measured-branch");
     }
     let out = args
         .out

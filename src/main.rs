@@ -1,6 +1,7 @@
 //! aeroform command-line interface: parses flags, builds library objects, draws progress
 //! bars and writes files. No physics lives here.
 
+mod bifurcation_cmd;
 mod branch_cmd;
 mod diagnose_cmd;
 mod exit;

@@ -13,8 +13,8 @@
 //! * [`sweep`]: large jobs split into independent items (shards, Dask tasks) and merged.
 
 pub mod bench;
-pub mod bifurcation;
 pub mod bench_run;
+pub mod bifurcation;
 pub mod blind;
 pub mod effect;
 pub mod error;

@@ -11,6 +11,7 @@
 #![warn(missing_docs)]
 
 pub mod adapters;
+pub mod bifurcation_report;
 pub mod diagnosis_report;
 pub mod error;
 pub mod figures;
@@ -26,6 +27,7 @@ mod vector;
 #[doc(hidden)]
 pub mod samples;
 
+pub use bifurcation_report::write_bifurcation_outputs;
 pub use diagnosis_report::{
     diagnosis_report, diagnosis_section, save_diagnosis_figures, write_diagnosis_outputs,
     DiagnosisFigure,
@@ -34,6 +36,7 @@ pub use error::{Error, Result};
 pub use figures::bifurcation::{
     AmplitudeInterval, BifurcationFigure, BifurcationPoint, ResponseClass, Sweep,
 };
+pub use figures::branch_comparison::{BranchComparisonFigure, ComparisonDofPanel, DiagramLayer};
 pub use figures::branch_diagram::{BranchCurve, BranchDiagramFigure, DiagramPoint};
 pub use figures::comparison::{ComparisonFigure, ComparisonPanel};
 pub use figures::delta_path::DeltaPathFigure;

@@ -41,6 +41,11 @@ pub struct ParameterSpec {
     pub convention: String,
     /// Value of θ = 1.
     pub scale: f64,
+    /// An even stiffness term: q → −q maps the section with +k onto the one with −k, so
+    /// amplitudes and frequencies cannot tell the sign of the even terms (jointly); the
+    /// fit reports them with the first even term ≥ 0.
+    #[serde(default)]
+    pub even: bool,
 }
 
 /// Which change a candidate makes.
@@ -93,6 +98,7 @@ fn p(name: &str, unit: &str, convention: &str, scale: f64) -> ParameterSpec {
         unit: unit.into(),
         convention: convention.into(),
         scale,
+        even: false,
     }
 }
 
@@ -102,17 +108,25 @@ fn stiffness_param(dof: &str, power: u32, k: f64, amp: f64) -> ParameterSpec {
     } else {
         ("h", format!("N/m^{power}"), "force")
     };
-    p(
+    let mut q = p(
         &format!("k{power}_{dof}"),
         &unit,
         &format!(
             "extra restoring {what} k{power}·{sym}^{power} ({sym} positive {}; k > 0 resists \
              positive {sym}{})",
             if dof == "pitch" { "nose-up" } else { "down" },
-            if power % 2 == 1 { ": hardening" } else { "" }
+            if power % 2 == 1 {
+                ": hardening"
+            } else {
+                "; the sign of the even terms is fixed only by the orbit's mean deflection, \
+                 which first-harmonic amplitudes do not carry: reported with the first even \
+                 term ≥ 0"
+            }
         ),
         k / amp.powi(power as i32 - 1),
-    )
+    );
+    q.even = power.is_multiple_of(2);
+    q
 }
 
 /// The catalogue of the bifurcation level for `base` and measured amplitudes `s`, nested
@@ -255,7 +269,9 @@ pub fn catalogue(base: &Section, s: Scales) -> Vec<BranchCandidate> {
         },
     ];
     for c in &mut out {
-        c.parameters.iter_mut().for_each(|q| q.scale = q.scale.abs());
+        c.parameters
+            .iter_mut()
+            .for_each(|q| q.scale = q.scale.abs());
     }
     out
 }
@@ -290,14 +306,15 @@ impl BranchCandidate {
         let v = self.values(theta);
         let mut st = base.structure.clone();
         let mut aero = base.aero.clone();
-        let push = |terms: &mut Vec<PolyTerm>, power: u32, c: f64| {
-            match terms.iter_mut().find(|t| t.power == power) {
-                Some(t) => t.coefficient += c,
-                None => terms.push(PolyTerm {
-                    power,
-                    coefficient: c,
-                }),
-            }
+        let push = |terms: &mut Vec<PolyTerm>, power: u32, c: f64| match terms
+            .iter_mut()
+            .find(|t| t.power == power)
+        {
+            Some(t) => t.coefficient += c,
+            None => terms.push(PolyTerm {
+                power,
+                coefficient: c,
+            }),
         };
         match self.change {
             Change::PitchStiffness(powers) => {

@@ -65,7 +65,11 @@ pub(crate) fn diagram(section: &Section, s: &Setting) -> Option<BranchSet> {
 
 /// Residuals of the measured points `pts` against `set` (layout per point: pitch if
 /// measured, heave if measured, speed).
-pub(crate) fn residuals(set: Option<&BranchSet>, pts: &[&MeasuredAmplitude], s: &Setting) -> Vec<f64> {
+pub(crate) fn residuals(
+    set: Option<&BranchSet>,
+    pts: &[&MeasuredAmplitude],
+    s: &Setting,
+) -> Vec<f64> {
     let mut r = Vec::with_capacity(3 * pts.len());
     for m in pts {
         let covered = set.and_then(|set| aeroelastic::branch::predicted_at(set, m));

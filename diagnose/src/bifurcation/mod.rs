@@ -40,7 +40,7 @@ pub use points::{points_from_records, structure_check, RecordRole, RecordUse, St
 pub const FORMAT: &str = "aeroform-bifurcation-diagnosis/1";
 
 /// Starts of the grid from which a fit on all points runs Levenberg–Marquardt.
-const START_POINTS: usize = 6;
+const START_POINTS: usize = 12;
 
 /// Settings of the bifurcation-level diagnosis.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
@@ -326,7 +326,8 @@ fn errors(d: &[MeasuredDistance], s: &Setting) -> Errors {
                     quantity,
                     n,
                     uncovered,
-                    rms: (!sq.is_empty()).then(|| (sq.iter().sum::<f64>() / sq.len() as f64).sqrt()),
+                    rms: (!sq.is_empty())
+                        .then(|| (sq.iter().sum::<f64>() / sq.len() as f64).sqrt()),
                 });
             }
         }
@@ -502,12 +503,26 @@ pub fn diagnose_branches(
         .min(1.5 * u_max_meas)
         * 1.02;
     let range = [0.7 * u_min_meas, hi];
-    let setting = Setting {
-        range,
-        ..probe
-    };
+    let setting = Setting { range, ..probe };
     let all: Vec<&MeasuredAmplitude> = measured.iter().collect();
-    let nominal = summary(diagram(section, &setting), measured, &setting);
+    // A linear section has no limit cycle: its "branch" is the vertical family of
+    // neutral orbits at the Hopf speed, not a diagram; only its Hopf points are reported.
+    let nominal = if section.structure.is_linear() && section.aero.is_linear() {
+        let mut s = summary(None, measured, &setting);
+        s.hopf = section
+            .hopf_points(range[0], range[1], branch.n_scan)
+            .unwrap_or_default()
+            .iter()
+            .map(|h| HopfSummary {
+                u: h.u,
+                frequency_hz: h.omega / std::f64::consts::TAU,
+                criticality: "degenerate (linear section: no limit cycle)".into(),
+            })
+            .collect();
+        s
+    } else {
+        summary(diagram(section, &setting), measured, &setting)
+    };
     let nominal_score = nominal.errors.score;
     let scales = Scales {
         alpha: max_of(&|m| m.amplitude_alpha).max(s_alpha),
@@ -630,15 +645,28 @@ fn fit_candidate(
         .min_by(|a, b| a.0.total_cmp(&b.0))
         .map(|(_, r)| r)
         .expect("at least one start");
+    // Even terms jointly to the sign convention (first even term ≥ 0): the diagram is the
+    // same (q → −q symmetry of the linear section).
+    let even: Vec<usize> = (0..n).filter(|&k| c.parameters[k].even).collect();
+    let flip = |v: &mut [f64]| {
+        if even.first().is_some_and(|&k| v[k] < 0.0) {
+            even.iter().for_each(|&k| v[k] = -v[k]);
+        }
+    };
     // Leave one speed out, each fold from the all-points optimum.
     let mut held = vec![None; measured.len()];
     let mut fold_values = vec![Vec::new(); n];
     for &g in groups {
-        let train: Vec<&MeasuredAmplitude> =
-            all.iter().copied().filter(|m| !same_speed(m.u, g)).collect();
+        let train: Vec<&MeasuredAmplitude> = all
+            .iter()
+            .copied()
+            .filter(|m| !same_speed(m.u, g))
+            .collect();
         let f_train = |th: &[f64]| eval(th, &train);
         let r = levenberg_marquardt(&f_train, &full.theta, opts.max_iterations / 2);
-        for (k, v) in c.values(&r.theta).into_iter().enumerate() {
+        let mut v = c.values(&r.theta);
+        flip(&mut v);
+        for (k, v) in v.into_iter().enumerate() {
             fold_values[k].push(v);
         }
         let test: Vec<MeasuredAmplitude> = measured
@@ -662,7 +690,10 @@ fn fit_candidate(
             }
         }
     }
-    let held: Vec<MeasuredDistance> = held.into_iter().map(|d| d.expect("every point held out once")).collect();
+    let held: Vec<MeasuredDistance> = held
+        .into_iter()
+        .map(|d| d.expect("every point held out once"))
+        .collect();
     let held_out = errors(&held, setting);
     // Standard error of the score over the speed groups (delta method on its square).
     let per_group: Vec<f64> = groups
@@ -691,7 +722,8 @@ fn fit_candidate(
         .ok()
         .and_then(|s| diagram(&s, setting));
     let fit = summary(set_all, measured, setting);
-    let values = c.values(&full.theta);
+    let mut values = c.values(&full.theta);
+    flip(&mut values);
     Ok(CandidateResult {
         effect: c.effect,
         level: c.effect.level(),

@@ -89,7 +89,10 @@ pub fn points_from_records(set: &Dataset) -> Result<(Vec<MeasuredAmplitude>, Vec
             })
         };
         if u <= 0.0 {
-            use_(RecordRole::Decay, "still air: structure identification".into());
+            use_(
+                RecordRole::Decay,
+                "still air: structure identification".into(),
+            );
             continue;
         }
         let dt = rec.dt;
@@ -108,7 +111,9 @@ pub fn points_from_records(set: &Dataset) -> Result<(Vec<MeasuredAmplitude>, Vec
             );
             continue;
         }
-        let a1 = (sa > 0.0).then(|| first_harmonic(&rec.alpha, dt, f)).flatten();
+        let a1 = (sa > 0.0)
+            .then(|| first_harmonic(&rec.alpha, dt, f))
+            .flatten();
         let h1 = (sh > 0.0).then(|| first_harmonic(&rec.h, dt, f)).flatten();
         let extra = spec
             .extra
@@ -277,7 +282,11 @@ fn line(x: &[f64], y: &[f64]) -> (f64, f64, f64) {
     let sxy: f64 = x.iter().zip(y).map(|(a, b)| (a - mx) * (b - my)).sum();
     let slope = if sxx > 0.0 { sxy / sxx } else { 0.0 };
     let c = my - slope * mx;
-    let sse = x.iter().zip(y).map(|(a, b)| (b - c - slope * a).powi(2)).sum();
+    let sse = x
+        .iter()
+        .zip(y)
+        .map(|(a, b)| (b - c - slope * a).powi(2))
+        .sum();
     (slope, c, sse)
 }
 
@@ -370,10 +379,7 @@ fn decay_row(
     let late = &good[good.len() - n3..];
     let early = &good[..n3];
     let mean = |v: &[(f64, f64, f64)], k: usize| {
-        v.iter()
-            .map(|w| [w.0, w.1, w.2][k])
-            .sum::<f64>()
-            / v.len() as f64
+        v.iter().map(|w| [w.0, w.1, w.2][k]).sum::<f64>() / v.len() as f64
     };
     let zeta = |v: &[(f64, f64, f64)]| {
         let tt: Vec<f64> = v.iter().map(|w| w.0).collect();
@@ -449,7 +455,11 @@ mod tests {
             .collect();
         let r = decay_row("c", "pitch", &x, dt, &[(2.5, 0.01)]).unwrap();
         assert!((r.measured_hz - 2.5).abs() < 0.005, "{}", r.measured_hz);
-        assert!((r.measured_zeta - 0.01).abs() < 0.001, "{}", r.measured_zeta);
+        assert!(
+            (r.measured_zeta - 0.01).abs() < 0.001,
+            "{}",
+            r.measured_zeta
+        );
         assert!(r.exp_over_linear < 1.0, "{}", r.exp_over_linear);
         assert!(r.backbone_change.abs() < 0.005, "{}", r.backbone_change);
         // Dry friction: linear envelope.

@@ -1,6 +1,7 @@
 //! The figure structs (plain data) and their drawing code, one file per figure.
 
 pub mod bifurcation;
+pub mod branch_comparison;
 pub mod branch_diagram;
 pub mod comparison;
 pub mod delta_path;

@@ -1,0 +1,198 @@
+//! `aeroform diagnose --measured-branch`: the sim's bifurcation diagram against a measured
+//! one (Hopf, folds, LCO branches), the catalogue candidates fitted with continuation
+//! inside the fit and scored by leave-one-speed-out (`bifurcation.json`, figures,
+//! `diagnosis.html`).
+
+use std::path::Path;
+
+use aeroelastic::files::{LoadedModel, StructureFile};
+use aeroelastic::section::Section;
+use aeroelastic::structure::Structure;
+use anyhow::{bail, Context};
+use diagnose::bifurcation::{
+    diagnose_branches, points_from_records, structure_check, BifurcationDiagnosis,
+    BifurcationOptions, BranchKind, Quantity,
+};
+use identify::dataset::{read_dataset, Dataset};
+use identify::io::write_atomic;
+
+use crate::diagnose_cmd::DiagnoseArgs;
+
+/// Runs the bifurcation-level diagnosis of `measured` (a CSV table or a data-set folder).
+pub fn run(args: &DiagnoseArgs, measured: &Path) -> anyhow::Result<()> {
+    let out = args
+        .out
+        .clone()
+        .unwrap_or_else(|| std::path::PathBuf::from("out/bifurcation"));
+    let Some(model_path) = &args.model else {
+        bail!("--measured-branch needs --model M (the sim's aerodynamic model)");
+    };
+    // Every input is read and checked before the output folder is touched.
+    let records: Option<Dataset> = if measured.is_dir() {
+        Some(read_dataset(measured).with_context(|| format!("reading {}", measured.display()))?)
+    } else {
+        None
+    };
+    let free = args
+        .free
+        .iter()
+        .map(|f| read_dataset(f).with_context(|| format!("reading {}", f.display())))
+        .collect::<anyhow::Result<Vec<_>>>()?;
+    let (points, uses) = match &records {
+        Some(set) => points_from_records(set)
+            .with_context(|| format!("measured branch points of {}", measured.display()))?,
+        None => (
+            aeroelastic::branch::read_measured_amplitudes(measured)
+                .context("measured bifurcation diagram")?,
+            Vec::new(),
+        ),
+    };
+    let manifest_of = || {
+        records
+            .iter()
+            .chain(&free)
+            .find(|d| d.manifest.structure.is_some())
+    };
+    let (structure, rho, chord, structure_name) = match &args.structure {
+        Some(s) => {
+            let sf = StructureFile::read(s).with_context(|| format!("reading {}", s.display()))?;
+            (
+                sf.structure()
+                    .with_context(|| format!("structure of {}", s.display()))?,
+                sf.air_density,
+                sf.chord,
+                s.display().to_string(),
+            )
+        }
+        None => {
+            let Some(set) = manifest_of() else {
+                bail!(
+                    "no structure: give --structure S, or data sets whose manifest has a \
+                     [structure]"
+                );
+            };
+            let modal = set
+                .manifest
+                .structure
+                .as_ref()
+                .expect("found with a structure");
+            (
+                Structure::from_modal(modal).with_context(|| {
+                    format!("[structure] of {}", set.root.join("manifest").display())
+                })?,
+                set.manifest.section.air_density,
+                Some(set.manifest.section.chord),
+                format!("[structure] of {}", set.root.display()),
+            )
+        }
+    };
+    let loaded = LoadedModel::load(model_path, chord)
+        .with_context(|| format!("loading {}", model_path.display()))?;
+    let section = Section::new(structure, loaded.model.clone(), rho)
+        .context("the nominal section (structure, model, air density)")?;
+    let decays: Vec<&Dataset> = free.iter().chain(records.iter()).collect();
+    let check = structure_check(&decays, &section);
+    let mut inputs = vec![
+        format!("measured: {}", measured.display()),
+        format!("structure: {structure_name}"),
+        format!("model: {}", model_path.display()),
+    ];
+    inputs.extend(free.iter().map(|f| format!("free: {}", f.root.display())));
+    let dir = crate::outdir::OutDir::begin(&out, "diagnose --measured-branch", args.force)?;
+    let spinner = crate::progress::Spinner::new(
+        "diagnose",
+        "continuation of every candidate, leave-one-speed-out",
+    );
+    let d = diagnose_branches(
+        &points,
+        &section,
+        check,
+        uses,
+        &BifurcationOptions::default(),
+        inputs,
+        &crate::version(),
+    );
+    spinner.finish();
+    let d = d?;
+    let mut text = serde_json::to_string_pretty(&d)?;
+    text.push('\n');
+    write_atomic(&dir.path().join("bifurcation.json"), text.as_bytes())?;
+    let files = plots::write_bifurcation_outputs(&d, dir.path())?;
+    dir.commit()?;
+    print(&d);
+    crate::ui::say!(
+        "wrote {} and {} figure/report files to {}",
+        out.join("bifurcation.json").display(),
+        files.len(),
+        out.display()
+    );
+    crate::ui::document(&d)
+}
+
+fn deg(v: Option<f64>) -> String {
+    v.map_or("–".into(), |x| format!("{:.3}°", x.to_degrees()))
+}
+
+fn mm(v: Option<f64>) -> String {
+    v.map_or("–".into(), |x| format!("{:.2} mm", x * 1e3))
+}
+
+fn print(d: &BifurcationDiagnosis) {
+    crate::ui::say!("verdict: {}", d.verdict.name);
+    crate::ui::say!("  {}", d.verdict.explanation);
+    if let Some(s) = &d.structure {
+        crate::ui::say!("structure (still-air decays): {}", s.summary);
+    }
+    let diag = |name: &str, s: &diagnose::bifurcation::DiagramSummary| {
+        let hopf: Vec<String> = s
+            .hopf
+            .iter()
+            .map(|h| format!("{:.3} m/s {:.3} Hz {}", h.u, h.frequency_hz, h.criticality))
+            .collect();
+        let folds: Vec<String> = s.folds.iter().map(|f| format!("{:.3} m/s", f.u)).collect();
+        crate::ui::say!(
+            "{name}: Hopf {}; folds {}",
+            if hopf.is_empty() {
+                "none".into()
+            } else {
+                hopf.join(", ")
+            },
+            if folds.is_empty() {
+                "none".into()
+            } else {
+                folds.join(", ")
+            }
+        );
+    };
+    diag("nominal", &d.nominal);
+    if let Some(i) = d.verdict.candidate {
+        diag("named", &d.candidates[i].fit);
+    }
+    crate::ui::say!(
+        "{:<44} {:>9} {:>8} {:>11} {:>11}",
+        "candidate (held-out, leave one speed out)",
+        "score",
+        "shrink",
+        "pitch RMS",
+        "heave RMS"
+    );
+    crate::ui::say!(
+        "{:<44} {:>9.3} {:>8} {:>11} {:>11}",
+        "nominal",
+        d.nominal.errors.score,
+        "",
+        deg(d.nominal.errors.rms(BranchKind::All, Quantity::Pitch)),
+        mm(d.nominal.errors.rms(BranchKind::All, Quantity::Heave))
+    );
+    for c in &d.candidates {
+        crate::ui::say!(
+            "{:<44} {:>9.3} {:>7.1}% {:>11} {:>11}",
+            c.label(),
+            c.held_out.score,
+            100.0 * c.shrink,
+            deg(c.held_out.rms(BranchKind::All, Quantity::Pitch)),
+            mm(c.held_out.rms(BranchKind::All, Quantity::Heave))
+        );
+    }
+    crate::ui::say!("diagnosed in {:.2} s", d.seconds);
+}
