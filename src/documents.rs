@@ -121,6 +121,10 @@ pub fn schemas() -> Vec<(&'static str, serde_json::Value)> {
             schema_of::<identify::pipeline::Identification>(),
         ),
         ("diagnosis", schema_of::<diagnose::report::Diagnosis>()),
+        (
+            "bifurcation",
+            schema_of::<diagnose::bifurcation::BifurcationDiagnosis>(),
+        ),
         ("blind", schema_of::<diagnose::bench::BlindReport>()),
         (
             "study-flutter",

@@ -14,6 +14,7 @@
 //! damping_heave = 0.005        # ratio of critical, optional (0)
 //! damping_pitch = 0.005
 //! # optional: heave_stiffness_terms / pitch_stiffness_terms = [{ power = 3, coefficient = 10.0 }],
+//! # heave_damping_terms / pitch_damping_terms = [{ power = 2, coefficient = 0.5 }] (c q^p q̇),
 //! # pitch_freeplay = 0.01 (rad), [friction] heave_force = …, pitch_moment = …
 //! ```
 //!

@@ -96,7 +96,15 @@ pub fn comparison_figure(d: &BifurcationDiagnosis) -> BranchComparisonFigure {
             })
         })
         .collect();
-    let lo = d.speed_groups.first().copied().unwrap_or(0.0);
+    // the measured speeds, the nominal Hopf points and the shown diagram's folds
+    let lo = d
+        .speed_groups
+        .first()
+        .copied()
+        .into_iter()
+        .chain(after.iter().flat_map(|c| c.fit.folds.iter().map(|f| f.u)))
+        .fold(f64::INFINITY, f64::min);
+    let lo = if lo.is_finite() { lo } else { 0.0 };
     let hi = d
         .nominal
         .hopf

@@ -10,6 +10,7 @@
 //!   RMS measured amplitude of that DOF (relative errors: a measured amplitude scatters by
 //!   a fraction of itself), on the branch segment of the same stability that covers the
 //!   point's speed;
+//! - per measured frequency f: (f_pred − f)/f on the same orbit;
 //! - when none covers it: the same with the nearest predicted orbit of that stability (in
 //!   the scaled (U, amplitude) plane), plus (U_orbit − U_meas)/s_U, s_U = 2 % of the mean
 //!   measured speed, so that a branch whose fold moved past a measured speed is pulled
@@ -64,7 +65,7 @@ pub(crate) fn diagram(section: &Section, s: &Setting) -> Option<BranchSet> {
 }
 
 /// Residuals of the measured points `pts` against `set` (layout per point: pitch if
-/// measured, heave if measured, speed).
+/// measured, heave if measured, frequency if measured, speed).
 pub(crate) fn residuals(
     set: Option<&BranchSet>,
     pts: &[&MeasuredAmplitude],
@@ -73,11 +74,11 @@ pub(crate) fn residuals(
     let mut r = Vec::with_capacity(3 * pts.len());
     for m in pts {
         let covered = set.and_then(|set| aeroelastic::branch::predicted_at(set, m));
-        let (pa, ph, du) = match covered {
-            Some((a, h, _)) => (a, h, 0.0),
+        let (pa, ph, pf, du) = match covered {
+            Some((a, h, f)) => (a, h, f, 0.0),
             None => {
                 // nearest orbit of the same stability in the scaled plane
-                let mut best: Option<(f64, (f64, f64, f64))> = None;
+                let mut best: Option<(f64, (f64, f64, f64, f64))> = None;
                 for b in set.iter().flat_map(|s| s.branches.iter()) {
                     for p in b.points.iter().filter(|p| p.stable == m.stable) {
                         let mut d = ((p.u - m.u) / s.s_u).powi(2);
@@ -88,7 +89,15 @@ pub(crate) fn residuals(
                             d += ((p.amplitude1_h - h) / s.n_h(h)).powi(2);
                         }
                         if best.is_none_or(|(bd, _)| d < bd) {
-                            best = Some((d, (p.amplitude1_alpha, p.amplitude1_h, p.u - m.u)));
+                            best = Some((
+                                d,
+                                (
+                                    p.amplitude1_alpha,
+                                    p.amplitude1_h,
+                                    p.omega / std::f64::consts::TAU,
+                                    p.u - m.u,
+                                ),
+                            ));
                         }
                     }
                 }
@@ -96,7 +105,7 @@ pub(crate) fn residuals(
                     Some((_, v)) => v,
                     // no orbit of this stability at all: predicted 0 at the far end of the
                     // range
-                    None => (0.0, 0.0, s.range[1] - s.range[0]),
+                    None => (0.0, 0.0, f64::NAN, s.range[1] - s.range[0]),
                 }
             }
         };
@@ -105,6 +114,10 @@ pub(crate) fn residuals(
         }
         if let Some(h) = m.amplitude_h {
             r.push((ph - h) / s.n_h(h));
+        }
+        if let Some(f) = m.frequency_hz {
+            // relative, as the amplitudes; no orbit at all: the speed residual carries it
+            r.push(if pf.is_finite() { (pf - f) / f } else { 0.0 });
         }
         r.push(du / s.s_u);
     }

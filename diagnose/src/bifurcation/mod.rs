@@ -119,7 +119,8 @@ pub struct Errors {
     pub rows: Vec<ErrorRow>,
     /// Normalised score: √(mean of ((pred − meas)/max(meas, s_d/4))²) over every measured
     /// amplitude (relative errors), s_d the RMS measured amplitude of DOF d (uncovered
-    /// points predicted 0, i.e. an error of 1).
+    /// points predicted 0, i.e. an error of 1), and of (pred − meas)/meas over every
+    /// measured frequency of a covered point.
     pub score: f64,
 }
 
@@ -341,7 +342,8 @@ fn errors(d: &[MeasuredDistance], s: &Setting) -> Errors {
     Errors { rows, score }
 }
 
-/// Normalised amplitude errors of predictions `d` (uncovered: predicted 0).
+/// Normalised errors of predictions `d`: relative amplitude errors (uncovered: predicted
+/// 0) and relative frequency errors of covered points.
 fn normalised(d: &[MeasuredDistance], s: &Setting) -> Vec<f64> {
     let mut z = Vec::new();
     for x in d {
@@ -350,6 +352,9 @@ fn normalised(d: &[MeasuredDistance], s: &Setting) -> Vec<f64> {
         }
         if let Some(m) = x.measured.amplitude_h {
             z.push((x.predicted_h.unwrap_or(0.0) - m) / s.n_h(m));
+        }
+        if let (Some(m), Some(p)) = (x.measured.frequency_hz, x.predicted_frequency_hz) {
+            z.push((p - m) / m);
         }
     }
     z
