@@ -140,7 +140,12 @@ pub fn ranking_figure(d: &BifurcationDiagnosis) -> RankingFigure {
                 .iter()
                 .enumerate()
                 .map(|(i, c)| RankingBar {
-                    label: format!("{} ({}p)", c.label(), c.parameters.len()),
+                    label: format!(
+                        "{} {} ({}p)",
+                        c.effect.short_label(),
+                        c.variant,
+                        c.parameters.len()
+                    ),
                     value: c.held_out.score,
                     highlight: d.verdict.candidate == Some(i),
                     note: "no value".into(),

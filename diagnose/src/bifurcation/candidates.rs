@@ -158,7 +158,7 @@ pub fn catalogue(base: &Section, s: Scales) -> Vec<BranchCandidate> {
         },
         BranchCandidate {
             effect: Effect::StructuralPolynomial,
-            variant: "pitch, to the fifth power".into(),
+            variant: "pitch to α⁵".into(),
             parameters: vec![
                 stiffness_param("pitch", 3, ka, s.alpha),
                 stiffness_param("pitch", 2, ka, s.alpha),
@@ -169,7 +169,7 @@ pub fn catalogue(base: &Section, s: Scales) -> Vec<BranchCandidate> {
         },
         BranchCandidate {
             effect: Effect::StructuralPolynomial,
-            variant: "pitch, heave cubic".into(),
+            variant: "pitch, heave h³".into(),
             parameters: vec![
                 stiffness_param("pitch", 3, ka, s.alpha),
                 stiffness_param("pitch", 2, ka, s.alpha),
