@@ -192,3 +192,70 @@ fn harmonic_balance_finds_the_same_bristol_fold_as_shooting() {
         "{stderr}"
     );
 }
+
+/// `diagnose --measured-branch`: the nine points of the Bristol records against the rig's
+/// linear structure (the data set's `[structure]`, given here as the still-air set of
+/// `--free`) name a structural effect and write the document, both figures in PNG, SVG and
+/// PDF, and the report; a table with an amplitude-less row is refused by line.
+#[test]
+fn diagnose_measured_branch_writes_its_document_figures_and_report() {
+    let dir = tmp();
+    let out = dir.path().join("bif");
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("diagnose/tests/data");
+    let (ok, stdout, stderr) = aeroform(&[
+        "diagnose",
+        "--measured-branch",
+        &s(&data.join("bristol-spring1-record-points.csv")),
+        "--free",
+        &s(&data.join("bristol-spring1-still-air")),
+        "--model",
+        &scenario("bristol-spring1.model.toml"),
+        "--out",
+        &s(&out),
+    ]);
+    assert!(ok, "{stdout}\n{stderr}");
+    assert!(
+        stdout.contains("verdict: structural_polynomial"),
+        "{stdout}"
+    );
+    let doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("bifurcation.json")).unwrap())
+            .unwrap();
+    assert_eq!(doc["format"], "aeroform-bifurcation-diagnosis/1");
+    assert_eq!(doc["verdict"]["effect"], "structural_polynomial");
+    for stem in ["bifurcation_comparison", "bifurcation_ranking"] {
+        for ext in ["png", "svg", "pdf"] {
+            let f = out.join("figures").join(format!("{stem}.{ext}"));
+            assert!(
+                f.metadata().map(|m| m.len() > 1000).unwrap_or(false),
+                "{f:?}"
+            );
+        }
+    }
+    let html = std::fs::read_to_string(out.join("diagnosis.html")).unwrap();
+    assert!(html.contains("Structure first") && html.contains("<svg"));
+    // a row without any amplitude: refused with its line
+    let bad = dir.path().join("bad.csv");
+    std::fs::write(
+        &bad,
+        "branch,wind_speed_m_s,heave_amp_m,pitch_amp_rad\nstable,15,0.01,0.04\nstable,16,,nan\n",
+    )
+    .unwrap();
+    let (ok, _, stderr) = aeroform(&[
+        "diagnose",
+        "--measured-branch",
+        &s(&bad),
+        "--structure",
+        &scenario("bristol-spring1.structure.toml"),
+        "--model",
+        &scenario("bristol-spring1.model.toml"),
+        "--out",
+        &s(&dir.path().join("bad")),
+    ]);
+    assert!(!ok);
+    assert!(
+        stderr.contains("line 3") && stderr.contains("pitch_amp_rad"),
+        "{stderr}"
+    );
+    assert!(!dir.path().join("bad").exists());
+}
