@@ -196,3 +196,47 @@ fn print(d: &BifurcationDiagnosis) {
     }
     crate::ui::say!("diagnosed in {:.2} s", d.seconds);
 }
+
+/// `diagnose --blind N --branch-level`: the generated benchmark at the bifurcation level.
+pub fn blind(n: usize, seed: u64, out: &Path, force: bool) -> anyhow::Result<()> {
+    use diagnose::bifurcation::bench::{run_bench, BranchOutcome, STRONG_SCORE};
+    let dir = crate::outdir::OutDir::begin(out, "diagnose --blind --branch-level", force)?;
+    let bar = crate::progress::CountBar::new("branch-level sets", n);
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    let obs = |o: &BranchOutcome| {
+        let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+        bar.set(k, format!("set {}: {:?} → {}", o.index, o.truth, o.verdict));
+    };
+    let r = run_bench(n, seed, &obs);
+    bar.finish();
+    let r = r?;
+    let mut text = serde_json::to_string_pretty(&r)?;
+    text.push('\n');
+    write_atomic(&dir.path().join("branch-blind.json"), text.as_bytes())?;
+    dir.commit()?;
+    crate::ui::say!(
+        "{:<20} {:>5} {:>7} {:>15} {:>8}",
+        "truth",
+        "sets",
+        "strong",
+        "strong correct",
+        "correct"
+    );
+    for t in &r.per_truth {
+        crate::ui::say!(
+            "{:<20} {:>5} {:>7} {:>15} {:>8}",
+            format!("{:?}", t.truth),
+            t.sets,
+            t.strong,
+            t.strong_correct,
+            t.correct
+        );
+    }
+    crate::ui::say!(
+        "top-1 on strong sets (nominal score ≥ {STRONG_SCORE}): {:.1} %; effect-free sets `none`: {:.1} %",
+        100.0 * r.top1_strong,
+        100.0 * r.none_on_effect_free
+    );
+    crate::ui::say!("wrote {}", out.join("branch-blind.json").display());
+    crate::ui::document(&r)
+}

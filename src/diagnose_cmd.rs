@@ -66,6 +66,11 @@ pub struct DiagnoseArgs {
     /// noise) and report the statistics per shape class.
     #[arg(long, requires = "blind", conflicts_with = "shard")]
     pub shapes: bool,
+    /// With `--blind`: the benchmark at the bifurcation level instead (generated rigs with
+    /// a withheld structural or aerodynamic effect, each a measured bifurcation diagram;
+    /// writes `branch-blind.json`).
+    #[arg(long, requires = "blind", conflicts_with_all = ["shard", "shapes"])]
+    pub branch_level: bool,
 }
 
 /// Runs `aeroform diagnose`.
@@ -78,6 +83,9 @@ pub fn run(args: &DiagnoseArgs) -> anyhow::Result<()> {
             .unwrap_or_else(|| PathBuf::from("out/blind"));
         if let Some(s) = &args.shard {
             return blind_shard(n, args.seed, s, &out);
+        }
+        if args.branch_level {
+            return crate::bifurcation_cmd::blind(n, args.seed, &out, args.force);
         }
         return blind(n, args.seed, args.shapes, &out, args.force);
     }

@@ -251,14 +251,23 @@ pub fn diagnosis_section(report: &mut Report, diag: &Diagnosis, figures: &[Diagn
         &rows,
     );
 
-    let where_all: Vec<_> = if diag.where_.is_empty() {
+    let mut where_all: Vec<_> = if diag.where_.is_empty() {
         diag.levels.iter().flat_map(|l| &l.where_).collect()
     } else {
         diag.where_.iter().collect()
     };
+    // The verdict's own level leads: its figure first (the gap map of the forced records
+    // for an aerodynamic verdict, the bifurcation diagram of the free runs for a structural
+    // one), and its where-cells before the other level's.
+    let lead = diag.verdict.level;
+    where_all.sort_by_key(|w| w.level != lead);
+    let lead_figure = if lead == diagnose::Level::Structural {
+        "bifurcation"
+    } else {
+        "gap_heatmap"
+    };
     report.section("Where");
-    // the gap map first: where the gap lies is read off the picture, the table gives numbers
-    for f in figures.iter().filter(|f| f.kind == "gap_heatmap") {
+    for f in figures.iter().filter(|f| f.kind == lead_figure) {
         report.figure(f.caption.clone(), &f.files);
     }
     if where_all.is_empty() {
@@ -429,7 +438,7 @@ pub fn diagnosis_section(report: &mut Report, diag: &Diagnosis, figures: &[Diagn
     if !missing.is_empty() {
         report.text(format!("Not drawn: {}.", missing.join("; ")));
     }
-    for f in figures.iter().filter(|f| f.kind != "gap_heatmap") {
+    for f in figures.iter().filter(|f| f.kind != lead_figure) {
         report.figure(f.caption.clone(), &f.files);
     }
 }

@@ -1468,7 +1468,7 @@ pub struct MeasuredAmplitude {
 }
 
 /// Reads a measured bifurcation diagram: CSV with a header naming `branch` (`stable` or
-/// `unstable`), `wind_speed_m_s` and at least one of `heave_amp_m` [m] and `pitch_amp_rad`
+/// `unstable`), `wind_speed_m_s` and at least one of `heave_amp_m` \[m\] and `pitch_amp_rad`
 /// \[rad\] (first-harmonic peak amplitudes), optionally `freq_hz` \[Hz\]; other columns are
 /// ignored (the last column may contain commas); lines starting with `#` are comments. A
 /// missing value is an empty field, `nan` or `-`; every row needs a speed and at least one

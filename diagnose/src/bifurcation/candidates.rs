@@ -80,6 +80,8 @@ pub struct BranchCandidate {
     /// any.
     pub extends: Option<usize>,
     change: Change,
+    /// Largest measured pitch amplitude \[rad\] (friction's regularisation).
+    reference_alpha: f64,
 }
 
 /// Reference amplitudes of the measured diagram: the largest pitch \[rad\] and heave \[m\]
@@ -144,6 +146,7 @@ pub fn catalogue(base: &Section, s: Scales) -> Vec<BranchCandidate> {
             variant: "pitch".into(),
             parameters: vec![stiffness_param("pitch", 3, ka, s.alpha)],
             extends: None,
+            reference_alpha: 0.0,
             change: Change::PitchStiffness(&[3]),
         },
         BranchCandidate {
@@ -154,6 +157,7 @@ pub fn catalogue(base: &Section, s: Scales) -> Vec<BranchCandidate> {
                 stiffness_param("pitch", 2, ka, s.alpha),
             ],
             extends: Some(0),
+            reference_alpha: 0.0,
             change: Change::PitchStiffness(&[3, 2]),
         },
         BranchCandidate {
@@ -165,6 +169,7 @@ pub fn catalogue(base: &Section, s: Scales) -> Vec<BranchCandidate> {
                 stiffness_param("pitch", 5, ka, s.alpha),
             ],
             extends: Some(1),
+            reference_alpha: 0.0,
             change: Change::PitchStiffness(&[3, 2, 5]),
         },
         BranchCandidate {
@@ -176,6 +181,7 @@ pub fn catalogue(base: &Section, s: Scales) -> Vec<BranchCandidate> {
                 stiffness_param("heave", 3, kh, s.h),
             ],
             extends: Some(1),
+            reference_alpha: 0.0,
             change: Change::PitchHeaveStiffness(&[3, 2], &[3]),
         },
         BranchCandidate {
@@ -188,6 +194,7 @@ pub fn catalogue(base: &Section, s: Scales) -> Vec<BranchCandidate> {
                 stiffness_param("heave", 2, kh, s.h),
             ],
             extends: Some(3),
+            reference_alpha: 0.0,
             change: Change::PitchHeaveStiffness(&[3, 2], &[3, 2]),
         },
         BranchCandidate {
@@ -200,6 +207,7 @@ pub fn catalogue(base: &Section, s: Scales) -> Vec<BranchCandidate> {
                 ca / (s.alpha * s.alpha),
             )],
             extends: None,
+            reference_alpha: 0.0,
             change: Change::PitchDamping,
         },
         BranchCandidate {
@@ -220,6 +228,7 @@ pub fn catalogue(base: &Section, s: Scales) -> Vec<BranchCandidate> {
                 ),
             ],
             extends: Some(5),
+            reference_alpha: 0.0,
             change: Change::PitchHeaveDamping,
         },
         BranchCandidate {
@@ -228,10 +237,12 @@ pub fn catalogue(base: &Section, s: Scales) -> Vec<BranchCandidate> {
             parameters: vec![p(
                 "friction_pitch",
                 "N m",
-                "Coulomb moment T_c·tanh(α̇/ε) opposing α̇ (T_c = |θ|·scale ≥ 0)",
+                "Coulomb moment T_c·tanh(α̇/ε) opposing α̇ (T_c = |θ|·scale ≥ 0; ε = 5 % of \
+                 the largest measured orbit's peak pitch velocity)",
                 0.02 * ka * s.alpha,
             )],
             extends: None,
+            reference_alpha: 0.0,
             change: Change::PitchFriction,
         },
         BranchCandidate {
@@ -252,6 +263,7 @@ pub fn catalogue(base: &Section, s: Scales) -> Vec<BranchCandidate> {
                 ),
             ],
             extends: None,
+            reference_alpha: 0.0,
             change: Change::AddedMass,
         },
         BranchCandidate {
@@ -265,6 +277,7 @@ pub fn catalogue(base: &Section, s: Scales) -> Vec<BranchCandidate> {
                 0.1,
             )],
             extends: None,
+            reference_alpha: 0.0,
             change: Change::AeroScale,
         },
     ];
@@ -336,11 +349,15 @@ impl BranchCandidate {
                 push(&mut st.nonlinear.heave_damping_terms, 2, v[1]);
             }
             Change::PitchFriction => {
+                // regularised over 5 % of the largest measured orbit's peak velocity, so
+                // that its slope at rest, T_c/ε, vanishes with T_c (the default smoothing
+                // is a fixed damping ratio of 5 there, which would remove flutter)
+                let eps = 0.05 * st.omega_alpha() * self.reference_alpha;
                 let f = st.nonlinear.friction.get_or_insert(Friction {
                     heave_force: 0.0,
                     pitch_moment: 0.0,
                     heave_smoothing: None,
-                    pitch_smoothing: None,
+                    pitch_smoothing: Some(eps),
                 });
                 f.pitch_moment += v[0];
             }

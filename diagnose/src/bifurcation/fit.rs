@@ -193,12 +193,18 @@ pub(crate) fn levenberg_marquardt(
 }
 
 /// Start points of a fit with `n` scaled parameters: every combination of a few values
-/// per parameter (four for one or two parameters, three for more), the origin excluded.
+/// per parameter, log-spaced over two decades for one or two parameters (θ = 1 is a change
+/// of the order of the linear term at the largest measured amplitude, but a truth may sit
+/// ten times above or below), fewer beyond; the origin excluded.
 pub(crate) fn start_grid(n: usize) -> Vec<Vec<f64>> {
-    let values: &[f64] = if n <= 2 {
-        &[-1.5, -0.5, 0.5, 1.5]
-    } else {
-        &[-1.0, 0.0, 1.0]
+    let values: &[f64] = match n {
+        0 | 1 => &[
+            -20.0, -10.0, -5.0, -2.0, -1.0, -0.5, -0.2, -0.1, 0.1, 0.2, 0.5, 1.0, 2.0, 5.0, 10.0,
+            20.0,
+        ],
+        2 => &[-10.0, -3.0, -1.0, -0.3, 0.3, 1.0, 3.0, 10.0],
+        3 => &[-3.0, -1.0, 0.0, 1.0, 3.0],
+        _ => &[-1.0, 0.0, 1.0],
     };
     let mut out: Vec<Vec<f64>> = vec![vec![]];
     for _ in 0..n {
