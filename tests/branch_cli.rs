@@ -259,3 +259,52 @@ fn diagnose_measured_branch_writes_its_document_figures_and_report() {
     );
     assert!(!dir.path().join("bad").exists());
 }
+
+/// Issue 27, rows 1, 2 and 5: harmonics and steps per period are capped wherever they are
+/// set (command line, a study's `[branch]`), refused by name before anything is allocated
+/// (before: 1e12 harmonics panicked with a capacity overflow, 1e4 and 1e6 aborted).
+#[test]
+fn branch_counts_are_capped_on_the_command_line_and_in_a_study() {
+    let dir = tmp();
+    for (flag, value, field) in [
+        ("--harmonics", "1000000000000", "branch.harmonics"),
+        ("--harmonics", "10000", "branch.harmonics"),
+        ("--steps-per-period", "1000000", "branch.steps_per_period"),
+    ] {
+        let (ok, stdout, stderr) = aeroform(&[
+            "branch",
+            "--structure",
+            &scenario("bristol-spring1.structure.toml"),
+            "--model",
+            &scenario("bristol-spring1.model.toml"),
+            "--speeds",
+            "12:20",
+            "--method",
+            "harmonic_balance",
+            flag,
+            value,
+            "--out",
+            &s(&dir.path().join("b")),
+        ]);
+        assert!(!ok, "{flag} {value}: {stdout}");
+        assert!(
+            stderr.contains(field) && !stderr.contains("panicked"),
+            "{flag} {value}: {stderr}"
+        );
+    }
+    let study = std::fs::read_to_string(scenario("flat-plate-lco.toml"))
+        .unwrap()
+        .replace(
+            "[branch]\n",
+            "[branch]\nmethod = \"harmonic_balance\"\nharmonics = 20000\n",
+        );
+    let path = dir.path().join("study.toml");
+    std::fs::write(&path, study).unwrap();
+    let (ok, _, stderr) = aeroform(&["run", &s(&path), "--out", &s(&dir.path().join("r"))]);
+    assert!(!ok);
+    assert!(
+        stderr.contains("branch.harmonics") && stderr.contains("20000"),
+        "{stderr}"
+    );
+    assert!(!dir.path().join("r").join("branch.json").exists());
+}

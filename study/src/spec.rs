@@ -1228,6 +1228,13 @@ impl Study {
                     format!("{}: expected 16 … 100000", b.steps_per_period),
                 );
             }
+            let hmax = aeroelastic::branch::MAX_HARMONICS;
+            if !(1..=hmax).contains(&b.harmonics) {
+                return err(
+                    "branch.harmonics",
+                    format!("{}: expected 1 … {hmax}", b.harmonics),
+                );
+            }
         }
         if let Some(l) = &s.lco {
             if l.speeds.is_empty() {

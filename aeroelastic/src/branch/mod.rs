@@ -112,6 +112,11 @@ impl std::str::FromStr for BranchMethod {
     }
 }
 
+/// Largest number of harmonics of the harmonic balance: the full form's Jacobian has
+/// (n(2H + 1) + 2)² entries (H = 100 and 6 states: 15 MB), far beyond what a limit cycle of
+/// a smooth section needs (5 by default).
+pub const MAX_HARMONICS: usize = 100;
+
 fn default_harmonics() -> usize {
     5
 }
@@ -139,8 +144,11 @@ impl Default for BranchOptions {
 impl BranchOptions {
     /// Checks the options.
     ///
+    /// Counts are capped (steps per period, points, scan speeds ≤ 100 000; Newton iterations
+    /// ≤ 1000; harmonics ≤ [`MAX_HARMONICS`]) so that no request allocates without bound.
+    ///
     /// # Errors
-    /// [`Error::InvalidParameter`] naming the bad option.
+    /// [`Error::InvalidParameter`] naming the bad option and its allowed range.
     pub fn check(&self) -> Result<()> {
         use crate::error::positive;
         positive("branch.ds", self.ds)?;
@@ -160,15 +168,24 @@ impl BranchOptions {
                 ),
             ));
         }
-        for (name, v, min) in [
-            ("branch.steps_per_period", self.steps_per_period, 16),
-            ("branch.max_points", self.max_points, 2),
-            ("branch.max_newton", self.max_newton, 2),
-            ("branch.n_scan", self.n_scan, 2),
-            ("branch.harmonics", self.harmonics, 1),
+        for (name, v, min, max) in [
+            (
+                "branch.steps_per_period",
+                self.steps_per_period,
+                16,
+                100_000,
+            ),
+            ("branch.max_points", self.max_points, 2, 100_000),
+            ("branch.max_newton", self.max_newton, 2, 1_000),
+            ("branch.n_scan", self.n_scan, 2, 100_000),
+            ("branch.harmonics", self.harmonics, 1, MAX_HARMONICS),
         ] {
-            if v < min {
-                return Err(Error::param(name, v as f64, format!("must be ≥ {min}")));
+            if v < min || v > max {
+                return Err(Error::param(
+                    name,
+                    v as f64,
+                    format!("must lie in {min} … {max}"),
+                ));
             }
         }
         Ok(())
