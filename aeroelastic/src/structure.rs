@@ -27,6 +27,15 @@ pub struct PolyTerm {
     pub coefficient: f64,
 }
 
+/// Adds `coefficient`·x^`power` to `terms`: to the term of that power when there is one,
+/// as a new term otherwise.
+pub fn add_poly_term(terms: &mut Vec<PolyTerm>, power: u32, coefficient: f64) {
+    match terms.iter_mut().find(|t| t.power == power) {
+        Some(t) => t.coefficient += coefficient,
+        None => terms.push(PolyTerm { power, coefficient }),
+    }
+}
+
 /// Coulomb (dry) friction, regularised as F_c tanh(v/ε) so that the explicit integrator is
 /// not stiff: near v = 0 it acts as a viscous damper F_c/ε, and that slope is what sets
 /// the stiffness. The default ε ([`Friction::default_smoothing`]) makes that slope equal

@@ -19,7 +19,7 @@ use aeroelastic::aero::AeroModel;
 use aeroelastic::aero::TheodorsenAero;
 use aeroelastic::branch::{predicted_at, MeasuredAmplitude};
 use aeroelastic::section::Section;
-use aeroelastic::structure::{Friction, NondimStructure, PolyTerm, Structure};
+use aeroelastic::structure::{add_poly_term, Friction, NondimStructure, PolyTerm, Structure};
 use identify::numerics::split_seed;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -196,27 +196,17 @@ fn truth_section(
     let lerp = |lo: f64, hi: f64| lo + (hi - lo) * s;
     let ka = st.k_alpha;
     let ca = 2.0 * 0.01 * (ka * st.inertia_alpha).sqrt();
-    let add = |terms: &mut Vec<PolyTerm>, power: u32, c: f64| match terms
-        .iter_mut()
-        .find(|t| t.power == power)
-    {
-        Some(t) => t.coefficient += c,
-        None => terms.push(PolyTerm {
-            power,
-            coefficient: c,
-        }),
-    };
     match truth {
         BranchTruth::None => {}
         BranchTruth::PitchPolynomial => {
             let k2 = sign * lerp(0.3, 1.5) * ka / a_ref;
-            add(&mut st.nonlinear.pitch_stiffness_terms, 2, k2);
-            add(
+            add_poly_term(&mut st.nonlinear.pitch_stiffness_terms, 2, k2);
+            add_poly_term(
                 &mut st.nonlinear.pitch_stiffness_terms,
                 3,
                 0.3 * k2.abs() / a_ref,
             );
-            add(
+            add_poly_term(
                 &mut st.nonlinear.pitch_stiffness_terms,
                 4,
                 0.2 * k2 / (a_ref * a_ref),
@@ -224,12 +214,12 @@ fn truth_section(
         }
         BranchTruth::PitchCubic => {
             let k3 = sign * lerp(0.3, 1.5) * ka / (a_ref * a_ref);
-            add(&mut st.nonlinear.pitch_stiffness_terms, 3, k3);
+            add_poly_term(&mut st.nonlinear.pitch_stiffness_terms, 3, k3);
         }
         BranchTruth::PitchDamping => {
             let c2 = sign * lerp(3.0, 40.0) * ca / (a_ref * a_ref);
-            add(&mut st.nonlinear.pitch_damping_terms, 2, c2);
-            add(
+            add_poly_term(&mut st.nonlinear.pitch_damping_terms, 2, c2);
+            add_poly_term(
                 &mut st.nonlinear.pitch_damping_terms,
                 4,
                 0.3 * c2 / (a_ref * a_ref),

@@ -23,7 +23,7 @@ use std::sync::Arc;
 
 use aeroelastic::aero::{AeroModel, Flow};
 use aeroelastic::section::Section;
-use aeroelastic::structure::{Friction, PolyTerm};
+use aeroelastic::structure::{add_poly_term, Friction};
 use nalgebra::Matrix2;
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
@@ -319,34 +319,24 @@ impl BranchCandidate {
         let v = self.values(theta);
         let mut st = base.structure.clone();
         let mut aero = base.aero.clone();
-        let push = |terms: &mut Vec<PolyTerm>, power: u32, c: f64| match terms
-            .iter_mut()
-            .find(|t| t.power == power)
-        {
-            Some(t) => t.coefficient += c,
-            None => terms.push(PolyTerm {
-                power,
-                coefficient: c,
-            }),
-        };
         match self.change {
             Change::PitchStiffness(powers) => {
                 for (pw, c) in powers.iter().zip(&v) {
-                    push(&mut st.nonlinear.pitch_stiffness_terms, *pw, *c);
+                    add_poly_term(&mut st.nonlinear.pitch_stiffness_terms, *pw, *c);
                 }
             }
             Change::PitchHeaveStiffness(pa, ph) => {
                 for (pw, c) in pa.iter().zip(&v) {
-                    push(&mut st.nonlinear.pitch_stiffness_terms, *pw, *c);
+                    add_poly_term(&mut st.nonlinear.pitch_stiffness_terms, *pw, *c);
                 }
                 for (pw, c) in ph.iter().zip(&v[pa.len()..]) {
-                    push(&mut st.nonlinear.heave_stiffness_terms, *pw, *c);
+                    add_poly_term(&mut st.nonlinear.heave_stiffness_terms, *pw, *c);
                 }
             }
-            Change::PitchDamping => push(&mut st.nonlinear.pitch_damping_terms, 2, v[0]),
+            Change::PitchDamping => add_poly_term(&mut st.nonlinear.pitch_damping_terms, 2, v[0]),
             Change::PitchHeaveDamping => {
-                push(&mut st.nonlinear.pitch_damping_terms, 2, v[0]);
-                push(&mut st.nonlinear.heave_damping_terms, 2, v[1]);
+                add_poly_term(&mut st.nonlinear.pitch_damping_terms, 2, v[0]);
+                add_poly_term(&mut st.nonlinear.heave_damping_terms, 2, v[1]);
             }
             Change::PitchFriction => {
                 // regularised over 5 % of the largest measured orbit's peak velocity, so

@@ -24,6 +24,7 @@ use identify::preprocess::{dominant_frequency, harmonic_fit, refine_frequency};
 use nalgebra::{DMatrix, Matrix2};
 use serde::{Deserialize, Serialize};
 
+use crate::system::simulate::line_fit;
 use crate::{Error, Result};
 
 /// Largest relative change of a record's first-harmonic amplitude between its halves for
@@ -274,22 +275,6 @@ fn decay_windows(x: &[f64], dt: f64, f: f64) -> Vec<(f64, f64, f64)> {
     out
 }
 
-fn line(x: &[f64], y: &[f64]) -> (f64, f64, f64) {
-    let n = x.len() as f64;
-    let mx = x.iter().sum::<f64>() / n;
-    let my = y.iter().sum::<f64>() / n;
-    let sxx: f64 = x.iter().map(|v| (v - mx).powi(2)).sum();
-    let sxy: f64 = x.iter().zip(y).map(|(a, b)| (a - mx) * (b - my)).sum();
-    let slope = if sxx > 0.0 { sxy / sxx } else { 0.0 };
-    let c = my - slope * mx;
-    let sse = x
-        .iter()
-        .zip(y)
-        .map(|(a, b)| (b - c - slope * a).powi(2))
-        .sum();
-    (slope, c, sse)
-}
-
 /// Analyses the still-air records (U = 0) of `sets` against `section`'s structure; `None`
 /// when there is none.
 pub fn structure_check(sets: &[&Dataset], section: &Section) -> Option<StructureCheck> {
@@ -362,8 +347,8 @@ fn decay_row(
     let t: Vec<f64> = good.iter().map(|w| w.0).collect();
     let a: Vec<f64> = good.iter().map(|w| w.1).collect();
     let la: Vec<f64> = a.iter().map(|v| v.ln()).collect();
-    let (_, _, sse_lin) = line(&t, &a);
-    let (rate, c, _) = line(&t, &la);
+    let (_, _, sse_lin) = line_fit(&t, &a);
+    let (rate, c, _) = line_fit(&t, &la);
     let sse_exp: f64 = t
         .iter()
         .zip(&a)
@@ -384,7 +369,7 @@ fn decay_row(
     let zeta = |v: &[(f64, f64, f64)]| {
         let tt: Vec<f64> = v.iter().map(|w| w.0).collect();
         let ll: Vec<f64> = v.iter().map(|w| w.1.ln()).collect();
-        let (r, _, _) = line(&tt, &ll);
+        let (r, _, _) = line_fit(&tt, &ll);
         -r / (TAU * mean(v, 2))
     };
     let f_small = mean(late, 2);

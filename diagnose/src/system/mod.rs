@@ -11,7 +11,7 @@ pub mod residual;
 mod analysis;
 mod candidates;
 pub mod coverage;
-mod simulate;
+pub(crate) mod simulate;
 
 use std::sync::Arc;
 

@@ -256,7 +256,9 @@ fn windows(a: &[f64], dt: f64, f: f64) -> Vec<(f64, f64, f64, f64)> {
     out
 }
 
-fn line_fit(x: &[f64], y: &[f64]) -> (f64, f64, f64) {
+/// Least-squares line y = icpt + slope·x: (slope, icpt, sum of squared residuals); a
+/// single point gives slope 0.
+pub(crate) fn line_fit(x: &[f64], y: &[f64]) -> (f64, f64, f64) {
     let n = x.len() as f64;
     if x.len() < 2 {
         return (0.0, y.first().copied().unwrap_or(0.0), 0.0);

@@ -191,28 +191,16 @@ fn draw_panel<DB: DrawingBackend>(
     let clip = |u: f64, a: f64| (u.clamp(u0, u1), a.clamp(y0, y1));
     for (layer, color) in &layers {
         for b in &layer.branches {
-            let n = b.u.len().min(b.amplitude.len()).min(b.stable.len());
-            let mut start = 0;
-            while start + 1 < n {
-                let st = b.stable[start + 1];
-                let mut end = start + 1;
-                while end + 1 < n && b.stable[end + 1] == st {
-                    end += 1;
-                }
-                // plotters clips the lines to the plot area
-                let pts: Vec<(f64, f64)> = (start..=end)
-                    .filter(|&i| fin(b.u[i], b.amplitude[i]))
-                    .map(|i| (b.u[i], b.amplitude[i]))
-                    .collect();
+            // plotters clips the lines to the plot area
+            for (stable, pts) in b.runs() {
                 let style = ShapeStyle::from(*color).stroke_width(3);
-                if st {
+                if stable {
                     chart.draw_series(LineSeries::new(pts, style)).ctx(kind)?;
                 } else {
                     chart
                         .draw_series(DashedLineSeries::new(pts, 10, 7, style))
                         .ctx(kind)?;
                 }
-                start = end;
             }
         }
     }

@@ -24,6 +24,35 @@ pub struct BranchCurve {
     pub stable: Vec<bool>,
 }
 
+impl BranchCurve {
+    /// The curve split into runs of equal stability (finite points only), each as
+    /// (stable, points); a run shares its end point with the next so that the curve is
+    /// continuous.
+    pub(crate) fn runs(&self) -> Vec<(bool, Vec<(f64, f64)>)> {
+        let n = self
+            .u
+            .len()
+            .min(self.amplitude.len())
+            .min(self.stable.len());
+        let mut out = Vec::new();
+        let mut start = 0;
+        while start + 1 < n {
+            let st = self.stable[start + 1];
+            let mut end = start + 1;
+            while end + 1 < n && self.stable[end + 1] == st {
+                end += 1;
+            }
+            let pts = (start..=end)
+                .filter(|&i| self.u[i].is_finite() && self.amplitude[i].is_finite())
+                .map(|i| (self.u[i], self.amplitude[i]))
+                .collect();
+            out.push((st, pts));
+            start = end;
+        }
+        out
+    }
+}
+
 /// A marked point (Hopf point, fold, sweep or measured point).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct DiagramPoint {
@@ -172,30 +201,16 @@ impl Figure for BranchDiagramFigure {
             .y_label_formatter(&fy)
             .draw()
             .ctx(kind)?;
-        // Each branch split into runs of equal stability; a run shares its end point with
-        // the next so that the curve is continuous.
         for b in &self.branches {
-            let n = b.u.len().min(b.amplitude.len()).min(b.stable.len());
-            let mut start = 0;
-            while start + 1 < n {
-                let st = b.stable[start + 1];
-                let mut end = start + 1;
-                while end + 1 < n && b.stable[end + 1] == st {
-                    end += 1;
-                }
-                let pts: Vec<(f64, f64)> = (start..=end)
-                    .filter(|&i| fin(b.u[i], b.amplitude[i]))
-                    .map(|i| (b.u[i], b.amplitude[i]))
-                    .collect();
+            for (stable, pts) in b.runs() {
                 let style = ShapeStyle::from(C_BRANCH).stroke_width(3);
-                if st {
+                if stable {
                     chart.draw_series(LineSeries::new(pts, style)).ctx(kind)?;
                 } else {
                     chart
                         .draw_series(DashedLineSeries::new(pts, 10, 7, style))
                         .ctx(kind)?;
                 }
-                start = end;
             }
         }
         let marks = self
