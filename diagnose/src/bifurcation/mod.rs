@@ -806,7 +806,8 @@ fn verdict(ranked: &[CandidateResult], nominal: f64, opts: &BifurcationOptions) 
                 .cmp(&b.parameters.len())
                 .then(a.held_out.score.total_cmp(&b.held_out.score))
         })
-        .expect("the best is within its own bar");
+        // a non-finite score leaves no candidate under the bar: the best stands
+        .unwrap_or((0, best));
     let richer: Vec<String> = ranked[..idx].iter().map(|c| c.label()).collect();
     if chosen.shrink >= opts.min_shrink {
         BranchVerdict {
