@@ -1751,6 +1751,41 @@ mod tests {
 
     fn no_obs(_: BranchProgress) {}
 
+    /// Missing values (empty, `nan`, `-`), a heave-only header and the optional frequency
+    /// are read; a row without any amplitude, a missing speed column and a bad number are
+    /// refused with file, line and column.
+    #[test]
+    fn measured_tables_with_missing_values() {
+        let t = "# c\nbranch,wind_speed_m_s,heave_amp_m,pitch_amp_rad,freq_hz,source\n\
+                 stable,15,0.02,,2.4,a, b\nunstable,16,-,0.03,nan,x\n";
+        let m = parse_measured_amplitudes(t, "t.csv").unwrap();
+        assert_eq!(m.len(), 2);
+        assert_eq!((m[0].amplitude_alpha, m[0].frequency_hz), (None, Some(2.4)));
+        assert_eq!((m[1].amplitude_h, m[1].amplitude_alpha), (None, Some(0.03)));
+        assert_eq!(m[1].frequency_hz, None);
+        let heave =
+            parse_measured_amplitudes("branch,wind_speed_m_s,heave_amp_m\nstable,15,0.02\n", "h")
+                .unwrap();
+        assert_eq!(heave[0].amplitude_alpha, None);
+        for (text, needle) in [
+            (
+                "branch,wind_speed_m_s,heave_amp_m,pitch_amp_rad\nstable,15,,nan\n",
+                "line 2",
+            ),
+            ("branch,heave_amp_m\nstable,0.1\n", "wind_speed_m_s"),
+            (
+                "branch,wind_speed_m_s,pitch_amp_rad\nstable,15,abc\n",
+                "pitch_amp_rad",
+            ),
+            ("branch,wind_speed_m_s,freq_hz\nstable,15,2\n", "neither"),
+        ] {
+            let e = parse_measured_amplitudes(text, "bad.csv")
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains(needle) && e.contains("bad.csv"), "{e}");
+        }
+    }
+
     /// det(2A⊙I) = Π_{i<j}(λ_i + λ_j) on a non-symmetric matrix with complex eigenvalues.
     #[test]
     fn bialternate_determinant_is_the_product_of_eigenvalue_pair_sums() {
