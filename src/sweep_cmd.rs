@@ -66,8 +66,21 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<()> {
     crate::ui::document(&doc)
 }
 
-/// Runs `aeroform merge`.
+/// Runs `aeroform merge`. An OUT that is one of the parts (the same file, by any path) is
+/// refused before anything is read or written.
 pub fn merge_run(args: &MergeArgs) -> anyhow::Result<()> {
+    let same = |a: &std::path::Path, b: &std::path::Path| match (a.canonicalize(), b.canonicalize())
+    {
+        (Ok(x), Ok(y)) => x == y,
+        _ => a == b,
+    };
+    if let Some(p) = args.parts.iter().find(|p| same(&args.out, p)) {
+        anyhow::bail!(
+            "merge: OUT {} is also one of the parts ({}); give a new file for the merged document",
+            args.out.display(),
+            p.display()
+        );
+    }
     let parts = args
         .parts
         .iter()
