@@ -585,4 +585,14 @@ fn json_manifest_is_the_toml_one_and_errors_name_json_lines() {
     assert!(e.to_string().contains(":4: field `section.chord`"), "{e}");
     let e = Manifest::parse_json("{\"format\": ", jp).unwrap_err();
     assert!(e.to_string().contains("invalid JSON"), "{e}");
+    // a repeated key is refused with its line, as TOML does (issue 27, row 13)
+    let dup = json.replace("\"chord\": 0.25", "\"chord\": 0.25, \"chord\": 5");
+    let e = Manifest::parse_json(&dup, jp).unwrap_err();
+    let Error::Manifest { line, .. } = &e else {
+        panic!("{e}")
+    };
+    assert!(
+        e.to_string().contains("duplicate key `chord`") && *line == 4,
+        "{e}"
+    );
 }
