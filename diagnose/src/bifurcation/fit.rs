@@ -133,6 +133,8 @@ fn cost(r: &[f64]) -> f64 {
 pub(crate) struct FitResult {
     /// Scaled parameters.
     pub theta: Vec<f64>,
+    /// Sum of squared residuals at `theta`.
+    pub cost: f64,
 }
 
 /// Levenberg–Marquardt on `f` from `x0` (forward differences, step 1e-2 in θ).
@@ -189,7 +191,7 @@ pub(crate) fn levenberg_marquardt(
             break;
         }
     }
-    FitResult { theta: x }
+    FitResult { theta: x, cost: c }
 }
 
 /// Start points of a fit with `n` scaled parameters: every combination of a few values

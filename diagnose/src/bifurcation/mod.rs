@@ -655,9 +655,7 @@ fn fit_candidate(
         .iter()
         .take(START_POINTS)
         .map(|(_, s)| levenberg_marquardt(&f_all, s, opts.max_iterations))
-        .map(|r| (cost(&f_all(&r.theta)), r))
-        .min_by(|a, b| a.0.total_cmp(&b.0))
-        .map(|(_, r)| r)
+        .min_by(|a, b| a.cost.total_cmp(&b.cost))
         .expect("at least one start");
     // Even terms jointly to the sign convention (first even term ≥ 0): the diagram is the
     // same (q → −q symmetry of the linear section).
