@@ -208,7 +208,8 @@ pub struct CandidateResult {
     pub held_out_points: Vec<MeasuredDistance>,
     /// Held-out errors.
     pub held_out: Errors,
-    /// Standard error of the held-out score over the speed groups.
+    /// Standard error of the held-out score over the speed groups, at least the amplitude
+    /// uncertainty over √(number of held-out residuals).
     pub score_se: f64,
     /// 1 − held-out score / nominal held-out score.
     pub shrink: f64,
@@ -724,10 +725,15 @@ fn fit_candidate(
     let mean = per_group.iter().sum::<f64>() / g;
     let var = per_group.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (g - 1.0).max(1.0);
     let se_sq = (var / g).sqrt();
+    // Floored at the resolution the measurement allows: the amplitude uncertainty over the
+    // number of held-out residuals (noise-free points would otherwise leave no standard
+    // error and let a richer candidate win by a rounding difference).
+    let n_res = normalised(&held, setting).len().max(1) as f64;
+    let resolution = opts.amplitude_noise / n_res.sqrt();
     let score_se = if held_out.score > 0.0 {
-        se_sq / (2.0 * held_out.score)
+        (se_sq / (2.0 * held_out.score)).max(resolution)
     } else {
-        0.0
+        resolution
     };
     let set_all = c
         .apply(section, &full.theta)
