@@ -135,6 +135,22 @@ pub enum InjectedEffect {
         /// Kinetic friction moment T_c \[N·m/m\].
         moment: f64,
     },
+    /// A pitch spring with even and odd terms, k_α(α + c₂α² + c₃α³) (primary) or
+    /// k_α(α + c₂α² + c₃α³ + c₄α⁴) with c₄ = 2c₃ \[1/rad³\] (alternate): an asymmetric,
+    /// hardening or softening spring. Signs are free.
+    StructuralPolynomial {
+        /// c₂ \[1/rad\].
+        c2: f64,
+        /// c₃ \[1/rad²\].
+        c3: f64,
+    },
+    /// Amplitude-dependent pitch damping c_α(1 + d α²) α̇ (primary) or
+    /// c_α(1 + d α⁴/α_r²) α̇ with α_r = 0.1 rad (alternate: the same extra damping at
+    /// 5.7°, steeper in amplitude). d \[1/rad²\] > 0.
+    StructuralDamping {
+        /// d \[1/rad²\].
+        d: f64,
+    },
     /// Turbulent buffeting (outside the catalogue): vertical gust w/U with rms I_w (typical
     /// 0.1 %–6 %), Dryden/von Kármán-like spectrum of integral length L \[m\], quasi-steady
     /// forces C_L↑ = 2π w/U at the quarter chord.
@@ -224,6 +240,8 @@ impl ForcingSeries {
 /// T = L/U (the Dryden form of the von Kármán spectrum), normalised to unit rms over the
 /// series; alternate form through a further Sears-like 1/(1 + s B/U) (normalised after);
 /// ΔC_L = −2π w/U (lift up), ΔC_M = 2π (x_ea − ¼) w/U.
+///
+/// Returns `None` in still air (U ≤ 0) and when no effect forces.
 pub fn forcing_series(
     effects: &[Injection],
     chord: f64,
@@ -232,6 +250,10 @@ pub fn forcing_series(
     n: usize,
     seed: u64,
 ) -> Option<ForcingSeries> {
+    // no flow, no shedding and no gusts (still air: forces scale with U²)
+    if !(u > 0.0 && u.is_finite()) {
+        return None;
+    }
     let mut total: Option<ForcingSeries> = None;
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     for inj in effects {
@@ -867,6 +889,27 @@ pub fn free_section(
                     power: 5,
                     coefficient: 10.0 * kappa * k_a,
                 });
+            }
+            (InjectedEffect::StructuralPolynomial { c2, c3 }, form) => {
+                let mut terms = vec![(2, c2 * k_a), (3, c3 * k_a)];
+                if form == Form::Alternate {
+                    terms.push((4, 2.0 * c3 * k_a));
+                }
+                for (power, coefficient) in terms {
+                    st.nonlinear
+                        .pitch_stiffness_terms
+                        .push(PolyTerm { power, coefficient });
+                }
+            }
+            (InjectedEffect::StructuralDamping { d }, form) => {
+                let c_a = st.c_alpha;
+                let (power, coefficient) = match form {
+                    Form::Primary => (2, c_a * d),
+                    Form::Alternate => (4, c_a * d / 0.01),
+                };
+                st.nonlinear
+                    .pitch_damping_terms
+                    .push(PolyTerm { power, coefficient });
             }
             (InjectedEffect::Freeplay { half_gap }, Form::Primary) => {
                 st.nonlinear.pitch_freeplay = *half_gap

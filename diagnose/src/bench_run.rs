@@ -58,7 +58,12 @@ pub fn blind_effect(label: &str) -> Result<BlindEffect> {
         "none" => Ok(BlindEffect::None),
         OUTSIDE => Ok(BlindEffect::Buffeting),
         other => match Effect::from_name(other) {
-            Ok(e) if Effect::GENERATED.contains(&e) => Ok(BlindEffect::Catalogue(e)),
+            Ok(e)
+                if Effect::GENERATED.contains(&e)
+                    || matches!(e, Effect::StructuralPolynomial | Effect::StructuralDamping) =>
+            {
+                Ok(BlindEffect::Catalogue(e))
+            }
             _ => Err(crate::Error::UnknownEffect {
                 name: other.to_string(),
                 expected: Effect::GENERATED
@@ -128,6 +133,11 @@ pub fn run_one(spec: &BlindSpec, opts: &BlindOptions) -> Result<(BlindOutcome, D
         parameters: set.truth.parameters.clone(),
         error: None,
         seconds: t.elapsed().as_secs_f64(),
+        uncovered_runs: diag
+            .levels
+            .iter()
+            .find_map(|l| l.coverage.as_ref())
+            .map(|c| c.runs.iter().filter(|r| !r.covered).count()),
     };
     Ok((outcome, diag))
 }
@@ -146,7 +156,11 @@ pub fn run_outcome(spec: &BlindSpec, opts: &BlindOptions) -> BlindOutcome {
 /// to generate or diagnose is recorded with its error (and counted as failed), never
 /// dropped. `observer` is called after each set.
 pub fn run_blind(opts: &BlindOptions, observer: &(dyn Fn(&BlindOutcome) + Sync)) -> BlindReport {
-    let mut specs = draw_specs(opts.n, opts.seed);
+    let mut specs = if opts.shapes {
+        crate::bench::draw_specs_from(opts.n, opts.seed, &crate::bench::shapes_truth_labels())
+    } else {
+        draw_specs(opts.n, opts.seed)
+    };
     if opts.shapes {
         for s in &mut specs {
             s.shape = Some(crate::bench::CampaignShape::draw(s.seed));
@@ -175,5 +189,6 @@ fn failed(spec: &BlindSpec, e: &Error, seconds: f64) -> BlindOutcome {
         parameters: vec![],
         error: Some(e.to_string()),
         seconds,
+        uncovered_runs: None,
     }
 }

@@ -179,8 +179,12 @@ pub fn parameter_range(effect: BlindEffect, form: Form) -> Option<(&'static str,
             StructuralCubic => ("kappa [1/rad^2]", 0.5, 200.0),
             Freeplay => ("half gap [deg]", 0.001, 1.0),
             Friction => ("T_c [N*m/m]", 1e-5, 3e-3),
-            // catalogue effects the generator does not inject (real-rig structure)
-            StructuralPolynomial | StructuralDamping | AerodynamicScale => return None,
+            // |c₃| of k_α(α + c₂α² + c₃α³); the sign and c₂ are drawn with it
+            // ([`injection`]): hardening 0.5…200, softening 0.2…5
+            StructuralPolynomial => ("|c3| [1/rad^2]", 0.5, 200.0),
+            StructuralDamping => ("d [1/rad^2]", 10.0, 5000.0),
+            // fitted at the bifurcation level only (its own benchmark)
+            AerodynamicScale => return None,
         },
     })
 }
@@ -191,11 +195,35 @@ fn injection(
     form: Form,
     sc: &BlindScenario,
     rig: [[f64; 2]; 2],
+    seed: u64,
 ) -> (Vec<Injection>, Vec<(String, f64)>) {
     let Some((name, lo, hi)) = parameter_range(effect, form) else {
         return (vec![], vec![]);
     };
     let p = log_map(strength, lo, hi);
+    if effect == BlindEffect::Catalogue(Effect::StructuralPolynomial) {
+        // signs of c₂ and c₃ from the set's seed; the spring's slope 1 + 2c₂α + 3c₃α²
+        // stays positive (hardening: c₂² < 3c₃ · 0.5) or positive beyond 15° (softening)
+        let bits = identify::numerics::split_seed(seed, 41);
+        let soft = bits & 1 == 1;
+        let s2 = if bits & 2 == 2 { -1.0 } else { 1.0 };
+        let (c3, c2) = if soft {
+            (
+                -log_map(strength, 0.2, 5.0),
+                s2 * log_map(strength, 0.05, 1.0),
+            )
+        } else {
+            let c3 = p;
+            (c3, s2 * log_map(strength, 0.05, 8.0).min((1.5 * c3).sqrt()))
+        };
+        return (
+            vec![Injection {
+                effect: Inj::StructuralPolynomial { c2, c3 },
+                form,
+            }],
+            vec![("c2 [1/rad]".into(), c2), ("c3 [1/rad^2]".into(), c3)],
+        );
+    }
     let mut params = vec![(name.to_string(), p)];
     use Effect::*;
     let e = match effect {
@@ -239,7 +267,8 @@ fn injection(
                 half_gap: p.to_radians(),
             },
             Friction => Inj::Friction { moment: p },
-            StructuralPolynomial | StructuralDamping | AerodynamicScale => return (vec![], vec![]),
+            StructuralDamping => Inj::StructuralDamping { d: p },
+            StructuralPolynomial | AerodynamicScale => return (vec![], vec![]),
         },
     };
     (vec![Injection { effect: e, form }], params)
@@ -290,6 +319,32 @@ pub fn generate(
     if !(0.0..=1.0).contains(&strength) {
         return Err(Error::setting("strength", strength, "must be in [0, 1]"));
     }
+    let rig_file =
+        StructureFile::parse(&scenario.rig, "rig structure").map_err(ae("blind: rig"))?;
+    let mm = rig_file
+        .structure()
+        .map_err(ae("blind: rig"))?
+        .mass_matrix();
+    let rig = [[mm[(0, 0)], mm[(0, 1)]], [mm[(1, 0)], mm[(1, 1)]]];
+    let (inj, parameters) = injection(effect, strength, form, scenario, rig, seed);
+    generate_injected(effect, &inj, parameters, strength, form, seed, scenario)
+}
+
+/// Generates a blind set with the given injections (their parameters as the caller
+/// chose them, e.g. a spring polynomial of a chosen sign), labelled `effect` with
+/// `parameters` in its truth; every random draw from `seed`, on `scenario`.
+///
+/// # Errors
+/// As [`generate`].
+pub fn generate_injected(
+    effect: BlindEffect,
+    inj: &[Injection],
+    parameters: Vec<(String, f64)>,
+    strength: f64,
+    form: Form,
+    seed: u64,
+    scenario: &BlindScenario,
+) -> Result<BlindSet> {
     let sc = scenario;
     let loaded = LoadedModel::parse(&sc.truth_model, "truth model", Path::new("."), None)
         .map_err(ae("blind: truth model"))?;
@@ -298,9 +353,7 @@ pub fn generate(
     let structure = rig_file.structure().map_err(ae("blind: rig"))?;
     let rho = rig_file.air_density;
     let chord = truth.chord();
-    let mm = structure.mass_matrix();
-    let rig = [[mm[(0, 0)], mm[(0, 1)]], [mm[(1, 0)], mm[(1, 1)]]];
-    let (inj, parameters) = injection(effect, strength, form, sc, rig);
+    let inj = inj.to_vec();
     let forced = forced_set(&truth, &inj, sc, rho, seed)?;
     let base = Section::new(structure, truth, rho).map_err(ae("blind: section"))?;
     let free = free_set(&base, &inj, sc, chord, seed)?;

@@ -46,6 +46,19 @@ pub struct CandidateScore {
     /// Why the candidate could not be fitted, when it could not.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub failure: Option<String>,
+    /// Sign convention and units of `parameters` (e.g. "extra restoring force added to
+    /// K q: … α positive nose-up").
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub convention: Option<String>,
+    /// What restricted or chose this candidate (its form, the runs its evidence comes
+    /// from, a simpler nested candidate preferred by the one-standard-error rule).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub note: Option<String>,
+    /// Held-out residual energy after the candidate per held-out unit (system level: per
+    /// free run, mean of the two DOFs' normalised energies; empty where not kept), for
+    /// paired comparisons of nested candidates.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub held_out_runs: Vec<f64>,
 }
 
 /// A share of a level's held-out gap (excess residual energy) attributed to one cell of a

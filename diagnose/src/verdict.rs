@@ -23,7 +23,7 @@
 //! *excess* shrink 1 − e_after/e_before with e = sqrt(max(gap² − noise², 0)), which is 1
 //! when a candidate leaves only noise.
 
-use crate::effect::{Level, Verdict};
+use crate::effect::{Effect, Level, Verdict};
 use crate::report::{
     CandidateScore, Diagnosis, GapReport, LevelResult, VerdictReport, WhereShare, FORMAT,
 };
@@ -105,39 +105,95 @@ pub struct Decision {
     pub candidate: Option<usize>,
 }
 
-/// The best candidate of a level that is significant, with its excess shrink.
-fn best_candidate(level: &LevelResult) -> Option<(usize, &CandidateScore, f64)> {
-    level
+/// Nested candidate pairs (simpler, richer): the richer one holds the simpler one's terms.
+pub const NESTED: [(Effect, Effect); 1] = [(Effect::StructuralCubic, Effect::StructuralPolynomial)];
+
+/// Whether the simpler candidate `a`'s per-run held-out energies are within one standard
+/// error (paired over the held-out units) of the richer `b`'s.
+fn within_one_se(a: &CandidateScore, b: &CandidateScore) -> bool {
+    if a.held_out_runs.len() != b.held_out_runs.len() || a.held_out_runs.is_empty() {
+        return false;
+    }
+    let d: Vec<f64> = a
+        .held_out_runs
+        .iter()
+        .zip(&b.held_out_runs)
+        .map(|(x, y)| x - y)
+        .collect();
+    let m = d.len() as f64;
+    let mean = d.iter().sum::<f64>() / m;
+    let se = if d.len() > 1 {
+        (d.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (m - 1.0)).sqrt() / m.sqrt()
+    } else {
+        0.0
+    };
+    mean <= se
+}
+
+/// The best candidate of a level that is significant (structural ones only when
+/// `structural_only`), with its excess shrink against its own baseline
+/// ([`CandidateScore::before`]). A simpler nested candidate ([`NESTED`]) within one
+/// standard error of the best is taken instead (the one-standard-error rule).
+fn best_candidate(
+    level: &LevelResult,
+    structural_only: bool,
+) -> Option<(usize, &CandidateScore, f64)> {
+    let ok = |c: &CandidateScore| {
+        c.significant
+            && c.failure.is_none()
+            && c.after.is_finite()
+            && (!structural_only || c.effect.level() == Level::Structural)
+    };
+    let with_shrink = |i: usize| {
+        let c = &level.candidates[i];
+        (i, c, excess_shrink(c.before, c.after, level.noise_level))
+    };
+    let best = level
         .candidates
         .iter()
         .enumerate()
-        .filter(|(_, c)| c.significant && c.failure.is_none() && c.after.is_finite())
-        .map(|(i, c)| {
-            (
-                i,
-                c,
-                excess_shrink(level.before, c.after, level.noise_level),
-            )
-        })
+        .filter(|(_, c)| ok(c))
+        .map(|(i, _)| with_shrink(i))
         .max_by(|a, b| {
             // lower score is better; ties by larger shrink
             b.1.score
                 .partial_cmp(&a.1.score)
                 .unwrap_or(std::cmp::Ordering::Equal)
                 .then(a.2.partial_cmp(&b.2).unwrap_or(std::cmp::Ordering::Equal))
-        })
+        })?;
+    for (simple, rich) in NESTED {
+        if best.1.effect == rich {
+            if let Some(i) = level
+                .candidates
+                .iter()
+                .position(|c| c.effect == simple && ok(c) && within_one_se(c, best.1))
+            {
+                return Some(with_shrink(i));
+            }
+        }
+    }
+    Some(best)
 }
 
 /// Confidence of naming `best`: its excess shrink, reduced by how much of the same
-/// improvement the runner-up achieves (1 − Δ₂/Δ₁ with Δ = before − after).
+/// improvement the runner-up achieves (1 − Δ₂/Δ₁ with Δ = before − after; a candidate
+/// nested with `best` is not its runner-up).
 fn effect_confidence(level: &LevelResult, best_idx: usize, shrink: f64) -> f64 {
-    let d1 = level.before - level.candidates[best_idx].after;
+    let b = &level.candidates[best_idx];
+    let nested = |e: Effect| {
+        NESTED
+            .iter()
+            .any(|&(x, y)| (x == e && y == b.effect) || (y == e && x == b.effect))
+    };
+    let d1 = b.before - b.after;
     let d2 = level
         .candidates
         .iter()
         .enumerate()
-        .filter(|(i, c)| *i != best_idx && c.failure.is_none() && c.after.is_finite())
-        .map(|(_, c)| level.before - c.after)
+        .filter(|(i, c)| {
+            *i != best_idx && c.failure.is_none() && c.after.is_finite() && !nested(c.effect)
+        })
+        .map(|(_, c)| c.before - c.after)
         .fold(0.0_f64, f64::max);
     let margin = if d1 > 0.0 {
         (1.0 - d2.max(0.0) / d1).clamp(0.0, 1.0)
@@ -147,6 +203,31 @@ fn effect_confidence(level: &LevelResult, best_idx: usize, shrink: f64) -> f64 {
     (shrink.clamp(0.0, 1.0) * (0.5 + 0.5 * margin)).clamp(0.0, 1.0)
 }
 
+/// The decision naming candidate `ci` of level `li`.
+fn named(level: &LevelResult, li: usize, ci: usize, c: &CandidateScore, shrink: f64) -> Decision {
+    let own = if (c.before - level.before).abs() > 5e-3 * level.before.abs() {
+        format!(" ({:.4} on the candidate's own baseline)", c.before)
+    } else {
+        String::new()
+    };
+    Decision {
+        verdict: Verdict::Effect(c.effect),
+        confidence: effect_confidence(level, ci, shrink),
+        reason: format!(
+            "{} held-out gap {:.4} is {}; adding `{}` brings it to {:.4}{own} (excess \
+             shrink {:.0} %)",
+            level.level.name(),
+            level.before,
+            against_null(level),
+            c.effect,
+            c.after,
+            100.0 * shrink
+        ),
+        level: Some(li),
+        candidate: Some(ci),
+    }
+}
+
 /// Decides one level with a significant gap.
 fn decide_level(levels: &[LevelResult], li: usize, rules: &VerdictRules) -> Decision {
     let level = &levels[li];
@@ -154,6 +235,13 @@ fn decide_level(levels: &[LevelResult], li: usize, rules: &VerdictRules) -> Deci
         let tails = cov
             .tails_before
             .map(|t| excess_shrink(cov.linear_before, t, level.noise_level));
+        // a structural candidate significant beyond the runs' extrapolation nuisance is
+        // evidence the extrapolation cannot produce: it is named even so
+        let structural =
+            best_candidate(level, true).filter(|(_, _, shrink)| *shrink >= rules.min_excess_shrink);
+        if let (true, Some((ci, c, shrink))) = (cov.explains_gap, structural) {
+            return named(level, li, ci, c, shrink);
+        }
         if cov.explains_gap {
             let outside: Vec<&str> = cov
                 .runs
@@ -196,23 +284,10 @@ fn decide_level(levels: &[LevelResult], li: usize, rules: &VerdictRules) -> Deci
             };
         }
     }
-    match best_candidate(level) {
-        Some((ci, c, shrink)) if shrink >= rules.min_excess_shrink => Decision {
-            verdict: Verdict::Effect(c.effect),
-            confidence: effect_confidence(level, ci, shrink),
-            reason: format!(
-                "{} held-out gap {:.4} is {}; adding `{}` brings it to {:.4} (excess shrink \
-                 {:.0} %)",
-                level.level.name(),
-                level.before,
-                against_null(level),
-                c.effect,
-                c.after,
-                100.0 * shrink
-            ),
-            level: Some(li),
-            candidate: Some(ci),
-        },
+    match best_candidate(level, false) {
+        Some((ci, c, shrink)) if shrink >= rules.min_excess_shrink => {
+            named(level, li, ci, c, shrink)
+        }
         best => {
             let (what, shrink) = match best {
                 Some((_, c, s)) => (format!("the best candidate `{}`", c.effect), s),
@@ -265,7 +340,8 @@ fn cross_validation_extrapolation(level: &LevelResult, rules: &VerdictRules) -> 
     level
         .interpolated_gap_statistic
         .is_some_and(|x| x <= level.gap_threshold)
-        && best_candidate(level).is_none_or(|(_, _, shrink)| shrink < rules.min_excess_shrink)
+        && best_candidate(level, false)
+            .is_none_or(|(_, _, shrink)| shrink < rules.min_excess_shrink)
 }
 
 /// Decides the verdict from the levels (force level first, then system level; see the
@@ -473,6 +549,9 @@ mod tests {
             score,
             parameters: vec![],
             failure: None,
+            convention: None,
+            note: None,
+            held_out_runs: vec![],
         }
     }
 

@@ -31,6 +31,9 @@ fn candidate(effect: Effect, level: Level, before: f64, after: f64, sig: bool) -
         score: after,
         parameters: vec![("p0".into(), 0.01), ("tau_s".into(), 2.5e-3)],
         failure: None,
+        convention: None,
+        note: None,
+        held_out_runs: vec![],
     }
 }
 

@@ -106,6 +106,9 @@ pub(crate) fn assemble(
                     score,
                     parameters: s.parameters.clone(),
                     failure: s.failure.clone(),
+                    convention: None,
+                    note: None,
+                    held_out_runs: vec![],
                 },
                 k,
             )

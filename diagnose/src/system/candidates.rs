@@ -81,6 +81,63 @@ fn moments(run: &RunResidual, cols: &[Column]) -> Moments {
     Moments { g, b, e }
 }
 
+/// Nuisance columns of one run (issue 29), two pooled groups of apparent-mass terms
+/// ΔM q̈, each as q̈_d in the heave and in the pitch equation for the DOFs d of the group:
+/// * group 0, the extrapolation: the motion whose response K leaves its forced range
+///   (the part of the law a campaign forced below the free runs' K cannot know: the K²
+///   apparent-mass terms of H₄*, A₃*…, beyond the Theodorsen-shaped tails the sim
+///   already continues with);
+/// * group 1, still air: both DOFs of the runs at U = 0 (the air's apparent mass, which
+///   no identified law predicts at U = 0).
+///
+/// `flags[g][d]`: the run has group g's term for DOF d (else its column is empty on this
+/// run); `dofs[g][d]`: some run has it (the column exists).
+pub(crate) fn nuisance_columns(
+    run: &RunResidual,
+    flags: [[bool; 2]; 2],
+    dofs: [[bool; 2]; 2],
+) -> Vec<Column> {
+    let mut v = Vec::new();
+    for g in 0..2 {
+        for d in (0..2).filter(|&d| dofs[g][d]) {
+            let x = if flags[g][d] {
+                kept(run, &run.qdd[d])
+            } else {
+                Vec::new()
+            };
+            v.push([x.clone(), Vec::new()]);
+            v.push([Vec::new(), x]);
+        }
+    }
+    v
+}
+
+impl Variant {
+    /// The variant restricted to the coefficients `idx` (a form of the candidate: pitch
+    /// terms only, heave terms only…): principal sub-blocks of every run's moments.
+    pub(crate) fn select(&self, idx: &[usize]) -> Variant {
+        let p = self.names.len();
+        Variant {
+            grid: self.grid.clone(),
+            names: idx.iter().map(|&i| self.names[i].clone()).collect(),
+            moments: self
+                .moments
+                .iter()
+                .map(|m| Moments {
+                    g: [0, 1].map(|c| {
+                        idx.iter()
+                            .flat_map(|&a| idx.iter().map(move |&b| (a, b)))
+                            .map(|(a, b)| m.g[c][a * p + b])
+                            .collect()
+                    }),
+                    b: [0, 1].map(|c| idx.iter().map(|&a| m.b[c][a]).collect()),
+                    e: m.e,
+                })
+                .collect(),
+        }
+    }
+}
+
 /// Solves (G + λ diag G) θ = b by Cholesky (tiny ridge for conditioning); `None` when
 /// singular.
 pub(crate) fn solve(g: &[f64], b: &[f64]) -> Option<Vec<f64>> {
@@ -90,11 +147,17 @@ pub(crate) fn solve(g: &[f64], b: &[f64]) -> Option<Vec<f64>> {
     if !(scale > 0.0 && scale.is_finite()) {
         return None;
     }
+    let mut y = b.to_vec();
     for i in 0..p {
+        if a[i * p + i] == 0.0 {
+            // a column empty on every training run (a nuisance term of a held-out run
+            // only): its coefficient is 0
+            a[i * p + i] = scale;
+            y[i] = 0.0;
+        }
         a[i * p + i] += 1e-10 * a[i * p + i].abs();
     }
     cholesky_in_place(&mut a, p, PivotFloor::Absolute(1e-13 * scale)).ok()?;
-    let mut y = b.to_vec();
     cholesky_solve_in_place(&a, p, &mut y);
     Some(y)
 }
@@ -182,23 +245,23 @@ fn columns(effect: Effect, grid: &[f64], run: &RunResidual, rho: f64, chord: f64
             };
             vec![[d(&run.force[0]), d(&run.force[1])]]
         }
-        Effect::StructuralCubic => vec![
-            [
-                kept(run, &run.q[0]).iter().map(|v| v.powi(3)).collect(),
-                z(),
-            ],
-            [
-                z(),
-                kept(run, &run.q[1]).iter().map(|v| v.powi(3)).collect(),
-            ],
-        ],
+        // restoring terms through the same smoothing as the residual's structural force
+        // (their harmonics at 2f, 3f are attenuated by the differentiator as the
+        // measured acceleration's are)
+        Effect::StructuralCubic => {
+            let p =
+                |c: usize| acc_term(run, &run.q[c].iter().map(|v| v.powi(3)).collect::<Vec<_>>());
+            vec![[p(0), z()], [z(), p(1)]]
+        }
         Effect::Freeplay => {
             let d = grid[0];
             let x: Vec<f64> = run.q[1].iter().map(|a| a.clamp(-d, d)).collect();
             vec![[z(), acc_term(run, &x)]]
         }
         Effect::StructuralPolynomial => {
-            let p = |c: usize, k: i32| kept(run, &run.q[c]).iter().map(|v| v.powi(k)).collect();
+            let p = |c: usize, k: i32| {
+                acc_term(run, &run.q[c].iter().map(|v| v.powi(k)).collect::<Vec<_>>())
+            };
             vec![
                 [p(0, 2), z()],
                 [p(0, 3), z()],
@@ -208,9 +271,12 @@ fn columns(effect: Effect, grid: &[f64], run: &RunResidual, rho: f64, chord: f64
         }
         Effect::StructuralDamping => {
             let p = |c: usize| -> Vec<f64> {
-                (run.i0..run.i1)
-                    .map(|i| run.q[c][i].powi(2) * run.qd[c][i])
-                    .collect()
+                let x: Vec<f64> = run.q[c]
+                    .iter()
+                    .zip(&run.qd[c])
+                    .map(|(q, v)| q * q * v)
+                    .collect();
+                acc_term(run, &x)
             };
             vec![[p(0), z()], [z(), p(1)]]
         }
@@ -273,21 +339,6 @@ pub(crate) const FREEPLAY_GRID_DEG: [f64; 14] = [
 /// Friction smoothing grid (fractions of the pooled rms velocity).
 pub(crate) const FRICTION_GRID: [f64; 3] = [0.01, 0.03, 0.1];
 
-/// Number of parameters a candidate adds (coefficients + grid parameters).
-pub(crate) fn n_params(effect: Effect) -> usize {
-    match effect {
-        Effect::AddedMass => 4,
-        Effect::TimeDelay => 1,
-        Effect::StructuralCubic => 2,
-        Effect::Freeplay => 2,
-        Effect::Friction => 3,
-        Effect::StaticOffset => 3,
-        Effect::StructuralPolynomial => 4,
-        Effect::StructuralDamping => 2,
-        _ => 0,
-    }
-}
-
 /// Grid parameters of every variant of a candidate (names and SI values).
 pub(crate) fn variants_grid(effect: Effect, runs: &[RunResidual]) -> Vec<Vec<(String, f64)>> {
     grids(effect, runs).into_iter().map(|g| g.0).collect()
@@ -338,19 +389,122 @@ fn grids(effect: Effect, runs: &[RunResidual]) -> Grid {
     }
 }
 
-/// All variants of a candidate over the runs.
-pub(crate) fn variants(effect: Effect, runs: &[RunResidual], rho: f64, chord: f64) -> Vec<Variant> {
+/// All variants of a candidate over the runs, its columns followed by the nuisance
+/// columns ([`nuisance_columns`]; `flags[j]`: run j's nuisance terms; no nuisance column
+/// that no run has).
+pub(crate) fn variants(
+    effect: Effect,
+    runs: &[RunResidual],
+    rho: f64,
+    chord: f64,
+    flags: &[[[bool; 2]; 2]],
+) -> Vec<Variant> {
+    let dofs = [0, 1].map(|g| [0, 1].map(|d| flags.iter().any(|f| f[g][d])));
+    let mut names = coefficient_names(effect);
+    for g in 0..2 {
+        for d in (0..2).filter(|&d| dofs[g][d]) {
+            let (group, q) = (["extrapolation", "still_air"][g], ["h", "alpha"][d]);
+            names.push(format!("nuisance_{group}_dM_heave_{q}"));
+            names.push(format!("nuisance_{group}_dM_pitch_{q}"));
+        }
+    }
     grids(effect, runs)
         .into_iter()
         .map(|(grid, g)| Variant {
             grid,
-            names: coefficient_names(effect),
+            names: names.clone(),
             moments: runs
                 .iter()
-                .map(|r| moments(r, &columns(effect, &g, r, rho, chord)))
+                .enumerate()
+                .map(|(j, r)| {
+                    let mut cols = columns(effect, &g, r, rho, chord);
+                    let f = flags.get(j).copied().unwrap_or([[false; 2]; 2]);
+                    cols.extend(nuisance_columns(r, f, dofs));
+                    moments(r, &cols)
+                })
                 .collect(),
         })
         .collect()
+}
+
+/// The forms of a candidate, simplest first: (label, coefficient indices). Structural
+/// terms come as pitch only, heave only, and both DOFs; the choice among them follows the
+/// one-standard-error rule of [`super`] (DECISIONS, "The simplest sufficient effect").
+pub(crate) fn forms(effect: Effect) -> Vec<(&'static str, Vec<usize>)> {
+    match effect {
+        Effect::StructuralCubic | Effect::StructuralDamping | Effect::Friction => vec![
+            ("pitch", vec![1]),
+            ("heave", vec![0]),
+            ("pitch+heave", vec![0, 1]),
+        ],
+        Effect::StructuralPolynomial => vec![
+            ("pitch", vec![2, 3]),
+            ("heave", vec![0, 1]),
+            ("pitch+heave", vec![0, 1, 2, 3]),
+        ],
+        _ => {
+            let n = coefficient_names(effect).len();
+            vec![("all", (0..n).collect())]
+        }
+    }
+}
+
+/// Number of grid parameters of a candidate (fitted on a grid, not by least squares).
+pub(crate) fn n_grid_params(effect: Effect) -> usize {
+    match effect {
+        Effect::Freeplay | Effect::Friction | Effect::StaticOffset => 1,
+        _ => 0,
+    }
+}
+
+/// Sign that turns a fitted coefficient θ into the reported one. The fit writes the
+/// augmentation like an aerodynamic force on the right of M q̈ + C q̇ + K q = F
+/// (r_aug = r − Φθ); structural springs, dampers and friction are reported as the extra
+/// restoring or dissipative force on the left, added to C q̇ + K q, so their sign flips.
+pub(crate) fn report_sign(effect: Effect) -> f64 {
+    match effect {
+        Effect::StructuralCubic
+        | Effect::StructuralPolynomial
+        | Effect::StructuralDamping
+        | Effect::Friction => -1.0,
+        _ => 1.0,
+    }
+}
+
+/// The sign convention of a candidate's reported parameters (written in diagnosis.json).
+pub(crate) fn convention(effect: Effect) -> &'static str {
+    match effect {
+        Effect::StructuralCubic => {
+            "extra restoring force added to K q: heave k3_heave·h³ [N/m], pitch \
+             k3_pitch·α³ [N·m/m]; h positive down, α positive nose-up; k3 > 0 hardening"
+        }
+        Effect::StructuralPolynomial => {
+            "extra restoring force added to K q: heave k2_heave·h² + k3_heave·h³ [N/m], \
+             pitch k2_pitch·α² + k3_pitch·α³ [N·m/m]; h positive down, α positive nose-up"
+        }
+        Effect::StructuralDamping => {
+            "extra damping force added to C q̇: c2_heave·h²ḣ [N/m], c2_pitch·α²α̇ [N·m/m]; \
+             c2 > 0 damping that grows with amplitude"
+        }
+        Effect::Friction => {
+            "extra dissipative force added to C q̇: friction·tanh(q̇/smoothing) (heave N/m, \
+             pitch N·m/m); > 0 opposes the motion"
+        }
+        Effect::Freeplay => {
+            "pitch restoring moment lost inside the gap: gap_stiffness·clamp(α, −half_gap, \
+             half_gap) [N·m/m] (gap_stiffness ≈ k_α for a true dead band)"
+        }
+        Effect::AddedMass => {
+            "extra force dM·q̈ on the right of M q̈ + C q̇ + K q = F: dM < 0 is mass the \
+             sim lacks (e.g. apparent mass), dM > 0 mass it has too much of"
+        }
+        Effect::TimeDelay => "aerodynamic force F(t − τ), τ > 0 a lag [s]",
+        Effect::StaticOffset => {
+            "constant lift (positive down) and moment (positive nose-up) coefficients, × ½ρU² \
+             when proportional_to_q_dyn = 1"
+        }
+        _ => "",
+    }
 }
 
 /// The candidate's extra residual columns for one run at fitted grid values, for

@@ -92,6 +92,15 @@ impl ForcedRange {
         }
     }
 
+    /// Whether the response reduced frequencies (heave, pitch) of a run lie outside the
+    /// forced K range of the same DOF (widened by [`MARGIN`]); `None` is inside.
+    pub fn k_outside(&self, k_h: Option<f64>, k_alpha: Option<f64>) -> [bool; 2] {
+        [
+            k_h.is_some_and(|k| !Self::inside(self.k_h, k)),
+            k_alpha.is_some_and(|k| !Self::inside(self.k_alpha, k)),
+        ]
+    }
+
     fn inside(r: [f64; 2], x: f64) -> bool {
         // an empty range (no case forced that DOF) covers everything
         let empty = r[0].partial_cmp(&r[1]).is_none_or(|o| o.is_gt());

@@ -26,6 +26,7 @@ use identify::record::CaseKind;
 use crate::effect::{Effect, Level};
 use crate::report::{CandidateScore, CaseGap, LevelResult};
 use crate::{Error, Result};
+use candidates::Variant;
 
 pub use residual::{ResidualSettings, RunResidual};
 
@@ -368,44 +369,49 @@ pub fn system_level(forced: &Dataset, free: &Dataset, opts: &SystemOptions) -> R
             .and_then(|ids| model_energy(ids, law_opts, free, opts))
     };
     let linear_energy = jack_energy(&IdentifiedOptions::new(chord));
-    let (mut level, p) = level_and_runs(&model, free, opts, linear_energy.as_deref())?;
     let range = coverage::ForcedRange::new(&id, forced, chord);
-    let before: Vec<f64> = level.cases.iter().map(|c| c.before).collect();
-    // each run's null level: its noise and the sim's own uncertainty along it
-    let null: Vec<f64> = level
-        .cases
-        .iter()
-        .enumerate()
-        .map(|(j, c)| {
-            let m = linear_energy.as_ref().map_or(0.0, |e| comb(e[j]));
-            c.noise_level.hypot(m)
-        })
-        .collect();
-    let mut cov = coverage::assess(&range, &p.runs, &before, &null);
-    cov.linear_before = level.before;
-    cov.linear_gap_statistic = level.gap_statistic;
-    if cov.any_outside() {
+    let (mut level, _) =
+        level_and_runs(&model, free, opts, linear_energy.as_deref(), Some(&range))?;
+    let (linear_before, linear_statistic) = (level.before, level.gap_statistic);
+    let mut tails: Option<(f64, f64)> = None;
+    if level.coverage.as_ref().is_some_and(|c| c.any_outside()) {
         let tails_opts = IdentifiedOptions {
             extrapolation: aeroelastic::identified::Extrapolation::Theodorsen,
             ..IdentifiedOptions::new(chord)
         };
         // a failure here only leaves the tails unreported
-        if let Ok(tails) = IdentifiedLaw::from_identification(&id, &tails_opts) {
-            let tm: Arc<dyn AeroModel> = Arc::new(tails.model().clone());
+        if let Ok(tails_law) = IdentifiedLaw::from_identification(&id, &tails_opts) {
+            let tm: Arc<dyn AeroModel> = Arc::new(tails_law.model().clone());
             let tails_energy = jack_energy(&tails_opts);
-            if let Ok((tl, _)) = level_and_runs(&tm, free, opts, tails_energy.as_deref()) {
+            if let Ok((tl, _)) =
+                level_and_runs(&tm, free, opts, tails_energy.as_deref(), Some(&range))
+            {
                 if tl.before.is_finite() {
-                    cov.tails_before = Some(tl.before);
-                    cov.tails_shrink = Some(crate::verdict::plain_shrink(level.before, tl.before));
+                    tails = Some((
+                        tl.before,
+                        crate::verdict::plain_shrink(level.before, tl.before),
+                    ));
                     if tl.before < level.before {
                         // the physically consistent extrapolation is the better sim: its
                         // remaining gap is what the candidates are asked to explain
                         level = tl;
-                        cov.sim_tables = "theodorsen_tails".into();
+                        if let Some(c) = level.coverage.as_mut() {
+                            c.sim_tables = "theodorsen_tails".into();
+                        }
                     }
                 }
             }
         }
+    }
+    let mut cov = level
+        .coverage
+        .take()
+        .expect("coverage assessed with a range");
+    cov.linear_before = linear_before;
+    cov.linear_gap_statistic = linear_statistic;
+    if let Some((t, x)) = tails {
+        cov.tails_before = Some(t);
+        cov.tails_shrink = Some(x);
     }
     cov.decide(level.gap_threshold, null_level(&level));
     level.coverage = Some(cov);
@@ -444,54 +450,308 @@ fn comb(e: [f64; 2]) -> f64 {
     (0.5 * (e[0] + e[1])).max(0.0).sqrt()
 }
 
-/// Held-out scoring of one candidate: per-run held-out energies after, the variant and
-/// coefficients fitted on all runs.
+/// Held-out scoring of one candidate in its chosen form.
 struct Scored {
     effect: Effect,
+    /// Label of the chosen form (`pitch`, `heave`, `pitch+heave`, `all`).
+    form: &'static str,
+    /// Coefficient indices of the form.
+    cols: Vec<usize>,
+    /// Per-run energies before (with the extrapolation nuisance profiled out where it
+    /// applies) and held out after; inactive runs keep their before energy.
+    before_runs: Vec<[f64; 2]>,
     after_runs: Vec<[f64; 2]>,
+    /// Runs the candidate is fitted and scored on.
+    active: Vec<bool>,
     variant: usize,
+    /// Coefficients of every column of the candidate (zero outside the form), fit sign.
     theta: Vec<f64>,
     failure: Option<String>,
+    note: Option<String>,
 }
 
+/// The air's apparent mass in still air (issue 29, structure first): no identified law
+/// predicts it at U = 0 (a law identified at K ≤ 1.2 extrapolates its K² terms to
+/// anything; the flat-plate πρb² needs the elastic axis, which a data set does not give),
+/// yet every still-air decay contains it (5 % of the plate rig's heave mass). It is fitted
+/// on the still-air runs, pooled: per equation c the least-squares m_c of the normalised
+/// residual on (ḧ, α̈) (the same weights as the gap), and M_a q̈ is removed from those
+/// runs' residuals. Returns the 2×2 apparent mass (rows: heave, pitch equation; the
+/// residual convention M q̈ + … − F, so positive is mass the nominal structure lacks), or
+/// `None` without a still-air run or when the fit is singular.
+fn still_air_mass(runs: &mut [RunResidual]) -> Option<[[f64; 2]; 2]> {
+    let still: Vec<usize> = (0..runs.len()).filter(|&j| runs[j].u == 0.0).collect();
+    if still.is_empty() {
+        return None;
+    }
+    let mut m = [[0.0; 2]; 2];
+    for (c, mc) in m.iter_mut().enumerate() {
+        let mut g = [0.0; 4];
+        let mut b = [0.0; 2];
+        for &j in &still {
+            let r = &runs[j];
+            let w = 1.0 / (r.len().max(1) as f64 * r.norm[c].powi(2));
+            let x = [&r.qdd[0][r.i0..r.i1], &r.qdd[1][r.i0..r.i1]];
+            for a in 0..2 {
+                b[a] += w * x[a].iter().zip(&r.r[c]).map(|(p, q)| p * q).sum::<f64>();
+                for bb in 0..2 {
+                    g[a * 2 + bb] += w * x[a].iter().zip(x[bb]).map(|(p, q)| p * q).sum::<f64>();
+                }
+            }
+        }
+        *mc = candidates::solve(&g, &b).map(|v| [v[0], v[1]])?;
+    }
+    for &j in &still {
+        let r = &mut runs[j];
+        let (i0, qdd) = (r.i0, &r.qdd);
+        for (rc, mc) in r.r.iter_mut().zip(&m) {
+            for (k, v) in rc.iter_mut().enumerate() {
+                *v -= mc[0] * qdd[0][i0 + k] + mc[1] * qdd[1][i0 + k];
+            }
+        }
+    }
+    Some(m)
+}
+
+/// Mean of the two DOFs' energies.
+fn e2(e: [f64; 2]) -> f64 {
+    0.5 * (e[0] + e[1])
+}
+
+/// Held-out fit of `vars` (one form) over the `active` runs: per-run energies after, the
+/// variant and coefficients fitted on every active run, a failure message.
+fn held_out(
+    vars: &[Variant],
+    folds: &[usize],
+    active: &[bool],
+) -> (Vec<[f64; 2]>, usize, Vec<f64>, Option<String>) {
+    let n = folds.len();
+    let p = vars.first().map_or(0, |v| v.names.len());
+    let mut after: Vec<[f64; 2]> = (0..n)
+        .map(|j| vars.first().map_or([0.0; 2], |v| v.moments[j].e))
+        .collect();
+    let mut failure = None;
+    let n_folds = folds.iter().max().map_or(0, |m| m + 1);
+    for k in 0..n_folds {
+        let held: Vec<usize> = (0..n).filter(|&j| folds[j] == k && active[j]).collect();
+        if held.is_empty() {
+            continue;
+        }
+        let train: Vec<usize> = (0..n).filter(|&j| folds[j] != k && active[j]).collect();
+        match candidates::fit(vars, &train) {
+            Some((v, theta, _)) if !train.is_empty() => {
+                for j in held {
+                    after[j] = candidates::energy_after(&vars[v].moments[j], &theta);
+                }
+            }
+            _ => failure = Some(format!("no training run or a singular fit in fold {k}")),
+        }
+    }
+    let all: Vec<usize> = (0..n).filter(|&j| active[j]).collect();
+    let (variant, theta) = match candidates::fit(vars, &all) {
+        Some((v, t, _)) if !all.is_empty() => (v, t),
+        _ => {
+            failure.get_or_insert_with(|| "singular least-squares fit".into());
+            (0, vec![0.0; p])
+        }
+    };
+    (after, variant, theta, failure)
+}
+
+/// Whether the simpler per-run energies `simple` are within one standard error of
+/// `best` over the `active` runs (paired: the mean of the per-run differences is at most
+/// their standard error), or within the parsimony allowance `allowance` (energy).
+fn within_one_se(simple: &[[f64; 2]], best: &[[f64; 2]], active: &[bool], allowance: f64) -> bool {
+    let d: Vec<f64> = (0..simple.len())
+        .filter(|&j| active[j])
+        .map(|j| e2(simple[j]) - e2(best[j]))
+        .collect();
+    if d.is_empty() {
+        return true;
+    }
+    let m = d.len() as f64;
+    let mean = d.iter().sum::<f64>() / m;
+    let sd = if d.len() > 1 {
+        (d.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (m - 1.0)).sqrt()
+    } else {
+        0.0
+    };
+    mean <= (sd / m.sqrt()).max(allowance)
+}
+
+/// Scores one candidate: fitted on the training folds of its active runs, scored on the
+/// held-out ones, in each of its forms ([`candidates::forms`]); the form named is the one
+/// with fewest coefficients within one standard error (or the parsimony allowance) of
+/// the best form.
+///
+/// Coverage rule (issue 29): an aerodynamic candidate is fitted and scored on the runs
+/// inside the forced range only (`uncovered[j]` false); a structural one on every run,
+/// with a per-run linear correction ([`candidates::nuisance`]) profiled out of each run
+/// outside the range, so that what it removes there is what no linear extrapolation of
+/// the law could.
+#[allow(clippy::too_many_arguments)]
 fn score_candidate(
     effect: Effect,
     runs: &[RunResidual],
     folds: &[usize],
     rho: f64,
     chord: f64,
+    uncovered: &[bool],
+    outside: &[[bool; 2]],
+    allowance_per_param: f64,
 ) -> Scored {
-    let vars = candidates::variants(effect, runs, rho, chord);
     let n = runs.len();
-    let n_folds = folds.iter().max().map_or(0, |m| m + 1);
-    let mut after_runs: Vec<[f64; 2]> = runs.iter().map(|r| r.energy()).collect();
-    let mut failure = None;
-    for k in 0..n_folds {
-        let train: Vec<usize> = (0..n).filter(|&j| folds[j] != k).collect();
-        match candidates::fit(&vars, &train) {
-            Some((v, theta, _)) => {
-                for j in (0..n).filter(|&j| folds[j] == k) {
-                    after_runs[j] = candidates::energy_after(&vars[v].moments[j], &theta);
-                }
+    let aero = effect.level() == Level::Aerodynamic;
+    let flags: Vec<[[bool; 2]; 2]> = (0..n)
+        .map(|j| {
+            let still = runs[j].u == 0.0;
+            if aero {
+                [[false; 2]; 2]
+            } else {
+                [outside[j], [still; 2]]
             }
-            None => failure = Some(format!("singular least-squares fit in fold {k}")),
-        }
-    }
-    let all: Vec<usize> = (0..n).collect();
-    let (variant, theta) = match candidates::fit(&vars, &all) {
-        Some((v, t, _)) => (v, t),
-        None => {
-            failure.get_or_insert_with(|| "singular least-squares fit".into());
-            (0, vec![0.0; vars.first().map_or(0, |v| v.names.len())])
-        }
+        })
+        .collect();
+    let vars = candidates::variants(effect, runs, rho, chord, &flags);
+    let p_c = candidates::coefficient_names(effect).len();
+    let p_all = vars.first().map_or(p_c, |v| v.names.len());
+    let nuis_idx: Vec<usize> = (p_c..p_all).collect();
+    // an aerodynamic candidate: runs in the wind inside the forced range only
+    let active: Vec<bool> = (0..n)
+        .map(|j| !(aero && (uncovered[j] || runs[j].u == 0.0)))
+        .collect();
+    let ids = |want: bool| -> Vec<&str> {
+        (0..n)
+            .filter(|&j| uncovered[j] == want)
+            .map(|j| runs[j].id.as_str())
+            .collect()
     };
-    let _ = &vars[variant.min(vars.len().saturating_sub(1))];
+    let mut note = None;
+    let profiled: Vec<&str> = (0..n)
+        .filter(|&j| !aero && (outside[j][0] || outside[j][1]))
+        .map(|j| runs[j].id.as_str())
+        .collect();
+    if (aero && uncovered.iter().any(|&u| u)) || (!aero && !profiled.is_empty()) {
+        note = Some(if aero {
+            let inside = ids(false);
+            if inside.is_empty() {
+                "not scored: no free run lies inside the forced range, and an aerodynamic \
+                 candidate is named at this level only on evidence from such runs"
+                    .to_string()
+            } else {
+                format!(
+                    "fitted and scored on the run(s) inside the forced range only ({}): an \
+                     aerodynamic candidate is named at this level only on their evidence",
+                    inside.join(", ")
+                )
+            }
+        } else {
+            format!(
+                "scored against the sim with an apparent-mass correction of the motion \
+                 outside its forced K range fitted alongside (run(s) {}): what the candidate \
+                 removes beyond it is what the law's extrapolation cannot produce",
+                profiled.join(", ")
+            )
+        });
+    }
+    let mut before_runs: Vec<[f64; 2]> = (0..n)
+        .map(|j| vars.first().map_or(runs[j].energy(), |v| v.moments[j].e))
+        .collect();
+    if !active.iter().any(|&a| a) {
+        return Scored {
+            effect,
+            form: "all",
+            cols: (0..p_c).collect(),
+            after_runs: before_runs.clone(),
+            before_runs,
+            active,
+            variant: 0,
+            theta: vec![0.0; p_c],
+            failure: None,
+            note,
+        };
+    }
+    if !nuis_idx.is_empty() {
+        // the baseline: the sim with the extrapolation nuisance alone, held out as well
+        let base: Vec<Variant> = vars.iter().take(1).map(|v| v.select(&nuis_idx)).collect();
+        before_runs = held_out(&base, folds, &active).0;
+    }
+    let noise_e = {
+        let (s, m) = (0..n).filter(|&j| active[j]).fold((0.0, 0.0), |(s, m), j| {
+            (s + e2(runs[j].noise_energy), m + 1.0)
+        });
+        s / f64::max(m, 1.0)
+    };
+    let forms = candidates::forms(effect);
+    let results: Vec<_> = forms
+        .iter()
+        .map(|(label, idx)| {
+            let with: Vec<usize> = idx.iter().chain(&nuis_idx).copied().collect();
+            let sub: Vec<Variant> = vars.iter().map(|v| v.select(&with)).collect();
+            (*label, idx.clone(), held_out(&sub, folds, &active))
+        })
+        .collect();
+    let mean = |a: &[[f64; 2]]| -> f64 {
+        let v: Vec<f64> = (0..n).filter(|&j| active[j]).map(|j| e2(a[j])).collect();
+        v.iter().sum::<f64>() / v.len().max(1) as f64
+    };
+    let best = (0..results.len())
+        .min_by(|&a, &b| mean(&results[a].2 .0).total_cmp(&mean(&results[b].2 .0)))
+        .unwrap_or(0);
+    // the simplest form within one standard error of the best (ties: the lower mean)
+    let chosen = (0..results.len())
+        .filter(|&k| {
+            let extra = results[best].1.len().saturating_sub(results[k].1.len());
+            k == best
+                || within_one_se(
+                    &results[k].2 .0,
+                    &results[best].2 .0,
+                    &active,
+                    allowance_per_param * extra as f64 * noise_e,
+                )
+        })
+        .min_by(|&a, &b| {
+            results[a]
+                .1
+                .len()
+                .cmp(&results[b].1.len())
+                .then(mean(&results[a].2 .0).total_cmp(&mean(&results[b].2 .0)))
+        })
+        .unwrap_or(best);
+    if forms.len() > 1 {
+        let form_note = if chosen == best {
+            format!(
+                "form `{}` (best held-out score of the forms)",
+                results[chosen].0
+            )
+        } else {
+            format!(
+                "form `{}`, the simplest within one standard error of the best form `{}`",
+                results[chosen].0, results[best].0
+            )
+        };
+        note = Some(match note {
+            Some(n) => format!("{form_note}; {n}"),
+            None => form_note,
+        });
+    }
+    let (label, idx, (after_runs, variant, theta_sub, failure)) =
+        results.into_iter().nth(chosen).expect("chosen form exists");
+    let mut theta = vec![0.0; p_c];
+    for (k, &i) in idx.iter().enumerate() {
+        theta[i] = theta_sub.get(k).copied().unwrap_or(0.0);
+    }
     Scored {
         effect,
+        form: label,
+        cols: idx,
+        before_runs,
         after_runs,
+        active,
         variant,
         theta,
         failure,
+        note,
     }
 }
 
@@ -526,7 +786,7 @@ pub fn system_level_with_model(
     free: &Dataset,
     opts: &SystemOptions,
 ) -> Result<LevelResult> {
-    level_and_runs(model, free, opts, None).map(|(level, _)| level)
+    level_and_runs(model, free, opts, None, None).map(|(level, _)| level)
 }
 
 /// The gap test's null level of a level: sqrt(noise_level² + model_level²).
@@ -542,9 +802,14 @@ fn level_and_runs(
     free: &Dataset,
     opts: &SystemOptions,
     model_energy: Option<&[[f64; 2]]>,
+    range: Option<&coverage::ForcedRange>,
 ) -> Result<(LevelResult, Prepared)> {
     opts.check()?;
-    let p = prepare_free(free, model, opts)?;
+    let mut p = prepare_free(free, model, opts)?;
+    // candidates fit the still air's apparent mass jointly (a nuisance); the gap and its
+    // splits are those of the residual with it removed
+    let raw_runs = p.runs.clone();
+    let air_mass = still_air_mass(&mut p.runs);
     let runs = &p.runs;
     let n = runs.len();
     let rho = free.manifest.section.air_density;
@@ -565,43 +830,123 @@ fn level_and_runs(
             .max(f64::MIN_POSITIVE);
     let significant_gap = gap_statistic > opts.gap_ratio;
 
+    // coverage of each run against the forced range (when the range is known)
+    let null_runs: Vec<f64> = (0..n)
+        .map(|j| {
+            let m = model_energy
+                .filter(|e| e.len() == n)
+                .map_or(0.0, |e| comb(e[j]));
+            comb(noise_runs[j]).hypot(m)
+        })
+        .collect();
+    let coverage = range.map(|rg| {
+        let b: Vec<f64> = before_runs.iter().map(|&e| comb(e)).collect();
+        coverage::assess(rg, runs, &b, &null_runs)
+    });
+    let uncovered: Vec<bool> = match &coverage {
+        Some(c) => c.runs.iter().map(|r| !r.covered).collect(),
+        None => vec![false; n],
+    };
+    // per mode: the DOFs whose response K leaves that DOF's forced range
+    let outside: Vec<[bool; 2]> = match (&coverage, range) {
+        (Some(c), Some(rg)) => c
+            .runs
+            .iter()
+            .map(|rc| rg.k_outside(rc.k_h, rc.k_alpha))
+            .collect(),
+        _ => vec![[false; 2]; n],
+    };
+    let model_e: Vec<f64> = (0..n)
+        .map(|j| {
+            model_energy
+                .filter(|e| e.len() == n)
+                .map_or(0.0, |e| e2(e[j]))
+        })
+        .collect();
     let mut scored: Vec<(CandidateScore, Scored)> = candidates::CANDIDATES
         .iter()
         .map(|&effect| {
-            let sc = score_candidate(effect, runs, &folds, rho, chord);
-            let after = comb(mean2(&sc.after_runs));
-            let eb = before * before;
-            let ea = after * after;
-            let en = noise_level * noise_level;
-            let statistic = if en > 0.0 { (eb - ea) / en } else { 0.0 };
-            let n_params = candidates::n_params(effect);
+            let sc = score_candidate(
+                effect,
+                &raw_runs,
+                &folds,
+                rho,
+                chord,
+                &uncovered,
+                &outside,
+                opts.gain_per_param,
+            );
+            let act: Vec<usize> = (0..n).filter(|&j| sc.active[j]).collect();
+            let m = act.len().max(1) as f64;
+            let eb = act.iter().map(|&j| e2(sc.before_runs[j])).sum::<f64>() / m;
+            let ea = act.iter().map(|&j| e2(sc.after_runs[j])).sum::<f64>() / m;
+            let en = act.iter().map(|&j| e2(noise_runs[j])).sum::<f64>() / m;
+            let em = act.iter().map(|&j| model_e[j]).sum::<f64>() / m;
+            let (c_before, c_after) = (eb.max(0.0).sqrt(), ea.max(0.0).sqrt());
+            // energy removed, summed over the active runs and spread over every run, in
+            // units of the level's noise energy: comparable across candidates whatever
+            // runs they were scored on
+            let en_all = noise_level * noise_level;
+            let statistic = if en_all > 0.0 && !act.is_empty() {
+                (eb - ea) * act.len() as f64 / n as f64 / en_all
+            } else {
+                0.0
+            };
+            // the candidate's own baseline must show a gap: with the nuisance profiled
+            // out (structural) or on the covered runs (aerodynamic)
+            let own_gap = !act.is_empty()
+                && c_before / (en + em).max(0.0).sqrt().max(f64::MIN_POSITIVE) > opts.gap_ratio;
+            let n_params = sc.cols.len() + candidates::n_grid_params(effect);
             let threshold = opts.min_gain + opts.gain_per_param * n_params as f64;
             let vars_grid = candidates::variants_grid(effect, runs);
             let mut parameters: Vec<(String, f64)> =
                 vars_grid.get(sc.variant).cloned().unwrap_or_default();
+            let names = candidates::coefficient_names(effect);
+            let sign = candidates::report_sign(effect);
             parameters.extend(
-                candidates::coefficient_names(effect)
-                    .into_iter()
-                    .zip(sc.theta.iter().copied()),
+                sc.cols
+                    .iter()
+                    .map(|&i| (names[i].clone(), sign * sc.theta[i])),
             );
+            // a dead band removes stiffness and friction opposes the motion: the other
+            // sign is no such effect (it would only mimic a hardening spring or a
+            // negative damping)
+            let unphysical = matches!(effect, Effect::Freeplay | Effect::Friction)
+                && sc.cols.iter().any(|&i| sign * sc.theta[i] < 0.0);
+            let mut note = sc.note.clone();
+            if unphysical {
+                let n = "not named: a fitted coefficient has the unphysical sign".to_string();
+                note = Some(match note {
+                    Some(x) => format!("{n}; {x}"),
+                    None => n,
+                });
+            }
             let cs = CandidateScore {
                 effect,
                 level: Level::Structural,
-                before,
-                after,
-                shrink: if before > 0.0 {
-                    1.0 - after / before
+                before: c_before,
+                after: c_after,
+                shrink: if c_before > 0.0 {
+                    1.0 - c_after / c_before
                 } else {
                     0.0
                 },
                 n_params,
                 statistic,
                 threshold,
-                significant: significant_gap && statistic > threshold && sc.failure.is_none(),
+                significant: significant_gap
+                    && own_gap
+                    && !unphysical
+                    && statistic > threshold
+                    && sc.failure.is_none(),
                 score: threshold - statistic,
                 parameters,
                 failure: sc.failure.clone(),
+                convention: Some(candidates::convention(effect).to_string()),
+                note,
+                held_out_runs: sc.after_runs.iter().map(|&e| e2(e)).collect(),
             };
+            let _ = sc.form;
             (cs, sc)
         })
         .collect();
@@ -674,12 +1019,21 @@ fn level_and_runs(
             groups: n,
             note: {
                 let still = runs.iter().filter(|r| r.u == 0.0).count();
-                (still > 0).then(|| {
-                    format!("{still} still-air run(s) (U = 0): residual without aerodynamic force")
+                (still > 0).then(|| match air_mass {
+                    Some(m) => format!(
+                        "{still} still-air run(s) (U = 0): no circulatory force; the air's \
+                         apparent mass fitted on them (least squares, 4 coefficients, \
+                         removed from their residual): [[{:.4}, {:.4} kg], [{:.4} kg, {:.3e} \
+                         kg m]] per unit span",
+                        m[0][0], m[0][1], m[1][0], m[1][1]
+                    ),
+                    None => format!(
+                        "{still} still-air run(s) (U = 0): residual without aerodynamic force"
+                    ),
                 })
             },
         }),
-        coverage: None,
+        coverage,
     };
     Ok((level, p))
 }
