@@ -1,7 +1,7 @@
 //! Diagnoses one set of the drawn-shapes blind benchmark and prints its diagnosis JSON
 //! (a debugging aid): `cargo run --release -p diagnose --example blind_one -- INDEX [N SEED]`.
 
-use diagnose::bench::{draw_specs, CampaignShape};
+use diagnose::bench::{draw_specs_from, shapes_truth_labels, CampaignShape};
 use diagnose::bench_run::{run_one, BlindOptions};
 
 fn main() {
@@ -11,7 +11,7 @@ fn main() {
     let seed: u64 = args.get(2).and_then(|a| a.parse().ok()).unwrap_or(2026);
     let mut opts = BlindOptions::new(n, seed);
     opts.shapes = true;
-    let mut spec = draw_specs(n, seed)[index].clone();
+    let mut spec = draw_specs_from(n, seed, &shapes_truth_labels())[index].clone();
     spec.shape = Some(CampaignShape::draw(spec.seed));
     match run_one(&spec, &opts) {
         Ok((o, d)) => {

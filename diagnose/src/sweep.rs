@@ -27,6 +27,14 @@ pub const MAP_FORMAT: &str = "aeroform-sweep/1";
 /// Format tag of a part document (the items of one shard).
 pub const PART_FORMAT: &str = "aeroform-sweep-part/1";
 
+/// Largest `n` of a benchmark sweep (the cap of `aeroform diagnose --blind`, ≈ 3 s per set).
+pub const MAX_SETS: usize = 10_000;
+/// Largest number of flutter or LCO speeds of a map item (the cap of every speed list).
+pub const MAX_SPEEDS: usize = 10_000;
+/// Largest number of grid points of a map (μ × σ × x_α × r² values; each point is one
+/// flutter scan of milliseconds and one JSON item).
+pub const MAX_GRID_POINTS: usize = 100_000;
+
 /// What to sweep (JSON, tagged by `kind`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
@@ -180,6 +188,12 @@ impl SweepSpec {
                         "`n` = 0: a benchmark needs at least one set",
                     ));
                 }
+                if b.n > MAX_SETS {
+                    return Err(sweep_err(
+                        source,
+                        format!("`n` = {}: at most {MAX_SETS} sets", b.n),
+                    ));
+                }
             }
             SweepSpec::FlutterMap(m) => {
                 if m.speeds.len() < 2 {
@@ -200,6 +214,28 @@ impl SweepSpec {
                         None => Ok(()),
                     }
                 };
+                for (name, v) in [("speeds", &m.speeds), ("lco_speeds", &m.lco_speeds)] {
+                    if v.len() > MAX_SPEEDS {
+                        return Err(sweep_err(
+                            source,
+                            format!("`{name}` has {} values: at most {MAX_SPEEDS}", v.len()),
+                        ));
+                    }
+                }
+                let points = [&m.grid.mu, &m.grid.sigma, &m.grid.x_alpha, &m.grid.r2]
+                    .iter()
+                    .map(|v| v.as_ref().map_or(1, |v| v.len().max(1)))
+                    .try_fold(1usize, |a, k| a.checked_mul(k))
+                    .unwrap_or(usize::MAX);
+                if points > MAX_GRID_POINTS {
+                    return Err(sweep_err(
+                        source,
+                        format!(
+                            "`grid` spans {points} points (μ × σ × x_α × r²): at most \
+                             {MAX_GRID_POINTS}"
+                        ),
+                    ));
+                }
                 positive("speeds", &m.speeds)?;
                 positive("lco_speeds", &m.lco_speeds)?;
                 if let Some(v) = &m.grid.mu {
@@ -345,19 +381,68 @@ impl SweepSpec {
             ));
         }
         let items: Vec<Value> = slots.into_iter().flatten().collect();
+        // Each item's inputs must be those its index implies (issue 27 row 12): an
+        // edited or mixed-up part is refused; outputs are not recomputed.
         match self {
             SweepSpec::Blind(b) => {
+                let expected = draw_specs(b.n, b.seed);
                 let outcomes = items
                     .into_iter()
-                    .map(|v| {
-                        serde_json::from_value::<BlindOutcome>(v)
-                            .map_err(|e| sweep_err("merge", format!("benchmark item: {e}")))
+                    .enumerate()
+                    .map(|(i, v)| {
+                        let o = serde_json::from_value::<BlindOutcome>(v)
+                            .map_err(|e| sweep_err("merge", format!("benchmark item: {e}")))?;
+                        let mut want = expected[i].clone();
+                        want.shape = o.spec.shape.clone();
+                        if o.spec != want {
+                            return Err(sweep_err(
+                                "merge",
+                                format!(
+                                    "item {i}: its set (seed {}, truth `{}`, strength {}) is \
+                                     not the set {i} of n = {}, seed {} (seed {}, truth `{}`, \
+                                     strength {}): an altered or foreign part",
+                                    o.spec.seed,
+                                    o.spec.truth,
+                                    o.spec.strength,
+                                    b.n,
+                                    b.seed,
+                                    want.seed,
+                                    want.truth,
+                                    want.strength
+                                ),
+                            ));
+                        }
+                        Ok(o)
                     })
                     .collect::<Result<Vec<_>>>()?;
                 Ok(serde_json::to_value(summarize(b.seed, outcomes)).unwrap_or(Value::Null))
             }
             SweepSpec::FlutterMap(m) => {
                 let base = MapBase::load(m)?;
+                for (i, item) in items.iter().enumerate() {
+                    let p = base.point(&m.grid, i);
+                    for (name, want) in [
+                        ("mu", p.mu),
+                        ("sigma", p.sigma),
+                        ("x_alpha", p.x_alpha),
+                        ("r2", p.r_alpha2),
+                    ] {
+                        let got = item.get(name).and_then(Value::as_f64);
+                        let same = got.is_some_and(|g| {
+                            g == want || (g - want).abs() <= 1e-12 * want.abs().max(g.abs())
+                        });
+                        if !same {
+                            return Err(sweep_err(
+                                "merge",
+                                format!(
+                                    "item {i}: `{name}` = {} is not grid point {i}'s {want}: \
+                                     an altered or foreign part",
+                                    got.map_or("missing".to_string(), |g| g.to_string())
+                                ),
+                            ));
+                        }
+                    }
+                }
                 Ok(json!({
                     "format": MAP_FORMAT,
                     "spec": self.to_value(),
@@ -650,6 +735,15 @@ mod tests {
         // A missing part is an error naming the missing items.
         let e = merge(&parts[1..]).unwrap_err().to_string();
         assert!(e.contains("missing"), "{e}");
+        // An altered item is refused, naming the item and the field (issue 27 row 12).
+        let mut bad = parts.clone();
+        let k = bad
+            .iter()
+            .position(|p| p.1["items"][0]["index"] == 0)
+            .unwrap();
+        bad[k].1["items"][0]["mu"] = json!(999.0);
+        let e = merge(&bad).unwrap_err().to_string();
+        assert!(e.contains("item 0") && e.contains("`mu` = 999"), "{e}");
     }
 
     #[test]
@@ -669,5 +763,29 @@ mod tests {
         assert!(e.contains("bogus"), "{e}");
         assert!(parse_shard("4/4").is_err());
         assert_eq!(parse_shard("3/4").unwrap(), (3, 4));
+    }
+
+    /// Issue 27 rows 3 and 4: counts are capped before anything is allocated.
+    #[test]
+    fn counts_are_capped() {
+        let dir = tempfile::tempdir().unwrap();
+        let e = SweepSpec::from_json(r#"{"kind":"blind","n":1000000000000,"seed":1}"#, "b.json")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("b.json") && e.contains("`n`"), "{e}");
+        assert!(SweepSpec::from_json(r#"{"kind":"blind","n":10000,"seed":1}"#, "b").is_ok());
+        let mut v: Value = serde_json::from_str(&map_spec(dir.path())).unwrap();
+        v["grid"]["mu"] = json!((1..=1000).map(f64::from).collect::<Vec<f64>>());
+        v["grid"]["sigma"] = json!((1..=101).map(|i| 0.01 * f64::from(i)).collect::<Vec<f64>>());
+        let e = SweepSpec::from_json(&v.to_string(), "m.json")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("101000 points"), "{e}");
+        v["grid"]["sigma"] = json!([0.5]);
+        v["speeds"] = json!((1..=10_001).map(f64::from).collect::<Vec<f64>>());
+        let e = SweepSpec::from_json(&v.to_string(), "m.json")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("`speeds` has 10001 values"), "{e}");
     }
 }

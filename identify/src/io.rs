@@ -24,7 +24,22 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
         .unwrap_or_else(|| "out".to_string());
     let tmp = dir.join(format!(".{name}.{}.tmp", std::process::id()));
     let result = (|| -> std::io::Result<()> {
-        let mut f = std::fs::File::create(&tmp)?;
+        // create_new (O_CREAT | O_EXCL) never follows a symlink planted at the temporary
+        // path; whatever sits there (a stale file of a dead process with our PID, a link)
+        // is unlinked once — the link itself, never its target — and the create retried
+        let create = || {
+            std::fs::OpenOptions::new()
+                .write(true)
+                .create_new(true)
+                .open(&tmp)
+        };
+        let mut f = match create() {
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
+                std::fs::remove_file(&tmp)?;
+                create()?
+            }
+            other => other?,
+        };
         f.write_all(bytes)?;
         f.sync_all()?;
         drop(f);
@@ -148,6 +163,24 @@ mod tests {
         std::fs::create_dir(&st).unwrap();
         let e = check_complete_folder(&st).unwrap_err();
         assert!(e.to_string().contains("process 42"), "{e}");
+    }
+
+    /// Issue 27 row 10: a symlink planted at the temporary path is not followed: the file
+    /// it points to is untouched, the link is gone and the output is written.
+    #[cfg(unix)]
+    #[test]
+    fn a_symlink_at_the_temporary_path_is_not_followed() {
+        let dir = tempfile::tempdir().unwrap();
+        let victim = dir.path().join("victim.txt");
+        std::fs::write(&victim, b"keep").unwrap();
+        let out = dir.path().join("out");
+        std::fs::create_dir(&out).unwrap();
+        let tmp = out.join(format!(".a.json.{}.tmp", std::process::id()));
+        std::os::unix::fs::symlink(&victim, &tmp).unwrap();
+        write_atomic(&out.join("a.json"), b"new").unwrap();
+        assert_eq!(std::fs::read(&victim).unwrap(), b"keep");
+        assert_eq!(std::fs::read(out.join("a.json")).unwrap(), b"new");
+        assert!(std::fs::symlink_metadata(&tmp).is_err());
     }
 
     #[test]

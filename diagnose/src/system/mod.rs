@@ -1019,7 +1019,7 @@ fn level_and_runs(
             groups: n,
             note: {
                 let still = runs.iter().filter(|r| r.u == 0.0).count();
-                (still > 0).then(|| match air_mass {
+                Some(match air_mass {
                     Some(m) => format!(
                         "{still} still-air run(s) (U = 0): no circulatory force; the air's \
                          apparent mass fitted on them (least squares, 4 coefficients, \
@@ -1027,9 +1027,12 @@ fn level_and_runs(
                          kg m]] per unit span",
                         m[0][0], m[0][1], m[1][0], m[1][1]
                     ),
-                    None => format!(
+                    None if still > 0 => format!(
                         "{still} still-air run(s) (U = 0): residual without aerodynamic force"
                     ),
+                    None => "no still-air decay (U = 0) among the free runs: the structure \
+                             is judged on the flow runs' amplitude dependence alone"
+                        .to_string(),
                 })
             },
         }),
