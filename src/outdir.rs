@@ -193,19 +193,42 @@ impl Lock {
     /// lock file cannot be created.
     pub fn acquire(parent: &Path, name: &str) -> anyhow::Result<Lock> {
         let path = parent.join(format!(".{name}.aeroform-lock"));
-        for _ in 0..5 {
-            match std::fs::OpenOptions::new()
+        // The PID is written to a private file first and the lock appears by a hard link
+        // (atomic, fails when the lock exists): no process ever sees an empty lock, so two
+        // runs started in the same instant cannot both take it for a stale one (issue 27,
+        // row 9).
+        let pid_file = parent.join(format!(".{name}.aeroform-lock.{}.tmp", std::process::id()));
+        let write_pid = || -> std::io::Result<()> {
+            use std::io::Write;
+            let _ = std::fs::remove_file(&pid_file);
+            let mut f = std::fs::OpenOptions::new()
                 .write(true)
                 .create_new(true)
-                .open(&path)
-            {
-                Ok(mut f) => {
-                    use std::io::Write;
-                    writeln!(f, "{}", std::process::id()).map_err(|e| {
-                        anyhow::anyhow!("cannot write the lock {}: {e}", path.display())
-                    })?;
-                    return Ok(Lock { path });
-                }
+                .open(&pid_file)?;
+            writeln!(f, "{}", std::process::id())?;
+            f.sync_all()
+        };
+        write_pid().map_err(|e| {
+            anyhow::anyhow!(
+                "cannot create output folder {}: lock {}: {e}",
+                parent.join(name).display(),
+                pid_file.display()
+            )
+        })?;
+        let result = Self::link_lock(parent, name, &pid_file, path);
+        let _ = std::fs::remove_file(&pid_file);
+        result
+    }
+
+    fn link_lock(
+        parent: &Path,
+        name: &str,
+        pid_file: &Path,
+        path: PathBuf,
+    ) -> anyhow::Result<Lock> {
+        for _ in 0..5 {
+            match std::fs::hard_link(pid_file, &path) {
+                Ok(()) => return Ok(Lock { path }),
                 Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
                     let text = std::fs::read_to_string(&path).unwrap_or_default();
                     let pid: Option<u32> = text.trim().parse().ok();
@@ -227,7 +250,12 @@ impl Lock {
                                     None => "an unknown process (unreadable PID)".into(),
                                 }
                             );
-                            remove_entry(&path);
+                            // only the lock read above: another process may have taken
+                            // over the stale lock in between (then this one retries)
+                            let again = std::fs::read_to_string(&path).unwrap_or_default();
+                            if again == text {
+                                remove_entry(&path);
+                            }
                         }
                     }
                 }
@@ -492,6 +520,38 @@ mod tests {
         assert_eq!(temp_file_pid("a.1.tmp"), None);
         assert_eq!(temp_file_pid(".a.x1.tmp"), None);
         assert_eq!(temp_file_pid(".a.1.json"), None);
+    }
+
+    /// Issue 27 row 9: the lock is never visible without its PID (a second process would
+    /// take an empty lock for a stale one): a reader polling the lock path while it is
+    /// taken and released 300 times never reads it empty; no PID file is left behind.
+    #[test]
+    fn the_lock_never_appears_without_its_pid() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join(".x.aeroform-lock");
+        let stop = std::sync::Arc::new(std::sync::atomic::AtomicBool::new(false));
+        let (p, st) = (path.clone(), stop.clone());
+        let reader = std::thread::spawn(move || {
+            let (mut seen, mut empty) = (0usize, 0usize);
+            while !st.load(std::sync::atomic::Ordering::Relaxed) {
+                if let Ok(t) = std::fs::read_to_string(&p) {
+                    seen += 1;
+                    if t.trim().is_empty() {
+                        empty += 1;
+                    }
+                }
+            }
+            (seen, empty)
+        });
+        for _ in 0..300 {
+            let l = Lock::acquire(dir.path(), "x").unwrap();
+            drop(l);
+        }
+        stop.store(true, std::sync::atomic::Ordering::Relaxed);
+        let (seen, empty) = reader.join().unwrap();
+        assert_eq!(empty, 0, "the lock was read empty {empty} of {seen} times");
+        let left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().flatten().collect();
+        assert!(left.is_empty(), "{left:?}");
     }
 
     #[test]

@@ -497,13 +497,28 @@ impl SweepSpec {
                 .collect::<Result<Vec<_>>>()?,
             SweepSpec::FlutterMap(_) => self.run_items(&indices)?,
         };
+        let digest = items_digest(&items);
         Ok(json!({
             "format": PART_FORMAT,
             "spec": self.to_value(),
             "shard": [shard, of],
             "items": items,
+            "items_digest": digest,
         }))
     }
+}
+
+/// FNV-1a (64 bit, hex) of the compact JSON of a part's items: `merge` recomputes it and
+/// refuses a part whose items were edited after it was written (an integrity check
+/// against accidents, not a signature).
+pub fn items_digest(items: &[Value]) -> String {
+    let text = serde_json::to_string(items).unwrap_or_default();
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for b in text.bytes() {
+        h ^= u64::from(b);
+        h = h.wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    format!("{h:016x}")
 }
 
 /// Indices of shard `shard` of `of` among `n` items: `shard, shard + of, …`.
@@ -568,7 +583,28 @@ pub fn merge(parts: &[(String, Value)]) -> Result<Value> {
             ));
         }
         match part.get("items") {
-            Some(Value::Array(v)) => items.extend(v.iter().cloned()),
+            Some(Value::Array(v)) => {
+                let want = items_digest(v);
+                match part.get("items_digest").and_then(Value::as_str) {
+                    Some(d) if d == want => {}
+                    Some(d) => {
+                        return Err(sweep_err(
+                            name,
+                            format!(
+                                "its items do not match their digest ({d}, recomputed \
+                                 {want}): the part was edited after it was written"
+                            ),
+                        ))
+                    }
+                    None => {
+                        return Err(sweep_err(
+                            name,
+                            "no `items_digest`: not written by this aeroform (re-run the shard)",
+                        ))
+                    }
+                }
+                items.extend(v.iter().cloned())
+            }
             _ => return Err(sweep_err(name, "no `items` array")),
         }
     }
@@ -742,6 +778,11 @@ mod tests {
             .position(|p| p.1["items"][0]["index"] == 0)
             .unwrap();
         bad[k].1["items"][0]["mu"] = json!(999.0);
+        let e = merge(&bad).unwrap_err().to_string();
+        assert!(e.contains("edited after it was written"), "{e}");
+        // with the digest recomputed, the item's inputs still do not fit its index
+        let items = bad[k].1["items"].as_array().unwrap().clone();
+        bad[k].1["items_digest"] = json!(items_digest(&items));
         let e = merge(&bad).unwrap_err().to_string();
         assert!(e.contains("item 0") && e.contains("`mu` = 999"), "{e}");
     }
