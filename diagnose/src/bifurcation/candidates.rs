@@ -61,6 +61,8 @@ enum Change {
     PitchHeaveDamping,
     /// Coulomb friction in pitch.
     PitchFriction,
+    /// Coulomb friction in pitch with its regularisation velocity fitted.
+    PitchFrictionSmoothing,
     /// Δm, ΔI_α.
     AddedMass,
     /// Scale on the aerodynamic loads.
@@ -242,8 +244,31 @@ pub fn catalogue(base: &Section, s: Scales) -> Vec<BranchCandidate> {
                 0.02 * ka * s.alpha,
             )],
             extends: None,
-            reference_alpha: 0.0,
+            reference_alpha: s.alpha,
             change: Change::PitchFriction,
+        },
+        BranchCandidate {
+            effect: Effect::Friction,
+            variant: "pitch, with its regularisation".into(),
+            parameters: vec![
+                p(
+                    "friction_pitch",
+                    "N m",
+                    "Coulomb moment T_c·tanh(α̇/ε) opposing α̇ (T_c = |θ|·scale ≥ 0)",
+                    0.02 * ka * s.alpha,
+                ),
+                p(
+                    "friction_smoothing_pitch",
+                    "rad/s",
+                    "velocity ε of the regularisation tanh(α̇/ε), scale·10^(θ/2) with θ in \
+                     [−4, 4] (below it the friction acts as a viscous damping T_c/ε: \
+                     pre-sliding, which sets the Hopf point)",
+                    0.05 * st.omega_alpha() * s.alpha,
+                ),
+            ],
+            extends: Some(7),
+            reference_alpha: s.alpha,
+            change: Change::PitchFrictionSmoothing,
         },
         BranchCandidate {
             effect: Effect::AddedMass,
@@ -295,12 +320,13 @@ impl BranchCandidate {
         self.parameters
             .iter()
             .zip(theta)
-            .map(|(q, t)| {
-                if self.change == Change::PitchFriction {
-                    q.scale * t.abs()
-                } else {
-                    q.scale * t
+            .enumerate()
+            .map(|(i, (q, t))| match (self.change, i) {
+                (Change::PitchFriction | Change::PitchFrictionSmoothing, 0) => q.scale * t.abs(),
+                (Change::PitchFrictionSmoothing, _) => {
+                    q.scale * 10f64.powf(t.clamp(-4.0, 4.0) / 2.0)
                 }
+                _ => q.scale * t,
             })
             .collect()
     }
@@ -350,6 +376,16 @@ impl BranchCandidate {
                     pitch_smoothing: Some(eps),
                 });
                 f.pitch_moment += v[0];
+            }
+            Change::PitchFrictionSmoothing => {
+                let f = st.nonlinear.friction.get_or_insert(Friction {
+                    heave_force: 0.0,
+                    pitch_moment: 0.0,
+                    heave_smoothing: None,
+                    pitch_smoothing: Some(v[1]),
+                });
+                f.pitch_moment += v[0];
+                f.pitch_smoothing = Some(v[1]);
             }
             Change::AddedMass => {
                 st.mass += v[0];
