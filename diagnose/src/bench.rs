@@ -362,8 +362,9 @@ pub struct BlindReport {
     pub confusion_strong: Vec<Vec<usize>>,
     /// Acceptance statistics.
     pub summary: BlindSummary,
-    /// The same statistics per campaign-shape class ([`CampaignShape::class`]), when the
-    /// shapes were drawn.
+    /// The same statistics per campaign-shape class ([`CampaignShape::class`]), then per
+    /// Table I reading, with or without a still-air decay, and with every free run covered
+    /// or not (`not: …`), when the shapes were drawn.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub per_shape: Vec<(String, BlindSummary)>,
     /// Every set.
@@ -438,7 +439,8 @@ pub fn summarize(seed: u64, outcomes: Vec<BlindOutcome>) -> BlindReport {
             o.uncovered_runs.map(|u| u == 0)
         }),
     ];
-    for (name, f) in splits {
+    let shaped = outcomes.iter().any(|o| o.spec.shape.is_some());
+    for (name, f) in splits.into_iter().filter(|_| shaped) {
         for want in [true, false] {
             let sub: Vec<BlindOutcome> = outcomes
                 .iter()
