@@ -154,6 +154,7 @@ pub fn ranking_figure(d: &BifurcationDiagnosis) -> RankingFigure {
             baseline: Some(d.nominal.errors.score),
             noise_level: Some(2.0 * d.options.amplitude_noise),
         }],
+        highlight_legend: Some(("named".into(), "not named".into())),
     }
 }
 

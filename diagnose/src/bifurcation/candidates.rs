@@ -249,7 +249,7 @@ pub fn catalogue(base: &Section, s: Scales) -> Vec<BranchCandidate> {
         },
         BranchCandidate {
             effect: Effect::Friction,
-            variant: "pitch, with its regularisation".into(),
+            variant: "pitch, ε fitted".into(),
             parameters: vec![
                 p(
                     "friction_pitch",

@@ -224,6 +224,7 @@ pub fn ranking_figure(diag: &Diagnosis) -> Option<RankingFigure> {
     (!panels.is_empty()).then(|| RankingFigure {
         title: "Candidate ranking: held-out gap after each augmentation".into(),
         panels,
+        highlight_legend: None,
     })
 }
 

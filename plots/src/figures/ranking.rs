@@ -50,6 +50,9 @@ pub struct RankingFigure {
     pub title: String,
     /// Panels, top to bottom. A panel without bars shows a "no candidates" note.
     pub panels: Vec<RankingPanel>,
+    /// Legend of the highlighted and the other bars; empty: "significant" and "not
+    /// significant".
+    pub highlight_legend: Option<(String, String)>,
 }
 
 /// Bar colour of significant candidates.
@@ -104,9 +107,13 @@ impl Figure for RankingFigure {
             });
         }
         let area = title(root, &self.title, kind)?;
+        let (on, off) = self
+            .highlight_legend
+            .clone()
+            .unwrap_or_else(|| ("significant".into(), "not significant".into()));
         let legend = [
-            LegendEntry::patch("significant", SIGNIFICANT),
-            LegendEntry::patch("not significant", PLAIN),
+            LegendEntry::patch(on, SIGNIFICANT),
+            LegendEntry::patch(off, PLAIN),
             LegendEntry::line("baseline (before)", BLACK, true),
             LegendEntry::line("noise level", HIGHLIGHT, true),
         ];
