@@ -453,8 +453,6 @@ fn comb(e: [f64; 2]) -> f64 {
 /// Held-out scoring of one candidate in its chosen form.
 struct Scored {
     effect: Effect,
-    /// Label of the chosen form (`pitch`, `heave`, `pitch+heave`, `all`).
-    form: &'static str,
     /// Coefficient indices of the form.
     cols: Vec<usize>,
     /// Per-run energies before (with the extrapolation nuisance profiled out where it
@@ -660,7 +658,6 @@ fn score_candidate(
     if !active.iter().any(|&a| a) {
         return Scored {
             effect,
-            form: "all",
             cols: (0..p_c).collect(),
             after_runs: before_runs.clone(),
             before_runs,
@@ -735,7 +732,7 @@ fn score_candidate(
             None => form_note,
         });
     }
-    let (label, idx, (after_runs, variant, theta_sub, failure)) =
+    let (_, idx, (after_runs, variant, theta_sub, failure)) =
         results.into_iter().nth(chosen).expect("chosen form exists");
     let mut theta = vec![0.0; p_c];
     for (k, &i) in idx.iter().enumerate() {
@@ -743,7 +740,6 @@ fn score_candidate(
     }
     Scored {
         effect,
-        form: label,
         cols: idx,
         before_runs,
         after_runs,
@@ -946,7 +942,6 @@ fn level_and_runs(
                 note,
                 held_out_runs: sc.after_runs.iter().map(|&e| e2(e)).collect(),
             };
-            let _ = sc.form;
             (cs, sc)
         })
         .collect();
