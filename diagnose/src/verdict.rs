@@ -108,6 +108,23 @@ pub struct Decision {
 /// Nested candidate pairs (simpler, richer): the richer one holds the simpler one's terms.
 pub const NESTED: [(Effect, Effect); 1] = [(Effect::StructuralCubic, Effect::StructuralPolynomial)];
 
+/// Paired one-standard-error test: whether the mean of the per-unit differences `d`
+/// (simpler minus richer held-out energy) is at most their standard error, or at most
+/// `allowance` (a parsimony allowance). An empty `d` passes.
+pub(crate) fn paired_within_one_se(d: &[f64], allowance: f64) -> bool {
+    if d.is_empty() {
+        return true;
+    }
+    let m = d.len() as f64;
+    let mean = d.iter().sum::<f64>() / m;
+    let sd = if d.len() > 1 {
+        (d.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (m - 1.0)).sqrt()
+    } else {
+        0.0
+    };
+    mean <= (sd / m.sqrt()).max(allowance)
+}
+
 /// Whether the simpler candidate `a`'s per-run held-out energies are within one standard
 /// error (paired over the held-out units) of the richer `b`'s.
 fn within_one_se(a: &CandidateScore, b: &CandidateScore) -> bool {
@@ -120,14 +137,7 @@ fn within_one_se(a: &CandidateScore, b: &CandidateScore) -> bool {
         .zip(&b.held_out_runs)
         .map(|(x, y)| x - y)
         .collect();
-    let m = d.len() as f64;
-    let mean = d.iter().sum::<f64>() / m;
-    let se = if d.len() > 1 {
-        (d.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (m - 1.0)).sqrt() / m.sqrt()
-    } else {
-        0.0
-    };
-    mean <= se
+    paired_within_one_se(&d, 0.0)
 }
 
 /// The best candidate of a level that is significant (structural ones only when

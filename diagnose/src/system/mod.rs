@@ -564,17 +564,7 @@ fn within_one_se(simple: &[[f64; 2]], best: &[[f64; 2]], active: &[bool], allowa
         .filter(|&j| active[j])
         .map(|j| e2(simple[j]) - e2(best[j]))
         .collect();
-    if d.is_empty() {
-        return true;
-    }
-    let m = d.len() as f64;
-    let mean = d.iter().sum::<f64>() / m;
-    let sd = if d.len() > 1 {
-        (d.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (m - 1.0)).sqrt()
-    } else {
-        0.0
-    };
-    mean <= (sd / m.sqrt()).max(allowance)
+    crate::verdict::paired_within_one_se(&d, allowance)
 }
 
 /// Scores one candidate: fitted on the training folds of its active runs, scored on the
@@ -584,9 +574,9 @@ fn within_one_se(simple: &[[f64; 2]], best: &[[f64; 2]], active: &[bool], allowa
 ///
 /// Coverage rule (issue 29): an aerodynamic candidate is fitted and scored on the runs
 /// inside the forced range only (`uncovered[j]` false); a structural one on every run,
-/// with a per-run linear correction ([`candidates::nuisance`]) profiled out of each run
-/// outside the range, so that what it removes there is what no linear extrapolation of
-/// the law could.
+/// fitted jointly with the pooled apparent-mass nuisances ([`candidates::nuisance_columns`]:
+/// the motion outside its forced K range, the still air) and scored against them alone, so
+/// that what it removes is what the law's extrapolation and the air's mass cannot.
 #[allow(clippy::too_many_arguments)]
 fn score_candidate(
     effect: Effect,
