@@ -27,6 +27,13 @@
 //! the nearest end (never extrapolated) — see [`Coefficient::OverK`]. In a forced run the
 //! model is evaluated at the forcing K_α ([`AeroModel::with_reduced_frequency`]).
 //!
+//! **Cases forced about a mean pitch.** A case regressed about ᾱ (`CaseResult::mean_pitch`,
+//! its variable `alpha` is α − ᾱ) is re-expanded about α = 0 before aggregation: each
+//! coefficient becomes Σ_{p ≥ j} c_p·C(p, j)·(−ᾱ)^(p−j) over the monomials that share its α̇,
+//! h, ḣ powers, each Eq. 19 value scaled with its raw coefficient. The law is evaluated
+//! about α = 0; without this a cubic identified about 3° adds an even term and α·α̇ adds
+//! ᾱ·N1 to the α̇ derivative.
+//!
 //! **Terms outside Eq. 19** (e.g. `alpha^2*h` if the regression selected it) are plain
 //! nondimensional coefficients without a K scaling. A term is *included* as a
 //! [`Coefficient::Constant`] (the median over the cases) when it has one sign in every case
@@ -205,6 +212,25 @@ pub struct IdentifiedTables {
     pub rfa: RfaFit,
     /// Everything that was dropped or filled in.
     pub warnings: Vec<String>,
+    /// The Theodorsen-shaped tails' fitted weights ([`Extrapolation::Theodorsen`]; empty
+    /// with straight-line continuation).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub tails: Vec<TailWeights>,
+}
+
+/// The fitted weights of one derivative's Theodorsen-shaped tail: beyond an end node K_e,
+/// K²d(K) = K_e²d(K_e) + Σ_b c_b (K²d_b(K) − K_e²d_b(K_e)), d_b the mid-chord flat plate's
+/// derivatives ([`flat_plate_derivatives`]) named in `basis`. A weight of 1 on the own
+/// entry alone is the flat plate itself; for H4 (whose growth at high K is the apparent
+/// mass) the weight is the apparent heave mass the tail implies over the plate's πρb².
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct TailWeights {
+    /// The derivative (`H1` … `A4`).
+    pub derivative: String,
+    /// The plate derivatives of the basis, own entry first.
+    pub basis: Vec<String>,
+    /// Their fitted weights c_b (nondimensional), in `basis` order.
+    pub weights: Vec<f64>,
 }
 
 /// An identified Eq. 19 law: derivative table (linear) + N* and outside terms
@@ -236,6 +262,76 @@ fn robust_sd(v: &[f64], med: f64) -> f64 {
         return 0.0;
     }
     1.4826 * identify::numerics::mad(v, med)
+}
+
+/// A case regressed about a mean pitch ᾱ (its `alpha` is α − ᾱ) re-expanded about α = 0
+/// ([`about_zero_pitch`] for every non-zero raw coefficient; each Eq. 19 value scaled with
+/// its raw coefficient ξ, value = ξ/K^p); other cases unchanged. The law is evaluated
+/// about α = 0 (flutter, LCO, free responses), where the centred coefficients are off by
+/// the expansion: e.g. α·α̇ about ᾱ adds ᾱ·N1 to the α̇ derivative, a cubic adds an even
+/// term 3ᾱN·a² (DECISIONS "Laws identified about a mean pitch"). The constant (the force
+/// at ᾱ) is left as identified.
+fn about_zero_pitch_case(c: &CaseResult) -> CaseResult {
+    let mut out = c.clone();
+    if !c.mean_pitch.is_some_and(|a| a != 0.0 && a.is_finite()) {
+        return out;
+    }
+    fn force<E: Copy + Into<identify::eq19::Eq19Values> + From<identify::eq19::Eq19Values>>(
+        f: &mut identify::pipeline::ForceResult<E>,
+        mean_pitch: Option<f64>,
+    ) {
+        let old = f.terms.clone();
+        for (n, v) in f.terms.0.iter_mut() {
+            if let Some(x) = v.filter(|x| *x != 0.0) {
+                *v = Some(about_zero_pitch(&old, n, mean_pitch).unwrap_or(x));
+            }
+        }
+        let mut e: identify::eq19::Eq19Values = f.eq19.into();
+        for (i, t) in identify::eq19::EQ19.iter().enumerate() {
+            if let (Some(d), Some(x0), Some(x1)) = (e.0[i], old.get(t.name), f.terms.get(t.name)) {
+                if x0 != 0.0 {
+                    e.0[i] = Some(d * x1 / x0);
+                }
+            }
+        }
+        f.eq19 = E::from(e);
+    }
+    force(&mut out.lift, c.mean_pitch);
+    force(&mut out.moment, c.mean_pitch);
+    out.mean_pitch = None;
+    out
+}
+
+/// The coefficient of term `name` in the polynomial about α = 0, for a case regressed
+/// about a mean pitch ᾱ (`mean_pitch`; its variable `alpha` is α − ᾱ): with the case's raw
+/// coefficients c_p of the monomials (α − ᾱ)^p·R that share the rest R (α̇, h, ḣ powers) of
+/// `name` = α^j·R, the coefficient is Σ_{p ≥ j} c_p·C(p, j)·(−ᾱ)^(p−j). A configuration
+/// forced about ᾱ = 3° turns a cubic c₃α³ into c₃(a³ + 3ᾱa² + …): the a² term it selects is
+/// that expansion, not an even term of the section, and vanishes here (DECISIONS
+/// "Laws identified about a mean pitch"). `None` for a case regressed on α itself, or a
+/// name that does not parse.
+fn about_zero_pitch(
+    terms: &identify::pipeline::TermMap,
+    name: &str,
+    mean_pitch: Option<f64>,
+) -> Option<f64> {
+    let ab = mean_pitch.filter(|a| *a != 0.0 && a.is_finite())?;
+    let pw = NonlinearTerm::powers_of(name).ok()?;
+    let j = pw[0];
+    let mut sum = 0.0;
+    for (n, v) in &terms.0 {
+        let (Some(x), Ok(q)) = (v, NonlinearTerm::powers_of(n)) else {
+            continue;
+        };
+        if q[1..] == pw[1..] && q[0] >= j {
+            let mut binom = 1.0;
+            for i in 0..(q[0] - j) {
+                binom *= f64::from(q[0] - i) / f64::from(i + 1);
+            }
+            sum += x * binom * (-ab).powi((q[0] - j) as i32);
+        }
+    }
+    Some(sum)
 }
 
 /// Groups (K, value, filled) by K within `tol` (relative) and aggregates each group.
@@ -298,6 +394,18 @@ fn flat_plate_q(i: usize) -> fn(f64) -> f64 {
 }
 
 impl Tail {
+    /// Plate entries (0..8 = H1..H4, A1..A4) of each derivative's tail, own entry first.
+    const BASIS: [&'static [usize]; 8] = [
+        &[0],
+        &[1, 0],
+        &[2, 3],
+        &[3],
+        &[4, 0],
+        &[5, 4, 1, 0],
+        &[6, 7, 2, 3],
+        &[7, 3],
+    ];
+
     /// The tail of derivative `i` fitted to the entry's nodes (`ks`, `gs`). Moving the
     /// elastic axis by x transforms the aerodynamic matrix as Q' = TᵀQT, T = [[1, x], [0, 1]]
     /// (Q_hh = K²(H4 + iH1), Q_hα = K²(H3 + iH2), Q_αh = K²(A4 + iA1), Q_αα = K²(A3 +
@@ -308,16 +416,7 @@ impl Tail {
     /// nodes, with as many of these functions (own entry first) as the nodes allow (nodes −
     /// 2); with none, or a singular fit, the plain flat-plate shape of its own entry.
     fn fit(i: usize, ks: &[f64], gs: &[f64]) -> Tail {
-        const BASIS: [&[usize]; 8] = [
-            &[0],
-            &[1, 0],
-            &[2, 3],
-            &[3],
-            &[4, 0],
-            &[5, 4, 1, 0],
-            &[6, 7, 2, 3],
-            &[7, 3],
-        ];
+        const BASIS: [&[usize]; 8] = Tail::BASIS;
         let m = BASIS[i].len().min(ks.len().saturating_sub(2)).max(1);
         let basis: Vec<fn(f64) -> f64> = BASIS[i][..m].iter().map(|&j| flat_plate_q(j)).collect();
         let nb = basis.len();
@@ -496,6 +595,9 @@ impl IdentifiedLaw {
                 "no identified case to build a law from",
             ));
         }
+        // cases regressed about a mean pitch, re-expanded about α = 0
+        let recentred: Vec<CaseResult> = cases.iter().map(|c| about_zero_pitch_case(c)).collect();
+        let cases: Vec<&CaseResult> = recentred.iter().collect();
         let mut warnings = Vec::new();
         let range = |over| {
             let ks: Vec<f64> = cases.iter().filter_map(|c| k_of(c, over)).collect();
@@ -621,6 +723,32 @@ impl IdentifiedLaw {
                     .position(|d| d.name() == s.name);
                 let tail = index.filter(|_| opts.extrapolation == Extrapolation::Theodorsen);
                 QEntry::new(&s.points, tail)
+            })
+            .collect();
+        let tails: Vec<TailWeights> = derivatives
+            .iter()
+            .zip(&q)
+            .filter_map(|(s, e)| {
+                let t = e.tail.as_ref()?;
+                let i = LIFT_NAMES
+                    .iter()
+                    .chain(&MOMENT_NAMES)
+                    .position(|d| d.name() == s.name)?;
+                Some(TailWeights {
+                    derivative: s.name.clone(),
+                    basis: Tail::BASIS[i][..t.c.len()]
+                        .iter()
+                        .map(|&j| {
+                            LIFT_NAMES
+                                .iter()
+                                .chain(&MOMENT_NAMES)
+                                .nth(j)
+                                .map_or("?", |d| d.name())
+                                .to_string()
+                        })
+                        .collect(),
+                    weights: t.c.clone(),
+                })
             })
             .collect();
         let rows: Vec<Derivatives> = merged
@@ -792,6 +920,7 @@ impl IdentifiedLaw {
             k_h_range: range(ReducedFrequency::KH),
             rfa: table.rfa().clone(),
             warnings,
+            tails,
         };
         Ok(IdentifiedLaw {
             tables,
@@ -882,6 +1011,51 @@ mod tests {
                 vec![],
             ),
         }
+    }
+
+    /// A case forced about ᾱ = 3° of the section M = 1.2α − 0.3α̇ + 0.5αα̇ − 2α³ (raw,
+    /// nondimensional, α absolute) regressed on a = α − ᾱ has an even term −6ᾱa², an α̇
+    /// coefficient −0.3 + 0.5ᾱ and an α coefficient 1.2 − 6ᾱ²: re-expanded about α = 0 the
+    /// section's own coefficients come back, the Eq. 19 values with them.
+    #[test]
+    fn a_case_regressed_about_a_mean_pitch_is_reexpanded_about_zero() {
+        let ab = 3f64.to_radians();
+        let ka = 0.4;
+        let mut c = case(8.0, 6.0, 0.0, 0.0);
+        c.mean_pitch = Some(ab);
+        c.k_alpha = Some(ka);
+        let raw = [
+            ("alpha", 1.2 - 6.0 * ab * ab),
+            ("alpha_dot", -0.3 + 0.5 * ab),
+            ("alpha^2", -6.0 * ab),
+            ("alpha*alpha_dot", 0.5),
+            ("alpha^3", -2.0),
+        ];
+        c.moment = force(
+            MomentEq19 {
+                A1: None,
+                A2: Some(raw[1].1 / ka),
+                A3: Some(raw[0].1 / (ka * ka)),
+                A4: None,
+                N1: Some(0.5 / ka.powi(3)),
+                N2: Some(-2.0 / ka.powi(6)),
+                N3: None,
+            },
+            raw.to_vec(),
+        );
+        let r = about_zero_pitch_case(&c);
+        assert_eq!(r.mean_pitch, None);
+        let t = &r.moment.terms;
+        assert!(t.get("alpha^2").unwrap().abs() < 1e-15);
+        assert!((t.get("alpha").unwrap() - 1.2).abs() < 1e-14);
+        assert!((t.get("alpha_dot").unwrap() + 0.3).abs() < 1e-15);
+        assert_eq!(t.get("alpha^3"), Some(-2.0));
+        assert!((r.moment.eq19.A2.unwrap() + 0.3 / ka).abs() < 1e-14);
+        assert!((r.moment.eq19.A3.unwrap() - 1.2 / (ka * ka)).abs() < 1e-12);
+        assert_eq!(r.moment.eq19.N2, c.moment.eq19.N2);
+        // a case regressed on α itself is left alone
+        let plain = case(8.0, 6.0, 0.0, 0.0);
+        assert_eq!(about_zero_pitch_case(&plain), plain);
     }
 
     fn identification(cases: Vec<CaseResult>) -> Identification {

@@ -152,6 +152,17 @@ impl Effect {
         }
     }
 
+    /// Whether the system level may score the effect on free runs outside the forced
+    /// range (with the apparent-mass nuisance of those runs fitted alongside): true for
+    /// the structural effects, and for a static offset, whose evidence is the runs' mean
+    /// force (K = 0), which no error of the law's extrapolation in K can produce from the
+    /// zero-mean response of an effect-free section. The other aerodynamic effects are
+    /// scored on covered runs only (issue 29, DECISIONS "Coverage in amplitude, both
+    /// ends").
+    pub fn scored_beyond_coverage(self) -> bool {
+        self.level() == Level::Structural || self == Effect::StaticOffset
+    }
+
     /// The level the effect acts at.
     pub fn level(self) -> Level {
         match self {

@@ -21,6 +21,7 @@ pub mod error;
 pub mod force;
 pub mod pipeline;
 pub mod report;
+pub mod structure;
 pub mod sweep;
 pub mod system;
 pub mod verdict;

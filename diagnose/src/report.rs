@@ -268,6 +268,12 @@ pub struct LevelResult {
     /// lies outside it).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub coverage: Option<Coverage>,
+    /// System level: the still-air decays among the free runs against the nominal
+    /// structure with the air's fitted apparent mass ([`crate::structure`]: frequency and
+    /// damping against amplitude, envelope shape); `None` without a still-air run (the
+    /// structural candidates then rest on the flow runs' amplitude dependence alone).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub structure: Option<crate::structure::StructureCheck>,
 }
 
 /// Free runs against the range the forced campaign identified (`levels[].coverage`).
@@ -311,6 +317,18 @@ pub struct Coverage {
     /// shrinks the gap.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub tails_shrink: Option<f64>,
+    /// The tails' fitted weights on the flat plate's derivatives, per derivative (empty
+    /// when no run leaves the range).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub tail_weights: Vec<aeroelastic::identified::TailWeights>,
+    /// The apparent heave mass the tails imply \[kg/m\]: the H4 tail's weight on the
+    /// plate's own H4 × πρb² (the plate's K² growth of H4 is its apparent mass).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tails_apparent_mass: Option<f64>,
+    /// πρb² of the section \[kg/m\] (ρ the free data set's air density, b the half chord):
+    /// a flat plate's apparent heave mass, against which `tails_apparent_mass` reads.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub plate_apparent_mass: Option<f64>,
     /// Which tables the level's gap and candidates use: `linear` or `theodorsen_tails` (the
     /// tails when runs leave the range and the tails give the smaller gap).
     pub sim_tables: String,

@@ -140,19 +140,19 @@ fn within_one_se(a: &CandidateScore, b: &CandidateScore) -> bool {
     paired_within_one_se(&d, 0.0)
 }
 
-/// The best candidate of a level that is significant (structural ones only when
-/// `structural_only`), with its excess shrink against its own baseline
+/// The best candidate of a level that is significant (only those scored beyond the
+/// coverage, [`Effect::scored_beyond_coverage`], when `beyond_coverage_only`), with its excess shrink against its own baseline
 /// ([`CandidateScore::before`]). A simpler nested candidate ([`NESTED`]) within one
 /// standard error of the best is taken instead (the one-standard-error rule).
 fn best_candidate(
     level: &LevelResult,
-    structural_only: bool,
+    beyond_coverage_only: bool,
 ) -> Option<(usize, &CandidateScore, f64)> {
     let ok = |c: &CandidateScore| {
         c.significant
             && c.failure.is_none()
             && c.after.is_finite()
-            && (!structural_only || c.effect.level() == Level::Structural)
+            && (!beyond_coverage_only || c.effect.scored_beyond_coverage())
     };
     let with_shrink = |i: usize| {
         let c = &level.candidates[i];
@@ -245,8 +245,9 @@ fn decide_level(levels: &[LevelResult], li: usize, rules: &VerdictRules) -> Deci
         let tails = cov
             .tails_before
             .map(|t| excess_shrink(cov.linear_before, t, level.noise_level));
-        // a structural candidate significant beyond the runs' extrapolation nuisance is
-        // evidence the extrapolation cannot produce: it is named even so
+        // a candidate scored on every run (structural, static offset) significant beyond
+        // the runs' extrapolation nuisance is evidence the extrapolation cannot produce:
+        // it is named even so
         let structural =
             best_candidate(level, true).filter(|(_, _, shrink)| *shrink >= rules.min_excess_shrink);
         if let (true, Some((ci, c, shrink))) = (cov.explains_gap, structural) {
@@ -266,10 +267,16 @@ fn decide_level(levels: &[LevelResult], li: usize, rules: &VerdictRules) -> Deci
                 ),
                 None => "no run is covered".to_string(),
             };
+            let mass = match (cov.tails_apparent_mass, cov.plate_apparent_mass) {
+                (Some(m), Some(p)) => {
+                    format!("; their apparent heave mass {m:.4} kg/m against πρb² {p:.4}")
+                }
+                _ => String::new(),
+            };
             let tail = match (cov.tails_before, tails) {
                 (Some(t), Some(x)) => format!(
                     "; Theodorsen-shaped tails instead of straight lines give {t:.4} (excess \
-                     shrink {:.0} %)",
+                     shrink {:.0} %){mass}",
                     100.0 * x
                 ),
                 _ => String::new(),
@@ -590,6 +597,7 @@ mod tests {
             bifurcation: None,
             fold_scheme: None,
             coverage: None,
+            structure: None,
             interpolated_gap_statistic: None,
             model_level: None,
         }
@@ -700,6 +708,9 @@ mod tests {
             linear_gap_statistic: 5.0,
             tails_before: Some(0.9),
             tails_shrink: Some(-0.3),
+            tail_weights: vec![],
+            tails_apparent_mass: None,
+            plate_apparent_mass: None,
             sim_tables: "linear".into(),
             explains_gap: false,
             suggestions: vec![],

@@ -167,6 +167,59 @@ fn save_all<F: Figure>(f: &F, dir: &Path, stem: &str) -> Result<(FigureFiles, Pa
     Ok((files, pdf))
 }
 
+/// The still-air decays' table ([`diagnose::structure::StructureCheck`]), or `none` in
+/// words when no decay was analysed.
+pub(crate) fn structure_section(
+    r: &mut Report,
+    s: Option<&diagnose::structure::StructureCheck>,
+    none: &str,
+) {
+    match s {
+        Some(s) => {
+            let rows: Vec<Vec<String>> = s
+                .modes
+                .iter()
+                .map(|m| {
+                    vec![
+                        m.case.clone(),
+                        m.dof.clone(),
+                        format!("{:.4}", m.measured_hz),
+                        format!("{:.4}", m.given_hz),
+                        format!("{:+.2} %", 100.0 * m.frequency_error),
+                        format!("{:.4}", m.measured_zeta),
+                        format!("{:.4}", m.given_zeta),
+                        format!("{:+.2} %", 100.0 * m.backbone_change),
+                        format!("{:.1}", m.exp_over_linear),
+                        m.signature.clone(),
+                    ]
+                })
+                .collect();
+            table(
+                r,
+                "Still-air modes measured (smallest analysed amplitudes) against the given \
+                 structure's; backbone = frequency change from small to large amplitude; \
+                 exp/lin > 1: a linear (dry-friction) envelope",
+                &[
+                    "record",
+                    "DOF",
+                    "f measured [Hz]",
+                    "f given [Hz]",
+                    "Δf",
+                    "ζ measured",
+                    "ζ given",
+                    "backbone",
+                    "exp/lin",
+                    "signature",
+                ],
+                &rows,
+            );
+        }
+        None => {
+            r.text(none);
+        }
+    }
+}
+
 fn table(r: &mut Report, caption: &str, header: &[&str], rows: &[Vec<String>]) {
     let header: Vec<String> = header.iter().map(|h| h.to_string()).collect();
     r.table(caption, &header, rows);
@@ -336,53 +389,12 @@ pub fn bifurcation_report(
         &held,
     );
     r.section("Structure first: still-air decays");
-    match &d.structure {
-        Some(s) => {
-            let rows: Vec<Vec<String>> = s
-                .modes
-                .iter()
-                .map(|m| {
-                    vec![
-                        m.case.clone(),
-                        m.dof.clone(),
-                        format!("{:.4}", m.measured_hz),
-                        format!("{:.4}", m.given_hz),
-                        format!("{:+.2} %", 100.0 * m.frequency_error),
-                        format!("{:.4}", m.measured_zeta),
-                        format!("{:.4}", m.given_zeta),
-                        format!("{:+.2} %", 100.0 * m.backbone_change),
-                        format!("{:.1}", m.exp_over_linear),
-                        m.signature.clone(),
-                    ]
-                })
-                .collect();
-            table(
-                &mut r,
-                "Still-air modes measured (smallest analysed amplitudes) against the given \
-                 structure's; backbone = frequency change from small to large amplitude; \
-                 exp/lin > 1: a linear (dry-friction) envelope",
-                &[
-                    "record",
-                    "DOF",
-                    "f measured [Hz]",
-                    "f given [Hz]",
-                    "Δf",
-                    "ζ measured",
-                    "ζ given",
-                    "backbone",
-                    "exp/lin",
-                    "signature",
-                ],
-                &rows,
-            );
-        }
-        None => {
-            r.text(
-                "No still-air decay was given: the structure is taken as given, and only the \
-                 flow records' amplitude dependence informs the structural candidates.",
-            );
-        }
-    }
+    structure_section(
+        &mut r,
+        d.structure.as_ref(),
+        "No still-air decay was given: the structure is taken as given, and only the \
+         flow records' amplitude dependence informs the structural candidates.",
+    );
     r.section("Which effect: candidates");
     if let Some(f) = ranking {
         r.figure(

@@ -312,6 +312,20 @@ pub fn diagnosis_section(report: &mut Report, diag: &Diagnosis, figures: &[Diagn
     if let Some(cov) = diag.levels.iter().find_map(|l| l.coverage.as_ref()) {
         coverage_section(report, cov);
     }
+    if let Some(level) = diag
+        .levels
+        .iter()
+        .find(|l| l.level == diagnose::Level::Structural)
+    {
+        report.section("Structure first: still-air decays");
+        crate::bifurcation_report::structure_section(
+            report,
+            level.structure.as_ref(),
+            "No still-air decay (U = 0) among the free runs: the structure is taken as \
+             given, and only the flow runs' amplitude dependence informs the structural \
+             candidates.",
+        );
+    }
 
     let cands: Vec<_> = if diag.candidates.is_empty() {
         diag.levels.iter().flat_map(|l| &l.candidates).collect()
@@ -489,6 +503,13 @@ fn coverage_section(report: &mut Report, cov: &diagnose::report::Coverage) {
                 "gap, Theodorsen-shaped tails".to_string(),
                 match (cov.tails_before, cov.tails_shrink) {
                     (Some(t), Some(s)) => format!("{} (shrink {})", num(t), pct(s)),
+                    _ => "–".into(),
+                },
+            ),
+            (
+                "tails' apparent heave mass (flat plate πρb²)".to_string(),
+                match (cov.tails_apparent_mass, cov.plate_apparent_mass) {
+                    (Some(m), Some(p)) => format!("{} kg/m ({} kg/m)", num(m), num(p)),
                     _ => "–".into(),
                 },
             ),

@@ -206,6 +206,7 @@ fn aero_level() -> LevelResult {
         bifurcation: None,
         fold_scheme: None,
         coverage: None,
+        structure: None,
     }
 }
 
@@ -313,6 +314,7 @@ fn structural_level() -> LevelResult {
         }),
         fold_scheme: None,
         coverage: None,
+        structure: None,
     }
 }
 

@@ -175,6 +175,7 @@ pub(crate) fn assemble(
         bifurcation: None,
         fold_scheme: None,
         coverage: None,
+        structure: None,
     }
 }
 

@@ -17,7 +17,9 @@
 //!    (default [`IdentifySettings`]; `Prepared::identify` on their indices, the result of
 //!    `identify` on them alone) selects each configuration's support (union of its groups' supports, lift and
 //!    moment, plus every nonlinear term any configuration selected: one section, one
-//!    set of nonlinear terms); the law is then one coefficient vector per node, fitted by least squares on
+//!    set of nonlinear terms; then every Eq. 19 nonlinear term the training nodes show when
+//!    their amplitudes are fitted together, [`complete_supports`]); the law is then one
+//!    coefficient vector per node, fitted by least squares on
 //!    the node's amplitudes together (the identified law depends on K only, as
 //!    `aeroelastic::identified` aggregates it). A held-out case is predicted from its
 //!    preprocessed motion with the node coefficients of its configuration interpolated at
@@ -282,6 +284,7 @@ fn build_fold(
             }
         }
     }
+    complete_supports(cases, nodes, &train, &mut supports, cache, index)?;
     for s in supports.values_mut() {
         for c in s.iter_mut() {
             c.sort_by_key(|t| (t.degree(), std::cmp::Reverse(t.powers)));
@@ -306,6 +309,104 @@ fn build_fold(
         supports,
         fits,
     })
+}
+
+/// The nonlinear terms of the Eq. 19 form (paper: α·α̇, α³, α̇³ in nondimensional
+/// motion) that the node law may take on beyond what the identification selected
+/// ([`complete_supports`]).
+const EQ19_NONLINEAR: [&str; 3] = ["alpha*alpha_dot", "alpha^3", "alpha_dot^3"];
+
+/// Noise-normalised evidence, in standard deviations of its null χ² law, a missing Eq. 19
+/// term must show on the training nodes to enter the node law ([`complete_supports`]).
+pub(crate) const SUPPORT_Z: f64 = 8.0;
+
+/// Completes the node law's support with the Eq. 19 nonlinear terms the training nodes
+/// show when their amplitudes are fitted together (one coefficient vector per node).
+///
+/// A per-case identification can leave such a term out where each case alone hides it
+/// (a slow pitch makes α̇³ a few noise σ per case, and its fundamental folds into that
+/// case's α̇ coefficient), while one node law over the node's amplitudes cannot fold it:
+/// its gap then grows with amplitude, and an effect-free section looks like
+/// `higher_order` (DECISIONS "Completing the node support"). Per channel and term t
+/// missing from every configuration's support, the statistic is
+/// S = Σ_n (z̃_n·r_n)² / (z̃_n·z̃_n σ̄_n²) over the training nodes (z̃_n, r_n the term's column
+/// and the target's residual off the node's support, σ̄_n² the mean noise variance of the
+/// node's cases): χ² with N_nodes degrees of freedom when t adds nothing. The term with
+/// the largest (S − N)/√(2N) above [`SUPPORT_Z`] enters every configuration (one
+/// section), and the test repeats with the wider support.
+///
+/// # Errors
+/// [`Error::Identify`] if a term name does not parse (a programming error).
+fn complete_supports(
+    cases: &[CaseData],
+    nodes: &[Node],
+    train: &[usize],
+    supports: &mut Supports,
+    cache: &NodeCache,
+    index: usize,
+) -> Result<()> {
+    let terms: Vec<Term> = EQ19_NONLINEAR
+        .iter()
+        .map(|n| {
+            Term::parse(n).map_err(|e| Error::identify(format!("fold {index}: term `{n}`"), e))
+        })
+        .collect::<Result<_>>()?;
+    let nn = train.len() as f64;
+    if nn < 1.0 {
+        return Ok(());
+    }
+    for c in 0..2 {
+        loop {
+            let missing: Vec<Term> = terms
+                .iter()
+                .filter(|t| supports.values().any(|s| !s[c].contains(t)))
+                .copied()
+                .collect();
+            if missing.is_empty() {
+                break;
+            }
+            let fits = law::node_fits(cases, nodes, train, supports, cache, 0);
+            let z_of = |t: &Term| -> f64 {
+                let s: f64 = fits
+                    .iter()
+                    .map(|f| {
+                        let node = &nodes[f.node];
+                        let ch = &f.ch[c];
+                        let z: Vec<f64> = node
+                            .cases
+                            .iter()
+                            .flat_map(|&i| cases[i].column(t).iter().copied().collect::<Vec<_>>())
+                            .collect();
+                        let zt = ch.qr.residual(&z);
+                        let zz = linalg::dot(&zt, &zt);
+                        let s2 = node
+                            .cases
+                            .iter()
+                            .map(|&i| cases[i].sigma[c].powi(2))
+                            .sum::<f64>()
+                            / node.cases.len().max(1) as f64;
+                        if zz <= 1e-12 * linalg::dot(&z, &z) || s2 <= 0.0 {
+                            return 0.0;
+                        }
+                        linalg::dot(&zt, &ch.res_y).powi(2) / (zz * s2)
+                    })
+                    .sum();
+                (s - nn) / (2.0 * nn).sqrt()
+            };
+            let best = missing
+                .iter()
+                .map(|t| (*t, z_of(t)))
+                .filter(|(_, z)| z.is_finite() && *z > SUPPORT_Z)
+                .max_by(|a, b| a.1.total_cmp(&b.1));
+            let Some((t, _)) = best else { break };
+            for s in supports.values_mut() {
+                if !s[c].contains(&t) {
+                    s[c].push(t);
+                }
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Held-out residuals r = measured − predicted, `[case][channel]` in C units, for the

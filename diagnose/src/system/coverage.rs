@@ -184,9 +184,20 @@ pub(crate) fn assess(
                     suggest(dof, k, pick);
                 }
             }
-            let amp_hi = range.amplitude_alpha_deg[1];
+            let [amp_lo, amp_hi] = range.amplitude_alpha_deg;
+            let amp_lo = if std::env::var_os("AEROFORM_NO_AMP_LO").is_some() {
+                0.0
+            } else {
+                amp_lo
+            };
             if r.u > 0.0 && amp_hi.is_finite() && amp_deg > amp_hi * (1.0 + MARGIN) {
                 outside.push(format!("α amplitude {amp_deg:.2}° above {amp_hi:.2}°"));
+            }
+            // below the forced amplitudes the law's linear part still holds the describing
+            // function of what its nonlinear terms miss at the forced amplitudes: an
+            // extrapolation too (DECISIONS "Coverage in amplitude, both ends")
+            if r.u > 0.0 && amp_lo.is_finite() && amp_deg < amp_lo / (1.0 + MARGIN) {
+                outside.push(format!("α amplitude {amp_deg:.2}° below {amp_lo:.2}°"));
             }
             RunCoverage {
                 id: r.id.clone(),
@@ -225,6 +236,9 @@ pub(crate) fn assess(
         linear_gap_statistic: f64::NAN,
         tails_before: None,
         tails_shrink: None,
+        tail_weights: Vec::new(),
+        tails_apparent_mass: None,
+        plate_apparent_mass: None,
         sim_tables: "linear".into(),
         explains_gap: false,
         suggestions,

@@ -374,6 +374,7 @@ pub fn system_level(forced: &Dataset, free: &Dataset, opts: &SystemOptions) -> R
         level_and_runs(&model, free, opts, linear_energy.as_deref(), Some(&range))?;
     let (linear_before, linear_statistic) = (level.before, level.gap_statistic);
     let mut tails: Option<(f64, f64)> = None;
+    let mut tail_weights = Vec::new();
     if level.coverage.as_ref().is_some_and(|c| c.any_outside()) {
         let tails_opts = IdentifiedOptions {
             extrapolation: aeroelastic::identified::Extrapolation::Theodorsen,
@@ -381,6 +382,7 @@ pub fn system_level(forced: &Dataset, free: &Dataset, opts: &SystemOptions) -> R
         };
         // a failure here only leaves the tails unreported
         if let Ok(tails_law) = IdentifiedLaw::from_identification(&id, &tails_opts) {
+            tail_weights = tails_law.tables.tails.clone();
             let tm: Arc<dyn AeroModel> = Arc::new(tails_law.model().clone());
             let tails_energy = jack_energy(&tails_opts);
             if let Ok((tl, _)) =
@@ -412,6 +414,17 @@ pub fn system_level(forced: &Dataset, free: &Dataset, opts: &SystemOptions) -> R
     if let Some((t, x)) = tails {
         cov.tails_before = Some(t);
         cov.tails_shrink = Some(x);
+    }
+    if !tail_weights.is_empty() {
+        let b = 0.5 * chord;
+        let plate = std::f64::consts::PI * free.manifest.section.air_density * b * b;
+        cov.tails_apparent_mass = tail_weights
+            .iter()
+            .find(|t| t.derivative == "H4")
+            .and_then(|t| t.weights.first())
+            .map(|c| c * plate);
+        cov.plate_apparent_mass = Some(plate);
+        cov.tail_weights = tail_weights;
     }
     cov.decide(level.gap_threshold, null_level(&level));
     level.coverage = Some(cov);
@@ -589,7 +602,8 @@ fn score_candidate(
     allowance_per_param: f64,
 ) -> Scored {
     let n = runs.len();
-    let aero = effect.level() == Level::Aerodynamic;
+    // gated: scored on the covered runs in the wind only
+    let aero = !effect.scored_beyond_coverage();
     let flags: Vec<[[bool; 2]; 2]> = (0..n)
         .map(|j| {
             let still = runs[j].u == 0.0;
@@ -605,8 +619,9 @@ fn score_candidate(
     let p_all = vars.first().map_or(p_c, |v| v.names.len());
     let nuis_idx: Vec<usize> = (p_c..p_all).collect();
     // an aerodynamic candidate: runs in the wind inside the forced range only
+    let in_wind = effect.level() == Level::Aerodynamic;
     let active: Vec<bool> = (0..n)
-        .map(|j| !(aero && (uncovered[j] || runs[j].u == 0.0)))
+        .map(|j| !((aero && uncovered[j]) || (in_wind && runs[j].u == 0.0)))
         .collect();
     let ids = |want: bool| -> Vec<&str> {
         (0..n)
@@ -976,6 +991,24 @@ fn level_and_runs(
     } else {
         (vec![], None)
     };
+    // the still-air decays against the nominal structure with the air's fitted mass
+    let structure = {
+        let st = &p.structure;
+        let mut m = st.mass_matrix();
+        if let Some(a) = air_mass {
+            for i in 0..2 {
+                for j in 0..2 {
+                    m[(i, j)] += a[i][j];
+                }
+            }
+        }
+        crate::structure::structure_check_matrices(
+            &[free],
+            &m,
+            &st.stiffness_matrix(),
+            &st.damping_matrix(),
+        )
+    };
     let level = LevelResult {
         interpolated_gap_statistic: None,
         model_level,
@@ -1022,6 +1055,7 @@ fn level_and_runs(
             },
         }),
         coverage,
+        structure,
     };
     Ok((level, p))
 }

@@ -9,6 +9,7 @@ use aeroelastic::aero::{AeroModel, Flow};
 use aeroelastic::integrate::{Control, OdeSystem, StopReason};
 
 use crate::effect::Effect;
+use crate::structure::line_fit;
 
 use aeroelastic::structure::Structure;
 
@@ -254,27 +255,6 @@ fn windows(a: &[f64], dt: f64, f: f64) -> Vec<(f64, f64, f64, f64)> {
         s += w;
     }
     out
-}
-
-/// Least-squares line y = icpt + slope·x: (slope, icpt, sum of squared residuals); a
-/// single point gives slope 0.
-pub(crate) fn line_fit(x: &[f64], y: &[f64]) -> (f64, f64, f64) {
-    let n = x.len() as f64;
-    if x.len() < 2 {
-        return (0.0, y.first().copied().unwrap_or(0.0), 0.0);
-    }
-    let mx = x.iter().sum::<f64>() / n;
-    let my = y.iter().sum::<f64>() / n;
-    let sxx: f64 = x.iter().map(|v| (v - mx).powi(2)).sum();
-    let sxy: f64 = x.iter().zip(y).map(|(a, b)| (a - mx) * (b - my)).sum();
-    let slope = if sxx > 0.0 { sxy / sxx } else { 0.0 };
-    let icpt = my - slope * mx;
-    let sse: f64 = x
-        .iter()
-        .zip(y)
-        .map(|(a, b)| (b - icpt - slope * a).powi(2))
-        .sum();
-    (slope, icpt, sse)
 }
 
 /// Observables of the pitch series `a` (rad) sampled every `dt`; `floor` is the

@@ -1,0 +1,40 @@
+//! Debug aid: the system level of one drawn-shapes blind set with the generator's truth
+//! law as the sim (no identification): `cargo run --release -p diagnose --example truth_sim -- INDEX [DIR]`
+//! (DIR: also write the set there).
+
+use std::sync::Arc;
+
+use diagnose::bench::{draw_specs_from, shapes_truth_labels, CampaignShape};
+use diagnose::bench_run::BlindOptions;
+use diagnose::blind::generate;
+
+fn main() {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let index: usize = args.first().and_then(|a| a.parse().ok()).unwrap_or(0);
+    let opts = BlindOptions::new(330, 2026);
+    let mut spec = draw_specs_from(330, 2026, &shapes_truth_labels())[index].clone();
+    let shape = CampaignShape::draw(spec.seed);
+    spec.shape = Some(shape.clone());
+    let scenario = shape.scenario(&opts.scenario);
+    let effect = diagnose::bench_run::blind_effect(&spec.truth).expect("effect");
+    let set = generate(effect, spec.strength, shape.form(), spec.seed, &scenario).expect("set");
+    if let Some(dir) = args.get(1) {
+        diagnose::blind::write_blind(std::path::Path::new(dir), &set).expect("write");
+    }
+    let loaded = aeroelastic::files::LoadedModel::parse(
+        &scenario.truth_model,
+        "truth",
+        std::path::Path::new("."),
+        None,
+    )
+    .expect("truth");
+    let model: Arc<dyn aeroelastic::aero::AeroModel> = loaded.model;
+    let mut sopts = opts.diagnose.system.clone();
+    sopts.seed = spec.seed;
+    let level =
+        diagnose::system::system_level_with_model(&model, &set.free, &sopts).expect("level");
+    println!(
+        "before {:.4} noise {:.4} stat {:.2}",
+        level.before, level.noise_level, level.gap_statistic
+    );
+}
