@@ -596,6 +596,12 @@ fn absurd_inputs_exit_with_1_or_2_and_name_the_field() {
         &manifest.replace("freq_pitch = 2.0", "freq_pitch = 1e6"),
         &csv,
     );
+    // issue 27 row 16: a declared forcing frequency 10× the record's own
+    let tenx = variant(
+        "tenx",
+        &manifest.replace("freq_pitch = 2.0", "freq_pitch = 20.0"),
+        &csv,
+    );
     let mut lines: Vec<String> = csv.lines().map(String::from).collect();
     let mut cells: Vec<String> = lines[10].split(',').map(String::from).collect();
     cells[3] = "1e308".into();
@@ -647,9 +653,65 @@ fn absurd_inputs_exit_with_1_or_2_and_name_the_field() {
     );
     let s_table = study("tiv", "[data.table_iv]\nrepeats = 18446744073709551615\n");
     let s_table_rate = study("tivr", "[data.table_iv]\nrepeats = 2\nrate = 1e12\n");
+    // issue 27 row 14: physical bounds of structure, model and sweep files
+    let file = |name: &str, body: String| -> String {
+        let p = dir.join(name);
+        std::fs::write(&p, body).unwrap();
+        p.to_str().unwrap().to_string()
+    };
+    let structure_text = std::fs::read_to_string(STRUCTURE).unwrap();
+    let model_text = std::fs::read_to_string(MODEL).unwrap();
+    let dense_air = file(
+        "dense.structure.toml",
+        format!(
+            "air_density = 1e6\n{}",
+            structure_text.replace("air_density", "# air_density")
+        ),
+    );
+    let far_axis = file(
+        "far.model.toml",
+        model_text.replace("elastic_axis = -0.3", "elastic_axis = 100"),
+    );
+    let sweep = |name: &str, extra: &str| -> String {
+        file(
+            name,
+            format!(
+                "{{\"kind\":\"flutter_map\",\"structure\":\"{STRUCTURE}\",\"model\":\"{MODEL}\",\
+                 \"speeds\":[1.0,2.0],\"grid\":{{\"mu\":[20.0]}}{extra}}}"
+            ),
+        )
+    };
+    let sweep_alpha = sweep("alpha.json", ",\"lco_speeds\":[5.0],\"alpha0\":1e9");
+    let sweep_lco = sweep("lco.json", ",\"lco_speeds\":[1e9]");
     let out = dir.join("out");
     let o = out.to_str().unwrap();
     let cases: Vec<(Vec<&str>, &str)> = vec![
+        (
+            vec![
+                "flutter",
+                "--structure",
+                &dense_air,
+                "--model",
+                MODEL,
+                "--out",
+                o,
+            ],
+            "air_density",
+        ),
+        (
+            vec![
+                "flutter",
+                "--structure",
+                STRUCTURE,
+                "--model",
+                &far_axis,
+                "--out",
+                o,
+            ],
+            "elastic_axis",
+        ),
+        (vec!["sweep", &sweep_alpha, "--out", o], "alpha0"),
+        (vec!["sweep", &sweep_lco, "--out", o], "lco_speeds"),
         (
             vec![
                 "flutter",
@@ -871,6 +933,7 @@ fn absurd_inputs_exit_with_1_or_2_and_name_the_field() {
         ),
         (vec!["identify", &wind, "--out", o], "wind_speed"),
         (vec!["identify", &nyq, "--out", o], "freq_pitch"),
+        (vec!["identify", &tenx, "--out", o], "freq_pitch"),
         (vec!["identify", &huge, "--out", o], "lift"),
         (
             vec!["run", &s_duration, "--out", o],

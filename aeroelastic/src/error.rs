@@ -11,7 +11,7 @@ pub type Result<T, E = Error> = std::result::Result<T, E>;
 #[non_exhaustive]
 pub enum Error {
     /// A parameter is out of its admissible range (non-finite, negative mass…).
-    #[error("field `{field}` = {value}: {message}")]
+    #[error("field `{field}` = {}: {message}", identify::limits::show(*.value))]
     InvalidParameter {
         /// Dotted field name, e.g. `structure.inertia_alpha`.
         field: String,

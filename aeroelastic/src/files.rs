@@ -216,9 +216,13 @@ impl StructureFile {
     /// [`Error::InvalidParameter`] naming the field (`air_density`, `freq_pitch`,
     /// `mass`, `pitch_stiffness_terms[1].power`…).
     pub fn structure(&self) -> Result<Structure> {
+        use identify::limits::{positive_at_most, MAX_AIR_DENSITY, MAX_CHORD};
         positive("air_density", self.air_density)?;
+        positive_at_most(self.air_density, MAX_AIR_DENSITY, "kg/m^3")
+            .map_err(|m| Error::param("air_density", self.air_density, m))?;
         if let Some(c) = self.chord {
             positive("chord", c)?;
+            positive_at_most(c, MAX_CHORD, "m").map_err(|m| Error::param("chord", c, m))?;
         }
         self.spec().resolve()
     }
@@ -539,6 +543,12 @@ impl LoadedModel {
         let chord = f.chord.or(chord);
         let wrap = |e: Error| in_file(source, e);
         let a = f.elastic_axis.unwrap_or(0.0);
+        identify::limits::abs_at_most(a, identify::limits::MAX_ELASTIC_AXIS, "semi-chords")
+            .map_err(|m| wrap(Error::param("elastic_axis", a, m)))?;
+        if let Some(c) = chord {
+            identify::limits::positive_at_most(c, identify::limits::MAX_CHORD, "m")
+                .map_err(|m| wrap(Error::param("chord", c, m)))?;
+        }
         let lags = f.rfa_lags.unwrap_or(3);
         let (linear, identified): (Arc<dyn AeroModel>, Option<IdentifiedLaw>) = match f.kind {
             ModelKind::Theodorsen => (

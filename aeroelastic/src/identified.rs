@@ -564,6 +564,8 @@ impl IdentifiedLaw {
     /// needs (4 distinct K, and 3 + `rfa_lags`).
     pub fn from_identification(id: &Identification, opts: &IdentifiedOptions) -> Result<Self> {
         crate::error::positive("chord", opts.chord)?;
+        identify::limits::positive_at_most(opts.chord, identify::limits::MAX_CHORD, "m")
+            .map_err(|m| Error::param("chord", opts.chord, m))?;
         crate::error::positive("k_merge_tol", opts.k_merge_tol)?;
         crate::error::non_negative("outside_max_spread", opts.outside_max_spread)?;
         let cases: Vec<&CaseResult> = match &opts.groups {

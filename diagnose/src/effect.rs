@@ -157,8 +157,8 @@ impl Effect {
     /// the structural effects, and for a static offset, whose evidence is the runs' mean
     /// force (K = 0), which no error of the law's extrapolation in K can produce from the
     /// zero-mean response of an effect-free section. The other aerodynamic effects are
-    /// scored on covered runs only (issue 29, DECISIONS "Coverage in amplitude, both
-    /// ends").
+    /// scored on covered runs only (issue 29, DECISIONS "Static offsets scored beyond
+    /// coverage").
     pub fn scored_beyond_coverage(self) -> bool {
         self.level() == Level::Structural || self == Effect::StaticOffset
     }

@@ -269,8 +269,13 @@ impl SweepSpec {
                     }
                 }
                 for (name, x) in [("alpha0", m.alpha0), ("alpha0_down", m.alpha0_down)] {
-                    if !x.is_finite() {
-                        return Err(sweep_err(source, format!("`{name}` = {x}: must be finite")));
+                    identify::limits::abs_at_most(x, identify::limits::MAX_PITCH_DEG, "deg")
+                        .map_err(|e| sweep_err(source, format!("`{name}`: {e}")))?;
+                }
+                for (name, v) in [("speeds", &m.speeds), ("lco_speeds", &m.lco_speeds)] {
+                    for &u in v.iter() {
+                        identify::limits::positive_at_most(u, identify::limits::MAX_SPEED, "m/s")
+                            .map_err(|e| sweep_err(source, format!("`{name}`: {e}")))?;
                     }
                 }
             }

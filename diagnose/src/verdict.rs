@@ -261,6 +261,13 @@ fn decide_level(levels: &[LevelResult], li: usize, rules: &VerdictRules) -> Deci
                 .map(|r| r.id.as_str())
                 .collect();
             let covered = match cov.covered_gap_statistic {
+                Some(s) if s > level.gap_threshold => format!(
+                    "the covered runs alone are at {s:.2}× their null level (threshold {:.2}) \
+                     but carry only {:.1} % of the excess, and no candidate scored on them \
+                     removes it",
+                    level.gap_threshold,
+                    100.0 * (1.0 - cov.extrapolated_share)
+                ),
                 Some(s) => format!(
                     "the covered runs alone are at {s:.2}× their null level (threshold {:.2})",
                     level.gap_threshold

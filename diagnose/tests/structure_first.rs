@@ -62,20 +62,24 @@ fn decays() -> BlindScenario {
 
 /// Item 5: k_α(α + c₂α² + c₃α³) with each sign of c₂ and of c₃ (hardening and softening)
 /// is named `structural_polynomial`, and the reported k2_pitch = c₂k_α, k3_pitch = c₃k_α
-/// (extra restoring moment, α nose-up) are recovered with their signs, within 15 %; the
-/// weak softening cubic (c₃ = −4: 2 % of the spring at the 4° the runs decay through)
-/// within 25 % (measured: −11.0 and −13.1 against −11.2; the 15 % is not met
-/// there, see docs/DECISIONS.md).
+/// (extra restoring moment, α nose-up) are recovered with their signs, within 15 %: a
+/// hardening cubic (c₃ = 60) and a softening one (c₃ = −12: 5 % of the spring at the 4°
+/// the runs decay through), each with c₂ of both signs. A weak softening cubic (c₃ = −4:
+/// 2 % of the spring at 4°) is held to its sign and 25 % (docs/DECISIONS.md: the issue's
+/// 15 % is not met at that strength).
 #[test]
 fn a_pitch_polynomial_of_each_sign_is_recovered_with_its_sign() {
     let sc = decays();
     let ka = k_alpha();
     let mut wrong = Vec::new();
-    for (i, (c2, c3)) in [(3.0, 60.0), (-3.0, 60.0), (1.5, -4.0), (-1.5, -4.0)]
-        .into_iter()
-        .enumerate()
-    {
-        let seed = 40 + i as u64;
+    for (seed, c2, c3) in [
+        (40, 3.0, 60.0),
+        (41, -3.0, 60.0),
+        (44, 1.5, -12.0),
+        (45, -1.5, -12.0),
+        (42, 1.5, -4.0),
+        (43, -1.5, -4.0),
+    ] {
         let inj = [Injection {
             effect: InjectedEffect::StructuralPolynomial { c2, c3 },
             form: Form::Primary,
@@ -117,7 +121,7 @@ fn a_pitch_polynomial_of_each_sign_is_recovered_with_its_sign() {
         ] {
             let got = k(name);
             eprintln!("c2 {c2} c3 {c3}: {name} {got:.3} against the truth {truth:.3}");
-            let tol = if c3 < 0.0 && name.starts_with("k3") {
+            let tol = if c3 == -4.0 && name.starts_with("k3") {
                 0.25
             } else {
                 0.15

@@ -19,6 +19,7 @@ pub mod error;
 pub mod identifiability;
 pub mod io;
 pub mod library;
+pub mod limits;
 pub mod metrics;
 pub mod numerics;
 pub mod paper;

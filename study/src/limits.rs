@@ -23,13 +23,13 @@ pub const MAX_DURATION: f64 = 1e6;
 pub const MAX_RATE: f64 = 1e6;
 /// Largest wind speed [m/s] (or reduced speed U/(bω_α) in a nondimensional study);
 /// equals the data-set reader's bound (`identify::dataset::PLAUSIBLE_MAX`).
-pub const MAX_SPEED: f64 = 1000.0;
+pub const MAX_SPEED: f64 = identify::limits::MAX_SPEED;
 /// Largest length of an LCO run [pitch periods].
 pub const MAX_PERIODS: f64 = 1e5;
 /// Largest phase-portrait length [pitch periods] (400 points each).
 pub const MAX_PHASE_PERIODS: f64 = 1000.0;
 /// Largest initial pitch perturbation magnitude \[deg\].
-pub const MAX_PITCH_DEG: f64 = 90.0;
+pub const MAX_PITCH_DEG: f64 = identify::limits::MAX_PITCH_DEG;
 /// Largest number of bootstrap members of an identification ensemble (each member is one
 /// identification, ≈ the nominal one's cost; `identify --ensemble`, `[identify] ensemble`).
 pub const MAX_ENSEMBLE: usize = 10_000;
@@ -52,14 +52,7 @@ impl std::fmt::Display for LimitError {
 
 impl std::error::Error for LimitError {}
 
-/// A number for a message: exponent form outside [1e-4, 1e16) so that 1e300 stays short.
-fn show(x: f64) -> String {
-    if x != 0.0 && x.is_finite() && !(1e-4..1e16).contains(&x.abs()) {
-        format!("{x:e}")
-    } else {
-        format!("{x}")
-    }
-}
+use identify::limits::show;
 
 fn err<T>(field: &str, message: String) -> Result<T, LimitError> {
     Err(LimitError {
@@ -73,14 +66,7 @@ fn err<T>(field: &str, message: String) -> Result<T, LimitError> {
 /// # Errors
 /// [`LimitError`] naming `field` with the value and the bound.
 pub fn positive_at_most(field: &str, x: f64, max: f64, unit: &str) -> Result<f64, LimitError> {
-    if x.is_finite() && x > 0.0 && x <= max {
-        Ok(x)
-    } else {
-        err(
-            field,
-            format!("{x} {unit} must be finite, > 0 and ≤ {max} {unit}"),
-        )
-    }
+    identify::limits::positive_at_most(x, max, unit).or_else(|m| err(field, m))
 }
 
 /// `|x| ≤ max`, finite.
@@ -88,14 +74,7 @@ pub fn positive_at_most(field: &str, x: f64, max: f64, unit: &str) -> Result<f64
 /// # Errors
 /// [`LimitError`] naming `field` with the value and the bound.
 pub fn abs_at_most(field: &str, x: f64, max: f64, unit: &str) -> Result<f64, LimitError> {
-    if x.is_finite() && x.abs() <= max {
-        Ok(x)
-    } else {
-        err(
-            field,
-            format!("{x} {unit} must be finite with |value| ≤ {max} {unit}"),
-        )
-    }
+    identify::limits::abs_at_most(x, max, unit).or_else(|m| err(field, m))
 }
 
 /// `1 ≤ n ≤ max` for a count.

@@ -20,6 +20,13 @@ pub const MARGIN: f64 = 0.1;
 /// clean, for the gap to be put down to extrapolation.
 pub const MIN_SHARE: f64 = 0.5;
 
+/// Largest share of the excess gap energy the covered runs may carry, significant or not,
+/// for the gap still to be put down to extrapolation when no candidate scored on them is
+/// significant: a residue that small, which nothing in the catalogue removes, does not
+/// turn a gap that lies outside the forced range into an unexplained one (DECISIONS
+/// "A minor covered residue").
+pub const MINOR_COVERED_SHARE: f64 = 0.1;
+
 /// What the forced campaign identified: K ranges per DOF, the pitch amplitude range, and
 /// each configuration's forcing frequencies (for the suggested cases).
 #[derive(Debug, Clone, PartialEq)]
@@ -184,20 +191,11 @@ pub(crate) fn assess(
                     suggest(dof, k, pick);
                 }
             }
-            let [amp_lo, amp_hi] = range.amplitude_alpha_deg;
-            let amp_lo = if std::env::var_os("AEROFORM_NO_AMP_LO").is_some() {
-                0.0
-            } else {
-                amp_lo
-            };
+            // above the forced amplitudes only: below them the law's linear part holds
+            // (DECISIONS "Coverage in amplitude: above the range only")
+            let amp_hi = range.amplitude_alpha_deg[1];
             if r.u > 0.0 && amp_hi.is_finite() && amp_deg > amp_hi * (1.0 + MARGIN) {
                 outside.push(format!("α amplitude {amp_deg:.2}° above {amp_hi:.2}°"));
-            }
-            // below the forced amplitudes the law's linear part still holds the describing
-            // function of what its nonlinear terms miss at the forced amplitudes: an
-            // extrapolation too (DECISIONS "Coverage in amplitude, both ends")
-            if r.u > 0.0 && amp_lo.is_finite() && amp_deg < amp_lo / (1.0 + MARGIN) {
-                outside.push(format!("α amplitude {amp_deg:.2}° below {amp_lo:.2}°"));
             }
             RunCoverage {
                 id: r.id.clone(),
@@ -254,17 +252,83 @@ impl Coverage {
     /// Sets [`Coverage::explains_gap`] from the linear sim's gap (`linear_before`,
     /// `linear_gap_statistic`), the tails' gap and the level's noise level and threshold:
     /// runs leave the range and carry at least [`MIN_SHARE`] of the excess, and the covered
-    /// runs alone show no significant gap (statistic ≤ `gap_threshold`) or, with no covered
-    /// run, the tails' gap is no longer significant.
-    pub(crate) fn decide(&mut self, gap_threshold: f64, noise_level: f64) {
+    /// runs alone show no significant gap (statistic ≤ `gap_threshold`) or carry at most
+    /// [`MINOR_COVERED_SHARE`] of it with no candidate scored on them significant
+    /// (`covered_candidate_significant` false) or, with no covered run, the tails' gap is
+    /// no longer significant.
+    pub(crate) fn decide(
+        &mut self,
+        gap_threshold: f64,
+        noise_level: f64,
+        covered_candidate_significant: bool,
+    ) {
         self.explains_gap = self.linear_gap_statistic > gap_threshold
             && self.any_outside()
             && self.extrapolated_share >= MIN_SHARE
             && match self.covered_gap_statistic {
-                Some(s) => s <= gap_threshold,
+                Some(s) => {
+                    s <= gap_threshold
+                        || (self.extrapolated_share >= 1.0 - MINOR_COVERED_SHARE
+                            && !covered_candidate_significant)
+                }
                 None => self
                     .tails_before
                     .is_some_and(|t| t <= gap_threshold * noise_level),
             };
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn coverage(covered: Option<f64>, share: f64) -> Coverage {
+        let run = |id: &str, covered: bool| RunCoverage {
+            id: id.into(),
+            wind_speed: 5.0,
+            k_h: Some(0.5),
+            k_alpha: Some(0.5),
+            amplitude_alpha_deg: 3.0,
+            amplitude_h_m: 0.001,
+            covered,
+            outside: vec![],
+            before: 0.1,
+        };
+        Coverage {
+            k_h_range: [0.2, 0.6],
+            k_alpha_range: [0.2, 0.6],
+            amplitude_alpha_deg_range: [3.0, 24.0],
+            margin: MARGIN,
+            runs: vec![run("a", true), run("b", false)],
+            extrapolated_share: share,
+            covered_gap_statistic: covered,
+            linear_before: 0.4,
+            linear_gap_statistic: 4.0,
+            tails_before: None,
+            tails_shrink: None,
+            tail_weights: vec![],
+            tails_apparent_mass: None,
+            plate_apparent_mass: None,
+            sim_tables: "linear".into(),
+            explains_gap: false,
+            suggestions: vec![],
+        }
+    }
+
+    /// Covered runs clean: extrapolation. Covered runs above their null but with at most
+    /// a tenth of the excess and no candidate significant on them: extrapolation still; a
+    /// larger covered share, or a significant covered-run candidate: not.
+    #[test]
+    fn a_minor_covered_residue_no_candidate_removes_leaves_the_gap_to_extrapolation() {
+        let decide = |covered, share, sig| {
+            let mut c = coverage(covered, share);
+            c.decide(1.25, 0.1, sig);
+            c.explains_gap
+        };
+        assert!(decide(Some(1.1), 0.6, false));
+        assert!(decide(Some(1.4), 0.994, false));
+        assert!(!decide(Some(1.4), 0.994, true));
+        assert!(!decide(Some(1.4), 0.85, false));
+        assert!(!decide(Some(1.1), 0.4, false));
     }
 }

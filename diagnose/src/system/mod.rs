@@ -426,7 +426,15 @@ pub fn system_level(forced: &Dataset, free: &Dataset, opts: &SystemOptions) -> R
         cov.plate_apparent_mass = Some(plate);
         cov.tail_weights = tail_weights;
     }
-    cov.decide(level.gap_threshold, null_level(&level));
+    let covered_candidate_significant = level
+        .candidates
+        .iter()
+        .any(|c| c.significant && !c.effect.scored_beyond_coverage());
+    cov.decide(
+        level.gap_threshold,
+        null_level(&level),
+        covered_candidate_significant,
+    );
     level.coverage = Some(cov);
     Ok(level)
 }

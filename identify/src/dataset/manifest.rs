@@ -799,10 +799,10 @@ pub(crate) fn unsafe_relative_path(path: &Path) -> Option<&'static str> {
 /// wind-tunnel section (docs/DATA_FORMAT.md) so that they only catch typos and absurd
 /// inputs (one `wind_speed = 1e308` case used to wreck a whole group silently).
 pub const PLAUSIBLE_MAX: [(&str, f64); 10] = [
-    ("wind_speed", 1000.0),
-    ("chord", 100.0),
-    ("span", 1000.0),
-    ("air_density", 2000.0),
+    ("wind_speed", crate::limits::MAX_SPEED),
+    ("chord", crate::limits::MAX_CHORD),
+    ("span", crate::limits::MAX_SPAN),
+    ("air_density", crate::limits::MAX_AIR_DENSITY),
     ("mass", 1e6),
     ("inertia", 1e6),
     ("freq_heave", 1e4),

@@ -172,7 +172,55 @@ pub fn read_case(dir: &Path, manifest: &Manifest, case: &CaseSpec) -> Result<Rec
             });
         }
     }
+    // A declared forcing frequency the record does not hold (a typo, a frequency in rad/s,
+    // 10× the true one) would silently rescale every derivative (issue 27, row 16).
+    if case.kind == CaseKind::Forced {
+        for (key, f, x) in [
+            ("freq_pitch", case.freq_pitch, &rec.alpha),
+            ("freq_heave", case.freq_heave, &rec.h),
+        ] {
+            let Some(f) = f else { continue };
+            if let Some((f_rec, share_rec, share_decl)) = declared_frequency_missing(x, rec.dt, f) {
+                let manifest_path = dir.join(MANIFEST_FILE);
+                let text = std::fs::read_to_string(&manifest_path).unwrap_or_default();
+                let (field, line) =
+                    manifest::case_key_location(&text, &manifest_path, &case.id, key);
+                return Err(crate::Error::Manifest {
+                    path: manifest_path,
+                    line,
+                    field,
+                    message: format!(
+                        "{f} Hz is not in the record {}: its motion oscillates at {f_rec:.4} Hz \
+                         ({:.0} % of its variance), a sinusoid at {f} Hz explains {:.1} %",
+                        file.display(),
+                        100.0 * share_rec,
+                        100.0 * share_decl.max(0.0)
+                    ),
+                });
+            }
+        }
+    }
     Ok(rec)
+}
+
+/// Relative distance between a declared forcing frequency and the record's own beyond
+/// which [`declared_frequency_missing`] looks further.
+pub const DECLARED_FREQUENCY_TOL: f64 = 0.05;
+
+/// `Some((f_record, share_record, share_declared))` when a forced record `x` (sampled every
+/// `dt` s) does not hold its declared forcing frequency `f`: its dominant frequency differs
+/// from `f` by more than [`DECLARED_FREQUENCY_TOL`], a sinusoid there explains at least half
+/// of its variance, and one at `f` explains less than a tenth of that. A channel without
+/// a dominant oscillation (a DOF not forced: noise) passes.
+pub fn declared_frequency_missing(x: &[f64], dt: f64, f: f64) -> Option<(f64, f64, f64)> {
+    let f0 = crate::preprocess::dominant_frequency(x, dt)?;
+    let f_rec = crate::preprocess::refine_frequency(x, dt, f0);
+    if (f_rec / f - 1.0).abs() <= DECLARED_FREQUENCY_TOL {
+        return None;
+    }
+    let (share_rec, _) = crate::preprocess::harmonic_share(x, dt, f_rec)?;
+    let (share_decl, _) = crate::preprocess::harmonic_share(x, dt, f)?;
+    (share_rec >= 0.5 && share_decl < 0.1 * share_rec).then_some((f_rec, share_rec, share_decl))
 }
 
 /// `dir.join(rel)` when the file `rel` named by `case.<key>` stays inside the data-set
