@@ -18,7 +18,7 @@
 //!    `identify` on them alone) selects each configuration's support (union of its groups' supports, lift and
 //!    moment, plus every nonlinear term any configuration selected: one section, one
 //!    set of nonlinear terms; then every Eq. 19 nonlinear term the training nodes show when
-//!    their amplitudes are fitted together, [`complete_supports`]); the law is then one
+//!    their amplitudes are fitted together, `complete_supports`); the law is then one
 //!    coefficient vector per node, fitted by least squares on
 //!    the node's amplitudes together (the identified law depends on K only, as
 //!    `aeroelastic::identified` aggregates it). A held-out case is predicted from its
