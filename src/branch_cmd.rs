@@ -46,9 +46,13 @@ pub struct BranchArgs {
     /// Chord B [m] for an identification.json model.
     #[arg(long)]
     pub chord: Option<f64>,
-    /// Output folder (created if missing).
+    /// Output folder, written as a whole (created if missing; an earlier aeroform result
+    /// there is replaced, never mixed with the new one).
     #[arg(long, default_value = "out")]
     pub out: PathBuf,
+    /// Replace an existing output folder that aeroform did not write.
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// Parses `a:b` into a checked range.
@@ -91,7 +95,6 @@ pub fn run(args: &BranchArgs) -> anyhow::Result<()> {
         Some(p) => Some(read_measured_amplitudes(p).context("measured amplitudes")?),
         None => None,
     };
-    crate::ensure_dir(&args.out)?;
     let bar = crate::progress::CountBar::new("branch", args.max_points);
     let obs = |p: BranchProgress| {
         bar.set(
@@ -175,21 +178,31 @@ pub fn run(args: &BranchArgs) -> anyhow::Result<()> {
         &dist,
     )
     .to_value();
-    let csv = args.out.join("branch.csv");
-    identify::io::write_atomic(&csv, aeroelastic::documents::branch_csv(&set).as_bytes())?;
-    let path = args.out.join("branch.json");
-    identify::io::write_atomic(&path, format!("{json:#}\n").as_bytes())?;
+    // staged, locked and moved into place as a whole (issue 27, row 6); taken once the
+    // branches are computed, so that a refused input never touches the folder
+    let dir = crate::outdir::OutDir::begin(&args.out, "branch", args.force)?;
+    let staged = dir.path().to_path_buf();
+    identify::io::write_atomic(
+        &staged.join("branch.csv"),
+        aeroelastic::documents::branch_csv(&set).as_bytes(),
+    )?;
+    identify::io::write_atomic(
+        &staged.join("branch.json"),
+        format!("{json:#}\n").as_bytes(),
+    )?;
     let fig = plots::save(
         &plots::adapters::aeroelastic::branch_figure(&set, &dist, vec![]),
-        &args.out,
+        &staged,
         "branch_diagram",
     )
     .context("bifurcation diagram")?;
+    let png = fig.png.file_name().map(std::path::PathBuf::from);
+    let out = dir.commit()?;
     crate::ui::say!(
         "wrote {}, {}, {}",
-        csv.display(),
-        path.display(),
-        fig.png.display()
+        out.join("branch.csv").display(),
+        out.join("branch.json").display(),
+        png.map_or_else(|| out.clone(), |p| out.join(p)).display()
     );
     crate::ui::document(&json)
 }

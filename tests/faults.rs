@@ -1359,3 +1359,53 @@ fn stale_temporary_files_of_dead_processes_are_removed() {
     assert_eq!(names, want);
     assert_eq!(std::fs::read(&target).unwrap(), b"keep");
 }
+
+/// Issue 27, row 6: `branch` writes its folder as a whole. A write failure part-way (a
+/// 75 kB file limit: the CSV fits, the JSON does not) keeps the previous results intact and
+/// leaves no staging folder; the next run replaces the folder with its own files only.
+#[test]
+fn branch_output_is_replaced_whole_or_kept_on_a_write_failure() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("br");
+    let o = out.to_str().unwrap();
+    let args = |speeds: &'static str| {
+        vec![
+            "branch",
+            "--structure",
+            STRUCTURE,
+            "--model",
+            MODEL,
+            "--speeds",
+            speeds,
+            "--out",
+            o,
+            "--quiet",
+        ]
+    };
+    let st = bin().args(args("5:9")).output().unwrap();
+    assert!(st.status.success(), "{}", String::from_utf8_lossy(&st.stderr));
+    let first = std::fs::read(out.join("branch.json")).unwrap();
+    let (ok, _, err) = sh("trap '' XFSZ; ulimit -f 150", &args("5:9.5"));
+    assert!(!ok, "expected a write failure");
+    assert!(!err.contains("panicked"), "{err}");
+    assert_eq!(std::fs::read(out.join("branch.json")).unwrap(), first);
+    assert!(out.join(".aeroform-complete").exists());
+    let leftovers: Vec<String> = files_in(tmp.path())
+        .into_iter()
+        .filter(|f| f.contains("staging") || f.ends_with(".tmp"))
+        .collect();
+    assert!(leftovers.is_empty(), "{leftovers:?}");
+    let st = bin().args(args("5:9.5")).output().unwrap();
+    assert!(st.status.success(), "{}", String::from_utf8_lossy(&st.stderr));
+    assert_ne!(std::fs::read(out.join("branch.json")).unwrap(), first);
+    assert_eq!(
+        files_in(&out),
+        [
+            ".aeroform-complete",
+            "branch.csv",
+            "branch.json",
+            "branch_diagram.png",
+            "branch_diagram.svg"
+        ]
+    );
+}
