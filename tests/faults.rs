@@ -1383,7 +1383,11 @@ fn branch_output_is_replaced_whole_or_kept_on_a_write_failure() {
         ]
     };
     let st = bin().args(args("5:9")).output().unwrap();
-    assert!(st.status.success(), "{}", String::from_utf8_lossy(&st.stderr));
+    assert!(
+        st.status.success(),
+        "{}",
+        String::from_utf8_lossy(&st.stderr)
+    );
     let first = std::fs::read(out.join("branch.json")).unwrap();
     let (ok, _, err) = sh("trap '' XFSZ; ulimit -f 150", &args("5:9.5"));
     assert!(!ok, "expected a write failure");
@@ -1396,7 +1400,11 @@ fn branch_output_is_replaced_whole_or_kept_on_a_write_failure() {
         .collect();
     assert!(leftovers.is_empty(), "{leftovers:?}");
     let st = bin().args(args("5:9.5")).output().unwrap();
-    assert!(st.status.success(), "{}", String::from_utf8_lossy(&st.stderr));
+    assert!(
+        st.status.success(),
+        "{}",
+        String::from_utf8_lossy(&st.stderr)
+    );
     assert_ne!(std::fs::read(out.join("branch.json")).unwrap(), first);
     assert_eq!(
         files_in(&out),
