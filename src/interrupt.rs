@@ -8,8 +8,11 @@
 /// Installs the handler (once per process, at start-up; a second call is a no-op).
 pub fn install() {
     let _ = ctrlc::set_handler(move || {
-        let msg = crate::outdir::interrupt_cleanup();
+        let (msg, blocker) = crate::outdir::interrupt_cleanup();
         eprintln!("{msg}");
+        if let Some(b) = blocker {
+            let _ = std::fs::remove_file(b);
+        }
         std::process::exit(130);
     });
 }

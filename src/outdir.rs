@@ -51,13 +51,15 @@ fn set_active(a: Option<Active>) {
 }
 
 /// Called by the SIGINT/SIGTERM handler: removes the staging folder and the lock (or this
-/// process's temporary files in a shared folder) and returns a sentence for the user.
+/// process's temporary files in a shared folder) and returns a sentence for the user and
+/// the file that blocks the staging path, for the handler to remove just before it exits.
 /// Holds the state mutex until the process exits.
-pub fn interrupt_cleanup() -> String {
+pub fn interrupt_cleanup() -> (String, Option<PathBuf>) {
     let guard = ACTIVE.lock().unwrap_or_else(|p| p.into_inner());
+    let mut blocker = None;
     let msg = match &*guard {
         Some(Active::Staging { out, staging, lock }) => {
-            remove_entry(staging);
+            blocker = remove_staging_while_written(staging);
             let _ = std::fs::remove_file(lock);
             format!(
                 "interrupted: {} left as it was (the unfinished results were removed)",
@@ -75,7 +77,52 @@ pub fn interrupt_cleanup() -> String {
     };
     // keep the guard: the main thread must not start a swap before the process exits
     std::mem::forget(guard);
-    msg
+    (msg, blocker)
+}
+
+/// Removes a staging folder that other threads of this process may still be writing
+/// into (the interrupt does not stop them). The folder is renamed to a work-folder trash
+/// name and an empty *file* takes its place, so that no writer can recreate it
+/// (`create_dir_all` of a subfolder fails on a file), then the trash is removed; the
+/// caller removes the blocking file (returned) as its last act before the exit. Removing
+/// in place lost the race: writers recreated the folder during or after the walk
+/// (issue 27, row 8).
+fn remove_staging_while_written(staging: &Path) -> Option<PathBuf> {
+    let name = staging.file_name().unwrap_or_default().to_string_lossy();
+    let mut blocker = None;
+    for round in 0..100 {
+        match std::fs::symlink_metadata(staging) {
+            Err(_) => {
+                // nothing there: block it
+                if std::fs::File::create_new(staging).is_ok() {
+                    blocker = Some(staging.to_path_buf());
+                    break;
+                }
+            }
+            Ok(m) if m.is_file() && blocker.is_some() => break,
+            Ok(_) => {
+                // a work-folder name (".NAME.trashN.aeroform-old.PID"): a leftover of it
+                // is removed by the next run like any dead process's work folder
+                let trash = staging.with_file_name(name.replace(
+                    ".aeroform-staging.",
+                    &format!(".trash{round}.aeroform-old."),
+                ));
+                match std::fs::rename(staging, &trash) {
+                    Ok(()) => {
+                        if std::fs::File::create_new(staging).is_ok() {
+                            blocker = Some(staging.to_path_buf());
+                        }
+                        remove_entry(&trash);
+                        if blocker.is_some() {
+                            break;
+                        }
+                    }
+                    Err(_) => remove_entry(staging),
+                }
+            }
+        }
+    }
+    blocker
 }
 
 /// Removes a file, a symbolic link (the link only) or a folder tree without following
@@ -176,15 +223,6 @@ pub struct Lock {
 }
 
 impl Lock {
-    /// Takes the lock of the output folder `dir` (see [`Lock::acquire`]).
-    ///
-    /// # Errors
-    /// As [`Lock::acquire`]; [`Usage`] when `dir` has no name.
-    pub fn for_folder(dir: &Path) -> anyhow::Result<Lock> {
-        let (parent, name) = split_out(dir, false)?;
-        Lock::acquire(&parent, &name)
-    }
-
     /// Takes the lock of `parent/name`, taking over the lock of a dead process (with a
     /// message on stderr).
     ///
@@ -320,55 +358,71 @@ impl OutDir {
         std::fs::create_dir_all(&parent)
             .map_err(|e| anyhow::anyhow!("cannot create output folder {}: {e}", out.display()))?;
         let lock = Lock::acquire(&parent, &name)?;
-        clean_dead_work_folders(&parent);
         let dest = parent.join(&name);
+        let staging = parent.join(format!(".{name}.aeroform-staging.{}", std::process::id()));
+        remove_entry(&staging); // a leftover of an earlier process with our PID
+                                // registered before anything is created, so that an interrupt from here on
+                                // removes whatever exists of the staging folder and the lock; from here on this
+                                // thread removes the staging path only holding the state mutex (an interrupt
+                                // blocks the path with a file while it cleans up)
+        set_active(Some(Active::Staging {
+            out: dest.clone(),
+            staging: staging.clone(),
+            lock: lock.path.clone(),
+        }));
+        clean_dead_work_folders(&parent);
+        let refused = |e: anyhow::Error| {
+            set_active(None);
+            e
+        };
         match std::fs::symlink_metadata(&dest) {
             Err(_) => {}
             Ok(m) if m.file_type().is_symlink() => {
-                return Err(Usage(format!(
-                    "--out {}: is a symbolic link; give the folder itself",
-                    out.display()
+                return Err(refused(
+                    Usage(format!(
+                        "--out {}: is a symbolic link; give the folder itself",
+                        out.display()
+                    ))
+                    .into(),
                 ))
-                .into())
             }
             Ok(m) if !m.is_dir() => {
-                return Err(Usage(format!(
-                    "cannot create output folder {}: a file of that name exists",
-                    out.display()
+                return Err(refused(
+                    Usage(format!(
+                        "cannot create output folder {}: a file of that name exists",
+                        out.display()
+                    ))
+                    .into(),
                 ))
-                .into())
             }
             Ok(_) => {
                 let ours = dest.join(COMPLETE_MARKER).exists();
                 let empty = std::fs::read_dir(&dest).is_ok_and(|mut d| d.next().is_none());
                 if !ours && !empty && !force {
-                    return Err(Usage(format!(
-                        "--out {}: the folder exists and holds files aeroform did not write \
-                         (no {COMPLETE_MARKER}); the new results replace the folder as a \
-                         whole, so choose another folder or pass --force to replace it",
-                        out.display()
-                    ))
-                    .into());
+                    return Err(refused(
+                        Usage(format!(
+                            "--out {}: the folder exists and holds files aeroform did not \
+                             write (no {COMPLETE_MARKER}); the new results replace the folder \
+                             as a whole, so choose another folder or pass --force to replace it",
+                            out.display()
+                        ))
+                        .into(),
+                    ));
                 }
             }
         }
-        let staging = parent.join(format!(".{name}.aeroform-staging.{}", std::process::id()));
-        remove_entry(&staging); // a leftover of an earlier process with our PID
         std::fs::create_dir(&staging)
             .and_then(|()| std::fs::write(staging.join(INCOMPLETE_MARKER), command.as_bytes()))
             .map_err(|e| {
+                let mut g = ACTIVE.lock().unwrap_or_else(|p| p.into_inner());
                 remove_entry(&staging);
+                *g = None;
                 anyhow::anyhow!(
                     "cannot create output folder {} (staging {}): {e}",
                     out.display(),
                     staging.display()
                 )
             })?;
-        set_active(Some(Active::Staging {
-            out: dest.clone(),
-            staging: staging.clone(),
-            lock: lock.path.clone(),
-        }));
         Ok(OutDir {
             out: dest,
             staging,
@@ -410,8 +464,10 @@ impl Drop for OutDir {
     /// results stay.
     fn drop(&mut self) {
         if self.lock.is_some() {
+            // the state first: while an interrupt cleans up, this waits for the exit
+            let mut g = ACTIVE.lock().unwrap_or_else(|p| p.into_inner());
             remove_entry(&self.staging);
-            set_active(None);
+            *g = None;
         }
     }
 }

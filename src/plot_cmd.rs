@@ -2,7 +2,7 @@
 //! result files (`study.toml`, `identification.json`, `series/`, `flutter.json`,
 //! `lco.json`, …) without recomputing anything.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::Context;
 use clap::Args;
@@ -18,20 +18,48 @@ pub struct PlotArgs {
     pub outdir: PathBuf,
 }
 
-/// Redraws figures and report.
+/// Redraws figures and report. The folder is rewritten as a whole (issue 27, row 7): its
+/// files are copied into a staging folder, redrawn there and moved into place in one
+/// rename, so an interrupted or failed redraw leaves the previous folder as it was.
 pub fn run(args: &PlotArgs) -> anyhow::Result<()> {
     crate::outdir::check_complete(&args.outdir)?;
-    let _lock = crate::outdir::Lock::for_folder(&args.outdir)?;
     let path = args.outdir.join(names::STUDY);
     let text = std::fs::read_to_string(&path)
         .with_context(|| format!("{} is not a study output folder", args.outdir.display()))?;
+    // the folder is the user's named target and every file of it is carried over
+    let dir = crate::outdir::OutDir::begin(&args.outdir, "plot", true)?;
+    copy_tree(&args.outdir, dir.path())
+        .with_context(|| format!("copying {} to redraw it", args.outdir.display()))?;
+    let staged = dir.path().to_path_buf();
     // relative data paths are not needed: nothing is recomputed
-    let study = Study::parse(&text, &path, &args.outdir)?;
-    let figs = render_all(&study, &args.outdir, &crate::version())?;
+    let study = Study::parse(&text, &staged.join(names::STUDY), &staged)?;
+    let figs = render_all(&study, &staged, &crate::version())?;
+    let out = dir.commit()?;
     crate::ui::say!(
         "redrew {} figures and {}",
         figs.len(),
-        args.outdir.join(names::REPORT).display()
+        out.join(names::REPORT).display()
     );
     crate::ui::document(&figs)
+}
+
+/// Copies the files and folders of `src` into `dst` (which exists), without the folder
+/// markers (the staging folder has its own).
+fn copy_tree(src: &Path, dst: &Path) -> std::io::Result<()> {
+    for e in std::fs::read_dir(src)? {
+        let e = e?;
+        let name = e.file_name();
+        if name == crate::outdir::COMPLETE_MARKER || name == crate::outdir::INCOMPLETE_MARKER {
+            continue;
+        }
+        let to = dst.join(&name);
+        let t = e.file_type()?;
+        if t.is_dir() {
+            std::fs::create_dir(&to)?;
+            copy_tree(&e.path(), &to)?;
+        } else if t.is_file() {
+            std::fs::copy(e.path(), &to)?;
+        }
+    }
+    Ok(())
 }

@@ -1417,3 +1417,65 @@ fn branch_output_is_replaced_whole_or_kept_on_a_write_failure() {
         ]
     );
 }
+
+/// Issue 27, rows 7 and 8: SIGINT at eight moments of a `plot` redraw and of a `tunnel`
+/// campaign with still-air runs (both write from several threads): exit 0 or 130, never a
+/// staging folder, trash folder or lock left behind (the handler used to remove the
+/// staging folder in place while the writers went on, and lost the race), and the study
+/// folder `plot` redraws keeps its complete set of files.
+#[test]
+fn interrupts_at_any_moment_leave_no_work_folder() {
+    let tmp = tempfile::tempdir().unwrap();
+    let q = tmp.path().join("q");
+    let t = tmp.path().join("t");
+    let (code, _, err) = code_of(
+        &["run", "--out", q.to_str().unwrap(), "--quiet"],
+        tmp.path(),
+    );
+    assert_eq!(code, 0, "{err}");
+    let before = files_in(&q);
+    let plot = ["plot", q.to_str().unwrap(), "--quiet"];
+    let tunnel = [
+        "tunnel",
+        "forced",
+        "--model",
+        MODEL,
+        "--campaign",
+        "config=A",
+        "--still-air",
+        "--out",
+        t.to_str().unwrap(),
+        "--quiet",
+    ];
+    for delay_ms in [20, 50, 80, 120, 160, 220, 300, 400] {
+        for args in [&plot[..], &tunnel[..]] {
+            let child = bin()
+                .args(args)
+                .stdout(std::process::Stdio::null())
+                .stderr(std::process::Stdio::piped())
+                .spawn()
+                .unwrap();
+            std::thread::sleep(std::time::Duration::from_millis(delay_ms));
+            let _ = Command::new("kill")
+                .args(["-INT", &child.id().to_string()])
+                .stderr(std::process::Stdio::null())
+                .status();
+            let o = child.wait_with_output().unwrap();
+            let err = String::from_utf8_lossy(&o.stderr);
+            let code = o.status.code();
+            assert!(
+                code == Some(0) || code == Some(130),
+                "{args:?} at {delay_ms} ms: {code:?} {err}"
+            );
+            let names: Vec<String> = std::fs::read_dir(tmp.path())
+                .unwrap()
+                .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+                .collect();
+            assert!(
+                names.iter().all(|n| !n.contains("aeroform")),
+                "{args:?} interrupted at {delay_ms} ms left {names:?}"
+            );
+            assert_eq!(files_in(&q), before, "{args:?} at {delay_ms} ms");
+        }
+    }
+}
