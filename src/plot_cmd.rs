@@ -26,8 +26,19 @@ pub fn run(args: &PlotArgs) -> anyhow::Result<()> {
     let path = args.outdir.join(names::STUDY);
     let text = std::fs::read_to_string(&path)
         .with_context(|| format!("{} is not a study output folder", args.outdir.display()))?;
-    // the folder is the user's named target and every file of it is carried over
-    let dir = crate::outdir::OutDir::begin(&args.outdir, "plot", true)?;
+    // the folder is the user's named target and every file of it is carried over; its
+    // completion marker keeps the command that computed the results (`plot` only redraws)
+    let command = std::fs::read_to_string(args.outdir.join(crate::outdir::COMPLETE_MARKER))
+        .ok()
+        .and_then(|t| {
+            t.lines().find_map(|l| {
+                l.strip_prefix("command = \"")?
+                    .strip_suffix('"')
+                    .map(String::from)
+            })
+        })
+        .unwrap_or_else(|| "plot".to_string());
+    let dir = crate::outdir::OutDir::begin(&args.outdir, &command, true)?;
     copy_tree(&args.outdir, dir.path())
         .with_context(|| format!("copying {} to redraw it", args.outdir.display()))?;
     let staged = dir.path().to_path_buf();
