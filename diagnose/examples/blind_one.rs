@@ -1,5 +1,6 @@
 //! Diagnoses one set of the drawn-shapes blind benchmark and prints its diagnosis JSON
-//! (a debugging aid): `cargo run --release -p diagnose --example blind_one -- INDEX [N SEED]`.
+//! (a debugging aid): `cargo run --release -p diagnose --example blind_one -- INDEX [N SEED]`
+//! (`list` for INDEX: every set's truth and strength).
 
 use diagnose::bench::{draw_specs_from, shapes_truth_labels, CampaignShape};
 use diagnose::bench_run::{run_one, BlindOptions};
@@ -11,11 +12,33 @@ fn main() {
     let seed: u64 = args.get(2).and_then(|a| a.parse().ok()).unwrap_or(2026);
     let mut opts = BlindOptions::new(n, seed);
     opts.shapes = true;
-    let mut spec = draw_specs_from(n, seed, &shapes_truth_labels())[index].clone();
-    spec.shape = Some(CampaignShape::draw(spec.seed));
+    let specs = draw_specs_from(n, seed, &shapes_truth_labels());
+    if args.first().map(String::as_str) == Some("list") {
+        for (i, s) in specs.iter().enumerate() {
+            let shape = CampaignShape::draw_with_physics(s.seed);
+            let law = shape.physics.as_ref().map(|p| match p.law {
+                diagnose::physics::DrawnLaw::Eq19 { .. } => "eq19",
+                diagnose::physics::DrawnLaw::EffectiveAngle { .. } => "effective_angle",
+            });
+            println!(
+                "{i} {} {:.2} groups {} amplitudes {} law {}",
+                s.truth,
+                s.strength,
+                shape.groups(),
+                shape.amplitudes_deg.len(),
+                law.unwrap_or("-")
+            );
+        }
+        return;
+    }
+    let mut spec = specs[index].clone();
+    spec.shape = Some(CampaignShape::draw_with_physics(spec.seed));
     match run_one(&spec, &opts) {
         Ok((o, d)) => {
-            eprintln!("{} -> {} ({:.2})", spec.truth, o.verdict, o.confidence);
+            eprintln!(
+                "{} -> {} ({:.2}) gap ratio {:.2}",
+                spec.truth, o.verdict, o.confidence, o.gap_ratio
+            );
             println!("{}", serde_json::to_string_pretty(&d).unwrap_or_default());
         }
         Err(e) => eprintln!("error: {e}"),

@@ -1,6 +1,6 @@
 //! Debug aid: the system level of one drawn-shapes blind set with the generator's truth
-//! law as the sim (no identification): `cargo run --release -p diagnose --example truth_sim -- INDEX [DIR]`
-//! (DIR: also write the set there).
+//! law as the sim (no identification): `cargo run --release -p diagnose --example truth_sim -- INDEX [DIR [N SEED]]`
+//! (DIR: also write the set there, `-` for none; N, SEED: the benchmark, default 330 2026).
 
 use std::sync::Arc;
 
@@ -11,14 +11,16 @@ use diagnose::blind::generate;
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let index: usize = args.first().and_then(|a| a.parse().ok()).unwrap_or(0);
-    let opts = BlindOptions::new(330, 2026);
-    let mut spec = draw_specs_from(330, 2026, &shapes_truth_labels())[index].clone();
-    let shape = CampaignShape::draw(spec.seed);
+    let n: usize = args.get(2).and_then(|a| a.parse().ok()).unwrap_or(330);
+    let seed: u64 = args.get(3).and_then(|a| a.parse().ok()).unwrap_or(2026);
+    let opts = BlindOptions::new(n, seed);
+    let mut spec = draw_specs_from(n, seed, &shapes_truth_labels())[index].clone();
+    let shape = CampaignShape::draw_with_physics(spec.seed);
     spec.shape = Some(shape.clone());
-    let scenario = shape.scenario(&opts.scenario);
+    let scenario = shape.scenario(&opts.scenario).expect("scenario");
     let effect = diagnose::bench_run::blind_effect(&spec.truth).expect("effect");
     let set = generate(effect, spec.strength, shape.form(), spec.seed, &scenario).expect("set");
-    if let Some(dir) = args.get(1) {
+    if let Some(dir) = args.get(1).filter(|d| d.as_str() != "-") {
         diagnose::blind::write_blind(std::path::Path::new(dir), &set).expect("write");
     }
     let loaded = aeroelastic::files::LoadedModel::parse(
@@ -37,4 +39,10 @@ fn main() {
         "before {:.4} noise {:.4} stat {:.2}",
         level.before, level.noise_level, level.gap_statistic
     );
+    for c in &level.cases {
+        println!(
+            "  {} U {:.3} before {:.4} noise {:.4}",
+            c.id, c.wind_speed, c.before, c.noise_level
+        );
+    }
 }

@@ -91,6 +91,10 @@ pub struct CampaignShape {
     /// Free-run speeds as multiples of U_F (0 = a still-air decay); empty: the scenario's.
     #[serde(default)]
     pub free_speed_factors: Vec<f64>,
+    /// The truth's drawn rig and nonlinear law ([`crate::physics`], `aeroform diagnose
+    /// --blind N --shapes` since round 20); absent: the scenario's plate rig and law.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub physics: Option<crate::physics::DrawnPhysics>,
 }
 
 /// The two readings of the paper's Table I. The printed table gives configuration D as
@@ -169,6 +173,16 @@ impl CampaignShape {
             alternate_form,
             table,
             free_speed_factors,
+            physics: None,
+        }
+    }
+
+    /// [`CampaignShape::draw`] with the truth's rig and law drawn too
+    /// ([`crate::physics::DrawnPhysics::draw`]): what `--shapes` runs.
+    pub fn draw_with_physics(seed: u64) -> Self {
+        CampaignShape {
+            physics: Some(crate::physics::DrawnPhysics::draw(seed)),
+            ..CampaignShape::draw(seed)
         }
     }
 
@@ -201,8 +215,16 @@ impl CampaignShape {
     }
 
     /// The blind scenario of this shape: `base` with this campaign and absolute balance
-    /// noise.
-    pub fn scenario(&self, base: &crate::blind::BlindScenario) -> crate::blind::BlindScenario {
+    /// noise, and with the drawn rig and law when the shape has them (the rig's
+    /// frequencies scaled so that its linear flutter speed is the drawn U_F,
+    /// [`crate::physics::DrawnPhysics::scenario_files`]).
+    ///
+    /// # Errors
+    /// As [`crate::physics::DrawnPhysics::scenario_files`].
+    pub fn scenario(
+        &self,
+        base: &crate::blind::BlindScenario,
+    ) -> crate::Result<crate::blind::BlindScenario> {
         let mut s = base.clone();
         let mut campaign = aeroelastic::tunnel::Campaign::paper();
         if self.table == TableReading::FigureCaptions {
@@ -218,7 +240,13 @@ impl CampaignShape {
         if !self.free_speed_factors.is_empty() {
             s.free_speed_factors = self.free_speed_factors.clone();
         }
-        s
+        if let Some(p) = &self.physics {
+            let (rig, model) = p.scenario_files()?;
+            s.rig = rig;
+            s.truth_model = model;
+            s.flutter_speed = p.flutter_speed;
+        }
+        Ok(s)
     }
 
     /// The effects' functional form.
@@ -363,8 +391,9 @@ pub struct BlindReport {
     /// Acceptance statistics.
     pub summary: BlindSummary,
     /// The same statistics per campaign-shape class ([`CampaignShape::class`]), then per
-    /// Table I reading, with or without a still-air decay, and with every free run covered
-    /// or not (`not: …`), when the shapes were drawn.
+    /// truth-law form (Eq. 19 or not, with drawn physics), Table I reading, with or without
+    /// a still-air decay, and with every free run covered or not (`not: …`), when the
+    /// shapes were drawn.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub per_shape: Vec<(String, BlindSummary)>,
     /// Every set.
@@ -423,9 +452,17 @@ pub fn summarize(seed: u64, outcomes: Vec<BlindOutcome>) -> BlindReport {
         })
         .collect::<Vec<_>>();
     let mut per_shape = per_shape;
-    // the splits of issue 29: Table I reading, still-air decay, free runs covered
+    // the splits of issue 29: truth law form (drawn physics), Table I reading, still-air
+    // decay, free runs covered
     type Split = (&'static str, fn(&BlindOutcome) -> Option<bool>);
-    let splits: [Split; 3] = [
+    let splits: [Split; 4] = [
+        ("truth law in the Eq. 19 form", |o| {
+            o.spec
+                .shape
+                .as_ref()
+                .and_then(|s| s.physics.as_ref())
+                .map(|p| matches!(p.law, crate::physics::DrawnLaw::Eq19 { .. }))
+        }),
         ("Table I as printed", |o| {
             o.spec
                 .shape
@@ -634,7 +671,7 @@ mod tests {
             assert!(s.wind_speeds.windows(2).all(|w| w[0] < w[1]));
             assert!(s.wind_speeds.iter().all(|u| (3.0..=10.0).contains(u)));
             assert!(s.amplitudes_deg.iter().all(|a| (3.0..=24.0).contains(a)));
-            let sc = s.scenario(&crate::blind::BlindScenario::default());
+            let sc = s.scenario(&crate::blind::BlindScenario::default()).unwrap();
             assert_eq!(sc.campaign.configurations.len(), s.configurations.len());
             assert!(sc.noise.balance_absolute.is_some());
         }
@@ -650,7 +687,7 @@ mod tests {
                 .collect();
             assert_eq!(wind.len(), 6, "{s:?}");
             assert!(wind.iter().all(|f| (0.4..=1.15).contains(f)), "{s:?}");
-            let sc = s.scenario(&crate::blind::BlindScenario::default());
+            let sc = s.scenario(&crate::blind::BlindScenario::default()).unwrap();
             assert_eq!(sc.free_speed_factors, s.free_speed_factors);
             let d = sc.campaign.configurations.iter().find(|c| c.name == "D");
             if let Some(d) = d {

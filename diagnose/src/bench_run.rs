@@ -101,7 +101,7 @@ pub fn run_one(spec: &BlindSpec, opts: &BlindOptions) -> Result<(BlindOutcome, D
     dopts.force.seed = spec.seed;
     dopts.system.seed = spec.seed;
     let (form, scenario) = match &spec.shape {
-        Some(shape) => (shape.form(), shape.scenario(&opts.scenario)),
+        Some(shape) => (shape.form(), shape.scenario(&opts.scenario)?),
         None => (opts.form, opts.scenario.clone()),
     };
     let set = generate(effect, spec.strength, form, spec.seed, &scenario)?;
@@ -163,7 +163,7 @@ pub fn run_blind(opts: &BlindOptions, observer: &(dyn Fn(&BlindOutcome) + Sync))
     };
     if opts.shapes {
         for s in &mut specs {
-            s.shape = Some(crate::bench::CampaignShape::draw(s.seed));
+            s.shape = Some(crate::bench::CampaignShape::draw_with_physics(s.seed));
         }
     }
     let outcomes: Vec<BlindOutcome> = specs

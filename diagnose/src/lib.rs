@@ -10,6 +10,7 @@
 //! * [`verdict`]: from the levels' findings to one verdict;
 //! * [`blind`]: the withheld-effect data-set generator (the diagnosis never reads it);
 //! * [`mod@bench`]: the withheld-effect benchmark statistics;
+//! * [`physics`]: the drawn rigs and aerodynamic laws of the drawn-shapes benchmark's truths;
 //! * [`sweep`]: large jobs split into independent items (shards, Dask tasks) and merged.
 
 pub mod bench;
@@ -19,6 +20,7 @@ pub mod blind;
 pub mod effect;
 pub mod error;
 pub mod force;
+pub mod physics;
 pub mod pipeline;
 pub mod report;
 pub mod structure;

@@ -105,7 +105,9 @@ type FitKey = (usize, u64, usize, Vec<Term>);
 #[derive(Debug, Default)]
 pub(crate) struct NodeCache(Mutex<HashMap<FitKey, Arc<NodeChan>>>);
 
-fn build_chan(cases: &[CaseData], node: &Node, sup: &[Term], c: usize) -> NodeChan {
+/// Factorises one node and channel on the support `sup` (stacked amplitudes, noise
+/// weights, residual of the target), uncached.
+pub(crate) fn build_chan(cases: &[CaseData], node: &Node, sup: &[Term], c: usize) -> NodeChan {
     let cols: Vec<Vec<f64>> = sup
         .iter()
         .map(|t| {

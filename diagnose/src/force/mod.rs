@@ -284,7 +284,14 @@ fn build_fold(
             }
         }
     }
-    complete_supports(cases, nodes, &train, &mut supports, cache, index)?;
+    let nonlinear: Vec<Term> = prepared
+        .library()
+        .terms()
+        .iter()
+        .filter(|t| t.degree() >= 2)
+        .copied()
+        .collect();
+    complete_supports(cases, nodes, &train, &mut supports, &nonlinear);
     for s in supports.values_mut() {
         for c in s.iter_mut() {
             c.sort_by_key(|t| (t.degree(), std::cmp::Reverse(t.powers)));
@@ -311,49 +318,37 @@ fn build_fold(
     })
 }
 
-/// The nonlinear terms of the Eq. 19 form (paper: α·α̇, α³, α̇³ in nondimensional
-/// motion) that the node law may take on beyond what the identification selected
-/// ([`complete_supports`]).
-const EQ19_NONLINEAR: [&str; 3] = ["alpha*alpha_dot", "alpha^3", "alpha_dot^3"];
-
-/// Noise-normalised evidence, in standard deviations of its null χ² law, a missing Eq. 19
+/// Noise-normalised evidence, in standard deviations of its null χ² law, a missing library
 /// term must show on the training nodes to enter the node law ([`complete_supports`]).
 pub(crate) const SUPPORT_Z: f64 = 8.0;
 
-/// Completes the node law's support with the Eq. 19 nonlinear terms the training nodes
-/// show when their amplitudes are fitted together (one coefficient vector per node).
+/// Completes the node law's support with the nonlinear library terms (`candidates`) the
+/// training nodes show when their amplitudes are fitted together (one coefficient vector
+/// per node).
 ///
-/// A per-case identification can leave such a term out where each case alone hides it
-/// (a slow pitch makes α̇³ a few noise σ per case, and its fundamental folds into that
-/// case's α̇ coefficient), while one node law over the node's amplitudes cannot fold it:
-/// its gap then grows with amplitude, and an effect-free section looks like
-/// `higher_order` (DECISIONS "Completing the node support"). Per channel and term t
-/// missing from every configuration's support, the statistic is
-/// S = Σ_n (z̃_n·r_n)² / (z̃_n·z̃_n σ̄_n²) over the training nodes (z̃_n, r_n the term's column
-/// and the target's residual off the node's support, σ̄_n² the mean noise variance of the
-/// node's cases): χ² with N_nodes degrees of freedom when t adds nothing. The term with
-/// the largest (S − N)/√(2N) above [`SUPPORT_Z`] enters every configuration (one
-/// section), and the test repeats with the wider support.
-///
-/// # Errors
-/// [`Error::Identify`] if a term name does not parse (a programming error).
+/// A per-case identification can leave such a term out where each case alone hides it:
+/// a slow pitch makes α̇³ a few noise σ per case, and its fundamental folds into that
+/// case's α̇ coefficient; under sinusoidal motion α·(Bα̇/U)² is K²A²α − K²α³ in each case
+/// (not identifiable there), but across a node's amplitudes it is a term of its own. One
+/// node law over the node's amplitudes cannot fold either: its gap then grows with
+/// amplitude, and an effect-free section looks like `higher_order` (DECISIONS "Completing
+/// the node support"). Per channel and term t missing from every configuration's support,
+/// the statistic is S = Σ_n (z̃_n·r_n)² / (z̃_n·z̃_n σ̄_n²) over the training nodes (z̃_n, r_n
+/// the term's column and the target's residual off the node's support, σ̄_n² the mean noise
+/// variance of the node's cases): χ² with N_nodes degrees of freedom when t adds nothing.
+/// The term with the largest (S − N)/√(2N) above [`SUPPORT_Z`] enters every configuration
+/// (one section), and the test repeats with the wider support.
 fn complete_supports(
     cases: &[CaseData],
     nodes: &[Node],
     train: &[usize],
     supports: &mut Supports,
-    cache: &NodeCache,
-    index: usize,
-) -> Result<()> {
-    let terms: Vec<Term> = EQ19_NONLINEAR
-        .iter()
-        .map(|n| {
-            Term::parse(n).map_err(|e| Error::identify(format!("fold {index}: term `{n}`"), e))
-        })
-        .collect::<Result<_>>()?;
+    candidates: &[Term],
+) {
+    let terms = candidates;
     let nn = train.len() as f64;
     if nn < 1.0 {
-        return Ok(());
+        return;
     }
     for c in 0..2 {
         loop {
@@ -365,13 +360,21 @@ fn complete_supports(
             if missing.is_empty() {
                 break;
             }
-            let fits = law::node_fits(cases, nodes, train, supports, cache, 0);
+            // this channel's node fits on the current support, not cached: the cache keeps
+            // one factorisation per (node, support), and a support that grows term by term
+            // would leave every intermediate one behind (tens of GB on a 20-term law)
+            let fits: Vec<(usize, law::NodeChan)> = train
+                .iter()
+                .map(|&n| {
+                    let node = &nodes[n];
+                    (n, law::build_chan(cases, node, &supports[&node.config][c], c))
+                })
+                .collect();
             let z_of = |t: &Term| -> f64 {
                 let s: f64 = fits
                     .iter()
-                    .map(|f| {
-                        let node = &nodes[f.node];
-                        let ch = &f.ch[c];
+                    .map(|(n, ch)| {
+                        let node = &nodes[*n];
                         let z: Vec<f64> = node
                             .cases
                             .iter()
@@ -406,7 +409,6 @@ fn complete_supports(
             }
         }
     }
-    Ok(())
 }
 
 /// Held-out residuals r = measured − predicted, `[case][channel]` in C units, for the

@@ -19,7 +19,8 @@ use aeroelastic::aero::AeroModel;
 use aeroelastic::identified::{IdentifiedLaw, IdentifiedOptions};
 use aeroelastic::structure::{Nonlinearities, Structure, StructureSpec};
 use identify::dataset::Dataset;
-use identify::pipeline::{identify, IdentifySettings};
+use identify::library::Term;
+use identify::pipeline::{IdentifySettings, Prepared as IdentifyStage};
 use identify::preprocess::PreprocessOptions;
 use identify::record::CaseKind;
 
@@ -141,15 +142,25 @@ pub fn sim_law(forced: &Dataset, opts: &SystemOptions) -> Result<IdentifiedLaw> 
     sim_identification(forced, opts).map(|(_, law, _)| law)
 }
 
-/// [`sim_law`] together with the identification it was built from and the preprocessed
-/// forced cases (the jackknife reuses them).
+/// [`sim_law`] together with the identification it was built from and its grouped
+/// jackknife ([`jackknife_identifications`]; `None` when it cannot be formed).
+///
+/// Every configuration of a campaign is the same section: a nonlinear term that any
+/// configuration's identification selects is kept in every configuration
+/// ([`section_terms`], a second pass of the group stage through
+/// [`IdentifyStage::identify_keeping`]), as the force level's node law does. A configuration
+/// whose forcing hides a term (one with a slow pitch, where the cubic terms are a few
+/// noise σ per case) otherwise folds the term's first harmonic into its linear
+/// derivatives at the forced amplitudes, and the sim carries that equivalent
+/// linearisation to free runs at other amplitudes (DECISIONS, "One section in the sim's
+/// law").
 fn sim_identification(
     forced: &Dataset,
     opts: &SystemOptions,
 ) -> Result<(
     identify::pipeline::Identification,
     IdentifiedLaw,
-    Vec<identify::record::NondimCase>,
+    Option<Vec<identify::pipeline::Identification>>,
 )> {
     let name = forced.manifest.name.clone();
     if !forced.records.iter().any(|r| r.kind == CaseKind::Forced) {
@@ -160,29 +171,79 @@ fn sim_identification(
     }
     let prepared = identify::workflow::prepare_dataset(forced, &opts.preprocess)
         .map_err(|e| Error::identify(format!("data set `{name}`: preprocessing"), e))?;
-    let id = identify(&prepared.cases, &opts.identify, &name, &|_| {})
+    let stage = identify::pipeline::prepare(&prepared.cases, &opts.identify, &|_| {})
+        .map_err(|e| Error::identify(format!("data set `{name}`: identification"), e))?;
+    let all: Vec<usize> = (0..prepared.cases.len()).collect();
+    let id = identify_section(&stage, &all, &name)
         .map_err(|e| Error::identify(format!("data set `{name}`: identification"), e))?;
     let law = IdentifiedLaw::from_identification(
         &id,
         &IdentifiedOptions::new(forced.manifest.section.chord),
     )
     .map_err(|e| Error::aeroelastic(format!("data set `{name}`: identified law"), e))?;
-    Ok((id, law, prepared.cases))
+    let jack = jackknife_identifications(&stage, &name);
+    Ok((id, law, jack))
 }
 
-/// The grouped-jackknife identifications of the forced campaign `cases` (data set
-/// `name`, preprocessed as for the sim's law): the interior (configuration,
+/// The cases `subset` of `stage` identified as one section: the group stage, then, when
+/// some configuration lacks a nonlinear term another selected ([`section_terms`]), the
+/// group stage again with those terms kept.
+///
+/// # Errors
+/// As [`IdentifyStage::identify_keeping`].
+fn identify_section(
+    stage: &IdentifyStage<'_>,
+    subset: &[usize],
+    name: &str,
+) -> identify::Result<identify::pipeline::Identification> {
+    let first = stage.identify(subset, name, &|_| {})?;
+    match section_terms(&first) {
+        Some(keep) => stage.identify_keeping(subset, &keep, name, &|_| {}),
+        None => Ok(first),
+    }
+}
+
+/// The nonlinear terms (degree ≥ 2), per force (moment, lift) in library order, that some
+/// case of `id` selected, when some other case has one of them identifiable but removed;
+/// `None` when every case already carries every such term (nothing to add).
+fn section_terms(id: &identify::pipeline::Identification) -> Option<[Vec<String>; 2]> {
+    let mut keep: [Vec<String>; 2] = [Vec::new(), Vec::new()];
+    let mut missing = false;
+    for name in &id.library.terms {
+        if Term::parse(name).map_or(true, |t| t.degree() < 2) {
+            continue;
+        }
+        for (force, kept) in keep.iter_mut().enumerate() {
+            let value = |c: &identify::pipeline::CaseResult| {
+                if force == 0 {
+                    c.moment.terms.get(name)
+                } else {
+                    c.lift.terms.get(name)
+                }
+            };
+            if id.cases.iter().any(|c| value(c).is_some_and(|v| v != 0.0)) {
+                missing |= id.cases.iter().any(|c| value(c) == Some(0.0));
+                kept.push(name.clone());
+            }
+        }
+    }
+    missing.then_some(keep)
+}
+
+/// The grouped-jackknife identifications of the forced campaign prepared in `stage`
+/// (data set `name`, preprocessed and prepared as for the sim's law, each fold identified
+/// as one section, [`identify_section`]): the interior (configuration,
 /// wind speed) groups (every wind speed of a configuration but its lowest and highest;
 /// all groups when fewer than two are interior), sorted, are dealt round-robin into
 /// k = min(groups, [`JACKKNIFE_FOLDS`]) folds and the law is identified again without each
 /// fold (in parallel). `None` with fewer than 3 groups or when any fold fails to identify
 /// (the sim is then scored against the noise alone, as without a forced campaign).
 fn jackknife_identifications(
-    cases: &[identify::record::NondimCase],
+    stage: &IdentifyStage<'_>,
     name: &str,
-    opts: &SystemOptions,
 ) -> Option<Vec<identify::pipeline::Identification>> {
     use rayon::prelude::*;
+    let cases = stage.cases();
     let key = |m: &identify::record::CaseMeta| {
         (m.config.clone().unwrap_or_default(), m.wind_speed.to_bits())
     };
@@ -223,13 +284,8 @@ fn jackknife_identifications(
     (0..k)
         .into_par_iter()
         .map(|f| {
-            let train: Vec<_> = cases
-                .iter()
-                .zip(&fold)
-                .filter(|(_, &g)| g != f)
-                .map(|(c, _)| c.clone())
-                .collect();
-            identify(&train, &opts.identify, name, &|_| {}).ok()
+            let train: Vec<usize> = (0..cases.len()).filter(|&i| fold[i] != f).collect();
+            identify_section(stage, &train, name).ok()
         })
         .collect()
 }
@@ -360,10 +416,9 @@ pub(crate) fn prepare_free(
 /// As [`sim_law`] and [`system_level_with_model`].
 pub fn system_level(forced: &Dataset, free: &Dataset, opts: &SystemOptions) -> Result<LevelResult> {
     opts.check()?;
-    let (id, law, cases) = sim_identification(forced, opts)?;
+    let (id, law, jack) = sim_identification(forced, opts)?;
     let model: Arc<dyn AeroModel> = Arc::new(law.model().clone());
     let chord = forced.manifest.section.chord;
-    let jack = jackknife_identifications(&cases, &forced.manifest.name, opts);
     let jack_energy = |law_opts: &IdentifiedOptions| {
         jack.as_ref()
             .and_then(|ids| model_energy(ids, law_opts, free, opts))

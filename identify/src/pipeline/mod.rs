@@ -539,6 +539,11 @@ impl<'c> Prepared<'c> {
         self.cases
     }
 
+    /// The library the cases were prepared with.
+    pub fn library(&self) -> &Library {
+        &self.lib
+    }
+
     /// Identifies all prepared cases: [`identify`]'s result.
     ///
     /// # Errors
@@ -566,6 +571,31 @@ impl<'c> Prepared<'c> {
         dataset_name: &str,
         observer: &dyn Fn(Progress),
     ) -> Result<Identification> {
+        self.identify_keeping(subset, &[Vec::new(), Vec::new()], dataset_name, observer)
+    }
+
+    /// [`Prepared::identify`] with further terms kept per force, `keep` = (moment, lift)
+    /// term names: the sparse regression never removes them where a group's identifiable
+    /// basis holds them, beside the settings' `kept_terms` (which the result's `settings`
+    /// record; these extra terms it does not). Used where the caller knows more than one
+    /// group shows, e.g. that every configuration of a campaign is the same section.
+    ///
+    /// # Errors
+    /// As [`Prepared::identify`]; [`Error::InvalidOption`] naming a term of `keep` that
+    /// does not parse or is not in the library.
+    pub fn identify_keeping(
+        &self,
+        subset: &[usize],
+        keep: &[Vec<String>; 2],
+        dataset_name: &str,
+        observer: &dyn Fn(Progress),
+    ) -> Result<Identification> {
+        let mut kept = [self.kept; 2];
+        for (target, names) in keep.iter().enumerate() {
+            for t in names {
+                kept[target] |= 1 << self.lib.index_of(t)?;
+            }
+        }
         let bad = |message: String| Error::InvalidData {
             case: "-".to_string(),
             field: "subset".to_string(),
@@ -626,7 +656,7 @@ impl<'c> Prepared<'c> {
                     let (g, target) = tasks[k];
                     let members: Vec<&CaseWork> =
                         group_list[g].1.iter().map(|&i| work[i]).collect();
-                    run_group(&members, target, settings, bases[g], self.kept, opts)
+                    run_group(&members, target, settings, bases[g], kept[target], opts)
                 })
                 .collect();
             for (&k, r) in chunk.iter().zip(res) {
