@@ -56,8 +56,15 @@ pub struct BranchArgs {
 }
 
 /// Parses `a:b` into a checked range.
+///
+/// # Errors
+/// [`crate::exit::Usage`] (exit code 2) naming `--speeds`.
 fn parse_range(s: &str) -> anyhow::Result<(f64, f64)> {
-    let bad = || anyhow::anyhow!("--speeds `{s}`: expected `a:b` with 0 < a < b [m/s]");
+    let bad = || {
+        anyhow::Error::from(crate::exit::Usage(format!(
+            "--speeds `{s}`: expected `a:b` with 0 < a < b [m/s]"
+        )))
+    };
     let (a, b) = s.split_once(':').ok_or_else(bad)?;
     let a: f64 = a.trim().parse().map_err(|_| bad())?;
     let b: f64 = b.trim().parse().map_err(|_| bad())?;

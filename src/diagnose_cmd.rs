@@ -75,6 +75,24 @@ pub struct DiagnoseArgs {
 
 /// Runs `aeroform diagnose`.
 pub fn run(args: &DiagnoseArgs) -> anyhow::Result<()> {
+    // clap's `requires = "blind"` is void when a data set is given: `--blind` conflicts
+    // with it, and clap drops a requirement that conflicts with a present argument
+    if args.blind.is_none() {
+        let flag = [
+            ("--shard", args.shard.is_some()),
+            ("--shapes", args.shapes),
+            ("--branch-level", args.branch_level),
+        ]
+        .into_iter()
+        .find_map(|(f, given)| given.then_some(f));
+        if let Some(f) = flag {
+            return Err(crate::exit::Usage(format!(
+                "{f} needs --blind N: it belongs to the withheld-effect benchmark, not to the \
+                 diagnosis of a data set"
+            ))
+            .into());
+        }
+    }
     if let Some(n) = args.blind {
         let n = aeroform::limits::count("--blind", n, aeroform::limits::MAX_BLIND_SETS)?;
         let out = args
@@ -93,10 +111,16 @@ pub fn run(args: &DiagnoseArgs) -> anyhow::Result<()> {
         return crate::bifurcation_cmd::run(args, m);
     }
     if args.model.is_some() && args.free.is_empty() {
-        bail!("--model needs --free FREE (free-response records) or --measured-branch");
+        return Err(crate::exit::Usage(
+            "--model needs --free FREE (free-response records) or --measured-branch".into(),
+        )
+        .into());
     }
     if args.structure.is_some() && args.free.is_empty() {
-        bail!("--structure needs --free FREE or --measured-branch");
+        return Err(crate::exit::Usage(
+            "--structure needs --free FREE or --measured-branch".into(),
+        )
+        .into());
     }
     let out = args
         .out
@@ -246,7 +270,7 @@ fn blind_shard(n: usize, seed: u64, shard: &str, out: &Path) -> anyhow::Result<(
     let (i, k) = diagnose::sweep::parse_shard(shard)?;
     let spec = diagnose::sweep::SweepSpec::Blind(diagnose::sweep::BlindSweep { n, seed });
     spec.validate("--blind")?;
-    crate::ensure_dir(&out.to_path_buf())?;
+    let _out = crate::outdir::SharedDir::begin(out)?;
     let part = spec.run_shard(i, k)?;
     let path = out.join(format!("blind.part-{i}-of-{k}.json"));
     write_json(&path, &part)?;

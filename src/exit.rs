@@ -1,6 +1,7 @@
 //! Exit codes: 0 success, 1 runtime failure, 2 usage or input error (a bad flag, study
-//! file, data set, model or structure file, a limit of `aeroform::limits`), 130 SIGINT or
-//! SIGTERM (`interrupt`). Clap's own usage errors exit with 2 as well.
+//! file, data set, model or structure file, sweep specification, `--shard` or part
+//! document, a limit of `aeroform::limits`), 130 SIGINT or SIGTERM (`interrupt`). Clap's
+//! own usage errors exit with 2 as well.
 
 /// A usage or input error raised by the binary itself (exit code 2).
 #[derive(Debug)]
@@ -77,9 +78,10 @@ fn is_input_error(c: &(dyn std::error::Error + 'static)) -> bool {
     }
     if let Some(e) = c.downcast_ref::<diagnose::Error>() {
         use diagnose::Error as E;
+        // `Sweep`: a sweep specification, `--shard i/n` or a part document
         return matches!(
             e,
-            E::Setting { .. } | E::UnknownEffect { .. } | E::Data { .. }
+            E::Setting { .. } | E::UnknownEffect { .. } | E::Data { .. } | E::Sweep { .. }
         );
     }
     false
@@ -136,5 +138,8 @@ mod tests {
         });
         let s = study::Context::context(r, "stage").unwrap_err();
         assert_eq!(code(&anyhow::Error::from(s)), 1);
+        // a bad `--shard` (issue 27, row 17)
+        let shard = diagnose::sweep::parse_shard("3/2").unwrap_err();
+        assert_eq!(code(&anyhow::Error::from(shard)), 2);
     }
 }

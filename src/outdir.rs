@@ -139,6 +139,34 @@ fn remove_entry(p: &Path) {
     }
 }
 
+/// Creates `dir` and its missing parents; returns the folders this call created, deepest
+/// first, for [`remove_created`] to take back when the command fails before it writes
+/// its results (issue 27, row 17: a failed command left an empty `--out` folder).
+fn create_dirs(dir: &Path) -> std::io::Result<Vec<PathBuf>> {
+    let mut missing = Vec::new();
+    let mut p = Some(dir);
+    while let Some(d) = p.filter(|d| !d.as_os_str().is_empty()) {
+        if std::fs::symlink_metadata(d).is_ok() {
+            break;
+        }
+        missing.push(d.to_path_buf());
+        p = d.parent();
+    }
+    std::fs::create_dir_all(dir)?;
+    Ok(missing)
+}
+
+/// Removes the folders of [`create_dirs`] that are still empty, deepest first (an empty
+/// folder only: anything written into one, by this or another process, keeps it and its
+/// parents; a folder that existed before the command is never in the list).
+fn remove_created(created: &[PathBuf]) {
+    for d in created {
+        if std::fs::remove_dir(d).is_err() {
+            break;
+        }
+    }
+}
+
 /// True when a process with this PID exists (signal 0; EPERM means it exists).
 pub fn pid_alive(pid: u32) -> bool {
     if pid == 0 || pid > i32::MAX as u32 {
@@ -342,6 +370,9 @@ pub struct OutDir {
     staging: PathBuf,
     command: String,
     lock: Option<Lock>,
+    /// Parent folders of `out` this command created (removed again, when empty, if it
+    /// fails before the swap).
+    created: Vec<PathBuf>,
 }
 
 impl OutDir {
@@ -355,10 +386,25 @@ impl OutDir {
     /// false; an error naming the folder when it cannot be created or is locked.
     pub fn begin(out: &Path, command: &str, force: bool) -> anyhow::Result<OutDir> {
         let (parent, name) = split_out(out, true)?;
-        std::fs::create_dir_all(&parent)
+        let created = create_dirs(&parent)
             .map_err(|e| anyhow::anyhow!("cannot create output folder {}: {e}", out.display()))?;
-        let lock = Lock::acquire(&parent, &name)?;
-        let dest = parent.join(&name);
+        // a refusal below leaves no folder this command created (the lock, the only
+        // file it put there, is gone by then)
+        Self::begin_in(out, command, force, &parent, &name, created.clone()).inspect_err(|_| {
+            remove_created(&created);
+        })
+    }
+
+    fn begin_in(
+        out: &Path,
+        command: &str,
+        force: bool,
+        parent: &Path,
+        name: &str,
+        created: Vec<PathBuf>,
+    ) -> anyhow::Result<OutDir> {
+        let lock = Lock::acquire(parent, name)?;
+        let dest = parent.join(name);
         let staging = parent.join(format!(".{name}.aeroform-staging.{}", std::process::id()));
         remove_entry(&staging); // a leftover of an earlier process with our PID
                                 // registered before anything is created, so that an interrupt from here on
@@ -370,7 +416,7 @@ impl OutDir {
             staging: staging.clone(),
             lock: lock.path.clone(),
         }));
-        clean_dead_work_folders(&parent);
+        clean_dead_work_folders(parent);
         let refused = |e: anyhow::Error| {
             set_active(None);
             e
@@ -428,6 +474,7 @@ impl OutDir {
             staging,
             command: command.to_string(),
             lock: Some(lock),
+            created,
         })
     }
 
@@ -461,13 +508,16 @@ impl OutDir {
 
 impl Drop for OutDir {
     /// Not committed (an error or a panic): the staging folder is removed, the previous
-    /// results stay.
+    /// results stay, and parent folders this command created are removed when empty.
     fn drop(&mut self) {
         if self.lock.is_some() {
             // the state first: while an interrupt cleans up, this waits for the exit
             let mut g = ACTIVE.lock().unwrap_or_else(|p| p.into_inner());
             remove_entry(&self.staging);
             *g = None;
+            drop(g);
+            self.lock.take();
+            remove_created(&self.created);
         }
     }
 }
@@ -525,9 +575,14 @@ fn exchange(_: &Path, _: &Path) -> std::io::Result<()> {
 }
 
 /// A shared output folder into which a command writes single files atomically
-/// (`identify`, `flutter`, `lco`): created if missing; temporary files of dead processes
-/// in it are removed; an interrupt removes this process's temporary files.
-pub struct SharedDir;
+/// (`identify`, `flutter`, `lco`, `diagnose --blind N --shard i/n`): created if missing;
+/// temporary files of dead processes in it are removed; an interrupt removes this
+/// process's temporary files; dropped while still empty (the command failed before
+/// writing), the folders it created are removed again.
+pub struct SharedDir {
+    /// The folder and its parents this command created, deepest first.
+    created: Vec<PathBuf>,
+}
 
 impl SharedDir {
     /// Prepares `dir`.
@@ -535,7 +590,8 @@ impl SharedDir {
     /// # Errors
     /// The folder cannot be created (named in the message).
     pub fn begin(dir: &Path) -> anyhow::Result<SharedDir> {
-        crate::ensure_dir(&dir.to_path_buf())?;
+        let created = create_dirs(dir)
+            .map_err(|e| anyhow::anyhow!("cannot create output folder {}: {e}", dir.display()))?;
         let n = remove_temp_files(dir, |pid| pid != std::process::id() && !pid_alive(pid));
         if n > 0 {
             eprintln!(
@@ -546,13 +602,16 @@ impl SharedDir {
         set_active(Some(Active::Shared {
             dir: dir.to_path_buf(),
         }));
-        Ok(SharedDir)
+        Ok(SharedDir { created })
     }
 }
 
 impl Drop for SharedDir {
+    /// Unregisters the folder; removes the folders [`SharedDir::begin`] created if they
+    /// are still empty (after a success the result file keeps them).
     fn drop(&mut self) {
         set_active(None);
+        remove_created(&self.created);
     }
 }
 

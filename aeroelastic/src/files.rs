@@ -326,8 +326,11 @@ impl NonlinearSpec {
     /// `(field, message)` with `field` relative to the entry: `term` when the name does not
     /// parse or its total degree is below 2; `coefficient` when neither or both of
     /// `coefficient` and the table (`k`, `values`, `k_power`) are given, or the constant is
-    /// not finite. (The table's own checks are [`NonlinearAero::new`]'s.)
+    /// not finite or above [`identify::limits::MAX_NONLINEAR_COEFFICIENT`] in magnitude;
+    /// `values` when an entry's effective coefficient K^`k_power` N* is above that bound.
+    /// (The table's own checks are [`NonlinearAero::new`]'s.)
     pub fn to_term(&self) -> std::result::Result<NonlinearTerm, (&'static str, String)> {
+        use identify::limits::{show, MAX_NONLINEAR_COEFFICIENT as MAX};
         let powers = NonlinearTerm::powers_of(&self.term).map_err(|e| {
             let m = match e {
                 Error::InvalidParameter { message, .. } => message,
@@ -339,15 +342,51 @@ impl NonlinearSpec {
             return Err(("term", format!("`{}`: total degree must be ≥ 2", self.term)));
         }
         let coefficient = match (self.coefficient, &self.k, &self.values, self.k_power) {
-            (Some(c), None, None, None) if c.is_finite() => Coefficient::Constant(c),
-            (Some(c), None, None, None) => {
-                return Err(("coefficient", format!("{c} must be finite")))
+            (Some(c), None, None, None) if c.is_finite() && c.abs() <= MAX => {
+                Coefficient::Constant(c)
             }
-            (None, Some(k), Some(v), Some(p)) => Coefficient::OverK {
-                k: k.clone(),
-                values: v.clone(),
-                k_power: p,
-            },
+            (Some(c), None, None, None) => {
+                return Err((
+                    "coefficient",
+                    format!(
+                        "{} must be finite with |coefficient| ≤ {} (nondimensional; \
+                         identify::limits::MAX_NONLINEAR_COEFFICIENT)",
+                        show(c),
+                        show(MAX)
+                    ),
+                ))
+            }
+            (None, Some(k), Some(v), Some(p)) => {
+                // the effective coefficient K^p N* of each entry; malformed entries (K ≤ 0,
+                // non-finite) are NonlinearAero::new's to name
+                let big = k.iter().zip(v).enumerate().find(|(_, (&k, &n))| {
+                    let xi = n * k.powi(p);
+                    k.is_finite()
+                        && k > 0.0
+                        && n.is_finite()
+                        && !(xi.is_finite() && xi.abs() <= MAX)
+                });
+                if let Some((i, (&k, &n))) = big {
+                    return Err((
+                        "values",
+                        format!(
+                            "entry {}: K^{p} N* = {}^{p} × {} = {} must be finite with \
+                             |value| ≤ {} (nondimensional; \
+                             identify::limits::MAX_NONLINEAR_COEFFICIENT)",
+                            i + 1,
+                            show(k),
+                            show(n),
+                            show(n * k.powi(p)),
+                            show(MAX)
+                        ),
+                    ));
+                }
+                Coefficient::OverK {
+                    k: k.clone(),
+                    values: v.clone(),
+                    k_power: p,
+                }
+            }
             _ => {
                 return Err((
                     "coefficient",
@@ -809,6 +848,52 @@ damping_pitch = 0.005
         )
         .unwrap();
         assert_eq!(ft.model.n_lag(), 6);
+    }
+
+    /// Issue 27 row 15: a nonlinear coefficient beyond the limits table is refused at
+    /// parsing, naming the file and the entry's field; the limit itself reads.
+    #[test]
+    fn nonlinear_coefficients_beyond_the_limit_are_refused_naming_the_field() {
+        use identify::limits::MAX_NONLINEAR_COEFFICIENT as MAX;
+        let base = Path::new(".");
+        let model = |c: &str| {
+            format!(
+                "kind = \"theodorsen\"\nchord = 0.25\n[[nonlinear]]\nterm = \"alpha^3\"\n\
+                 channel = \"moment\"\ncoefficient = -2.0\n[[nonlinear]]\n\
+                 term = \"alpha_dot^3\"\nchannel = \"lift\"\ncoefficient = {c}\n"
+            )
+        };
+        for c in [MAX, -MAX] {
+            LoadedModel::parse(&model(&format!("{c:e}")), "m.toml", base, None).unwrap();
+        }
+        for (c, shown) in [
+            ("1e300", "1e300"),
+            ("-1.000001e9", "-1000001000"),
+            ("inf", "inf"),
+        ] {
+            let e = LoadedModel::parse(&model(c), "m.toml", base, None).unwrap_err();
+            let m = e.to_string();
+            assert!(
+                m.contains("m.toml: nonlinear[2].coefficient: ")
+                    && m.contains(shown)
+                    && m.contains("≤ 1000000000"),
+                "{m}"
+            );
+        }
+        // an Eq. 19 table: the bound is on the effective coefficient K^p N*
+        let table = |v: &str| {
+            format!(
+                "kind = \"theodorsen\"\nchord = 0.25\n[[nonlinear]]\nterm = \"alpha^3\"\n\
+                 channel = \"moment\"\nk = [0.5, 1.0]\nvalues = [1.0, {v}]\nk_power = 6\n"
+            )
+        };
+        LoadedModel::parse(&table("1e9"), "m.toml", base, None).unwrap();
+        let e = LoadedModel::parse(&table("1e300"), "m.toml", base, None).unwrap_err();
+        assert!(
+            e.to_string()
+                .contains("m.toml: nonlinear[1].values: entry 2"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -865,6 +865,51 @@ pub fn forced_forces(
     Ok((lift, moment))
 }
 
+/// Refuses aerodynamic forces (L, M) [N/m, N·m/m], sampled every `dt` \[s\] from t = 0,
+/// whose coefficients C_L = L/(½ρU²B), C_M = M/(½ρU²B²) (`chord` B \[m\]) are not finite or
+/// exceed [`identify::limits::MAX_FORCE_COEFFICIENT`] in magnitude: a model whose
+/// nonlinear terms blow up along the motion would otherwise write forces that no reader
+/// accepts (issue 27, row 15).
+///
+/// # Errors
+/// [`Error::InvalidParameter`] naming `case.lift` or `case.moment` with the first offending
+/// coefficient and its time.
+fn check_force_coefficients(
+    case: &str,
+    flow: &Flow,
+    chord: f64,
+    dt: f64,
+    lift: &[f64],
+    moment: &[f64],
+) -> Result<()> {
+    use identify::limits::{show, MAX_FORCE_COEFFICIENT as MAX};
+    let q = 0.5 * flow.rho * flow.u * flow.u;
+    let channels = [
+        ("lift", "C_L", lift, q * chord),
+        ("moment", "C_M", moment, q * chord * chord),
+    ];
+    for (channel, symbol, forces, scale) in channels {
+        let bad = forces.iter().enumerate().find(|(_, &f)| {
+            let c = f / scale;
+            !(c.is_finite() && c.abs() <= MAX)
+        });
+        if let Some((i, &f)) = bad {
+            return Err(Error::param(
+                format!("{case}.{channel}"),
+                f / scale,
+                format!(
+                    "case `{case}`, {channel} at t = {} s: |{symbol}| must be finite and ≤ {} \
+                     (identify::limits::MAX_FORCE_COEFFICIENT); the model's forces blow up \
+                     along this motion (check its nonlinear terms), nothing was written",
+                    show(i as f64 * dt),
+                    show(MAX)
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// A descriptor converted from SI for the manifest, rounded to 12 significant digits so that
 /// a value given in degrees comes back as written (6, not 6.000000000000001, after rad → deg).
 fn tidy(x: f64) -> f64 {
@@ -899,7 +944,10 @@ fn forced_spec(case: &ForcedCase, units: &Units, still: bool) -> CaseSpec {
 ///
 /// # Errors
 /// [`Error::InvalidParameter`] for bad options or case (wind speed ≤ 0, bad motion, model
-/// chord ≠ section chord); [`Error::Numerical`] from the lag initialisation.
+/// chord ≠ section chord) and, naming `CASE.lift` or `CASE.moment` and the time, for a
+/// force coefficient that is not finite or exceeds
+/// [`identify::limits::MAX_FORCE_COEFFICIENT`]; [`Error::Numerical`] from the lag
+/// initialisation.
 pub fn forced_record(
     model: &dyn AeroModel,
     case: &ForcedCase,
@@ -923,6 +971,7 @@ pub fn forced_record(
     let pre_roll = opts.pre_roll.max(m.settle_time(&flow));
     let (mut lift, mut moment) =
         forced_forces(m, &flow, &case.motion, 0.0, dt, n, pre_roll, &case.id)?;
+    check_force_coefficients(&case.id, &flow, b, dt, &lift, &moment)?;
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut extra = toml::Table::new();
     extra.insert("seed".into(), seed.to_string().into());
@@ -1613,6 +1662,45 @@ mod tests {
         let (r2, _) = forced_record(&m, &case, &rel, 5).unwrap();
         let sd2 = r2.lift.unwrap().iter().map(|x| x.abs()).fold(0.0, f64::max);
         assert!(sd2 < 1e-9, "relative noise of a zero force {sd2}");
+    }
+
+    /// Issue 27 row 15: a model whose nonlinear term blows up along the motion (an α² lift
+    /// coefficient at the model files' limit, 1e9: C_L ≈ 1e6 at 3°) is refused naming the
+    /// case, the channel and the time, before any record exists; a plausible one passes.
+    #[test]
+    fn forces_beyond_the_coefficient_bound_are_refused_naming_case_channel_and_time() {
+        let model = |c: f64| {
+            crate::files::LoadedModel::parse(
+                &format!(
+                    "kind = \"theodorsen\"\nchord = 0.25\nelastic_axis = -0.3\n\
+                     [[nonlinear]]\nterm = \"alpha^2\"\nchannel = \"lift\"\n\
+                     coefficient = {c:e}\n"
+                ),
+                "m.toml",
+                Path::new("."),
+                None,
+            )
+            .unwrap()
+            .model
+        };
+        let mut opts = ForcedOptions::paper(1);
+        opts.duration = 1.0;
+        let cases = Campaign::paper_config("D").unwrap().cases();
+        let e = forced_dataset(model(1e9).as_ref(), &cases, &opts, &no_obs).unwrap_err();
+        let m = e.to_string();
+        let first = &cases[0].id;
+        assert!(
+            m.contains(&format!("field `{first}.lift`"))
+                && m.contains(&format!("case `{first}`, lift at t = "))
+                && m.contains("|C_L| must be finite and ≤ 10000"),
+            "{m}"
+        );
+        forced_dataset(model(-100.0).as_ref(), &cases[..2], &opts, &no_obs).unwrap();
+        // a non-finite moment names the moment channel and the sample's time
+        let flow = Flow { rho: 1.2, u: 10.0 };
+        let e = check_force_coefficients("c", &flow, 0.25, 0.5, &[1.0; 3], &[0.0, 0.0, f64::NAN])
+            .unwrap_err();
+        assert!(e.to_string().contains("case `c`, moment at t = 1 s"), "{e}");
     }
 
     #[test]

@@ -16,6 +16,17 @@ pub const MAX_AIR_DENSITY: f64 = 2000.0;
 pub const MAX_ELASTIC_AXIS: f64 = 10.0;
 /// Largest |pitch angle| of an initial condition, offset or amplitude \[deg\].
 pub const MAX_PITCH_DEG: f64 = 90.0;
+/// Largest |constant nondimensional coefficient| of a model file's `[[nonlinear]]` term
+/// (and |K^p N*| of an Eq. 19 table entry) \[-\]. Identified coefficients of high powers
+/// of Bα̇/U (≈ 0.01–0.1 in a wind tunnel) reach 1e5; 1e9 leaves four decades above that
+/// and refuses typos such as 1e300, whose forces overflow (issue 27, row 15).
+pub const MAX_NONLINEAR_COEFFICIENT: f64 = 1e9;
+/// Largest |C_L| or |C_M| (C_L = L/(½ρU²B), C_M = M/(½ρU²B²)) of a force the virtual wind
+/// tunnel records \[-\]. A flat plate's circulatory lift stays below 2π·(π/2) ≈ 10 and its
+/// noncirculatory terms below some tens at the campaigns' reduced frequencies; 1e4 is
+/// three decades above any physical section, so only a model whose forces blow up along
+/// the prescribed motion reaches it (issue 27, row 15).
+pub const MAX_FORCE_COEFFICIENT: f64 = 1e4;
 
 /// A number for a message: exponent form outside [1e-4, 1e16) so that 1e300 stays short.
 pub fn show(x: f64) -> String {

@@ -25,3 +25,17 @@ fn run(cmd: &mut Command) -> (bool, String, String) {
         String::from_utf8_lossy(&out.stderr).into_owned(),
     )
 }
+
+/// [`aeroform_in`] with the exit code: (code, stdout, stderr); -1 when a signal ended it.
+pub fn aeroform_code_in(dir: &Path, args: &[&str]) -> (i32, String, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_aeroform"))
+        .current_dir(dir)
+        .args(args)
+        .output()
+        .expect("run aeroform");
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
