@@ -284,14 +284,14 @@ fn build_fold(
             }
         }
     }
-    let nonlinear: Vec<Term> = prepared
+    let eq19: Vec<Term> = prepared
         .library()
         .terms()
         .iter()
-        .filter(|t| t.degree() >= 2)
+        .filter(|t| EQ19_NONLINEAR.contains(&t.name().as_str()))
         .copied()
         .collect();
-    complete_supports(cases, nodes, &train, &mut supports, &nonlinear);
+    complete_supports(cases, nodes, &train, &mut supports, &eq19);
     for s in supports.values_mut() {
         for c in s.iter_mut() {
             c.sort_by_key(|t| (t.degree(), std::cmp::Reverse(t.powers)));
@@ -318,21 +318,26 @@ fn build_fold(
     })
 }
 
+/// The nonlinear terms of the Eq. 19 form (paper: α·α̇, α³, α̇³ in nondimensional
+/// motion) that the node law may take on beyond what the identification selected
+/// ([`complete_supports`]). Completing from the whole library was tried in round 20 and
+/// not kept (DECISIONS, "Completing the node support from the whole library").
+const EQ19_NONLINEAR: [&str; 3] = ["alpha*alpha_dot", "alpha^3", "alpha_dot^3"];
+
 /// Noise-normalised evidence, in standard deviations of its null χ² law, a missing library
 /// term must show on the training nodes to enter the node law ([`complete_supports`]).
 pub(crate) const SUPPORT_Z: f64 = 8.0;
 
-/// Completes the node law's support with the nonlinear library terms (`candidates`) the
-/// training nodes show when their amplitudes are fitted together (one coefficient vector
-/// per node).
+/// Completes the node law's support with the nonlinear terms `candidates` (the Eq. 19
+/// ones, [`EQ19_NONLINEAR`]) the training nodes show when their amplitudes are fitted
+/// together (one coefficient vector per node).
 ///
 /// A per-case identification can leave such a term out where each case alone hides it:
 /// a slow pitch makes α̇³ a few noise σ per case, and its fundamental folds into that
-/// case's α̇ coefficient; under sinusoidal motion α·(Bα̇/U)² is K²A²α − K²α³ in each case
-/// (not identifiable there), but across a node's amplitudes it is a term of its own. One
-/// node law over the node's amplitudes cannot fold either: its gap then grows with
-/// amplitude, and an effect-free section looks like `higher_order` (DECISIONS "Completing
-/// the node support"). Per channel and term t missing from every configuration's support,
+/// case's α̇ coefficient. One node law over the node's amplitudes cannot fold it: its gap
+/// then grows with amplitude, and an effect-free section looks like `higher_order`
+/// (DECISIONS "Completing the node support"). Per channel and term t missing from every
+/// configuration's support,
 /// the statistic is S = Σ_n (z̃_n·r_n)² / (z̃_n·z̃_n σ̄_n²) over the training nodes (z̃_n, r_n
 /// the term's column and the target's residual off the node's support, σ̄_n² the mean noise
 /// variance of the node's cases): χ² with N_nodes degrees of freedom when t adds nothing.
