@@ -155,12 +155,14 @@ impl DrawnPhysics {
         use aeroelastic::files::{LoadedModel, StructureFile};
         use aeroelastic::flutter::{FlutterMethod, FlutterOptions};
         let ae = |what: &'static str| {
-            move |e: aeroelastic::Error| crate::Error::aeroelastic(format!("drawn truth: {what}"), e)
+            move |e: aeroelastic::Error| {
+                crate::Error::aeroelastic(format!("drawn truth: {what}"), e)
+            }
         };
         let model = self.model_toml();
         let reference = 2.0;
-        let rig = StructureFile::parse(&self.rig_toml_at(reference), "drawn rig")
-            .map_err(ae("rig"))?;
+        let rig =
+            StructureFile::parse(&self.rig_toml_at(reference), "drawn rig").map_err(ae("rig"))?;
         let law = LoadedModel::parse(&model, "drawn truth model", std::path::Path::new("."), None)
             .map_err(ae("model"))?;
         let section = aeroelastic::section::Section::new(
@@ -308,14 +310,22 @@ mod tests {
 
     #[test]
     fn draws_are_in_range_reproducible_and_both_laws_occur() {
-        let all: Vec<DrawnPhysics> = (0..300).map(|i| DrawnPhysics::draw(split_seed(5, i))).collect();
+        let all: Vec<DrawnPhysics> = (0..300)
+            .map(|i| DrawnPhysics::draw(split_seed(5, i)))
+            .collect();
         for p in &all {
             assert!((4.5..=11.0).contains(&p.flutter_speed), "{p:?}");
             assert!((1.3..=2.0).contains(&p.frequency_ratio), "{p:?}");
             assert!((0.003..=0.02).contains(&p.damping_pitch), "{p:?}");
         }
-        let eq19 = all.iter().filter(|p| matches!(p.law, DrawnLaw::Eq19 { .. })).count();
-        assert!((120..180).contains(&eq19), "{eq19} of 300 in the Eq. 19 form");
+        let eq19 = all
+            .iter()
+            .filter(|p| matches!(p.law, DrawnLaw::Eq19 { .. }))
+            .count();
+        assert!(
+            (120..180).contains(&eq19),
+            "{eq19} of 300 in the Eq. 19 form"
+        );
         assert_eq!(DrawnPhysics::draw(split_seed(5, 7)), all[7]);
     }
 
@@ -338,7 +348,11 @@ mod tests {
                 tol_rel: 1e-9,
             };
             let u = s.flutter(FlutterMethod::Pk, &o).unwrap().flutter.unwrap().u;
-            assert!((u / p.flutter_speed - 1.0).abs() < 1e-4, "{u} vs {}", p.flutter_speed);
+            assert!(
+                (u / p.flutter_speed - 1.0).abs() < 1e-4,
+                "{u} vs {}",
+                p.flutter_speed
+            );
         }
     }
 }

@@ -23,7 +23,9 @@ fn one_nonlinear_support_for_every_configuration() {
     assert_eq!(s.truth, "none");
     let shape = s.shape.clone().unwrap();
     assert_eq!(shape.configurations, ["A", "C"]);
-    let sc = shape.scenario(&BlindOptions::new(330, 2026).scenario).unwrap();
+    let sc = shape
+        .scenario(&BlindOptions::new(330, 2026).scenario)
+        .unwrap();
     let set = generate(
         blind_effect("none").unwrap(),
         s.strength,

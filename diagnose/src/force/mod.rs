@@ -372,7 +372,10 @@ fn complete_supports(
                 .iter()
                 .map(|&n| {
                     let node = &nodes[n];
-                    (n, law::build_chan(cases, node, &supports[&node.config][c], c))
+                    (
+                        n,
+                        law::build_chan(cases, node, &supports[&node.config][c], c),
+                    )
                 })
                 .collect();
             let z_of = |t: &Term| -> f64 {
