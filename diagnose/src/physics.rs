@@ -12,7 +12,7 @@
 //!   campaign stays at 3–10 m/s, so the forced K range relative to the free runs varies
 //!   from set to set). The frequencies are scaled to that U_F: at fixed mass ratio,
 //!   frequency ratio and damping ratios the linear flutter speed is proportional to the
-//!   frequencies ([`DrawnPhysics::rig_toml`]).
+//!   frequencies ([`DrawnPhysics::scenario_files`]).
 //! - **the nonlinear law** ([`DrawnLaw`]): for half of the sets a subset of the Eq. 19
 //!   terms with drawn coefficients (the cubic α³ always, α·α̇ in half, α̇³ in two thirds of
 //!   them); for the other half a cubic in the effective angle of attack
@@ -99,7 +99,7 @@ impl DrawnPhysics {
             DrawnLaw::Eq19 {
                 alpha_alpha_dot: if bits & 1 == 0 { u(7, 0.1, 1.0) } else { 0.0 },
                 alpha3: u(8, -4.0, -0.5),
-                alpha_dot3: if (bits >> 1) % 3 != 0 {
+                alpha_dot3: if !(bits >> 1).is_multiple_of(3) {
                     -log(9, 30.0, 200.0)
                 } else {
                     0.0
