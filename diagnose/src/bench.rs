@@ -158,7 +158,7 @@ impl CampaignShape {
         } else {
             TableReading::FigureCaptions
         };
-        let unit = |i: u64| (split_seed(seed, i) >> 11) as f64 / (1u64 << 53) as f64;
+        let unit = |i: u64| identify::numerics::unit_interval(split_seed(seed, i));
         let mut free_speed_factors: Vec<f64> = (0..6)
             .map(|i| ((0.4 + 0.75 * unit(40 + i)) * 1000.0).round() / 1000.0)
             .collect();
@@ -281,7 +281,7 @@ pub fn draw_specs_from(n: usize, seed: u64, labels: &[String]) -> Vec<BlindSpec>
                 index: i,
                 seed: s,
                 truth: labels[order[i]].clone(),
-                strength: (split_seed(s, 7) >> 11) as f64 / (1u64 << 53) as f64,
+                strength: identify::numerics::unit_interval(split_seed(s, 7)),
                 shape: None,
             }
         })

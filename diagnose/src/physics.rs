@@ -26,7 +26,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use identify::numerics::split_seed;
+use identify::numerics::{split_seed, unit_interval};
 
 /// The plate rig's mass per unit span \[kg/m\] (0.82 kg over 0.75 m).
 const PLATE_MASS: f64 = 0.82 / 0.75;
@@ -84,7 +84,7 @@ pub struct DrawnPhysics {
 
 /// Uniform draw in [lo, hi] from the 53 high bits of `bits`.
 fn uniform(bits: u64, lo: f64, hi: f64) -> f64 {
-    lo + (hi - lo) * ((bits >> 11) as f64 / (1u64 << 53) as f64)
+    lo + (hi - lo) * unit_interval(bits)
 }
 
 impl DrawnPhysics {

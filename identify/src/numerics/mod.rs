@@ -207,6 +207,11 @@ pub fn split_seed(seed: u64, index: u64) -> u64 {
     z ^ (z >> 31)
 }
 
+/// The 53 high bits of `bits` as a uniform number in [0, 1) (e.g. of a [`split_seed`]).
+pub fn unit_interval(bits: u64) -> f64 {
+    (bits >> 11) as f64 / (1u64 << 53) as f64
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
