@@ -22,6 +22,11 @@ fn main() {
     let set = generate(effect, spec.strength, shape.form(), spec.seed, &scenario).expect("set");
     if let Some(dir) = args.get(1).filter(|d| d.as_str() != "-") {
         diagnose::blind::write_blind(std::path::Path::new(dir), &set).expect("write");
+        std::fs::write(
+            std::path::Path::new(dir).join("truth.model.toml"),
+            &scenario.truth_model,
+        )
+        .expect("write truth model");
     }
     let loaded = aeroelastic::files::LoadedModel::parse(
         &scenario.truth_model,

@@ -377,40 +377,94 @@ fn shifted_values(h: &identify::preprocess::HarmonicFit, t0: f64, n: usize, dt: 
 struct PoolStats {
     g: Vec<Vec<f64>>,
     b: Vec<f64>,
+    /// Number of leading shared (nonlinear law) columns.
+    shared: usize,
+    /// bᵀ G⁻¹ b of the shared columns alone.
+    base: f64,
 }
 
-fn pool_stats(nodes: &[Node], fits: &[NodeFit], c: usize, aug: Aug<'_>) -> PoolStats {
+/// Pool statistics with the section's `ms` shared nonlinear columns first: the gain of a
+/// pool subset is measured on top of them.
+fn pool_stats(
+    cases: &[CaseData],
+    nodes: &[Node],
+    fits: &[NodeFit],
+    shared: &[Term],
+    c: usize,
+    aug: Aug<'_>,
+) -> PoolStats {
+    let key = law::shared_key(shared, aug.key);
+    let cols = |i: usize, ch: usize| -> Vec<Vec<f64>> {
+        let mut v: Vec<Vec<f64>> = shared
+            .iter()
+            .map(|t| cases[i].column(t).as_ref().clone())
+            .collect();
+        v.extend((aug.cols)(i, ch));
+        v
+    };
+    let all = Aug {
+        key: &key,
+        cols: &cols,
+        subset: None,
+    };
     let mut g: Vec<Vec<f64>> = Vec::new();
     let mut b: Vec<f64> = Vec::new();
     for f in fits {
         let w = f.ch[c].w_pool;
         let w2 = w * w;
-        let gr = aug.gram(nodes, f, c);
+        let gr = all.gram(nodes, f, c);
         let m = gr.b.len();
         if g.is_empty() {
             g = vec![vec![0.0; m]; m];
             b = vec![0.0; m];
         }
         for j in 0..m {
+            if gr.absorbed[j] {
+                continue;
+            }
             b[j] += w2 * gr.b[j];
             for k in j..m {
+                if gr.absorbed[k] {
+                    continue;
+                }
                 let v = w2 * gr.g[j][k];
                 g[j][k] += v;
                 g[k][j] = g[j][k];
             }
         }
     }
-    PoolStats { g, b }
+    let mut ps = PoolStats {
+        g,
+        b,
+        shared: shared.len(),
+        base: 0.0,
+    };
+    ps.base = ps.quad(&(0..ps.shared).collect::<Vec<_>>());
+    ps
 }
 
-/// Training improvement (noise units) of a subset: bᵀ G⁻¹ b.
+/// Training improvement (noise units) of a pool subset on top of the shared columns:
+/// bᵀ G⁻¹ b over (shared ∪ set) minus the same over the shared columns alone.
 fn gain(ps: &PoolStats, set: &[usize]) -> f64 {
-    let g: Vec<Vec<f64>> = set
-        .iter()
-        .map(|&i| set.iter().map(|&j| ps.g[i][j]).collect())
+    let with: Vec<usize> = (0..ps.shared)
+        .chain(set.iter().map(|j| j + ps.shared))
         .collect();
-    let b: Vec<f64> = set.iter().map(|&i| ps.b[i]).collect();
-    solve_spd(&g, &b, law::BETA_RIDGE).map_or(0.0, |x| dot(&x, &b))
+    ps.quad(&with) - ps.base
+}
+
+impl PoolStats {
+    /// bᵀ G⁻¹ b over the columns `idx`.
+    fn quad(&self, idx: &[usize]) -> f64 {
+        if idx.is_empty() {
+            return 0.0;
+        }
+        let g: Vec<Vec<f64>> = idx
+            .iter()
+            .map(|&i| idx.iter().map(|&j| self.g[i][j]).collect())
+            .collect();
+        let b: Vec<f64> = idx.iter().map(|&i| self.b[i]).collect();
+        solve_spd(&g, &b, law::BETA_RIDGE).map_or(0.0, |x| dot(&x, &b))
+    }
 }
 
 /// Forward selection from a pool per fold and channel, then held-out scoring.
@@ -447,7 +501,7 @@ fn sparse(
     };
     for f in folds {
         for c in 0..2 {
-            let ps = pool_stats(nodes, &f.fits, c, pool_aug);
+            let ps = pool_stats(cases, nodes, &f.fits, &f.shared[c], c, pool_aug);
             let mut set: Vec<usize> = Vec::new();
             let mut cur = 0.0;
             while set.len() < max_terms {
@@ -551,7 +605,7 @@ fn delay_criterion(sh: &[CaseData], nodes: &[Node], f: &Fold, tau: f64, cache: &
     let fits = law::node_fits(sh, nodes, &f.train, &f.supports, cache, tau.to_bits());
     let mut e = 0.0;
     for c in 0..2 {
-        let full = law::fit_channel(nodes, &fits, c, Aug::NONE);
+        let full = law::fit_channel(sh, nodes, &fits, &f.shared[c], c, Aug::NONE);
         for (j, nf) in fits.iter().enumerate() {
             let mut loo = full.clone();
             loo.nodes.remove(j);
@@ -566,7 +620,21 @@ fn delay_criterion(sh: &[CaseData], nodes: &[Node], f: &Fold, tau: f64, cache: &
                 continue;
             }
             let qr = &nf.ch[c].qr;
-            let r = &nf.ch[c].res_y;
+            // the node's residual off its support after the shared nonlinear part
+            let node = &nodes[nf.node];
+            let mut y: Vec<f64> = node
+                .cases
+                .iter()
+                .flat_map(|&i| sh[i].y[c].iter().copied())
+                .collect();
+            for (t, g) in f.shared[c].iter().zip(&full.shared) {
+                let z = node
+                    .cases
+                    .iter()
+                    .flat_map(|&i| sh[i].column(t).as_ref().clone());
+                y.iter_mut().zip(z).for_each(|(v, z)| *v -= g * z);
+            }
+            let r = &qr.residual(&y);
             let d: Vec<f64> = ahat.iter().zip(a).map(|(x, y)| x - y).collect();
             let rd = qr.r_times(&d);
             let en = dot(r, r) + dot(&rd, &rd);
@@ -633,6 +701,7 @@ fn time_delay(cases: &[CaseData], nodes: &[Node], folds: &[Fold], cache: &NodeCa
             train: f.train.clone(),
             test: f.test.clone(),
             supports: f.supports.clone(),
+            shared: f.shared.clone(),
             fits: law::node_fits(&shifted, nodes, &f.train, &f.supports, cache, tau.to_bits()),
         };
         for c in 0..2 {

@@ -1,11 +1,12 @@
 //! The force law of one fold: per (configuration, wind speed) node a coefficient vector on
-//! the configuration's identified support (shared by the node's amplitudes), plus
-//! augmentation coefficients β shared by every node; and its held-out prediction with the
-//! node coefficients interpolated over K_α.
+//! the configuration's linear support (shared by the node's amplitudes), the coefficients γ
+//! of the section's nonlinear terms shared by every node (one section, one nonlinear law),
+//! plus augmentation coefficients β shared by every node; and its held-out prediction with
+//! the node coefficients interpolated over K.
 //!
-//! Fit: min Σ_nodes ‖y_n − X_n a_n − Z_n β‖² by block elimination: β from the stacked
-//! projections (I − P_n) Z_n, (I − P_n) y_n (P_n the projector on the node's support
-//! columns), then a_n by least squares on y_n − Z_n β.
+//! Fit: min Σ_nodes ‖y_n − X_n a_n − Z_n (γ, β)‖² by block elimination: (γ, β) from the
+//! stacked projections (I − P_n) Z_n, (I − P_n) y_n (P_n the projector on the node's support
+//! columns), then a_n by least squares on y_n − Z_n (γ, β).
 
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex};
@@ -187,6 +188,8 @@ pub(crate) fn node_fits(
 /// A fitted law of one channel.
 #[derive(Debug, Clone)]
 pub(crate) struct ChannelLaw {
+    /// Coefficients γ of the section's nonlinear terms (shared by every node).
+    pub shared: Vec<f64>,
     /// Shared augmentation coefficients.
     pub beta: Vec<f64>,
     /// (node index, K_α, coefficients on the configuration's support).
@@ -239,16 +242,43 @@ impl Aug<'_> {
     }
 }
 
-/// Fits channel `c` with shared columns `aug` on the training nodes: β from the
-/// noise-weighted stacked projections (columns the node's support spans get no weight),
-/// then every node's coefficients a_n = â(y) − Σ β_j â(z_j) (least squares on the support).
-pub(crate) fn fit_channel(nodes: &[Node], fits: &[NodeFit], c: usize, aug: Aug<'_>) -> ChannelLaw {
+/// Fits channel `c` on the training nodes: per node the coefficients of its support (the
+/// linear terms), and shared by every node the coefficients γ of the section's nonlinear
+/// terms `shared` and β of the augmentation columns `aug`. γ and β come from the
+/// noise-weighted stacked projections (columns a node's support spans get no weight), then
+/// every node's coefficients a_n = â(y) − Σ γ_j â(z_j) − Σ β_j â(a_j) (least squares on
+/// the support).
+pub(crate) fn fit_channel(
+    cases: &[CaseData],
+    nodes: &[Node],
+    fits: &[NodeFit],
+    shared: &[Term],
+    c: usize,
+    aug: Aug<'_>,
+) -> ChannelLaw {
+    let ms = shared.len();
+    let key = shared_key(shared, aug.key);
+    let cols = |i: usize, ch: usize| -> Vec<Vec<f64>> {
+        let mut v: Vec<Vec<f64>> = shared
+            .iter()
+            .map(|t| cases[i].column(t).as_ref().clone())
+            .collect();
+        if !aug.key.is_empty() {
+            v.extend((aug.cols)(i, ch));
+        }
+        v
+    };
+    let all = Aug {
+        key: &key,
+        cols: &cols,
+        subset: None,
+    };
     let grams: Vec<Option<Arc<NodeGram>>> = fits
         .iter()
-        .map(|f| (!aug.key.is_empty()).then(|| aug.gram(nodes, f, c)))
+        .map(|f| (!key.is_empty()).then(|| all.gram(nodes, f, c)))
         .collect();
     let idx: Vec<usize> = match (aug.subset, grams.first()) {
-        (Some(s), _) => s.to_vec(),
+        (Some(s), _) => (0..ms).chain(s.iter().map(|j| j + ms)).collect(),
         (None, Some(Some(g))) => (0..g.b.len()).collect(),
         _ => Vec::new(),
     };
@@ -296,7 +326,22 @@ pub(crate) fn fit_channel(nodes: &[Node], fits: &[NodeFit], c: usize, aug: Aug<'
             (f.node, nodes[f.node].k_alpha, a)
         })
         .collect();
-    ChannelLaw { beta, nodes: out }
+    let aug_beta = beta.split_off(ms.min(beta.len()));
+    ChannelLaw {
+        shared: beta,
+        beta: aug_beta,
+        nodes: out,
+    }
+}
+
+/// Cache key of the shared nonlinear terms followed by an augmentation set (empty when
+/// both are empty).
+pub(crate) fn shared_key(shared: &[Term], aug: &str) -> String {
+    if shared.is_empty() && aug.is_empty() {
+        return String::new();
+    }
+    let names: Vec<String> = shared.iter().map(|t| t.name()).collect();
+    format!("{}|{aug}", names.join(","))
 }
 
 fn mean(v: &[f64]) -> f64 {
@@ -464,11 +509,14 @@ pub(crate) fn node_coefficients(
 }
 
 /// Held-out prediction of case `i`, channel `c`: support columns × node coefficients
-/// predicted by [`node_coefficients`], plus the shared augmentation columns × β.
+/// predicted by [`node_coefficients`], plus the section's nonlinear columns × γ and the
+/// shared augmentation columns × β.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn predict(
     cases: &[CaseData],
     nodes: &[Node],
     supports: &Supports,
+    shared: &[Term],
     law: &ChannelLaw,
     i: usize,
     c: usize,
@@ -484,6 +532,14 @@ pub(crate) fn predict(
             out.iter_mut()
                 .zip(col.iter())
                 .for_each(|(o, v)| *o += aj * v);
+        }
+    }
+    for (t, &g) in shared.iter().zip(&law.shared) {
+        if g != 0.0 {
+            let col = case.column(t);
+            out.iter_mut()
+                .zip(col.iter())
+                .for_each(|(o, v)| *o += g * v);
         }
     }
     for (col, &b) in extra_cols.iter().zip(&law.beta) {

@@ -46,7 +46,7 @@ mod linalg;
 use std::collections::BTreeMap;
 
 use identify::dataset::Dataset;
-use identify::library::Term;
+use identify::library::{LibraryKind, Term};
 use identify::pipeline::{IdentifySettings, Prepared};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -112,7 +112,12 @@ pub(crate) struct Fold {
     pub index: usize,
     pub train: Vec<usize>,
     pub test: Vec<usize>,
+    /// Linear support of each configuration (terms of degree ≤ 1, with the constant of a
+    /// centred configuration): coefficients per node.
     pub supports: Supports,
+    /// The section's nonlinear terms (lift, moment): one coefficient each, shared by every
+    /// node.
+    pub shared: [Vec<Term>; 2],
     pub fits: Vec<NodeFit>,
 }
 
@@ -201,7 +206,7 @@ fn build_fold(
     prepared: &Prepared<'_>,
     dataset: &str,
     cache: &NodeCache,
-) -> Result<Fold> {
+) -> Result<(Fold, identify::pipeline::Identification)> {
     let train: Vec<usize> = (0..nodes.len()).filter(|&n| fold_of[n] != index).collect();
     let test: Vec<usize> = (0..nodes.len()).filter(|&n| fold_of[n] == index).collect();
     let train_indices: Vec<usize> = train
@@ -284,14 +289,6 @@ fn build_fold(
             }
         }
     }
-    let eq19: Vec<Term> = prepared
-        .library()
-        .terms()
-        .iter()
-        .filter(|t| EQ19_NONLINEAR.contains(&t.name().as_str()))
-        .copied()
-        .collect();
-    complete_supports(cases, nodes, &train, &mut supports, &eq19);
     for s in supports.values_mut() {
         for c in s.iter_mut() {
             c.sort_by_key(|t| (t.degree(), std::cmp::Reverse(t.powers)));
@@ -308,115 +305,277 @@ fn build_fold(
             ));
         }
     }
+    let (supports, mut shared) = split_supports(supports);
     let fits = law::node_fits(cases, nodes, &train, &supports, cache, 0);
-    Ok(Fold {
-        index,
-        train,
-        test,
-        supports,
-        fits,
-    })
+    // every cubic monomial: the paper's library leaves out α²α̇, αα̇², h²ḣ, hḣ² (dependent
+    // per case), which pooled amplitudes and speeds separate
+    let library: Vec<Term> = identify::library::Library::new(LibraryKind::Full34, false)
+        .terms()
+        .iter()
+        .filter(|t| t.degree() >= 2)
+        .copied()
+        .collect();
+    for c in 0..2 {
+        complete_shared(cases, nodes, &fits, c, &mut shared[c], &library);
+    }
+    Ok((
+        Fold {
+            index,
+            train,
+            test,
+            supports,
+            shared,
+            fits,
+        },
+        id,
+    ))
 }
 
-/// The nonlinear terms of the Eq. 19 form (paper: α·α̇, α³, α̇³ in nondimensional
-/// motion) that the node law may take on beyond what the identification selected
-/// ([`complete_supports`]). Completing from the whole library was tried in round 20 and
-/// not kept (DECISIONS, "Completing the node support from the whole library").
-const EQ19_NONLINEAR: [&str; 3] = ["alpha*alpha_dot", "alpha^3", "alpha_dot^3"];
+/// Splits the configurations' supports into their linear parts (degree ≤ 1: per-node
+/// coefficients) and the section's nonlinear terms per channel (their union: one shared
+/// coefficient each).
+///
+/// A nonlinear coefficient identified per node and interpolated over K breaks the
+/// cancellations between correlated cubic columns (DECISIONS, "Nonlinear coefficients
+/// shared by the section's nodes").
+pub(crate) fn split_supports(supports: Supports) -> (Supports, [Vec<Term>; 2]) {
+    let mut shared: [Vec<Term>; 2] = [Vec::new(), Vec::new()];
+    let linear = supports
+        .into_iter()
+        .map(|(cfg, s)| {
+            let s = std::array::from_fn(|c| {
+                let mut lin = Vec::new();
+                for t in &s[c] {
+                    if t.degree() >= 2 {
+                        if !shared[c].contains(t) {
+                            shared[c].push(*t);
+                        }
+                    } else {
+                        lin.push(*t);
+                    }
+                }
+                lin
+            });
+            (cfg, s)
+        })
+        .collect();
+    for v in shared.iter_mut() {
+        v.sort_by_key(|t| (t.degree(), std::cmp::Reverse(t.powers)));
+    }
+    (linear, shared)
+}
 
-/// Noise-normalised evidence, in standard deviations of its null χ² law, a missing library
-/// term must show on the training nodes to enter the node law ([`complete_supports`]).
+/// Evidence, in noise units of a one-degree-of-freedom χ² statistic, a library term
+/// missing from the section's nonlinear law must show on the training nodes to enter it
+/// ([`complete_shared`]): Z² with Z = [`SUPPORT_Z`].
 pub(crate) const SUPPORT_Z: f64 = 8.0;
 
-/// Completes the node law's support with the nonlinear terms `candidates` (the Eq. 19
-/// ones, [`EQ19_NONLINEAR`]) the training nodes show when their amplitudes are fitted
-/// together (one coefficient vector per node).
+/// Completes channel `c`'s shared nonlinear terms with the library terms (`library`, every
+/// term of degree ≥ 2) the training nodes show when fitted together with one coefficient
+/// per term for the whole section.
 ///
-/// A per-case identification can leave such a term out where each case alone hides it:
-/// a slow pitch makes α̇³ a few noise σ per case, and its fundamental folds into that
-/// case's α̇ coefficient. One node law over the node's amplitudes cannot fold it: its gap
-/// then grows with amplitude, and an effect-free section looks like `higher_order`
-/// (DECISIONS "Completing the node support"). Per channel and term t missing from every
-/// configuration's support,
-/// the statistic is S = Σ_n (z̃_n·r_n)² / (z̃_n·z̃_n σ̄_n²) over the training nodes (z̃_n, r_n
-/// the term's column and the target's residual off the node's support, σ̄_n² the mean noise
-/// variance of the node's cases): χ² with N_nodes degrees of freedom when t adds nothing.
-/// The term with the largest (S − N)/√(2N) above [`SUPPORT_Z`] enters every configuration
-/// (one section), and the test repeats with the wider support.
-fn complete_supports(
+/// A per-case identification cannot tell a cubic from its one-harmonic equivalents: at one
+/// amplitude and frequency α²α̇ equals −α̇³/K² plus a multiple of α̇, so the group stage may
+/// select α̇³ where the section's law has α²α̇ (an effective-angle law expands to up to 20
+/// cubics). Across the section's amplitudes and wind speeds with shared coefficients the
+/// two differ. Greedy: the term whose shared column reduces the noise-weighted training
+/// residual most (g = Δ(bᵀG⁻¹b) over the node projections off each node's linear support,
+/// χ²₁ when the term adds nothing) enters while g > [`SUPPORT_Z`]²; one section, so the
+/// statistic pools every training node of every configuration.
+fn complete_shared(
     cases: &[CaseData],
     nodes: &[Node],
-    train: &[usize],
-    supports: &mut Supports,
-    candidates: &[Term],
+    fits: &[NodeFit],
+    c: usize,
+    shared: &mut Vec<Term>,
+    library: &[Term],
 ) {
-    let terms = candidates;
-    let nn = train.len() as f64;
-    if nn < 1.0 {
+    let pool: Vec<Term> = library
+        .iter()
+        .filter(|t| !shared.contains(t))
+        .copied()
+        .collect();
+    if pool.is_empty() || fits.is_empty() {
         return;
     }
-    for c in 0..2 {
-        loop {
-            let missing: Vec<Term> = terms
-                .iter()
-                .filter(|t| supports.values().any(|s| !s[c].contains(t)))
-                .copied()
-                .collect();
-            if missing.is_empty() {
-                break;
-            }
-            // this channel's node fits on the current support, not cached: the cache keeps
-            // one factorisation per (node, support), and a support that grows term by term
-            // would leave every intermediate one behind (tens of GB on a 20-term law)
-            let fits: Vec<(usize, law::NodeChan)> = train
-                .iter()
-                .map(|&n| {
-                    let node = &nodes[n];
-                    (
-                        n,
-                        law::build_chan(cases, node, &supports[&node.config][c], c),
-                    )
-                })
-                .collect();
-            let z_of = |t: &Term| -> f64 {
-                let s: f64 = fits
+    // statistics of the current shared terms followed by the pool, uncached (the shared set
+    // changes once per completion)
+    let base: Vec<Term> = shared.clone();
+    let all: Vec<Term> = base.iter().chain(&pool).copied().collect();
+    let m = all.len();
+    let mut g = vec![vec![0.0; m]; m];
+    let mut b = vec![0.0; m];
+    for f in fits {
+        let node = &nodes[f.node];
+        let s2 = node
+            .cases
+            .iter()
+            .map(|&i| cases[i].sigma[c].powi(2))
+            .sum::<f64>()
+            / node.cases.len().max(1) as f64;
+        if !(s2 > 0.0) {
+            continue;
+        }
+        let ch = &f.ch[c];
+        let zt: Vec<Option<Vec<f64>>> = all
+            .iter()
+            .map(|t| {
+                let z: Vec<f64> = node
+                    .cases
                     .iter()
-                    .map(|(n, ch)| {
-                        let node = &nodes[*n];
-                        let z: Vec<f64> = node
-                            .cases
-                            .iter()
-                            .flat_map(|&i| cases[i].column(t).iter().copied().collect::<Vec<_>>())
-                            .collect();
-                        let zt = ch.qr.residual(&z);
-                        let zz = linalg::dot(&zt, &zt);
-                        let s2 = node
-                            .cases
-                            .iter()
-                            .map(|&i| cases[i].sigma[c].powi(2))
-                            .sum::<f64>()
-                            / node.cases.len().max(1) as f64;
-                        if zz <= 1e-12 * linalg::dot(&z, &z) || s2 <= 0.0 {
-                            return 0.0;
-                        }
-                        linalg::dot(&zt, &ch.res_y).powi(2) / (zz * s2)
-                    })
-                    .sum();
-                (s - nn) / (2.0 * nn).sqrt()
-            };
-            let best = missing
-                .iter()
-                .map(|t| (*t, z_of(t)))
-                .filter(|(_, z)| z.is_finite() && *z > SUPPORT_Z)
-                .max_by(|a, b| a.1.total_cmp(&b.1));
-            let Some((t, _)) = best else { break };
-            for s in supports.values_mut() {
-                if !s[c].contains(&t) {
-                    s[c].push(t);
+                    .flat_map(|&i| cases[i].column(t).as_ref().clone())
+                    .collect();
+                let r = ch.qr.residual(&z);
+                (linalg::dot(&r, &r) > 1e-12 * linalg::dot(&z, &z)).then_some(r)
+            })
+            .collect();
+        for j in 0..m {
+            let Some(zj) = &zt[j] else { continue };
+            b[j] += linalg::dot(zj, &ch.res_y) / s2;
+            for k in j..m {
+                let Some(zk) = &zt[k] else { continue };
+                let v = linalg::dot(zj, zk) / s2;
+                g[j][k] += v;
+                if k != j {
+                    g[k][j] += v;
                 }
             }
         }
     }
+    let quad = |idx: &[usize]| -> f64 {
+        if idx.is_empty() {
+            return 0.0;
+        }
+        let gs: Vec<Vec<f64>> = idx
+            .iter()
+            .map(|&i| idx.iter().map(|&j| g[i][j]).collect())
+            .collect();
+        let bs: Vec<f64> = idx.iter().map(|&i| b[i]).collect();
+        linalg::solve_spd(&gs, &bs, law::BETA_RIDGE).map_or(0.0, |x| linalg::dot(&x, &bs))
+    };
+    let mut set: Vec<usize> = (0..base.len()).collect();
+    let mut cur = quad(&set);
+    loop {
+        let best = (base.len()..m)
+            .filter(|j| !set.contains(j))
+            .map(|j| {
+                let mut s = set.clone();
+                s.push(j);
+                (j, quad(&s) - cur)
+            })
+            .filter(|(_, d)| d.is_finite())
+            .max_by(|a, b| a.1.total_cmp(&b.1));
+        match best {
+            Some((j, d)) if d > SUPPORT_Z * SUPPORT_Z => {
+                set.push(j);
+                cur += d;
+                shared.push(all[j]);
+            }
+            _ => break,
+        }
+    }
+    shared.sort_by_key(|t| (t.degree(), std::cmp::Reverse(t.powers)));
+}
+
+/// The section's law fitted on forced cases, written as an identification: the law of a
+/// fold ([`build_fold`], [`law::fit_channel`]) trained on every node of `subset`, each
+/// case's coefficients replaced by its node's linear coefficients and the section's shared
+/// nonlinear ones (on the absolute pitch: `mean_pitch` cleared), its Eq. 19 values
+/// recomputed from them. `subsets`: the case-index subsets to fit (indices into the data
+/// set's forced cases in manifest order); a case whose (configuration, wind speed) node is
+/// not whole in a subset is left out of that subset.
+///
+/// This is the law the system level simulates: the one the force level found at the
+/// noise, not the per-case identification, which cannot tell a cubic from its
+/// one-harmonic equivalents (α²α̇ and α̇³ at one amplitude) and leaves the paper library's
+/// α²α̇, αα̇² out (DECISIONS, "One section law for both levels").
+///
+/// # Errors
+/// As [`force_level`]'s preparation and fold identification.
+pub fn section_identifications(
+    forced: &Dataset,
+    settings: &IdentifySettings,
+    subsets: &[Vec<usize>],
+) -> Result<Vec<identify::pipeline::Identification>> {
+    let name = forced.manifest.name.clone();
+    let (cases, nodes, _) = data::prepare(forced)?;
+    let nd: Vec<identify::record::NondimCase> = cases.iter().map(|c| c.nd.clone()).collect();
+    let prepared = identify::pipeline::prepare(&nd, settings, &|_| {}).map_err(|e| {
+        Error::identify(
+            format!("data set `{name}`: preparing the identification"),
+            e,
+        )
+    })?;
+    let cache = NodeCache::default();
+    use rayon::prelude::*;
+    subsets
+        .par_iter()
+        .map(|subset| {
+            let fold_of: Vec<usize> = nodes
+                .iter()
+                .map(|n| usize::from(n.cases.iter().all(|i| subset.contains(i))))
+                .collect();
+            let (fold, id) = build_fold(0, &fold_of, &cases, &nodes, &prepared, &name, &cache)?;
+            let laws: [law::ChannelLaw; 2] = std::array::from_fn(|c| {
+                law::fit_channel(&cases, &nodes, &fold.fits, &fold.shared[c], c, Aug::NONE)
+            });
+            Ok(section_as_identification(id, &cases, &nodes, &fold, &laws))
+        })
+        .collect()
+}
+
+/// Writes a fold's law into its identification's cases (see [`section_identifications`]).
+fn section_as_identification(
+    mut id: identify::pipeline::Identification,
+    cases: &[CaseData],
+    nodes: &[Node],
+    fold: &Fold,
+    laws: &[law::ChannelLaw; 2],
+) -> identify::pipeline::Identification {
+    use identify::eq19::{Eq19Values, EQ19_TERMS};
+    use identify::pipeline::TermMap;
+    for cr in id.cases.iter_mut() {
+        let Some(i) = cases.iter().position(|c| c.nd.meta.id == cr.id) else {
+            continue;
+        };
+        let n = cases[i].node;
+        let cfg = &nodes[n].config;
+        let terms: [TermMap; 2] = std::array::from_fn(|c| {
+            let mut map: Vec<(String, Option<f64>)> = Vec::new();
+            if let Some((_, _, a)) = laws[c].nodes.iter().find(|(m, _, _)| *m == n) {
+                for (t, v) in fold.supports[cfg][c].iter().zip(a) {
+                    map.push((t.name(), Some(*v)));
+                }
+            }
+            for (t, g) in fold.shared[c].iter().zip(&laws[c].shared) {
+                map.push((t.name(), Some(*g)));
+            }
+            TermMap(map)
+        });
+        let [lift, moment] = terms;
+        let xi = |map: &TermMap, old: &TermMap| -> [Option<f64>; 7] {
+            std::array::from_fn(|j| {
+                let name = EQ19_TERMS[j];
+                match map.0.iter().find(|(n, _)| n == name) {
+                    Some((_, v)) => *v,
+                    // a linear term outside the node's support keeps what the case had
+                    // (null where not identifiable); a nonlinear one is absent: zero
+                    None if j < 4 => old.get(name),
+                    None => Some(0.0),
+                }
+            })
+        };
+        let (ka, kh) = (cr.k_alpha, cr.k_h);
+        cr.lift.eq19 = Eq19Values::from_coefficients(xi(&lift, &cr.lift.terms), ka, kh).into();
+        cr.moment.eq19 =
+            Eq19Values::from_coefficients(xi(&moment, &cr.moment.terms), ka, kh).into();
+        cr.lift.terms = lift;
+        cr.moment.terms = moment;
+        cr.lift.constant = None;
+        cr.moment.constant = None;
+        cr.mean_pitch = None;
+    }
+    id
 }
 
 /// Held-out residuals r = measured − predicted, `[case][channel]` in C units, for the
@@ -445,11 +604,11 @@ pub(crate) fn fold_residuals(
     aug: Aug<'_>,
     out: &mut [[Vec<f64>; 2]],
 ) -> law::ChannelLaw {
-    let lawc = law::fit_channel(nodes, &f.fits, c, aug);
+    let lawc = law::fit_channel(cases, nodes, &f.fits, &f.shared[c], c, aug);
     for &n in &f.test {
         for &i in &nodes[n].cases {
             let z = aug.columns(i, c);
-            let p = law::predict(cases, nodes, &f.supports, &lawc, i, c, &z);
+            let p = law::predict(cases, nodes, &f.supports, &f.shared[c], &lawc, i, c, &z);
             out[i][c] = cases[i].y[c].iter().zip(&p).map(|(y, p)| y - p).collect();
         }
     }
@@ -565,7 +724,9 @@ pub fn force_level_profiled(
         )
     })?;
     let folds: Vec<Fold> = (0..scheme.folds)
-        .map(|k| build_fold(k, &fold_of, &cases, &nodes, &prepared, &name, &cache))
+        .map(|k| {
+            build_fold(k, &fold_of, &cases, &nodes, &prepared, &name, &cache).map(|(f, _)| f)
+        })
         .collect::<Result<_>>()?;
     lap("folds", &mut prof);
     let before = held_out_residuals(&cases, &nodes, &folds, Aug::NONE);

@@ -19,8 +19,7 @@ use aeroelastic::aero::AeroModel;
 use aeroelastic::identified::{IdentifiedLaw, IdentifiedOptions};
 use aeroelastic::structure::{Nonlinearities, Structure, StructureSpec};
 use identify::dataset::Dataset;
-use identify::library::Term;
-use identify::pipeline::{IdentifySettings, Prepared as IdentifyStage};
+use identify::pipeline::IdentifySettings;
 use identify::preprocess::PreprocessOptions;
 use identify::record::CaseKind;
 
@@ -143,17 +142,17 @@ pub fn sim_law(forced: &Dataset, opts: &SystemOptions) -> Result<IdentifiedLaw> 
 }
 
 /// [`sim_law`] together with the identification it was built from and its grouped
-/// jackknife ([`jackknife_identifications`]; `None` when it cannot be formed).
+/// jackknife ([`jackknife_subsets`]; `None` when it cannot be formed).
 ///
-/// Every configuration of a campaign is the same section: a nonlinear term that any
-/// configuration's identification selects is kept in every configuration
-/// ([`section_terms`], a second pass of the group stage through
-/// [`IdentifyStage::identify_keeping`]), as the force level's node law does. A configuration
-/// whose forcing hides a term (one with a slow pitch, where the cubic terms are a few
-/// noise σ per case) otherwise folds the term's first harmonic into its linear
-/// derivatives at the forced amplitudes, and the sim carries that equivalent
-/// linearisation to free runs at other amplitudes (DECISIONS, "One section in the sim's
-/// law").
+/// The law is the force level's section law fitted on every forced case
+/// ([`crate::force::section_identifications`]): per (configuration, wind speed) node its
+/// linear derivatives, one set of nonlinear coefficients for the whole section (every
+/// configuration is the same section), on the nonlinear terms the identification selected
+/// in any configuration plus those the pooled nodes show. The per-case identification
+/// alone folds a cubic's first harmonic into the linear derivatives at the forced
+/// amplitudes (α²α̇ and α̇³ are the same at one amplitude), and the sim would carry that
+/// linearisation to free runs at other amplitudes (DECISIONS, "One section law for both
+/// levels").
 fn sim_identification(
     forced: &Dataset,
     opts: &SystemOptions,
@@ -169,85 +168,43 @@ fn sim_identification(
             "no forced case to identify the sim's law from",
         ));
     }
-    let prepared = identify::workflow::prepare_dataset(forced, &opts.preprocess)
-        .map_err(|e| Error::identify(format!("data set `{name}`: preprocessing"), e))?;
-    let stage = identify::pipeline::prepare(&prepared.cases, &opts.identify, &|_| {})
-        .map_err(|e| Error::identify(format!("data set `{name}`: identification"), e))?;
-    let all: Vec<usize> = (0..prepared.cases.len()).collect();
-    let id = identify_section(&stage, &all, &name)
-        .map_err(|e| Error::identify(format!("data set `{name}`: identification"), e))?;
+    let metas: Vec<(String, f64)> = forced
+        .records
+        .iter()
+        .filter(|r| r.kind == CaseKind::Forced)
+        .map(|r| {
+            (
+                r.meta.config.clone().unwrap_or_default(),
+                r.meta.wind_speed,
+            )
+        })
+        .collect();
+    let all: Vec<usize> = (0..metas.len()).collect();
+    let jack = jackknife_subsets(&metas);
+    let mut subsets = vec![all];
+    if let Some(j) = &jack {
+        subsets.extend(j.iter().cloned());
+    }
+    let mut ids = crate::force::section_identifications(forced, &opts.identify, &subsets)?;
+    let id = ids.remove(0);
     let law = IdentifiedLaw::from_identification(
         &id,
         &IdentifiedOptions::new(forced.manifest.section.chord),
     )
     .map_err(|e| Error::aeroelastic(format!("data set `{name}`: identified law"), e))?;
-    let jack = jackknife_identifications(&stage, &name);
+    let jack = jack.map(|_| ids);
     Ok((id, law, jack))
 }
 
-/// The cases `subset` of `stage` identified as one section: the group stage, then, when
-/// some configuration lacks a nonlinear term another selected ([`section_terms`]), the
-/// group stage again with those terms kept.
-///
-/// # Errors
-/// As [`IdentifyStage::identify_keeping`].
-fn identify_section(
-    stage: &IdentifyStage<'_>,
-    subset: &[usize],
-    name: &str,
-) -> identify::Result<identify::pipeline::Identification> {
-    let first = stage.identify(subset, name, &|_| {})?;
-    match section_terms(&first) {
-        Some(keep) => stage.identify_keeping(subset, &keep, name, &|_| {}),
-        None => Ok(first),
-    }
-}
-
-/// The nonlinear terms (degree ≥ 2), per force (moment, lift) in library order, that some
-/// case of `id` selected, when some other case has one of them identifiable but removed;
-/// `None` when every case already carries every such term (nothing to add).
-fn section_terms(id: &identify::pipeline::Identification) -> Option<[Vec<String>; 2]> {
-    let mut keep: [Vec<String>; 2] = [Vec::new(), Vec::new()];
-    let mut missing = false;
-    for name in &id.library.terms {
-        if Term::parse(name).map_or(true, |t| t.degree() < 2) {
-            continue;
-        }
-        for (force, kept) in keep.iter_mut().enumerate() {
-            let value = |c: &identify::pipeline::CaseResult| {
-                if force == 0 {
-                    c.moment.terms.get(name)
-                } else {
-                    c.lift.terms.get(name)
-                }
-            };
-            if id.cases.iter().any(|c| value(c).is_some_and(|v| v != 0.0)) {
-                missing |= id.cases.iter().any(|c| value(c) == Some(0.0));
-                kept.push(name.clone());
-            }
-        }
-    }
-    missing.then_some(keep)
-}
-
-/// The grouped-jackknife identifications of the forced campaign prepared in `stage`
-/// (data set `name`, preprocessed and prepared as for the sim's law, each fold identified
-/// as one section, [`identify_section`]): the interior (configuration,
-/// wind speed) groups (every wind speed of a configuration but its lowest and highest;
-/// all groups when fewer than two are interior), sorted, are dealt round-robin into
-/// k = min(groups, [`JACKKNIFE_FOLDS`]) folds and the law is identified again without each
-/// fold (in parallel). `None` with fewer than 3 groups or when any fold fails to identify
-/// (the sim is then scored against the noise alone, as without a forced campaign).
-fn jackknife_identifications(
-    stage: &IdentifyStage<'_>,
-    name: &str,
-) -> Option<Vec<identify::pipeline::Identification>> {
-    use rayon::prelude::*;
-    let cases = stage.cases();
-    let key = |m: &identify::record::CaseMeta| {
-        (m.config.clone().unwrap_or_default(), m.wind_speed.to_bits())
-    };
-    let mut groups: Vec<(String, u64)> = cases.iter().map(|c| key(&c.meta)).collect();
+/// The grouped-jackknife subsets of a forced campaign whose cases have the (configuration,
+/// wind speed) `metas`: the interior groups (every wind speed of a configuration but its
+/// lowest and highest; all groups when fewer than two are interior), sorted, are dealt
+/// round-robin into k = min(groups, [`JACKKNIFE_FOLDS`]) folds, and each subset is every
+/// case outside one fold. `None` with fewer than 3 groups (the sim is then scored against
+/// the noise alone, as without a forced campaign).
+fn jackknife_subsets(metas: &[(String, f64)]) -> Option<Vec<Vec<usize>>> {
+    let key = |m: &(String, f64)| (m.0.clone(), m.1.to_bits());
+    let mut groups: Vec<(String, u64)> = metas.iter().map(key).collect();
     groups.sort();
     groups.dedup();
     if groups.len() < 3 {
@@ -272,22 +229,20 @@ fn jackknife_identifications(
         groups = interior;
     }
     let k = groups.len().min(JACKKNIFE_FOLDS);
-    let fold: Vec<usize> = cases
+    let fold: Vec<usize> = metas
         .iter()
-        .map(|c| {
+        .map(|m| {
             groups
                 .iter()
-                .position(|g| *g == key(&c.meta))
+                .position(|g| *g == key(m))
                 .map_or(usize::MAX, |p| p % k)
         })
         .collect();
-    (0..k)
-        .into_par_iter()
-        .map(|f| {
-            let train: Vec<usize> = (0..cases.len()).filter(|&i| fold[i] != f).collect();
-            identify_section(stage, &train, name).ok()
-        })
-        .collect()
+    Some(
+        (0..k)
+            .map(|f| (0..metas.len()).filter(|&i| fold[i] != f).collect())
+            .collect(),
+    )
 }
 
 /// The sim's own uncertainty along each free run, per DOF, in the units of the gap
