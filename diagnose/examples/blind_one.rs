@@ -11,8 +11,14 @@ fn main() {
     let n: usize = args.get(1).and_then(|a| a.parse().ok()).unwrap_or(330);
     let seed: u64 = args.get(2).and_then(|a| a.parse().ok()).unwrap_or(2026);
     let mut opts = BlindOptions::new(n, seed);
-    opts.shapes = true;
-    let specs = draw_specs_from(n, seed, &shapes_truth_labels());
+    // PLAIN=1: the default benchmark (plate scenario, no drawn shapes)
+    let plain = std::env::var("PLAIN").is_ok();
+    opts.shapes = !plain;
+    let specs = if plain {
+        diagnose::bench::draw_specs(n, seed)
+    } else {
+        draw_specs_from(n, seed, &shapes_truth_labels())
+    };
     if args.first().map(String::as_str) == Some("list") {
         for (i, s) in specs.iter().enumerate() {
             let shape = CampaignShape::draw_with_physics(s.seed);
@@ -32,7 +38,9 @@ fn main() {
         return;
     }
     let mut spec = specs[index].clone();
-    spec.shape = Some(CampaignShape::draw_with_physics(spec.seed));
+    if !plain {
+        spec.shape = Some(CampaignShape::draw_with_physics(spec.seed));
+    }
     match run_one(&spec, &opts) {
         Ok((o, d)) => {
             eprintln!(

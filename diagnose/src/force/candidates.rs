@@ -723,8 +723,9 @@ fn time_delay(cases: &[CaseData], nodes: &[Node], folds: &[Fold], cache: &NodeCa
     }
 }
 
-/// (case, lift and moment factorisations of its node) naming a training residual.
-type SpecKey = (usize, *const law::NodeChan, *const law::NodeChan);
+/// (case, lift and moment factorisations of its node, hash of the shared nonlinear
+/// coefficients) naming a training residual.
+type SpecKey = (usize, *const law::NodeChan, *const law::NodeChan, u64);
 
 /// (case, 4×-padded periodogram, its bin width \[Hz\], unpadded periodogram) of a training
 /// residual, both channels summed.
@@ -870,10 +871,30 @@ fn vortex(cases: &[CaseData], nodes: &[Node], folds: &[Fold], before: &[[Vec<f64
     let mut spec_memo: HashMap<SpecKey, Arc<Spectra>> = HashMap::new();
     let tones: Vec<Vec<f64>> = cases.iter().map(|c| tone_list(c.f_alpha, c.f_h)).collect();
     for f in folds {
-        // training residuals of the baseline node fits, noise weighted, both channels
+        // training residuals of the fold's baseline law (node supports and the section's
+        // shared nonlinear terms), noise weighted, both channels
+        let laws: [law::ChannelLaw; 2] = std::array::from_fn(|c| {
+            law::fit_channel(cases, nodes, &f.fits, &f.shared[c], c, Aug::NONE)
+        });
+        let mut tag: u64 = 0xcbf2_9ce4_8422_2325;
+        for v in laws.iter().flat_map(|l| l.shared.iter()) {
+            tag = (tag ^ v.to_bits()).wrapping_mul(0x0000_0100_0000_01b3);
+        }
         let mut train_res: Vec<(usize, [Vec<f64>; 2], SpecKey)> = Vec::new();
         for nf in &f.fits {
-            let r: [&Vec<f64>; 2] = [0, 1].map(|c| &nf.ch[c].res_y);
+            let r: [Vec<f64>; 2] = std::array::from_fn(|c| {
+                let mut r = nf.ch[c].res_y.clone();
+                for (t, g) in f.shared[c].iter().zip(&laws[c].shared) {
+                    let z: Vec<f64> = nodes[nf.node]
+                        .cases
+                        .iter()
+                        .flat_map(|&i| cases[i].column(t).as_ref().clone())
+                        .collect();
+                    let zt = nf.ch[c].qr.residual(&z);
+                    r.iter_mut().zip(&zt).for_each(|(v, z)| *v -= g * z);
+                }
+                r
+            });
             let mut off = 0;
             for &i in &nodes[nf.node].cases {
                 let n = cases[i].n;
@@ -884,7 +905,7 @@ fn vortex(cases: &[CaseData], nodes: &[Node], folds: &[Fold], before: &[[Vec<f64
                         .collect::<Vec<f64>>()
                 });
                 off += n;
-                let key = (i, Arc::as_ptr(&nf.ch[0]), Arc::as_ptr(&nf.ch[1]));
+                let key = (i, Arc::as_ptr(&nf.ch[0]), Arc::as_ptr(&nf.ch[1]), tag);
                 train_res.push((i, rc, key));
             }
         }
