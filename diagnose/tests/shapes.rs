@@ -72,12 +72,30 @@ fn the_sims_own_uncertainty_is_not_an_effect() {
 
 /// Set 43 (dynamic stall, configuration C, strong): the lagged dead-zone columns alone
 /// removed 61 % of the gap in round 14; with the Kirchhoff-structured, saturating columns
-/// (attached load × lagged separation step) the named candidate removes 86 %.
+/// (attached load × lagged separation step) the named candidate leaves a held-out force gap
+/// within 2 × the noise (round 20: 2.31 × with an 87 % shrink; round 21: 1.91 ×, an 83 %
+/// shrink of a baseline whose shared cubics already take 43 % of the stall, DECISIONS
+/// "One section law for both levels").
 #[test]
 fn kirchhoff_stall_columns_explain_a_separation_point_stall() {
     let s = spec(43);
     assert_eq!(s.truth, "dynamic_stall");
-    let (outcome, _) = run_one(&s, &BlindOptions::new(330, 2026)).unwrap();
+    let (outcome, diag) = run_one(&s, &BlindOptions::new(330, 2026)).unwrap();
     assert_eq!(outcome.verdict, "dynamic_stall");
-    assert!(outcome.shrink > 0.8, "shrink {}", outcome.shrink);
+    let force = diag
+        .levels
+        .iter()
+        .find(|l| l.level == diagnose::effect::Level::Aerodynamic)
+        .unwrap();
+    let stall = force
+        .candidates
+        .iter()
+        .find(|c| c.effect == diagnose::effect::Effect::DynamicStall)
+        .unwrap();
+    assert!(
+        stall.after < 2.0 * force.noise_level,
+        "remaining gap {} against noise {}",
+        stall.after,
+        force.noise_level
+    );
 }

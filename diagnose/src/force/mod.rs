@@ -724,9 +724,7 @@ pub fn force_level_profiled(
         )
     })?;
     let folds: Vec<Fold> = (0..scheme.folds)
-        .map(|k| {
-            build_fold(k, &fold_of, &cases, &nodes, &prepared, &name, &cache).map(|(f, _)| f)
-        })
+        .map(|k| build_fold(k, &fold_of, &cases, &nodes, &prepared, &name, &cache).map(|(f, _)| f))
         .collect::<Result<_>>()?;
     lap("folds", &mut prof);
     let before = held_out_residuals(&cases, &nodes, &folds, Aug::NONE);

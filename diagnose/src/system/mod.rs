@@ -172,12 +172,7 @@ fn sim_identification(
         .records
         .iter()
         .filter(|r| r.kind == CaseKind::Forced)
-        .map(|r| {
-            (
-                r.meta.config.clone().unwrap_or_default(),
-                r.meta.wind_speed,
-            )
-        })
+        .map(|r| (r.meta.config.clone().unwrap_or_default(), r.meta.wind_speed))
         .collect();
     let all: Vec<usize> = (0..metas.len()).collect();
     let jack = jackknife_subsets(&metas);
