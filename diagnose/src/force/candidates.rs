@@ -394,14 +394,7 @@ fn pool_stats(
     aug: Aug<'_>,
 ) -> PoolStats {
     let key = law::shared_key(shared, aug.key);
-    let cols = |i: usize, ch: usize| -> Vec<Vec<f64>> {
-        let mut v: Vec<Vec<f64>> = shared
-            .iter()
-            .map(|t| cases[i].column(t).as_ref().clone())
-            .collect();
-        v.extend((aug.cols)(i, ch));
-        v
-    };
+    let cols = law::with_shared(cases, shared, aug);
     let all = Aug {
         key: &key,
         cols: &cols,
@@ -628,10 +621,7 @@ fn delay_criterion(sh: &[CaseData], nodes: &[Node], f: &Fold, tau: f64, cache: &
                 .flat_map(|&i| sh[i].y[c].iter().copied())
                 .collect();
             for (t, g) in f.shared[c].iter().zip(&full.shared) {
-                let z = node
-                    .cases
-                    .iter()
-                    .flat_map(|&i| sh[i].column(t).as_ref().clone());
+                let z = law::stacked_column(sh, node, t);
                 y.iter_mut().zip(z).for_each(|(v, z)| *v -= g * z);
             }
             let r = &qr.residual(&y);
@@ -885,11 +875,7 @@ fn vortex(cases: &[CaseData], nodes: &[Node], folds: &[Fold], before: &[[Vec<f64
             let r: [Vec<f64>; 2] = std::array::from_fn(|c| {
                 let mut r = nf.ch[c].res_y.clone();
                 for (t, g) in f.shared[c].iter().zip(&laws[c].shared) {
-                    let z: Vec<f64> = nodes[nf.node]
-                        .cases
-                        .iter()
-                        .flat_map(|&i| cases[i].column(t).as_ref().clone())
-                        .collect();
+                    let z = law::stacked_column(cases, &nodes[nf.node], t);
                     let zt = nf.ch[c].qr.residual(&z);
                     r.iter_mut().zip(&zt).for_each(|(v, z)| *v -= g * z);
                 }

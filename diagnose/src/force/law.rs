@@ -109,15 +109,7 @@ pub(crate) struct NodeCache(Mutex<HashMap<FitKey, Arc<NodeChan>>>);
 /// Factorises one node and channel on the support `sup` (stacked amplitudes, noise
 /// weights, residual of the target), uncached.
 pub(crate) fn build_chan(cases: &[CaseData], node: &Node, sup: &[Term], c: usize) -> NodeChan {
-    let cols: Vec<Vec<f64>> = sup
-        .iter()
-        .map(|t| {
-            node.cases
-                .iter()
-                .flat_map(|&i| cases[i].column(t).iter().copied().collect::<Vec<_>>())
-                .collect()
-        })
-        .collect();
+    let cols: Vec<Vec<f64>> = sup.iter().map(|t| stacked_column(cases, node, t)).collect();
     let refs: Vec<&[f64]> = cols.iter().map(|v| v.as_slice()).collect();
     let qr = ThinQr::new(&refs, QR_TOL);
     let y: Vec<f64> = node
@@ -258,16 +250,7 @@ pub(crate) fn fit_channel(
 ) -> ChannelLaw {
     let ms = shared.len();
     let key = shared_key(shared, aug.key);
-    let cols = |i: usize, ch: usize| -> Vec<Vec<f64>> {
-        let mut v: Vec<Vec<f64>> = shared
-            .iter()
-            .map(|t| cases[i].column(t).as_ref().clone())
-            .collect();
-        if !aug.key.is_empty() {
-            v.extend((aug.cols)(i, ch));
-        }
-        v
-    };
+    let cols = with_shared(cases, shared, aug);
     let all = Aug {
         key: &key,
         cols: &cols,
@@ -332,6 +315,33 @@ pub(crate) fn fit_channel(
         beta: aug_beta,
         nodes: out,
     }
+}
+
+/// The columns of case `i`, channel `c`: the shared nonlinear terms' then `aug`'s (all of
+/// them; a subset indexes past the shared ones).
+pub(crate) fn with_shared<'a>(
+    cases: &'a [CaseData],
+    shared: &'a [Term],
+    aug: Aug<'a>,
+) -> impl Fn(usize, usize) -> Vec<Vec<f64>> + Sync + 'a {
+    move |i, c| {
+        let mut v: Vec<Vec<f64>> = shared
+            .iter()
+            .map(|t| cases[i].column(t).as_ref().clone())
+            .collect();
+        if !aug.key.is_empty() {
+            v.extend((aug.cols)(i, c));
+        }
+        v
+    }
+}
+
+/// Column of term `t` stacked over the cases of `node` (in node order).
+pub(crate) fn stacked_column(cases: &[CaseData], node: &Node, t: &Term) -> Vec<f64> {
+    node.cases
+        .iter()
+        .flat_map(|&i| cases[i].column(t).iter().copied().collect::<Vec<_>>())
+        .collect()
 }
 
 /// Cache key of the shared nonlinear terms followed by an augmentation set (empty when

@@ -15,16 +15,17 @@
 //! 2. **Baseline.** Every forced case is prepared for identification once
 //!    (`identify::pipeline::prepare`); per fold, the training cases' identification
 //!    (default [`IdentifySettings`]; `Prepared::identify` on their indices, the result of
-//!    `identify` on them alone) selects each configuration's support (union of its groups' supports, lift and
-//!    moment, plus every nonlinear term any configuration selected: one section, one
-//!    set of nonlinear terms; then every Eq. 19 nonlinear term the training nodes show when
-//!    their amplitudes are fitted together, `complete_supports`); the law is then one
-//!    coefficient vector per node, fitted by least squares on
-//!    the node's amplitudes together (the identified law depends on K only, as
-//!    `aeroelastic::identified` aggregates it). A held-out case is predicted from its
-//!    preprocessed motion with the node coefficients of its configuration interpolated at
-//!    its K_α (`law::interpolate_scalar`: quadratic through the three nearest nodes inside
-//!    the range, a line through the end nodes outside, held beyond one node spacing).
+//!    `identify` on them alone) selects each configuration's support (union of its groups'
+//!    supports, lift and moment). The law is one section's: per (configuration, wind speed)
+//!    node a coefficient vector on the configuration's linear terms (the identified law's
+//!    linear part depends on K, as `aeroelastic::identified` aggregates it), and one
+//!    coefficient per nonlinear term for every node of every configuration (`split_supports`)
+//!    — the nonlinear terms any configuration selected, completed with every cubic monomial
+//!    the pooled training nodes show (`complete_shared`). Columns are evaluated on the
+//!    absolute pitch. A held-out case is predicted from its preprocessed motion with the
+//!    section's nonlinear coefficients and its node's linear coefficients predicted over K
+//!    (`law::node_coefficients`: a rational function of K pooled over configurations for the
+//!    Scanlan pairs, `law::interpolate_scalar` otherwise).
 //! 3. **Gap** (`gaps`): sqrt(Σr²/ΣF²) per channel in forces per unit span over the
 //!    held-out cases, combined as the rms of the channels; the noise level is the same
 //!    metric with Σr² replaced by Σ n σ̂² (σ̂ = `noise_sigma` of each force channel).
@@ -420,11 +421,7 @@ fn complete_shared(
         let zt: Vec<Option<Vec<f64>>> = all
             .iter()
             .map(|t| {
-                let z: Vec<f64> = node
-                    .cases
-                    .iter()
-                    .flat_map(|&i| cases[i].column(t).as_ref().clone())
-                    .collect();
+                let z = law::stacked_column(cases, node, t);
                 let r = ch.qr.residual(&z);
                 (linalg::dot(&r, &r) > 1e-12 * linalg::dot(&z, &z)).then_some(r)
             })
