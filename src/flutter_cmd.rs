@@ -137,9 +137,18 @@ pub fn run(args: &FlutterArgs) -> anyhow::Result<()> {
             f.message
         );
     }
+    // U_D is the root of the static stiffness (no scan): say when it lies outside the scan
+    let (lo, hi) = (
+        speeds.iter().copied().fold(f64::INFINITY, f64::min),
+        speeds.iter().copied().fold(0.0, f64::max),
+    );
     match fa.divergence_speed {
+        Some(u) if u < lo || u > hi => crate::ui::say!(
+            "divergence: U_D = {u:.4} m/s (outside the scanned {lo}–{hi} m/s: from the static \
+             stiffness, not the scan)"
+        ),
         Some(u) => crate::ui::say!("divergence: U_D = {u:.4} m/s"),
-        None => crate::ui::say!("divergence: none"),
+        None => crate::ui::say!("divergence: none (no positive root of the static stiffness)"),
     }
     if let Some(e) = &ensemble {
         let show =

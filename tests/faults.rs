@@ -481,6 +481,12 @@ fn flutter_scan_without_flutter_in_range_says_none() {
         stdout.contains("flutter: none between 1 and 5 m/s"),
         "{stdout}"
     );
+    // U_D (10.8 m/s, the static stiffness's root) lies beyond the scan: said so
+    assert!(
+        stdout.contains("divergence: U_D = 10.80")
+            && stdout.contains("outside the scanned 1–5 m/s"),
+        "{stdout}"
+    );
     assert_complete(&out);
     let json: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.join("flutter.json")).unwrap()).unwrap();
