@@ -19,7 +19,7 @@ pub enum Error {
         message: String,
     },
     /// A setting is out of range.
-    #[error("setting `{field}` = {value}: {message}")]
+    #[error("setting `{field}` = {}: {message}", identify::limits::show(*.value))]
     Setting {
         /// Setting name.
         field: String,
