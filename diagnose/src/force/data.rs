@@ -45,9 +45,11 @@ pub(crate) struct CaseData {
     /// Mean pitch ᾱ \[rad\] about which the baseline identification regresses this case
     /// (identify's `centre_mean_angle`: the case's declared `mean_pitch`), 0 otherwise. The
     /// configuration's supports then get the constant term (the identification reports the
-    /// mean force in one); the columns themselves are evaluated on the absolute α, since the
-    /// section's nonlinear law, shared by configurations of different mean angles, is one
-    /// law of the absolute angle (a cubic of α − ᾱ would need a quadratic per ᾱ).
+    /// mean force in one). Linear columns are evaluated on α − ᾱ (the node's constant is
+    /// then the force at ᾱ, and a zero-mean augmentation such as an acceleration projects
+    /// on it with nothing); nonlinear ones on the absolute α, since the section's nonlinear
+    /// law, shared by configurations of different mean angles, is one law of the absolute
+    /// angle (a cubic of α − ᾱ would need a quadratic per ᾱ).
     pub alpha_shift: f64,
     /// Monomial columns evaluated so far (filled on demand, shared by every fold and
     /// candidate; a clone starts empty, since clones are made to change the regressors).
@@ -70,7 +72,8 @@ impl CaseData {
         if let Some(v) = self.cols.0.lock().ok().and_then(|m| m.get(t).cloned()) {
             return v;
         }
-        let v = Arc::new(column_of(&self.nd.x, t));
+        let shift = if t.degree() <= 1 { self.alpha_shift } else { 0.0 };
+        let v = Arc::new(column_of(&self.nd.x, shift, t));
         if let Ok(mut m) = self.cols.0.lock() {
             m.entry(*t).or_insert_with(|| v.clone());
         }
@@ -91,12 +94,13 @@ impl CaseData {
         })
     }
 }
-/// Column of a monomial (any degree) on four variable series.
+
 /// Column of a monomial (any degree) on four variable series, pitch taken about
-pub(crate) fn column_of(x: &[Vec<f64>; 4], t: &Term) -> Vec<f64> {
+/// `alpha_shift` (α − ᾱ; 0 for none).
+pub(crate) fn column_of(x: &[Vec<f64>; 4], alpha_shift: f64, t: &Term) -> Vec<f64> {
     let n = x[0].len();
     (0..n)
-        .map(|i| t.eval_at([x[0][i], x[1][i], x[2][i], x[3][i]]))
+        .map(|i| t.eval_at([x[0][i] - alpha_shift, x[1][i], x[2][i], x[3][i]]))
         .collect()
 }
 
