@@ -256,13 +256,32 @@ pub(crate) fn fit_channel(
         cols: &cols,
         subset: None,
     };
+    // without augmentation the shared terms' statistics are a part of the node's cached
+    // section-term statistics
+    let lib_idx: Option<Vec<usize>> = if aug.key.is_empty() {
+        shared
+            .iter()
+            .map(|t| section_terms().iter().position(|x| x == t))
+            .collect()
+    } else {
+        None
+    };
     let grams: Vec<Option<Arc<NodeGram>>> = fits
         .iter()
-        .map(|f| (!key.is_empty()).then(|| all.gram(nodes, f, c)))
+        .map(|f| {
+            if key.is_empty() {
+                None
+            } else if lib_idx.is_some() {
+                Some(section_gram(cases, nodes, f, c))
+            } else {
+                Some(all.gram(nodes, f, c))
+            }
+        })
         .collect();
-    let idx: Vec<usize> = match (aug.subset, grams.first()) {
-        (Some(s), _) => (0..ms).chain(s.iter().map(|j| j + ms)).collect(),
-        (None, Some(Some(g))) => (0..g.b.len()).collect(),
+    let idx: Vec<usize> = match (&lib_idx, aug.subset, grams.first()) {
+        (Some(l), _, _) => l.clone(),
+        (None, Some(s), _) => (0..ms).chain(s.iter().map(|j| j + ms)).collect(),
+        (None, None, Some(Some(g))) => (0..g.b.len()).collect(),
         _ => Vec::new(),
     };
     let m = idx.len();
@@ -342,6 +361,39 @@ pub(crate) fn stacked_column(cases: &[CaseData], node: &Node, t: &Term) -> Vec<f
         .iter()
         .flat_map(|&i| cases[i].column(t).iter().copied().collect::<Vec<_>>())
         .collect()
+}
+
+/// The nonlinear terms the section's law may hold: every monomial of degree 2–3 in (α,
+/// Bα̇/U, h/B, ḣ/U) (`Full34`; the paper library leaves out α²α̇, αα̇², h²ḣ, hḣ², which a
+/// section's pooled amplitudes and speeds separate).
+pub(crate) fn section_terms() -> &'static [Term] {
+    static TERMS: std::sync::OnceLock<Vec<Term>> = std::sync::OnceLock::new();
+    TERMS.get_or_init(|| {
+        identify::library::Library::new(identify::library::LibraryKind::Full34, false)
+            .terms()
+            .iter()
+            .filter(|t| t.degree() >= 2)
+            .copied()
+            .collect()
+    })
+}
+
+/// Statistics of every [`section_terms`] column on training node `f`, channel `c`, computed
+/// once per node factorisation (shared by every fold, jackknife subset and the support
+/// completion that train on the node).
+pub(crate) fn section_gram(
+    cases: &[CaseData],
+    nodes: &[Node],
+    f: &NodeFit,
+    c: usize,
+) -> Arc<NodeGram> {
+    let node = &nodes[f.node];
+    f.ch[c].gram(&format!("section#{c}"), &|| {
+        section_terms()
+            .iter()
+            .map(|t| stacked_column(cases, node, t))
+            .collect()
+    })
 }
 
 /// Cache key of the shared nonlinear terms followed by an augmentation set (empty when

@@ -47,7 +47,7 @@ mod linalg;
 use std::collections::BTreeMap;
 
 use identify::dataset::Dataset;
-use identify::library::{LibraryKind, Term};
+use identify::library::Term;
 use identify::pipeline::{IdentifySettings, Prepared};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -308,16 +308,8 @@ fn build_fold(
     }
     let (supports, mut shared) = split_supports(supports);
     let fits = law::node_fits(cases, nodes, &train, &supports, cache, 0);
-    // every cubic monomial: the paper's library leaves out α²α̇, αα̇², h²ḣ, hḣ² (dependent
-    // per case), which pooled amplitudes and speeds separate
-    let library: Vec<Term> = identify::library::Library::new(LibraryKind::Full34, false)
-        .terms()
-        .iter()
-        .filter(|t| t.degree() >= 2)
-        .copied()
-        .collect();
     for c in 0..2 {
-        complete_shared(cases, nodes, &fits, c, &mut shared[c], &library);
+        complete_shared(cases, nodes, &fits, c, &mut shared[c]);
     }
     Ok((
         Fold {
@@ -371,8 +363,8 @@ pub(crate) fn split_supports(supports: Supports) -> (Supports, [Vec<Term>; 2]) {
 /// ([`complete_shared`]): Z² with Z = [`SUPPORT_Z`].
 pub(crate) const SUPPORT_Z: f64 = 8.0;
 
-/// Completes channel `c`'s shared nonlinear terms with the library terms (`library`, every
-/// term of degree ≥ 2) the training nodes show when fitted together with one coefficient
+/// Completes channel `c`'s shared nonlinear terms with the terms of
+/// [`law::section_terms`] (every monomial of degree 2–3) the training nodes show when fitted together with one coefficient
 /// per term for the whole section.
 ///
 /// A per-case identification cannot tell a cubic from its one-harmonic equivalents: at one
@@ -389,21 +381,13 @@ fn complete_shared(
     fits: &[NodeFit],
     c: usize,
     shared: &mut Vec<Term>,
-    library: &[Term],
 ) {
-    let pool: Vec<Term> = library
-        .iter()
-        .filter(|t| !shared.contains(t))
-        .copied()
-        .collect();
-    if pool.is_empty() || fits.is_empty() {
+    let library = law::section_terms();
+    let m = library.len();
+    if fits.is_empty() {
         return;
     }
-    // statistics of the current shared terms followed by the pool, uncached (the shared set
-    // changes once per completion)
-    let base: Vec<Term> = shared.clone();
-    let all: Vec<Term> = base.iter().chain(&pool).copied().collect();
-    let m = all.len();
+    // noise-weighted sums of the nodes' cached section-term statistics
     let mut g = vec![vec![0.0; m]; m];
     let mut b = vec![0.0; m];
     for f in fits {
@@ -417,21 +401,17 @@ fn complete_shared(
         if !(s2 > 0.0) {
             continue;
         }
-        let ch = &f.ch[c];
-        let zt: Vec<Option<Vec<f64>>> = all
-            .iter()
-            .map(|t| {
-                let z = law::stacked_column(cases, node, t);
-                let r = ch.qr.residual(&z);
-                (linalg::dot(&r, &r) > 1e-12 * linalg::dot(&z, &z)).then_some(r)
-            })
-            .collect();
+        let gr = law::section_gram(cases, nodes, f, c);
         for j in 0..m {
-            let Some(zj) = &zt[j] else { continue };
-            b[j] += linalg::dot(zj, &ch.res_y) / s2;
+            if gr.absorbed[j] {
+                continue;
+            }
+            b[j] += gr.b[j] / s2;
             for k in j..m {
-                let Some(zk) = &zt[k] else { continue };
-                let v = linalg::dot(zj, zk) / s2;
+                if gr.absorbed[k] {
+                    continue;
+                }
+                let v = gr.g[j][k] / s2;
                 g[j][k] += v;
                 if k != j {
                     g[k][j] += v;
@@ -450,10 +430,13 @@ fn complete_shared(
         let bs: Vec<f64> = idx.iter().map(|&i| b[i]).collect();
         linalg::solve_spd(&gs, &bs, law::BETA_RIDGE).map_or(0.0, |x| linalg::dot(&x, &bs))
     };
-    let mut set: Vec<usize> = (0..base.len()).collect();
+    let mut set: Vec<usize> = shared
+        .iter()
+        .filter_map(|t| library.iter().position(|x| x == t))
+        .collect();
     let mut cur = quad(&set);
     loop {
-        let best = (base.len()..m)
+        let best = (0..m)
             .filter(|j| !set.contains(j))
             .map(|j| {
                 let mut s = set.clone();
@@ -466,7 +449,7 @@ fn complete_shared(
             Some((j, d)) if d > SUPPORT_Z * SUPPORT_Z => {
                 set.push(j);
                 cur += d;
-                shared.push(all[j]);
+                shared.push(library[j]);
             }
             _ => break,
         }
