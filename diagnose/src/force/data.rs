@@ -72,7 +72,11 @@ impl CaseData {
         if let Some(v) = self.cols.0.lock().ok().and_then(|m| m.get(t).cloned()) {
             return v;
         }
-        let shift = if t.degree() <= 1 { self.alpha_shift } else { 0.0 };
+        let shift = if t.degree() <= 1 {
+            self.alpha_shift
+        } else {
+            0.0
+        };
         let v = Arc::new(column_of(&self.nd.x, shift, t));
         if let Ok(mut m) = self.cols.0.lock() {
             m.entry(*t).or_insert_with(|| v.clone());

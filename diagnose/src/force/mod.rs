@@ -398,7 +398,7 @@ fn complete_shared(
             .map(|&i| cases[i].sigma[c].powi(2))
             .sum::<f64>()
             / node.cases.len().max(1) as f64;
-        if !(s2 > 0.0) {
+        if s2.is_nan() || s2 <= 0.0 {
             continue;
         }
         let gr = law::section_gram(cases, nodes, f, c);
