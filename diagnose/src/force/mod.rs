@@ -458,7 +458,7 @@ fn complete_shared(
 }
 
 /// The section's law fitted on forced cases, written as an identification: the law of a
-/// fold ([`build_fold`], [`law::fit_channel`]) trained on every node of `subset`, each
+/// fold (`build_fold`, `law::fit_channel`) trained on every node of `subset`, each
 /// case's coefficients replaced by its node's linear coefficients and the section's shared
 /// nonlinear ones (on the absolute pitch: `mean_pitch` cleared), its Eq. 19 values
 /// recomputed from them. `subsets`: the case-index subsets to fit (indices into the data
