@@ -20,7 +20,6 @@ use aeroelastic::identified::{IdentifiedLaw, IdentifiedOptions};
 use aeroelastic::structure::{Nonlinearities, Structure, StructureSpec};
 use identify::dataset::Dataset;
 use identify::pipeline::IdentifySettings;
-use identify::preprocess::PreprocessOptions;
 use identify::record::CaseKind;
 
 use crate::effect::{Effect, Level};
@@ -56,8 +55,6 @@ pub struct SystemOptions {
     pub min_gain: f64,
     /// Parsimony penalty: extra noise energies per fitted parameter (default 0.02).
     pub gain_per_param: f64,
-    /// Preprocessing of the forced records for the identification.
-    pub preprocess: PreprocessOptions,
     /// Identification settings (default: identify's defaults).
     pub identify: IdentifySettings,
     /// Re-simulate every run with the sim (and the best candidate) for the observables
@@ -80,7 +77,6 @@ impl Default for SystemOptions {
             gap_ratio: 1.25,
             min_gain: 0.05,
             gain_per_param: 0.02,
-            preprocess: PreprocessOptions::default(),
             identify: IdentifySettings::default(),
             simulate: true,
             structure: None,
@@ -129,9 +125,11 @@ impl SystemOptions {
     }
 }
 
-/// Identifies the sim's law from every forced case of `forced` (preprocessing and
-/// identification with `opts`' settings, then [`IdentifiedLaw::from_identification`] with
-/// the default [`IdentifiedOptions`] for the data set's chord).
+/// Identifies the sim's law from every forced case of `forced`: the force level's section
+/// law ([`crate::force::section_identifications`]: identify's preprocessing, the group stage
+/// with `opts.identify`, one set of nonlinear coefficients for the section), then
+/// [`IdentifiedLaw::from_identification`] with the default [`IdentifiedOptions`] for the
+/// data set's chord.
 ///
 /// # Errors
 /// [`Error::Data`] when `forced` has no forced case; [`Error::Identify`] /
