@@ -99,3 +99,37 @@ fn kirchhoff_stall_columns_explain_a_separation_point_stall() {
         force.noise_level
     );
 }
+
+/// Set 54 of the drawn-physics benchmark (`--shapes`: configuration E alone, 3–24°, no
+/// effect, the truth law a cubic in the effective angle: moment α²α̇ −73.5, αα̇ḣ −147,
+/// αα̇² −17.7, …). Round 20 named it `higher_order` (force-level statistic 39.4): the paper's
+/// library has no α²α̇ or αα̇², and per case α²α̇ is α̇³ plus a multiple of α̇. The section
+/// law (one coefficient per cubic monomial for every node, completed from all of them) is
+/// at the noise, and the sim built from it leaves the free runs unexplained by any effect.
+#[test]
+fn an_effective_angle_law_is_not_an_effect() {
+    let mut s =
+        diagnose::bench::draw_specs_from(330, 2026, &diagnose::bench::shapes_truth_labels())[54]
+            .clone();
+    assert_eq!(s.truth, "none");
+    s.shape = Some(CampaignShape::draw_with_physics(s.seed));
+    let mut opts = BlindOptions::new(330, 2026);
+    opts.shapes = true;
+    let (outcome, diag) = run_one(&s, &opts).unwrap();
+    assert!(
+        ["none", "extrapolation"].contains(&outcome.verdict.as_str()),
+        "verdict {} ({})",
+        outcome.verdict,
+        diag.verdict.reason
+    );
+    let force = diag
+        .levels
+        .iter()
+        .find(|l| l.level == diagnose::effect::Level::Aerodynamic)
+        .unwrap();
+    assert!(
+        force.gap_statistic < 1.2,
+        "force-level statistic {}",
+        force.gap_statistic
+    );
+}
