@@ -21,8 +21,8 @@
 //!    linear part depends on K, as `aeroelastic::identified` aggregates it), and one
 //!    coefficient per nonlinear term for every node of every configuration (`split_supports`)
 //!    — the nonlinear terms any configuration selected, completed with every cubic monomial
-//!    the pooled training nodes show (`complete_shared`). Columns are evaluated on the
-//!    absolute pitch. A held-out case is predicted from its preprocessed motion with the
+//!    the pooled training nodes show (`complete_shared`). Nonlinear columns are evaluated on
+//!    the absolute pitch, linear ones about a declared mean pitch. A held-out case is predicted from its preprocessed motion with the
 //!    section's nonlinear coefficients and its node's linear coefficients predicted over K
 //!    (`law::node_coefficients`: a rational function of K pooled over configurations for the
 //!    Scanlan pairs, `law::interpolate_scalar` otherwise).
@@ -265,31 +265,6 @@ fn build_fold(
             }
         }
     }
-    // Every configuration is the same section: a nonlinear term that any configuration's
-    // identification selects belongs to every configuration's node law. A configuration
-    // whose forcing hides it (Table I's A pitches at 0.7 Hz: α̇³ is a few noise σ per
-    // case, and a per-case fit folds its fundamental into the α̇ coefficient) cannot fit
-    // its amplitudes with one coefficient vector without it, and its held-out gap grows
-    // with amplitude (DECISIONS, "One nonlinear support for every configuration").
-    let mut shared: [Vec<Term>; 2] = [Vec::new(), Vec::new()];
-    for s in supports.values() {
-        for c in 0..2 {
-            for t in &s[c] {
-                if t.degree() >= 2 && !shared[c].contains(t) {
-                    shared[c].push(*t);
-                }
-            }
-        }
-    }
-    for s in supports.values_mut() {
-        for c in 0..2 {
-            for t in &shared[c] {
-                if !s[c].contains(t) {
-                    s[c].push(*t);
-                }
-            }
-        }
-    }
     for s in supports.values_mut() {
         for c in s.iter_mut() {
             c.sort_by_key(|t| (t.degree(), std::cmp::Reverse(t.powers)));
@@ -306,6 +281,12 @@ fn build_fold(
             ));
         }
     }
+    // Every configuration is the same section: a nonlinear term that any configuration's
+    // identification selects belongs to the section's law, one coefficient for every node.
+    // A configuration whose forcing hides it (Table I's A pitches at 0.7 Hz: α̇³ is a few
+    // noise σ per case, and a per-case fit folds its fundamental into the α̇ coefficient)
+    // could not fit its amplitudes with one coefficient vector without it (DECISIONS, "One
+    // nonlinear support for every configuration", "One section law for both levels").
     let (supports, mut shared) = split_supports(supports);
     let fits = law::node_fits(cases, nodes, &train, &supports, cache, 0);
     for c in 0..2 {
@@ -329,8 +310,8 @@ fn build_fold(
 /// coefficient each).
 ///
 /// A nonlinear coefficient identified per node and interpolated over K breaks the
-/// cancellations between correlated cubic columns (DECISIONS, "Nonlinear coefficients
-/// shared by the section's nodes").
+/// cancellations between correlated cubic columns (DECISIONS, "One section law for both
+/// levels").
 pub(crate) fn split_supports(supports: Supports) -> (Supports, [Vec<Term>; 2]) {
     let mut shared: [Vec<Term>; 2] = [Vec::new(), Vec::new()];
     let linear = supports
