@@ -58,7 +58,8 @@ pub struct BranchArgs {
 /// Parses `a:b` into a checked range.
 ///
 /// # Errors
-/// [`crate::exit::Usage`] (exit code 2) naming `--speeds`.
+/// [`crate::exit::Usage`] (exit code 2) naming `--speeds`; a speed above the limits table's
+/// `MAX_SPEED` is a [`aeroform::limits::LimitError`] (also exit code 2).
 fn parse_range(s: &str) -> anyhow::Result<(f64, f64)> {
     let bad = || {
         anyhow::Error::from(crate::exit::Usage(format!(
@@ -71,6 +72,7 @@ fn parse_range(s: &str) -> anyhow::Result<(f64, f64)> {
     if !(a.is_finite() && b.is_finite() && a > 0.0 && b > a) {
         return Err(bad());
     }
+    aeroform::limits::positive_at_most("--speeds", b, aeroform::limits::MAX_SPEED, "m/s")?;
     Ok((a, b))
 }
 
@@ -90,7 +92,6 @@ fn stop_text(s: &StopReason) -> String {
 /// Runs `aeroform branch`.
 pub fn run(args: &BranchArgs) -> anyhow::Result<()> {
     let (u_min, u_max) = parse_range(&args.speeds)?;
-    let l = load(&args.structure, &args.model, args.chord)?;
     let opts = BranchOptions {
         max_points: args.max_points,
         steps_per_period: args.steps_per_period,
@@ -98,6 +99,22 @@ pub fn run(args: &BranchArgs) -> anyhow::Result<()> {
         harmonics: args.harmonics,
         ..BranchOptions::default()
     };
+    // The counts against the limits table, before any file is read, named by their flag
+    // (`branch.max_points` is `--max-points`).
+    if let Err(aeroelastic::Error::InvalidParameter {
+        field,
+        value,
+        message,
+    }) = opts.check()
+    {
+        let flag = field.trim_start_matches("branch.").replace('_', "-");
+        return Err(crate::exit::Usage(format!(
+            "--{flag} = {}: {message}",
+            identify::limits::show(value)
+        ))
+        .into());
+    }
+    let l = load(&args.structure, &args.model, args.chord)?;
     let measured = match &args.measured {
         Some(p) => Some(read_measured_amplitudes(p).context("measured amplitudes")?),
         None => None,

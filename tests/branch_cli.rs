@@ -267,9 +267,9 @@ fn diagnose_measured_branch_writes_its_document_figures_and_report() {
 fn branch_counts_are_capped_on_the_command_line_and_in_a_study() {
     let dir = tmp();
     for (flag, value, field) in [
-        ("--harmonics", "1000000000000", "branch.harmonics"),
-        ("--harmonics", "10000", "branch.harmonics"),
-        ("--steps-per-period", "1000000", "branch.steps_per_period"),
+        ("--harmonics", "1000000000000", "--harmonics"),
+        ("--harmonics", "10000", "--harmonics"),
+        ("--steps-per-period", "1000000", "--steps-per-period"),
     ] {
         let (ok, stdout, stderr) = aeroform(&[
             "branch",

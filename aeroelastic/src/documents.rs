@@ -75,6 +75,10 @@ impl LoadedPair {
     /// The errors of [`StructureFile::read`], [`StructureFile::structure`],
     /// [`LoadedModel::load`] and [`Section::new`] (each names the file and the field).
     pub fn load(structure: &Path, model: &Path, chord: Option<f64>) -> Result<Self> {
+        if let Some(c) = chord {
+            identify::limits::positive_at_most(c, identify::limits::MAX_CHORD, "m")
+                .map_err(|m| crate::Error::param("chord", c, m))?;
+        }
         let file = StructureFile::read(structure)?;
         let model = LoadedModel::load(model, chord.or(file.chord))?;
         Self::from_parts(file, model)
@@ -190,8 +194,8 @@ impl LoadedPair {
     /// `aeroform branch` ([`Section::lco_branches`]).
     ///
     /// # Errors
-    /// [`crate::Error::InvalidParameter`] when the range is not 0 < `u_min` < `u_max`
-    /// (finite); the errors of [`Section::lco_branches`] (no Hopf point in range,
+    /// [`crate::Error::InvalidParameter`] when the range is not 0 < `u_min` < `u_max` ≤
+    /// `identify::limits::MAX_SPEED`; the errors of [`Section::lco_branches`] (no Hopf point in range,
     /// non-smooth nonlinearity, bad options).
     pub fn branches(
         &self,
@@ -200,11 +204,13 @@ impl LoadedPair {
         opts: &BranchOptions,
         observer: &dyn Fn(BranchProgress),
     ) -> Result<BranchSet> {
-        if !(u_min.is_finite() && u_min > 0.0) {
-            return Err(crate::Error::param("u_min", u_min, "finite and > 0 m/s"));
-        }
-        if !(u_max.is_finite() && u_max > u_min) {
-            return Err(crate::Error::param("u_max", u_max, "finite and > u_min"));
+        use identify::limits::{positive_at_most, MAX_SPEED};
+        positive_at_most(u_min, MAX_SPEED, "m/s")
+            .map_err(|m| crate::Error::param("u_min", u_min, m))?;
+        positive_at_most(u_max, MAX_SPEED, "m/s")
+            .map_err(|m| crate::Error::param("u_max", u_max, m))?;
+        if u_max <= u_min {
+            return Err(crate::Error::param("u_max", u_max, "must be > u_min"));
         }
         self.section.lco_branches(u_min, u_max, opts, observer)
     }

@@ -27,13 +27,7 @@ pub const MAP_FORMAT: &str = "aeroform-sweep/1";
 /// Format tag of a part document (the items of one shard).
 pub const PART_FORMAT: &str = "aeroform-sweep-part/1";
 
-/// Largest `n` of a benchmark sweep (the cap of `aeroform diagnose --blind`, ≈ 3 s per set).
-pub const MAX_SETS: usize = 10_000;
-/// Largest number of flutter or LCO speeds of a map item (the cap of every speed list).
-pub const MAX_SPEEDS: usize = 10_000;
-/// Largest number of grid points of a map (μ × σ × x_α × r² values; each point is one
-/// flutter scan of milliseconds and one JSON item).
-pub const MAX_GRID_POINTS: usize = 100_000;
+use identify::limits::{MAX_BLIND_SETS as MAX_SETS, MAX_GRID_POINTS, MAX_SPEEDS};
 
 /// What to sweep (JSON, tagged by `kind`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

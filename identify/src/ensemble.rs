@@ -89,15 +89,23 @@ impl EnsembleSettings {
     /// Checks the settings.
     ///
     /// # Errors
-    /// [`Error::InvalidOption`] naming `ensemble.members` (< 2), `ensemble.level` (outside
+    /// [`Error::InvalidOption`] naming `ensemble.members` (< 2 or above
+    /// [`crate::limits::MAX_ENSEMBLE`]), `ensemble.level` (outside
     /// (0, 1)) or `ensemble.block_periods` (not finite and > 0).
     pub fn validate(&self) -> Result<()> {
         let bad = |name: &str, message: String| Error::InvalidOption {
             name: format!("ensemble.{name}"),
             message,
         };
-        if self.members < 2 {
-            return Err(bad("members", format!("{} must be ≥ 2", self.members)));
+        if !(2..=crate::limits::MAX_ENSEMBLE).contains(&self.members) {
+            return Err(bad(
+                "members",
+                format!(
+                    "{} must be in 2..={}",
+                    self.members,
+                    crate::limits::MAX_ENSEMBLE
+                ),
+            ));
         }
         if !(self.level > 0.0 && self.level < 1.0) {
             return Err(bad("level", format!("{} must be in (0, 1)", self.level)));

@@ -38,6 +38,7 @@ __all__ = [
     "sweep",
     "sweep_local",
     "parse_speeds",
+    "limits",
 ]
 
 PathLike = Union[str, "os.PathLike[str]"]
@@ -202,6 +203,17 @@ class Dataset:
         return f"Dataset({self.name!r}, {len(self.case_ids)} cases)"
 
 
+def limits() -> Dict[str, Dict[str, Any]]:
+    """The limits table (docs/DATA_FORMAT.md, "Limits"): for each entry (``MAX_SPEED``, …)
+    its bound ``max`` (largest allowed value, of |x| for signed quantities), ``unit`` and
+    where a user sets it (``set_by``). Every argument of this package is checked against
+    it and an :class:`AeroformError` names the argument."""
+    return {
+        name: {"max": mx, "unit": unit, "set_by": set_by}
+        for name, mx, unit, set_by in _core.limits()
+    }
+
+
 def read_dataset(path: PathLike) -> Dataset:
     """Reads a data-set folder (manifest.toml + case CSV files, docs/DATA_FORMAT.md)."""
     return Dataset(_core.read_dataset(os.fspath(path)))
@@ -349,6 +361,11 @@ def parse_speeds(speeds: Union[str, Iterable[float]]) -> List[float]:
                 lo, hi, k = float(a), float(b), int(n)
                 if k < 1:
                     raise ValueError
+                cap = int(limits()["MAX_SPEEDS"]["max"])
+                if k > cap:
+                    raise AeroformError(
+                        f"speeds `{speeds}`: {k} speeds, at most {cap} (MAX_SPEEDS)"
+                    )
                 if k == 1:
                     return [lo]
                 return [lo + (hi - lo) * i / (k - 1) for i in range(k)]

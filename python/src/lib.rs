@@ -311,11 +311,18 @@ fn flutter_method(name: &str) -> PyResult<FlutterMethod> {
     }
 }
 
+/// A speed list against the limits table: at most `MAX_SPEEDS` speeds, each finite, > 0 and
+/// ≤ `MAX_SPEED` m/s; the error names the argument.
 fn check_speeds(speeds: &[f64], what: &str) -> PyResult<()> {
-    if let Some(u) = speeds.iter().find(|u| !(u.is_finite() && **u > 0.0)) {
+    use identify::limits::{positive_at_most, MAX_SPEED, MAX_SPEEDS};
+    if speeds.len() > MAX_SPEEDS {
         return Err(err(format!(
-            "{what}: every speed must be finite and > 0 (got {u})"
+            "{what}: {} speeds, at most {MAX_SPEEDS}",
+            speeds.len()
         )));
+    }
+    for u in speeds {
+        positive_at_most(*u, MAX_SPEED, "m/s").map_err(|m| err(format!("{what}: {m}")))?;
     }
     Ok(())
 }
@@ -381,9 +388,8 @@ fn lco(
         }
     }
     for (name, x) in [("alpha0", alpha0), ("alpha0_down", alpha0_down)] {
-        if !x.is_finite() {
-            return Err(err(format!("{name} = {x}: must be finite")));
-        }
+        identify::limits::abs_at_most(x, identify::limits::MAX_PITCH_DEG, "deg")
+            .map_err(|m| err(format!("{name}: {m}")))?;
     }
     py.detach(|| {
         let pair = LoadedPair::load(&structure, &model, chord).map_err(|e| e.to_string())?;
@@ -467,6 +473,17 @@ fn branch(
     .map_err(err)
 }
 
+/// The limits table (`identify::limits::TABLE`, docs/DATA_FORMAT.md "Limits"): one
+/// `(name, max, unit, set_by)` per entry; `max` is the largest allowed value (of |x| for
+/// signed quantities) in `unit`.
+#[pyfunction]
+fn limits() -> Vec<(&'static str, f64, &'static str, &'static str)> {
+    identify::limits::TABLE
+        .iter()
+        .map(|l| (l.name, l.max, l.unit, l.set_by))
+        .collect()
+}
+
 /// Sim-to-real diagnosis (`aeroform diagnose`): returns the `diagnosis.json` document.
 #[pyfunction]
 #[pyo3(name = "diagnose", signature = (forced, free = None, seed = 1))]
@@ -548,6 +565,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(lco, m)?)?;
     m.add_function(wrap_pyfunction!(branch, m)?)?;
     m.add_function(wrap_pyfunction!(py_diagnose, m)?)?;
+    m.add_function(wrap_pyfunction!(limits, m)?)?;
     m.add_function(wrap_pyfunction!(sweep_n_items, m)?)?;
     m.add_function(wrap_pyfunction!(sweep_run_items, m)?)?;
     m.add_function(wrap_pyfunction!(sweep_assemble, m)?)?;

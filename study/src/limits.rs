@@ -1,38 +1,12 @@
-//! Caps on every count, duration, rate and memory estimate that a command-line flag or a
-//! study file can ask for, and the plausibility of the physical numbers they carry. Each
-//! check runs before anything is allocated or written and fails with a [`LimitError`]
-//! naming the flag or the dotted study key; the binary exits with code 2 on it.
-//!
-//! The caps are far above every shipped scenario (docs/DECISIONS.md, "Input limits"): the
-//! paper campaign holds 448 × 10 s × 512 Hz = 2.3 M samples, the cap is 25 M (≈ 1 GB of
-//! five f64 channels); the densest flutter scan ships with 96 speeds, the cap is 10 000.
+//! The checks of the limits table (`identify::limits::TABLE`, the one place the values
+//! live) for command-line flags and study keys. Each runs before anything is allocated or
+//! written and fails with a [`LimitError`] naming the flag or the dotted study key; the
+//! binary exits with code 2 on it.
 
-/// Largest number of wind speeds of a scan, sweep or free-response campaign.
-pub const MAX_SPEEDS: usize = 10_000;
-/// Largest number of generated data sets of `diagnose --blind` (≈ 1 s each).
-pub const MAX_BLIND_SETS: usize = 10_000;
-/// Largest number of cases a study may generate (configurations × amplitudes × speeds,
-/// or Table IV repeats).
-pub const MAX_CASES: usize = 100_000;
-/// Largest number of samples a command may generate and hold (all cases and records
-/// together, still-air runs included): 25 M samples ≈ 1 GB of five f64 channels.
-pub const MAX_SAMPLES: f64 = 2.5e7;
-/// Largest record duration \[s\] (≈ 11.6 days).
-pub const MAX_DURATION: f64 = 1e6;
-/// Largest sampling rate \[Hz\].
-pub const MAX_RATE: f64 = 1e6;
-/// Largest wind speed [m/s] (or reduced speed U/(bω_α) in a nondimensional study);
-/// equals the data-set reader's bound (`identify::dataset::PLAUSIBLE_MAX`).
-pub const MAX_SPEED: f64 = identify::limits::MAX_SPEED;
-/// Largest length of an LCO run [pitch periods].
-pub const MAX_PERIODS: f64 = 1e5;
-/// Largest phase-portrait length [pitch periods] (400 points each).
-pub const MAX_PHASE_PERIODS: f64 = 1000.0;
-/// Largest initial pitch perturbation magnitude \[deg\].
-pub const MAX_PITCH_DEG: f64 = identify::limits::MAX_PITCH_DEG;
-/// Largest number of bootstrap members of an identification ensemble (each member is one
-/// identification, ≈ the nominal one's cost; `identify --ensemble`, `[identify] ensemble`).
-pub const MAX_ENSEMBLE: usize = 10_000;
+pub use identify::limits::{
+    MAX_BLIND_SETS, MAX_CASES, MAX_DURATION, MAX_ENSEMBLE, MAX_PERIODS, MAX_PHASE_PERIODS,
+    MAX_PITCH_DEG, MAX_RATE, MAX_SAMPLES, MAX_SPEED, MAX_SPEEDS,
+};
 
 /// A request beyond a cap or a physically implausible number: the flag or dotted key, and
 /// what is wrong with the numbers.
@@ -82,11 +56,7 @@ pub fn abs_at_most(field: &str, x: f64, max: f64, unit: &str) -> Result<f64, Lim
 /// # Errors
 /// [`LimitError`] naming `field` with the count and the bound.
 pub fn count(field: &str, n: u128, max: usize) -> Result<usize, LimitError> {
-    if n >= 1 && n <= max as u128 {
-        Ok(n as usize)
-    } else {
-        err(field, format!("{n} must be in 1..={max}"))
-    }
+    identify::limits::count_at_most(n, max).or_else(|m| err(field, m))
 }
 
 /// Samples of a generated campaign, `records × duration × rate` (still-air runs count as
@@ -110,12 +80,14 @@ pub fn samples(
         return err(
             duration_field,
             format!(
-                "{records} record(s) × {} s × {} Hz = {n:.3e} samples \
-                 (≈ {:.1} GB) exceed the cap of {MAX_SAMPLES:.1e} samples; shorten the \
+                "{records} record(s) × {} s × {} Hz = {} samples \
+                 (≈ {:.1} GB) exceed the cap of {} samples (MAX_SAMPLES); shorten the \
                  records or use fewer cases",
                 show(duration),
                 show(rate),
-                n * 5.0 * 8.0 / 1e9
+                show(n),
+                n * 5.0 * 8.0 / 1e9,
+                show(MAX_SAMPLES)
             ),
         );
     }

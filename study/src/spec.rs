@@ -1216,19 +1216,23 @@ impl Study {
             if c <= a {
                 return err("branch.speeds", format!("[{a}, {c}]: expected a < b"));
             }
-            if !(1..=100_000).contains(&b.max_points) {
+            use identify::limits::{MAX_BRANCH_POINTS, MAX_STEPS_PER_PERIOD};
+            if !(2..=MAX_BRANCH_POINTS).contains(&b.max_points) {
                 return err(
                     "branch.max_points",
-                    format!("{}: expected 1 … 100000", b.max_points),
+                    format!("{}: expected 2 … {MAX_BRANCH_POINTS}", b.max_points),
                 );
             }
-            if !(16..=100_000).contains(&b.steps_per_period) {
+            if !(16..=MAX_STEPS_PER_PERIOD).contains(&b.steps_per_period) {
                 return err(
                     "branch.steps_per_period",
-                    format!("{}: expected 16 … 100000", b.steps_per_period),
+                    format!(
+                        "{}: expected 16 … {MAX_STEPS_PER_PERIOD}",
+                        b.steps_per_period
+                    ),
                 );
             }
-            let hmax = aeroelastic::branch::MAX_HARMONICS;
+            let hmax = identify::limits::MAX_HARMONICS;
             if !(1..=hmax).contains(&b.harmonics) {
                 return err(
                     "branch.harmonics",
@@ -1286,7 +1290,7 @@ impl Study {
             lim(abs_at_most(
                 "lco.perturbation_deg",
                 l.perturbation_deg,
-                90.0,
+                crate::limits::MAX_PITCH_DEG,
                 "deg",
             ))?;
             lim(abs_at_most(

@@ -112,10 +112,8 @@ impl std::str::FromStr for BranchMethod {
     }
 }
 
-/// Largest number of harmonics of the harmonic balance: the full form's Jacobian has
-/// (n(2H + 1) + 2)² entries (H = 100 and 6 states: 15 MB), far beyond what a limit cycle of
-/// a smooth section needs (5 by default).
-pub const MAX_HARMONICS: usize = 100;
+/// Largest number of harmonics of the harmonic balance (the limits table's entry).
+pub use identify::limits::MAX_HARMONICS;
 
 fn default_harmonics() -> usize {
     5
@@ -144,8 +142,8 @@ impl Default for BranchOptions {
 impl BranchOptions {
     /// Checks the options.
     ///
-    /// Counts are capped (steps per period, points, scan speeds ≤ 100 000; Newton iterations
-    /// ≤ 1000; harmonics ≤ [`MAX_HARMONICS`]) so that no request allocates without bound.
+    /// Counts are capped by the limits table (`identify::limits`: steps per period, points,
+    /// scan speeds, Newton iterations, harmonics) so that no request allocates without bound.
     ///
     /// # Errors
     /// [`Error::InvalidParameter`] naming the bad option and its allowed range.
@@ -168,16 +166,27 @@ impl BranchOptions {
                 ),
             ));
         }
+        use identify::limits as l;
         for (name, v, min, max) in [
             (
                 "branch.steps_per_period",
                 self.steps_per_period,
                 16,
-                100_000,
+                l::MAX_STEPS_PER_PERIOD,
             ),
-            ("branch.max_points", self.max_points, 2, 100_000),
-            ("branch.max_newton", self.max_newton, 2, 1_000),
-            ("branch.n_scan", self.n_scan, 2, 100_000),
+            (
+                "branch.max_points",
+                self.max_points,
+                2,
+                l::MAX_BRANCH_POINTS,
+            ),
+            (
+                "branch.max_newton",
+                self.max_newton,
+                2,
+                l::MAX_NEWTON_ITERATIONS,
+            ),
+            ("branch.n_scan", self.n_scan, 2, l::MAX_SCAN_SPEEDS),
             ("branch.harmonics", self.harmonics, 1, MAX_HARMONICS),
         ] {
             if v < min || v > max {

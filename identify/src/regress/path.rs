@@ -43,11 +43,9 @@ pub struct PathOptions {
     pub loss_noise: f64,
 }
 
+/// Largest number of δ values on a path: the limits table's entry.
+pub use crate::limits::MAX_N_DELTA;
 /// Default number of δ values.
-/// Largest number of δ values on a path (each value is one sparse fit per case; the
-/// default is 50): a larger request is an option error, checked before allocating.
-pub const MAX_N_DELTA: usize = 100_000;
-
 pub const DEFAULT_N_DELTA: usize = 50;
 /// Default relative slack of the loss limit.
 pub const DEFAULT_LOSS_REL: f64 = 0.1;
