@@ -15,6 +15,24 @@ impl std::fmt::Display for Usage {
 
 impl std::error::Error for Usage {}
 
+/// The message of an error and its causes, `outer: inner: …`, each cause written once: the
+/// crates' context variants (`{context}: {source}`) already print their source, which
+/// `{:#}` would print a second time ("x: No such file or directory (os error 2): x: No such
+/// file or directory (os error 2)", issue 27 row 17).
+pub fn message(e: &anyhow::Error) -> String {
+    let mut s = String::new();
+    for c in e.chain() {
+        let t = c.to_string();
+        if s.is_empty() {
+            s = t;
+        } else if !s.contains(&t) {
+            s.push_str(": ");
+            s.push_str(&t);
+        }
+    }
+    s
+}
+
 /// The exit code of an error: 2 when any error of its chain is an input error (the
 /// input's file, line and field are in the message), else 1.
 pub fn code(e: &anyhow::Error) -> u8 {
@@ -141,5 +159,14 @@ mod tests {
         // a bad `--shard` (issue 27, row 17)
         let shard = diagnose::sweep::parse_shard("3/2").unwrap_err();
         assert_eq!(code(&anyhow::Error::from(shard)), 2);
+    }
+
+    #[test]
+    fn a_cause_already_in_its_context_is_written_once() {
+        let io = std::io::Error::new(std::io::ErrorKind::NotFound, "x: missing");
+        let e = anyhow::Error::new(io).context("sweep files a and x: x: missing");
+        assert_eq!(super::message(&e), "sweep files a and x: x: missing");
+        let e = anyhow::anyhow!("inner").context("outer");
+        assert_eq!(super::message(&e), "outer: inner");
     }
 }

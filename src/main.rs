@@ -17,7 +17,6 @@ mod sweep_cmd;
 mod tunnel_cmd;
 mod ui;
 
-use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
@@ -100,7 +99,7 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", exit::message(&e));
             ExitCode::from(exit::code(&e))
         }
     }
@@ -115,10 +114,4 @@ fn version() -> String {
         env!("CARGO_PKG_VERSION"),
         env!("AEROFORM_GIT")
     )
-}
-
-/// Creates the output folder (and parents), with a message naming it on failure.
-fn ensure_dir(dir: &PathBuf) -> anyhow::Result<()> {
-    std::fs::create_dir_all(dir)
-        .map_err(|e| anyhow::anyhow!("cannot create output folder {}: {e}", dir.display()))
 }

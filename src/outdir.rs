@@ -342,15 +342,22 @@ impl Drop for Lock {
     }
 }
 
-/// Removes work folders (`.X.aeroform-staging.PID`, `.X.aeroform-old.PID`) of dead
-/// processes in `parent`, without following symbolic links; says so on stderr.
+/// Removes work folders (`.X.aeroform-staging.PID`, `.X.aeroform-old.PID`) and lock PID
+/// files (`.X.aeroform-lock.PID.tmp`) of dead processes in `parent`, without following
+/// symbolic links; says so on stderr.
 fn clean_dead_work_folders(parent: &Path) {
     let Ok(entries) = std::fs::read_dir(parent) else {
         return;
     };
     for e in entries.flatten() {
         let name = e.file_name().to_string_lossy().into_owned();
-        let Some((_, pid)) = identify::io::work_folder_pid(&name) else {
+        // the private PID file a killed process left while taking a lock
+        // (`.X.aeroform-lock.PID.tmp`, see `Lock::acquire`)
+        let lock_pid = temp_file_pid(&name).filter(|_| name.contains(".aeroform-lock."));
+        let Some(pid) = identify::io::work_folder_pid(&name)
+            .map(|(_, p)| p)
+            .or(lock_pid)
+        else {
             continue;
         };
         if pid == std::process::id() || pid_alive(pid) {
@@ -635,6 +642,27 @@ mod tests {
         assert_eq!(temp_file_pid("a.1.tmp"), None);
         assert_eq!(temp_file_pid(".a.x1.tmp"), None);
         assert_eq!(temp_file_pid(".a.1.json"), None);
+    }
+
+    /// A SIGKILL while a lock is taken leaves its private PID file (the kill campaign of
+    /// tests/campaign.rs found it after a clean run): the next writer removes it, and a live
+    /// process's file and other names stay.
+    #[test]
+    fn a_dead_process_lock_pid_file_is_removed() {
+        let dir = tempfile::tempdir().unwrap();
+        let dead = dir
+            .path()
+            .join(format!(".o.aeroform-lock.{}.tmp", u32::MAX));
+        let live = dir
+            .path()
+            .join(format!(".o.aeroform-lock.{}.tmp", std::process::id()));
+        let other = dir.path().join(format!(".notes.{}.tmp", u32::MAX));
+        for p in [&dead, &live, &other] {
+            std::fs::write(p, "1").unwrap();
+        }
+        clean_dead_work_folders(dir.path());
+        assert!(!dead.exists());
+        assert!(live.exists() && other.exists());
     }
 
     /// Issue 27 row 9: the lock is never visible without its PID (a second process would

@@ -34,10 +34,16 @@ pub struct MergeArgs {
     pub parts: Vec<PathBuf>,
 }
 
+/// Writes the document atomically into its folder, registered as a shared folder: an
+/// interrupt removes this process's temporary file, and temporary files of dead processes
+/// there are removed first (the kill campaign of tests/campaign.rs found `merge` leaving
+/// `.OUT.PID.tmp` after SIGINT).
 fn write_json(path: &std::path::Path, v: &serde_json::Value) -> anyhow::Result<()> {
-    if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        crate::ensure_dir(&dir.to_path_buf())?;
-    }
+    let dir = path
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(std::path::Path::new("."));
+    let _shared = crate::outdir::SharedDir::begin(dir)?;
     write_atomic(path, format!("{v:#}\n").as_bytes())?;
     Ok(())
 }

@@ -622,7 +622,7 @@ impl MapBase {
     fn load(m: &MapSpec) -> Result<Self> {
         let ctx = |e: aeroelastic::Error| Error::Aeroelastic {
             context: format!(
-                "sweep files {} and {}",
+                "sweep files (`structure` {}, `model` {})",
                 m.structure.display(),
                 m.model.display()
             ),
