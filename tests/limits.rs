@@ -246,6 +246,27 @@ fn every_limit_exceeded_at_every_entry_point_is_refused() {
         "air_density",
     );
 
+    // MAX_DAMPING_RATIO
+    for field in ["damping_heave", "damping_pitch"] {
+        let z = above(limits::MAX_DAMPING_RATIO);
+        let s = w.file(
+            "toml",
+            &structure.replace(&format!("{field} = 0.005"), &format!("{field} = {z}")),
+        );
+        run(
+            &mut w,
+            "MAX_DAMPING_RATIO",
+            vec![
+                "flutter".into(),
+                "--structure".into(),
+                s,
+                "--model".into(),
+                MODEL.into(),
+            ],
+            field,
+        );
+    }
+
     // MAX_ELASTIC_AXIS
     let m = w.file(
         "toml",

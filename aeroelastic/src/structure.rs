@@ -428,8 +428,59 @@ impl Structure {
         positive("freq_pitch", p.freq_pitch)?;
         non_negative("damping_heave", p.damping_heave)?;
         non_negative("damping_pitch", p.damping_pitch)?;
+        use identify::limits::{show, MAX_DAMPING_RATIO};
+        for (name, zeta) in [
+            ("damping_heave", p.damping_heave),
+            ("damping_pitch", p.damping_pitch),
+        ] {
+            if zeta > MAX_DAMPING_RATIO {
+                return Err(Error::param(
+                    name,
+                    zeta,
+                    format!(
+                        "a damping ratio must be ≤ {} (critical damping: an overdamped \
+                         mode does not oscillate)",
+                        show(MAX_DAMPING_RATIO)
+                    ),
+                ));
+            }
+        }
         let tau = 2.0 * std::f64::consts::PI;
         let (wh, wa) = (tau * p.freq_heave, tau * p.freq_pitch);
+        // the springs and dampers derived from the fields must be representable: named by
+        // the fields they come from (before: `k_alpha = 0` for freq_pitch = 1e-300)
+        let derived = [
+            (
+                "freq_heave",
+                p.freq_heave,
+                "mass",
+                p.mass,
+                p.mass * wh * wh,
+                p.freq_heave > 0.0,
+            ),
+            (
+                "freq_pitch",
+                p.freq_pitch,
+                "inertia",
+                p.inertia,
+                p.inertia * wa * wa,
+                true,
+            ),
+        ];
+        for (f, fv, m, mv, k, must_be_positive) in derived {
+            if !k.is_finite() || (must_be_positive && k <= 0.0) {
+                return Err(Error::param(
+                    f,
+                    fv,
+                    format!(
+                        "with {m} = {} the spring {m}·(2π·{f})² = {} is not a finite \
+                         positive number",
+                        show(mv),
+                        show(k)
+                    ),
+                ));
+            }
+        }
         let s = Structure {
             mass: p.mass,
             inertia_alpha: p.inertia,
@@ -498,7 +549,7 @@ impl Structure {
                 self.static_unbalance,
                 format!(
                     "S_α² must be < m I_α = {} (positive-definite mass matrix)",
-                    self.mass * self.inertia_alpha
+                    identify::limits::show(self.mass * self.inertia_alpha)
                 ),
             ));
         }
@@ -817,6 +868,28 @@ mod tests {
         );
         let e = Structure::from_rig(1.0, 1.0, 0.0, 1.0, f64::NAN, 0.0, 0.0).unwrap_err();
         assert!(e.to_string().contains("k_alpha"), "{e}");
+        // modal fields whose springs under- or overflow, and overdamped modes, are named
+        // by the field the user wrote (issue 27, row 17: `k_alpha = 0` before)
+        let modal = ModalStructure {
+            mass: 1.0,
+            inertia: 0.01,
+            static_unbalance: 0.0,
+            freq_heave: 2.0,
+            freq_pitch: 3.5,
+            damping_heave: 0.005,
+            damping_pitch: 0.005,
+        };
+        assert!(Structure::from_modal(&modal).is_ok());
+        for (m, field) in [
+            (ModalStructure { freq_pitch: 1e-300, ..modal }, "freq_pitch"),
+            (ModalStructure { freq_pitch: 1e300, ..modal }, "freq_pitch"),
+            (ModalStructure { freq_heave: 1e300, ..modal }, "freq_heave"),
+            (ModalStructure { damping_pitch: 2.0, ..modal }, "damping_pitch"),
+            (ModalStructure { damping_heave: 1e300, ..modal }, "damping_heave"),
+        ] {
+            let e = Structure::from_modal(&m).unwrap_err().to_string();
+            assert!(e.contains(field) && !e.contains("k_alpha"), "{field}: {e}");
+        }
     }
 
     #[test]

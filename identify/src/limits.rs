@@ -18,6 +18,9 @@ pub const MAX_SPAN: f64 = 1000.0;
 pub const MAX_AIR_DENSITY: f64 = 2000.0;
 /// Largest |elastic axis position| a \[semi-chords from mid-chord\].
 pub const MAX_ELASTIC_AXIS: f64 = 10.0;
+/// Largest damping ratio ζ of a structural mode \[-\]: critical damping (an overdamped mode
+/// does not oscillate, so it can neither flutter nor be identified from a decay).
+pub const MAX_DAMPING_RATIO: f64 = 1.0;
 /// Largest |pitch angle| of an initial condition, offset or amplitude \[deg\].
 pub const MAX_PITCH_DEG: f64 = 90.0;
 /// Largest |constant nondimensional coefficient| of a model file's `[[nonlinear]]` term
@@ -96,6 +99,7 @@ pub const TABLE: &[Limit] = &[
     Limit { name: "MAX_SPAN", max: MAX_SPAN, unit: "m", set_by: "manifest `span`" },
     Limit { name: "MAX_AIR_DENSITY", max: MAX_AIR_DENSITY, unit: "kg/m³", set_by: "manifest and structure `air_density`" },
     Limit { name: "MAX_ELASTIC_AXIS", max: MAX_ELASTIC_AXIS, unit: "semi-chords", set_by: "model `elastic_axis`" },
+    Limit { name: "MAX_DAMPING_RATIO", max: MAX_DAMPING_RATIO, unit: "-", set_by: "structure `damping_heave`, `damping_pitch`; Python structure dict" },
     Limit { name: "MAX_PITCH_DEG", max: MAX_PITCH_DEG, unit: "deg", set_by: "`--alpha0`, `--alpha0-down`; study `[lco] perturbation_deg`; sweep `alpha0`; Python `alpha0`, `alpha0_down`" },
     Limit { name: "MAX_NONLINEAR_COEFFICIENT", max: MAX_NONLINEAR_COEFFICIENT, unit: "-", set_by: "model `[[nonlinear]] coefficient`; study `[aero]` terms" },
     Limit { name: "MAX_FORCE_COEFFICIENT", max: MAX_FORCE_COEFFICIENT, unit: "-", set_by: "reached through a model (`tunnel forced`)" },
