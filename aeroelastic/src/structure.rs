@@ -881,11 +881,41 @@ mod tests {
         };
         assert!(Structure::from_modal(&modal).is_ok());
         for (m, field) in [
-            (ModalStructure { freq_pitch: 1e-300, ..modal }, "freq_pitch"),
-            (ModalStructure { freq_pitch: 1e300, ..modal }, "freq_pitch"),
-            (ModalStructure { freq_heave: 1e300, ..modal }, "freq_heave"),
-            (ModalStructure { damping_pitch: 2.0, ..modal }, "damping_pitch"),
-            (ModalStructure { damping_heave: 1e300, ..modal }, "damping_heave"),
+            (
+                ModalStructure {
+                    freq_pitch: 1e-300,
+                    ..modal
+                },
+                "freq_pitch",
+            ),
+            (
+                ModalStructure {
+                    freq_pitch: 1e300,
+                    ..modal
+                },
+                "freq_pitch",
+            ),
+            (
+                ModalStructure {
+                    freq_heave: 1e300,
+                    ..modal
+                },
+                "freq_heave",
+            ),
+            (
+                ModalStructure {
+                    damping_pitch: 2.0,
+                    ..modal
+                },
+                "damping_pitch",
+            ),
+            (
+                ModalStructure {
+                    damping_heave: 1e300,
+                    ..modal
+                },
+                "damping_heave",
+            ),
         ] {
             let e = Structure::from_modal(&m).unwrap_err().to_string();
             assert!(e.contains(field) && !e.contains("k_alpha"), "{field}: {e}");
