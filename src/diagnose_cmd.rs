@@ -246,7 +246,7 @@ fn blind(n: usize, seed: u64, shapes: bool, out: &Path, force: bool) -> anyhow::
         if !o.correct() {
             wrong.fetch_add(1, Ordering::Relaxed);
         }
-        bar.tick(format!("{} → {}", o.spec.truth, o.verdict));
+        bar.tick(format!("{} → {}", o.spec.truth, o.verdict_name()));
     });
     bar.finish();
     let secs = t.elapsed().as_secs_f64();
@@ -356,7 +356,7 @@ fn blind_text(r: &BlindReport, secs: f64) -> String {
                 o.spec.truth,
                 o.spec.strength,
                 o.gap_ratio,
-                o.verdict,
+                o.verdict_name(),
                 o.confidence
             )
         })

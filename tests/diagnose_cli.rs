@@ -45,7 +45,11 @@ fn diagnose_writes_a_complete_diagnosis_from_folders() {
     assert_eq!(d.format, "aeroform-diagnosis/1");
     assert_eq!(d.seed, 5);
     assert_eq!(d.levels.len(), 2);
-    assert_eq!(d.verdict.effect, "static_offset", "{stdout}");
+    assert_eq!(
+        d.verdict.effect,
+        diagnose::Verdict::Effect(diagnose::Effect::StaticOffset),
+        "{stdout}"
+    );
     assert!(d.gap.after < d.gap.before);
     // Every forced case is held out exactly once.
     let held = &d.levels[0].held_out_cases;

@@ -45,7 +45,10 @@ fn main() {
         Ok((o, d)) => {
             eprintln!(
                 "{} -> {} ({:.2}) gap ratio {:.2}",
-                spec.truth, o.verdict, o.confidence, o.gap_ratio
+                spec.truth,
+                o.verdict_name(),
+                o.confidence,
+                o.gap_ratio
             );
             println!("{}", serde_json::to_string_pretty(&d).unwrap_or_default());
         }

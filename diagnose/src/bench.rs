@@ -293,8 +293,8 @@ pub fn draw_specs_from(n: usize, seed: u64, labels: &[String]) -> Vec<BlindSpec>
 pub struct BlindOutcome {
     /// The drawn set.
     pub spec: BlindSpec,
-    /// Verdict name.
-    pub verdict: String,
+    /// The verdict (written as its name); `null` when the set failed (`error` says why).
+    pub verdict: Option<Verdict>,
     /// Verdict confidence.
     pub confidence: f64,
     /// True gap / noise-level gap (max over levels; 1 for effect-free sets).
@@ -320,6 +320,11 @@ pub struct BlindOutcome {
 }
 
 impl BlindOutcome {
+    /// The verdict's name for tables and messages; `error` for a failed set.
+    pub fn verdict_name(&self) -> &'static str {
+        self.verdict.map_or("error", Verdict::name)
+    }
+
     /// Whether the true gap is at least [`STRONG_RATIO`] × the noise-level gap.
     pub fn strong(&self) -> bool {
         self.gap_ratio >= STRONG_RATIO
@@ -329,12 +334,13 @@ impl BlindOutcome {
     /// `none` or `extrapolation` for an effect-free set, whose only gap can come from
     /// tables extrapolated beyond the forced range).
     pub fn correct(&self) -> bool {
-        if self.spec.truth == OUTSIDE {
-            self.verdict == "unexplained"
-        } else if self.spec.truth == "none" {
-            self.verdict == "none" || self.verdict == "extrapolation"
-        } else {
-            self.verdict == self.spec.truth
+        let Some(verdict) = self.verdict else {
+            return false;
+        };
+        match self.spec.truth.as_str() {
+            OUTSIDE => verdict == Verdict::Unexplained,
+            "none" => matches!(verdict, Verdict::None | Verdict::Extrapolation),
+            truth => Verdict::from_name(truth).is_ok_and(|t| t == verdict),
         }
     }
 }
@@ -424,7 +430,8 @@ pub fn summarize(seed: u64, outcomes: Vec<BlindOutcome>) -> BlindReport {
     for o in outcomes.iter().filter(|o| o.error.is_none()) {
         let (Some(i), Some(j)) = (
             tl.iter().position(|l| *l == o.spec.truth),
-            vl.iter().position(|l| *l == o.verdict),
+            o.verdict
+                .and_then(|v| vl.iter().position(|l| l == v.name())),
         ) else {
             continue;
         };
@@ -545,10 +552,7 @@ fn summary_of(outcomes: &[BlindOutcome]) -> BlindSummary {
         none_rate: ratio(none.iter().filter(|o| o.correct()).count(), none.len()),
         none_named_confident: none
             .iter()
-            .filter(|o| {
-                Verdict::from_name(&o.verdict).is_ok_and(|v| matches!(v, Verdict::Effect(_)))
-                    && o.confidence >= 0.5
-            })
+            .filter(|o| matches!(o.verdict, Some(Verdict::Effect(_))) && o.confidence >= 0.5)
             .count(),
         outside_strong: out_strong.len(),
         outside_unexplained: ratio(
@@ -727,7 +731,7 @@ mod tests {
                 strength: 0.5,
                 shape: None,
             },
-            verdict: verdict.into(),
+            verdict: Some(Verdict::from_name(verdict).unwrap()),
             confidence: 0.9,
             gap_ratio: ratio,
             shrink,

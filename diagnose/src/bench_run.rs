@@ -124,7 +124,7 @@ pub fn run_one(spec: &BlindSpec, opts: &BlindOptions) -> Result<(BlindOutcome, D
         .fold(None, |a: Option<f64>, s| Some(a.map_or(s, |a| a.max(s))));
     let outcome = BlindOutcome {
         spec: spec.clone(),
-        verdict: diag.verdict.effect.clone(),
+        verdict: Some(diag.verdict.effect),
         confidence: diag.verdict.confidence,
         gap_ratio: ratio,
         shrink: diag.gap.shrink,
@@ -180,7 +180,7 @@ pub fn run_blind(opts: &BlindOptions, observer: &(dyn Fn(&BlindOutcome) + Sync))
 fn failed(spec: &BlindSpec, e: &Error, seconds: f64) -> BlindOutcome {
     BlindOutcome {
         spec: spec.clone(),
-        verdict: "error".into(),
+        verdict: None,
         confidence: 0.0,
         gap_ratio: f64::NAN,
         shrink: f64::NAN,

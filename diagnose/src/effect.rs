@@ -263,6 +263,51 @@ impl std::fmt::Display for Verdict {
     }
 }
 
+impl Verdict {
+    /// Every verdict: the catalogue's effects, then `none`, `unexplained`, `extrapolation`.
+    pub fn all() -> impl Iterator<Item = Verdict> {
+        Effect::ALL.into_iter().map(Verdict::Effect).chain([
+            Verdict::None,
+            Verdict::Unexplained,
+            Verdict::Extrapolation,
+        ])
+    }
+}
+
+/// Written as its [`Verdict::name`] (`"added_mass"`, `"none"`, …): `verdict.effect` of
+/// diagnosis.json and `verdict` of a benchmark outcome.
+impl Serialize for Verdict {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        s.serialize_str(self.name())
+    }
+}
+
+/// Read from its [`Verdict::name`]; any other string is an error naming it.
+impl<'de> Deserialize<'de> for Verdict {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        let s = String::deserialize(d)?;
+        Verdict::from_name(&s).map_err(serde::de::Error::custom)
+    }
+}
+
+/// A string enum of every [`Verdict::name`].
+impl schemars::JsonSchema for Verdict {
+    fn schema_name() -> std::borrow::Cow<'static, str> {
+        "Verdict".into()
+    }
+
+    fn json_schema(_: &mut schemars::SchemaGenerator) -> schemars::Schema {
+        let names: Vec<&str> = Verdict::all().map(Verdict::name).collect();
+        schemars::json_schema!({
+            "description": "A catalogue effect, `none` (gap at noise level), `unexplained` \
+                (a significant gap no candidate removes) or `extrapolation` (the gap lies \
+                on free runs outside the forced range).",
+            "type": "string",
+            "enum": names,
+        })
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -387,8 +387,9 @@ pub struct SuggestedCase {
 /// `verdict` of `diagnosis.json`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct VerdictReport {
-    /// Catalogue name, `none` or `unexplained`.
-    pub effect: String,
+    /// The verdict: a catalogue effect, `none`, `unexplained` or `extrapolation` (written
+    /// as its name).
+    pub effect: Verdict,
     /// `aerodynamic`, `structural` or `none`.
     pub level: Level,
     /// Confidence in [0, 1] (documented in [`crate::verdict`]).
@@ -440,14 +441,4 @@ pub struct Diagnosis {
     pub version: String,
     /// Input data sets (folders or names).
     pub inputs: Vec<String>,
-}
-
-impl Diagnosis {
-    /// The verdict as a typed value.
-    ///
-    /// # Errors
-    /// [`crate::Error::UnknownEffect`] when `verdict.effect` is not a valid name.
-    pub fn verdict(&self) -> crate::Result<Verdict> {
-        Verdict::from_name(&self.verdict.effect)
-    }
 }

@@ -533,7 +533,7 @@ pub fn assemble(
     Diagnosis {
         format: FORMAT.into(),
         verdict: VerdictReport {
-            effect: d.verdict.name().into(),
+            effect: d.verdict,
             level: d.verdict.level(),
             confidence: d.confidence,
             reason: d.reason,
@@ -774,7 +774,7 @@ mod tests {
             ],
         );
         let diag = assemble(vec![f, s], &VerdictRules::default(), 7, "v", vec![]);
-        assert_eq!(diag.verdict.effect, "freeplay");
+        assert_eq!(diag.verdict.effect, Verdict::Effect(Effect::Freeplay));
         assert_eq!(diag.verdict.level, Level::Structural);
         assert!((diag.gap.shrink - (1.0 - 0.12 / 0.5)).abs() < 1e-12);
         let shares: f64 = diag

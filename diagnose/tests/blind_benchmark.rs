@@ -23,7 +23,7 @@ fn run(n: usize, seed: u64) -> BlindReport {
             o.spec.truth,
             o.spec.strength,
             o.gap_ratio,
-            o.verdict,
+            o.verdict_name(),
             o.confidence,
             o.shrink,
             o.error

@@ -7,7 +7,7 @@ use aeroelastic::effects::Form;
 use diagnose::blind::{generate, BlindEffect, BlindScenario, BlindSet};
 use diagnose::pipeline::{diagnose, DiagnoseOptions};
 use diagnose::report::Diagnosis;
-use diagnose::Effect;
+use diagnose::{Effect, Verdict};
 
 fn high_speed_campaign() -> BlindScenario {
     let mut s = BlindScenario::default();
@@ -90,7 +90,7 @@ fn the_default_campaign_flags_exactly_the_runs_beyond_a_range() {
             "{msg}"
         );
     }
-    assert_eq!(d.verdict.effect, "none", "{msg}");
+    assert_eq!(d.verdict.effect, Verdict::None, "{msg}");
 }
 
 /// Effect-free data from a campaign that stops short of the free runs' K: the runs outside
@@ -122,7 +122,7 @@ fn an_effect_free_set_beyond_the_forced_range_is_never_an_effect() {
             }
         }
         assert!(
-            d.verdict.effect == "none" || d.verdict.effect == "extrapolation",
+            matches!(d.verdict.effect, Verdict::None | Verdict::Extrapolation),
             "{msg}"
         );
     }
@@ -141,5 +141,10 @@ fn a_strong_effect_beyond_the_forced_range_is_still_named() {
     )
     .unwrap();
     let d = run(&set);
-    assert_eq!(d.verdict.effect, "friction", "{}", describe(&d));
+    assert_eq!(
+        d.verdict.effect,
+        Verdict::Effect(Effect::Friction),
+        "{}",
+        describe(&d)
+    );
 }

@@ -6,6 +6,7 @@ use diagnose::bench::{draw_specs, CampaignShape};
 use diagnose::bench_run::{blind_effect, run_one, BlindOptions};
 use diagnose::blind::generate;
 use diagnose::force::{force_level, ForceOptions};
+use diagnose::Verdict;
 
 fn spec(index: usize) -> diagnose::bench::BlindSpec {
     let mut s = draw_specs(330, 2026)[index].clone();
@@ -57,9 +58,12 @@ fn the_sims_own_uncertainty_is_not_an_effect() {
     assert_eq!(s.truth, "none");
     let (outcome, diag) = run_one(&s, &BlindOptions::new(330, 2026)).unwrap();
     assert!(
-        ["none", "extrapolation"].contains(&outcome.verdict.as_str()),
+        matches!(
+            outcome.verdict,
+            Some(Verdict::None | Verdict::Extrapolation)
+        ),
         "verdict {} ({})",
-        outcome.verdict,
+        outcome.verdict_name(),
         diag.verdict.reason
     );
     let system = diag
@@ -81,7 +85,10 @@ fn kirchhoff_stall_columns_explain_a_separation_point_stall() {
     let s = spec(43);
     assert_eq!(s.truth, "dynamic_stall");
     let (outcome, diag) = run_one(&s, &BlindOptions::new(330, 2026)).unwrap();
-    assert_eq!(outcome.verdict, "dynamic_stall");
+    assert_eq!(
+        outcome.verdict,
+        Some(Verdict::Effect(diagnose::Effect::DynamicStall))
+    );
     let force = diag
         .levels
         .iter()
@@ -117,9 +124,12 @@ fn an_effective_angle_law_is_not_an_effect() {
     opts.shapes = true;
     let (outcome, diag) = run_one(&s, &opts).unwrap();
     assert!(
-        ["none", "extrapolation"].contains(&outcome.verdict.as_str()),
+        matches!(
+            outcome.verdict,
+            Some(Verdict::None | Verdict::Extrapolation)
+        ),
         "verdict {} ({})",
-        outcome.verdict,
+        outcome.verdict_name(),
         diag.verdict.reason
     );
     let force = diag

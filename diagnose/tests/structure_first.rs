@@ -8,7 +8,7 @@ use aeroelastic::effects::{Form, InjectedEffect, Injection};
 use diagnose::blind::{generate, generate_injected, write_blind, BlindEffect, BlindScenario};
 use diagnose::pipeline::{diagnose, DiagnoseOptions};
 use diagnose::report::Diagnosis;
-use diagnose::Effect;
+use diagnose::{Effect, Verdict};
 
 /// k_α of `scenarios/plate-rig.structure.toml`: I_α (2π f_α)² [N·m/rad per unit span].
 fn k_alpha() -> f64 {
@@ -96,7 +96,11 @@ fn a_pitch_polynomial_of_each_sign_is_recovered_with_its_sign() {
         .unwrap();
         let d = through_files(&set, seed);
         let msg = format!("c2 {c2} c3 {c3}: {}", summary(&d));
-        assert_eq!(d.verdict.effect, "structural_polynomial", "{msg}");
+        assert_eq!(
+            d.verdict.effect,
+            Verdict::Effect(Effect::StructuralPolynomial),
+            "{msg}"
+        );
         let poly = d
             .candidates
             .iter()
@@ -175,7 +179,7 @@ fn still_air_decays_name_each_structural_effect() {
         let set = generate(effect, strength, Form::Primary, seed, &sc).unwrap();
         let d = diagnose(&set.forced, Some(&set.free), &opts(seed), "test").unwrap();
         eprintln!("{want}: {:?}\n{}", set.truth.parameters, summary(&d));
-        if d.verdict.effect != want {
+        if d.verdict.effect.name() != want {
             wrong.push(format!("{want} → {}", summary(&d)));
         }
     }

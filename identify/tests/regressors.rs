@@ -1,4 +1,4 @@
-//! One contract run by every regressor (STYLE.md, pysindy habit), plus the group-removal
+//! One contract run by every regressor (as pysindy tests its optimisers), plus the group-removal
 //! rule comparison and the pipeline's determinism.
 
 use identify::identifiability::priority_order;

@@ -188,7 +188,7 @@ pub fn diagnosis_section(report: &mut Report, diag: &Diagnosis, figures: &[Diagn
     report.section("Verdict").key_values(
         "",
         &[
-            ("effect", v.effect.clone()),
+            ("effect", v.effect.name().to_string()),
             ("level", v.level.name().to_string()),
             ("confidence", num(v.confidence)),
             ("reason", v.reason.clone()),

@@ -332,7 +332,7 @@ fn full_diagnosis() -> Diagnosis {
     Diagnosis {
         format: FORMAT.into(),
         verdict: VerdictReport {
-            effect: "dynamic_stall".into(),
+            effect: diagnose::Verdict::Effect(Effect::DynamicStall),
             level: Level::Aerodynamic,
             confidence: 0.93,
             reason: "dynamic_stall removes 79 % of the held-out force gap (significant, \
@@ -361,7 +361,7 @@ fn minimal_diagnosis() -> Diagnosis {
     Diagnosis {
         format: FORMAT.into(),
         verdict: VerdictReport {
-            effect: "none".into(),
+            effect: diagnose::Verdict::None,
             level: Level::None,
             confidence: f64::NAN,
             reason: "no level given".into(),

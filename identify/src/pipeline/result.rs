@@ -280,8 +280,21 @@ impl Identification {
             self.library.rank,
             self.library.terms.len()
         );
+        // one table per channel: its name, group result, Eq. 19 column names and case row
+        type Row = fn(&CaseResult) -> (Eq19Values, Option<f64>, Option<f64>, Option<f64>);
+        let moment_row: Row = |c| {
+            let m = &c.moment;
+            (m.eq19.into(), m.r2, m.mfwa, m.key_frequency_loss)
+        };
+        let lift_row: Row = |c| {
+            let l = &c.lift;
+            (l.eq19.into(), l.r2, l.mfwa, l.key_frequency_loss)
+        };
         for g in &self.groups {
-            for (force, gf) in [("moment", &g.moment), ("lift", &g.lift)] {
+            for (force, gf, names, row) in [
+                ("moment", &g.moment, crate::eq19::MOMENT_NAMES, moment_row),
+                ("lift", &g.lift, crate::eq19::LIFT_NAMES, lift_row),
+            ] {
                 let _ = writeln!(
                     s,
                     "\n[{}] {force}: {} terms (δ = {:.3e}, loss {:.2e}, limit {:.2e}): {}",
@@ -292,11 +305,6 @@ impl Identification {
                     gf.loss_limit,
                     gf.support.join(", ")
                 );
-                let names = if force == "moment" {
-                    crate::eq19::MOMENT_NAMES
-                } else {
-                    crate::eq19::LIFT_NAMES
-                };
                 let _ = writeln!(
                     s,
                     "  {:<20} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9}",
@@ -313,21 +321,8 @@ impl Identification {
                     "loss"
                 );
                 for c in self.cases.iter().filter(|c| c.group == g.name) {
-                    let (d, r2, mfwa, loss) = if force == "moment" {
-                        (
-                            Eq19Values::from(c.moment.eq19).0,
-                            c.moment.r2,
-                            c.moment.mfwa,
-                            c.moment.key_frequency_loss,
-                        )
-                    } else {
-                        (
-                            Eq19Values::from(c.lift.eq19).0,
-                            c.lift.r2,
-                            c.lift.mfwa,
-                            c.lift.key_frequency_loss,
-                        )
-                    };
+                    let (d, r2, mfwa, loss) = row(c);
+                    let d = d.0;
                     let _ = writeln!(
                         s,
                         "  {:<20} {} {} {} {} {} {} {} {} {} {}",

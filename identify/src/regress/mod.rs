@@ -1,6 +1,6 @@
 //! Sparse regression: STLSQ (paper Alg. 1), group STLSQ (Alg. 2) and the δ path (Alg. 3).
 //!
-//! Layout (STYLE.md, "separate what varies"):
+//! Layout (what varies between optimisers is separated from what they share):
 //! - [`factor`]: one QR factorisation per case; every later fit is a tiny solve.
 //! - [`SparseRegressor`]: an optimiser writes only its *reduction step* (which active terms
 //!   to drop given the fits on the current support). [`fit_group`] is the one shared

@@ -252,9 +252,10 @@ pub fn bifurcation_figure(diag: &Diagnosis) -> Option<ComparisonFigure> {
     }
     // The free-response sim "after" carries the winning augmentation: the verdict's effect
     // when it names one, else the level's best candidate.
-    let winner = diagnose::Effect::from_name(&diag.verdict.effect)
-        .ok()
-        .or_else(|| best_candidate(lv).map(|c| c.effect));
+    let winner = match diag.verdict.effect {
+        diagnose::Verdict::Effect(e) => Some(e),
+        _ => best_candidate(lv).map(|c| c.effect),
+    };
     let after_label = match winner {
         Some(e) => format!("predicted + {}", e.name()),
         None => "predicted with augmentation".into(),
