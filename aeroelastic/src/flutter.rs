@@ -23,6 +23,29 @@ pub enum FlutterMethod {
     Pk,
 }
 
+impl FlutterMethod {
+    /// The short name of the command line, Python and sweep specifications: `p` or `pk`.
+    pub fn name(self) -> &'static str {
+        match self {
+            FlutterMethod::P => "p",
+            FlutterMethod::Pk => "pk",
+        }
+    }
+}
+
+impl std::str::FromStr for FlutterMethod {
+    type Err = String;
+
+    /// `p` or `pk`; the error says what was given and what is accepted.
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        match s {
+            "p" => Ok(FlutterMethod::P),
+            "pk" => Ok(FlutterMethod::Pk),
+            other => Err(format!("`{other}`: expected `pk` or `p`")),
+        }
+    }
+}
+
 /// Options of a flutter analysis.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct FlutterOptions {
@@ -636,6 +659,15 @@ impl Section {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn method_names_round_trip() {
+        for m in [FlutterMethod::P, FlutterMethod::Pk] {
+            assert_eq!(m.name().parse::<FlutterMethod>(), Ok(m));
+        }
+        let e = "kp".parse::<FlutterMethod>().unwrap_err();
+        assert!(e.contains("`kp`") && e.contains("`pk`"), "{e}");
+    }
     use crate::reference::{flutter_cases, flutter_options, FlutterCase};
 
     /// Generic checker: measured vs expected with relative errors.

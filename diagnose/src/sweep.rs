@@ -94,20 +94,13 @@ mod method_name {
     use serde::{de::Error as _, Deserialize, Deserializer, Serializer};
 
     pub fn serialize<S: Serializer>(m: &FlutterMethod, s: S) -> Result<S::Ok, S::Error> {
-        s.serialize_str(match m {
-            FlutterMethod::Pk => "pk",
-            FlutterMethod::P => "p",
-        })
+        s.serialize_str(m.name())
     }
 
     pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<FlutterMethod, D::Error> {
-        match String::deserialize(d)?.as_str() {
-            "pk" => Ok(FlutterMethod::Pk),
-            "p" => Ok(FlutterMethod::P),
-            other => Err(D::Error::custom(format!(
-                "`method` = \"{other}\": expected \"pk\" or \"p\""
-            ))),
-        }
+        String::deserialize(d)?
+            .parse()
+            .map_err(|m| D::Error::custom(format!("`method` = {m}")))
     }
 }
 fn default_alpha0() -> f64 {

@@ -304,11 +304,7 @@ fn py_identify(
 }
 
 fn flutter_method(name: &str) -> PyResult<FlutterMethod> {
-    match name {
-        "pk" => Ok(FlutterMethod::Pk),
-        "p" => Ok(FlutterMethod::P),
-        other => Err(err(format!("method = `{other}`: expected `pk` or `p`"))),
-    }
+    name.parse().map_err(|m| err(format!("method = {m}")))
 }
 
 /// A speed list against the limits table: at most `MAX_SPEEDS` speeds, each finite, > 0 and
