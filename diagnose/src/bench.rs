@@ -23,7 +23,7 @@ pub const OUTSIDE: &str = "buffeting";
 /// The truth labels drawn by the benchmark, in table order: the catalogue, `none`, and the
 /// outside effect.
 pub fn truth_labels() -> Vec<String> {
-    Effect::GENERATED
+    Effect::generated()
         .iter()
         .map(|e| e.name().to_string())
         .chain(["none".to_string(), OUTSIDE.to_string()])
@@ -33,9 +33,8 @@ pub fn truth_labels() -> Vec<String> {
 /// The truth labels of the drawn-shapes benchmark (`--shapes`): [`truth_labels`] with the
 /// structural polynomial and amplitude-dependent damping added as truths (issue 29).
 pub fn shapes_truth_labels() -> Vec<String> {
-    Effect::GENERATED
+    Effect::drawable()
         .iter()
-        .chain(&[Effect::StructuralPolynomial, Effect::StructuralDamping])
         .map(|e| e.name().to_string())
         .chain(["none".to_string(), OUTSIDE.to_string()])
         .collect()

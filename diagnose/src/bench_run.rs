@@ -52,23 +52,20 @@ impl BlindOptions {
 ///
 /// # Errors
 /// [`Error::UnknownEffect`] for a label that is neither an effect the generator injects
-/// ([`Effect::GENERATED`]), `none` nor [`OUTSIDE`].
+/// ([`Effect::drawable`]), `none` nor [`OUTSIDE`].
 pub fn blind_effect(label: &str) -> Result<BlindEffect> {
     match label {
         "none" => Ok(BlindEffect::None),
         OUTSIDE => Ok(BlindEffect::Buffeting),
         other => match Effect::from_name(other) {
-            Ok(e)
-                if Effect::GENERATED.contains(&e)
-                    || matches!(e, Effect::StructuralPolynomial | Effect::StructuralDamping) =>
-            {
+            Ok(e) if Effect::drawable().contains(&e) => {
                 Ok(BlindEffect::Catalogue(e))
             }
             _ => Err(crate::Error::UnknownEffect {
                 name: other.to_string(),
-                expected: Effect::GENERATED
-                    .map(Effect::name)
+                expected: Effect::generated()
                     .into_iter()
+                    .map(Effect::name)
                     .chain(["none", OUTSIDE])
                     .collect::<Vec<_>>()
                     .join(", "),

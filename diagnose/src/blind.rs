@@ -36,6 +36,7 @@ use rand_distr::{Distribution, Normal};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+use crate::catalogue::{log_map, DrawContext};
 use crate::effect::Effect;
 use crate::{Error, Result};
 
@@ -153,40 +154,15 @@ impl Default for BlindScenario {
 /// Elastic axis of the truth (a = −0.3 semi-chords) in chords from the leading edge.
 const X_EA: f64 = 0.35;
 
-/// Log-uniform map of s ∈ [0, 1] onto [lo, hi] (lo, hi of the same sign).
-fn log_map(s: f64, lo: f64, hi: f64) -> f64 {
-    lo * (hi / lo).powf(s)
-}
-
 /// The parameter range (value at s = 0, value at s = 1) of an effect in a form, with the
-/// parameter's name and unit. See the module-level calibration in the report of
-/// [`effect_size`].
+/// parameter's name and unit (each catalogue effect's draw, `buffeting`'s intensity).
+/// See the module-level calibration in the report of [`effect_size`].
 pub fn parameter_range(effect: BlindEffect, form: Form) -> Option<(&'static str, f64, f64)> {
-    use Effect::*;
-    Some(match effect {
-        BlindEffect::None => return None,
-        BlindEffect::Buffeting => ("intensity I_w [-]", 2e-4, 0.05),
-        BlindEffect::Catalogue(e) => match e {
-            StaticOffset => ("alpha0 [deg]", 0.02, 2.0),
-            AddedMass => match form {
-                Form::Primary => ("fraction of rig mass [-]", 0.002, 0.2),
-                Form::Alternate => ("fraction of air apparent mass [-]", 0.05, 5.0),
-            },
-            TimeDelay => ("tau [s]", 1e-4, 0.02),
-            HigherOrder => ("c [-]", -0.05, -20.0),
-            DynamicStall => ("alpha_crit [deg]", 27.5, 10.0),
-            VortexShedding => ("C_L,vs [-]", 0.001, 0.1),
-            StructuralCubic => ("kappa [1/rad^2]", 0.5, 200.0),
-            Freeplay => ("half gap [deg]", 0.001, 1.0),
-            Friction => ("T_c [N*m/m]", 1e-5, 3e-3),
-            // |c₃| of k_α(α + c₂α² + c₃α³); the sign and c₂ are drawn with it
-            // ([`injection`]): hardening 0.5…200, softening 0.2…5
-            StructuralPolynomial => ("|c3| [1/rad^2]", 0.5, 200.0),
-            StructuralDamping => ("d [1/rad^2]", 10.0, 5000.0),
-            // fitted at the bifurcation level only (its own benchmark)
-            AerodynamicScale => return None,
-        },
-    })
+    match effect {
+        BlindEffect::None => None,
+        BlindEffect::Buffeting => Some(("intensity I_w [-]", 2e-4, 0.05)),
+        BlindEffect::Catalogue(e) => e.entry().draw().map(|d| d.range(form)),
+    }
 }
 
 fn injection(
@@ -201,75 +177,28 @@ fn injection(
         return (vec![], vec![]);
     };
     let p = log_map(strength, lo, hi);
-    if effect == BlindEffect::Catalogue(Effect::StructuralPolynomial) {
-        // signs of c₂ and c₃ from the set's seed; the spring's slope 1 + 2c₂α + 3c₃α²
-        // stays positive (hardening: c₂² < 3c₃ · 0.5) or positive beyond 15° (softening)
-        let bits = identify::numerics::split_seed(seed, 41);
-        let soft = bits & 1 == 1;
-        let s2 = if bits & 2 == 2 { -1.0 } else { 1.0 };
-        let (c3, c2) = if soft {
-            (
-                -log_map(strength, 0.2, 5.0),
-                s2 * log_map(strength, 0.05, 1.0),
-            )
-        } else {
-            let c3 = p;
-            (c3, s2 * log_map(strength, 0.05, 8.0).min((1.5 * c3).sqrt()))
-        };
-        return (
-            vec![Injection {
-                effect: Inj::StructuralPolynomial { c2, c3 },
-                form,
-            }],
-            vec![("c2 [1/rad]".into(), c2), ("c3 [1/rad^2]".into(), c3)],
-        );
-    }
-    let mut params = vec![(name.to_string(), p)];
-    use Effect::*;
-    let e = match effect {
-        BlindEffect::None => unreachable!("no range for None"),
-        BlindEffect::Buffeting => {
-            params.push(("length scale L [m]".into(), 0.1));
+    let (e, params) = match effect {
+        BlindEffect::None => return (vec![], vec![]),
+        BlindEffect::Buffeting => (
             Inj::Buffeting {
                 intensity: p,
                 length_scale: 0.1,
                 x_ea: X_EA,
-            }
+            },
+            vec![(name.to_string(), p), ("length scale L [m]".into(), 0.1)],
+        ),
+        BlindEffect::Catalogue(c) => {
+            let Some(d) = c.entry().draw() else {
+                return (vec![], vec![]);
+            };
+            let cx = DrawContext {
+                rig,
+                depth: sc.depth,
+                x_ea: X_EA,
+                seed,
+            };
+            d.inject(p, strength, form, &cx)
         }
-        BlindEffect::Catalogue(c) => match c {
-            StaticOffset => Inj::StaticOffset {
-                alpha0: p.to_radians(),
-            },
-            AddedMass => Inj::AddedMass { fraction: p, rig },
-            TimeDelay => Inj::TimeDelay { tau: p },
-            HigherOrder => Inj::HigherOrder { c: p },
-            DynamicStall => {
-                params.push(("lag [chords]".into(), 1.5));
-                Inj::DynamicStall {
-                    alpha_crit: p.to_radians(),
-                    lag_chords: 1.5,
-                    x_ea: X_EA,
-                }
-            }
-            VortexShedding => {
-                params.push(("depth D [m]".into(), sc.depth));
-                params.push((
-                    "Strouhal [-]".into(),
-                    effects::shedding_frequency(1.0, 1.0, form),
-                ));
-                Inj::VortexShedding {
-                    c_lift: p,
-                    depth: sc.depth,
-                }
-            }
-            StructuralCubic => Inj::StructuralCubic { kappa: p },
-            Freeplay => Inj::Freeplay {
-                half_gap: p.to_radians(),
-            },
-            Friction => Inj::Friction { moment: p },
-            StructuralDamping => Inj::StructuralDamping { d: p },
-            StructuralPolynomial | AerodynamicScale => return (vec![], vec![]),
-        },
     };
     (vec![Injection { effect: e, form }], params)
 }

@@ -1,5 +1,5 @@
-//! The effect catalogue of DESIGN.md §5 (fixed names) and the verdicts a diagnosis can
-//! reach.
+//! The effect catalogue's names (DESIGN.md §5; each effect's entry is in
+//! `crate::catalogue`) and the verdicts a diagnosis can reach.
 
 use serde::{Deserialize, Serialize};
 
@@ -86,95 +86,6 @@ pub enum Effect {
 }
 
 impl Effect {
-    /// The whole catalogue: DESIGN.md §5's nine effects, then the structural polynomial,
-    /// amplitude-dependent damping and the aerodynamic scale added for real rigs.
-    pub const ALL: [Effect; 12] = [
-        Effect::StaticOffset,
-        Effect::AddedMass,
-        Effect::TimeDelay,
-        Effect::HigherOrder,
-        Effect::DynamicStall,
-        Effect::VortexShedding,
-        Effect::StructuralCubic,
-        Effect::Freeplay,
-        Effect::Friction,
-        Effect::StructuralPolynomial,
-        Effect::StructuralDamping,
-        Effect::AerodynamicScale,
-    ];
-
-    /// The effects the withheld-effect generator injects (DESIGN.md §5's nine).
-    pub const GENERATED: [Effect; 9] = [
-        Effect::StaticOffset,
-        Effect::AddedMass,
-        Effect::TimeDelay,
-        Effect::HigherOrder,
-        Effect::DynamicStall,
-        Effect::VortexShedding,
-        Effect::StructuralCubic,
-        Effect::Freeplay,
-        Effect::Friction,
-    ];
-
-    /// The fixed catalogue name (`static_offset`, …).
-    pub fn name(self) -> &'static str {
-        match self {
-            Effect::StaticOffset => "static_offset",
-            Effect::AddedMass => "added_mass",
-            Effect::TimeDelay => "time_delay",
-            Effect::HigherOrder => "higher_order",
-            Effect::DynamicStall => "dynamic_stall",
-            Effect::VortexShedding => "vortex_shedding",
-            Effect::StructuralCubic => "structural_cubic",
-            Effect::Freeplay => "freeplay",
-            Effect::Friction => "friction",
-            Effect::StructuralPolynomial => "structural_polynomial",
-            Effect::StructuralDamping => "structural_damping",
-            Effect::AerodynamicScale => "aerodynamic_scale",
-        }
-    }
-
-    /// A short column label for tables (`offset`, `mass`, …).
-    pub fn short_label(self) -> &'static str {
-        match self {
-            Effect::StaticOffset => "offset",
-            Effect::AddedMass => "mass",
-            Effect::TimeDelay => "delay",
-            Effect::HigherOrder => "h.order",
-            Effect::DynamicStall => "stall",
-            Effect::VortexShedding => "shed",
-            Effect::StructuralCubic => "s.cubic",
-            Effect::Freeplay => "freepl",
-            Effect::Friction => "frict",
-            Effect::StructuralPolynomial => "s.poly",
-            Effect::StructuralDamping => "s.damp",
-            Effect::AerodynamicScale => "a.scale",
-        }
-    }
-
-    /// Whether the system level may score the effect on free runs outside the forced
-    /// range (with the apparent-mass nuisance of those runs fitted alongside): true for
-    /// the structural effects, and for a static offset, whose evidence is the runs' mean
-    /// force (K = 0), which no error of the law's extrapolation in K can produce from the
-    /// zero-mean response of an effect-free section. The other aerodynamic effects are
-    /// scored on covered runs only (issue 29, DECISIONS "Static offsets scored beyond
-    /// coverage").
-    pub fn scored_beyond_coverage(self) -> bool {
-        self.level() == Level::Structural || self == Effect::StaticOffset
-    }
-
-    /// The level the effect acts at.
-    pub fn level(self) -> Level {
-        match self {
-            Effect::StructuralCubic
-            | Effect::Freeplay
-            | Effect::Friction
-            | Effect::StructuralPolynomial
-            | Effect::StructuralDamping => Level::Structural,
-            _ => Level::Aerodynamic,
-        }
-    }
-
     /// The effect of a catalogue name.
     ///
     /// # Errors

@@ -1,7 +1,9 @@
 //! Sim-to-real gap: localisation, effect catalogue, attribution, blind benchmark
 //! (DESIGN.md §5).
 //!
-//! * [`effect`]: the catalogue names and verdicts;
+//! * [`effect`]: the catalogue names and verdicts; `catalogue`: one file per effect (its
+//!   fit at each level, its simulation term, its injection), reached through
+//!   [`Effect`]'s methods;
 //! * [`report`]: the result types and the `diagnosis.json` document;
 //! * [`force`]: the force level (forced-motion records);
 //! * [`system`]: the system level (free-response records);
@@ -17,6 +19,7 @@ pub mod bench;
 pub mod bench_run;
 pub mod bifurcation;
 pub mod blind;
+mod catalogue;
 pub mod effect;
 pub mod error;
 pub mod force;

@@ -105,8 +105,6 @@ pub struct Decision {
     pub candidate: Option<usize>,
 }
 
-/// Nested candidate pairs (simpler, richer): the richer one holds the simpler one's terms.
-pub const NESTED: [(Effect, Effect); 1] = [(Effect::StructuralCubic, Effect::StructuralPolynomial)];
 
 /// Paired one-standard-error test: whether the mean of the per-unit differences `d`
 /// (simpler minus richer held-out energy) is at most their standard error, or at most
@@ -142,7 +140,7 @@ fn within_one_se(a: &CandidateScore, b: &CandidateScore) -> bool {
 
 /// The best candidate of a level that is significant (only those scored beyond the
 /// coverage, [`Effect::scored_beyond_coverage`], when `beyond_coverage_only`), with its excess shrink against its own baseline
-/// ([`CandidateScore::before`]). A simpler nested candidate ([`NESTED`]) within one
+/// ([`CandidateScore::before`]). A simpler nested candidate ([`Effect::extends`]) within one
 /// standard error of the best is taken instead (the one-standard-error rule).
 fn best_candidate(
     level: &LevelResult,
@@ -171,15 +169,13 @@ fn best_candidate(
                 .unwrap_or(std::cmp::Ordering::Equal)
                 .then(a.2.partial_cmp(&b.2).unwrap_or(std::cmp::Ordering::Equal))
         })?;
-    for (simple, rich) in NESTED {
-        if best.1.effect == rich {
-            if let Some(i) = level
-                .candidates
-                .iter()
-                .position(|c| c.effect == simple && ok(c) && within_one_se(c, best.1))
-            {
-                return Some(with_shrink(i));
-            }
+    if let Some(simple) = best.1.effect.extends() {
+        if let Some(i) = level
+            .candidates
+            .iter()
+            .position(|c| c.effect == simple && ok(c) && within_one_se(c, best.1))
+        {
+            return Some(with_shrink(i));
         }
     }
     Some(best)
@@ -190,11 +186,7 @@ fn best_candidate(
 /// nested with `best` is not its runner-up).
 fn effect_confidence(level: &LevelResult, best_idx: usize, shrink: f64) -> f64 {
     let b = &level.candidates[best_idx];
-    let nested = |e: Effect| {
-        NESTED
-            .iter()
-            .any(|&(x, y)| (x == e && y == b.effect) || (y == e && x == b.effect))
-    };
+    let nested = |e: Effect| e.extends() == Some(b.effect) || b.effect.extends() == Some(e);
     let d1 = b.before - b.after;
     let d2 = level
         .candidates

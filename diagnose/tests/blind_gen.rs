@@ -120,7 +120,7 @@ fn added_mass_leaves_free_records_identical_and_adds_acceleration_forces() {
 fn strength_zero_is_near_noise_and_strength_one_is_clearly_visible() {
     let sc = small();
     let none = gen(BlindEffect::None, 0.0, Form::Primary, 8, &sc);
-    for e in Effect::GENERATED
+    for e in Effect::generated()
         .into_iter()
         .map(BlindEffect::Catalogue)
         .chain([BlindEffect::Buffeting])
@@ -287,7 +287,7 @@ fn none_twin_differs_only_by_the_effect() {
 #[test]
 fn alternate_forms_generate_and_differ_from_primary() {
     let sc = small();
-    for e in Effect::GENERATED
+    for e in Effect::generated()
         .into_iter()
         .map(BlindEffect::Catalogue)
         .chain([BlindEffect::Buffeting])
@@ -346,7 +346,7 @@ fn calibration_table() {
         "| noise | - | - | {:.2e} (balance σ / rms M) | | {:.2e} (σ_α / rms α) |",
         n0.forced_noise, n0.free_noise
     );
-    for e in Effect::GENERATED
+    for e in Effect::generated()
         .into_iter()
         .map(BlindEffect::Catalogue)
         .chain([BlindEffect::Buffeting])

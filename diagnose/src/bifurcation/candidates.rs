@@ -1,5 +1,5 @@
-//! The catalogue at the bifurcation level: each candidate is a parametrised change of the
-//! nominal section (a structural term of [`aeroelastic::structure::Nonlinearities`], a mass
+//! The candidates of the bifurcation level (each effect's are in its file of
+//! `crate::catalogue`): each candidate is a parametrised change of the nominal section (a structural term of [`aeroelastic::structure::Nonlinearities`], a mass
 //! change, or a scale on the aerodynamic loads) that the continuation can follow. The fit
 //! works on scaled parameters θ (value = scale · θ, scales from the nominal structure and
 //! the measured amplitudes, so that θ = 1 is a change of the order of the linear term at
@@ -17,7 +17,7 @@
 //!
 //! Not at this level: freeplay (a sharp gap is not a smooth vector field; continuation
 //! refuses it) and a force delay (no delay states in the section model); the report lists
-//! them as not fitted.
+//! them as not fitted (`Entry::not_at_bifurcation`).
 
 use std::sync::Arc;
 
@@ -50,7 +50,7 @@ pub struct ParameterSpec {
 
 /// Which change a candidate makes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Change {
+pub(crate) enum Change {
     /// Pitch stiffness terms of these powers.
     PitchStiffness(&'static [u32]),
     /// Pitch stiffness powers, then heave stiffness powers.
@@ -81,6 +81,9 @@ pub struct BranchCandidate {
     /// Index of the candidate it extends (nested: its parameters are a prefix of these), if
     /// any.
     pub extends: Option<usize>,
+    /// The (effect, variant) it extends, resolved to [`BranchCandidate::extends`] when the
+    /// levels' candidates are gathered.
+    pub(crate) extends_key: Option<(Effect, &'static str)>,
     change: Change,
     /// Largest measured pitch amplitude \[rad\] (friction's regularisation).
     reference_alpha: f64,
@@ -96,7 +99,9 @@ pub struct Scales {
     pub h: f64,
 }
 
-fn p(name: &str, unit: &str, convention: &str, scale: f64) -> ParameterSpec {
+/// A parameter of unit `unit` whose θ = 1 is `scale` (made positive when the
+/// candidates are gathered).
+pub(crate) fn param(name: &str, unit: &str, convention: &str, scale: f64) -> ParameterSpec {
     ParameterSpec {
         name: name.into(),
         unit: unit.into(),
@@ -106,13 +111,15 @@ fn p(name: &str, unit: &str, convention: &str, scale: f64) -> ParameterSpec {
     }
 }
 
-fn stiffness_param(dof: &str, power: u32, k: f64, amp: f64) -> ParameterSpec {
+/// A stiffness term k·q^power of `dof` (`pitch` or `heave`), scaled so that θ = 1 is the
+/// linear stiffness `k` at the amplitude `amp`.
+pub(crate) fn stiffness_param(dof: &str, power: u32, k: f64, amp: f64) -> ParameterSpec {
     let (sym, unit, what) = if dof == "pitch" {
         ("α", format!("N m/rad^{power}"), "moment")
     } else {
         ("h", format!("N/m^{power}"), "force")
     };
-    let mut q = p(
+    let mut q = param(
         &format!("k{power}_{dof}"),
         &unit,
         &format!(
@@ -133,188 +140,33 @@ fn stiffness_param(dof: &str, power: u32, k: f64, amp: f64) -> ParameterSpec {
     q
 }
 
-/// The catalogue of the bifurcation level for `base` and measured amplitudes `s`, nested
-/// candidates after the ones they extend (whose parameters come first in theirs).
-pub fn catalogue(base: &Section, s: Scales) -> Vec<BranchCandidate> {
-    let st = &base.structure;
-    let (ka, kh) = (st.k_alpha, st.k_h.max(1e-3 * st.k_alpha / (s.h * s.h)));
-    // A damping scale of a 5 % damping ratio on the uncoupled mode at the reference
-    // amplitude (the nominal c may be zero).
-    let ca = 0.1 * (st.k_alpha * st.inertia_alpha).sqrt();
-    let ch = 0.1 * (kh * st.mass).sqrt();
-    let mut out = vec![
-        BranchCandidate {
-            effect: Effect::StructuralCubic,
-            variant: "pitch".into(),
-            parameters: vec![stiffness_param("pitch", 3, ka, s.alpha)],
-            extends: None,
-            reference_alpha: 0.0,
-            change: Change::PitchStiffness(&[3]),
-        },
-        BranchCandidate {
-            effect: Effect::StructuralPolynomial,
-            variant: "pitch".into(),
-            parameters: vec![
-                stiffness_param("pitch", 3, ka, s.alpha),
-                stiffness_param("pitch", 2, ka, s.alpha),
-            ],
-            extends: Some(0),
-            reference_alpha: 0.0,
-            change: Change::PitchStiffness(&[3, 2]),
-        },
-        BranchCandidate {
-            effect: Effect::StructuralPolynomial,
-            variant: "pitch to α⁵".into(),
-            parameters: vec![
-                stiffness_param("pitch", 3, ka, s.alpha),
-                stiffness_param("pitch", 2, ka, s.alpha),
-                stiffness_param("pitch", 5, ka, s.alpha),
-            ],
-            extends: Some(1),
-            reference_alpha: 0.0,
-            change: Change::PitchStiffness(&[3, 2, 5]),
-        },
-        BranchCandidate {
-            effect: Effect::StructuralPolynomial,
-            variant: "pitch, heave h³".into(),
-            parameters: vec![
-                stiffness_param("pitch", 3, ka, s.alpha),
-                stiffness_param("pitch", 2, ka, s.alpha),
-                stiffness_param("heave", 3, kh, s.h),
-            ],
-            extends: Some(1),
-            reference_alpha: 0.0,
-            change: Change::PitchHeaveStiffness(&[3, 2], &[3]),
-        },
-        BranchCandidate {
-            effect: Effect::StructuralPolynomial,
-            variant: "pitch+heave".into(),
-            parameters: vec![
-                stiffness_param("pitch", 3, ka, s.alpha),
-                stiffness_param("pitch", 2, ka, s.alpha),
-                stiffness_param("heave", 3, kh, s.h),
-                stiffness_param("heave", 2, kh, s.h),
-            ],
-            extends: Some(3),
-            reference_alpha: 0.0,
-            change: Change::PitchHeaveStiffness(&[3, 2], &[3, 2]),
-        },
-        BranchCandidate {
-            effect: Effect::StructuralDamping,
-            variant: "pitch".into(),
-            parameters: vec![p(
-                "c2_pitch",
-                "N m s/rad^3",
-                "extra pitch damping moment c2·α²·α̇ (c2 > 0 dissipates)",
-                ca / (s.alpha * s.alpha),
-            )],
-            extends: None,
-            reference_alpha: 0.0,
-            change: Change::PitchDamping,
-        },
-        BranchCandidate {
-            effect: Effect::StructuralDamping,
-            variant: "pitch+heave".into(),
-            parameters: vec![
-                p(
-                    "c2_pitch",
-                    "N m s/rad^3",
-                    "extra pitch damping moment c2·α²·α̇ (c2 > 0 dissipates)",
-                    ca / (s.alpha * s.alpha),
-                ),
-                p(
-                    "c2_heave",
-                    "N s/m^3",
-                    "extra heave damping force c2·h²·ḣ (c2 > 0 dissipates)",
-                    ch / (s.h * s.h),
-                ),
-            ],
-            extends: Some(5),
-            reference_alpha: 0.0,
-            change: Change::PitchHeaveDamping,
-        },
-        BranchCandidate {
-            effect: Effect::Friction,
-            variant: "pitch".into(),
-            parameters: vec![p(
-                "friction_pitch",
-                "N m",
-                "Coulomb moment T_c·tanh(α̇/ε) opposing α̇ (T_c = |θ|·scale ≥ 0; ε = 5 % of \
-                 the largest measured orbit's peak pitch velocity)",
-                0.02 * ka * s.alpha,
-            )],
-            extends: None,
-            reference_alpha: s.alpha,
-            change: Change::PitchFriction,
-        },
-        BranchCandidate {
-            effect: Effect::Friction,
-            variant: "pitch, ε fitted".into(),
-            parameters: vec![
-                p(
-                    "friction_pitch",
-                    "N m",
-                    "Coulomb moment T_c·tanh(α̇/ε) opposing α̇ (T_c = |θ|·scale ≥ 0)",
-                    0.02 * ka * s.alpha,
-                ),
-                p(
-                    "friction_smoothing_pitch",
-                    "rad/s",
-                    "velocity ε of the regularisation tanh(α̇/ε), scale·10^(θ/2) with θ in \
-                     [−4, 4] (below it the friction acts as a viscous damping T_c/ε: \
-                     pre-sliding, which sets the Hopf point)",
-                    0.05 * st.omega_alpha() * s.alpha,
-                ),
-            ],
-            extends: Some(7),
-            reference_alpha: s.alpha,
-            change: Change::PitchFrictionSmoothing,
-        },
-        BranchCandidate {
-            effect: Effect::AddedMass,
-            variant: "heave+pitch".into(),
-            parameters: vec![
-                p(
-                    "added_mass",
-                    "kg",
-                    "mass added to the heaving mass m",
-                    0.1 * st.mass,
-                ),
-                p(
-                    "added_inertia",
-                    "kg m^2",
-                    "inertia added to I_α about the elastic axis",
-                    0.1 * st.inertia_alpha,
-                ),
-            ],
-            extends: None,
-            reference_alpha: 0.0,
-            change: Change::AddedMass,
-        },
-        BranchCandidate {
-            effect: Effect::AerodynamicScale,
-            variant: "lift+moment".into(),
-            parameters: vec![p(
-                "aero_scale_minus_1",
-                "1",
-                "aerodynamic lift and moment (with their apparent mass) times 1 + value \
-                 (value < 0: less load than the 2-D model, e.g. a finite span)",
-                0.1,
-            )],
-            extends: None,
-            reference_alpha: 0.0,
-            change: Change::AeroScale,
-        },
-    ];
-    for c in &mut out {
-        c.parameters
-            .iter_mut()
-            .for_each(|q| q.scale = q.scale.abs());
-    }
-    out
-}
-
 impl BranchCandidate {
+    /// A candidate of `effect` in form `variant`, extending the candidate `extends`
+    /// (effect, variant) if any.
+    pub(crate) fn new(
+        effect: Effect,
+        variant: &str,
+        parameters: Vec<ParameterSpec>,
+        extends: Option<(Effect, &'static str)>,
+        change: Change,
+    ) -> Self {
+        BranchCandidate {
+            effect,
+            variant: variant.into(),
+            parameters,
+            extends: None,
+            extends_key: extends,
+            change,
+            reference_alpha: 0.0,
+        }
+    }
+
+    /// With the largest measured pitch amplitude \[rad\] (friction's regularisation).
+    pub(crate) fn with_reference_alpha(mut self, alpha: f64) -> Self {
+        self.reference_alpha = alpha;
+        self
+    }
+
     /// The physical parameter values of the scaled `theta`.
     pub fn values(&self, theta: &[f64]) -> Vec<f64> {
         self.parameters

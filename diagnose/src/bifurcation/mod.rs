@@ -7,7 +7,7 @@
 //! *Where*: Hopf speed and frequency, fold speeds, criticality, and the amplitude and
 //! frequency error of every measured point against the predicted branch of the same
 //! stability at its speed, per branch and per DOF. *Which*: every candidate of
-//! [`candidates::catalogue`] fitted on all speeds but one and scored on that one; the
+//! [`catalogue`] fitted on all speeds but one and scored on that one; the
 //! simplest candidate within one standard error of the best held-out score is named when
 //! it removes at least `min_shrink` of the nominal model's held-out error. *How far*: the
 //! held-out errors before and after, per branch and DOF.
@@ -33,7 +33,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::{Effect, Error, Level, Result, Verdict};
-use candidates::{catalogue, BranchCandidate, ParameterSpec, Scales};
+use candidates::{BranchCandidate, ParameterSpec, Scales};
 use fit::{diagram, levenberg_marquardt, residuals, start_grid, Setting};
 pub use points::{points_from_records, structure_check, RecordRole, RecordUse, StructureCheck};
 
@@ -602,15 +602,39 @@ pub fn diagnose_branches(
         structure,
         nominal,
         candidates,
-        not_fitted: vec![
-            "freeplay: a sharp gap is not a smooth vector field; continuation of periodic \
-             orbits refuses it (use `aeroform lco` time integration)"
-                .into(),
-            "time_delay: the section model has no delay states".into(),
-        ],
+        not_fitted: not_fitted(),
         verdict,
         seconds: t0.elapsed().as_secs_f64(),
     })
+}
+
+/// The candidates of every catalogue effect for `base` and measured amplitudes `s`, in
+/// catalogue order, each nested one after the one it extends (whose parameters come
+/// first in its own); parameter scales made positive.
+pub fn catalogue(base: &Section, s: Scales) -> Vec<BranchCandidate> {
+    let mut out: Vec<BranchCandidate> = Effect::ALL
+        .into_iter()
+        .flat_map(|e| e.entry().bifurcation(base, s))
+        .collect();
+    for i in 0..out.len() {
+        out[i].extends = out[i]
+            .extends_key
+            .and_then(|(e, v)| out[..i].iter().position(|c| c.effect == e && c.variant == v));
+        out[i]
+            .parameters
+            .iter_mut()
+            .for_each(|q| q.scale = q.scale.abs());
+    }
+    out
+}
+
+/// Why each catalogue effect that is not fitted at this level is not, in catalogue order.
+fn not_fitted() -> Vec<String> {
+    Effect::ALL
+        .into_iter()
+        .filter_map(|e| e.entry().not_at_bifurcation())
+        .map(String::from)
+        .collect()
 }
 
 #[allow(clippy::too_many_arguments)]

@@ -12,7 +12,7 @@
 
 use std::collections::BTreeMap;
 
-use crate::effect::Level;
+use crate::effect::{Effect, Level};
 use crate::report::{
     CandidateScore, CaseGap, LevelResult, ObservableGap, ResidualSpectrum, SignatureTest,
     WhereShare,
@@ -20,6 +20,7 @@ use crate::report::{
 
 use super::candidates::{significance, Scored};
 use super::data::{CaseData, Node, CHANNELS};
+use super::linalg::periodogram_full;
 use super::{gaps, gaps_of, noise_gaps, noise_of, ForceOptions};
 
 /// Noise-unit energy Σ (r/σ̂)² of residuals.
@@ -44,7 +45,7 @@ pub(crate) fn assemble(
     nodes: &[Node],
     fold_of: &[usize],
     before: &[[Vec<f64>; 2]],
-    scored: Vec<Scored>,
+    scored: Vec<(Effect, Scored)>,
     opts: &ForceOptions,
 ) -> LevelResult {
     let g = gaps(cases, before);
@@ -87,14 +88,21 @@ pub(crate) fn assemble(
     let mut cands: Vec<(CandidateScore, usize)> = scored
         .iter()
         .enumerate()
-        .map(|(k, s)| {
+        .map(|(k, (effect, s))| {
             let e_after = energy_w(cases, &s.residuals);
-            let (z, thr, sig, _share, score) =
-                significance(e_before, e_after, n_samples, s.n_params, s.n_nuisance, opts);
+            let (z, thr, sig, _share, score) = significance(
+                e_before,
+                e_after,
+                n_samples,
+                s.n_params,
+                s.n_nuisance,
+                opts.significance,
+                opts.min_shrink,
+            );
             let after = gaps(cases, &s.residuals).combined;
             (
                 CandidateScore {
-                    effect: s.kind.effect(),
+                    effect: *effect,
                     level: Level::Aerodynamic,
                     before: g.combined,
                     after,
@@ -119,7 +127,7 @@ pub(crate) fn assemble(
             .cmp(&a.0.significant)
             .then(a.0.score.total_cmp(&b.0.score))
     });
-    let best = cands.first().map(|(_, k)| &scored[*k].residuals);
+    let best = cands.first().map(|(_, k)| &scored[*k].1.residuals);
     let after_res: &[[Vec<f64>; 2]] = best.map_or(before, |v| v.as_slice());
     let case_gaps = cases
         .iter()
@@ -531,17 +539,4 @@ fn locate(
         })
         .collect();
     (out, signatures, spectra)
-}
-
-/// |DFT|² of x zero-padded to m points.
-pub(super) fn periodogram_full(x: &[f64], m: usize) -> Vec<f64> {
-    let mut planner = realfft::RealFftPlanner::<f64>::new();
-    let fft = planner.plan_fft_forward(m);
-    let mut input = vec![0.0; m];
-    input[..x.len()].copy_from_slice(x);
-    let mut out = fft.make_output_vec();
-    if fft.process(&mut input, &mut out).is_err() {
-        return vec![0.0; m / 2 + 1];
-    }
-    out.iter().map(|z| z.norm_sqr()).collect()
 }

@@ -1,5 +1,5 @@
-//! The force level's small SPD solve with a relative ridge (the thin QR of its regressions
-//! is `identify::numerics::qr::ThinQr`).
+//! The force level's small numeric kernels: an SPD solve with a relative ridge (the thin QR
+//! of its regressions is `identify::numerics::qr::ThinQr`) and a zero-padded periodogram.
 
 use identify::numerics::{cholesky_in_place, cholesky_solve_in_place, PivotFloor};
 
@@ -39,6 +39,19 @@ pub(crate) fn solve_spd(g: &[Vec<f64>], b: &[f64], ridge: f64) -> Option<Vec<f64
     let mut x: Vec<f64> = (0..n).map(|i| b[i] * s[i]).collect();
     cholesky_solve_in_place(&a, n, &mut x);
     Some((0..n).map(|i| x[i] * s[i]).collect())
+}
+
+/// |DFT|² of x zero-padded to m points.
+pub(crate) fn periodogram_full(x: &[f64], m: usize) -> Vec<f64> {
+    let mut planner = realfft::RealFftPlanner::<f64>::new();
+    let fft = planner.plan_fft_forward(m);
+    let mut input = vec![0.0; m];
+    input[..x.len()].copy_from_slice(x);
+    let mut out = fft.make_output_vec();
+    if fft.process(&mut input, &mut out).is_err() {
+        return vec![0.0; m / 2 + 1];
+    }
+    out.iter().map(|z| z.norm_sqr()).collect()
 }
 
 #[cfg(test)]

@@ -39,10 +39,11 @@
 #![allow(clippy::needless_range_loop)]
 
 mod analysis;
-mod candidates;
-mod data;
-mod law;
-mod linalg;
+pub(crate) mod candidates;
+pub(crate) mod data;
+pub(crate) mod folds;
+pub(crate) mod law;
+pub(crate) mod linalg;
 
 use std::collections::BTreeMap;
 
@@ -59,7 +60,7 @@ use crate::{Error, Result};
 use data::{CaseData, Node};
 use law::{Aug, NodeCache, NodeFit, Supports};
 
-pub use candidates::CandidateKind;
+use folds::{held_out_residuals, Fold};
 
 /// Default threshold of the gap test (statistic = held-out gap / noise level).
 ///
@@ -83,8 +84,9 @@ pub struct ForceOptions {
     /// Threshold of the gap statistic held-out gap / noise level (default
     /// [`DEFAULT_GAP_THRESHOLD`]).
     pub gap_threshold: f64,
-    /// Candidate augmentations to score (default: all of [`CandidateKind::ALL`]).
-    pub candidates: Vec<CandidateKind>,
+    /// Catalogue effects to score (default: every effect with a force-level fit,
+    /// [`force_effects`]; others are skipped).
+    pub candidates: Vec<Effect>,
     /// Significance threshold of a candidate's held-out improvement (see
     /// `candidates`; default `candidates::DEFAULT_SIGNIFICANCE`).
     pub significance: f64,
@@ -100,26 +102,11 @@ impl Default for ForceOptions {
             seed: 0,
             identify: IdentifySettings::default(),
             gap_threshold: DEFAULT_GAP_THRESHOLD,
-            candidates: CandidateKind::ALL.to_vec(),
+            candidates: force_effects(),
             significance: candidates::DEFAULT_SIGNIFICANCE,
             min_shrink: candidates::DEFAULT_MIN_SHRINK,
         }
     }
-}
-
-/// One fold: its training and held-out nodes, the supports identified on its training
-/// cases and the training nodes' factorisations.
-pub(crate) struct Fold {
-    pub index: usize,
-    pub train: Vec<usize>,
-    pub test: Vec<usize>,
-    /// Linear support of each configuration (terms of degree ≤ 1, with the constant of a
-    /// centred configuration): coefficients per node.
-    pub supports: Supports,
-    /// The section's nonlinear terms (lift, moment): one coefficient each, shared by every
-    /// node.
-    pub shared: [Vec<Term>; 2],
-    pub fits: Vec<NodeFit>,
 }
 
 /// Deals the nodes to folds: leave one group out when there are fewer nodes than the
@@ -539,43 +526,6 @@ fn section_as_identification(
     id
 }
 
-/// Held-out residuals r = measured − predicted, `[case][channel]` in C units, for the
-/// augmentation `aug` ([`Aug::NONE`]: none).
-pub(crate) fn held_out_residuals(
-    cases: &[CaseData],
-    nodes: &[Node],
-    folds: &[Fold],
-    aug: Aug<'_>,
-) -> Vec<[Vec<f64>; 2]> {
-    let mut out: Vec<[Vec<f64>; 2]> = vec![[Vec::new(), Vec::new()]; cases.len()];
-    for f in folds {
-        for c in 0..2 {
-            fold_residuals(cases, nodes, f, c, aug, &mut out);
-        }
-    }
-    out
-}
-
-/// Held-out residuals of one fold and channel into `out`; returns the fitted law.
-pub(crate) fn fold_residuals(
-    cases: &[CaseData],
-    nodes: &[Node],
-    f: &Fold,
-    c: usize,
-    aug: Aug<'_>,
-    out: &mut [[Vec<f64>; 2]],
-) -> law::ChannelLaw {
-    let lawc = law::fit_channel(cases, nodes, &f.fits, &f.shared[c], c, aug);
-    for &n in &f.test {
-        for &i in &nodes[n].cases {
-            let z = aug.columns(i, c);
-            let p = law::predict(cases, nodes, &f.supports, &f.shared[c], &lawc, i, c, &z);
-            out[i][c] = cases[i].y[c].iter().zip(&p).map(|(y, p)| y - p).collect();
-        }
-    }
-    lawc
-}
-
 /// Held-out gap metrics of a set of residuals.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Gaps {
@@ -690,12 +640,12 @@ pub fn force_level_profiled(
     lap("folds", &mut prof);
     let before = held_out_residuals(&cases, &nodes, &folds, Aug::NONE);
     lap("baseline", &mut prof);
-    let timed = candidates::score_all(&cases, &nodes, &folds, &before, opts, &cache);
+    let timed = score_all(&cases, &nodes, &folds, &before, opts, &cache);
     lap("candidates (wall)", &mut prof);
     let mut scored = Vec::with_capacity(timed.len());
-    for (s, t) in timed {
-        prof.push((format!("candidate:{}", s.kind.effect().name()), t));
-        scored.push(s);
+    for (e, s, t) in timed {
+        prof.push((format!("candidate:{}", e.name()), t));
+        scored.push((e, s));
     }
     let mut r = analysis::assemble(&cases, &nodes, &fold_of, &before, scored, opts);
     r.fold_scheme = Some(scheme);
@@ -706,9 +656,47 @@ pub fn force_level_profiled(
 /// The level a force-level result reports.
 pub const LEVEL: Level = Level::Aerodynamic;
 
-/// Catalogue effect of a candidate kind.
-pub fn effect_of(kind: CandidateKind) -> Effect {
-    kind.effect()
+/// The catalogue effects with a force-level fit, in catalogue order.
+pub fn force_effects() -> Vec<Effect> {
+    Effect::ALL
+        .into_iter()
+        .filter(|e| e.entry().force().is_some())
+        .collect()
+}
+
+/// Scores every effect of `opts.candidates` that has a force-level fit, in parallel:
+/// (effect, held-out result, seconds spent in its own task).
+fn score_all(
+    cases: &[CaseData],
+    nodes: &[Node],
+    folds: &[Fold],
+    before: &[[Vec<f64>; 2]],
+    opts: &ForceOptions,
+    cache: &NodeCache,
+) -> Vec<(Effect, candidates::Scored, f64)> {
+    use rayon::prelude::*;
+    let fits: Vec<(Effect, &dyn candidates::ForceFit)> = opts
+        .candidates
+        .iter()
+        .filter_map(|&e| Some((e, e.entry().force()?)))
+        .collect();
+    fits.par_iter()
+        .map(|&(e, fit)| {
+            let t0 = std::time::Instant::now();
+            // the columns' cache key: the effect's variant name
+            let key = format!("{e:?}");
+            let cx = candidates::Context {
+                cases,
+                nodes,
+                folds,
+                before,
+                cache,
+                key: &key,
+            };
+            let s = fit.fit(&cx);
+            (e, s, t0.elapsed().as_secs_f64())
+        })
+        .collect()
 }
 
 #[cfg(test)]

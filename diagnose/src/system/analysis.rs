@@ -1,16 +1,16 @@
 //! Where the system-level gap lies (shares of the excess residual energy) and residual
 //! spectra before/after the best candidate.
 
-use crate::effect::{Effect, Level};
+use crate::effect::Level;
 use crate::report::{ResidualSpectrum, WhereShare};
 
-use super::candidates;
+use super::candidates::{self, SystemTerm};
 use super::residual::RunResidual;
 
 const CHANNELS: [&str; 2] = ["heave", "pitch"];
 
 /// The best candidate: effect, grid parameters, coefficients.
-pub(crate) type Best = (Effect, Vec<(String, f64)>, Vec<f64>);
+pub(crate) type Best = (&'static dyn SystemTerm, Vec<(String, f64)>, Vec<f64>);
 
 /// Shares of the excess normalised residual energy (energy minus its noise expectation,
 /// clipped at 0; raw energy when nothing exceeds the noise) by channel, by response

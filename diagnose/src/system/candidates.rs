@@ -26,8 +26,6 @@
 
 use identify::numerics::{cholesky_in_place, cholesky_solve_in_place, PivotFloor};
 
-use crate::effect::Effect;
-
 use super::residual::RunResidual;
 
 /// One regressor column: its series per channel over the kept samples (empty = 0).
@@ -213,179 +211,95 @@ pub(crate) fn fit(variants: &[Variant], runs: &[usize]) -> Option<(usize, Vec<f6
 }
 
 /// Kept-sample slice of a whole-run series.
-fn kept(run: &RunResidual, x: &[f64]) -> Vec<f64> {
+pub(crate) fn kept(run: &RunResidual, x: &[f64]) -> Vec<f64> {
     x[run.i0..run.i1].to_vec()
 }
 
 /// A non-smooth structural force series (whole run) as the residual sees it
 /// ([`RunResidual::as_acceleration_term`]); the raw kept samples if that fails.
-fn acc_term(run: &RunResidual, x: &[f64]) -> Vec<f64> {
+pub(crate) fn acc_term(run: &RunResidual, x: &[f64]) -> Vec<f64> {
     run.as_acceleration_term(x)
         .unwrap_or_else(|| x[run.i0..run.i1].to_vec())
 }
 
-/// Columns of one candidate variant for one run.
-fn columns(effect: Effect, grid: &[f64], run: &RunResidual, rho: f64, chord: f64) -> Vec<Column> {
-    let z = Vec::new;
-    match effect {
-        Effect::AddedMass => {
-            let (hdd, add) = (kept(run, &run.qdd[0]), kept(run, &run.qdd[1]));
-            vec![
-                [hdd.clone(), z()],
-                [add.clone(), z()],
-                [z(), hdd],
-                [z(), add],
-            ]
-        }
-        Effect::TimeDelay => {
-            let d = |f: &[f64]| -> Vec<f64> {
-                (run.i0..run.i1)
-                    .map(|i| -(f[i + 1] - f[i - 1]) / (2.0 * run.dt))
-                    .collect()
-            };
-            vec![[d(&run.force[0]), d(&run.force[1])]]
-        }
-        // restoring terms through the same smoothing as the residual's structural force
-        // (their harmonics at 2f, 3f are attenuated by the differentiator as the
-        // measured acceleration's are)
-        Effect::StructuralCubic => {
-            let p =
-                |c: usize| acc_term(run, &run.q[c].iter().map(|v| v.powi(3)).collect::<Vec<_>>());
-            vec![[p(0), z()], [z(), p(1)]]
-        }
-        Effect::Freeplay => {
-            let d = grid[0];
-            let x: Vec<f64> = run.q[1].iter().map(|a| a.clamp(-d, d)).collect();
-            vec![[z(), acc_term(run, &x)]]
-        }
-        Effect::StructuralPolynomial => {
-            let p = |c: usize, k: i32| {
-                acc_term(run, &run.q[c].iter().map(|v| v.powi(k)).collect::<Vec<_>>())
-            };
-            vec![
-                [p(0, 2), z()],
-                [p(0, 3), z()],
-                [z(), p(1, 2)],
-                [z(), p(1, 3)],
-            ]
-        }
-        Effect::StructuralDamping => {
-            let p = |c: usize| -> Vec<f64> {
-                let x: Vec<f64> = run.q[c]
-                    .iter()
-                    .zip(&run.qd[c])
-                    .map(|(q, v)| q * q * v)
-                    .collect();
-                acc_term(run, &x)
-            };
-            vec![[p(0), z()], [z(), p(1)]]
-        }
-        Effect::Friction => {
-            let (eh, ea) = (grid[0], grid[1]);
-            let xh: Vec<f64> = run.qd[0].iter().map(|v| (v / eh).tanh()).collect();
-            let xa: Vec<f64> = run.qd[1].iter().map(|v| (v / ea).tanh()).collect();
-            vec![[acc_term(run, &xh), z()], [z(), acc_term(run, &xa)]]
-        }
-        Effect::StaticOffset => {
-            let s = if grid[0] > 0.5 {
-                0.5 * rho * run.u * run.u
-            } else {
-                1.0
-            };
-            let n = run.len();
-            vec![[vec![s * chord; n], z()], [z(), vec![s * chord * chord; n]]]
-        }
-        _ => Vec::new(),
+/// Grid variants of a candidate: (named grid values in SI units, the values).
+pub(crate) type Grid = Vec<(Vec<(String, f64)>, Vec<f64>)>;
+
+/// An effect's terms at the system level: the columns Φ of the equation-error fit, linear
+/// in the coefficients θ (r_aug = r − Φθ), nonlinear parameters on a grid, and the same
+/// terms in the augmented simulation ([`super::simulate`]).
+pub(crate) trait SystemTerm: Sync {
+    /// Names of the coefficients θ, with their SI unit.
+    fn coefficient_names(&self) -> &'static [&'static str];
+
+    /// The grid variants over `runs` (default: one variant without grid parameters).
+    fn grids(&self, runs: &[RunResidual]) -> Grid {
+        let _ = runs;
+        vec![(Vec::new(), Vec::new())]
     }
-}
 
-/// Names of the coefficients of a candidate.
-pub(crate) fn coefficient_names(effect: Effect) -> Vec<String> {
-    let v: &[&str] = match effect {
-        Effect::AddedMass => &["dM_hh_kg_per_m", "dM_ha_kg", "dM_ah_kg", "dM_aa_kg_m"],
-        Effect::TimeDelay => &["tau_s"],
-        Effect::StructuralCubic => &["k3_heave_N_per_m3", "k3_pitch_Nm_per_rad3"],
-        Effect::Freeplay => &["gap_stiffness_Nm_per_rad"],
-        Effect::Friction => &["friction_heave_N_per_m", "friction_pitch_Nm_per_m"],
-        Effect::StaticOffset => &["offset_coefficient_lift", "offset_coefficient_moment"],
-        Effect::StructuralPolynomial => &[
-            "k2_heave_N_per_m2",
-            "k3_heave_N_per_m3",
-            "k2_pitch_Nm_per_rad2",
-            "k3_pitch_Nm_per_rad3",
-        ],
-        Effect::StructuralDamping => &["c2_heave_Ns_per_m3", "c2_pitch_Nms_per_rad3"],
-        _ => &[],
-    };
-    v.iter().map(|s| s.to_string()).collect()
-}
+    /// Number of grid parameters (fitted on a grid, not by least squares).
+    fn n_grid_params(&self) -> usize {
+        0
+    }
 
-/// The system-level candidates, in catalogue order.
-pub(crate) const CANDIDATES: [Effect; 8] = [
-    Effect::StaticOffset,
-    Effect::AddedMass,
-    Effect::TimeDelay,
-    Effect::StructuralCubic,
-    Effect::Freeplay,
-    Effect::Friction,
-    Effect::StructuralPolynomial,
-    Effect::StructuralDamping,
-];
+    /// The columns of `run` at grid values `grid` (ρ \[kg/m³\], chord B \[m\]).
+    fn columns(&self, grid: &[f64], run: &RunResidual, rho: f64, chord: f64) -> Vec<Column>;
 
-/// Freeplay half-gap grid \[deg\].
-pub(crate) const FREEPLAY_GRID_DEG: [f64; 14] = [
-    0.05, 0.075, 0.1, 0.15, 0.2, 0.3, 0.4, 0.5, 0.7, 1.0, 1.4, 2.0, 2.5, 3.0,
-];
-/// Friction smoothing grid (fractions of the pooled rms velocity).
-pub(crate) const FRICTION_GRID: [f64; 3] = [0.01, 0.03, 0.1];
+    /// The forms of the candidate, simplest first: (label, coefficient indices).
+    /// Structural terms come as pitch only, heave only, and both DOFs; the choice among
+    /// them follows the one-standard-error rule of [`super`] (DECISIONS, "The simplest
+    /// sufficient effect"). Default: one form with every coefficient.
+    fn forms(&self) -> Vec<(&'static str, Vec<usize>)> {
+        vec![("all", (0..self.coefficient_names().len()).collect())]
+    }
 
-/// Grid parameters of every variant of a candidate (names and SI values).
-pub(crate) fn variants_grid(effect: Effect, runs: &[RunResidual]) -> Vec<Vec<(String, f64)>> {
-    grids(effect, runs).into_iter().map(|g| g.0).collect()
-}
+    /// Sign that turns a fitted coefficient θ into the reported one. The fit writes the
+    /// augmentation like an aerodynamic force on the right of M q̈ + C q̇ + K q = F
+    /// (r_aug = r − Φθ); structural springs, dampers and friction are reported as the
+    /// extra restoring or dissipative force on the left, added to C q̇ + K q, so their
+    /// sign flips (−1).
+    fn report_sign(&self) -> f64 {
+        1.0
+    }
 
-type Grid = Vec<(Vec<(String, f64)>, Vec<f64>)>;
+    /// Whether a negative reported coefficient is no such effect (a dead band removes
+    /// stiffness, friction opposes the motion: the other sign would only mimic a
+    /// hardening spring or a negative damping).
+    fn sign_bound(&self) -> bool {
+        false
+    }
 
-fn grids(effect: Effect, runs: &[RunResidual]) -> Grid {
-    match effect {
-        Effect::Freeplay => FREEPLAY_GRID_DEG
-            .iter()
-            .map(|d| {
-                (
-                    vec![("half_gap_rad".into(), d.to_radians())],
-                    vec![d.to_radians()],
-                )
-            })
-            .collect(),
-        Effect::Friction => {
-            let rms = |c: usize| {
-                let (s, n) = runs.iter().fold((0.0, 0usize), |(s, n), r| {
-                    (
-                        s + r.qd[c][r.i0..r.i1].iter().map(|v| v * v).sum::<f64>(),
-                        n + r.len(),
-                    )
-                });
-                (s / n.max(1) as f64).sqrt().max(1e-12)
-            };
-            let (vh, va) = (rms(0), rms(1));
-            FRICTION_GRID
-                .iter()
-                .map(|f| {
-                    (
-                        vec![
-                            ("smoothing_heave_m_per_s".into(), f * vh),
-                            ("smoothing_pitch_rad_per_s".into(), f * va),
-                        ],
-                        vec![f * vh, f * va],
-                    )
-                })
-                .collect()
-        }
-        Effect::StaticOffset => vec![
-            (vec![("proportional_to_q_dyn".into(), 0.0)], vec![0.0]),
-            (vec![("proportional_to_q_dyn".into(), 1.0)], vec![1.0]),
-        ],
-        _ => vec![(Vec::new(), Vec::new())],
+    /// The sign convention of the reported parameters (written in diagnosis.json).
+    fn convention(&self) -> &'static str;
+
+    /// The term's force in the augmented simulation at grid values `grid` and
+    /// coefficients `theta`: Φ(q, q̇)θ on the right of the equations of motion, like an
+    /// aerodynamic force \[N/m, N·m/m\] (q_dyn = ½ρU² \[Pa\], chord B \[m\]).
+    fn force(
+        &self,
+        grid: &[f64],
+        theta: &[f64],
+        q: [f64; 2],
+        qd: [f64; 2],
+        q_dyn: f64,
+        chord: f64,
+    ) -> [f64; 2] {
+        let _ = (grid, theta, q, qd, q_dyn, chord);
+        [0.0; 2]
+    }
+
+    /// The mass ΔM the fitted term adds on the right, ΔM q̈ (the structure carries
+    /// M_s − ΔM), rows \[kg/m, kg; kg, kg·m\].
+    fn mass(&self, theta: &[f64]) -> [[f64; 2]; 2] {
+        let _ = theta;
+        [[0.0; 2]; 2]
+    }
+
+    /// The delay τ \[s\] of the aerodynamic force, F(t − τ) ≈ F − τḞ.
+    fn delay(&self, theta: &[f64]) -> f64 {
+        let _ = theta;
+        0.0
     }
 }
 
@@ -393,14 +307,18 @@ fn grids(effect: Effect, runs: &[RunResidual]) -> Grid {
 /// columns ([`nuisance_columns`]; `flags[j]`: run j's nuisance terms; no nuisance column
 /// that no run has).
 pub(crate) fn variants(
-    effect: Effect,
+    term: &dyn SystemTerm,
     runs: &[RunResidual],
     rho: f64,
     chord: f64,
     flags: &[[[bool; 2]; 2]],
 ) -> Vec<Variant> {
     let dofs = [0, 1].map(|g| [0, 1].map(|d| flags.iter().any(|f| f[g][d])));
-    let mut names = coefficient_names(effect);
+    let mut names: Vec<String> = term
+        .coefficient_names()
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
     for g in 0..2 {
         for d in (0..2).filter(|&d| dofs[g][d]) {
             let (group, q) = (["extrapolation", "still_air"][g], ["h", "alpha"][d]);
@@ -408,7 +326,7 @@ pub(crate) fn variants(
             names.push(format!("nuisance_{group}_dM_pitch_{q}"));
         }
     }
-    grids(effect, runs)
+    term.grids(runs)
         .into_iter()
         .map(|(grid, g)| Variant {
             grid,
@@ -417,7 +335,7 @@ pub(crate) fn variants(
                 .iter()
                 .enumerate()
                 .map(|(j, r)| {
-                    let mut cols = columns(effect, &g, r, rho, chord);
+                    let mut cols = term.columns(&g, r, rho, chord);
                     let f = flags.get(j).copied().unwrap_or([[false; 2]; 2]);
                     cols.extend(nuisance_columns(r, f, dofs));
                     moments(r, &cols)
@@ -427,97 +345,17 @@ pub(crate) fn variants(
         .collect()
 }
 
-/// The forms of a candidate, simplest first: (label, coefficient indices). Structural
-/// terms come as pitch only, heave only, and both DOFs; the choice among them follows the
-/// one-standard-error rule of [`super`] (DECISIONS, "The simplest sufficient effect").
-pub(crate) fn forms(effect: Effect) -> Vec<(&'static str, Vec<usize>)> {
-    match effect {
-        Effect::StructuralCubic | Effect::StructuralDamping | Effect::Friction => vec![
-            ("pitch", vec![1]),
-            ("heave", vec![0]),
-            ("pitch+heave", vec![0, 1]),
-        ],
-        Effect::StructuralPolynomial => vec![
-            ("pitch", vec![2, 3]),
-            ("heave", vec![0, 1]),
-            ("pitch+heave", vec![0, 1, 2, 3]),
-        ],
-        _ => {
-            let n = coefficient_names(effect).len();
-            vec![("all", (0..n).collect())]
-        }
-    }
-}
-
-/// Number of grid parameters of a candidate (fitted on a grid, not by least squares).
-pub(crate) fn n_grid_params(effect: Effect) -> usize {
-    match effect {
-        Effect::Freeplay | Effect::Friction | Effect::StaticOffset => 1,
-        _ => 0,
-    }
-}
-
-/// Sign that turns a fitted coefficient θ into the reported one. The fit writes the
-/// augmentation like an aerodynamic force on the right of M q̈ + C q̇ + K q = F
-/// (r_aug = r − Φθ); structural springs, dampers and friction are reported as the extra
-/// restoring or dissipative force on the left, added to C q̇ + K q, so their sign flips.
-pub(crate) fn report_sign(effect: Effect) -> f64 {
-    match effect {
-        Effect::StructuralCubic
-        | Effect::StructuralPolynomial
-        | Effect::StructuralDamping
-        | Effect::Friction => -1.0,
-        _ => 1.0,
-    }
-}
-
-/// The sign convention of a candidate's reported parameters (written in diagnosis.json).
-pub(crate) fn convention(effect: Effect) -> &'static str {
-    match effect {
-        Effect::StructuralCubic => {
-            "extra restoring force added to K q: heave k3_heave·h³ [N/m], pitch \
-             k3_pitch·α³ [N·m/m]; h positive down, α positive nose-up; k3 > 0 hardening"
-        }
-        Effect::StructuralPolynomial => {
-            "extra restoring force added to K q: heave k2_heave·h² + k3_heave·h³ [N/m], \
-             pitch k2_pitch·α² + k3_pitch·α³ [N·m/m]; h positive down, α positive nose-up"
-        }
-        Effect::StructuralDamping => {
-            "extra damping force added to C q̇: c2_heave·h²ḣ [N/m], c2_pitch·α²α̇ [N·m/m]; \
-             c2 > 0 damping that grows with amplitude"
-        }
-        Effect::Friction => {
-            "extra dissipative force added to C q̇: friction·tanh(q̇/smoothing) (heave N/m, \
-             pitch N·m/m); > 0 opposes the motion"
-        }
-        Effect::Freeplay => {
-            "pitch restoring moment lost inside the gap: gap_stiffness·clamp(α, −half_gap, \
-             half_gap) [N·m/m] (gap_stiffness ≈ k_α for a true dead band)"
-        }
-        Effect::AddedMass => {
-            "extra force dM·q̈ on the right of M q̈ + C q̇ + K q = F: dM < 0 is mass the \
-             sim lacks (e.g. apparent mass), dM > 0 mass it has too much of"
-        }
-        Effect::TimeDelay => "aerodynamic force F(t − τ), τ > 0 a lag [s]",
-        Effect::StaticOffset => {
-            "constant lift (positive down) and moment (positive nose-up) coefficients, × ½ρU² \
-             when proportional_to_q_dyn = 1"
-        }
-        _ => "",
-    }
-}
-
 /// The candidate's extra residual columns for one run at fitted grid values, for
 /// re-evaluating the augmented residual sample by sample (where/spectra).
 pub(crate) fn run_columns(
-    effect: Effect,
+    term: &dyn SystemTerm,
     grid: &[(String, f64)],
     run: &RunResidual,
     rho: f64,
     chord: f64,
 ) -> Vec<Column> {
     let g: Vec<f64> = grid.iter().map(|x| x.1).collect();
-    columns(effect, &g, run, rho, chord)
+    term.columns(&g, run, rho, chord)
 }
 
 #[cfg(test)]

@@ -9,7 +9,7 @@
 pub mod residual;
 
 mod analysis;
-mod candidates;
+pub(crate) mod candidates;
 pub mod coverage;
 pub(crate) mod simulate;
 
@@ -25,7 +25,7 @@ use identify::record::CaseKind;
 use crate::effect::{Effect, Level};
 use crate::report::{CandidateScore, CaseGap, LevelResult};
 use crate::{Error, Result};
-use candidates::Variant;
+use candidates::{SystemTerm, Variant};
 
 pub use residual::{ResidualSettings, RunResidual};
 
@@ -592,7 +592,7 @@ fn within_one_se(simple: &[[f64; 2]], best: &[[f64; 2]], active: &[bool], allowa
 }
 
 /// Scores one candidate: fitted on the training folds of its active runs, scored on the
-/// held-out ones, in each of its forms ([`candidates::forms`]); the form named is the one
+/// held-out ones, in each of its forms ([`SystemTerm::forms`]); the form named is the one
 /// with fewest coefficients within one standard error (or the parsimony allowance) of
 /// the best form.
 ///
@@ -604,6 +604,7 @@ fn within_one_se(simple: &[[f64; 2]], best: &[[f64; 2]], active: &[bool], allowa
 #[allow(clippy::too_many_arguments)]
 fn score_candidate(
     effect: Effect,
+    term: &dyn SystemTerm,
     runs: &[RunResidual],
     folds: &[usize],
     rho: f64,
@@ -625,8 +626,8 @@ fn score_candidate(
             }
         })
         .collect();
-    let vars = candidates::variants(effect, runs, rho, chord, &flags);
-    let p_c = candidates::coefficient_names(effect).len();
+    let vars = candidates::variants(term, runs, rho, chord, &flags);
+    let p_c = term.coefficient_names().len();
     let p_all = vars.first().map_or(p_c, |v| v.names.len());
     let nuis_idx: Vec<usize> = (p_c..p_all).collect();
     // an aerodynamic candidate: runs in the wind inside the forced range only
@@ -695,7 +696,7 @@ fn score_candidate(
         });
         s / f64::max(m, 1.0)
     };
-    let forms = candidates::forms(effect);
+    let forms = term.forms();
     let results: Vec<_> = forms
         .iter()
         .map(|(label, idx)| {
@@ -875,11 +876,13 @@ fn level_and_runs(
                 .map_or(0.0, |e| e2(e[j]))
         })
         .collect();
-    let mut scored: Vec<(CandidateScore, Scored)> = candidates::CANDIDATES
-        .iter()
-        .map(|&effect| {
+    let mut scored: Vec<(CandidateScore, Scored)> = Effect::ALL
+        .into_iter()
+        .filter_map(|e| Some((e, e.entry().system()?)))
+        .map(|(effect, term)| {
             let sc = score_candidate(
                 effect,
+                term,
                 &raw_runs,
                 &folds,
                 rho,
@@ -908,22 +911,25 @@ fn level_and_runs(
             // out (structural) or on the covered runs (aerodynamic)
             let own_gap = !act.is_empty()
                 && c_before / (en + em).max(0.0).sqrt().max(f64::MIN_POSITIVE) > opts.gap_ratio;
-            let n_params = sc.cols.len() + candidates::n_grid_params(effect);
+            let n_params = sc.cols.len() + term.n_grid_params();
             let threshold = opts.min_gain + opts.gain_per_param * n_params as f64;
-            let vars_grid = candidates::variants_grid(effect, runs);
-            let mut parameters: Vec<(String, f64)> =
-                vars_grid.get(sc.variant).cloned().unwrap_or_default();
-            let names = candidates::coefficient_names(effect);
-            let sign = candidates::report_sign(effect);
+            let mut parameters: Vec<(String, f64)> = term
+                .grids(runs)
+                .into_iter()
+                .nth(sc.variant)
+                .map(|g| g.0)
+                .unwrap_or_default();
+            let names = term.coefficient_names();
+            let sign = term.report_sign();
             parameters.extend(
                 sc.cols
                     .iter()
-                    .map(|&i| (names[i].clone(), sign * sc.theta[i])),
+                    .map(|&i| (names[i].to_string(), sign * sc.theta[i])),
             );
             // a dead band removes stiffness and friction opposes the motion: the other
             // sign is no such effect (it would only mimic a hardening spring or a
             // negative damping)
-            let unphysical = matches!(effect, Effect::Freeplay | Effect::Friction)
+            let unphysical = term.sign_bound()
                 && sc.cols.iter().any(|&i| sign * sc.theta[i] < 0.0);
             let mut note = sc.note.clone();
             if unphysical {
@@ -954,7 +960,7 @@ fn level_and_runs(
                 score: threshold - statistic,
                 parameters,
                 failure: sc.failure.clone(),
-                convention: Some(candidates::convention(effect).to_string()),
+                convention: Some(term.convention().to_string()),
                 note,
                 held_out_runs: sc.after_runs.iter().map(|&e| e2(e)).collect(),
             };
@@ -981,19 +987,22 @@ fn level_and_runs(
             noise_level: comb(noise_runs[j]),
         })
         .collect();
-    let best_cols = best.map(|(_, s)| {
-        let grid = candidates::variants_grid(s.effect, runs)
-            .get(s.variant)
-            .cloned()
+    let best_cols = best.and_then(|(_, s)| {
+        let term = s.effect.entry().system()?;
+        let grid = term
+            .grids(runs)
+            .into_iter()
+            .nth(s.variant)
+            .map(|g| g.0)
             .unwrap_or_default();
-        (s.effect, grid, s.theta.clone())
+        Some((term, grid, s.theta.clone()))
     });
     let where_ = analysis::where_shares(runs, &noise_runs);
     let spectra = analysis::spectra(runs, best_cols.as_ref(), rho, chord);
     let signatures = simulate::signatures(runs, gap_statistic, opts.gap_ratio);
     let (observables, bifurcation) = if opts.simulate {
-        let aug = best_cols.as_ref().map(|(e, g, t)| simulate::Augment {
-            effect: *e,
+        let aug = best_cols.as_ref().map(|(term, g, t)| simulate::Augment {
+            term: *term,
             grid: g.iter().map(|x| x.1).collect(),
             theta: t.clone(),
         });

@@ -8,63 +8,35 @@ use std::sync::Arc;
 use aeroelastic::aero::{AeroModel, Flow};
 use aeroelastic::integrate::{Control, OdeSystem, StopReason};
 
-use crate::effect::Effect;
+use super::candidates::SystemTerm;
 use crate::structure::line_fit;
 
 use aeroelastic::structure::Structure;
 
 use super::residual::{dominant_frequency, RunResidual};
 
-/// A fitted augmentation used in a simulation: effect, grid values, coefficients.
-#[derive(Debug, Clone)]
+/// A fitted augmentation used in a simulation: the effect's terms, grid values,
+/// coefficients.
+#[derive(Clone)]
 pub(crate) struct Augment {
-    pub effect: Effect,
+    pub term: &'static dyn SystemTerm,
     pub grid: Vec<f64>,
     pub theta: Vec<f64>,
 }
 
 impl Augment {
-    /// Extra structural force Φ(q, q̇)θ (not the added-mass or delay parts).
+    /// Extra force Φ(q, q̇)θ (not the added-mass or delay parts).
     fn force(&self, q: [f64; 2], qd: [f64; 2], q_dyn: f64, chord: f64) -> [f64; 2] {
-        let t = &self.theta;
-        match self.effect {
-            Effect::StructuralCubic => [t[0] * q[0].powi(3), t[1] * q[1].powi(3)],
-            Effect::StructuralPolynomial => [
-                t[0] * q[0].powi(2) + t[1] * q[0].powi(3),
-                t[2] * q[1].powi(2) + t[3] * q[1].powi(3),
-            ],
-            Effect::StructuralDamping => [t[0] * q[0].powi(2) * qd[0], t[1] * q[1].powi(2) * qd[1]],
-            Effect::Freeplay => {
-                let d = self.grid[0];
-                [0.0, t[0] * q[1].clamp(-d, d)]
-            }
-            Effect::Friction => [
-                t[0] * (qd[0] / self.grid[0]).tanh(),
-                t[1] * (qd[1] / self.grid[1]).tanh(),
-            ],
-            Effect::StaticOffset => {
-                let s = if self.grid[0] > 0.5 { q_dyn } else { 1.0 };
-                [t[0] * s * chord, t[1] * s * chord * chord]
-            }
-            _ => [0.0, 0.0],
-        }
+        self.term
+            .force(&self.grid, &self.theta, q, qd, q_dyn, chord)
     }
 
     fn added_mass(&self) -> [[f64; 2]; 2] {
-        match self.effect {
-            Effect::AddedMass => [
-                [self.theta[0], self.theta[1]],
-                [self.theta[2], self.theta[3]],
-            ],
-            _ => [[0.0; 2]; 2],
-        }
+        self.term.mass(&self.theta)
     }
 
     fn delay(&self) -> f64 {
-        match self.effect {
-            Effect::TimeDelay => self.theta[0],
-            _ => 0.0,
-        }
+        self.term.delay(&self.theta)
     }
 }
 
