@@ -36,7 +36,7 @@
 //! orbits: only odd harmonics are kept, the AFT samples half the period and the monodromy
 //! is Φ(T/2)² (J(t) has period T/2). Polynomial structures are sampled alias-free with
 //! N = (p + 1)H + 1 (p the largest power). For linear models A(U) is an exact quadratic in U
-//! ([`super::QuadraticJacobian`], verified before use), which also gives the U column of the
+//! ([`QuadraticJacobian`], verified before use), which also gives the U column of the
 //! Jacobian analytically. DECISIONS.md gives the measured effect of each.
 
 use std::cell::RefCell;
@@ -45,9 +45,10 @@ use std::f64::consts::TAU;
 use nalgebra::{DMatrix, DVector};
 use num_complex::Complex64;
 
-use super::{
-    orbit_point, stored_unknowns, BranchPoint, HopfPoint, PeriodicProblem, QuadraticJacobian,
-};
+use super::continuation::{stored_unknowns, PeriodicProblem};
+use super::hopf::QuadraticJacobian;
+use super::orbit::orbit_point;
+use super::{BranchPoint, HopfPoint};
 use crate::dynamics::SectionDynamics;
 use crate::section::Section;
 use crate::{Error, Result};
@@ -208,7 +209,8 @@ fn basis_fn(k: usize, sine: bool, theta: f64) -> (f64, f64) {
 
 impl<'a> CondensedBalance<'a> {
     /// `harmonics` H, `steps` variational steps per period; `scales` those of the shooting
-    /// unknowns (one per state, T, U: [`super::branch_scales`]); ω is scaled by 0.1 ω_Hopf.
+    /// unknowns (one per state, T, U: [`super::continuation::branch_scales`]); ω is scaled
+    /// by 0.1 ω_Hopf.
     pub(super) fn new(
         section: &'a Section,
         harmonics: usize,
@@ -1230,8 +1232,8 @@ impl PeriodicProblem for CondensedBalance<'_> {
 
 #[cfg(test)]
 mod tests {
+    use super::super::continuation::{branch_scales, newton, Closure};
     use super::super::harmonic::HarmonicBalance;
-    use super::super::{branch_scales, newton, Closure};
     use super::*;
     use crate::reference::hp1_cubic_pitch;
     use crate::structure::{Friction, PolyTerm};

@@ -25,7 +25,9 @@ use std::f64::consts::TAU;
 
 use nalgebra::{DMatrix, DVector};
 
-use super::{orbit_point, stored_unknowns, BranchPoint, HopfPoint, PeriodicProblem};
+use super::continuation::{stored_unknowns, PeriodicProblem};
+use super::orbit::orbit_point;
+use super::{BranchPoint, HopfPoint};
 use crate::dynamics::SectionDynamics;
 use crate::integrate::{OdeSystem, Rk4};
 use crate::section::Section;
