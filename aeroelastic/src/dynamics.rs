@@ -9,13 +9,30 @@
 //!
 //! with M_a the model's apparent mass, F_aero = (L, M) per unit span (L positive down,
 //! M nose-up about the elastic axis) and R the structure's restoring force including its
-//! nonlinear springs, freeplay and (smoothed) friction.
+//! nonlinear springs, freeplay and (smoothed) friction. A caller's [`ExtraTerms`] (the
+//! diagnosis's fitted augmentations) enter the same equations: a mass ΔM moved to the
+//! right-hand side and a change of the applied force,
+//! (M_s − M_a − ΔM) q̈ = F̃(q, q̇, F_aero) − R(q, q̇).
 
 use nalgebra::Matrix2;
 
 use crate::aero::Flow;
 use crate::section::Section;
 use crate::{Error, Result};
+
+/// Terms a caller adds to the section's equations of motion (DESIGN.md §5: the
+/// diagnosis's fitted effects are terms of this one rate function, not a second equation
+/// of motion).
+pub trait ExtraTerms: Sync + std::fmt::Debug {
+    /// The mass ΔM moved to the right-hand side, ΔM q̈ (the equations carry
+    /// M_s − M_a − ΔM on the left), rows \[kg/m, kg; kg, kg·m\] per unit span.
+    fn mass(&self) -> Matrix2<f64>;
+
+    /// The applied generalised force F̃ (lift positive down \[N/m\], moment nose-up
+    /// \[N·m/m\]) at heave and pitch `q`, rates `qd`, given the aerodynamic model's force
+    /// `f` (zero in still air): `f` itself when the caller adds nothing.
+    fn applied(&self, q: [f64; 2], qd: [f64; 2], f: [f64; 2]) -> [f64; 2];
+}
 
 /// Right-hand side ż = f(z) of the nonlinear section at a fixed wind speed.
 ///
@@ -28,6 +45,7 @@ pub struct SectionDynamics<'a> {
     minv: Matrix2<f64>,
     friction: [f64; 4],
     nlag: usize,
+    extra: Option<&'a dyn ExtraTerms>,
 }
 
 impl<'a> SectionDynamics<'a> {
@@ -41,11 +59,30 @@ impl<'a> SectionDynamics<'a> {
     /// [`Error::InvalidParameter`] when `u` is negative or not finite;
     /// [`Error::Numerical`] when M_s − M_a is singular at `u`.
     pub fn new(section: &'a Section, u: f64) -> Result<Self> {
+        Self::build(section, u, None)
+    }
+
+    /// [`SectionDynamics::new`] with a caller's `extra` terms in the equations.
+    ///
+    /// # Errors
+    /// As [`SectionDynamics::new`]; [`Error::Numerical`] when M_s − M_a − ΔM is singular.
+    pub fn with_extra(section: &'a Section, u: f64, extra: &'a dyn ExtraTerms) -> Result<Self> {
+        Self::build(section, u, Some(extra))
+    }
+
+    fn build(section: &'a Section, u: f64, extra: Option<&'a dyn ExtraTerms>) -> Result<Self> {
         if !u.is_finite() || u < 0.0 {
             return Err(Error::param("u", u, "must be finite and ≥ 0"));
         }
-        let minv = section.total_mass(u).try_inverse().ok_or_else(|| {
-            Error::numerical("SectionDynamics", format!("M_s − M_a singular at U = {u}"))
+        let mut total = section.total_mass(u);
+        if let Some(x) = extra {
+            total -= x.mass();
+        }
+        let minv = total.try_inverse().ok_or_else(|| {
+            Error::numerical(
+                "SectionDynamics",
+                format!("total mass M_s − M_a (− ΔM) singular at U = {u}"),
+            )
         })?;
         Ok(SectionDynamics {
             section,
@@ -53,6 +90,7 @@ impl<'a> SectionDynamics<'a> {
             minv,
             friction: section.structure.friction_resolved(),
             nlag: section.aero.n_lag(),
+            extra,
         })
     }
 
@@ -161,6 +199,10 @@ impl<'a> SectionDynamics<'a> {
             [0.0; 2]
         } else {
             self.section.aero.forces(&self.flow, q, qd, lag)
+        };
+        let f = match self.extra {
+            Some(x) => x.applied(q, qd, f),
+            None => f,
         };
         let r = self.section.structure.restoring_with(q, qd, &self.friction);
         let g = [f[0] - r[0], f[1] - r[1]];

@@ -2,11 +2,14 @@
 //! measured state, and the observables of a response: dominant pitch frequency, decay or
 //! growth rate of the pitch amplitude, final (LCO) amplitude.
 
-use std::cell::Cell;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 
 use aeroelastic::aero::{AeroModel, Flow};
-use aeroelastic::integrate::{Control, OdeSystem, StopReason};
+use aeroelastic::dynamics::{ExtraTerms, SectionDynamics};
+use aeroelastic::integrate::{Control, StopReason};
+use aeroelastic::section::Section;
+use nalgebra::Matrix2;
 
 use super::candidates::SystemTerm;
 use crate::structure::line_fit;
@@ -22,6 +25,16 @@ pub(crate) struct Augment {
     pub term: &'static dyn SystemTerm,
     pub grid: Vec<f64>,
     pub theta: Vec<f64>,
+}
+
+impl std::fmt::Debug for Augment {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Augment")
+            .field("coefficients", &self.term.coefficient_names())
+            .field("grid", &self.grid)
+            .field("theta", &self.theta)
+            .finish()
+    }
 }
 
 impl Augment {
@@ -41,9 +54,11 @@ impl Augment {
 }
 
 /// Simulated pitch and heave from sample `run.i0` to the end of the run, RK4
-/// ([`aeroelastic::integrate::rk4`]) with `substeps` steps per sample, from the measured state at `i0` (SG velocities) and the
-/// lag states integrated along the measured motion up to `i0`. The run stops early when
-/// |α| > 1.5 rad or the state is not finite.
+/// ([`aeroelastic::integrate::rk4`]) with `substeps` steps per sample, from the measured
+/// state at `i0` (SG velocities) and the lag states integrated along the measured motion
+/// up to `i0`. The equations are the section's ([`SectionDynamics`]) with the fitted
+/// augmentation as [`ExtraTerms`]. The run stops early when |α| > 1.5 rad; it is empty
+/// when the section or its total mass is invalid.
 pub(crate) fn simulate(
     model: &Arc<dyn AeroModel>,
     rho: f64,
@@ -53,24 +68,23 @@ pub(crate) fn simulate(
     substeps: usize,
 ) -> [Vec<f64>; 2] {
     let model = super::residual::run_model(model, run.u, run.k);
-    let flow = Flow { rho, u: run.u };
     let chord = model.chord();
-    let q_dyn = flow.q_dyn();
-    let ma = model.apparent_mass(&flow);
-    let dm = aug.map(|a| a.added_mass()).unwrap_or([[0.0; 2]; 2]);
-    let tau = aug.map(|a| a.delay()).unwrap_or(0.0);
-    let mut mt = st.mass_matrix() - ma;
-    for i in 0..2 {
-        for j in 0..2 {
-            // The fitted augmentation is r − ΔM q̈: the structure carries M_s − ΔM.
-            mt[(i, j)] -= dm[i][j];
-        }
-    }
-    let Some(minv) = mt.try_inverse() else {
+    let q_dyn = Flow { rho, u: run.u }.q_dyn();
+    let Ok(section) = Section::new(st.clone(), model, rho) else {
         return [Vec::new(), Vec::new()];
     };
-    let nl = model.n_lag();
-    let nz = 4 + nl;
+    let terms = Fitted {
+        aug,
+        dm: aug.map(|a| a.added_mass()).unwrap_or([[0.0; 2]; 2]),
+        tau: aug.map(|a| a.delay()).unwrap_or(0.0),
+        q_dyn,
+        chord,
+        fdot: Default::default(),
+    };
+    let Ok(sys) = SectionDynamics::with_extra(&section, run.u, &terms) else {
+        return [Vec::new(), Vec::new()];
+    };
+    let nz = sys.dim();
     let n_out = run.q[0].len() - run.i0;
     let dt = run.dt;
     let h = dt / substeps as f64;
@@ -80,19 +94,6 @@ pub(crate) fn simulate(
     y[2] = run.qd[0][run.i0];
     y[3] = run.qd[1][run.i0];
     y[4..].copy_from_slice(&run.lag0);
-    let sys = Augmented {
-        model: model.as_ref(),
-        flow,
-        damping: st.damping_matrix(),
-        stiffness: st.stiffness_matrix(),
-        aug,
-        minv,
-        q_dyn,
-        chord,
-        tau,
-        fdot: Cell::new([0.0; 2]),
-        nz,
-    };
     let mut out = [Vec::with_capacity(n_out), Vec::with_capacity(n_out)];
     if n_out == 0 {
         return out;
@@ -101,7 +102,7 @@ pub(crate) fn simulate(
     out[1].push(y[1]);
     // Delay: F(t − τ) ≈ F − τ Ḟ with Ḟ = (F(y_s) − F(y_{s−1}))/h, from the two previous
     // step starts (explicit, held over the step; 0 on the first step).
-    let mut f_prev = sys.forces(&y);
+    let mut f_prev = sys.aero_forces(&y);
     let _ = aeroelastic::integrate::rk4(
         &sys,
         0.0,
@@ -113,9 +114,8 @@ pub(crate) fn simulate(
             if y[1].abs() >= 1.5 {
                 return Control::Stop(StopReason::LeftBound);
             }
-            let f = sys.forces(y);
-            sys.fdot
-                .set([(f[0] - f_prev[0]) / h, (f[1] - f_prev[1]) / h]);
+            let f = sys.aero_forces(y);
+            terms.set_fdot([(f[0] - f_prev[0]) / h, (f[1] - f_prev[1]) / h]);
             f_prev = f;
             if s % substeps == 0 {
                 out[0].push(y[0]);
@@ -127,60 +127,41 @@ pub(crate) fn simulate(
     out
 }
 
-/// The sim with a fitted augmentation, as a first-order system (state h, α, ḣ, α̇, lags).
-struct Augmented<'a> {
-    model: &'a dyn AeroModel,
-    flow: Flow,
-    /// Structural damping matrix C_s.
-    damping: nalgebra::Matrix2<f64>,
-    /// Structural stiffness matrix K_s.
-    stiffness: nalgebra::Matrix2<f64>,
+/// The fitted augmentation as terms of the section's equations of motion: its mass ΔM,
+/// and on the applied force F − τḞ + Φ(q, q̇)θ (r_aug = r − Φθ: the augmentation acts
+/// like an aerodynamic force).
+#[derive(Debug)]
+struct Fitted<'a> {
     aug: Option<&'a Augment>,
-    minv: nalgebra::Matrix2<f64>,
+    dm: [[f64; 2]; 2],
+    tau: f64,
     q_dyn: f64,
     chord: f64,
-    tau: f64,
-    /// Ḟ used by the delay term over the current step.
-    fdot: Cell<[f64; 2]>,
-    nz: usize,
+    /// Ḟ used by the delay term over the current step (bits of two f64).
+    fdot: [AtomicU64; 2],
 }
 
-impl Augmented<'_> {
-    fn forces(&self, y: &[f64]) -> [f64; 2] {
-        self.model
-            .forces(&self.flow, [y[0], y[1]], [y[2], y[3]], &y[4..])
+impl Fitted<'_> {
+    fn set_fdot(&self, v: [f64; 2]) {
+        for (a, v) in self.fdot.iter().zip(v) {
+            a.store(v.to_bits(), Ordering::Relaxed);
+        }
     }
 }
 
-impl OdeSystem for Augmented<'_> {
-    fn dim(&self) -> usize {
-        self.nz
+impl ExtraTerms for Fitted<'_> {
+    fn mass(&self) -> Matrix2<f64> {
+        let m = &self.dm;
+        Matrix2::new(m[0][0], m[0][1], m[1][0], m[1][1])
     }
 
-    fn rate(&self, _t: f64, y: &[f64], dy: &mut [f64]) {
-        let q = [y[0], y[1]];
-        let qd = [y[2], y[3]];
-        let f = self.forces(y);
+    fn applied(&self, q: [f64; 2], qd: [f64; 2], f: [f64; 2]) -> [f64; 2] {
         let extra = self
             .aug
             .map(|a| a.force(q, qd, self.q_dyn, self.chord))
             .unwrap_or([0.0; 2]);
-        let fdot = self.fdot.get();
-        let mut g = [0.0; 2];
-        for c in 0..2 {
-            // r_aug = r − Φθ: the augmentation acts like an aerodynamic force.
-            g[c] = f[c] - self.tau * fdot[c] + extra[c];
-            for j in 0..2 {
-                g[c] -= self.damping[(c, j)] * qd[j] + self.stiffness[(c, j)] * q[j];
-            }
-        }
-        let minv = &self.minv;
-        dy[0] = qd[0];
-        dy[1] = qd[1];
-        dy[2] = minv[(0, 0)] * g[0] + minv[(0, 1)] * g[1];
-        dy[3] = minv[(1, 0)] * g[0] + minv[(1, 1)] * g[1];
-        self.model
-            .lag_rates(&self.flow, q, qd, &y[4..], &mut dy[4..]);
+        let fdot = self.fdot.each_ref().map(|a| f64::from_bits(a.load(Ordering::Relaxed)));
+        [0, 1].map(|c| f[c] - self.tau * fdot[c] + extra[c])
     }
 }
 
