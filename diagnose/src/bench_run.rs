@@ -58,9 +58,7 @@ pub fn blind_effect(label: &str) -> Result<BlindEffect> {
         "none" => Ok(BlindEffect::None),
         OUTSIDE => Ok(BlindEffect::Buffeting),
         other => match Effect::from_name(other) {
-            Ok(e) if Effect::drawable().contains(&e) => {
-                Ok(BlindEffect::Catalogue(e))
-            }
+            Ok(e) if Effect::drawable().contains(&e) => Ok(BlindEffect::Catalogue(e)),
             _ => Err(crate::Error::UnknownEffect {
                 name: other.to_string(),
                 expected: Effect::generated()

@@ -61,20 +61,288 @@ pub struct CandidateScore {
     pub held_out_runs: Vec<f64>,
 }
 
+/// The split a where-cell belongs to (variants in the alphabetical order of their names).
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Hash,
+    PartialOrd,
+    Ord,
+    Serialize,
+    Deserialize,
+    schemars::JsonSchema,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum Split {
+    /// By response amplitude (system level).
+    Amplitude,
+    /// By channel.
+    Channel,
+    /// By harmonic or combination tone of the forcing ([`Harmonic`]).
+    Harmonic,
+    /// Between the levels.
+    Level,
+    /// By (configuration, wind speed, amplitude) region of the forced cases.
+    Region,
+    /// By state-space region (`|alpha| < 0.5 A`, `alpha_dot > 0`…).
+    State,
+}
+
+impl Split {
+    /// The name written in diagnosis.json (`channel`, `harmonic`, …).
+    pub fn name(self) -> &'static str {
+        match self {
+            Split::Amplitude => "amplitude",
+            Split::Channel => "channel",
+            Split::Harmonic => "harmonic",
+            Split::Level => "level",
+            Split::Region => "region",
+            Split::State => "state",
+        }
+    }
+}
+
+impl std::str::FromStr for Split {
+    type Err = String;
+
+    /// The split of a [`Split::name`]; an error naming the string otherwise.
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        [
+            Split::Amplitude,
+            Split::Channel,
+            Split::Harmonic,
+            Split::Level,
+            Split::Region,
+            Split::State,
+        ]
+        .into_iter()
+        .find(|x| x.name() == s)
+        .ok_or_else(|| {
+            format!("split `{s}`: expected amplitude, channel, harmonic, level, region or state")
+        })
+    }
+}
+
+impl std::fmt::Display for Split {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// A residual channel: the forces of the forced records, the motions of the free ones.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum Channel {
+    /// Lift (forced records).
+    Lift,
+    /// Moment (forced records).
+    Moment,
+    /// Heave (free records).
+    Heave,
+    /// Pitch (free records).
+    Pitch,
+    /// Every channel (a cell of another split).
+    All,
+}
+
+impl Channel {
+    /// The force level's channels, in column order.
+    pub const FORCES: [Channel; 2] = [Channel::Lift, Channel::Moment];
+    /// The system level's channels, in state order.
+    pub const MOTIONS: [Channel; 2] = [Channel::Heave, Channel::Pitch];
+
+    /// The name written in diagnosis.json (`lift`, …, `all`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Channel::Lift => "lift",
+            Channel::Moment => "moment",
+            Channel::Heave => "heave",
+            Channel::Pitch => "pitch",
+            Channel::All => "all",
+        }
+    }
+}
+
+impl std::str::FromStr for Channel {
+    type Err = String;
+
+    /// The channel of a [`Channel::name`]; an error naming the string otherwise.
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        [
+            Channel::Lift,
+            Channel::Moment,
+            Channel::Heave,
+            Channel::Pitch,
+            Channel::All,
+        ]
+        .into_iter()
+        .find(|x| x.name() == s)
+        .ok_or_else(|| format!("channel `{s}`: expected lift, moment, heave, pitch or all"))
+    }
+}
+
+impl std::fmt::Display for Channel {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// The harmonic content of a where-cell of the `harmonic` split.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Harmonic {
+    /// Every harmonic (a cell of another split): `all`.
+    All,
+    /// The mean: `DC`.
+    Dc,
+    /// The combination tone m·f_α + n·f_h (m ≥ 0, not both 0; n = 0 for pitch-only
+    /// forcing): `3*f_alpha`, `2*f_alpha-f_h`, … (`identify::metrics::Tone::label`).
+    Tone {
+        /// Multiple of the pitch forcing frequency.
+        m: i32,
+        /// Multiple of the heave forcing frequency.
+        n: i32,
+    },
+    /// A line off every forcing tone (a bin above 20 × the median): `off-harmonic line`.
+    OffHarmonicLine,
+    /// The broadband floor above the noise: `broadband`.
+    Broadband,
+}
+
+impl Harmonic {
+    /// The label written in diagnosis.json.
+    pub fn label(self) -> String {
+        match self {
+            Harmonic::All => "all".into(),
+            Harmonic::Dc => "DC".into(),
+            Harmonic::Tone { m, n } => identify::metrics::Tone { freq: 0.0, m, n }.label(),
+            Harmonic::OffHarmonicLine => "off-harmonic line".into(),
+            Harmonic::Broadband => "broadband".into(),
+        }
+    }
+
+    /// The net multiple |m + n| of a tone (`None` for the other cells): the harmonic of
+    /// the pitch frequency it falls on when f_h ≈ f_α (odd ≥ 3: a cubic's tones; even: an
+    /// offset's).
+    pub fn net(self) -> Option<i32> {
+        match self {
+            Harmonic::Tone { m, n } => Some((m + n).abs()),
+            _ => None,
+        }
+    }
+
+    /// The harmonic of a label ([`Harmonic::label`]).
+    ///
+    /// # Errors
+    /// A message naming the label when it is none of the forms above.
+    pub fn from_label(s: &str) -> std::result::Result<Self, String> {
+        match s {
+            "all" => return Ok(Harmonic::All),
+            "DC" => return Ok(Harmonic::Dc),
+            "off-harmonic line" => return Ok(Harmonic::OffHarmonicLine),
+            "broadband" => return Ok(Harmonic::Broadband),
+            _ => {}
+        }
+        let bad = || {
+            format!(
+                "harmonic `{s}`: expected `all`, `DC`, `off-harmonic line`, `broadband` or a \
+                 tone such as `3*f_alpha`, `2*f_alpha-f_h`"
+            )
+        };
+        let (mut m, mut n) = (None, None);
+        let spaced = s.replace('-', "+-");
+        for part in spaced.split('+').filter(|p| !p.is_empty()) {
+            let (coef, var) = match part.split_once('*') {
+                Some((c, v)) => (c.parse::<i32>().map_err(|_| bad())?, v),
+                None => match part.strip_prefix('-') {
+                    Some(v) => (-1, v),
+                    None => (1, part),
+                },
+            };
+            let slot = match var {
+                "f_alpha" => &mut m,
+                "f_h" => &mut n,
+                _ => return Err(bad()),
+            };
+            if slot.replace(coef).is_some() {
+                return Err(bad());
+            }
+        }
+        let (m, n) = (m.unwrap_or(0), n.unwrap_or(0));
+        if (m, n) == (0, 0) {
+            return Err(bad());
+        }
+        let h = Harmonic::Tone { m, n };
+        // only the canonical spelling (so that labels round-trip)
+        if h.label() == s {
+            Ok(h)
+        } else {
+            Err(bad())
+        }
+    }
+}
+
+impl std::str::FromStr for Harmonic {
+    type Err = String;
+
+    /// [`Harmonic::from_label`].
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        Harmonic::from_label(s)
+    }
+}
+
+impl std::fmt::Display for Harmonic {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.label())
+    }
+}
+
+/// Written as its [`Harmonic::label`].
+impl Serialize for Harmonic {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        s.serialize_str(&self.label())
+    }
+}
+
+/// Read from its [`Harmonic::label`]; any other string is an error naming it.
+impl<'de> Deserialize<'de> for Harmonic {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        let s = String::deserialize(d)?;
+        Harmonic::from_label(&s).map_err(serde::de::Error::custom)
+    }
+}
+
+/// A string: `all`, `DC`, `off-harmonic line`, `broadband` or a tone label.
+impl schemars::JsonSchema for Harmonic {
+    fn schema_name() -> std::borrow::Cow<'static, str> {
+        "Harmonic".into()
+    }
+
+    fn json_schema(_: &mut schemars::SchemaGenerator) -> schemars::Schema {
+        schemars::json_schema!({
+            "description": "`all`, `DC` (the mean), `off-harmonic line`, `broadband` or a \
+                combination tone m*f_alpha+n*f_h written as `f_alpha`, `3*f_alpha`, \
+                `2*f_alpha-f_h`, `f_h`.",
+            "type": "string",
+        })
+    }
+}
+
 /// A share of a level's held-out gap (excess residual energy) attributed to one cell of a
 /// split. The shares of one `split` sum to 1.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct WhereShare {
-    /// Which split this cell belongs to: `level`, `channel`, `harmonic`, `region`,
-    /// `state`.
-    pub split: String,
+    /// Which split this cell belongs to.
+    pub split: Split,
     /// Level of the cell.
     pub level: Level,
     /// Channel: `lift`, `moment` (forced), `heave`, `pitch` (free), or `all`.
-    pub channel: String,
-    /// Harmonic or combination tone (`DC`, `1*f_alpha`, `3*f_alpha`, `2*f_alpha+f_h`,
+    pub channel: Channel,
+    /// Harmonic or combination tone (`DC`, `f_alpha`, `3*f_alpha`, `2*f_alpha+f_h`,
     /// `broadband`…), or `all`.
-    pub harmonic: String,
+    pub harmonic: Harmonic,
     /// Wind-speed range \[m/s\] of the cell.
     pub wind_speed: [f64; 2],
     /// Pitch-amplitude range \[deg\] of the cell (forced cases; free: amplitude of the
@@ -122,7 +390,7 @@ pub struct ResidualSpectrum {
     /// Level.
     pub level: Level,
     /// Channel (`lift`, `moment`, `heave`, `pitch`).
-    pub channel: String,
+    pub channel: Channel,
     /// Unit of `frequency` (`f/f_alpha` or `Hz`).
     pub frequency_unit: String,
     /// Frequency axis.
@@ -441,4 +709,59 @@ pub struct Diagnosis {
     pub version: String,
     /// Input data sets (folders or names).
     pub inputs: Vec<String>,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn harmonic_labels_round_trip_and_bad_ones_are_named() {
+        let mut cells = vec![
+            Harmonic::All,
+            Harmonic::Dc,
+            Harmonic::OffHarmonicLine,
+            Harmonic::Broadband,
+        ];
+        for m in 0..=9 {
+            for n in -9..=9 {
+                if (m, n) != (0, 0) && !(m == 0 && n < 0) {
+                    cells.push(Harmonic::Tone { m, n });
+                }
+            }
+        }
+        for h in cells {
+            let json = serde_json::to_string(&h).unwrap();
+            assert_eq!(
+                serde_json::from_str::<Harmonic>(&json).unwrap(),
+                h,
+                "{json}"
+            );
+        }
+        assert_eq!(
+            Harmonic::from_label("3*f_alpha"),
+            Ok(Harmonic::Tone { m: 3, n: 0 })
+        );
+        assert_eq!(
+            Harmonic::from_label("2*f_alpha-f_h"),
+            Ok(Harmonic::Tone { m: 2, n: -1 })
+        );
+        assert_eq!(Harmonic::Tone { m: 2, n: -1 }.net(), Some(1));
+        for bad in [
+            "",
+            "1*f_alpha",
+            "f_alpha+f_alpha",
+            "3*f_beta",
+            "dc",
+            "0*f_h",
+        ] {
+            let e = Harmonic::from_label(bad).unwrap_err();
+            assert!(e.contains(&format!("`{bad}`")), "{e}");
+        }
+        for (s, c) in [("lift", Channel::Lift), ("all", Channel::All)] {
+            assert_eq!(s.parse::<Channel>(), Ok(c));
+        }
+        assert!("torque".parse::<Channel>().unwrap_err().contains("torque"));
+        assert_eq!("state".parse::<Split>(), Ok(Split::State));
+    }
 }

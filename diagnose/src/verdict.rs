@@ -25,7 +25,8 @@
 
 use crate::effect::{Effect, Level, Verdict};
 use crate::report::{
-    CandidateScore, Diagnosis, GapReport, LevelResult, VerdictReport, WhereShare, FORMAT,
+    CandidateScore, Channel, Diagnosis, GapReport, Harmonic, LevelResult, Split, VerdictReport,
+    WhereShare, FORMAT,
 };
 
 /// Thresholds of the verdict rule.
@@ -104,7 +105,6 @@ pub struct Decision {
     /// Index of the winning candidate in that level's list.
     pub candidate: Option<usize>,
 }
-
 
 /// Paired one-standard-error test: whether the mean of the per-unit differences `d`
 /// (simpler minus richer held-out energy) is at most their standard error, or at most
@@ -412,10 +412,10 @@ pub fn level_shares(levels: &[LevelResult]) -> Vec<WhereShare> {
         .iter()
         .zip(&e)
         .map(|(l, &ei)| WhereShare {
-            split: "level".into(),
+            split: Split::Level,
             level: l.level,
-            channel: "all".into(),
-            harmonic: "all".into(),
+            channel: Channel::All,
+            harmonic: Harmonic::All,
             wind_speed: speed_range(l),
             amplitude: amplitude_range(l),
             config: None,
@@ -772,7 +772,7 @@ mod tests {
         let shares: f64 = diag
             .where_
             .iter()
-            .filter(|w| w.split == "level")
+            .filter(|w| w.split == Split::Level)
             .map(|w| w.share)
             .sum();
         assert!((shares - 1.0).abs() < 1e-12);

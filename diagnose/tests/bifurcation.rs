@@ -265,7 +265,7 @@ fn an_effect_free_rig_is_none_and_a_heave_only_table_still_names_the_effect() {
         "t",
     )
     .unwrap();
-    assert_eq!(d.verdict.name, "none", "{:?}", d.verdict);
+    assert_eq!(d.verdict.name, diagnose::Verdict::None, "{:?}", d.verdict);
     // heave amplitudes only
     let m = measured_from(&truth, &speeds, 0.02, true);
     assert!(m.iter().all(|p| p.amplitude_alpha.is_none()));

@@ -153,7 +153,8 @@ fn effect_free_has_no_significant_gap_and_no_significant_candidate() {
         assert!(!r.significant_gap, "seed {seed}: stat {}", r.gap_statistic);
         assert!(r.candidates.iter().all(|c| !c.significant));
         assert_eq!(r.held_out_cases.len(), 40);
-        for split in ["channel", "region", "state", "harmonic"] {
+        use diagnose::report::Split;
+        for split in [Split::Channel, Split::Region, Split::State, Split::Harmonic] {
             let s: f64 = r
                 .where_
                 .iter()

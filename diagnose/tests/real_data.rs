@@ -65,7 +65,10 @@ fn bristol_free_response_against_the_rigs_linear_model() {
     let pitch = l
         .where_
         .iter()
-        .find(|w| w.split == "channel" && w.channel == "pitch")
+        .find(|w| {
+            w.split == diagnose::report::Split::Channel
+                && w.channel == diagnose::report::Channel::Pitch
+        })
         .unwrap();
     assert!(pitch.share > 0.5, "pitch share {}", pitch.share);
     // which: the stiffness polynomial is a significant candidate, fitted on training runs

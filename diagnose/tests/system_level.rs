@@ -92,7 +92,7 @@ fn effect_free_gap_is_at_noise_level_and_not_significant() {
     let sh: f64 = r
         .where_
         .iter()
-        .filter(|w| w.split == "channel")
+        .filter(|w| w.split == diagnose::report::Split::Channel)
         .map(|w| w.share)
         .sum();
     assert!((sh - 1.0).abs() < 1e-9);

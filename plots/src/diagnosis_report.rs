@@ -277,11 +277,11 @@ pub fn diagnosis_section(report: &mut Report, diag: &Diagnosis, figures: &[Diagn
             .iter()
             .map(|w| {
                 vec![
-                    w.split.clone(),
+                    w.split.to_string(),
                     w.level.name().to_string(),
                     where_cell_label(w),
-                    w.channel.clone(),
-                    w.harmonic.clone(),
+                    w.channel.to_string(),
+                    w.harmonic.label(),
                     w.config.clone().unwrap_or_default(),
                     range(w.wind_speed),
                     range(w.amplitude),

@@ -39,10 +39,10 @@ fn candidate(effect: Effect, level: Level, before: f64, after: f64, sig: bool) -
 
 fn share(split: &str, level: Level, channel: &str, harmonic: &str, s: f64) -> WhereShare {
     WhereShare {
-        split: split.into(),
+        split: split.parse().unwrap(),
         level,
-        channel: channel.into(),
-        harmonic: harmonic.into(),
+        channel: channel.parse().unwrap(),
+        harmonic: harmonic.parse().unwrap(),
         wind_speed: [4.0, 10.0],
         amplitude: [6.0, 24.0],
         config: None,
@@ -67,7 +67,7 @@ fn spectrum(level: Level, channel: &str, unit: &str, f1: f64, f_max: f64) -> Res
         .collect();
     ResidualSpectrum {
         level,
-        channel: channel.into(),
+        channel: channel.parse().unwrap(),
         frequency_unit: unit.into(),
         frequency,
         before,
@@ -411,7 +411,7 @@ fn nan_diagnosis() -> Diagnosis {
     }
     d.levels[1].spectra.push(ResidualSpectrum {
         level: Level::Structural,
-        channel: "pitch".into(),
+        channel: diagnose::report::Channel::Pitch,
         frequency_unit: "Hz".into(),
         frequency: vec![],
         before: vec![],

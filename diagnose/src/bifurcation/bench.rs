@@ -28,7 +28,7 @@ use serde::{Deserialize, Serialize};
 
 use super::candidates::ScaledAero;
 use super::{diagnose_branches, BifurcationOptions};
-use crate::{Effect, Error, Result};
+use crate::{Effect, Error, Result, Verdict};
 
 /// Relative amplitude noise of the generated measured points.
 pub const AMPLITUDE_NOISE: f64 = 0.02;
@@ -102,8 +102,8 @@ pub struct BranchOutcome {
     pub nominal_score: f64,
     /// `nominal_score ≥ STRONG_SCORE`.
     pub strong: bool,
-    /// The verdict's name.
-    pub verdict: String,
+    /// The verdict (written by name).
+    pub verdict: Verdict,
     /// Verdict equals the truth's expected effect (`none` for an effect-free set).
     pub correct: bool,
     /// Held-out shrink of the named candidate.
@@ -352,7 +352,7 @@ pub fn run_set(index: usize, seed: u64) -> Result<BranchOutcome> {
         let d = diagnose_branches(&points, &nominal, None, vec![], &opts, vec![], "bench")?;
         let nominal_score = d.nominal.errors.score;
         let correct = match truth.expected() {
-            None => d.verdict.effect.is_none() && d.verdict.name == "none",
+            None => d.verdict.effect.is_none() && d.verdict.name == Verdict::None,
             Some(e) => d.verdict.effect == Some(e),
         };
         return Ok(BranchOutcome {
@@ -364,7 +364,7 @@ pub fn run_set(index: usize, seed: u64) -> Result<BranchOutcome> {
             points: points.len(),
             nominal_score,
             strong: nominal_score >= STRONG_SCORE,
-            verdict: d.verdict.name.clone(),
+            verdict: d.verdict.name,
             correct,
             shrink: d.verdict.shrink,
             seconds: t0.elapsed().as_secs_f64(),

@@ -233,8 +233,8 @@ impl CandidateResult {
 pub struct BranchVerdict {
     /// The catalogue effect named, if any.
     pub effect: Option<Effect>,
-    /// `none`, `unexplained` or the effect's name.
-    pub name: String,
+    /// The verdict: the effect named, `none` or `unexplained` (written by name).
+    pub name: Verdict,
     /// Index of the named candidate in `candidates`.
     pub candidate: Option<usize>,
     /// Candidates with a better held-out score within one standard error of the best
@@ -617,9 +617,11 @@ pub fn catalogue(base: &Section, s: Scales) -> Vec<BranchCandidate> {
         .flat_map(|e| e.entry().bifurcation(base, s))
         .collect();
     for i in 0..out.len() {
-        out[i].extends = out[i]
-            .extends_key
-            .and_then(|(e, v)| out[..i].iter().position(|c| c.effect == e && c.variant == v));
+        out[i].extends = out[i].extends_key.and_then(|(e, v)| {
+            out[..i]
+                .iter()
+                .position(|c| c.effect == e && c.variant == v)
+        });
         out[i]
             .parameters
             .iter_mut()
@@ -802,7 +804,7 @@ fn verdict(ranked: &[CandidateResult], nominal: f64, opts: &BifurcationOptions) 
     if nominal <= 2.0 * opts.amplitude_noise {
         return BranchVerdict {
             effect: None,
-            name: Verdict::None.name().into(),
+            name: Verdict::None,
             candidate: None,
             richer: Vec::new(),
             shrink: None,
@@ -816,7 +818,7 @@ fn verdict(ranked: &[CandidateResult], nominal: f64, opts: &BifurcationOptions) 
     let Some(best) = ranked.first() else {
         return BranchVerdict {
             effect: None,
-            name: Verdict::Unexplained.name().into(),
+            name: Verdict::Unexplained,
             candidate: None,
             richer: Vec::new(),
             shrink: None,
@@ -840,7 +842,7 @@ fn verdict(ranked: &[CandidateResult], nominal: f64, opts: &BifurcationOptions) 
     if chosen.shrink >= opts.min_shrink {
         BranchVerdict {
             effect: Some(chosen.effect),
-            name: chosen.effect.name().into(),
+            name: Verdict::Effect(chosen.effect),
             candidate: Some(idx),
             richer,
             shrink: Some(chosen.shrink),
@@ -858,7 +860,7 @@ fn verdict(ranked: &[CandidateResult], nominal: f64, opts: &BifurcationOptions) 
     } else {
         BranchVerdict {
             effect: None,
-            name: Verdict::Unexplained.name().into(),
+            name: Verdict::Unexplained,
             candidate: None,
             richer: Vec::new(),
             shrink: Some(best.shrink),

@@ -14,8 +14,8 @@ use std::collections::BTreeMap;
 
 use crate::effect::{Effect, Level};
 use crate::report::{
-    CandidateScore, CaseGap, LevelResult, ObservableGap, ResidualSpectrum, SignatureTest,
-    WhereShare,
+    CandidateScore, CaseGap, Channel, Harmonic, LevelResult, ObservableGap, ResidualSpectrum,
+    SignatureTest, Split, WhereShare,
 };
 
 use super::candidates::{significance, Scored};
@@ -198,12 +198,18 @@ pub(crate) fn excess_shrink(before: f64, after: f64, noise: f64) -> f64 {
     1.0 - (ea / eb).sqrt()
 }
 
-fn share(split: &str, channel: &str, harmonic: &str, w: [f64; 2], a: [f64; 2]) -> WhereShare {
+fn share(
+    split: Split,
+    channel: Channel,
+    harmonic: Harmonic,
+    w: [f64; 2],
+    a: [f64; 2],
+) -> WhereShare {
     WhereShare {
-        split: split.into(),
+        split,
         level: Level::Aerodynamic,
-        channel: channel.into(),
-        harmonic: harmonic.into(),
+        channel,
+        harmonic,
         wind_speed: w,
         amplitude: a,
         config: None,
@@ -223,12 +229,11 @@ fn normalise(v: &mut [WhereShare], e: &[f64]) {
     }
 }
 
-fn tone_label(m: i32, n: i32) -> String {
-    let t = identify::metrics::Tone { freq: 0.0, m, n };
+fn tone(m: i32, n: i32) -> Harmonic {
     if m == 0 && n == 0 {
-        "DC".into()
+        Harmonic::Dc
     } else {
-        t.label()
+        Harmonic::Tone { m, n }
     }
 }
 
@@ -263,7 +268,15 @@ fn locate(
         }
     }
     let mut v: Vec<WhereShare> = (0..2)
-        .map(|k| share("channel", CHANNELS[k], "all", u_rng, a_rng))
+        .map(|k| {
+            share(
+                Split::Channel,
+                Channel::FORCES[k],
+                Harmonic::All,
+                u_rng,
+                a_rng,
+            )
+        })
         .collect();
     normalise(&mut v, &e_ch);
     out.extend(v);
@@ -284,7 +297,13 @@ fn locate(
     let mut v: Vec<WhereShare> = cases
         .iter()
         .map(|c| {
-            let mut s = share("region", "all", "all", [c.u, c.u], [c.amp_deg, c.amp_deg]);
+            let mut s = share(
+                Split::Region,
+                Channel::All,
+                Harmonic::All,
+                [c.u, c.u],
+                [c.amp_deg, c.amp_deg],
+            );
             s.config = Some(c.config.clone());
             s
         })
@@ -323,7 +342,7 @@ fn locate(
     }
     let mut v: Vec<WhereShare> = (0..6)
         .map(|j| {
-            let mut s = share("state", "all", "all", u_rng, a_rng);
+            let mut s = share(Split::State, Channel::All, Harmonic::All, u_rng, a_rng);
             s.state = Some(format!(
                 "{}, {}",
                 labels[j / 2],
@@ -339,7 +358,8 @@ fn locate(
     normalise(&mut v, &e_state);
     out.extend(v);
     // harmonic
-    let mut e_h: BTreeMap<String, f64> = BTreeMap::new();
+    // keyed by label: cells in the label order
+    let mut e_h: BTreeMap<String, (Harmonic, f64)> = BTreeMap::new();
     let mut amp_hi_lo = [0.0f64; 2];
     let mut n_hi_lo = [0usize; 2];
     let (a_min, a_max) = (a_rng[0], a_rng[1]);
@@ -373,22 +393,21 @@ fn locate(
                             }
                             let t = (mm as f64 * c.f_alpha + nn as f64 * fh).abs();
                             if (t - f).abs() < tol {
-                                label = Some(tone_label(mm, nn));
+                                label = Some(tone(mm, nn));
                                 break 'outer;
                             }
                         }
                     }
                 }
-                let key = label.unwrap_or_else(|| {
-                    if pb > 20.0 * med {
-                        "off-harmonic line".into()
-                    } else {
-                        "broadband".into()
-                    }
+                let key = label.unwrap_or(if pb > 20.0 * med {
+                    Harmonic::OffHarmonicLine
+                } else {
+                    Harmonic::Broadband
                 });
-                *e_h.entry(key).or_default() += s2 * pb * scale;
+                e_h.entry(key.label()).or_insert((key, 0.0)).1 += s2 * pb * scale;
             }
-            *e_h.entry("broadband".into()).or_default() -= s2 * noise_e;
+            let b = Harmonic::Broadband;
+            e_h.entry(b.label()).or_insert((b, 0.0)).1 -= s2 * noise_e;
             let band = if c.amp_deg >= a_max - 1e-9 {
                 Some(0)
             } else if c.amp_deg <= a_min + 1e-9 {
@@ -404,49 +423,20 @@ fn locate(
             }
         }
     }
-    let keys: Vec<String> = e_h.keys().cloned().collect();
-    let vals: Vec<f64> = keys.iter().map(|k| e_h[k]).collect();
-    let mut v: Vec<WhereShare> = keys
-        .iter()
-        .map(|k| share("harmonic", "all", k, u_rng, a_rng))
+    let vals: Vec<f64> = e_h.values().map(|v| v.1).collect();
+    let mut v: Vec<WhereShare> = e_h
+        .values()
+        .map(|&(h, _)| share(Split::Harmonic, Channel::All, h, u_rng, a_rng))
         .collect();
     normalise(&mut v, &vals);
-    let hshare = |pred: &dyn Fn(&str) -> bool| -> f64 {
-        v.iter()
-            .filter(|s| pred(&s.harmonic))
-            .map(|s| s.share)
-            .sum()
+    let hshare = |pred: &dyn Fn(Harmonic) -> bool| -> f64 {
+        v.iter().filter(|s| pred(s.harmonic)).map(|s| s.share).sum()
     };
-    let dc = hshare(&|h| h == "DC");
-    let parse_m = |h: &str| -> Option<(i32, i32)> {
-        // "3*f_alpha", "f_alpha", "2*f_alpha-f_h", "f_h"…
-        let mut m = 0;
-        let mut n = 0;
-        let hs = h.replace("-", "+-");
-        for part in hs.split('+').filter(|p| !p.is_empty()) {
-            let (coef, var) = match part.split_once('*') {
-                Some((c, v)) => (c.parse::<i32>().ok()?, v),
-                None => {
-                    if let Some(v) = part.strip_prefix('-') {
-                        (-1, v)
-                    } else {
-                        (1, part)
-                    }
-                }
-            };
-            match var {
-                "f_alpha" => m = coef,
-                "f_h" => n = coef,
-                _ => return None,
-            }
-        }
-        Some((m, n))
-    };
-    let odd =
-        hshare(&|h| parse_m(h).is_some_and(|(m, n)| (m + n).abs() % 2 == 1 && (m + n).abs() >= 3));
-    let even = hshare(&|h| h != "DC" && parse_m(h).is_some_and(|(m, n)| (m + n).abs() % 2 == 0));
-    let off = hshare(&|h| h == "off-harmonic line");
-    let broad = hshare(&|h| h == "broadband");
+    let dc = hshare(&|h| h == Harmonic::Dc);
+    let odd = hshare(&|h| h.net().is_some_and(|k| k % 2 == 1 && k >= 3));
+    let even = hshare(&|h| h.net().is_some_and(|k| k % 2 == 0));
+    let off = hshare(&|h| h == Harmonic::OffHarmonicLine);
+    let broad = hshare(&|h| h == Harmonic::Broadband);
     out.extend(v);
     // signatures
     let sig = |name: &str, s: f64, t: f64, d: String| SignatureTest {
@@ -528,7 +518,7 @@ fn locate(
             }
             ResidualSpectrum {
                 level: Level::Aerodynamic,
-                channel: CHANNELS[k].into(),
+                channel: Channel::FORCES[k],
                 frequency_unit: "f/f_alpha".into(),
                 frequency: (0..nb)
                     .map(|j| (j as f64 + 0.5) * fmax / nb as f64)

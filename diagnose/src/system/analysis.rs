@@ -2,12 +2,10 @@
 //! spectra before/after the best candidate.
 
 use crate::effect::Level;
-use crate::report::{ResidualSpectrum, WhereShare};
+use crate::report::{Channel, Harmonic, ResidualSpectrum, Split, WhereShare};
 
 use super::candidates::{self, SystemTerm};
 use super::residual::RunResidual;
-
-const CHANNELS: [&str; 2] = ["heave", "pitch"];
 
 /// The best candidate: effect, grid parameters, coefficients.
 pub(crate) type Best = (&'static dyn SystemTerm, Vec<(String, f64)>, Vec<f64>);
@@ -70,24 +68,25 @@ pub(crate) fn where_shares(runs: &[RunResidual], noise: &[[f64; 2]]) -> Vec<Wher
         }
     };
     let amp_deg = amp_max.to_degrees();
-    let cell = |split: &str, channel: &str, u: [f64; 2], a: [f64; 2], st: Option<String>, share| {
-        WhereShare {
-            split: split.into(),
-            level: Level::Structural,
-            channel: channel.into(),
-            harmonic: "all".into(),
-            wind_speed: u,
-            amplitude: a,
-            config: None,
-            state: st,
-            share,
-        }
-    };
+    let cell =
+        |split: Split, channel: Channel, u: [f64; 2], a: [f64; 2], st: Option<String>, share| {
+            WhereShare {
+                split,
+                level: Level::Structural,
+                channel,
+                harmonic: Harmonic::All,
+                wind_speed: u,
+                amplitude: a,
+                config: None,
+                state: st,
+                share,
+            }
+        };
     let mut out = Vec::new();
     for (c, sh) in shares(&chan).into_iter().enumerate() {
         out.push(cell(
-            "channel",
-            CHANNELS[c],
+            Split::Channel,
+            Channel::MOTIONS[c],
             [u_min, u_max],
             [0.0, amp_deg],
             None,
@@ -100,7 +99,7 @@ pub(crate) fn where_shares(runs: &[RunResidual], noise: &[[f64; 2]]) -> Vec<Wher
         } else {
             [0.5 * amp_deg, amp_deg]
         };
-        let mut w = cell("amplitude", "all", [u_min, u_max], a, None, sh);
+        let mut w = cell(Split::Amplitude, Channel::All, [u_min, u_max], a, None, sh);
         w.state = Some(if b == 0 {
             "|alpha| <= 0.5 max|alpha| of the run".into()
         } else {
@@ -110,8 +109,8 @@ pub(crate) fn where_shares(runs: &[RunResidual], noise: &[[f64; 2]]) -> Vec<Wher
     }
     for (j, sh) in shares(&per_run).into_iter().enumerate() {
         out.push(cell(
-            "region",
-            "all",
+            Split::Region,
+            Channel::All,
             [runs[j].u, runs[j].u],
             [0.0, amp_deg],
             None,
@@ -126,8 +125,8 @@ pub(crate) fn where_shares(runs: &[RunResidual], noise: &[[f64; 2]]) -> Vec<Wher
     ];
     for (k, sh) in shares(&state).into_iter().enumerate() {
         out.push(cell(
-            "state",
-            "all",
+            Split::State,
+            Channel::All,
             [u_min, u_max],
             [0.0, amp_deg],
             Some(names[k].into()),
@@ -193,7 +192,7 @@ pub(crate) fn spectra(
     (0..2)
         .map(|c| ResidualSpectrum {
             level: Level::Structural,
-            channel: CHANNELS[c].into(),
+            channel: Channel::MOTIONS[c],
             frequency_unit: "Hz".into(),
             frequency: freq.clone(),
             before: before[c].clone(),

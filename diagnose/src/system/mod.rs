@@ -929,8 +929,7 @@ fn level_and_runs(
             // a dead band removes stiffness and friction opposes the motion: the other
             // sign is no such effect (it would only mimic a hardening spring or a
             // negative damping)
-            let unphysical = term.sign_bound()
-                && sc.cols.iter().any(|&i| sign * sc.theta[i] < 0.0);
+            let unphysical = term.sign_bound() && sc.cols.iter().any(|&i| sign * sc.theta[i] < 0.0);
             let mut note = sc.note.clone();
             if unphysical {
                 let n = "not named: a fitted coefficient has the unphysical sign".to_string();

@@ -160,7 +160,10 @@ impl ExtraTerms for Fitted<'_> {
             .aug
             .map(|a| a.force(q, qd, self.q_dyn, self.chord))
             .unwrap_or([0.0; 2]);
-        let fdot = self.fdot.each_ref().map(|a| f64::from_bits(a.load(Ordering::Relaxed)));
+        let fdot = self
+            .fdot
+            .each_ref()
+            .map(|a| f64::from_bits(a.load(Ordering::Relaxed)));
         [0, 1].map(|c| f[c] - self.tau * fdot[c] + extra[c])
     }
 }

@@ -7,7 +7,7 @@
 
 use std::collections::BTreeMap;
 
-use diagnose::report::{CandidateScore, LevelResult, WhereShare};
+use diagnose::report::{CandidateScore, Channel, LevelResult, Split, WhereShare};
 use diagnose::{Diagnosis, Level};
 
 use crate::style::fmt_num;
@@ -316,15 +316,14 @@ fn range(r: [f64; 2]) -> String {
 
 /// Short name of a where-cell within its split: the channel for `channel`, the tone for
 /// `harmonic`, configuration + U and amplitude ranges for `region`, the state-space
-/// condition for `state`, the level for `level`.
+/// condition for `state` and `amplitude`, the level for `level`.
 pub fn where_cell_label(w: &WhereShare) -> String {
-    let not_all = |s: &str| !s.is_empty() && s != "all";
-    match w.split.as_str() {
-        "level" => w.level.name().into(),
-        "channel" => w.channel.clone(),
-        "harmonic" if not_all(&w.channel) => format!("{} {}", w.channel, w.harmonic),
-        "harmonic" => w.harmonic.clone(),
-        "region" => {
+    match w.split {
+        Split::Level => w.level.name().into(),
+        Split::Channel => w.channel.name().into(),
+        Split::Harmonic if w.channel != Channel::All => format!("{} {}", w.channel, w.harmonic),
+        Split::Harmonic => w.harmonic.label(),
+        Split::Region => {
             let mut parts = vec![];
             if let Some(c) = &w.config {
                 parts.push(c.clone());
@@ -337,17 +336,17 @@ pub fn where_cell_label(w: &WhereShare) -> String {
             }
             parts.join(", ")
         }
-        "state" => w.state.clone().unwrap_or_else(|| "state".into()),
-        _ => [w.channel.as_str(), w.harmonic.as_str()]
-            .into_iter()
-            .filter(|s| not_all(s))
-            .collect::<Vec<_>>()
-            .join(" "),
+        Split::State => w.state.clone().unwrap_or_else(|| "state".into()),
+        // the band's condition (|α| against half the run's largest), else its range
+        Split::Amplitude => w
+            .state
+            .clone()
+            .unwrap_or_else(|| format!("A {}", range(w.amplitude))),
     }
 }
 
 /// (level, split) of a where-bar; `None` level for the `level` split.
-type SplitKey = (Option<Level>, String);
+type SplitKey = (Option<Level>, Split);
 
 /// Where-shares: one stacked bar per (level, split) in order of first appearance, cells
 /// sorted by share, at most [`MAX_SEGMENTS`] drawn (the rest merged into "other").
@@ -362,8 +361,8 @@ pub fn shares_figure(diag: &Diagnosis) -> Option<SharesFigure> {
     // The `level` split compares levels: one bar over all of them.
     let mut groups: Vec<(SplitKey, Vec<&WhereShare>)> = vec![];
     for w in source {
-        let lv = (w.split != "level").then_some(w.level);
-        let k = (lv, w.split.clone());
+        let lv = (w.split != Split::Level).then_some(w.level);
+        let k = (lv, w.split);
         match groups.iter_mut().find(|(g, _)| *g == k) {
             Some((_, v)) => v.push(w),
             None => groups.push((k, vec![w])),
@@ -394,7 +393,7 @@ pub fn shares_figure(diag: &Diagnosis) -> Option<SharesFigure> {
             ShareBar {
                 label: match level {
                     Some(l) => format!("{}: {split}", l.name()),
-                    None => split,
+                    None => split.to_string(),
                 },
                 segments,
             }
@@ -409,13 +408,14 @@ pub fn shares_figure(diag: &Diagnosis) -> Option<SharesFigure> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use diagnose::report::Harmonic;
 
-    fn w(split: &str) -> WhereShare {
+    fn w(split: Split) -> WhereShare {
         WhereShare {
-            split: split.into(),
+            split,
             level: Level::Aerodynamic,
-            channel: "moment".into(),
-            harmonic: "3*f_alpha".into(),
+            channel: Channel::Moment,
+            harmonic: Harmonic::Tone { m: 3, n: 0 },
             wind_speed: [4.0, 5.5],
             amplitude: [6.0, 6.0],
             config: Some("B".into()),
@@ -426,13 +426,13 @@ mod tests {
 
     #[test]
     fn where_cells_are_named_by_their_split() {
-        assert_eq!(where_cell_label(&w("level")), "aerodynamic");
-        assert_eq!(where_cell_label(&w("channel")), "moment");
-        assert_eq!(where_cell_label(&w("harmonic")), "moment 3*f_alpha");
-        assert_eq!(where_cell_label(&w("region")), "B, U 4–5.5, A 6");
-        assert_eq!(where_cell_label(&w("state")), "alpha_dot > 0");
-        let mut h = w("harmonic");
-        h.channel = "all".into();
+        assert_eq!(where_cell_label(&w(Split::Level)), "aerodynamic");
+        assert_eq!(where_cell_label(&w(Split::Channel)), "moment");
+        assert_eq!(where_cell_label(&w(Split::Harmonic)), "moment 3*f_alpha");
+        assert_eq!(where_cell_label(&w(Split::Region)), "B, U 4–5.5, A 6");
+        assert_eq!(where_cell_label(&w(Split::State)), "alpha_dot > 0");
+        let mut h = w(Split::Harmonic);
+        h.channel = Channel::All;
         assert_eq!(where_cell_label(&h), "3*f_alpha");
     }
 }
