@@ -12,6 +12,7 @@
 //! Sign conventions (DESIGN.md §2): h positive down, α positive nose-up, lift positive down,
 //! moment positive nose-up, C_L = L/(½ρU²B), C_M = M/(½ρU²B²).
 
+pub mod csv_fields;
 pub mod dataset;
 pub mod ensemble;
 pub mod eq19;

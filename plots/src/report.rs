@@ -98,25 +98,9 @@ fn inline_svg(svg: &str) -> String {
 }
 
 /// Splits one CSV line on commas, honouring double-quoted fields with `""` escapes; fields
-/// are trimmed. The one CSV splitter of the report builders (study and diagnosis).
+/// are trimmed ([`identify::csv_fields::split_line`], the workspace's one CSV splitter).
 pub fn split_csv_line(line: &str) -> Vec<String> {
-    let mut out = vec![];
-    let mut cur = String::new();
-    let mut quoted = false;
-    let mut chars = line.chars().peekable();
-    while let Some(c) = chars.next() {
-        match (c, quoted) {
-            ('"', true) if chars.peek() == Some(&'"') => {
-                cur.push('"');
-                chars.next();
-            }
-            ('"', _) => quoted = !quoted,
-            (',', false) => out.push(std::mem::take(&mut cur).trim().to_string()),
-            _ => cur.push(c),
-        }
-    }
-    out.push(cur.trim().to_string());
-    out
+    identify::csv_fields::split_line(line)
 }
 
 const CSS: &str = "body{font-family:sans-serif;max-width:1300px;margin:2em auto;padding:0 1em;\

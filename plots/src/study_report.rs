@@ -139,14 +139,14 @@ fn csv_file_columns(
     report: &mut Report,
     caption: &str,
     path: &Path,
-    keep: Option<&[&str]>,
+    keep: Option<&[String]>,
     reduced: bool,
 ) {
     if let Ok(t) = std::fs::read_to_string(path) {
         let rows = pretty_csv(&t);
         if let Some((header, body)) = rows.split_first() {
             let idx: Vec<usize> = (0..header.len())
-                .filter(|&i| keep.is_none_or(|k| k.contains(&header[i].as_str())))
+                .filter(|&i| keep.is_none_or(|k| k.contains(&header[i])))
                 .collect();
             let pick = |r: &Vec<String>| -> Vec<String> {
                 idx.iter()
@@ -616,23 +616,14 @@ pub fn render_all(study: &Study, out: &Path, version: &str) -> Result<Vec<Figure
                     names::DERIVATIVES
                 ),
                 &out.join(names::DERIVATIVES),
-                Some(&[
-                    "case",
-                    "U_m_s",
-                    "amplitude_deg",
-                    "K_alpha",
-                    "K_h",
-                    "H1",
-                    "H2",
-                    "H3",
-                    "H4",
-                    "A1",
-                    "A2",
-                    "A3",
-                    "A4",
-                    "R2_lift",
-                    "R2_moment",
-                ]),
+                Some(
+                    &["case", "U_m_s", "amplitude_deg", "K_alpha", "K_h"]
+                        .into_iter()
+                        .map(String::from)
+                        .chain(names::derivative_columns(true))
+                        .chain(["R2_lift".into(), "R2_moment".into()])
+                        .collect::<Vec<String>>(),
+                ),
                 false, // the data set's wind speeds are in m/s
             );
         } else {

@@ -30,8 +30,23 @@ pub mod names {
     pub const IDENTIFICATION: &str = "identification.json";
     /// Raw coefficients of every library term, per case and force.
     pub const COEFFICIENTS: &str = "coefficients.csv";
-    /// Eq. 19 derivatives and metrics per case.
+    /// Eq. 19 derivatives and metrics per case (columns [`derivative_columns`]).
     pub const DERIVATIVES: &str = "derivatives.csv";
+
+    /// The Eq. 19 columns of [`DERIVATIVES`], from `identify::eq19`'s names: the lift
+    /// derivatives H1–H4 and the moment derivatives A1–A4 (`linear_only`), or all seven of
+    /// each force with the nonlinear N1–N3 suffixed `_lift` and `_moment`.
+    pub fn derivative_columns(linear_only: bool) -> Vec<String> {
+        use identify::eq19::{LIFT_NAMES, MOMENT_NAMES};
+        let mut out = Vec::new();
+        for (names, force) in [(LIFT_NAMES, "lift"), (MOMENT_NAMES, "moment")] {
+            out.extend(names[..4].iter().map(|n| n.to_string()));
+            if !linear_only {
+                out.extend(names[4..].iter().map(|n| format!("{n}_{force}")));
+            }
+        }
+        out
+    }
     /// Table IV: identified vs true coefficients.
     pub const TABLE_IV: &str = "table_iv.csv";
     /// Folder of the compact case series.
@@ -274,34 +289,22 @@ fn identify_stage(
             .chain(safe.iter().cloned())
             .collect::<Vec<_>>(),
     );
-    let mut der = Csv::new(&[
-        "case",
-        "group",
-        "U_m_s",
-        "amplitude_deg",
-        "K_alpha",
-        "K_h",
-        "H1",
-        "H2",
-        "H3",
-        "H4",
-        "N1_lift",
-        "N2_lift",
-        "N3_lift",
-        "A1",
-        "A2",
-        "A3",
-        "A4",
-        "N1_moment",
-        "N2_moment",
-        "N3_moment",
-        "R2_lift",
-        "R2_moment",
-        "MFWA_lift",
-        "MFWA_moment",
-        "loss_lift",
-        "loss_moment",
-    ]);
+    let text = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<_>>();
+    let mut der = Csv::new(
+        &[
+            text(&["case", "group", "U_m_s", "amplitude_deg", "K_alpha", "K_h"]),
+            names::derivative_columns(false),
+            text(&[
+                "R2_lift",
+                "R2_moment",
+                "MFWA_lift",
+                "MFWA_moment",
+                "loss_lift",
+                "loss_moment",
+            ]),
+        ]
+        .concat(),
+    );
     for (c, nc) in id.cases.iter().zip(&cases.cases) {
         // degrees → radians → degrees: round off the last-bit noise (6.000000000000001)
         let amp = nc
@@ -951,4 +954,36 @@ fn branch_stage(
         &aeroelastic::documents::branch_csv(&set),
     )?;
     Ok(set)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::names::derivative_columns;
+
+    #[test]
+    fn derivative_columns_are_the_eq19_names() {
+        assert_eq!(
+            derivative_columns(false),
+            [
+                "H1",
+                "H2",
+                "H3",
+                "H4",
+                "N1_lift",
+                "N2_lift",
+                "N3_lift",
+                "A1",
+                "A2",
+                "A3",
+                "A4",
+                "N1_moment",
+                "N2_moment",
+                "N3_moment"
+            ]
+        );
+        assert_eq!(
+            derivative_columns(true),
+            ["H1", "H2", "H3", "H4", "A1", "A2", "A3", "A4"]
+        );
+    }
 }

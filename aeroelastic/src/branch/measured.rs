@@ -74,8 +74,8 @@ pub fn parse_measured_amplitudes(text: &str, source: &str) -> Result<Vec<Measure
             continue;
         }
         let Some((width, cols)) = header else {
-            let h: Vec<&str> = l.split(',').map(str::trim).collect();
-            let cols = NAMES.map(|name| h.iter().position(|c| *c == name));
+            let h = identify::csv_fields::split_line(l);
+            let cols = NAMES.map(|name| h.iter().position(|c| c == name));
             for k in 0..2 {
                 if cols[k].is_none() {
                     return Err(bad(
@@ -100,7 +100,7 @@ pub fn parse_measured_amplitudes(text: &str, source: &str) -> Result<Vec<Measure
             header = Some((h.len(), cols));
             continue;
         };
-        let f: Vec<&str> = l.splitn(width, ',').map(str::trim).collect();
+        let f = identify::csv_fields::split_line(l);
         if f.len() < width {
             return Err(bad(
                 line,
@@ -109,7 +109,7 @@ pub fn parse_measured_amplitudes(text: &str, source: &str) -> Result<Vec<Measure
         }
         let num = |k: usize| -> Result<Option<f64>> {
             let Some(c) = cols[k] else { return Ok(None) };
-            let s = f[c];
+            let s = f[c].as_str();
             if s.is_empty() || s == "-" || s.eq_ignore_ascii_case("nan") {
                 return Ok(None);
             }
@@ -127,7 +127,7 @@ pub fn parse_measured_amplitudes(text: &str, source: &str) -> Result<Vec<Measure
             }
             Ok(Some(v))
         };
-        let stable = match f[cols[0].expect("checked")] {
+        let stable = match f[cols[0].expect("checked")].as_str() {
             "stable" => true,
             "unstable" => false,
             other => {

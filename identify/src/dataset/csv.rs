@@ -114,16 +114,7 @@ fn parse_case_reader(
             "empty header line: the first line must name the columns".into(),
         ));
     }
-    let names: Vec<&str> = header
-        .split(',')
-        .map(|f| {
-            let f = f.trim();
-            f.strip_prefix('"')
-                .and_then(|x| x.strip_suffix('"'))
-                .unwrap_or(f)
-                .trim()
-        })
-        .collect();
+    let names: Vec<std::borrow::Cow<'_, str>> = crate::csv_fields::fields(header).collect();
     let ncols = names.len();
     // slot[j] = index into NAMES of column j, or usize::MAX when ignored.
     let mut slot = vec![usize::MAX; ncols];
@@ -195,7 +186,7 @@ fn parse_case_reader(
             }
         }
         let mut count = 0usize;
-        for (j, field) in line.split(',').enumerate() {
+        for (j, field) in crate::csv_fields::fields(line).enumerate() {
             count = j + 1;
             if j >= ncols {
                 continue;
@@ -228,7 +219,7 @@ fn parse_case_reader(
         }
         if count != ncols {
             let field = if count < ncols {
-                names[count]
+                names[count].as_ref()
             } else {
                 "(extra field)"
             };
