@@ -23,6 +23,7 @@ mod catalogue;
 pub mod effect;
 pub mod error;
 pub mod force;
+mod numerics;
 pub mod physics;
 pub mod pipeline;
 pub mod report;

@@ -21,7 +21,7 @@ use crate::force::candidates::{Context, ForceFit, Scored};
 use crate::force::data::{CaseData, Node};
 use crate::force::folds::{fold_residuals, Fold};
 use crate::force::law::{self, Aug, NodeCache};
-use crate::force::linalg::dot;
+use crate::numerics::dot;
 use crate::system::candidates::{Column, SystemTerm};
 use crate::system::residual::RunResidual;
 

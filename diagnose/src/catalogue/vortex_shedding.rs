@@ -18,7 +18,7 @@ use crate::force::candidates::{Context, ForceFit, Scored};
 use crate::force::data::{CaseData, Node};
 use crate::force::folds::Fold;
 use crate::force::law::{self, Aug};
-use crate::force::linalg::periodogram_full;
+use crate::numerics::periodogram_full;
 
 /// The `vortex_shedding` entry.
 pub(crate) struct VortexShedding;

@@ -20,8 +20,8 @@ use crate::report::{
 
 use super::candidates::{significance, Scored};
 use super::data::{CaseData, Node, CHANNELS};
-use super::linalg::periodogram_full;
 use super::{gaps, gaps_of, noise_gaps, noise_of, ForceOptions};
+use crate::numerics::periodogram_full;
 
 /// Noise-unit energy Σ (r/σ̂)² of residuals.
 fn energy_w(cases: &[CaseData], res: &[[Vec<f64>; 2]]) -> f64 {

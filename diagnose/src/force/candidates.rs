@@ -29,7 +29,7 @@ use identify::library::Term;
 use super::data::{CaseData, Node};
 use super::folds::{fold_residuals, Fold};
 use super::law::{self, Aug, NodeCache, NodeFit};
-use super::linalg::{dot, solve_spd};
+use crate::numerics::{dot, ridge_solve};
 
 /// Default significance threshold (z, standard deviations of the null improvement).
 pub const DEFAULT_SIGNIFICANCE: f64 = 4.0;
@@ -204,7 +204,7 @@ impl PoolStats {
             .map(|&i| idx.iter().map(|&j| self.g[i][j]).collect())
             .collect();
         let b: Vec<f64> = idx.iter().map(|&i| self.b[i]).collect();
-        solve_spd(&g, &b, law::BETA_RIDGE).map_or(0.0, |x| dot(&x, &b))
+        ridge_solve(|i, j| g[i][j], &b, law::BETA_RIDGE).map_or(0.0, |x| dot(&x, &b))
     }
 }
 

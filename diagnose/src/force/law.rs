@@ -17,7 +17,7 @@ use super::data::{CaseData, Node};
 use identify::numerics::interp::lagrange;
 use identify::numerics::qr::ThinQr;
 
-use super::linalg::{dot, solve_spd};
+use crate::numerics::{dot, ridge_solve};
 
 /// Relative tolerance of dropped (dependent) columns.
 const QR_TOL: f64 = 1e-9;
@@ -311,7 +311,7 @@ pub(crate) fn fit_channel(
                 }
             }
         }
-        beta = solve_spd(&g, &b, BETA_RIDGE).unwrap_or(beta);
+        beta = ridge_solve(|i, j| g[i][j], &b, BETA_RIDGE).unwrap_or(beta);
     }
     let out = fits
         .iter()
@@ -499,7 +499,7 @@ pub(crate) fn rfa_predict(nodes: &[(f64, f64, f64)], k: f64) -> Option<(f64, f64
             }
         }
     }
-    let c = solve_spd(&g, &b, 1e-10)?;
+    let c = ridge_solve(|i, j| g[i][j], &b, 1e-10)?;
     let phi = rfa_basis(k);
     let re: f64 = phi.iter().zip(&c).map(|(p, c)| p.0 * c).sum();
     let im: f64 = phi.iter().zip(&c).map(|(p, c)| p.1 * c).sum();

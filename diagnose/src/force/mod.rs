@@ -43,7 +43,6 @@ pub(crate) mod candidates;
 pub(crate) mod data;
 pub(crate) mod folds;
 pub(crate) mod law;
-pub(crate) mod linalg;
 
 use std::collections::BTreeMap;
 
@@ -396,7 +395,8 @@ fn complete_shared(
             .map(|&i| idx.iter().map(|&j| g[i][j]).collect())
             .collect();
         let bs: Vec<f64> = idx.iter().map(|&i| b[i]).collect();
-        linalg::solve_spd(&gs, &bs, law::BETA_RIDGE).map_or(0.0, |x| linalg::dot(&x, &bs))
+        crate::numerics::ridge_solve(|i, j| gs[i][j], &bs, law::BETA_RIDGE)
+            .map_or(0.0, |x| crate::numerics::dot(&x, &bs))
     };
     let mut set: Vec<usize> = shared
         .iter()

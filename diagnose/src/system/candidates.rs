@@ -24,8 +24,6 @@
 //! * `static_offset`: a constant force and moment, either constant in U (structural zero
 //!   offset) or ∝ ½ρU² (aerodynamic mean-angle offset), chosen by training error (3).
 
-use identify::numerics::{cholesky_in_place, cholesky_solve_in_place, PivotFloor};
-
 use super::residual::RunResidual;
 
 /// One regressor column: its series per channel over the kept samples (empty = 0).
@@ -136,28 +134,12 @@ impl Variant {
     }
 }
 
-/// Solves (G + λ diag G) θ = b by Cholesky (tiny ridge for conditioning); `None` when
-/// singular.
+/// Solves (G + λ diag G) θ = b for the flat p × p moments `g`, λ = 1e-10
+/// ([`crate::numerics::ridge_solve`]: a coefficient of a column empty on every training
+/// run, a nuisance term of a held-out run only, is 0); `None` when singular.
 pub(crate) fn solve(g: &[f64], b: &[f64]) -> Option<Vec<f64>> {
     let p = b.len();
-    let mut a = g.to_vec();
-    let scale = (0..p).map(|i| a[i * p + i]).fold(0.0, f64::max);
-    if !(scale > 0.0 && scale.is_finite()) {
-        return None;
-    }
-    let mut y = b.to_vec();
-    for i in 0..p {
-        if a[i * p + i] == 0.0 {
-            // a column empty on every training run (a nuisance term of a held-out run
-            // only): its coefficient is 0
-            a[i * p + i] = scale;
-            y[i] = 0.0;
-        }
-        a[i * p + i] += 1e-10 * a[i * p + i].abs();
-    }
-    cholesky_in_place(&mut a, p, PivotFloor::Absolute(1e-13 * scale)).ok()?;
-    cholesky_solve_in_place(&a, p, &mut y);
-    Some(y)
+    crate::numerics::ridge_solve(|i, j| g[i * p + j], b, 1e-10)
 }
 
 /// Energy after θ of a run's moments, per channel: e − 2θᵀb + θᵀGθ.

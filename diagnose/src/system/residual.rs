@@ -22,7 +22,7 @@ use std::sync::Arc;
 
 use aeroelastic::aero::{linearize, AeroModel, Flow};
 use aeroelastic::structure::Structure;
-use identify::preprocess::{noise_sigma, savitzky_golay_derivative};
+use identify::preprocess::{noise_sigma, savitzky_golay_derivative, spectral_peak, PeakSearch};
 use identify::record::Record;
 use nalgebra::Matrix2;
 use realfft::num_complex::Complex64;
@@ -185,48 +185,11 @@ pub fn smooth_as_acceleration(
     savitzky_golay_derivative(&d1, dt, half_window, order)
 }
 
-/// Dominant frequency \[Hz\] of `x` (mean removed, rectangular window, zero-padded to ≥ 4×
-/// the length, parabolic peak interpolation on the magnitude spectrum, bins below two
-/// cycles per record ignored); 0 when flat.
+/// Dominant frequency \[Hz\] of a free response `x` ([`identify::preprocess::spectral_peak`]
+/// with [`PeakSearch::FREE`]: mean removed, rectangular window, bins below two cycles per
+/// record ignored); 0 when flat or shorter than 4 samples.
 pub fn dominant_frequency(x: &[f64], dt: f64) -> f64 {
-    let n = x.len();
-    if n < 8 {
-        return 0.0;
-    }
-    let mean = x.iter().sum::<f64>() / n as f64;
-    let nfft = (4 * n).next_power_of_two();
-    let mut planner = realfft::RealFftPlanner::<f64>::new();
-    let fft = planner.plan_fft_forward(nfft);
-    let mut buf = fft.make_input_vec();
-    // Rectangular window: a decaying transient lives at the start of the record, where a
-    // taper would remove it.
-    for (i, v) in x.iter().enumerate() {
-        buf[i] = v - mean;
-    }
-    let mut spec = fft.make_output_vec();
-    if fft.process(&mut buf, &mut spec).is_err() {
-        return 0.0;
-    }
-    let mag: Vec<f64> = spec.iter().map(|c| c.norm()).collect();
-    // Bins below two cycles per record are trends, not oscillations.
-    let k_min = (2 * nfft / n).max(1);
-    let (k, peak) = mag
-        .iter()
-        .enumerate()
-        .skip(k_min)
-        .fold((0, 0.0), |a, (i, &m)| if m > a.1 { (i, m) } else { a });
-    if k == 0 || peak <= 0.0 {
-        return 0.0;
-    }
-    let mut off = 0.0;
-    if k + 1 < mag.len() {
-        let (a, b, c) = (mag[k - 1], mag[k], mag[k + 1]);
-        let den = a - 2.0 * b + c;
-        if den < 0.0 {
-            off = (0.5 * (a - c) / den).clamp(-0.5, 0.5);
-        }
-    }
-    (k as f64 + off) / (nfft as f64 * dt)
+    spectral_peak(x, dt, PeakSearch::FREE).unwrap_or(0.0)
 }
 
 /// Pass band \[Hz\] of the frequency-domain force evaluation: full up to

@@ -660,9 +660,52 @@ pub(crate) fn sinusoid_share(x: &[f64], dt: f64, f: f64) -> Option<(f64, f64)> {
 }
 
 /// Frequency \[Hz\] of the largest spectral peak of `x` (mean removed, Hann window, zero
-/// padding to ≥ 4n points, parabolic interpolation of the peak), searching above `0.5/T`.
-/// `None` for a constant signal or fewer than 4 samples.
+/// padding to ≥ 4n points, parabolic interpolation of the peak), searching above `0.5/T`:
+/// [`spectral_peak`] with [`PeakSearch::FORCED`]. `None` for a constant signal or fewer
+/// than 4 samples.
 pub fn dominant_frequency(x: &[f64], dt: f64) -> Option<f64> {
+    spectral_peak(x, dt, PeakSearch::FORCED)
+}
+
+/// The window of a spectral estimate.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Window {
+    /// Hann, 0.5 − 0.5 cos(2πi/(n−1)): low leakage, for steady (forced) records.
+    Hann,
+    /// None: a decaying transient lives at the start of the record, where a taper would
+    /// remove it (free decays).
+    Rectangular,
+}
+
+/// How [`spectral_peak`] looks for the peak.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PeakSearch {
+    /// Window applied after removing the mean.
+    pub window: Window,
+    /// Lowest frequency searched, in cycles per record (bins below are trends).
+    pub min_cycles: f64,
+}
+
+impl PeakSearch {
+    /// Steady forced records: Hann window, above half a cycle per record.
+    pub const FORCED: PeakSearch = PeakSearch {
+        window: Window::Hann,
+        min_cycles: 0.5,
+    };
+    /// Free responses (decays, growing or limit-cycle oscillations): no window, above two
+    /// cycles per record.
+    pub const FREE: PeakSearch = PeakSearch {
+        window: Window::Rectangular,
+        min_cycles: 2.0,
+    };
+}
+
+/// Frequency \[Hz\] of the largest spectral peak of `x` sampled every `dt` \[s\]: mean
+/// removed, `search.window` applied, zero padding to ≥ 4n points (a power of two), the
+/// largest bin at or above `search.min_cycles` cycles per record, refined by a parabola
+/// through the magnitudes around it. The one dominant-frequency estimator of the
+/// workspace. `None` for a constant signal, fewer than 4 samples or a bad `dt`.
+pub fn spectral_peak(x: &[f64], dt: f64, search: PeakSearch) -> Option<f64> {
     let n = x.len();
     if n < 4 || dt.is_nan() || dt <= 0.0 {
         return None;
@@ -670,17 +713,24 @@ pub fn dominant_frequency(x: &[f64], dt: f64) -> Option<f64> {
     let m = x.iter().sum::<f64>() / n as f64;
     let len = (4 * n).next_power_of_two();
     let mut buf = vec![0.0; len];
-    // Hann window 0.5 − 0.5 cos(2πi/(n−1)).
-    for_each_phase(n, 2.0 * PI / (n - 1) as f64, 0.0, |_, i, c, _| {
-        buf[i] = (x[i] - m) * (0.5 - 0.5 * c);
-    });
+    match search.window {
+        // Hann window 0.5 − 0.5 cos(2πi/(n−1)).
+        Window::Hann => for_each_phase(n, 2.0 * PI / (n - 1) as f64, 0.0, |_, i, c, _| {
+            buf[i] = (x[i] - m) * (0.5 - 0.5 * c);
+        }),
+        Window::Rectangular => {
+            for (b, v) in buf.iter_mut().zip(x) {
+                *b = v - m;
+            }
+        }
+    }
     let fft = FFT_PLANNER.with(|p| p.borrow_mut().plan_fft_forward(len));
     let mut spec = fft.make_output_vec();
     fft.process(&mut buf, &mut spec).ok()?;
     let power: Vec<f64> = spec.iter().map(|c| c.norm_sqr()).collect();
     let df = 1.0 / (len as f64 * dt);
     let t = n as f64 * dt;
-    let k_lo = ((0.5 / t) / df).ceil().max(1.0) as usize;
+    let k_lo = ((search.min_cycles / t) / df).ceil().max(1.0) as usize;
     let (k, &peak) = power
         .iter()
         .enumerate()

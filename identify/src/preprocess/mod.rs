@@ -30,7 +30,7 @@ pub use self::align::{align_lag, nowind_overlap, subtract_nowind};
 pub(crate) use self::harmonic::sinusoid_share as harmonic_share;
 pub use self::harmonic::{
     dominant_frequency, harmonic_fit, noise_sigma, refine_frequency, significant_harmonic_fit,
-    HarmonicComponent, HarmonicFit,
+    spectral_peak, HarmonicComponent, HarmonicFit, PeakSearch, Window,
 };
 pub use self::sg::savitzky_golay_derivative;
 

@@ -1,26 +1,34 @@
-//! The force level's small numeric kernels: an SPD solve with a relative ridge (the thin QR
-//! of its regressions is `identify::numerics::qr::ThinQr`) and a zero-padded periodogram.
+//! The diagnosis's small numeric kernels, shared by its levels: the one ridge solve of the
+//! small normal equations (force-level shared coefficients, system-level candidate fits)
+//! and a zero-padded periodogram. The thin QR of the force level's regressions is
+//! `identify::numerics::qr::ThinQr`.
 
 use identify::numerics::{cholesky_in_place, cholesky_solve_in_place, PivotFloor};
 
 pub(crate) use identify::numerics::qr::dot;
 
-/// Solves the small symmetric positive semi-definite system G β = b with a relative ridge
-/// `ridge · max diag(G)` (so that a direction the data do not determine gets β ≈ 0).
-/// Returns None when G is empty or not finite.
-pub(crate) fn solve_spd(g: &[Vec<f64>], b: &[f64], ridge: f64) -> Option<Vec<f64>> {
+/// Solves the small symmetric positive semi-definite system (G + λ diag G) x = b, with
+/// G = `g(i, j)` of size `b.len()` and λ = max(`ridge`, 1e-12): by Jacobi scaling
+/// (S G S + λ I, S = diag G^(−1/2)) and Cholesky, so that a direction the data do not
+/// determine gets x ≈ 0, and a column with a zero diagonal (empty on the data) gets x = 0.
+/// `None` when G's largest diagonal is not finite and positive, or the factorisation fails.
+pub(crate) fn ridge_solve(
+    g: impl Fn(usize, usize) -> f64,
+    b: &[f64],
+    ridge: f64,
+) -> Option<Vec<f64>> {
     let n = b.len();
     if n == 0 {
         return Some(Vec::new());
     }
-    let dmax = (0..n).map(|i| g[i][i]).fold(0.0, f64::max);
+    let dmax = (0..n).map(|i| g(i, i)).fold(0.0, f64::max);
     if !(dmax.is_finite() && dmax > 0.0) {
         return None;
     }
     // Jacobi scaling then Cholesky.
     let s: Vec<f64> = (0..n)
         .map(|i| {
-            let d = g[i][i];
+            let d = g(i, i);
             if d > 0.0 {
                 1.0 / d.sqrt()
             } else {
@@ -31,7 +39,7 @@ pub(crate) fn solve_spd(g: &[Vec<f64>], b: &[f64], ridge: f64) -> Option<Vec<f64
     let mut a = vec![0.0; n * n];
     for i in 0..n {
         for j in 0..n {
-            a[i * n + j] = g[i][j] * s[i] * s[j];
+            a[i * n + j] = g(i, j) * s[i] * s[j];
         }
         a[i * n + i] += ridge.max(1e-12);
     }
@@ -60,9 +68,15 @@ mod tests {
 
     #[test]
     fn spd_solver_matches_a_known_solution() {
-        let g = vec![vec![4.0, 1.0], vec![1.0, 3.0]];
-        let x = solve_spd(&g, &[1.0, 2.0], 0.0).unwrap();
+        let g = [[4.0, 1.0], [1.0, 3.0]];
+        let x = ridge_solve(|i, j| g[i][j], &[1.0, 2.0], 0.0).unwrap();
         // exact: (4x + y = 1, x + 3y = 2) → x = 1/11, y = 7/11
         assert!((x[0] - 1.0 / 11.0).abs() < 1e-9 && (x[1] - 7.0 / 11.0).abs() < 1e-9);
+        // a column with a zero diagonal (empty on the data) gets 0
+        let g0 = [4.0, 0.0, 0.0, 0.0];
+        let x = ridge_solve(|i, j| g0[i * 2 + j], &[1.0, 5.0], 1e-10).unwrap();
+        assert!((x[0] - 0.25).abs() < 1e-9 && x[1] == 0.0, "{x:?}");
+        assert!(ridge_solve(|_, _| 0.0, &[1.0, 1.0], 1e-10).is_none());
+        assert!(ridge_solve(|_, _| f64::NAN, &[1.0], 1e-10).is_none());
     }
 }
