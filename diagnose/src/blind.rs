@@ -27,12 +27,11 @@ use aeroelastic::aero::{AeroModel, Flow};
 use aeroelastic::effects::{self, Form, InjectedEffect as Inj, Injection};
 use aeroelastic::files::{LoadedModel, StructureFile};
 use aeroelastic::section::Section;
-use aeroelastic::tunnel::{self, case_seed, Campaign, FreeOptions, SensorNoise};
+use aeroelastic::tunnel::{self, add_noise, case_seed, peak, Campaign, FreeOptions, SensorNoise};
 use identify::dataset::{CaseSpec, Dataset, Manifest};
 use identify::record::{CaseKind, Record, SectionGeometry};
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, Normal};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
@@ -206,20 +205,6 @@ fn injection(
 fn ae(context: impl Into<String>) -> impl FnOnce(aeroelastic::Error) -> Error {
     let c = context.into();
     move |e| Error::aeroelastic(c, e)
-}
-
-fn peak(v: &[f64]) -> f64 {
-    v.iter().fold(0.0_f64, |m, x| m.max(x.abs()))
-}
-
-fn add_noise(rng: &mut ChaCha8Rng, v: &mut [f64], sd: f64) {
-    if sd > 0.0 && sd.is_finite() {
-        if let Ok(n) = Normal::new(0.0, sd) {
-            for x in v.iter_mut() {
-                *x += n.sample(rng);
-            }
-        }
-    }
 }
 
 /// Seed of the free runs' noise (independent of the forced cases').

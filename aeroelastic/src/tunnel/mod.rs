@@ -59,7 +59,7 @@ pub use motion::{
     caption_configurations, paper_configurations, reconstructed_configurations, Campaign,
     CampaignName, Configuration, ForcedCase, Motion, Sine,
 };
-pub use noise::{BalanceNoise, SensorNoise};
+pub use noise::{add_noise, peak, BalanceNoise, SensorNoise};
 pub use write::{paper_units, write};
 
 /// Progress of a tunnel run, after each case.

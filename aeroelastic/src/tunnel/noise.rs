@@ -169,7 +169,9 @@ fn quantise(v: &mut [f64], step: f64) {
     }
 }
 
-pub(super) fn add_noise(rng: &mut ChaCha8Rng, v: &mut [f64], sd: f64) {
+/// Adds independent normal noise of standard deviation `sd` to every value of `v`, drawn
+/// from `rng` (nothing for `sd` ≤ 0 or not finite).
+pub fn add_noise(rng: &mut ChaCha8Rng, v: &mut [f64], sd: f64) {
     if sd > 0.0 && sd.is_finite() {
         if let Ok(n) = Normal::new(0.0, sd) {
             for x in v.iter_mut() {
@@ -179,7 +181,8 @@ pub(super) fn add_noise(rng: &mut ChaCha8Rng, v: &mut [f64], sd: f64) {
     }
 }
 
-pub(super) fn peak(v: &[f64]) -> f64 {
+/// Largest |value| of `v` (0 for an empty slice).
+pub fn peak(v: &[f64]) -> f64 {
     v.iter().fold(0.0_f64, |m, x| m.max(x.abs()))
 }
 
