@@ -27,6 +27,7 @@ mod numerics;
 pub mod physics;
 pub mod pipeline;
 pub mod report;
+mod stats;
 pub mod structure;
 pub mod sweep;
 pub mod system;

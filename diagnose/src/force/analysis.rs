@@ -13,6 +13,7 @@
 use std::collections::BTreeMap;
 
 use crate::effect::{Effect, Level};
+use crate::stats::excess_shrink;
 use crate::report::{
     CandidateScore, CaseGap, Channel, Harmonic, LevelResult, ObservableGap, ResidualSpectrum,
     SignatureTest, Split, WhereShare,
@@ -185,17 +186,6 @@ pub(crate) fn assemble(
         coverage: None,
         structure: None,
     }
-}
-
-/// 1 − √(max(a² − n², 0) / (b² − n²)): the share of the above-noise gap removed (in gap
-/// units); 0 when the gap is at noise level.
-pub(crate) fn excess_shrink(before: f64, after: f64, noise: f64) -> f64 {
-    let eb = before * before - noise * noise;
-    if eb <= 0.0 {
-        return 0.0;
-    }
-    let ea = (after * after - noise * noise).max(0.0);
-    1.0 - (ea / eb).sqrt()
 }
 
 fn share(

@@ -394,7 +394,7 @@ pub fn system_level(forced: &Dataset, free: &Dataset, opts: &SystemOptions) -> R
                 if tl.before.is_finite() {
                     tails = Some((
                         tl.before,
-                        crate::verdict::plain_shrink(level.before, tl.before),
+                        crate::stats::plain_shrink(level.before, tl.before),
                     ));
                     if tl.before < level.before {
                         // the physically consistent extrapolation is the better sim: its
@@ -588,7 +588,7 @@ fn within_one_se(simple: &[[f64; 2]], best: &[[f64; 2]], active: &[bool], allowa
         .filter(|&j| active[j])
         .map(|j| e2(simple[j]) - e2(best[j]))
         .collect();
-    crate::verdict::paired_within_one_se(&d, allowance)
+    crate::stats::paired_within_one_se(&d, allowance)
 }
 
 /// Scores one candidate: fitted on the training folds of its active runs, scored on the
