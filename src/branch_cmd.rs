@@ -6,8 +6,8 @@
 use std::path::PathBuf;
 
 use aeroelastic::branch::{
-    measured_distances, read_measured_amplitudes, BranchMethod, BranchOptions, BranchProgress,
-    StopReason,
+    measured_distances, read_measured_amplitudes, BranchEnd, BranchMethod, BranchOptions,
+    BranchProgress,
 };
 use anyhow::Context;
 use clap::Args;
@@ -76,16 +76,16 @@ fn parse_range(s: &str) -> anyhow::Result<(f64, f64)> {
     Ok((a, b))
 }
 
-fn stop_text(s: &StopReason) -> String {
+fn stop_text(s: &BranchEnd) -> String {
     match s {
-        StopReason::SpeedRange { u } => format!("left the speed range at U = {u:.4} m/s"),
-        StopReason::Amplitude { amplitude_alpha } => format!(
+        BranchEnd::SpeedRange { u } => format!("left the speed range at U = {u:.4} m/s"),
+        BranchEnd::Amplitude { amplitude_alpha } => format!(
             "pitch amplitude {:.2}° above the limit",
             amplitude_alpha.to_degrees()
         ),
-        StopReason::Equilibrium { u } => format!("returned to the equilibrium at U = {u:.4} m/s"),
-        StopReason::MaxPoints => "point limit reached".into(),
-        StopReason::NotConverged { message, .. } => format!("did not converge {message}"),
+        BranchEnd::Equilibrium { u } => format!("returned to the equilibrium at U = {u:.4} m/s"),
+        BranchEnd::MaxPoints => "point limit reached".into(),
+        BranchEnd::NotConverged { message, .. } => format!("did not converge {message}"),
     }
 }
 
@@ -143,7 +143,7 @@ pub fn run(args: &BranchArgs) -> anyhow::Result<()> {
             b.points.len(),
             stop_text(&b.stop)
         );
-        if let StopReason::NotConverged { message, .. } = &b.stop {
+        if let BranchEnd::NotConverged { message, .. } = &b.stop {
             eprintln!("warning: branch {i} stopped early: it did not converge {message}");
         }
         for e in &b.events {

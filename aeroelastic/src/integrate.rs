@@ -41,18 +41,24 @@ impl OdeSystem for SectionDynamics<'_> {
     }
 }
 
-/// Why an integration stopped.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, schemars::JsonSchema)]
-#[serde(rename_all = "snake_case")]
-pub enum StopReason {
-    /// The observer found a converged response (e.g. a steady limit cycle).
+/// What an observer concluded about the response: the run stops there. Every observer of
+/// the workspace (LCO classification, the free-response bound, the diagnosis's
+/// re-simulation) returns one of these through [`Control::Stop`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum ObserverVerdict {
+    /// A converged response (e.g. a steady limit cycle).
     Converged,
-    /// The observer found the response decayed to the equilibrium.
+    /// The response decayed to the equilibrium.
     Decayed,
-    /// The observer found unbounded growth established before the bound was reached.
+    /// Unbounded growth established before the bound was reached.
     Diverged,
-    /// |h| or |α| left the bound ([`Bound`]).
+    /// |h| or |α| left the bound ([`Bound`], or the observer's own).
     LeftBound,
+}
+
+/// Why a solver stopped on its own, without an observer's verdict.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum SolverStop {
     /// The largest number of steps (accepted + rejected for Dop853) was reached.
     StepCap,
     /// The end time was reached without the observer stopping the run.
@@ -65,20 +71,137 @@ pub enum StopReason {
     NonFinite,
 }
 
+/// Why an integration ended: an observer's verdict or a solver stop. Written by its flat
+/// [`StopReason::name`] (`converged`, `step_cap`, …) in lco.json and CSV files.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum StopReason {
+    /// The observer (or the bound) stopped the run.
+    Observer(ObserverVerdict),
+    /// The solver stopped on its own.
+    Solver(SolverStop),
+}
+
 impl StopReason {
+    /// Every stop reason, observer verdicts first.
+    pub const ALL: [StopReason; 9] = [
+        StopReason::Observer(ObserverVerdict::Converged),
+        StopReason::Observer(ObserverVerdict::Decayed),
+        StopReason::Observer(ObserverVerdict::Diverged),
+        StopReason::Observer(ObserverVerdict::LeftBound),
+        StopReason::Solver(SolverStop::StepCap),
+        StopReason::Solver(SolverStop::TimeCap),
+        StopReason::Solver(SolverStop::StepSizeUnderflow),
+        StopReason::Solver(SolverStop::Stiffness),
+        StopReason::Solver(SolverStop::NonFinite),
+    ];
+
     /// Short snake_case name, as written in lco.json and CSV files.
     pub fn name(&self) -> &'static str {
         match self {
-            StopReason::Converged => "converged",
-            StopReason::Decayed => "decayed",
-            StopReason::Diverged => "diverged",
-            StopReason::LeftBound => "left_bound",
-            StopReason::StepCap => "step_cap",
-            StopReason::TimeCap => "time_cap",
-            StopReason::StepSizeUnderflow => "step_size_underflow",
-            StopReason::Stiffness => "stiffness",
-            StopReason::NonFinite => "non_finite",
+            StopReason::Observer(v) => match v {
+                ObserverVerdict::Converged => "converged",
+                ObserverVerdict::Decayed => "decayed",
+                ObserverVerdict::Diverged => "diverged",
+                ObserverVerdict::LeftBound => "left_bound",
+            },
+            StopReason::Solver(s) => match s {
+                SolverStop::StepCap => "step_cap",
+                SolverStop::TimeCap => "time_cap",
+                SolverStop::StepSizeUnderflow => "step_size_underflow",
+                SolverStop::Stiffness => "stiffness",
+                SolverStop::NonFinite => "non_finite",
+            },
         }
+    }
+
+    /// What the stop means, in one sentence (the schema's description of its name).
+    pub fn description(&self) -> &'static str {
+        match self {
+            StopReason::Observer(v) => match v {
+                ObserverVerdict::Converged => {
+                    "The observer found a converged response (e.g. a steady limit cycle)."
+                }
+                ObserverVerdict::Decayed => "The observer found the response decayed to the equilibrium.",
+                ObserverVerdict::Diverged => {
+                    "The observer found unbounded growth established before the bound was reached."
+                }
+                ObserverVerdict::LeftBound => "|h| or |α| left the bound.",
+            },
+            StopReason::Solver(s) => match s {
+                SolverStop::StepCap => {
+                    "The largest number of steps (accepted + rejected for Dop853) was reached."
+                }
+                SolverStop::TimeCap => "The end time was reached without the observer stopping the run.",
+                SolverStop::StepSizeUnderflow => "Dop853's step size fell below the rounding of t.",
+                SolverStop::Stiffness => {
+                    "Dop853's stiffness detector aborted the run (h·λ > 6.1 at 15 successive tests)."
+                }
+                SolverStop::NonFinite => "A state value became NaN or infinite.",
+            },
+        }
+    }
+
+    /// The stop reason of a [`StopReason::name`], if any.
+    pub fn from_name(name: &str) -> Option<Self> {
+        StopReason::ALL.into_iter().find(|r| r.name() == name)
+    }
+}
+
+impl From<ObserverVerdict> for StopReason {
+    fn from(v: ObserverVerdict) -> Self {
+        StopReason::Observer(v)
+    }
+}
+
+impl From<SolverStop> for StopReason {
+    fn from(s: SolverStop) -> Self {
+        StopReason::Solver(s)
+    }
+}
+
+/// Written as its [`StopReason::name`].
+impl Serialize for StopReason {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        s.serialize_str(self.name())
+    }
+}
+
+/// Read from its [`StopReason::name`]; any other string is an error naming it.
+impl<'de> Deserialize<'de> for StopReason {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        let s = String::deserialize(d)?;
+        StopReason::from_name(&s).ok_or_else(|| {
+            serde::de::Error::custom(format!(
+                "stop reason `{s}`: expected one of {}",
+                StopReason::ALL.map(|r| r.name()).join(", ")
+            ))
+        })
+    }
+}
+
+/// One string constant per [`StopReason::name`], with its description.
+impl schemars::JsonSchema for StopReason {
+    fn schema_name() -> std::borrow::Cow<'static, str> {
+        "StopReason".into()
+    }
+
+    fn json_schema(_: &mut schemars::SchemaGenerator) -> schemars::Schema {
+        let one_of: Vec<serde_json::Value> = StopReason::ALL
+            .iter()
+            .map(|r| {
+                serde_json::json!({
+                    "const": r.name(),
+                    "description": r.description(),
+                    "type": "string",
+                })
+            })
+            .collect();
+        schemars::json_schema!({
+            "description": "Why an integration ended: an observer's verdict (`converged`, \
+                `decayed`, `diverged`, `left_bound`) or a solver stop (`step_cap`, \
+                `time_cap`, `step_size_underflow`, `stiffness`, `non_finite`).",
+            "oneOf": one_of,
+        })
     }
 }
 
@@ -87,14 +210,14 @@ impl StopReason {
 pub enum Control {
     /// Go on.
     Continue,
-    /// Stop now, for this reason.
-    Stop(StopReason),
+    /// Stop now, with this verdict.
+    Stop(ObserverVerdict),
 }
 
 /// Observer of an adaptive run: called with (t, z, ż) after every accepted step.
 pub type StepObserver<'a> = dyn FnMut(f64, &[f64], &[f64]) -> Control + 'a;
 
-/// Bound on the section's displacements: the run stops with [`StopReason::LeftBound`]
+/// Bound on the section's displacements: the run stops with [`ObserverVerdict::LeftBound`]
 /// when |z₀| = |h| > `h` \[m\] or |z₁| = |α| > `alpha` \[rad\] after a step.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct Bound {
@@ -141,7 +264,7 @@ pub struct AdaptiveOptions {
     pub atol: f64,
     /// Largest number of steps, accepted + rejected.
     pub max_steps: u32,
-    /// Run ode_solvers' stiffness detector (aborts with [`StopReason::Stiffness`]). Off by
+    /// Run ode_solvers' stiffness detector (aborts with [`SolverStop::Stiffness`]). Off by
     /// default: the error control keeps an explicit run accurate on a stiff problem, only
     /// slower (see DECISIONS.md, "Stiffness detector").
     pub stiffness_test: bool,
@@ -184,11 +307,11 @@ impl<const N: usize, S: OdeSystem + ?Sized> System<f64, SVector<f64, N>> for &mu
         self.t_last = t;
         let z = y.as_slice();
         if z.iter().any(|v| !v.is_finite()) {
-            self.stop = Some(StopReason::NonFinite);
+            self.stop = Some(SolverStop::NonFinite.into());
             return true;
         }
         if self.bound.is_some_and(|b| b.left(z)) {
-            self.stop = Some(StopReason::LeftBound);
+            self.stop = Some(ObserverVerdict::LeftBound.into());
             // the observer still sees the state that left the bound
             let _ = (self.observer)(t, z, dy.as_slice());
             return true;
@@ -196,7 +319,7 @@ impl<const N: usize, S: OdeSystem + ?Sized> System<f64, SVector<f64, N>> for &mu
         match (self.observer)(t, z, dy.as_slice()) {
             Control::Continue => false,
             Control::Stop(r) => {
-                self.stop = Some(r);
+                self.stop = Some(r.into());
                 true
             }
         }
@@ -234,9 +357,11 @@ fn dop853_fixed<const N: usize, S: OdeSystem + ?Sized>(
     );
     match solver.integrate() {
         Ok(_) => None,
-        Err(IntegrationError::MaxNumStepReached { .. }) => Some(StopReason::StepCap),
-        Err(IntegrationError::StepSizeUnderflow { .. }) => Some(StopReason::StepSizeUnderflow),
-        Err(IntegrationError::StiffnessDetected { .. }) => Some(StopReason::Stiffness),
+        Err(IntegrationError::MaxNumStepReached { .. }) => Some(SolverStop::StepCap.into()),
+        Err(IntegrationError::StepSizeUnderflow { .. }) => {
+            Some(SolverStop::StepSizeUnderflow.into())
+        }
+        Err(IntegrationError::StiffnessDetected { .. }) => Some(SolverStop::Stiffness.into()),
     }
 }
 
@@ -244,7 +369,7 @@ fn dop853_fixed<const N: usize, S: OdeSystem + ?Sized>(
 /// control on |δz_i| ≤ atol + rtol·|z_i|), calling `observer(t, z, ż)` after every
 /// accepted step (never at t0). Stops at the first of: the observer's
 /// [`Control::Stop`], a non-finite state, leaving `opts.bound`, `t_end`
-/// ([`StopReason::TimeCap`]), the step cap, step-size underflow or (when enabled) the
+/// ([`SolverStop::TimeCap`]), the step cap, step-size underflow or (when enabled) the
 /// stiffness detector.
 ///
 /// # Errors
@@ -288,7 +413,7 @@ pub fn dop853<S: OdeSystem + ?Sized>(
         };
     }
     let solver_stop = dispatch!(1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12);
-    let stop = a.stop.or(solver_stop).unwrap_or(StopReason::TimeCap);
+    let stop = a.stop.or(solver_stop).unwrap_or(SolverStop::TimeCap.into());
     Ok(IntegrationRun {
         stop,
         t_end: a.t_last,
@@ -365,9 +490,9 @@ impl Rk4 {
 
 /// Fixed-step RK4 driver: `n_steps` steps of length `h` from (t0, z), in place, calling
 /// `observer(i, t_i, z_i)` after step i (1-based, t_i = t0 + i·h). Stops at the first
-/// of: a non-finite state ([`StopReason::NonFinite`]), leaving `bound`
-/// ([`StopReason::LeftBound`]; the observer is not called for that state), the
-/// observer's [`Control::Stop`], or after the last step ([`StopReason::TimeCap`]).
+/// of: a non-finite state ([`SolverStop::NonFinite`]), leaving `bound`
+/// ([`ObserverVerdict::LeftBound`]; the observer is not called for that state), the
+/// observer's [`Control::Stop`], or after the last step ([`SolverStop::TimeCap`]).
 ///
 /// # Errors
 /// [`Error::InvalidParameter`] for a non-positive or non-finite `h`, or a `z` whose
@@ -385,7 +510,7 @@ pub fn rk4<S: OdeSystem + ?Sized>(
     check_start(sys, t0, z)?;
     let mut w = Rk4::new(z.len());
     let mut run = IntegrationRun {
-        stop: StopReason::TimeCap,
+        stop: SolverStop::TimeCap.into(),
         t_end: t0,
         steps: 0,
         rhs_evals: 0,
@@ -397,15 +522,15 @@ pub fn rk4<S: OdeSystem + ?Sized>(
         run.rhs_evals += 4;
         run.t_end = t0 + i as f64 * h;
         if z.iter().any(|v| !v.is_finite()) {
-            run.stop = StopReason::NonFinite;
+            run.stop = SolverStop::NonFinite.into();
             return Ok(run);
         }
         if bound.is_some_and(|b| b.left(z)) {
-            run.stop = StopReason::LeftBound;
+            run.stop = ObserverVerdict::LeftBound.into();
             return Ok(run);
         }
         if let Control::Stop(r) = observer(i, run.t_end, z) {
-            run.stop = r;
+            run.stop = r.into();
             return Ok(run);
         }
     }
@@ -464,7 +589,7 @@ mod tests {
         };
         let t_end = 3.0;
         let r = dop853(&sys, 0.0, t_end, &[0.0, 0.1, 0.0, 0.0], &opts(), &mut obs).unwrap();
-        assert_eq!(r.stop, StopReason::TimeCap);
+        assert_eq!(r.stop, StopReason::Solver(SolverStop::TimeCap));
         assert!((r.t_end - t_end).abs() < 1e-12);
         assert!(
             (last[1] - 0.1 * (2.0 * t_end).cos()).abs() < 1e-9,
@@ -490,7 +615,7 @@ mod tests {
             &mut cont,
         )
         .unwrap();
-        assert_eq!(r.stop, StopReason::StepCap);
+        assert_eq!(r.stop, StopReason::Solver(SolverStop::StepCap));
         assert!(r.steps > 0 && r.rhs_evals > 0, "{r:?}");
         // bound
         let o = AdaptiveOptions {
@@ -498,12 +623,12 @@ mod tests {
             ..opts()
         };
         let r = dop853(&Exp(1.0), 0.0, 100.0, &[0.0, 0.01], &o, &mut cont).unwrap();
-        assert_eq!(r.stop, StopReason::LeftBound);
+        assert_eq!(r.stop, StopReason::Observer(ObserverVerdict::LeftBound));
         assert!(r.t_end > 4.0 && r.t_end < 5.0, "{}", r.t_end);
         // observer decision
         let mut stop_at_1 = |t: f64, _z: &[f64], _d: &[f64]| {
             if t > 1.0 {
-                Control::Stop(StopReason::Converged)
+                Control::Stop(ObserverVerdict::Converged)
             } else {
                 Control::Continue
             }
@@ -517,7 +642,7 @@ mod tests {
             &mut stop_at_1,
         )
         .unwrap();
-        assert_eq!(r.stop, StopReason::Converged);
+        assert_eq!(r.stop, StopReason::Observer(ObserverVerdict::Converged));
         // stiffness: ż = −1e6 z with loose tolerance, detector on
         let o = AdaptiveOptions {
             rtol: 1e-3,
@@ -527,14 +652,14 @@ mod tests {
             ..opts()
         };
         let r = dop853(&Exp(-1e6), 0.0, 0.01, &[1.0, 1.0], &o, &mut cont).unwrap();
-        assert_eq!(r.stop, StopReason::Stiffness, "{r:?}");
+        assert_eq!(r.stop, StopReason::Solver(SolverStop::Stiffness), "{r:?}");
         // the same run with the detector off finishes, accurately
         let o = AdaptiveOptions {
             stiffness_test: false,
             ..o
         };
         let r = dop853(&Exp(-1e6), 0.0, 0.01, &[1.0, 1.0], &o, &mut cont).unwrap();
-        assert_eq!(r.stop, StopReason::TimeCap, "{r:?}");
+        assert_eq!(r.stop, StopReason::Solver(SolverStop::TimeCap), "{r:?}");
         // rk4: bound, non-finite and time cap
         let mut none = |_i: usize, _t: f64, _z: &[f64]| Control::Continue;
         let mut z = [0.0, 0.01];
@@ -548,15 +673,15 @@ mod tests {
             &mut none,
         )
         .unwrap();
-        assert_eq!(r.stop, StopReason::LeftBound);
+        assert_eq!(r.stop, StopReason::Observer(ObserverVerdict::LeftBound));
         let mut z = [1.0, 1.0];
         let r = rk4(&Exp(1e3), 0.0, &mut z, 1.0, 1000, None, &mut none).unwrap();
-        assert_eq!(r.stop, StopReason::NonFinite);
+        assert_eq!(r.stop, StopReason::Solver(SolverStop::NonFinite));
         let mut z = [1.0, 1.0];
         let r = rk4(&Exp(-1.0), 0.0, &mut z, 0.01, 100, None, &mut none).unwrap();
         assert_eq!(
             (r.stop, r.steps, r.rhs_evals),
-            (StopReason::TimeCap, 100, 400)
+            (StopReason::Solver(SolverStop::TimeCap), 100, 400)
         );
         assert!((z[0] - (-1.0f64).exp()).abs() < 1e-9);
         // bad input is an error naming the field

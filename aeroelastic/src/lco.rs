@@ -7,7 +7,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::dynamics::SectionDynamics;
-use crate::integrate::{dop853, AdaptiveOptions, Control, StopReason};
+use crate::integrate::{dop853, AdaptiveOptions, Control, ObserverVerdict, SolverStop, StopReason};
 use crate::section::Section;
 use crate::{Error, Result};
 
@@ -235,7 +235,7 @@ impl Tracker {
         if !(y[0].abs() <= self.bound_h && y[1].abs() <= self.bound_alpha) {
             self.class = Some(Classification::Divergent { time_left_bound: t });
             self.last_state = y.to_vec();
-            return Control::Stop(StopReason::LeftBound);
+            return Control::Stop(ObserverVerdict::LeftBound);
         }
         let cur = [t, y[0], y[1], y[2], y[3], dy[2], dy[3]];
         let mut stop = false;
@@ -275,9 +275,9 @@ impl Tracker {
         }
         match self.class {
             Some(c) if stop && self.stop_when_classified => Control::Stop(match c {
-                Classification::Lco => StopReason::Converged,
-                Classification::Decay => StopReason::Decayed,
-                _ => StopReason::LeftBound,
+                Classification::Lco => ObserverVerdict::Converged,
+                Classification::Decay => ObserverVerdict::Decayed,
+                _ => ObserverVerdict::LeftBound,
             }),
             _ => Control::Continue,
         }
@@ -389,7 +389,7 @@ impl Section {
         let class = match (tracker.class, run.stop) {
             (Some(c), _) => c,
             // a state that overflows before any step leaves the bound has still diverged
-            (None, StopReason::NonFinite) => Classification::Divergent {
+            (None, StopReason::Solver(SolverStop::NonFinite)) => Classification::Divergent {
                 time_left_bound: run.t_end,
             },
             (None, _) => Classification::Unsettled,
@@ -803,7 +803,7 @@ mod tests {
         };
         let r = s.lco_run(2.0, &s.perturbation(0.01), &o).unwrap();
         assert_eq!(r.classification, Classification::Unsettled);
-        assert_eq!(r.stop, StopReason::StepCap);
+        assert_eq!(r.stop, StopReason::Solver(SolverStop::StepCap));
         assert!(r.steps > 0 && r.rhs_evals > r.steps, "{r:?}");
         let e = s.lco_run(2.0, &[0.0; 3], &o).unwrap_err();
         assert!(e.to_string().contains("y0"), "{e}");

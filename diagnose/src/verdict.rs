@@ -47,8 +47,8 @@ impl Default for VerdictRules {
     }
 }
 
-pub use crate::stats::{excess, excess_shrink, plain_shrink};
 use crate::stats::paired_within_one_se;
+pub use crate::stats::{excess, excess_shrink, plain_shrink};
 
 /// "before is x× its noise level n" for a reason sentence; with the sim's own uncertainty
 /// ([`LevelResult::model_level`]) the null level sqrt(noise² + model²) and both parts.

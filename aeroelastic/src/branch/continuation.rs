@@ -10,8 +10,8 @@ use nalgebra::{DMatrix, DVector, Dyn};
 use super::shooting::Shooting;
 use super::{condensed, harmonic};
 use super::{
-    Branch, BranchEvent, BranchMethod, BranchOptions, BranchPoint, BranchProgress, EventKind,
-    HopfPoint, StopReason,
+    Branch, BranchEnd, BranchEvent, BranchMethod, BranchOptions, BranchPoint, BranchProgress,
+    EventKind, HopfPoint,
 };
 use crate::section::Section;
 use crate::{Error, Result};
@@ -271,7 +271,7 @@ impl Section {
     /// [`Error::InvalidParameter`] for bad options or a non-smooth structure
     /// ([`Section::check_smooth`]); [`Error::Numerical`] when not even the first orbits
     /// near the Hopf point converge (the message names the speed and amplitude). A branch
-    /// that stops converging later ends with [`StopReason::NotConverged`] and keeps its
+    /// that stops converging later ends with [`BranchEnd::NotConverged`] and keeps its
     /// points.
     pub fn continue_branch(
         &self,
@@ -328,7 +328,7 @@ impl Section {
         let stop;
         loop {
             if points.len() >= opts.max_points {
-                stop = StopReason::MaxPoints;
+                stop = BranchEnd::MaxPoints;
                 break;
             }
             // Predictor: the tangent step; for a problem that takes a fresh Jacobian at the
@@ -362,7 +362,7 @@ impl Section {
                 Err(e) => {
                     if ds * 0.5 < opts.ds_min {
                         let last = points.last().expect("two start points");
-                        stop = StopReason::NotConverged {
+                        stop = BranchEnd::NotConverged {
                             u: last.u,
                             amplitude_alpha: last.amplitude_alpha,
                             message: format!(
@@ -381,7 +381,7 @@ impl Section {
                 ds *= 0.5;
                 if ds < opts.ds_min {
                     let last = points.last().expect("two start points");
-                    stop = StopReason::NotConverged {
+                    stop = BranchEnd::NotConverged {
                         u: last.u,
                         amplitude_alpha: last.amplitude_alpha,
                         message: format!(
@@ -397,17 +397,17 @@ impl Section {
             };
             let p = sh.point(&y, &j)?;
             if p.u < u_min || p.u > u_max {
-                stop = StopReason::SpeedRange { u: p.u };
+                stop = BranchEnd::SpeedRange { u: p.u };
                 break;
             }
             if p.amplitude_alpha > opts.max_amplitude_alpha {
-                stop = StopReason::Amplitude {
+                stop = BranchEnd::Amplitude {
                     amplitude_alpha: p.amplitude_alpha,
                 };
                 break;
             }
             if points.len() > 4 && p.amplitude_alpha < 0.5 * opts.start_amplitude {
-                stop = StopReason::Equilibrium { u: p.u };
+                stop = BranchEnd::Equilibrium { u: p.u };
                 break;
             }
             arc.push(arc.last().copied().unwrap_or(0.0) + (&y - &yk).norm());

@@ -138,7 +138,7 @@ pub struct BranchPoint {
 /// Why a branch ended.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(rename_all = "snake_case", tag = "reason")]
-pub enum StopReason {
+pub enum BranchEnd {
     /// U left the requested range.
     SpeedRange {
         /// Speed of the first point outside [m/s].
@@ -177,7 +177,7 @@ pub struct Branch {
     /// Folds, period doublings, Neimark–Sacker points.
     pub events: Vec<BranchEvent>,
     /// Why it ended.
-    pub stop: StopReason,
+    pub stop: BranchEnd,
     /// `supercritical` (stable cycles born towards U where the equilibrium is unstable)
     /// or `subcritical`, from the first continued orbits.
     pub criticality: String,

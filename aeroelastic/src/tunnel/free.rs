@@ -17,7 +17,7 @@ use super::write::{check_ids, manifest_extra};
 use super::{case_seed, paper_units, SensorNoise, TunnelProgress};
 use crate::dynamics::SectionDynamics;
 use crate::error::positive;
-use crate::integrate::{rk4, Bound, Control, StopReason};
+use crate::integrate::{rk4, Bound, Control, ObserverVerdict, SolverStop, StopReason};
 use crate::section::Section;
 use crate::{Error, Result};
 
@@ -183,11 +183,11 @@ pub fn free_record(
                 if record(y) {
                     Control::Continue
                 } else {
-                    Control::Stop(StopReason::LeftBound)
+                    Control::Stop(ObserverVerdict::LeftBound)
                 }
             },
         )?;
-        if run.stop != StopReason::TimeCap {
+        if run.stop != StopReason::Solver(SolverStop::TimeCap) {
             // left the bound (or overflowed) before the next sample
             left = Some(h.len() as f64 * dt);
         }

@@ -13,11 +13,11 @@
 use std::collections::BTreeMap;
 
 use crate::effect::{Effect, Level};
-use crate::stats::excess_shrink;
 use crate::report::{
     CandidateScore, CaseGap, Channel, Harmonic, LevelResult, ObservableGap, ResidualSpectrum,
     SignatureTest, Split, WhereShare,
 };
+use crate::stats::excess_shrink;
 
 use super::candidates::{significance, Scored};
 use super::data::{CaseData, Node, CHANNELS};

@@ -7,7 +7,7 @@ use std::sync::Arc;
 
 use aeroelastic::aero::{AeroModel, Flow};
 use aeroelastic::dynamics::{ExtraTerms, SectionDynamics};
-use aeroelastic::integrate::{Control, StopReason};
+use aeroelastic::integrate::{Control, ObserverVerdict};
 use aeroelastic::section::Section;
 use nalgebra::Matrix2;
 
@@ -112,7 +112,7 @@ pub(crate) fn simulate(
         None,
         &mut |s, _t, y| {
             if y[1].abs() >= 1.5 {
-                return Control::Stop(StopReason::LeftBound);
+                return Control::Stop(ObserverVerdict::LeftBound);
             }
             let f = sys.aero_forces(y);
             terms.set_fdot([(f[0] - f_prev[0]) / h, (f[1] - f_prev[1]) / h]);

@@ -294,7 +294,7 @@ pub fn branch_figure(
 #[cfg(test)]
 mod tests {
     use aeroelastic::flutter::{FlutterMethod, ModePoint};
-    use aeroelastic::integrate::StopReason;
+    use aeroelastic::integrate::{ObserverVerdict, SolverStop};
 
     use super::*;
 
@@ -310,10 +310,10 @@ mod tests {
             rhs_evals: 0,
             steps: 0,
             stop: match class {
-                Classification::Decay => StopReason::Decayed,
-                Classification::Lco => StopReason::Converged,
-                Classification::Divergent { .. } => StopReason::LeftBound,
-                Classification::Unsettled => StopReason::TimeCap,
+                Classification::Decay => ObserverVerdict::Decayed.into(),
+                Classification::Lco => ObserverVerdict::Converged.into(),
+                Classification::Divergent { .. } => ObserverVerdict::LeftBound.into(),
+                Classification::Unsettled => SolverStop::TimeCap.into(),
             },
             final_state: vec![],
             k_eval: None,
