@@ -6,9 +6,9 @@ use std::sync::Arc;
 use aeroelastic::aero::AeroModel;
 use identify::dataset::Dataset;
 
-use crate::force::{force_level, ForceOptions};
+use crate::force::{force_level_of, Campaign, ForceOptions};
 use crate::report::Diagnosis;
-use crate::system::{system_level, system_level_with_model, SystemOptions};
+use crate::system::{system_level_of, system_level_with_model, SystemOptions};
 use crate::verdict::{assemble, VerdictRules};
 use crate::{Error, Result};
 
@@ -45,7 +45,7 @@ impl DiagnoseOptions {
 /// far it shrinks, and the verdict. `version` is written into the document.
 ///
 /// # Errors
-/// As [`force_level`] and [`system_level`]: [`crate::Error::Data`] naming the data set when it
+/// As [`crate::force::force_level`] and [`crate::system::system_level`]: [`crate::Error::Data`] naming the data set when it
 /// cannot support held-out folds (too few groups or runs, no forced case, a free data set
 /// without `[structure]`), [`crate::Error::Identify`] when the baseline cannot be identified.
 pub fn diagnose(
@@ -54,10 +54,27 @@ pub fn diagnose(
     opts: &DiagnoseOptions,
     version: &str,
 ) -> Result<Diagnosis> {
-    let mut levels = vec![force_level(forced, &opts.force)?];
+    // one preparation of the forced campaign for both levels (and one identification
+    // preparation when both levels identify with the same settings)
+    let campaign = Campaign::prepare(forced)?;
+    let prepared = campaign.identification(&opts.force.identify)?;
+    let mut levels = vec![force_level_of(&campaign, &prepared, &opts.force)?.0];
     let mut inputs = vec![forced.root.display().to_string()];
     if let Some(free) = free {
-        levels.push(system_level(forced, free, &opts.system)?);
+        let other;
+        let sys_prepared = if opts.system.identify == opts.force.identify {
+            &prepared
+        } else {
+            other = campaign.identification(&opts.system.identify)?;
+            &other
+        };
+        levels.push(system_level_of(
+            &campaign,
+            sys_prepared,
+            forced,
+            free,
+            &opts.system,
+        )?);
         inputs.push(free.root.display().to_string());
     }
     Ok(assemble(levels, &opts.rules, opts.seed, version, inputs))

@@ -445,15 +445,22 @@ pub fn section_identifications(
     settings: &IdentifySettings,
     subsets: &[Vec<usize>],
 ) -> Result<Vec<identify::pipeline::Identification>> {
-    let name = forced.manifest.name.clone();
-    let (cases, nodes, _) = data::prepare(forced)?;
-    let nd: Vec<identify::record::NondimCase> = cases.iter().map(|c| c.nd.clone()).collect();
-    let prepared = identify::pipeline::prepare(&nd, settings, &|_| {}).map_err(|e| {
-        Error::identify(
-            format!("data set `{name}`: preparing the identification"),
-            e,
-        )
-    })?;
+    let campaign = Campaign::prepare(forced)?;
+    let prepared = campaign.identification(settings)?;
+    section_identifications_of(&campaign, &prepared, subsets)
+}
+
+/// [`section_identifications`] of a prepared campaign (`prepared`: its
+/// [`Campaign::identification`]).
+///
+/// # Errors
+/// As [`section_identifications`]' fold identification.
+pub fn section_identifications_of(
+    campaign: &Campaign,
+    prepared: &Prepared<'_>,
+    subsets: &[Vec<usize>],
+) -> Result<Vec<identify::pipeline::Identification>> {
+    let (name, cases, nodes) = (&campaign.name, &campaign.cases, &campaign.nodes);
     let cache = NodeCache::default();
     use rayon::prelude::*;
     subsets
@@ -463,11 +470,11 @@ pub fn section_identifications(
                 .iter()
                 .map(|n| usize::from(n.cases.iter().all(|i| subset.contains(i))))
                 .collect();
-            let (fold, id) = build_fold(0, &fold_of, &cases, &nodes, &prepared, &name, &cache)?;
+            let (fold, id) = build_fold(0, &fold_of, cases, nodes, prepared, name, &cache)?;
             let laws: [law::ChannelLaw; 2] = std::array::from_fn(|c| {
-                law::fit_channel(&cases, &nodes, &fold.fits, &fold.shared[c], c, Aug::NONE)
+                law::fit_channel(cases, nodes, &fold.fits, &fold.shared[c], c, Aug::NONE)
             });
-            Ok(section_as_identification(id, &cases, &nodes, &fold, &laws))
+            Ok(section_as_identification(id, cases, nodes, &fold, &laws))
         })
         .collect()
 }
@@ -592,7 +599,8 @@ pub fn force_level(forced: &Dataset, opts: &ForceOptions) -> Result<LevelResult>
 }
 
 /// [`force_level`] with the wall-clock time of each stage: `(stage, seconds)` for
-/// `prepare` (preprocessing, harmonic fits), `folds` (fold identifications and node
+/// `prepare` (preprocessing, harmonic fits: [`Campaign::prepare`]), `prepare
+/// identification` ([`Campaign::identification`]), `folds` (fold identifications and node
 /// factorisations), `baseline` (held-out residuals without augmentation), one
 /// `candidate:<name>` per scored candidate (measured inside its own task: candidates run
 /// in parallel, so these overlap) and `assemble` (gap, where, signatures, spectra).
@@ -603,6 +611,20 @@ pub fn force_level_profiled(
     forced: &Dataset,
     opts: &ForceOptions,
 ) -> Result<(LevelResult, Vec<(String, f64)>)> {
+    check_options(opts)?;
+    let t0 = std::time::Instant::now();
+    let campaign = Campaign::prepare(forced)?;
+    let t_prepare = t0.elapsed().as_secs_f64();
+    let t0 = std::time::Instant::now();
+    let prepared = campaign.identification(&opts.identify)?;
+    let t_identification = t0.elapsed().as_secs_f64();
+    let (r, mut prof) = force_level_of(&campaign, &prepared, opts)?;
+    prof.insert(0, ("prepare".into(), t_prepare));
+    prof.insert(1, ("prepare identification".into(), t_identification));
+    Ok((r, prof))
+}
+
+fn check_options(opts: &ForceOptions) -> Result<()> {
     if !(opts.gap_threshold.is_finite() && opts.gap_threshold > 0.0) {
         return Err(Error::setting(
             "gap_threshold",
@@ -610,44 +632,97 @@ pub fn force_level_profiled(
             "must be > 0",
         ));
     }
+    Ok(())
+}
+
+/// A forced campaign prepared once for both levels (DESIGN.md §8): its cases
+/// preprocessed (harmonic fits of the motion, noise levels, nondimensional regressors),
+/// its (configuration, wind speed) nodes, and what the identification prepares from them
+/// ([`Campaign::identification`]). The force level's folds and the system level's section
+/// law and jackknife identify subsets of this one preparation.
+pub struct Campaign {
+    name: String,
+    cases: Vec<CaseData>,
+    nodes: Vec<Node>,
+    /// A note on configurations pooled because they have a single wind speed.
+    pooled: Option<String>,
+    nd: Vec<identify::record::NondimCase>,
+}
+
+impl Campaign {
+    /// Prepares the forced cases of `forced`.
+    ///
+    /// # Errors
+    /// [`Error::Identify`] / [`Error::Data`] naming the data set and case when a case
+    /// cannot be preprocessed (no pitch forcing, too short…).
+    pub fn prepare(forced: &Dataset) -> Result<Self> {
+        let (cases, nodes, pooled) = data::prepare(forced)?;
+        let nd = cases.iter().map(|c| c.nd.clone()).collect();
+        Ok(Campaign {
+            name: forced.manifest.name.clone(),
+            cases,
+            nodes,
+            pooled,
+            nd,
+        })
+    }
+
+    /// The identification's preparation of the campaign's cases with `settings`
+    /// ([`identify::pipeline::prepare`]): every subset identification of both levels
+    /// starts from it.
+    ///
+    /// # Errors
+    /// [`Error::Identify`] naming the data set.
+    pub fn identification(&self, settings: &IdentifySettings) -> Result<Prepared<'_>> {
+        identify::pipeline::prepare(&self.nd, settings, &|_| {}).map_err(|e| {
+            Error::identify(
+                format!("data set `{}`: preparing the identification", self.name),
+                e,
+            )
+        })
+    }
+}
+
+/// [`force_level_profiled`] of a prepared campaign (`prepared`: its
+/// [`Campaign::identification`] with `opts.identify`), without the `prepare` stage.
+///
+/// # Errors
+/// As [`force_level`], but for the preparation.
+pub fn force_level_of(
+    campaign: &Campaign,
+    prepared: &Prepared<'_>,
+    opts: &ForceOptions,
+) -> Result<(LevelResult, Vec<(String, f64)>)> {
+    check_options(opts)?;
     let mut prof: Vec<(String, f64)> = Vec::new();
     let mut t0 = std::time::Instant::now();
     let mut lap = |name: &str, prof: &mut Vec<(String, f64)>| {
         prof.push((name.to_string(), t0.elapsed().as_secs_f64()));
         t0 = std::time::Instant::now();
     };
-    let name = forced.manifest.name.clone();
-    let (cases, nodes, pooled) = data::prepare(forced)?;
-    lap("prepare", &mut prof);
-    let (fold_of, mut scheme) = assign_folds(&nodes, opts.folds, opts.seed, &name)?;
-    if let Some(p) = pooled {
+    let (name, cases, nodes) = (&campaign.name, &campaign.cases, &campaign.nodes);
+    let (fold_of, mut scheme) = assign_folds(nodes, opts.folds, opts.seed, name)?;
+    if let Some(p) = campaign.pooled.clone() {
         scheme.note = Some(match scheme.note.take() {
             Some(n) => format!("{n}; {p}"),
             None => p,
         });
     }
     let cache = NodeCache::default();
-    let nd: Vec<identify::record::NondimCase> = cases.iter().map(|c| c.nd.clone()).collect();
-    let prepared = identify::pipeline::prepare(&nd, &opts.identify, &|_| {}).map_err(|e| {
-        Error::identify(
-            format!("data set `{name}`: preparing the identification"),
-            e,
-        )
-    })?;
     let folds: Vec<Fold> = (0..scheme.folds)
-        .map(|k| build_fold(k, &fold_of, &cases, &nodes, &prepared, &name, &cache).map(|(f, _)| f))
+        .map(|k| build_fold(k, &fold_of, cases, nodes, prepared, name, &cache).map(|(f, _)| f))
         .collect::<Result<_>>()?;
     lap("folds", &mut prof);
-    let before = held_out_residuals(&cases, &nodes, &folds, Aug::NONE);
+    let before = held_out_residuals(cases, nodes, &folds, Aug::NONE);
     lap("baseline", &mut prof);
-    let timed = score_all(&cases, &nodes, &folds, &before, opts, &cache);
+    let timed = score_all(cases, nodes, &folds, &before, opts, &cache);
     lap("candidates (wall)", &mut prof);
     let mut scored = Vec::with_capacity(timed.len());
     for (e, s, t) in timed {
         prof.push((format!("candidate:{}", e.name()), t));
         scored.push((e, s));
     }
-    let mut r = analysis::assemble(&cases, &nodes, &fold_of, &before, scored, opts);
+    let mut r = analysis::assemble(cases, nodes, &fold_of, &before, scored, opts);
     r.fold_scheme = Some(scheme);
     lap("assemble", &mut prof);
     Ok((r, prof))

@@ -19,7 +19,9 @@ use aeroelastic::aero::AeroModel;
 use aeroelastic::identified::{IdentifiedLaw, IdentifiedOptions};
 use aeroelastic::structure::{Nonlinearities, Structure, StructureSpec};
 use identify::dataset::Dataset;
-use identify::pipeline::IdentifySettings;
+use identify::pipeline::{IdentifySettings, Prepared};
+
+use crate::force::Campaign;
 use identify::record::CaseKind;
 
 use crate::effect::{Effect, Level};
@@ -136,7 +138,9 @@ impl SystemOptions {
 /// [`Error::Aeroelastic`] naming the data set when preprocessing, identification or the
 /// law fails.
 pub fn sim_law(forced: &Dataset, opts: &SystemOptions) -> Result<IdentifiedLaw> {
-    sim_identification(forced, opts).map(|(_, law, _)| law)
+    let campaign = Campaign::prepare(forced)?;
+    let prepared = campaign.identification(&opts.identify)?;
+    sim_identification(&campaign, &prepared, forced).map(|(_, law, _)| law)
 }
 
 /// [`sim_law`] together with the identification it was built from and its grouped
@@ -152,8 +156,9 @@ pub fn sim_law(forced: &Dataset, opts: &SystemOptions) -> Result<IdentifiedLaw> 
 /// linearisation to free runs at other amplitudes (DECISIONS, "One section law for both
 /// levels").
 fn sim_identification(
+    campaign: &Campaign,
+    prepared: &Prepared<'_>,
     forced: &Dataset,
-    opts: &SystemOptions,
 ) -> Result<(
     identify::pipeline::Identification,
     IdentifiedLaw,
@@ -178,7 +183,7 @@ fn sim_identification(
     if let Some(j) = &jack {
         subsets.extend(j.iter().cloned());
     }
-    let mut ids = crate::force::section_identifications(forced, &opts.identify, &subsets)?;
+    let mut ids = crate::force::section_identifications_of(campaign, prepared, &subsets)?;
     let id = ids.remove(0);
     let law = IdentifiedLaw::from_identification(
         &id,
@@ -290,7 +295,7 @@ pub fn model_energy(
 pub const JACKKNIFE_FOLDS: usize = 5;
 
 /// Prepared free runs of a data set for a given aerodynamic model.
-pub(crate) struct Prepared {
+pub(crate) struct FreeRuns {
     pub runs: Vec<RunResidual>,
     pub structure: Structure,
 }
@@ -299,7 +304,7 @@ pub(crate) fn prepare_free(
     free: &Dataset,
     model: &Arc<dyn AeroModel>,
     opts: &SystemOptions,
-) -> Result<Prepared> {
+) -> Result<FreeRuns> {
     let name = free.manifest.name.as_str();
     let spec = opts.structure.or(free.manifest.structure).ok_or_else(|| {
         Error::data(
@@ -343,7 +348,7 @@ pub(crate) fn prepare_free(
             residual::prepare_run(name, r, model, rho, &structure, &s)
         })
         .collect::<Result<Vec<_>>>()?;
-    Ok(Prepared { runs, structure })
+    Ok(FreeRuns { runs, structure })
 }
 
 /// The system level (see the module docs): identifies the sim's law from `forced`
@@ -364,7 +369,26 @@ pub(crate) fn prepare_free(
 /// As [`sim_law`] and [`system_level_with_model`].
 pub fn system_level(forced: &Dataset, free: &Dataset, opts: &SystemOptions) -> Result<LevelResult> {
     opts.check()?;
-    let (id, law, jack) = sim_identification(forced, opts)?;
+    let campaign = Campaign::prepare(forced)?;
+    let prepared = campaign.identification(&opts.identify)?;
+    system_level_of(&campaign, &prepared, forced, free, opts)
+}
+
+/// [`system_level`] of a prepared forced campaign (`campaign`, `prepared`: its
+/// [`Campaign::identification`] with `opts.identify`; `forced` the data set it was
+/// prepared from), so that the force level's preparation serves both levels.
+///
+/// # Errors
+/// As [`system_level`].
+pub fn system_level_of(
+    campaign: &Campaign,
+    prepared: &Prepared<'_>,
+    forced: &Dataset,
+    free: &Dataset,
+    opts: &SystemOptions,
+) -> Result<LevelResult> {
+    opts.check()?;
+    let (id, law, jack) = sim_identification(campaign, prepared, forced)?;
     let model: Arc<dyn AeroModel> = Arc::new(law.model().clone());
     let chord = forced.manifest.section.chord;
     let jack_energy = |law_opts: &IdentifiedOptions| {
@@ -816,7 +840,7 @@ fn level_and_runs(
     opts: &SystemOptions,
     model_energy: Option<&[[f64; 2]]>,
     range: Option<&coverage::ForcedRange>,
-) -> Result<(LevelResult, Prepared)> {
+) -> Result<(LevelResult, FreeRuns)> {
     opts.check()?;
     let mut p = prepare_free(free, model, opts)?;
     // candidates fit the still air's apparent mass jointly (a nuisance); the gap and its
