@@ -99,17 +99,7 @@ impl Coefficient {
                 values,
                 k_power,
             } => {
-                let n = ks.len();
-                let xi = |i: usize| values[i] * ks[i].powi(*k_power);
-                if k <= ks[0] {
-                    xi(0)
-                } else if k >= ks[n - 1] {
-                    xi(n - 1)
-                } else {
-                    let i = ks.partition_point(|&x| x <= k) - 1;
-                    let t = (k - ks[i]) / (ks[i + 1] - ks[i]);
-                    xi(i) + t * (xi(i + 1) - xi(i))
-                }
+                identify::numerics::interp::linear_held(ks, |i| values[i] * ks[i].powi(*k_power), k)
             }
         }
     }

@@ -1,6 +1,6 @@
 //! Interpolation: a polynomial through a few nodes ([`lagrange`]), the 4-point cubic on
-//! uniform samples ([`uniform_cubic`], built on it) and the natural cubic spline
-//! ([`Spline`]).
+//! uniform samples ([`uniform_cubic`], built on it), piecewise-linear with held ends
+//! ([`linear_held`]) and the natural cubic spline ([`Spline`]).
 
 /// Value at `x` of the polynomial of degree `nodes.len() − 1` through `nodes` (x_i, y_i)
 /// (Lagrange form; the x_i distinct). One node: its value; none: 0.
@@ -34,6 +34,26 @@ pub fn uniform_cubic(x: &[f64], u: f64) -> f64 {
     let j = (u.floor() as usize).saturating_sub(1).min(n - 4);
     let nodes: [(f64, f64); 4] = std::array::from_fn(|k| (k as f64, x[j + k]));
     lagrange(&nodes, u - j as f64)
+}
+
+/// Piecewise-linear interpolation at `x` through the nodes (x_i, y(i)), x strictly
+/// increasing, held at the end values outside [x_0, x_{n−1}] (never extrapolated).
+///
+/// # Panics
+/// When `xs` is empty (a programming error: callers hold at least one node).
+#[track_caller]
+pub fn linear_held(xs: &[f64], y: impl Fn(usize) -> f64, x: f64) -> f64 {
+    let n = xs.len();
+    assert!(n >= 1, "linear interpolation needs a node");
+    if x <= xs[0] {
+        y(0)
+    } else if x >= xs[n - 1] {
+        y(n - 1)
+    } else {
+        let i = xs.partition_point(|&v| v <= x) - 1;
+        let t = (x - xs[i]) / (xs[i + 1] - xs[i]);
+        y(i) + t * (y(i + 1) - y(i))
+    }
 }
 
 /// Natural cubic spline through (x_i, y_i), x strictly increasing; constant extrapolation
@@ -109,6 +129,19 @@ impl Spline {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn linear_held_interpolates_inside_and_holds_outside() {
+        let xs = [0.5, 1.0, 2.0];
+        let ys = [1.0, 3.0, 0.0];
+        let f = |x| linear_held(&xs, |i| ys[i], x);
+        assert_eq!(f(0.0), 1.0);
+        assert_eq!(f(9.0), 0.0);
+        assert_eq!(f(1.0), 3.0);
+        assert!((f(0.75) - 2.0).abs() < 1e-15);
+        assert!((f(1.5) - 1.5).abs() < 1e-15);
+        assert_eq!(linear_held(&[2.0], |_| 7.0, -1.0), 7.0);
+    }
 
     #[test]
     fn lagrange_is_exact_for_polynomials_of_its_degree() {
