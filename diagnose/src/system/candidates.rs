@@ -9,20 +9,9 @@
 //! Because everything is quadratic in θ, each run is reduced once to its moments
 //! (ΦᵀWΦ, ΦᵀWr, rᵀWr per channel) and every fold is a small solve.
 //!
-//! The generic forms (not the generator's):
-//! * `added_mass`: ΔM q̈ with a general 2×2 ΔM (4 coefficients: mass error or spurious
-//!   apparent mass of the identified law);
-//! * `time_delay`: the aerodynamic force delayed by τ, to first order F(t−τ) ≈ F − τḞ
-//!   (1 coefficient τ shared by both channels);
-//! * `structural_cubic`: c_h h³ and c_α α³ springs (2);
-//! * `freeplay`: a pitch dead band of half gap δ, k·clamp(α, −δ, δ) (the spring force
-//!   missing inside the gap; δ on a grid 0.05°…3°, k fitted: 2 parameters);
-//! * `friction`: F_c tanh(ḣ/ε_h), T_c tanh(α̇/ε_α), ε a fraction (grid 0.01, 0.03, 0.1)
-//!   of the pooled rms velocity (3 parameters);
-//! * `structural_polynomial`: k₂h² + k₃h³ and k₂α² + k₃α³ springs, even and odd (4);
-//! * `structural_damping`: amplitude-dependent damping c₂h²ḣ, c₂α²α̇ (2);
-//! * `static_offset`: a constant force and moment, either constant in U (structural zero
-//!   offset) or ∝ ½ρU² (aerodynamic mean-angle offset), chosen by training error (3).
+//! Each effect's generic form (not the generator's) is its [`SystemTerm`], in its file of
+//! `crate::catalogue` (e.g. `added_mass`: ΔM q̈ with a general 2×2 ΔM; `freeplay`:
+//! k·clamp(α, −δ, δ) with δ on a grid).
 
 use super::residual::RunResidual;
 
