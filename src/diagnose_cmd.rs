@@ -347,7 +347,11 @@ fn blind_text(r: &BlindReport, secs: f64) -> String {
     let mut weak: Vec<String> = r
         .outcomes
         .iter()
-        .filter(|o| o.error.is_none() && (o.strong() || o.spec.truth == "none") && !o.correct())
+        .filter(|o| {
+            o.error.is_none()
+                && (o.strong() || o.spec.truth_effect() == Some(diagnose::blind::BlindEffect::None))
+                && !o.correct()
+        })
         .map(|o| {
             format!(
                 "- set {} (seed {}): {} at strength {:.2}, gap ratio {:.1} → {} (confidence {:.2})",

@@ -12,6 +12,7 @@
 use identify::numerics::{median_finite, split_seed};
 use serde::{Deserialize, Serialize};
 
+use crate::blind::BlindEffect;
 use crate::effect::{Effect, Verdict};
 
 /// Least ratio true gap / noise-level gap of a *strong* set (the issue's acceptance bar).
@@ -57,13 +58,21 @@ pub struct BlindSpec {
     pub index: usize,
     /// Seed of the set (noise, effect parameters), derived from the master seed.
     pub seed: u64,
-    /// Truth label (one of [`truth_labels`]).
+    /// Truth label (one of [`truth_labels`]; [`BlindSpec::truth_effect`] reads it).
     pub truth: String,
     /// Strength in [0, 1] (0 barely detectable, 1 strong; mapped by the generator).
     pub strength: f64,
     /// The drawn campaign shape (`--shapes`); absent: the default scenario.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub shape: Option<CampaignShape>,
+}
+
+impl BlindSpec {
+    /// The truth of the label ([`BlindEffect::from_name`]); `None` for a label that
+    /// names no drawable truth (a foreign or altered part).
+    pub fn truth_effect(&self) -> Option<BlindEffect> {
+        BlindEffect::from_name(&self.truth).ok()
+    }
 }
 
 /// A campaign shape drawn per set by the broader benchmark (issues 10 and 29): 1–3
@@ -336,10 +345,11 @@ impl BlindOutcome {
         let Some(verdict) = self.verdict else {
             return false;
         };
-        match self.spec.truth.as_str() {
-            OUTSIDE => verdict == Verdict::Unexplained,
-            "none" => matches!(verdict, Verdict::None | Verdict::Extrapolation),
-            truth => Verdict::from_name(truth).is_ok_and(|t| t == verdict),
+        match self.spec.truth_effect() {
+            Some(BlindEffect::Buffeting) => verdict == Verdict::Unexplained,
+            Some(BlindEffect::None) => matches!(verdict, Verdict::None | Verdict::Extrapolation),
+            Some(BlindEffect::Catalogue(e)) => verdict == Verdict::Effect(e),
+            None => false,
         }
     }
 }
@@ -435,7 +445,7 @@ pub fn summarize(seed: u64, outcomes: Vec<BlindOutcome>) -> BlindReport {
             continue;
         };
         all[i][j] += 1;
-        if o.strong() || o.spec.truth == "none" {
+        if o.strong() || o.spec.truth_effect() == Some(BlindEffect::None) {
             strong[i][j] += 1;
         }
     }
@@ -516,14 +526,16 @@ pub fn summarize(seed: u64, outcomes: Vec<BlindOutcome>) -> BlindReport {
 /// The acceptance statistics of `outcomes`.
 fn summary_of(outcomes: &[BlindOutcome]) -> BlindSummary {
     let ok: Vec<&BlindOutcome> = outcomes.iter().filter(|o| o.error.is_none()).collect();
-    let is_cat = |o: &&&BlindOutcome| {
-        Verdict::from_name(&o.spec.truth).is_ok_and(|v| matches!(v, Verdict::Effect(_)))
-    };
+    let is_cat =
+        |o: &&&BlindOutcome| matches!(o.spec.truth_effect(), Some(BlindEffect::Catalogue(_)));
     let cat_strong: Vec<&&BlindOutcome> = ok.iter().filter(|o| o.strong()).filter(is_cat).collect();
-    let none: Vec<&&BlindOutcome> = ok.iter().filter(|o| o.spec.truth == "none").collect();
+    let none: Vec<&&BlindOutcome> = ok
+        .iter()
+        .filter(|o| o.spec.truth_effect() == Some(BlindEffect::None))
+        .collect();
     let out_strong: Vec<&&BlindOutcome> = ok
         .iter()
-        .filter(|o| o.spec.truth == OUTSIDE && o.strong())
+        .filter(|o| o.spec.truth_effect() == Some(BlindEffect::Buffeting) && o.strong())
         .collect();
     let per_effect = Effect::ALL
         .iter()

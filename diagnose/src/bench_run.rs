@@ -5,9 +5,8 @@ use std::time::Instant;
 use aeroelastic::effects::Form;
 use rayon::prelude::*;
 
-use crate::bench::{draw_specs, summarize, BlindOutcome, BlindReport, BlindSpec, OUTSIDE};
+use crate::bench::{draw_specs, summarize, BlindOutcome, BlindReport, BlindSpec};
 use crate::blind::{generate, BlindEffect, BlindScenario};
-use crate::effect::Effect;
 use crate::pipeline::{diagnose, DiagnoseOptions};
 use crate::report::Diagnosis;
 use crate::{Error, Result};
@@ -52,24 +51,9 @@ impl BlindOptions {
 ///
 /// # Errors
 /// [`Error::UnknownEffect`] for a label that is neither an effect the generator injects
-/// ([`Effect::drawable`]), `none` nor [`OUTSIDE`].
+/// ([`crate::Effect::drawable`]), `none` nor [`crate::bench::OUTSIDE`] ([`BlindEffect::from_name`]).
 pub fn blind_effect(label: &str) -> Result<BlindEffect> {
-    match label {
-        "none" => Ok(BlindEffect::None),
-        OUTSIDE => Ok(BlindEffect::Buffeting),
-        other => match Effect::from_name(other) {
-            Ok(e) if Effect::drawable().contains(&e) => Ok(BlindEffect::Catalogue(e)),
-            _ => Err(crate::Error::UnknownEffect {
-                name: other.to_string(),
-                expected: Effect::generated()
-                    .into_iter()
-                    .map(Effect::name)
-                    .chain(["none", OUTSIDE])
-                    .collect::<Vec<_>>()
-                    .join(", "),
-            }),
-        },
-    }
+    BlindEffect::from_name(label)
 }
 
 /// Ratio of each level's held-out gap in `diag` to the same level's gap in `twin`; the
@@ -91,6 +75,10 @@ pub fn gap_ratio(diag: &Diagnosis, twin: &Diagnosis) -> f64 {
 pub fn run_one(spec: &BlindSpec, opts: &BlindOptions) -> Result<(BlindOutcome, Diagnosis)> {
     let t = Instant::now();
     let effect = blind_effect(&spec.truth)?;
+    let true_effect = match effect {
+        BlindEffect::Catalogue(e) => Some(e),
+        _ => None,
+    };
     let mut dopts = opts.diagnose.clone();
     dopts.seed = spec.seed;
     dopts.force.seed = spec.seed;
@@ -114,7 +102,7 @@ pub fn run_one(spec: &BlindSpec, opts: &BlindOptions) -> Result<(BlindOutcome, D
     let true_candidate_shrink = diag
         .candidates
         .iter()
-        .filter(|c| c.effect.name() == spec.truth && c.failure.is_none())
+        .filter(|c| Some(c.effect) == true_effect && c.failure.is_none())
         .map(|c| crate::verdict::plain_shrink(c.before, c.after))
         .fold(None, |a: Option<f64>, s| Some(a.map_or(s, |a| a.max(s))));
     let outcome = BlindOutcome {

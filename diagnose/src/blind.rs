@@ -52,6 +52,30 @@ pub enum BlindEffect {
 }
 
 impl BlindEffect {
+    /// The blind effect of a truth label ([`BlindEffect::name`]).
+    ///
+    /// # Errors
+    /// [`Error::UnknownEffect`] for a label that is neither an effect the generator injects
+    /// ([`Effect::drawable`]), `none` nor `buffeting`.
+    pub fn from_name(label: &str) -> Result<Self> {
+        match label {
+            "none" => Ok(BlindEffect::None),
+            "buffeting" => Ok(BlindEffect::Buffeting),
+            other => match Effect::from_name(other) {
+                Ok(e) if Effect::drawable().contains(&e) => Ok(BlindEffect::Catalogue(e)),
+                _ => Err(Error::UnknownEffect {
+                    name: other.to_string(),
+                    expected: Effect::generated()
+                        .into_iter()
+                        .map(Effect::name)
+                        .chain(["none", "buffeting"])
+                        .collect::<Vec<_>>()
+                        .join(", "),
+                }),
+            },
+        }
+    }
+
     /// Name: the catalogue name, `none` or `buffeting`.
     pub fn name(self) -> &'static str {
         match self {
