@@ -220,7 +220,9 @@ fn injection(
                 x_ea: X_EA,
                 seed,
             };
-            d.inject(p, strength, form, &cx)
+            let (e, more) = d.inject(p, strength, form, &cx);
+            let drawn = d.writes_drawn().then(|| (name.to_string(), p));
+            (e, drawn.into_iter().chain(more).collect())
         }
     };
     (vec![Injection { effect: e, form }], params)

@@ -106,7 +106,7 @@ impl Draw for AddedMass {
         &self,
         p: f64,
         _s: f64,
-        form: Form,
+        _form: Form,
         cx: &DrawContext,
     ) -> (InjectedEffect, Vec<(String, f64)>) {
         (
@@ -114,7 +114,7 @@ impl Draw for AddedMass {
                 fraction: p,
                 rig: cx.rig,
             },
-            vec![(self.range(form).0.into(), p)],
+            Vec::new(),
         )
     }
 }

@@ -180,7 +180,7 @@ impl Draw for DynamicStall {
         &self,
         p: f64,
         _s: f64,
-        form: Form,
+        _form: Form,
         cx: &DrawContext,
     ) -> (InjectedEffect, Vec<(String, f64)>) {
         (
@@ -189,10 +189,7 @@ impl Draw for DynamicStall {
                 lag_chords: 1.5,
                 x_ea: cx.x_ea,
             },
-            vec![
-                (self.range(form).0.into(), p),
-                ("lag [chords]".into(), 1.5),
-            ],
+            vec![("lag [chords]".into(), 1.5)],
         )
     }
 }

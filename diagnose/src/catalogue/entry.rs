@@ -93,8 +93,15 @@ pub(crate) trait Draw: Sync {
     /// strength 1); the draw is log-uniform between them ([`log_map`]).
     fn range(&self, form: Form) -> (&'static str, f64, f64);
 
+    /// Whether the truth records the drawn parameter itself (name from [`Draw::range`])
+    /// before the ones [`Draw::inject`] returns.
+    fn writes_drawn(&self) -> bool {
+        true
+    }
+
     /// The injected effect at parameter value `p` (strength `s` ∈ [0, 1], from
-    /// [`Draw::range`]) and the parameters written in the truth (name with unit, value).
+    /// [`Draw::range`]) and the further parameters written in the truth (name with unit,
+    /// value).
     fn inject(
         &self,
         p: f64,

@@ -96,14 +96,14 @@ impl Draw for Freeplay {
         &self,
         p: f64,
         _s: f64,
-        form: Form,
+        _form: Form,
         _cx: &DrawContext,
     ) -> (InjectedEffect, Vec<(String, f64)>) {
         (
             InjectedEffect::Freeplay {
                 half_gap: p.to_radians(),
             },
-            vec![(self.range(form).0.into(), p)],
+            Vec::new(),
         )
     }
 }

@@ -160,12 +160,12 @@ impl Draw for Friction {
         &self,
         p: f64,
         _s: f64,
-        form: Form,
+        _form: Form,
         _cx: &DrawContext,
     ) -> (InjectedEffect, Vec<(String, f64)>) {
         (
             InjectedEffect::Friction { moment: p },
-            vec![(self.range(form).0.into(), p)],
+            Vec::new(),
         )
     }
 }

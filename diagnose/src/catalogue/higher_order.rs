@@ -85,12 +85,12 @@ impl Draw for HigherOrder {
         &self,
         p: f64,
         _s: f64,
-        form: Form,
+        _form: Form,
         _cx: &DrawContext,
     ) -> (InjectedEffect, Vec<(String, f64)>) {
         (
             InjectedEffect::HigherOrder { c: p },
-            vec![(self.range(form).0.into(), p)],
+            Vec::new(),
         )
     }
 }

@@ -116,14 +116,14 @@ impl Draw for StaticOffset {
         &self,
         p: f64,
         _s: f64,
-        form: Form,
+        _form: Form,
         _cx: &DrawContext,
     ) -> (InjectedEffect, Vec<(String, f64)>) {
         (
             InjectedEffect::StaticOffset {
                 alpha0: p.to_radians(),
             },
-            vec![(self.range(form).0.into(), p)],
+            Vec::new(),
         )
     }
 }

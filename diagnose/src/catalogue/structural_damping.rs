@@ -119,12 +119,12 @@ impl Draw for StructuralDamping {
         &self,
         p: f64,
         _s: f64,
-        form: Form,
+        _form: Form,
         _cx: &DrawContext,
     ) -> (InjectedEffect, Vec<(String, f64)>) {
         (
             InjectedEffect::StructuralDamping { d: p },
-            vec![(self.range(form).0.into(), p)],
+            Vec::new(),
         )
     }
 }

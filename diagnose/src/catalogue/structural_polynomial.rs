@@ -147,6 +147,9 @@ impl Draw for StructuralPolynomial {
     fn generated(&self) -> bool {
         false
     }
+    fn writes_drawn(&self) -> bool {
+        false
+    }
     // |c₃| of k_α(α + c₂α² + c₃α³); the sign and c₂ are drawn with it ([`Draw::inject`]):
     // hardening 0.5…200, softening 0.2…5
     fn range(&self, _form: Form) -> (&'static str, f64, f64) {

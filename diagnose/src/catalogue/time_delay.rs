@@ -86,12 +86,12 @@ impl Draw for TimeDelay {
         &self,
         p: f64,
         _s: f64,
-        form: Form,
+        _form: Form,
         _cx: &DrawContext,
     ) -> (InjectedEffect, Vec<(String, f64)>) {
         (
             InjectedEffect::TimeDelay { tau: p },
-            vec![(self.range(form).0.into(), p)],
+            Vec::new(),
         )
     }
 }

@@ -64,7 +64,6 @@ impl Draw for VortexShedding {
                 depth: cx.depth,
             },
             vec![
-                (self.range(form).0.into(), p),
                 ("depth D [m]".into(), cx.depth),
                 (
                     "Strouhal [-]".into(),
