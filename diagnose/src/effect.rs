@@ -1,111 +1,11 @@
-//! The effect catalogue's names (DESIGN.md §5; each effect's entry is in
-//! `crate::catalogue`) and the verdicts a diagnosis can reach.
+//! The verdicts a diagnosis can reach. The effect names ([`Effect`]) and their levels
+//! ([`Level`]) are the catalogue's (`crate::catalogue`, DESIGN.md §5): its registry
+//! generates [`Effect`], one variant per entry.
 
 use serde::{Deserialize, Serialize};
 
-use crate::{Error, Result};
-
-/// Level at which an effect acts. `Aerodynamic` effects change the forces the section
-/// feels (or the forces the balance reports); `Structural` effects change only the
-/// structure's restoring forces, so they leave forced-motion residuals clean and show in
-/// free response only.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, schemars::JsonSchema)]
-#[serde(rename_all = "snake_case")]
-pub enum Level {
-    /// Aerodynamic forces (including balance artefacts such as an imperfect wind–no-wind
-    /// subtraction).
-    Aerodynamic,
-    /// Structural restoring forces (springs, gaps, friction).
-    Structural,
-    /// No effect (verdict `none` or `unexplained`).
-    None,
-}
-
-impl Level {
-    /// The name written in `diagnosis.json`.
-    pub fn name(self) -> &'static str {
-        match self {
-            Level::Aerodynamic => "aerodynamic",
-            Level::Structural => "structural",
-            Level::None => "none",
-        }
-    }
-}
-
-/// A candidate unmodelled effect of the catalogue (DESIGN.md §5, fixed names).
-#[derive(
-    Debug,
-    Clone,
-    Copy,
-    PartialEq,
-    Eq,
-    Hash,
-    PartialOrd,
-    Ord,
-    Serialize,
-    Deserialize,
-    schemars::JsonSchema,
-)]
-#[serde(rename_all = "snake_case")]
-pub enum Effect {
-    /// Mean angle offset α₀ (the model sits at α + α₀ when the rig reads α): DC forces and,
-    /// through the nonlinear terms, even harmonics.
-    StaticOffset,
-    /// Acceleration-proportional forces M_a q̈ as left by an imperfect wind–no-wind
-    /// subtraction: absorbed by derivatives at the forcing frequency, visible across
-    /// reduced frequency, as U → 0 and in free response.
-    AddedMass,
-    /// Forces lag the motion by a delay τ: a phase ωτ absorbed by derivatives at the forcing
-    /// frequency, visible across frequencies and in free response.
-    TimeDelay,
-    /// Force terms outside the Eq. 19 library (quintic, cross-DOF…): harmonics beyond the
-    /// third, amplitude dependence steeper than cubic.
-    HigherOrder,
-    /// Flow separation above a critical angle with lag and hysteresis: residuals that
-    /// switch on above an amplitude threshold, many harmonics, loops in (α, C_M).
-    DynamicStall,
-    /// Narrow-band forcing at a Strouhal frequency f = St·U/D that moves with U and is not a
-    /// combination tone of the motion.
-    VortexShedding,
-    /// Cubic structural stiffness (hardening or softening): amplitude-dependent frequency in
-    /// free response, forced residuals clean.
-    StructuralCubic,
-    /// Pitch freeplay (a dead band of the spring): frequency falls at small amplitude.
-    Freeplay,
-    /// Dry (Coulomb) friction in the supports: linear, not exponential, amplitude decay.
-    Friction,
-    /// Structural stiffness polynomial with even and odd terms, k₂q² + k₃q³ per DOF (an
-    /// asymmetric or softening–hardening spring: a subcritical Hopf with a fold).
-    StructuralPolynomial,
-    /// Amplitude-dependent structural damping, c₂q²q̇ per DOF (damping that grows with
-    /// amplitude, the opposite trend of dry friction).
-    StructuralDamping,
-    /// A scale on the aerodynamic lift and moment (a 2-D model on a finite rig: tip
-    /// losses, an uncertain effective span). Fitted at the bifurcation level only.
-    AerodynamicScale,
-}
-
-impl Effect {
-    /// The effect of a catalogue name.
-    ///
-    /// # Errors
-    /// [`Error::UnknownEffect`] listing the accepted names.
-    pub fn from_name(name: &str) -> Result<Self> {
-        Effect::ALL
-            .into_iter()
-            .find(|e| e.name() == name)
-            .ok_or_else(|| Error::UnknownEffect {
-                name: name.to_string(),
-                expected: Effect::ALL.map(Effect::name).join(", "),
-            })
-    }
-}
-
-impl std::fmt::Display for Effect {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}
+pub use crate::catalogue::{Effect, Level};
+use crate::Result;
 
 /// The outcome of a diagnosis.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
@@ -157,7 +57,7 @@ impl Verdict {
     /// The verdict of a `verdict.effect` name.
     ///
     /// # Errors
-    /// [`Error::UnknownEffect`] for anything else.
+    /// [`crate::Error::UnknownEffect`] for anything else.
     pub fn from_name(name: &str) -> Result<Self> {
         match name {
             "none" => Ok(Verdict::None),
@@ -232,7 +132,7 @@ mod tests {
         }
         names.sort();
         names.dedup();
-        assert_eq!(names.len(), 12);
+        assert_eq!(names.len(), Effect::ALL.len());
         assert_eq!(Verdict::from_name("none").unwrap(), Verdict::None);
         assert_eq!(
             Verdict::from_name("unexplained").unwrap().level(),
@@ -243,20 +143,23 @@ mod tests {
     }
 
     #[test]
-    fn structural_effects_are_the_five_structural_ones() {
-        let s: Vec<Effect> = Effect::ALL
+    fn structural_effects_leave_forced_residuals_clean() {
+        // DESIGN.md §5: a structural effect changes only the restoring forces, so it has
+        // no force-level fit, and its evidence is the free response.
+        for e in Effect::ALL
             .into_iter()
             .filter(|e| e.level() == Level::Structural)
-            .collect();
-        assert_eq!(
-            s,
-            [
-                Effect::StructuralCubic,
-                Effect::Freeplay,
-                Effect::Friction,
-                Effect::StructuralPolynomial,
-                Effect::StructuralDamping
-            ]
-        );
+        {
+            assert!(e.entry().force().is_none(), "{e}");
+        }
+        for e in [
+            Effect::StructuralCubic,
+            Effect::Freeplay,
+            Effect::Friction,
+            Effect::StructuralPolynomial,
+            Effect::StructuralDamping,
+        ] {
+            assert_eq!(e.level(), Level::Structural, "{e}");
+        }
     }
 }

@@ -14,7 +14,7 @@ use aeroelastic::section::Section;
 
 use super::entry::{Draw, DrawContext, Entry};
 use crate::bifurcation::candidates::{param, BranchCandidate, Change, Scales};
-use crate::effect::{Effect, Level};
+use super::{Effect, Level};
 use crate::force::candidates::{shared, Context, ForceFit, Scored};
 use crate::force::data::CaseData;
 use crate::system::candidates::{kept, Column, SystemTerm};

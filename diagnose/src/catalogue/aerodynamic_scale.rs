@@ -6,7 +6,7 @@ use aeroelastic::section::Section;
 
 use super::entry::Entry;
 use crate::bifurcation::candidates::{param, BranchCandidate, Change, Scales};
-use crate::effect::{Effect, Level};
+use super::{Effect, Level};
 
 /// The `aerodynamic_scale` entry.
 pub(crate) struct AerodynamicScale;

@@ -13,7 +13,7 @@
 use aeroelastic::effects::{Form, InjectedEffect};
 
 use super::entry::{Draw, DrawContext, Entry};
-use crate::effect::Level;
+use super::Level;
 use crate::force::candidates::{sparse, Context, ForceFit, PoolColumn, Scored};
 use crate::force::data::CaseData;
 

@@ -6,8 +6,8 @@
 use aeroelastic::effects::{Form, InjectedEffect};
 use aeroelastic::section::Section;
 
+use super::{Effect, Level};
 use crate::bifurcation::candidates::{BranchCandidate, Scales};
-use crate::effect::{Effect, Level};
 use crate::force::candidates::ForceFit;
 use crate::system::candidates::SystemTerm;
 

@@ -8,7 +8,7 @@
 use aeroelastic::effects::{Form, InjectedEffect};
 
 use super::entry::{Draw, DrawContext, Entry};
-use crate::effect::Level;
+use super::Level;
 use crate::system::candidates::{acc_term, Column, Grid, SystemTerm};
 use crate::system::residual::RunResidual;
 

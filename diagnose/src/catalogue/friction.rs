@@ -13,7 +13,7 @@ use aeroelastic::section::Section;
 
 use super::entry::{Draw, DrawContext, Entry};
 use crate::bifurcation::candidates::{param, BranchCandidate, Change, Scales};
-use crate::effect::{Effect, Level};
+use super::{Effect, Level};
 use crate::system::candidates::{acc_term, Column, Grid, SystemTerm};
 use crate::system::residual::RunResidual;
 

@@ -11,7 +11,7 @@ use aeroelastic::effects::{Form, InjectedEffect};
 use identify::library::Term;
 
 use super::entry::{Draw, DrawContext, Entry};
-use crate::effect::Level;
+use super::Level;
 use crate::force::candidates::{sparse, Context, ForceFit, PoolColumn, Scored};
 use crate::force::data::CaseData;
 

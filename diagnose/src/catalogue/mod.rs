@@ -4,23 +4,72 @@
 //! withheld-effect generator. The levels and the benchmark reach an effect only through
 //! [`Effect::entry`].
 //!
-//! **Adding an effect**: a variant of [`Effect`] (its serde name is the catalogue name),
-//! one new file here implementing [`Entry`] (and the level traits it applies to), and one
-//! line in the registry below. Registration order is the order of [`Effect::ALL`], in
-//! which every level scores and reports its candidates.
+//! **Adding an effect**: one new file here implementing [`Entry`] (and the level traits
+//! it applies to), and one line (with its doc comment) in the registry below, which
+//! generates the [`Effect`] variant, [`Effect::ALL`] and [`Effect::entry`]. The variant's
+//! serde name is the catalogue name; registration order is the order of [`Effect::ALL`],
+//! in which every level scores and reports its candidates.
 
 mod entry;
 
 pub(crate) use entry::{log_map, DrawContext, Entry};
 
 use aeroelastic::section::Section;
+use serde::{Deserialize, Serialize};
 
 use crate::bifurcation::candidates::Scales;
-use crate::effect::{Effect, Level};
+use crate::{Error, Result};
+
+/// Level at which an effect acts. `Aerodynamic` effects change the forces the section
+/// feels (or the forces the balance reports); `Structural` effects change only the
+/// structure's restoring forces, so they leave forced-motion residuals clean and show in
+/// free response only.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum Level {
+    /// Aerodynamic forces (including balance artefacts such as an imperfect wind–no-wind
+    /// subtraction).
+    Aerodynamic,
+    /// Structural restoring forces (springs, gaps, friction).
+    Structural,
+    /// No effect (verdict `none` or `unexplained`).
+    None,
+}
+
+impl Level {
+    /// The name written in `diagnosis.json`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Level::Aerodynamic => "aerodynamic",
+            Level::Structural => "structural",
+            Level::None => "none",
+        }
+    }
+}
 
 macro_rules! registry {
-    ($($variant:ident => $module:ident :: $entry:ident),* $(,)?) => {
+    ($($(#[$doc:meta])* $variant:ident => $module:ident :: $entry:ident),* $(,)?) => {
         $(mod $module;)*
+
+        /// A candidate unmodelled effect of the catalogue (DESIGN.md §5, fixed names),
+        /// one variant per registered entry.
+        #[derive(
+            Debug,
+            Clone,
+            Copy,
+            PartialEq,
+            Eq,
+            Hash,
+            PartialOrd,
+            Ord,
+            Serialize,
+            Deserialize,
+            schemars::JsonSchema,
+        )]
+        #[serde(rename_all = "snake_case")]
+        pub enum Effect {
+            $($(#[$doc])* $variant,)*
+        }
 
         impl Effect {
             /// The whole catalogue in registration order: DESIGN.md §5's nine effects,
@@ -39,17 +88,40 @@ macro_rules! registry {
 }
 
 registry! {
+    /// Mean angle offset α₀ (the model sits at α + α₀ when the rig reads α): DC forces and,
+    /// through the nonlinear terms, even harmonics.
     StaticOffset => static_offset::StaticOffset,
+    /// Acceleration-proportional forces M_a q̈ as left by an imperfect wind–no-wind
+    /// subtraction: absorbed by derivatives at the forcing frequency, visible across
+    /// reduced frequency, as U → 0 and in free response.
     AddedMass => added_mass::AddedMass,
+    /// Forces lag the motion by a delay τ: a phase ωτ absorbed by derivatives at the forcing
+    /// frequency, visible across frequencies and in free response.
     TimeDelay => time_delay::TimeDelay,
+    /// Force terms outside the Eq. 19 library (quintic, cross-DOF…): harmonics beyond the
+    /// third, amplitude dependence steeper than cubic.
     HigherOrder => higher_order::HigherOrder,
+    /// Flow separation above a critical angle with lag and hysteresis: residuals that
+    /// switch on above an amplitude threshold, many harmonics, loops in (α, C_M).
     DynamicStall => dynamic_stall::DynamicStall,
+    /// Narrow-band forcing at a Strouhal frequency f = St·U/D that moves with U and is not a
+    /// combination tone of the motion.
     VortexShedding => vortex_shedding::VortexShedding,
+    /// Cubic structural stiffness (hardening or softening): amplitude-dependent frequency in
+    /// free response, forced residuals clean.
     StructuralCubic => structural_cubic::StructuralCubic,
+    /// Pitch freeplay (a dead band of the spring): frequency falls at small amplitude.
     Freeplay => freeplay::Freeplay,
+    /// Dry (Coulomb) friction in the supports: linear, not exponential, amplitude decay.
     Friction => friction::Friction,
+    /// Structural stiffness polynomial with even and odd terms, k₂q² + k₃q³ per DOF (an
+    /// asymmetric or softening–hardening spring: a subcritical Hopf with a fold).
     StructuralPolynomial => structural_polynomial::StructuralPolynomial,
+    /// Amplitude-dependent structural damping, c₂q²q̇ per DOF (damping that grows with
+    /// amplitude, the opposite trend of dry friction).
     StructuralDamping => structural_damping::StructuralDamping,
+    /// A scale on the aerodynamic lift and moment (a 2-D model on a finite rig: tip
+    /// losses, an uncertain effective span). Fitted at the bifurcation level only.
     AerodynamicScale => aerodynamic_scale::AerodynamicScale,
 }
 
@@ -105,6 +177,28 @@ impl Effect {
     }
 }
 
+impl Effect {
+    /// The effect of a catalogue name.
+    ///
+    /// # Errors
+    /// [`Error::UnknownEffect`] listing the accepted names.
+    pub fn from_name(name: &str) -> Result<Self> {
+        Effect::ALL
+            .into_iter()
+            .find(|e| e.name() == name)
+            .ok_or_else(|| Error::UnknownEffect {
+                name: name.to_string(),
+                expected: Effect::ALL.map(Effect::name).join(", "),
+            })
+    }
+}
+
+impl std::fmt::Display for Effect {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
 /// The forms of a structural term with one coefficient per DOF (heave 0, pitch 1):
 /// pitch only, heave only, both.
 fn dof_forms() -> Vec<(&'static str, Vec<usize>)> {
@@ -151,16 +245,28 @@ mod tests {
                 Friction
             ]
         );
-        assert_eq!(Effect::drawable().len(), 11);
+        let drawable = Effect::drawable();
+        assert!(Effect::generated().iter().all(|e| drawable.contains(e)));
+        assert!(drawable.contains(&StructuralPolynomial) && drawable.contains(&StructuralDamping));
     }
 
     #[test]
     fn every_effect_applies_somewhere() {
+        let base = aeroelastic::reference::hp1_theodorsen();
+        let s = Scales {
+            alpha: 0.1,
+            h: 0.01,
+        };
         for e in Effect::ALL {
             let en = e.entry();
+            let branch = en.bifurcation(&base, s);
             assert!(
-                en.force().is_some() || en.system().is_some() || en.name() == "aerodynamic_scale",
-                "{e}"
+                en.force().is_some() || en.system().is_some() || !branch.is_empty(),
+                "{e} is fitted at no level"
+            );
+            assert!(
+                branch.is_empty() || en.not_at_bifurcation().is_none(),
+                "{e} has bifurcation candidates and a reason not to be fitted there"
             );
             if let Some(x) = en.extends() {
                 assert_eq!(x.level(), e.level(), "{e} extends {x}");

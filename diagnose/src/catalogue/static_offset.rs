@@ -15,7 +15,7 @@
 use aeroelastic::effects::{Form, InjectedEffect};
 
 use super::entry::{Draw, DrawContext, Entry};
-use crate::effect::Level;
+use super::Level;
 use crate::force::candidates::{shared, Context, ForceFit, Scored};
 use crate::force::data::CaseData;
 use crate::system::candidates::{Column, Grid, SystemTerm};

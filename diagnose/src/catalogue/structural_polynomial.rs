@@ -14,7 +14,7 @@ use aeroelastic::section::Section;
 
 use super::entry::{log_map, Draw, DrawContext, Entry};
 use crate::bifurcation::candidates::{stiffness_param, BranchCandidate, Change, Scales};
-use crate::effect::{Effect, Level};
+use super::{Effect, Level};
 use crate::system::candidates::{acc_term, Column, SystemTerm};
 use crate::system::residual::RunResidual;
 

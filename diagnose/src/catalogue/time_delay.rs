@@ -16,7 +16,7 @@ use std::sync::Arc;
 use aeroelastic::effects::{Form, InjectedEffect};
 
 use super::entry::{Draw, DrawContext, Entry};
-use crate::effect::Level;
+use super::Level;
 use crate::force::candidates::{Context, ForceFit, Scored};
 use crate::force::data::{CaseData, Node};
 use crate::force::folds::{fold_residuals, Fold};
