@@ -533,13 +533,6 @@ fn eq19_of(c: &CaseResult, channel: Channel) -> [Option<f64>; 7] {
     }
 }
 
-fn channel_name(ch: Channel) -> &'static str {
-    match ch {
-        Channel::Lift => "lift",
-        Channel::Moment => "moment",
-    }
-}
-
 impl IdentifiedLaw {
     /// Reads `identification.json` at `path` and builds the law.
     ///
@@ -793,7 +786,7 @@ impl IdentifiedLaw {
                         _ => n_null += 1,
                     }
                 }
-                let name = format!("{} N{}", channel_name(channel), j + 1);
+                let name = format!("{} N{}", channel.name(), j + 1);
                 if pts.iter().all(|p| p.1 == 0.0) {
                     if n_null > 0 && !pts.is_empty() {
                         warnings.push(format!("{name}: null in {n_null} case(s), zero elsewhere"));
@@ -879,7 +872,7 @@ impl IdentifiedLaw {
                 match reason {
                     Some(r) => warnings.push(format!(
                         "{} term `{n}` (median {med:.4e}) excluded: {r}",
-                        channel_name(channel)
+                        channel.name()
                     )),
                     None => {
                         if let Some(p) = powers {

@@ -19,6 +19,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::error::{Context, Error, Result};
 
+use aeroelastic::aero::Channel;
 use aeroelastic::documents::{FlutterDoc, LcoDoc};
 use study::documents::run_model;
 use study::files::{ensure_dir, read_json, write_json};
@@ -457,12 +458,12 @@ pub fn render_all(study: &Study, out: &Path, version: &str) -> Result<Vec<Figure
             for d in &paper.delta_fits {
                 cv.draw(
                     "delta_fits",
-                    &format!("delta_fits_{}_{}", safe(&d.group), d.force),
+                    &format!("delta_fits_{}_{}", safe(&d.group), d.force.name()),
                     format!(
                         "Group {}, case {}, {}: measured (solid) and least-squares fits (dashed) of the supports at a high δ ({} terms, R² {}), the selected δ ({} terms, R² {}) and a low δ ({} terms, R² {}) of the path (paper Figs. 7/8; coefficients in Table III below).",
                         d.group,
                         d.case,
-                        d.force,
+                        d.force.name(),
                         d.fits[0].coefficients.len(),
                         pretty_cell(&format!("{:.4}", d.fits[0].r2)),
                         d.fits[1].coefficients.len(),
@@ -905,7 +906,10 @@ fn force_decomposition_figure(f: &ForceDecomposition) -> TimeSeriesFigure {
 
 /// Paper Figs. 7/8: the case's measured coefficient against the fits at three δ.
 fn delta_fits_figure(d: &DeltaFits) -> TimeSeriesFigure {
-    let symbol = if d.force == "lift" { "C_L" } else { "C_M" };
+    let symbol = match d.force {
+        Channel::Lift => "C_L",
+        Channel::Moment => "C_M",
+    };
     TimeSeriesFigure {
         title: format!(
             "Fits along the δ path: group {}, case {}, {symbol}",
@@ -1005,7 +1009,9 @@ fn table_iii(report: &mut Report, d: &DeltaFits) {
     report.table(
         format!(
             "Table III: supports of group {} at three δ of the path, least-squares coefficients of case {}, {} (empty: term not in the support)",
-            d.group, d.case, d.force
+            d.group,
+            d.case,
+            d.force.name()
         ),
         &header,
         &rows,

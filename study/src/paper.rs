@@ -5,6 +5,7 @@
 //! speed and across amplitude (Figs. 14/15). Everything is computed from the records and the
 //! identification; the figures are drawn from this file so `aeroform plot` can redraw them.
 
+use aeroelastic::aero::Channel;
 use identify::dataset::Dataset;
 use identify::library::Term;
 use identify::pipeline::{GroupForce, Identification};
@@ -89,8 +90,9 @@ pub struct DeltaFits {
     pub group: String,
     /// Case id.
     pub case: String,
-    /// `"lift"` or `"moment"`.
-    pub force: String,
+    /// The force (written `"lift"` or `"moment"`).
+    #[serde(with = "aeroelastic::aero::channel_name")]
+    pub force: Channel,
     /// Time from the first sample \[s\].
     pub t: Vec<f64>,
     /// Measured coefficient (C_L positive down or C_M nose-up) over the window.
@@ -201,11 +203,11 @@ pub fn delta_fits(
     let n_win = ((WINDOW_S / case.dt).ceil() as usize).min(case.len());
     let t: Vec<f64> = (0..n_win).map(|i| i as f64 * case.dt).collect();
     [
-        ("lift", &g.lift, &case.c_lift),
-        ("moment", &g.moment, &case.c_moment),
+        (Channel::Lift, &g.lift, &case.c_lift),
+        (Channel::Moment, &g.moment, &case.c_moment),
     ]
     .into_iter()
-    .filter_map(|(force, gf, y): (&str, &GroupForce, &Vec<f64>)| {
+    .filter_map(|(force, gf, y): (Channel, &GroupForce, &Vec<f64>)| {
         let sparsest = gf.path.iter().rev().find(|p| p.n_terms > 0)?;
         let densest = gf.path.first()?;
         let picks = [
@@ -229,7 +231,7 @@ pub fn delta_fits(
         (fits.len() == 3).then(|| DeltaFits {
             group: group.into(),
             case: case_id.into(),
-            force: force.into(),
+            force,
             t: t.clone(),
             measured: y[..n_win].to_vec(),
             fits,

@@ -111,21 +111,38 @@ pub(crate) fn param(name: &str, unit: &str, convention: &str, scale: f64) -> Par
     }
 }
 
-/// A stiffness term k·q^power of `dof` (`pitch` or `heave`), scaled so that θ = 1 is the
-/// linear stiffness `k` at the amplitude `amp`.
-pub(crate) fn stiffness_param(dof: &str, power: u32, k: f64, amp: f64) -> ParameterSpec {
-    let (sym, unit, what) = if dof == "pitch" {
-        ("α", format!("N m/rad^{power}"), "moment")
-    } else {
-        ("h", format!("N/m^{power}"), "force")
+/// A degree of freedom of the section (heave positive down, pitch positive nose-up).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Dof {
+    /// Heave h \[m\].
+    Heave,
+    /// Pitch α \[rad\].
+    Pitch,
+}
+
+impl Dof {
+    /// `heave` / `pitch` (in parameter names).
+    fn name(self) -> &'static str {
+        match self {
+            Dof::Heave => "heave",
+            Dof::Pitch => "pitch",
+        }
+    }
+}
+
+/// A stiffness term k·q^power of `dof`, scaled so that θ = 1 is the linear stiffness `k`
+/// at the amplitude `amp`.
+pub(crate) fn stiffness_param(dof: Dof, power: u32, k: f64, amp: f64) -> ParameterSpec {
+    let (sym, unit, what, positive) = match dof {
+        Dof::Pitch => ("α", format!("N m/rad^{power}"), "moment", "nose-up"),
+        Dof::Heave => ("h", format!("N/m^{power}"), "force", "down"),
     };
     let mut q = param(
-        &format!("k{power}_{dof}"),
+        &format!("k{power}_{}", dof.name()),
         &unit,
         &format!(
-            "extra restoring {what} k{power}·{sym}^{power} ({sym} positive {}; k > 0 resists \
-             positive {sym}{})",
-            if dof == "pitch" { "nose-up" } else { "down" },
+            "extra restoring {what} k{power}·{sym}^{power} ({sym} positive {positive}; k > 0 \
+             resists positive {sym}{})",
             if power % 2 == 1 {
                 ": hardening"
             } else {

@@ -9,7 +9,7 @@ use aeroelastic::effects::{Form, InjectedEffect};
 use aeroelastic::section::Section;
 
 use super::entry::{Draw, DrawContext, Entry};
-use crate::bifurcation::candidates::{stiffness_param, BranchCandidate, Change, Scales};
+use crate::bifurcation::candidates::{stiffness_param, BranchCandidate, Change, Dof, Scales};
 use super::{Effect, Level};
 use crate::system::candidates::{acc_term, Column, SystemTerm};
 use crate::system::residual::RunResidual;
@@ -34,7 +34,7 @@ impl Entry for StructuralCubic {
         vec![BranchCandidate::new(
             Effect::StructuralCubic,
             "pitch",
-            vec![stiffness_param("pitch", 3, base.structure.k_alpha, s.alpha)],
+            vec![stiffness_param(Dof::Pitch, 3, base.structure.k_alpha, s.alpha)],
             None,
             Change::PitchStiffness(&[3]),
         )]

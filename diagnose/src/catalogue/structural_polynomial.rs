@@ -13,7 +13,7 @@ use aeroelastic::effects::{Form, InjectedEffect};
 use aeroelastic::section::Section;
 
 use super::entry::{log_map, Draw, DrawContext, Entry};
-use crate::bifurcation::candidates::{stiffness_param, BranchCandidate, Change, Scales};
+use crate::bifurcation::candidates::{stiffness_param, BranchCandidate, Change, Dof, Scales};
 use super::{Effect, Level};
 use crate::system::candidates::{acc_term, Column, SystemTerm};
 use crate::system::residual::RunResidual;
@@ -46,8 +46,8 @@ impl Entry for StructuralPolynomial {
                 e,
                 "pitch",
                 vec![
-                    stiffness_param("pitch", 3, ka, s.alpha),
-                    stiffness_param("pitch", 2, ka, s.alpha),
+                    stiffness_param(Dof::Pitch, 3, ka, s.alpha),
+                    stiffness_param(Dof::Pitch, 2, ka, s.alpha),
                 ],
                 Some((Effect::StructuralCubic, "pitch")),
                 Change::PitchStiffness(&[3, 2]),
@@ -56,9 +56,9 @@ impl Entry for StructuralPolynomial {
                 e,
                 "pitch to α⁵",
                 vec![
-                    stiffness_param("pitch", 3, ka, s.alpha),
-                    stiffness_param("pitch", 2, ka, s.alpha),
-                    stiffness_param("pitch", 5, ka, s.alpha),
+                    stiffness_param(Dof::Pitch, 3, ka, s.alpha),
+                    stiffness_param(Dof::Pitch, 2, ka, s.alpha),
+                    stiffness_param(Dof::Pitch, 5, ka, s.alpha),
                 ],
                 Some((e, "pitch")),
                 Change::PitchStiffness(&[3, 2, 5]),
@@ -67,9 +67,9 @@ impl Entry for StructuralPolynomial {
                 e,
                 "pitch, heave h³",
                 vec![
-                    stiffness_param("pitch", 3, ka, s.alpha),
-                    stiffness_param("pitch", 2, ka, s.alpha),
-                    stiffness_param("heave", 3, kh, s.h),
+                    stiffness_param(Dof::Pitch, 3, ka, s.alpha),
+                    stiffness_param(Dof::Pitch, 2, ka, s.alpha),
+                    stiffness_param(Dof::Heave, 3, kh, s.h),
                 ],
                 Some((e, "pitch")),
                 Change::PitchHeaveStiffness(&[3, 2], &[3]),
@@ -78,10 +78,10 @@ impl Entry for StructuralPolynomial {
                 e,
                 "pitch+heave",
                 vec![
-                    stiffness_param("pitch", 3, ka, s.alpha),
-                    stiffness_param("pitch", 2, ka, s.alpha),
-                    stiffness_param("heave", 3, kh, s.h),
-                    stiffness_param("heave", 2, kh, s.h),
+                    stiffness_param(Dof::Pitch, 3, ka, s.alpha),
+                    stiffness_param(Dof::Pitch, 2, ka, s.alpha),
+                    stiffness_param(Dof::Heave, 3, kh, s.h),
+                    stiffness_param(Dof::Heave, 2, kh, s.h),
                 ],
                 Some((e, "pitch, heave h³")),
                 Change::PitchHeaveStiffness(&[3, 2], &[3, 2]),
