@@ -349,7 +349,7 @@ fn blind_text(r: &BlindReport, secs: f64) -> String {
         .iter()
         .filter(|o| {
             o.error.is_none()
-                && (o.strong() || o.spec.truth_effect() == Some(diagnose::blind::BlindEffect::None))
+                && (o.strong() || o.spec.truth == diagnose::blind::BlindEffect::None)
                 && !o.correct()
         })
         .map(|o| {

@@ -126,7 +126,7 @@ pub fn run(cmd: &TunnelCommand) -> anyhow::Result<()> {
 fn blind(a: &BlindArgs) -> anyhow::Result<()> {
     use aeroelastic::effects::Form;
     use diagnose::blind::{generate, write_blind, BlindScenario};
-    let effect = diagnose::bench_run::blind_effect(&a.effect)?;
+    let effect = diagnose::blind::BlindEffect::from_name(&a.effect)?;
     if !(0.0..=1.0).contains(&a.strength) {
         return Err(
             crate::exit::Usage(format!("--strength {}: must be in [0, 1]", a.strength)).into(),

@@ -2,7 +2,7 @@
 //! (a debugging aid): `cargo run --release -p diagnose --example blind_one -- INDEX [N SEED]`
 //! (`list` for INDEX: every set's truth and strength).
 
-use diagnose::bench::{draw_specs_from, shapes_truth_labels, CampaignShape};
+use diagnose::bench::{draw_specs_from, shapes_truths, CampaignShape};
 use diagnose::bench_run::{run_one, BlindOptions};
 
 fn main() {
@@ -17,7 +17,7 @@ fn main() {
     let specs = if plain {
         diagnose::bench::draw_specs(n, seed)
     } else {
-        draw_specs_from(n, seed, &shapes_truth_labels())
+        draw_specs_from(n, seed, &shapes_truths())
     };
     if args.first().map(String::as_str) == Some("list") {
         for (i, s) in specs.iter().enumerate() {

@@ -4,7 +4,7 @@
 
 use std::sync::Arc;
 
-use diagnose::bench::{draw_specs_from, shapes_truth_labels, CampaignShape};
+use diagnose::bench::{draw_specs_from, shapes_truths, CampaignShape};
 use diagnose::bench_run::BlindOptions;
 use diagnose::blind::generate;
 
@@ -14,11 +14,11 @@ fn main() {
     let n: usize = args.get(2).and_then(|a| a.parse().ok()).unwrap_or(330);
     let seed: u64 = args.get(3).and_then(|a| a.parse().ok()).unwrap_or(2026);
     let opts = BlindOptions::new(n, seed);
-    let mut spec = draw_specs_from(n, seed, &shapes_truth_labels())[index].clone();
+    let mut spec = draw_specs_from(n, seed, &shapes_truths())[index].clone();
     let shape = CampaignShape::draw_with_physics(spec.seed);
     spec.shape = Some(shape.clone());
     let scenario = shape.scenario(&opts.scenario).expect("scenario");
-    let effect = diagnose::bench_run::blind_effect(&spec.truth).expect("effect");
+    let effect = spec.truth;
     let set = generate(effect, spec.strength, shape.form(), spec.seed, &scenario).expect("set");
     if let Some(dir) = args.get(1).filter(|d| d.as_str() != "-") {
         diagnose::blind::write_blind(std::path::Path::new(dir), &set).expect("write");

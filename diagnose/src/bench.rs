@@ -18,36 +18,23 @@ use crate::effect::{Effect, Verdict};
 /// Least ratio true gap / noise-level gap of a *strong* set (the issue's acceptance bar).
 pub const STRONG_RATIO: f64 = 3.0;
 
-/// Name of the outside-the-catalogue effect of the benchmark.
-pub const OUTSIDE: &str = "buffeting";
-
-/// The truth labels drawn by the benchmark, in table order: the catalogue, `none`, and the
-/// outside effect.
-pub fn truth_labels() -> Vec<String> {
+/// The truths drawn by the benchmark, in table order: the catalogue's generated effects,
+/// `none`, and the outside effect.
+pub fn truths() -> Vec<BlindEffect> {
     Effect::generated()
-        .iter()
-        .map(|e| e.name().to_string())
-        .chain(["none".to_string(), OUTSIDE.to_string()])
+        .into_iter()
+        .map(BlindEffect::Catalogue)
+        .chain([BlindEffect::None, BlindEffect::Buffeting])
         .collect()
 }
 
-/// The truth labels of the drawn-shapes benchmark (`--shapes`): [`truth_labels`] with the
-/// structural polynomial and amplitude-dependent damping added as truths (issue 29).
-pub fn shapes_truth_labels() -> Vec<String> {
+/// The truths of the drawn-shapes benchmark (`--shapes`): [`truths`] with the structural
+/// polynomial and amplitude-dependent damping added (issue 29).
+pub fn shapes_truths() -> Vec<BlindEffect> {
     Effect::drawable()
-        .iter()
-        .map(|e| e.name().to_string())
-        .chain(["none".to_string(), OUTSIDE.to_string()])
-        .collect()
-}
-
-/// The verdict labels, in table order: the catalogue, `none`, `unexplained`,
-/// `extrapolation`.
-pub fn verdict_labels() -> Vec<String> {
-    Effect::ALL
-        .iter()
-        .map(|e| e.name().to_string())
-        .chain(["none", "unexplained", "extrapolation"].map(String::from))
+        .into_iter()
+        .map(BlindEffect::Catalogue)
+        .chain([BlindEffect::None, BlindEffect::Buffeting])
         .collect()
 }
 
@@ -58,21 +45,15 @@ pub struct BlindSpec {
     pub index: usize,
     /// Seed of the set (noise, effect parameters), derived from the master seed.
     pub seed: u64,
-    /// Truth label (one of [`truth_labels`]; [`BlindSpec::truth_effect`] reads it).
-    pub truth: String,
+    /// The truth (one of [`shapes_truths`]), written as its name.
+    #[serde(with = "crate::blind::effect_name")]
+    #[schemars(with = "String")]
+    pub truth: BlindEffect,
     /// Strength in [0, 1] (0 barely detectable, 1 strong; mapped by the generator).
     pub strength: f64,
     /// The drawn campaign shape (`--shapes`); absent: the default scenario.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub shape: Option<CampaignShape>,
-}
-
-impl BlindSpec {
-    /// The truth of the label ([`BlindEffect::from_name`]); `None` for a label that
-    /// names no drawable truth (a foreign or altered part).
-    pub fn truth_effect(&self) -> Option<BlindEffect> {
-        BlindEffect::from_name(&self.truth).ok()
-    }
 }
 
 /// A campaign shape drawn per set by the broader benchmark (issues 10 and 29): 1–3
@@ -267,16 +248,16 @@ impl CampaignShape {
     }
 }
 
-/// Draws `n` sets from the master `seed`: labels uniformly over [`truth_labels`] (a
+/// Draws `n` sets from the master `seed`: truths uniformly over [`truths`] (a
 /// balanced cyclic assignment, shuffled, so that every label gets ⌊n/11⌋ or ⌈n/11⌉ sets),
 /// strengths uniform in [0, 1]. Each set's seed and strength depend only on (seed, index).
 pub fn draw_specs(n: usize, seed: u64) -> Vec<BlindSpec> {
-    draw_specs_from(n, seed, &truth_labels())
+    draw_specs_from(n, seed, &truths())
 }
 
-/// [`draw_specs`] over the given truth `labels` (e.g. [`shapes_truth_labels`]).
-pub fn draw_specs_from(n: usize, seed: u64, labels: &[String]) -> Vec<BlindSpec> {
-    let mut order: Vec<usize> = (0..n).map(|i| i % labels.len()).collect();
+/// [`draw_specs`] over the given `truths` (e.g. [`shapes_truths`]).
+pub fn draw_specs_from(n: usize, seed: u64, truths: &[BlindEffect]) -> Vec<BlindSpec> {
+    let mut order: Vec<usize> = (0..n).map(|i| i % truths.len()).collect();
     // Fisher–Yates with the mixed stream.
     for i in (1..n).rev() {
         let j = (split_seed(seed, 1_000_000 + i as u64) % (i as u64 + 1)) as usize;
@@ -288,7 +269,7 @@ pub fn draw_specs_from(n: usize, seed: u64, labels: &[String]) -> Vec<BlindSpec>
             BlindSpec {
                 index: i,
                 seed: s,
-                truth: labels[order[i]].clone(),
+                truth: truths[order[i]],
                 strength: identify::numerics::unit_interval(split_seed(s, 7)),
                 shape: None,
             }
@@ -345,16 +326,16 @@ impl BlindOutcome {
         let Some(verdict) = self.verdict else {
             return false;
         };
-        match self.spec.truth_effect() {
-            Some(BlindEffect::Buffeting) => verdict == Verdict::Unexplained,
-            Some(BlindEffect::None) => matches!(verdict, Verdict::None | Verdict::Extrapolation),
-            Some(BlindEffect::Catalogue(e)) => verdict == Verdict::Effect(e),
-            None => false,
+        match self.spec.truth {
+            BlindEffect::Buffeting => verdict == Verdict::Unexplained,
+            BlindEffect::None => matches!(verdict, Verdict::None | Verdict::Extrapolation),
+            BlindEffect::Catalogue(e) => verdict == Verdict::Effect(e),
         }
     }
 }
 
-/// Acceptance statistics of a benchmark.
+/// Acceptance statistics of a benchmark. A share or median over no sets is NaN, written
+/// `null`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct BlindSummary {
     /// Sets run.
@@ -364,10 +345,14 @@ pub struct BlindSummary {
     /// Strong catalogue sets.
     pub catalogue_strong: usize,
     /// Top-1 accuracy on strong catalogue sets.
+    #[serde(with = "nan_as_null")]
+    #[schemars(with = "Option<f64>")]
     pub catalogue_top1: f64,
     /// Effect-free sets.
     pub none_sets: usize,
     /// Share of effect-free sets diagnosed `none`.
+    #[serde(with = "nan_as_null")]
+    #[schemars(with = "Option<f64>")]
     pub none_rate: f64,
     /// Effect-free sets named an effect with confidence ≥ 0.5.
     #[serde(default)]
@@ -375,17 +360,43 @@ pub struct BlindSummary {
     /// Strong outside-effect sets.
     pub outside_strong: usize,
     /// Share of strong outside-effect sets diagnosed `unexplained`.
+    #[serde(with = "nan_as_null")]
+    #[schemars(with = "Option<f64>")]
     pub outside_unexplained: f64,
     /// Median plain shrink of the verdict on strong catalogue sets named correctly.
+    #[serde(with = "nan_as_null")]
+    #[schemars(with = "Option<f64>")]
     pub median_shrink_named: f64,
     /// Median plain shrink of the true effect's candidate on all strong catalogue sets.
+    #[serde(with = "nan_as_null")]
+    #[schemars(with = "Option<f64>")]
     pub median_shrink_true_candidate: f64,
     /// Median excess shrink of the verdict on strong catalogue sets named correctly.
+    #[serde(with = "nan_as_null")]
+    #[schemars(with = "Option<f64>")]
     pub median_excess_shrink_named: f64,
     /// Top-1 accuracy per catalogue effect on its strong sets (name, correct, total).
     pub per_effect: Vec<(String, usize, usize)>,
     /// Mean wall time per set \[s\].
     pub mean_seconds: f64,
+}
+
+/// Serde form of a statistic that is NaN over no sets: NaN is written `null` (JSON has no
+/// NaN) and `null` reads back as NaN, so that a benchmark document reads as its own type.
+mod nan_as_null {
+    use serde::{Deserialize, Deserializer, Serializer};
+
+    pub fn serialize<S: Serializer>(x: &f64, s: S) -> Result<S::Ok, S::Error> {
+        if x.is_nan() {
+            s.serialize_none()
+        } else {
+            s.serialize_f64(*x)
+        }
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+        Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
+    }
 }
 
 /// A whole benchmark: settings, every outcome, confusion matrices and the summary.
@@ -425,27 +436,23 @@ fn ratio(num: usize, den: usize) -> f64 {
 
 /// Confusion matrices and acceptance statistics of a set of outcomes.
 pub fn summarize(seed: u64, outcomes: Vec<BlindOutcome>) -> BlindReport {
-    let tl = if outcomes
-        .iter()
-        .any(|o| !truth_labels().contains(&o.spec.truth))
-    {
-        shapes_truth_labels()
+    let tl = if outcomes.iter().any(|o| !truths().contains(&o.spec.truth)) {
+        shapes_truths()
     } else {
-        truth_labels()
+        truths()
     };
-    let vl = verdict_labels();
+    let vl: Vec<Verdict> = Verdict::all().collect();
     let mut all = vec![vec![0usize; vl.len()]; tl.len()];
     let mut strong = vec![vec![0usize; vl.len()]; tl.len()];
     for o in outcomes.iter().filter(|o| o.error.is_none()) {
         let (Some(i), Some(j)) = (
-            tl.iter().position(|l| *l == o.spec.truth),
-            o.verdict
-                .and_then(|v| vl.iter().position(|l| l == v.name())),
+            tl.iter().position(|t| *t == o.spec.truth),
+            o.verdict.and_then(|v| vl.iter().position(|l| *l == v)),
         ) else {
             continue;
         };
         all[i][j] += 1;
-        if o.strong() || o.spec.truth_effect() == Some(BlindEffect::None) {
+        if o.strong() || o.spec.truth == BlindEffect::None {
             strong[i][j] += 1;
         }
     }
@@ -513,8 +520,8 @@ pub fn summarize(seed: u64, outcomes: Vec<BlindOutcome>) -> BlindReport {
     BlindReport {
         format: "aeroform-blind/1".into(),
         seed,
-        truth_labels: tl,
-        verdict_labels: vl,
+        truth_labels: tl.iter().map(|t| t.name().to_string()).collect(),
+        verdict_labels: vl.iter().map(|v| v.name().to_string()).collect(),
         confusion_all: all,
         confusion_strong: strong,
         summary,
@@ -526,23 +533,22 @@ pub fn summarize(seed: u64, outcomes: Vec<BlindOutcome>) -> BlindReport {
 /// The acceptance statistics of `outcomes`.
 fn summary_of(outcomes: &[BlindOutcome]) -> BlindSummary {
     let ok: Vec<&BlindOutcome> = outcomes.iter().filter(|o| o.error.is_none()).collect();
-    let is_cat =
-        |o: &&&BlindOutcome| matches!(o.spec.truth_effect(), Some(BlindEffect::Catalogue(_)));
+    let is_cat = |o: &&&BlindOutcome| matches!(o.spec.truth, BlindEffect::Catalogue(_));
     let cat_strong: Vec<&&BlindOutcome> = ok.iter().filter(|o| o.strong()).filter(is_cat).collect();
     let none: Vec<&&BlindOutcome> = ok
         .iter()
-        .filter(|o| o.spec.truth_effect() == Some(BlindEffect::None))
+        .filter(|o| o.spec.truth == BlindEffect::None)
         .collect();
     let out_strong: Vec<&&BlindOutcome> = ok
         .iter()
-        .filter(|o| o.spec.truth_effect() == Some(BlindEffect::Buffeting) && o.strong())
+        .filter(|o| o.spec.truth == BlindEffect::Buffeting && o.strong())
         .collect();
     let per_effect = Effect::ALL
         .iter()
         .map(|e| {
             let sets: Vec<_> = cat_strong
                 .iter()
-                .filter(|o| o.spec.truth == e.name())
+                .filter(|o| o.spec.truth == BlindEffect::Catalogue(*e))
                 .collect();
             (
                 e.name().to_string(),
@@ -738,7 +744,7 @@ mod tests {
             spec: BlindSpec {
                 index: 0,
                 seed: 1,
-                truth: truth.into(),
+                truth: BlindEffect::from_name(truth).unwrap(),
                 strength: 0.5,
                 shape: None,
             },
@@ -760,8 +766,8 @@ mod tests {
         let a = draw_specs(330, 42);
         assert_eq!(a, draw_specs(330, 42));
         assert_ne!(a, draw_specs(330, 43));
-        for l in truth_labels() {
-            assert_eq!(a.iter().filter(|s| s.truth == l).count(), 30, "{l}");
+        for t in truths() {
+            assert_eq!(a.iter().filter(|s| s.truth == t).count(), 30, "{t}");
         }
         let mean = a.iter().map(|s| s.strength).sum::<f64>() / 330.0;
         assert!((mean - 0.5).abs() < 0.06, "{mean}");
@@ -778,7 +784,7 @@ mod tests {
                 outcome("freeplay", "structural_cubic", 4.0, 0.5),
                 outcome("none", "none", 1.0, 0.0),
                 outcome("none", "higher_order", 1.0, 0.0),
-                outcome(OUTSIDE, "unexplained", 6.0, 0.1),
+                outcome("buffeting", "unexplained", 6.0, 0.1),
             ],
         );
         let s = &r.summary;

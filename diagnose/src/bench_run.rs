@@ -47,15 +47,6 @@ impl BlindOptions {
     }
 }
 
-/// The blind effect of a truth label.
-///
-/// # Errors
-/// [`Error::UnknownEffect`] for a label that is neither an effect the generator injects
-/// ([`crate::Effect::drawable`]), `none` nor [`crate::bench::OUTSIDE`] ([`BlindEffect::from_name`]).
-pub fn blind_effect(label: &str) -> Result<BlindEffect> {
-    BlindEffect::from_name(label)
-}
-
 /// Ratio of each level's held-out gap in `diag` to the same level's gap in `twin`; the
 /// larger one.
 pub fn gap_ratio(diag: &Diagnosis, twin: &Diagnosis) -> f64 {
@@ -74,7 +65,7 @@ pub fn gap_ratio(diag: &Diagnosis, twin: &Diagnosis) -> f64 {
 /// Generation or diagnosis errors of the set or its twin.
 pub fn run_one(spec: &BlindSpec, opts: &BlindOptions) -> Result<(BlindOutcome, Diagnosis)> {
     let t = Instant::now();
-    let effect = blind_effect(&spec.truth)?;
+    let effect = spec.truth;
     let true_effect = match effect {
         BlindEffect::Catalogue(e) => Some(e),
         _ => None,
@@ -140,7 +131,7 @@ pub fn run_outcome(spec: &BlindSpec, opts: &BlindOptions) -> BlindOutcome {
 /// dropped. `observer` is called after each set.
 pub fn run_blind(opts: &BlindOptions, observer: &(dyn Fn(&BlindOutcome) + Sync)) -> BlindReport {
     let mut specs = if opts.shapes {
-        crate::bench::draw_specs_from(opts.n, opts.seed, &crate::bench::shapes_truth_labels())
+        crate::bench::draw_specs_from(opts.n, opts.seed, &crate::bench::shapes_truths())
     } else {
         draw_specs(opts.n, opts.seed)
     };

@@ -86,6 +86,37 @@ impl BlindEffect {
     }
 }
 
+impl std::fmt::Display for BlindEffect {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// Serde form of a [`BlindEffect`] in the benchmark document: its [`BlindEffect::name`];
+/// for `#[serde(with = "…")]`.
+pub mod effect_name {
+    use serde::{de::Error as _, Deserialize, Deserializer, Serializer};
+
+    use super::BlindEffect;
+
+    /// Writes [`BlindEffect::name`].
+    ///
+    /// # Errors
+    /// The serializer's.
+    pub fn serialize<S: Serializer>(e: &BlindEffect, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(e.name())
+    }
+
+    /// Reads a name through [`BlindEffect::from_name`].
+    ///
+    /// # Errors
+    /// A custom error naming the value and the accepted names for anything else.
+    pub fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<BlindEffect, D::Error> {
+        let s = String::deserialize(d)?;
+        BlindEffect::from_name(&s).map_err(D::Error::custom)
+    }
+}
+
 /// The truth of a blind set (never read by the diagnosis).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct BlindTruth {

@@ -3,8 +3,8 @@
 //! on the drawn campaign shapes").
 
 use diagnose::bench::{draw_specs, CampaignShape};
-use diagnose::bench_run::{blind_effect, run_one, BlindOptions};
-use diagnose::blind::generate;
+use diagnose::bench_run::{run_one, BlindOptions};
+use diagnose::blind::{generate, BlindEffect};
 use diagnose::force::{force_level, ForceOptions};
 use diagnose::Verdict;
 
@@ -21,20 +21,13 @@ fn spec(index: usize) -> diagnose::bench::BlindSpec {
 #[test]
 fn one_nonlinear_support_for_every_configuration() {
     let s = spec(115);
-    assert_eq!(s.truth, "none");
+    assert_eq!(s.truth, BlindEffect::None);
     let shape = s.shape.clone().unwrap();
     assert_eq!(shape.configurations, ["A", "C"]);
     let sc = shape
         .scenario(&BlindOptions::new(330, 2026).scenario)
         .unwrap();
-    let set = generate(
-        blind_effect("none").unwrap(),
-        s.strength,
-        shape.form(),
-        s.seed,
-        &sc,
-    )
-    .unwrap();
+    let set = generate(BlindEffect::None, s.strength, shape.form(), s.seed, &sc).unwrap();
     let opts = ForceOptions {
         seed: s.seed,
         candidates: vec![],
@@ -55,7 +48,7 @@ fn one_nonlinear_support_for_every_configuration() {
 #[test]
 fn the_sims_own_uncertainty_is_not_an_effect() {
     let s = spec(20);
-    assert_eq!(s.truth, "none");
+    assert_eq!(s.truth, BlindEffect::None);
     let (outcome, diag) = run_one(&s, &BlindOptions::new(330, 2026)).unwrap();
     assert!(
         matches!(
@@ -83,7 +76,10 @@ fn the_sims_own_uncertainty_is_not_an_effect() {
 #[test]
 fn kirchhoff_stall_columns_explain_a_separation_point_stall() {
     let s = spec(43);
-    assert_eq!(s.truth, "dynamic_stall");
+    assert_eq!(
+        s.truth,
+        BlindEffect::Catalogue(diagnose::Effect::DynamicStall)
+    );
     let (outcome, diag) = run_one(&s, &BlindOptions::new(330, 2026)).unwrap();
     assert_eq!(
         outcome.verdict,
@@ -116,9 +112,8 @@ fn kirchhoff_stall_columns_explain_a_separation_point_stall() {
 #[test]
 fn an_effective_angle_law_is_not_an_effect() {
     let mut s =
-        diagnose::bench::draw_specs_from(330, 2026, &diagnose::bench::shapes_truth_labels())[54]
-            .clone();
-    assert_eq!(s.truth, "none");
+        diagnose::bench::draw_specs_from(330, 2026, &diagnose::bench::shapes_truths())[54].clone();
+    assert_eq!(s.truth, BlindEffect::None);
     s.shape = Some(CampaignShape::draw_with_physics(s.seed));
     let mut opts = BlindOptions::new(330, 2026);
     opts.shapes = true;
