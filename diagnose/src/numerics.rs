@@ -79,4 +79,30 @@ mod tests {
         assert!(ridge_solve(|_, _| 0.0, &[1.0, 1.0], 1e-10).is_none());
         assert!(ridge_solve(|_, _| f64::NAN, &[1.0], 1e-10).is_none());
     }
+
+    #[test]
+    fn solve_does_not_depend_on_column_scale() {
+        // A column in rad³ at 0.05 rad (an α³ stiffness term) is ~1e-4 of a column in
+        // rad: its diagonal is ~1e-8 of the largest. A pivot floor relative to the
+        // largest diagonal refused such a system (DECISIONS "One ridge solve"); the Jacobi
+        // scaling solves it as if the columns were of one scale.
+        let g = [[4.0, 1.0, 0.5], [1.0, 3.0, 0.2], [0.5, 0.2, 2.0]];
+        let b = [1.0, 2.0, 0.5];
+        let x = ridge_solve(|i, j| g[i][j], &b, 1e-10).unwrap();
+        for c in [1e-4, 1e-7] {
+            let sc = [1.0, 1.0, c];
+            let xs = ridge_solve(
+                |i, j| g[i][j] * sc[i] * sc[j],
+                &[b[0], b[1], b[2] * c],
+                1e-10,
+            )
+            .unwrap();
+            for k in 0..3 {
+                assert!(
+                    (xs[k] * sc[k] - x[k]).abs() < 1e-9 * x[k].abs().max(1.0),
+                    "{c}: {xs:?}"
+                );
+            }
+        }
+    }
 }
