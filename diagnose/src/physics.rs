@@ -24,6 +24,7 @@
 //! apparent-mass terms, about a = −0.3 semi-chords (the effects' injections assume that
 //! elastic axis).
 
+use aeroelastic::aero::Channel;
 use serde::{Deserialize, Serialize};
 
 use identify::numerics::{split_seed, unit_interval};
@@ -198,7 +199,8 @@ impl DrawnPhysics {
         let mut s = format!("kind = \"theodorsen\"\nchord = {CHORD}\nelastic_axis = -0.3\n");
         for (term, channel, c) in self.terms() {
             s.push_str(&format!(
-                "\n[[nonlinear]]\nterm = \"{term}\"\nchannel = \"{channel}\"\ncoefficient = {c:e}\n"
+                "\n[[nonlinear]]\nterm = \"{term}\"\nchannel = \"{}\"\ncoefficient = {c:e}\n",
+                channel.name()
             ));
         }
         s
@@ -206,16 +208,16 @@ impl DrawnPhysics {
 
     /// The law's library monomials (term name, channel, coefficient), the effective-angle
     /// cubics expanded by the multinomial theorem; terms below 1e-12 dropped.
-    pub fn terms(&self) -> Vec<(String, &'static str, f64)> {
+    pub fn terms(&self) -> Vec<(String, Channel, f64)> {
         match &self.law {
             DrawnLaw::Eq19 {
                 alpha_alpha_dot,
                 alpha3,
                 alpha_dot3,
             } => vec![
-                ("alpha*alpha_dot".into(), "moment", *alpha_alpha_dot),
-                ("alpha^3".into(), "moment", *alpha3),
-                ("alpha_dot^3".into(), "moment", *alpha_dot3),
+                ("alpha*alpha_dot".into(), Channel::Moment, *alpha_alpha_dot),
+                ("alpha^3".into(), Channel::Moment, *alpha3),
+                ("alpha_dot^3".into(), Channel::Moment, *alpha_dot3),
             ]
             .into_iter()
             .filter(|t| t.2.abs() > 1e-12)
@@ -228,8 +230,8 @@ impl DrawnPhysics {
             } => {
                 // α_e^n = Σ n!/(i! j! k!) e^j α^i (Bα̇/U)^j (ḣ/U)^k over i + j + k = n
                 let fact = |n: u32| (1..=n).product::<u32>() as f64;
-                let mut out: Vec<(String, &'static str, f64)> = Vec::new();
-                let mut add = |powers: [u32; 3], channel: &'static str, c: f64| {
+                let mut out: Vec<(String, Channel, f64)> = Vec::new();
+                let mut add = |powers: [u32; 3], channel: Channel, c: f64| {
                     if c.abs() <= 1e-12 {
                         return;
                     }
@@ -245,10 +247,10 @@ impl DrawnPhysics {
                             let k = n - i - j;
                             let w = fact(n) / (fact(i) * fact(j) * fact(k)) * lever.powi(j as i32);
                             if n == 3 {
-                                add([i, j, k], "moment", moment_cubic * w);
-                                add([i, j, k], "lift", lift_cubic * w);
+                                add([i, j, k], Channel::Moment, moment_cubic * w);
+                                add([i, j, k], Channel::Lift, lift_cubic * w);
                             } else {
-                                add([i, j + 1, k], "moment", moment_damping * w);
+                                add([i, j + 1, k], Channel::Moment, moment_damping * w);
                             }
                         }
                     }
@@ -298,7 +300,7 @@ mod tests {
         for (name, ch, c) in p.terms() {
             let t = identify::library::Term::parse(&name).unwrap();
             let v = t.eval_at([a, ad, 0.0, hd]);
-            if ch == "moment" {
+            if ch == Channel::Moment {
                 cm += c * v;
             } else {
                 cl += c * v;
