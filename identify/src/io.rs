@@ -5,6 +5,27 @@ use std::path::Path;
 
 use crate::{Error, Result};
 
+/// Creates the folders of `rel` below the existing folder `root`, one level at a time
+/// (`create_dir`, an existing folder kept), and never `root` itself: a writer whose output
+/// folder was taken away (an interrupt's cleanup) fails instead of recreating it, which
+/// `create_dir_all` would do.
+///
+/// # Errors
+/// [`Error::Io`] naming the folder that could not be created (`root` missing, a file in
+/// the way, no permission).
+pub fn create_dir_below(root: &Path, rel: &Path) -> Result<()> {
+    let mut dir = root.to_path_buf();
+    for c in rel.components() {
+        dir.push(c);
+        match std::fs::create_dir(&dir) {
+            Ok(()) => {}
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists && dir.is_dir() => {}
+            Err(e) => return Err(Error::io(&dir, e)),
+        }
+    }
+    Ok(())
+}
+
 /// Writes `bytes` to `path` atomically: the data goes to a temporary file in the same
 /// folder, is flushed and synced, then renamed over `path`. A reader sees the old file or
 /// the complete new one, never a half-written file; on error the temporary file is removed
@@ -200,5 +221,23 @@ mod tests {
         let p = dir.path().join("no/such/dir/a.txt");
         let e = write_atomic(&p, b"x").unwrap_err();
         assert!(e.to_string().contains("a.txt"), "{e}");
+    }
+
+    #[test]
+    fn folders_are_created_below_an_existing_root_only() {
+        let tmp = tempfile::tempdir().unwrap();
+        let root = tmp.path().join("out");
+        std::fs::create_dir(&root).unwrap();
+        create_dir_below(&root, Path::new("a/b")).unwrap();
+        create_dir_below(&root, Path::new("a/b")).unwrap();
+        assert!(root.join("a/b").is_dir());
+        std::fs::remove_dir_all(&root).unwrap();
+        let e = create_dir_below(&root, Path::new("a"))
+            .unwrap_err()
+            .to_string();
+        assert!(!root.exists(), "the root was recreated");
+        assert!(e.contains("out"), "{e}");
+        std::fs::write(&root, "").unwrap();
+        assert!(create_dir_below(&root, Path::new("a")).is_err());
     }
 }

@@ -516,10 +516,7 @@ pub fn bifurcation_report(
 /// writable; drawing errors naming the figure.
 pub fn write_bifurcation_outputs(d: &BifurcationDiagnosis, out_dir: &Path) -> Result<Vec<PathBuf>> {
     let fig_dir = out_dir.join(FIGURES_DIR);
-    std::fs::create_dir_all(&fig_dir).map_err(|source| identify::Error::Io {
-        path: fig_dir.clone(),
-        source,
-    })?;
+    identify::io::create_dir_below(out_dir, Path::new(FIGURES_DIR))?;
     let mut paths = Vec::new();
     let comp = comparison_figure(d);
     let comp = if comp.panels.is_empty() {

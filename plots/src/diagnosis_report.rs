@@ -612,10 +612,7 @@ pub fn write_diagnosis_outputs(diag: &Diagnosis, out_dir: &Path) -> Result<Vec<P
         }
         .into());
     }
-    std::fs::create_dir_all(&fig_dir).map_err(|source| identify::Error::Io {
-        path: fig_dir.clone(),
-        source,
-    })?;
+    identify::io::create_dir_below(out_dir, Path::new(FIGURES_DIR))?;
     let figures = save_diagnosis_figures(diag, &fig_dir)?;
     let html = out_dir.join(DIAGNOSIS_HTML);
     diagnosis_report(diag, &figures).write(&html)?;

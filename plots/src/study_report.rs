@@ -22,7 +22,7 @@ use crate::error::{Context, Error, Result};
 use aeroelastic::aero::Channel;
 use aeroelastic::documents::{FlutterDoc, LcoDoc};
 use study::documents::run_model;
-use study::files::{ensure_dir, read_json, write_json};
+use study::files::{read_json, write_json};
 use study::paper::{DeltaFit, DeltaFits, ForceDecomposition, ForceLoop, LoopSet, PaperFigures};
 use study::run::names;
 use study::spec::{Study, StudyModel};
@@ -332,7 +332,7 @@ fn round_trip_table(report: &mut Report, out: &Path, reduced: bool) -> Result<()
 /// be drawn ([`Error::Context`] naming the figure), a write failure.
 pub fn render_all(study: &Study, out: &Path, version: &str) -> Result<Vec<FigureEntry>> {
     let dir = out.join(names::FIGURES);
-    ensure_dir(&dir)?;
+    identify::io::create_dir_below(out, Path::new(names::FIGURES))?;
     let mut cv = Canvas {
         dir: &dir,
         kinds: study.figure_kinds(),

@@ -185,7 +185,7 @@ fn synthetic(study: &Study, sy: &SyntheticSpec, out: &Path) -> Result<Dataset> {
     };
     let root = out.join("dataset");
     if sy.write_dataset {
-        crate::files::ensure_dir(&root.join("cases"))?;
+        identify::io::create_dir_below(out, Path::new("dataset/cases"))?;
         write_dataset(&root, &manifest, &records)
             .with_context(|| format!("writing the data set to {}", root.display()))?;
     }
@@ -234,7 +234,7 @@ fn virtual_campaign(
     let (manifest, records) = r.context("data.virtual: forced campaign")?;
     let root = out.join("dataset");
     if v.write_dataset {
-        crate::files::ensure_dir(&root.join("cases"))?;
+        identify::io::create_dir_below(out, Path::new("dataset/cases"))?;
         tunnel::write(&root, &manifest, &records)
             .with_context(|| format!("writing the data set to {}", root.display()))?;
     }

@@ -365,7 +365,7 @@ fn identify_stage(
 
     // compact series of the shown cases
     let dir = out.join(names::SERIES);
-    ensure_dir(&dir)?;
+    identify::io::create_dir_below(out, Path::new(names::SERIES))?;
     for i in series_case_indices(study, cases)? {
         let w = &cases.cases[i].meta.id;
         let s = case_series(&cases.cases[i], &id.cases[i], &SeriesOptions::default())

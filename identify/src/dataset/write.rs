@@ -120,11 +120,12 @@ fn case_csv(manifest: &Manifest, r: &Record) -> String {
 }
 
 fn write_file(dir: &Path, rel: &Path, text: &str) -> Result<()> {
-    let path = dir.join(rel);
-    if let Some(parent) = path.parent() {
-        std::fs::create_dir_all(parent).map_err(|e| Error::io(parent, e))?;
+    // the folders below `dir` only: an interrupt that took `dir` away must not see it
+    // recreated here
+    if let Some(sub) = rel.parent() {
+        crate::io::create_dir_below(dir, sub)?;
     }
-    write_atomic(&path, text.as_bytes())
+    write_atomic(&dir.join(rel), text.as_bytes())
 }
 
 /// Writes a data set: `records[i]` is the case `manifest.cases[i]` (same id), SI per unit
