@@ -71,23 +71,22 @@ fn blind_benchmark_full() {
 fn stored_benchmarks_read_and_summarise_to_themselves() {
     use diagnose::bench::summarize;
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/blind");
-    for name in ["blind-330-shapes-physics-r21-seed2026.json"] {
-        let text = std::fs::read_to_string(dir.join(name)).unwrap();
-        let stored: BlindReport = serde_json::from_str(&text).unwrap();
-        let again = summarize(stored.seed, stored.outcomes.clone());
-        assert_eq!(again.truth_labels, stored.truth_labels, "{name}");
-        assert_eq!(again.verdict_labels, stored.verdict_labels, "{name}");
-        assert_eq!(again.confusion_all, stored.confusion_all, "{name}");
-        assert_eq!(again.confusion_strong, stored.confusion_strong, "{name}");
-        // NaN-aware comparison of the summaries through their JSON.
-        assert_eq!(
-            serde_json::to_value(&again.summary).unwrap(),
-            serde_json::to_value(&stored.summary).unwrap(),
-            "{name}"
-        );
-        let written: serde_json::Value = serde_json::to_value(&stored.outcomes).unwrap();
-        let read: serde_json::Value =
-            serde_json::from_str::<serde_json::Value>(&text).unwrap()["outcomes"].clone();
-        assert_eq!(written, read, "{name}: outcomes do not round-trip");
-    }
+    let name = "blind-330-shapes-physics-r21-seed2026.json";
+    let text = std::fs::read_to_string(dir.join(name)).unwrap();
+    let stored: BlindReport = serde_json::from_str(&text).unwrap();
+    let again = summarize(stored.seed, stored.outcomes.clone());
+    assert_eq!(again.truth_labels, stored.truth_labels, "{name}");
+    assert_eq!(again.verdict_labels, stored.verdict_labels, "{name}");
+    assert_eq!(again.confusion_all, stored.confusion_all, "{name}");
+    assert_eq!(again.confusion_strong, stored.confusion_strong, "{name}");
+    // NaN-aware comparison of the summaries through their JSON.
+    assert_eq!(
+        serde_json::to_value(&again.summary).unwrap(),
+        serde_json::to_value(&stored.summary).unwrap(),
+        "{name}"
+    );
+    let written: serde_json::Value = serde_json::to_value(&stored.outcomes).unwrap();
+    let read: serde_json::Value =
+        serde_json::from_str::<serde_json::Value>(&text).unwrap()["outcomes"].clone();
+    assert_eq!(written, read, "{name}: outcomes do not round-trip");
 }
