@@ -4,7 +4,12 @@
 //! (4 … 10 m/s) × 4 pitch amplitudes = 28 forced cases (8 s at 512 Hz) and 9 free runs
 //! (0.6 … 1.2 U_F, 12 s), effect-free, from the blind generator (generation is not timed).
 //!
-//! Run: `cargo bench --bench diagnose`.
+//! The second group times the bifurcation-level diagnosis of the Bristol rig
+//! (`diagnose::bifurcation::diagnose_branches`: the linear model against the nine measured
+//! LCO points, every catalogue candidate fitted with its held-out folds), which
+//! `diagnose/tests/bifurcation.rs` checks for correctness only.
+//!
+//! Run: `cargo bench --bench diagnose` (`-- bifurcation` for the second group only).
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use diagnose::blind::{generate, BlindEffect, BlindScenario};
@@ -34,5 +39,39 @@ fn bench(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, bench);
+fn bench_bifurcation(c: &mut Criterion) {
+    use aeroelastic::files::{LoadedModel, StructureFile};
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let sf = StructureFile::read(&root.join("scenarios/bristol-spring1.structure.toml"))
+        .expect("structure");
+    let model = LoadedModel::load(&root.join("scenarios/bristol-spring1.model.toml"), sf.chord)
+        .expect("model");
+    let st = aeroelastic::structure::Structure::from_modal(&sf.linear).expect("modal");
+    let section =
+        aeroelastic::section::Section::new(st, model.model, sf.air_density).expect("section");
+    let points = aeroelastic::branch::read_measured_amplitudes(
+        &root.join("diagnose/tests/data/bristol-spring1-record-points.csv"),
+    )
+    .expect("points");
+    let opts = diagnose::bifurcation::BifurcationOptions::default();
+    let mut g = c.benchmark_group("bifurcation");
+    g.sample_size(10);
+    g.bench_function("bristol_9_points", |b| {
+        b.iter(|| {
+            diagnose::bifurcation::diagnose_branches(
+                &points,
+                &section,
+                None,
+                vec![],
+                &opts,
+                vec![],
+                "bench",
+            )
+            .unwrap()
+        })
+    });
+    g.finish();
+}
+
+criterion_group!(benches, bench, bench_bifurcation);
 criterion_main!(benches);

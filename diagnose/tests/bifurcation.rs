@@ -145,7 +145,7 @@ fn bristol_bifurcation_diagram_against_the_linear_model() {
         .find(|p| p.spec.name == "k3_pitch")
         .unwrap();
     assert!(k3.value > 0.0, "{}", k3.value);
-    assert!(secs < 30.0, "{secs} s");
+    // its time is measured by `cargo bench --bench diagnose -- bifurcation`, not here
 }
 
 /// A measured diagram from the continuation of `truth`: first-harmonic amplitudes at
