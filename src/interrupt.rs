@@ -11,8 +11,11 @@
 //! can recreate the folder between the removal and the exit (the window in which the
 //! interrupt test saw a staging folder survive, issue 28).
 
+#[cfg(target_os = "linux")]
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::time::{Duration, Instant};
+use std::time::Duration;
+#[cfg(target_os = "linux")]
+use std::time::Instant;
 
 /// Installs the handler (once per process, at start-up; a second call is a no-op).
 pub fn install() {
@@ -34,10 +37,12 @@ pub fn install() {
 }
 
 /// Threads that entered [`park`].
+#[cfg(target_os = "linux")]
 static PARKED: AtomicUsize = AtomicUsize::new(0);
 
 /// The parking signal's handler: counts itself and waits for the exit (async-signal-safe:
 /// an atomic add and `pause`).
+#[cfg(target_os = "linux")]
 extern "C" fn park(_: libc::c_int) {
     PARKED.fetch_add(1, Ordering::SeqCst);
     loop {
@@ -50,6 +55,7 @@ extern "C" fn park(_: libc::c_int) {
 /// handler parks it, and waits until all have parked or `timeout` has passed (a thread
 /// in an uninterruptible write parks when the write returns). Threads that appear
 /// meanwhile are signalled too. Without `/proc` this does nothing.
+#[cfg(target_os = "linux")]
 fn park_other_threads(timeout: Duration) {
     let sig = libc::SIGRTMIN() + 3;
     // SAFETY: installs a handler that only touches an atomic and calls pause; the
@@ -84,3 +90,7 @@ fn park_other_threads(timeout: Duration) {
         std::thread::sleep(Duration::from_millis(1));
     }
 }
+
+/// Elsewhere than Linux the other threads are not parked (the window stays).
+#[cfg(not(target_os = "linux"))]
+fn park_other_threads(_: Duration) {}
