@@ -21,17 +21,18 @@ pub const STRONG_RATIO: f64 = 3.0;
 /// The truths drawn by the benchmark, in table order: the catalogue's generated effects,
 /// `none`, and the outside effect.
 pub fn truths() -> Vec<BlindEffect> {
-    Effect::generated()
-        .into_iter()
-        .map(BlindEffect::Catalogue)
-        .chain([BlindEffect::None, BlindEffect::Buffeting])
-        .collect()
+    with_none_and_outside(Effect::generated())
 }
 
 /// The truths of the drawn-shapes benchmark (`--shapes`): [`truths`] with the structural
 /// polynomial and amplitude-dependent damping added (issue 29).
 pub fn shapes_truths() -> Vec<BlindEffect> {
-    Effect::drawable()
+    with_none_and_outside(Effect::drawable())
+}
+
+/// `effects` as truths, then `none` and the outside effect.
+fn with_none_and_outside(effects: Vec<Effect>) -> Vec<BlindEffect> {
+    effects
         .into_iter()
         .map(BlindEffect::Catalogue)
         .chain([BlindEffect::None, BlindEffect::Buffeting])
