@@ -24,6 +24,8 @@ pub fn run(args: &DiagnoseArgs, measured: &Path) -> anyhow::Result<()> {
         .out
         .clone()
         .unwrap_or_else(|| std::path::PathBuf::from("out/bifurcation"));
+    // before the inputs are read and the candidates fitted (`OutDir::begin` checks it again)
+    crate::outdir::refuse_overlap(&out, "--out", &args.inputs())?;
     let Some(model_path) = &args.model else {
         bail!("--measured-branch needs --model M (the sim's aerodynamic model)");
     };
@@ -98,7 +100,12 @@ pub fn run(args: &DiagnoseArgs, measured: &Path) -> anyhow::Result<()> {
         format!("model: {}", model_path.display()),
     ];
     inputs.extend(free.iter().map(|f| format!("free: {}", f.root.display())));
-    let dir = crate::outdir::OutDir::begin(&out, "diagnose --measured-branch", args.force)?;
+    let dir = crate::outdir::OutDir::begin(
+        &out,
+        "diagnose --measured-branch",
+        args.force,
+        &args.inputs(),
+    )?;
     let spinner = crate::progress::Spinner::new(
         "diagnose",
         "continuation of every candidate, leave-one-speed-out",
@@ -200,7 +207,7 @@ fn print(d: &BifurcationDiagnosis) {
 /// `diagnose --blind N --branch-level`: the generated benchmark at the bifurcation level.
 pub fn blind(n: usize, seed: u64, out: &Path, force: bool) -> anyhow::Result<()> {
     use diagnose::bifurcation::bench::{run_bench, BranchOutcome, STRONG_SCORE};
-    let dir = crate::outdir::OutDir::begin(out, "diagnose --blind --branch-level", force)?;
+    let dir = crate::outdir::OutDir::begin(out, "diagnose --blind --branch-level", force, &[])?;
     let bar = crate::progress::CountBar::new("branch-level sets", n);
     let done = std::sync::atomic::AtomicUsize::new(0);
     let obs = |o: &BranchOutcome| {

@@ -55,6 +55,19 @@ pub struct BranchArgs {
     pub force: bool,
 }
 
+impl BranchArgs {
+    /// The files these flags name for reading.
+    fn inputs(&self) -> Vec<crate::outdir::Input<'_>> {
+        use crate::outdir::Input;
+        let mut v = vec![
+            Input::new("--structure", &self.structure),
+            Input::new("--model", &self.model),
+        ];
+        v.extend(self.measured.iter().map(|p| Input::new("--measured", p)));
+        v
+    }
+}
+
 /// Parses `a:b` into a checked range.
 ///
 /// # Errors
@@ -91,6 +104,8 @@ fn stop_text(s: &BranchEnd) -> String {
 
 /// Runs `aeroform branch`.
 pub fn run(args: &BranchArgs) -> anyhow::Result<()> {
+    // before anything is computed (`OutDir::begin` checks it again)
+    crate::outdir::refuse_overlap(&args.out, "--out", &args.inputs())?;
     let (u_min, u_max) = parse_range(&args.speeds)?;
     let opts = BranchOptions {
         max_points: args.max_points,
@@ -204,7 +219,7 @@ pub fn run(args: &BranchArgs) -> anyhow::Result<()> {
     .to_value();
     // staged, locked and moved into place as a whole (issue 27, row 6); taken once the
     // branches are computed, so that a refused input never touches the folder
-    let dir = crate::outdir::OutDir::begin(&args.out, "branch", args.force)?;
+    let dir = crate::outdir::OutDir::begin(&args.out, "branch", args.force, &args.inputs())?;
     let staged = dir.path().to_path_buf();
     identify::io::write_atomic(
         &staged.join("branch.csv"),

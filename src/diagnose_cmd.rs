@@ -73,6 +73,28 @@ pub struct DiagnoseArgs {
     pub branch_level: bool,
 }
 
+impl DiagnoseArgs {
+    /// Every file and folder these flags name for reading (the output may not be, contain
+    /// or lie inside one of them: `outdir::refuse_overlap`).
+    pub fn inputs(&self) -> Vec<crate::outdir::Input<'_>> {
+        use crate::outdir::Input;
+        let mut v: Vec<Input<'_>> = self
+            .dataset
+            .iter()
+            .map(|p| Input::new("FORCED", p))
+            .collect();
+        v.extend(self.free.iter().map(|p| Input::new("--free", p)));
+        v.extend(self.model.iter().map(|p| Input::new("--model", p)));
+        v.extend(self.structure.iter().map(|p| Input::new("--structure", p)));
+        v.extend(
+            self.measured_branch
+                .iter()
+                .map(|p| Input::new("--measured-branch", p)),
+        );
+        v
+    }
+}
+
 /// Runs `aeroform diagnose`.
 pub fn run(args: &DiagnoseArgs) -> anyhow::Result<()> {
     // clap's `requires = "blind"` is void when a data set is given: `--blind` conflicts
@@ -126,6 +148,8 @@ pub fn run(args: &DiagnoseArgs) -> anyhow::Result<()> {
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from("out/diagnosis"));
+    // before the inputs are read (`OutDir::begin` checks it again)
+    crate::outdir::refuse_overlap(&out, "--out", &args.inputs())?;
     let free_sets = args
         .free
         .iter()
@@ -164,7 +188,7 @@ pub fn run(args: &DiagnoseArgs) -> anyhow::Result<()> {
         }
         _ => bail!("give a forced data-set folder, --free FREE --model M, or --blind N"),
     };
-    let dir = crate::outdir::OutDir::begin(&out, "diagnose", args.force)?;
+    let dir = crate::outdir::OutDir::begin(&out, "diagnose", args.force, &args.inputs())?;
     let t = std::time::Instant::now();
     let version = crate::version();
     let spinner =
@@ -236,7 +260,7 @@ fn print_diagnosis(d: &Diagnosis, secs: f64) {
 }
 
 fn blind(n: usize, seed: u64, shapes: bool, out: &Path, force: bool) -> anyhow::Result<()> {
-    let dir = crate::outdir::OutDir::begin(out, "diagnose --blind", force)?;
+    let dir = crate::outdir::OutDir::begin(out, "diagnose --blind", force, &[])?;
     let mut opts = BlindOptions::new(n, seed);
     opts.shapes = shapes;
     let bar = CountBar::new("blind", n);
@@ -270,9 +294,9 @@ fn blind_shard(n: usize, seed: u64, shard: &str, out: &Path) -> anyhow::Result<(
     let (i, k) = diagnose::sweep::parse_shard(shard)?;
     let spec = diagnose::sweep::SweepSpec::Blind(diagnose::sweep::BlindSweep { n, seed });
     spec.validate("--blind")?;
-    let _out = crate::outdir::SharedDir::begin(out)?;
-    let part = spec.run_shard(i, k)?;
     let path = out.join(format!("blind.part-{i}-of-{k}.json"));
+    let _out = crate::outdir::SharedDir::begin(out, &[&path], &[])?;
+    let part = spec.run_shard(i, k)?;
     write_json(&path, &part)?;
     crate::ui::say!("shard {i}/{k} of {n} sets; wrote {}", path.display());
     crate::ui::document(&part)

@@ -6,6 +6,8 @@ use std::path::{Path, PathBuf};
 use aeroelastic::documents::{flutter_document, flutter_options, LoadedPair};
 use aeroelastic::flutter::FlutterMethod;
 use anyhow::Context;
+
+use crate::outdir::Input;
 use clap::{Args, ValueEnum};
 
 /// Flags of `aeroform flutter`.
@@ -92,7 +94,15 @@ pub fn run(args: &FlutterArgs) -> anyhow::Result<()> {
         .section
         .flutter(method, &opts)
         .context("flutter analysis")?;
-    let _out = crate::outdir::SharedDir::begin(&args.out)?;
+    let path = args.out.join("flutter.json");
+    let _out = crate::outdir::SharedDir::begin(
+        &args.out,
+        &[&path],
+        &[
+            Input::new("--structure", &args.structure),
+            Input::new("--model", &args.model),
+        ],
+    )?;
     let b = l.section.aero.chord();
     let ensemble = match args.ensemble {
         Some(n) => Some(
@@ -109,7 +119,6 @@ pub fn run(args: &FlutterArgs) -> anyhow::Result<()> {
     );
     doc.ensemble = ensemble.clone();
     let json = doc.to_value();
-    let path = args.out.join("flutter.json");
     identify::io::write_atomic(&path, format!("{json:#}\n").as_bytes())?;
     match fa.flutter {
         Some(f) => crate::ui::say!(

@@ -216,6 +216,15 @@ pub fn run(args: &IdentifyArgs) -> anyhow::Result<Identification> {
         }
     }
 
+    // the files this command writes, checked against its input before it is read
+    let path = args.out.join("identification.json");
+    let mut written = vec![path.as_path()];
+    written.extend(args.timing_json.as_deref());
+    let inputs = [crate::outdir::Input::new("DATASET", &args.dataset)];
+    for w in &written {
+        crate::outdir::refuse_overlap(w, "output file", &inputs)?;
+    }
+
     let t_start = Instant::now();
     let options = ReadOptions {
         flip_lift: args.flip_lift,
@@ -243,7 +252,7 @@ pub fn run(args: &IdentifyArgs) -> anyhow::Result<Identification> {
     }
 
     // every input is read and checked: only now is the output folder created
-    let _out = crate::outdir::SharedDir::begin(&args.out)?;
+    let _out = crate::outdir::SharedDir::begin(&args.out, &written, &inputs)?;
     let t_id = Instant::now();
     let bar = IdentifyBar::new();
     let result =
@@ -269,7 +278,6 @@ pub fn run(args: &IdentifyArgs) -> anyhow::Result<Identification> {
         }
     }
 
-    let path = args.out.join("identification.json");
     result.write(&path)?;
     let total_s = t_start.elapsed().as_secs_f64();
     if let Some(t) = &args.timing_json {

@@ -77,8 +77,15 @@ pub fn run(args: &LcoArgs) -> anyhow::Result<()> {
     let k_iteration = KIteration::default();
     let pert = l.section.perturbation(args.alpha0.to_radians());
     let pert_down = l.section.perturbation(args.alpha0_down.to_radians());
-    let _out = crate::outdir::SharedDir::begin(&args.out)?;
     let path = args.out.join("lco.json");
+    let _out = crate::outdir::SharedDir::begin(
+        &args.out,
+        &[&path],
+        &[
+            crate::outdir::Input::new("--structure", &args.structure),
+            crate::outdir::Input::new("--model", &args.model),
+        ],
+    )?;
     let structure_name = args.structure.display().to_string();
     let model_name = args.model.display().to_string();
     let doc = if let Some(u) = args.speed {

@@ -245,6 +245,89 @@ fn split_out(out: &Path, check_cwd: bool) -> anyhow::Result<(PathBuf, String)> {
     Ok((parent, name))
 }
 
+/// A file or folder a command reads, with the flag or key that named it (for messages).
+#[derive(Debug, Clone, Copy)]
+pub struct Input<'a> {
+    /// The flag, argument or study key that gave the path (`FORCED`, `--free`, `data.dataset`).
+    pub what: &'a str,
+    /// The path as the user gave it.
+    pub path: &'a Path,
+}
+
+impl<'a> Input<'a> {
+    /// An input named by `what`.
+    pub fn new(what: &'a str, path: &'a Path) -> Input<'a> {
+        Input { what, path }
+    }
+}
+
+/// Where `p` is on the file system: absolute, with the symbolic links of its existing part
+/// resolved and the `.` and `..` of the part that does not exist yet applied by name.
+fn real_path(p: &Path) -> Option<PathBuf> {
+    let abs = std::path::absolute(p).ok()?;
+    let mut base = abs.as_path();
+    let mut rest = Vec::new();
+    loop {
+        if let Ok(real) = std::fs::canonicalize(base) {
+            let mut out = real;
+            for c in rest.iter().rev() {
+                match c {
+                    std::path::Component::ParentDir => {
+                        out.pop();
+                    }
+                    std::path::Component::Normal(n) => out.push(n),
+                    _ => {}
+                }
+            }
+            return Some(out);
+        }
+        rest.push(base.components().next_back()?);
+        base = base.parent()?;
+    }
+}
+
+/// The one rule of every writer (issue 39, row 1): no output may be, contain or lie inside
+/// an input. An output folder replaced as a whole (`replaces` true, [`OutDir`]) that is or
+/// contains an input would delete it; an output inside an input folder would change a data
+/// set someone else may be reading. `out_flag` names the output in the message.
+///
+/// # Errors
+/// [`Usage`] naming the output, the input and its flag.
+pub fn refuse_overlap(out: &Path, out_flag: &str, inputs: &[Input<'_>]) -> anyhow::Result<()> {
+    let Some(o) = real_path(out) else {
+        return Ok(());
+    };
+    for input in inputs {
+        let Some(i) = real_path(input.path) else {
+            continue;
+        };
+        let relation = if o == i {
+            "is"
+        } else if i.starts_with(&o) {
+            "contains"
+        } else if o.starts_with(&i) {
+            "lies inside"
+        } else {
+            continue;
+        };
+        return Err(Usage(format!(
+            "{out_flag} {}: {relation} the input {} ({}); an output may not be, contain or lie \
+             inside an input (writing it would replace or change what is read), so give \
+             another {}",
+            out.display(),
+            input.what,
+            input.path.display(),
+            if out_flag == "--out" {
+                "output"
+            } else {
+                "path"
+            }
+        ))
+        .into());
+    }
+    Ok(())
+}
+
 /// The lock `P/.NAME.aeroform-lock` of an output folder, held until dropped.
 pub struct Lock {
     path: PathBuf,
@@ -387,12 +470,22 @@ impl OutDir {
     /// existing folder, and a fresh staging folder holding the incomplete-marker.
     /// `command` is recorded in the completion marker.
     ///
+    /// `inputs` are every file and folder the command reads: `out` may not be, contain or
+    /// lie inside one of them ([`refuse_overlap`]; `--force` does not lift this).
+    ///
     /// # Errors
-    /// [`Usage`] when `out` is `/`, contains the working directory, is a file or a
-    /// symbolic link, or is a non-empty folder without [`COMPLETE_MARKER`] and `force` is
-    /// false; an error naming the folder when it cannot be created or is locked.
-    pub fn begin(out: &Path, command: &str, force: bool) -> anyhow::Result<OutDir> {
+    /// [`Usage`] when `out` is `/`, contains the working directory, is, contains or lies
+    /// inside an input, is a file or a symbolic link, or is a non-empty folder without
+    /// [`COMPLETE_MARKER`] and `force` is false; an error naming the folder when it cannot
+    /// be created or is locked.
+    pub fn begin(
+        out: &Path,
+        command: &str,
+        force: bool,
+        inputs: &[Input<'_>],
+    ) -> anyhow::Result<OutDir> {
         let (parent, name) = split_out(out, true)?;
+        refuse_overlap(out, "--out", inputs)?;
         let created = create_dirs(&parent)
             .map_err(|e| anyhow::anyhow!("cannot create output folder {}: {e}", out.display()))?;
         // a refusal below leaves no folder this command created (the lock, the only
@@ -592,11 +685,18 @@ pub struct SharedDir {
 }
 
 impl SharedDir {
-    /// Prepares `dir`.
+    /// Prepares `dir` for the files `written` (paths inside `dir` or anywhere, e.g.
+    /// `--timing-json`): none of them may be or lie inside one of `inputs`
+    /// ([`refuse_overlap`]); `dir` itself may hold inputs, since only the named files are
+    /// replaced.
     ///
     /// # Errors
-    /// The folder cannot be created (named in the message).
-    pub fn begin(dir: &Path) -> anyhow::Result<SharedDir> {
+    /// [`Usage`] when a written file is or lies inside an input; the folder cannot be
+    /// created (named in the message).
+    pub fn begin(dir: &Path, written: &[&Path], inputs: &[Input<'_>]) -> anyhow::Result<SharedDir> {
+        for w in written {
+            refuse_overlap(w, "output file", inputs)?;
+        }
         let created = create_dirs(dir)
             .map_err(|e| anyhow::anyhow!("cannot create output folder {}: {e}", dir.display()))?;
         let n = remove_temp_files(dir, |pid| pid != std::process::id() && !pid_alive(pid));

@@ -38,7 +38,7 @@ pub fn run(args: &PlotArgs) -> anyhow::Result<()> {
             })
         })
         .unwrap_or_else(|| "plot".to_string());
-    let dir = crate::outdir::OutDir::begin(&args.outdir, &command, true)?;
+    let dir = crate::outdir::OutDir::begin(&args.outdir, &command, true, &[])?;
     copy_tree(&args.outdir, dir.path())
         .with_context(|| format!("copying {} to redraw it", args.outdir.display()))?;
     let staged = dir.path().to_path_buf();

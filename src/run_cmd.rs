@@ -41,7 +41,12 @@ pub fn run(args: &RunArgs) -> anyhow::Result<()> {
         .clone()
         .unwrap_or_else(|| PathBuf::from("out").join(&study.spec.name));
     let t0 = Instant::now();
-    let dir = crate::outdir::OutDir::begin(&out, "run", args.force)?;
+    let study_inputs = study.inputs();
+    let inputs: Vec<_> = study_inputs
+        .iter()
+        .map(|(k, p)| crate::outdir::Input::new(k, p))
+        .collect();
+    let dir = crate::outdir::OutDir::begin(&out, "run", args.force, &inputs)?;
     let mut timings = run_study(&study, dir.path(), &crate::progress::Terminal::new())?;
     let t = Instant::now();
     plots::study_report::render_all(&study, dir.path(), &crate::version())?;

@@ -9,6 +9,7 @@ use clap::Args;
 use diagnose::sweep::{merge, parse_shard, SweepSpec};
 use identify::io::write_atomic;
 
+use crate::outdir::Input;
 use crate::progress::CountBar;
 
 /// Flags of `aeroform sweep`.
@@ -38,12 +39,16 @@ pub struct MergeArgs {
 /// interrupt removes this process's temporary file, and temporary files of dead processes
 /// there are removed first (the kill campaign of tests/campaign.rs found `merge` leaving
 /// `.OUT.PID.tmp` after SIGINT).
-fn write_json(path: &std::path::Path, v: &serde_json::Value) -> anyhow::Result<()> {
+fn write_json(
+    path: &std::path::Path,
+    v: &serde_json::Value,
+    inputs: &[Input<'_>],
+) -> anyhow::Result<()> {
     let dir = path
         .parent()
         .filter(|d| !d.as_os_str().is_empty())
         .unwrap_or(std::path::Path::new("."));
-    let _shared = crate::outdir::SharedDir::begin(dir)?;
+    let _shared = crate::outdir::SharedDir::begin(dir, &[path], inputs)?;
     write_atomic(path, format!("{v:#}\n").as_bytes())?;
     Ok(())
 }
@@ -51,23 +56,24 @@ fn write_json(path: &std::path::Path, v: &serde_json::Value) -> anyhow::Result<(
 /// Runs `aeroform sweep`.
 pub fn run(args: &SweepArgs) -> anyhow::Result<()> {
     let spec = SweepSpec::read(&args.spec)?;
-    let (doc, default_out) = match &args.shard {
-        Some(s) => {
-            let (i, n) = parse_shard(s)?;
-            (spec.run_shard(i, n)?, format!("sweep.part-{i}-of-{n}.json"))
-        }
+    let shard = args.shard.as_deref().map(parse_shard).transpose()?;
+    let out = args.out.clone().unwrap_or_else(|| match shard {
+        Some((i, n)) => PathBuf::from(format!("sweep.part-{i}-of-{n}.json")),
+        None => PathBuf::from("sweep.json"),
+    });
+    let inputs = [Input::new("SPEC", &args.spec)];
+    // refused before the (long) run, not after it
+    crate::outdir::refuse_overlap(&out, "--out", &inputs)?;
+    let doc = match shard {
+        Some((i, n)) => spec.run_shard(i, n)?,
         None => {
             let bar = CountBar::new("sweep", spec.n_items());
             let doc = spec.run_local(&|i| bar.tick(format!("item {i}")));
             bar.finish();
-            (doc?, "sweep.json".to_string())
+            doc?
         }
     };
-    let out = args
-        .out
-        .clone()
-        .unwrap_or_else(|| PathBuf::from(default_out));
-    write_json(&out, &doc)?;
+    write_json(&out, &doc, &inputs)?;
     crate::ui::say!("{} items; wrote {}", spec.n_items(), out.display());
     crate::ui::document(&doc)
 }
@@ -99,7 +105,8 @@ pub fn merge_run(args: &MergeArgs) -> anyhow::Result<()> {
         })
         .collect::<anyhow::Result<Vec<_>>>()?;
     let doc = merge(&parts)?;
-    write_json(&args.out, &doc)?;
+    let inputs: Vec<_> = args.parts.iter().map(|p| Input::new("PART", p)).collect();
+    write_json(&args.out, &doc, &inputs)?;
     crate::ui::say!("merged {} parts; wrote {}", parts.len(), args.out.display());
     crate::ui::document(&doc)
 }

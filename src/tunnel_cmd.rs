@@ -8,7 +8,7 @@ use anyhow::Context;
 use clap::{Args, Subcommand};
 
 use crate::flutter_cmd::load;
-use crate::outdir::OutDir;
+use crate::outdir::{Input, OutDir};
 use crate::progress::CountBar;
 use aeroform::limits::{abs_at_most, parse_speeds, MAX_PITCH_DEG};
 
@@ -138,7 +138,7 @@ fn blind(a: &BlindArgs) -> anyhow::Result<()> {
         Form::Primary
     };
     let set = generate(effect, a.strength, form, a.seed, &BlindScenario::default())?;
-    let dir = OutDir::begin(&a.out, "tunnel blind", a.force)?;
+    let dir = OutDir::begin(&a.out, "tunnel blind", a.force, &[])?;
     write_blind(dir.path(), &set)?;
     dir.commit()?;
     crate::ui::say!(
@@ -181,7 +181,12 @@ fn forced(a: &ForcedArgs) -> anyhow::Result<()> {
     let m = LoadedModel::load(&a.model, a.chord).context("model file")?;
     opts.duration = a.duration;
     opts.section.chord = m.model.chord();
-    let dir = OutDir::begin(&a.out, "tunnel forced", a.force)?;
+    let dir = OutDir::begin(
+        &a.out,
+        "tunnel forced",
+        a.force,
+        &[Input::new("--model", &a.model)],
+    )?;
     let bar = CountBar::new("cases", cases.len());
     let obs = |p: TunnelProgress| bar.tick(p.id);
     let r = tunnel::forced_dataset(m.model.as_ref(), &cases, &opts, &obs);
@@ -219,7 +224,15 @@ fn free(a: &FreeArgs) -> anyhow::Result<()> {
     let r = tunnel::free_dataset(&l.section, &speeds, &opts, &obs);
     bar.finish();
     let (manifest, records, runs) = r.context("virtual wind tunnel (free)")?;
-    let dir = OutDir::begin(&a.out, "tunnel free", a.force)?;
+    let dir = OutDir::begin(
+        &a.out,
+        "tunnel free",
+        a.force,
+        &[
+            Input::new("--structure", &a.structure),
+            Input::new("--model", &a.model),
+        ],
+    )?;
     tunnel::write(dir.path(), &manifest, &records)?;
     dir.commit()?;
     for run in &runs {

@@ -99,6 +99,8 @@ fn no_hopf_point_in_range_is_a_clear_error() {
 #[test]
 fn sharp_freeplay_and_bad_measured_table_are_refused_by_name() {
     let dir = tmp();
+    // the inputs live in `dir`, the output beside them (an output may not contain an input)
+    let out = dir.path().join("out");
     let text = std::fs::read_to_string(scenario("bristol-spring1.structure.toml")).unwrap();
     let st = dir.path().join("freeplay.structure.toml");
     std::fs::write(&st, format!("pitch_freeplay = 0.01\n{text}")).unwrap();
@@ -111,7 +113,7 @@ fn sharp_freeplay_and_bad_measured_table_are_refused_by_name() {
         "--speeds",
         "12:20",
         "--out",
-        &s(dir.path()),
+        &s(&out),
     ]);
     assert!(!ok);
     assert!(stderr.contains("structure.pitch_freeplay"), "{stderr}");
@@ -132,7 +134,7 @@ fn sharp_freeplay_and_bad_measured_table_are_refused_by_name() {
         "--measured",
         &s(&bad),
         "--out",
-        &s(dir.path()),
+        &s(&out),
     ]);
     assert!(!ok);
     assert!(

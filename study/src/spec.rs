@@ -771,6 +771,29 @@ impl Study {
         Study::parse(&text, path, &base)
     }
 
+    /// Every file and folder the study reads, with the key that names it (`study` for the
+    /// study file itself, unless embedded; `data.dataset`, `data.virtual.model`,
+    /// `branch.measured`), relative paths resolved against [`Study::base`]. A run's output
+    /// folder may not be, contain or lie inside any of them (issue 39, row 1).
+    pub fn inputs(&self) -> Vec<(&'static str, PathBuf)> {
+        let mut v = Vec::new();
+        if self.path.exists() {
+            v.push(("study", self.path.clone()));
+        }
+        let d = self.spec.data.as_ref();
+        if let Some(p) = d.and_then(|d| d.dataset.as_ref()) {
+            v.push(("data.dataset", self.base.join(p)));
+        }
+        let virtual_model = d.and_then(|d| d.virtual_tunnel.as_ref()?.model.as_ref());
+        if let Some(p) = virtual_model {
+            v.push(("data.virtual.model", self.base.join(p)));
+        }
+        if let Some(p) = self.spec.branch.as_ref().and_then(|b| b.measured.as_ref()) {
+            v.push(("branch.measured", self.base.join(p)));
+        }
+        v
+    }
+
     /// The embedded quickstart study.
     ///
     /// # Errors
