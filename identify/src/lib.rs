@@ -19,6 +19,7 @@ pub mod eq19;
 pub mod error;
 pub mod identifiability;
 pub mod io;
+pub mod lag;
 pub mod library;
 pub mod limits;
 pub mod metrics;

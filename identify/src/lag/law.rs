@@ -1,0 +1,309 @@
+//! The lag law: the Eq. 19 idea with one internal separation state (Goman–Khrabrov / Øye
+//! family), in nondimensional form so that identification ([`super`]) and flight
+//! (`aeroelastic::aero::LagAero`) evaluate the same numbers.
+//!
+//! Variables (DESIGN.md §2, Scanlan signs): α \[rad\] nose-up, q = Bα̇/U, ḣ/U (h down),
+//! semichord b = B/2, convective time s = tU/b.
+//!
+//! - Effective angle α_e = α + ḣ/U (a downward heave velocity raises the angle of attack).
+//! - Input of the lag equation u = α_e − τ₂·(b α̇/U) = α_e − τ₂·q/2: the separation responds
+//!   to the angle τ₂ convective times earlier (pitch rate only; the heave acceleration's
+//!   share b ḧ/U² is left out, forced records do not carry it cleanly).
+//! - Separation state x ∈ [0, 1] (1 = attached): τ₁ dx/ds + x = x₀(u), i.e.
+//!   ẋ = (U/(b τ₁))·(x₀(u) − x) in physical time.
+//! - Static separation curve x₀(α) = 1 / (1 + |α/α*|^{2m}) (α* the angle of half
+//!   separation, m ≥ 1 its sharpness): x₀(0) = 1 with zero slope, so the law's
+//!   linearisation about α = 0 is attached flow.
+//! - Forces: C_L (down) and C_M (nose-up about the elastic axis) are each a linear
+//!   combination of the columns [`LagColumn`]: a constant, α_e, the Kirchhoff lift
+//!   α_e·((1 + √x)/2)², q, the separation deficit 1 − x and the Kirchhoff lift times it
+//!   (centre-of-pressure travel). The thin-aerofoil apparent mass (acceleration terms) is not
+//!   part of the law: flight adds it (`AeroModel::apparent_mass`).
+
+use serde::{Deserialize, Serialize};
+
+use crate::{Error, Result};
+
+/// A column of the lag law's force library, evaluated at (α_e, q, x).
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    PartialEq,
+    Eq,
+    Hash,
+    PartialOrd,
+    Ord,
+    Serialize,
+    Deserialize,
+    schemars::JsonSchema,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum LagColumn {
+    /// 1 (a constant: camber, offsets).
+    One,
+    /// α_e = α + ḣ/U.
+    AlphaE,
+    /// Kirchhoff circulatory lift shape α_e·((1 + √x)/2)².
+    Kirchhoff,
+    /// q = Bα̇/U (pitch-rate lift and damping).
+    Q,
+    /// Separation deficit 1 − x.
+    Sep,
+    /// Kirchhoff lift times the separation deficit, α_e·((1 + √x)/2)²·(1 − x): the moment of
+    /// a centre of pressure that travels aft with separation.
+    KirchhoffSep,
+}
+
+impl LagColumn {
+    /// Every column, in library order.
+    pub const ALL: [LagColumn; 6] = [
+        LagColumn::One,
+        LagColumn::AlphaE,
+        LagColumn::Kirchhoff,
+        LagColumn::Q,
+        LagColumn::Sep,
+        LagColumn::KirchhoffSep,
+    ];
+
+    /// The column's display name (`α_e·κ(x)` …).
+    pub fn label(self) -> &'static str {
+        match self {
+            LagColumn::One => "1",
+            LagColumn::AlphaE => "α_e",
+            LagColumn::Kirchhoff => "α_e·κ(x)",
+            LagColumn::Q => "Bα̇/U",
+            LagColumn::Sep => "1−x",
+            LagColumn::KirchhoffSep => "α_e·κ(x)·(1−x)",
+        }
+    }
+
+    /// The column's value at effective angle `alpha_e` \[rad\], q = Bα̇/U and separation
+    /// state `x` (clamped to \[0, 1\] inside the square root).
+    #[inline]
+    pub fn value(self, alpha_e: f64, q: f64, x: f64) -> f64 {
+        match self {
+            LagColumn::One => 1.0,
+            LagColumn::AlphaE => alpha_e,
+            LagColumn::Kirchhoff => alpha_e * kirchhoff(x),
+            LagColumn::Q => q,
+            LagColumn::Sep => 1.0 - x,
+            LagColumn::KirchhoffSep => alpha_e * kirchhoff(x) * (1.0 - x),
+        }
+    }
+
+    /// ∂(value)/∂x at (α_e, q, x) (for linearisations and output-error gradients).
+    #[inline]
+    pub fn d_dx(self, alpha_e: f64, _q: f64, x: f64) -> f64 {
+        match self {
+            LagColumn::One | LagColumn::AlphaE | LagColumn::Q => 0.0,
+            LagColumn::Kirchhoff => alpha_e * kirchhoff_dx(x),
+            LagColumn::Sep => -1.0,
+            LagColumn::KirchhoffSep => alpha_e * (kirchhoff_dx(x) * (1.0 - x) - kirchhoff(x)),
+        }
+    }
+}
+
+/// Kirchhoff factor κ(x) = ((1 + √x)/2)², x clamped to \[0, 1\].
+#[inline]
+pub fn kirchhoff(x: f64) -> f64 {
+    let s = x.clamp(0.0, 1.0).sqrt();
+    0.25 * (1.0 + s) * (1.0 + s)
+}
+
+/// dκ/dx = (1 + √x)/(4√x), with √x floored at 1e-3 (finite at full separation).
+#[inline]
+pub fn kirchhoff_dx(x: f64) -> f64 {
+    let s = x.clamp(0.0, 1.0).sqrt().max(1e-3);
+    (1.0 + s) / (4.0 * s)
+}
+
+/// One channel of the law: the columns it uses and their coefficients.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct LagChannel {
+    /// (column, coefficient) pairs; a column appears at most once.
+    pub terms: Vec<(LagColumn, f64)>,
+}
+
+impl LagChannel {
+    /// The channel's coefficient (C_L or C_M) at (α_e, q, x).
+    #[inline]
+    pub fn value(&self, alpha_e: f64, q: f64, x: f64) -> f64 {
+        self.terms
+            .iter()
+            .map(|(c, k)| k * c.value(alpha_e, q, x))
+            .sum()
+    }
+
+    /// ∂(value)/∂x.
+    #[inline]
+    pub fn d_dx(&self, alpha_e: f64, q: f64, x: f64) -> f64 {
+        self.terms
+            .iter()
+            .map(|(c, k)| k * c.d_dx(alpha_e, q, x))
+            .sum()
+    }
+}
+
+/// The range of the forced data a law was fitted on (for extrapolation warnings).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct FittedRange {
+    /// Smallest and largest effective angle α_e seen \[rad\].
+    pub alpha_e: [f64; 2],
+    /// Smallest and largest reduced frequency K = Bω/U of the cases.
+    pub k: [f64; 2],
+}
+
+/// The lag law (module docs): separation dynamics and the two force channels.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct LagLaw {
+    /// Separation lag τ₁ \[convective times b/U\], in (0, 100].
+    pub tau1: f64,
+    /// Separation input lead τ₂ \[convective times b/U\], in \[0, 100\].
+    pub tau2: f64,
+    /// Angle of half separation α* \[rad\], in (0, π/2).
+    pub alpha_star: f64,
+    /// Sharpness m ≥ 1 of the static separation curve.
+    pub sharpness: f64,
+    /// Lift coefficient C_L (positive down, Scanlan).
+    pub lift: LagChannel,
+    /// Moment coefficient C_M (positive nose-up, about the elastic axis of the records).
+    pub moment: LagChannel,
+    /// Range of the data the law was fitted on.
+    pub range: FittedRange,
+}
+
+impl LagLaw {
+    /// Checks the physical bounds of every parameter.
+    ///
+    /// # Errors
+    /// [`Error::InvalidOption`] naming the parameter and its bound.
+    pub fn check(&self) -> Result<()> {
+        let bad = |name: &str, v: f64, bound: &str| {
+            Err(Error::InvalidOption {
+                name: format!("lag law {name}"),
+                message: format!("{v}: must be {bound}"),
+            })
+        };
+        if !(self.tau1 > 0.0 && self.tau1 <= 100.0) {
+            return bad("tau1", self.tau1, "in (0, 100] convective times");
+        }
+        if !(self.tau2 >= 0.0 && self.tau2 <= 100.0) {
+            return bad("tau2", self.tau2, "in [0, 100] convective times");
+        }
+        if !(self.alpha_star > 0.0 && self.alpha_star < std::f64::consts::FRAC_PI_2) {
+            return bad("alpha_star", self.alpha_star, "in (0, π/2) rad");
+        }
+        if !(self.sharpness >= 1.0 && self.sharpness <= 50.0) {
+            return bad("sharpness", self.sharpness, "in [1, 50]");
+        }
+        for (name, ch) in [("lift", &self.lift), ("moment", &self.moment)] {
+            for (c, k) in &ch.terms {
+                if !k.is_finite() {
+                    return bad(
+                        &format!("{name} coefficient of {}", c.label()),
+                        *k,
+                        "finite",
+                    );
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Static separation curve x₀(α) = 1/(1 + |α/α*|^{2m}) ∈ (0, 1].
+    #[inline]
+    pub fn x_static(&self, alpha: f64) -> f64 {
+        1.0 / (1.0 + (alpha / self.alpha_star).abs().powf(2.0 * self.sharpness))
+    }
+
+    /// Effective angle α_e = α + ḣ/U \[rad\].
+    #[inline]
+    pub fn alpha_e(alpha: f64, h_dot_over_u: f64) -> f64 {
+        alpha + h_dot_over_u
+    }
+
+    /// Input of the lag equation u = α_e − τ₂·q/2 \[rad\] (q = Bα̇/U).
+    #[inline]
+    pub fn input(&self, alpha_e: f64, q: f64) -> f64 {
+        alpha_e - 0.5 * self.tau2 * q
+    }
+
+    /// dx/ds in convective time s = tU/b: (x₀(u) − x)/τ₁. Multiply by 2U/B for d/dt.
+    #[inline]
+    pub fn x_rate(&self, alpha_e: f64, q: f64, x: f64) -> f64 {
+        (self.x_static(self.input(alpha_e, q)) - x) / self.tau1
+    }
+
+    /// (C_L, C_M) at (α_e, q, x).
+    #[inline]
+    pub fn coefficients(&self, alpha_e: f64, q: f64, x: f64) -> [f64; 2] {
+        [
+            self.lift.value(alpha_e, q, x),
+            self.moment.value(alpha_e, q, x),
+        ]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn law() -> LagLaw {
+        LagLaw {
+            tau1: 3.0,
+            tau2: 1.0,
+            alpha_star: 0.25,
+            sharpness: 4.0,
+            lift: LagChannel {
+                terms: vec![(LagColumn::Kirchhoff, -6.0)],
+            },
+            moment: LagChannel {
+                terms: vec![(LagColumn::KirchhoffSep, -1.5), (LagColumn::Q, -0.5)],
+            },
+            range: FittedRange {
+                alpha_e: [0.0, 0.5],
+                k: [0.05, 0.2],
+            },
+        }
+    }
+
+    #[test]
+    fn static_curve_is_attached_at_zero_and_half_at_alpha_star() {
+        let l = law();
+        assert_eq!(l.x_static(0.0), 1.0);
+        assert!((l.x_static(0.25) - 0.5).abs() < 1e-12);
+        assert!((l.x_static(-0.25) - 0.5).abs() < 1e-12);
+        assert!(l.x_static(0.6) < 0.01);
+        assert!(l.check().is_ok());
+    }
+
+    #[test]
+    fn kirchhoff_is_one_attached_and_a_quarter_separated() {
+        assert_eq!(kirchhoff(1.0), 1.0);
+        assert_eq!(kirchhoff(0.0), 0.25);
+        for &x in &[0.1, 0.5, 0.9] {
+            let d = (kirchhoff(x + 1e-6) - kirchhoff(x - 1e-6)) / 2e-6;
+            assert!((d - kirchhoff_dx(x)).abs() < 1e-6, "{x}: {d}");
+        }
+    }
+
+    #[test]
+    fn column_derivatives_match_differences() {
+        for c in LagColumn::ALL {
+            let (a, q, x) = (0.3, 0.05, 0.4);
+            let d = (c.value(a, q, x + 1e-6) - c.value(a, q, x - 1e-6)) / 2e-6;
+            assert!((d - c.d_dx(a, q, x)).abs() < 1e-6, "{c:?}");
+        }
+    }
+
+    #[test]
+    fn bounds_are_checked_by_name() {
+        let mut l = law();
+        l.tau1 = -1.0;
+        assert!(l.check().unwrap_err().to_string().contains("tau1"));
+        let mut l = law();
+        l.sharpness = 0.5;
+        assert!(l.check().unwrap_err().to_string().contains("sharpness"));
+    }
+}
