@@ -245,6 +245,59 @@ impl LagLaw {
     }
 }
 
+/// Format tag of a lag-law document (`lag_law.json`).
+pub const LAG_LAW_FORMAT: &str = "aeroform-lag-law/1";
+
+/// The document `identify --law lag` writes (`lag_law.json`) and the model readers of
+/// `flutter`, `lco`, `branch` and `tunnel` accept: the law and what it is dimensional with.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct LagLawDocument {
+    /// Always [`LAG_LAW_FORMAT`].
+    pub format: String,
+    /// Name of the data set the law was fitted on.
+    pub dataset: String,
+    /// Chord B \[m\] of the records (the law itself is nondimensional).
+    pub chord: f64,
+    /// The fitted law.
+    pub law: LagLaw,
+    /// The fit's report (per-case R², parameter intervals and correlations, held-out
+    /// comparison), as written by the identification; readers of the law ignore it.
+    #[serde(default)]
+    pub report: serde_json::Value,
+}
+
+impl LagLawDocument {
+    /// Parses and checks a lag-law document.
+    ///
+    /// # Errors
+    /// [`Error::Json`] for text that is not the document, a wrong `format` or a non-positive chord; the law's bounds
+    /// ([`LagLaw::check`]).
+    pub fn from_json(text: &str, path: &std::path::Path) -> Result<LagLawDocument> {
+        let doc: LagLawDocument = serde_json::from_str(text).map_err(|e| Error::Json {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        })?;
+        let bad = |field: &str, message: String| Error::Json {
+            path: path.to_path_buf(),
+            message: format!("field `{field}`: {message}"),
+        };
+        if doc.format != LAG_LAW_FORMAT {
+            return Err(bad(
+                "format",
+                format!("{:?}, expected {LAG_LAW_FORMAT:?}", doc.format),
+            ));
+        }
+        if !(doc.chord > 0.0 && doc.chord.is_finite()) {
+            return Err(bad(
+                "chord",
+                format!("{} must be a positive length [m]", doc.chord),
+            ));
+        }
+        doc.law.check()?;
+        Ok(doc)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

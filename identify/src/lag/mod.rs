@@ -3,4 +3,4 @@
 
 pub mod law;
 
-pub use law::{FittedRange, LagChannel, LagColumn, LagLaw};
+pub use law::{FittedRange, LagChannel, LagColumn, LagLaw, LagLawDocument, LAG_LAW_FORMAT};
