@@ -12,15 +12,18 @@
 //! Implementations: [`QuasiSteady`] (steady or quasi-steady thin aerofoil),
 //! [`TheodorsenAero`] (exact C(k) / Jones–Wagner lag states), [`DerivativeTable`]
 //! (Scanlan H*, A* tables / Roger rational-function approximation), [`DynamicStallAero`]
-//! (Beddoes–Leishman-type dynamic stall of a thin plate) and [`NonlinearAero`]
+//! (Beddoes–Leishman-type dynamic stall of a thin plate), [`LagAero`] (the identified lag
+//! law of `identify::lag`: one separation state, Kirchhoff lift) and [`NonlinearAero`]
 //! (any model plus polynomial terms in α, Bα̇/U, h/B, ḣ/U — the Eq. 19 N* terms).
 
+mod lag;
 mod nonlinear;
 mod quasi_steady;
 mod stall;
 mod table;
 mod unsteady;
 
+pub use lag::LagAero;
 pub use nonlinear::{channel_name, term_name, Channel, Coefficient, NonlinearAero, NonlinearTerm};
 pub use quasi_steady::{QuasiSteady, QuasiSteadyKind};
 pub use stall::DynamicStallAero;
