@@ -127,6 +127,31 @@ pub enum Error {
         /// What is wrong (serde message with line and column).
         message: String,
     },
+    /// A fitted lag law is refused: a constant at an open bound of its physical range, or
+    /// a state outside \[0, 1\].
+    #[error("lag law refused: {parameter} = {value}: {reason}")]
+    Unphysical {
+        /// Parameter or quantity (`tau1 [b/U]`, `x` …).
+        parameter: String,
+        /// Its value.
+        value: f64,
+        /// Why it is refused.
+        reason: String,
+    },
+    /// A prediction asked outside the range of the data a law was fitted on.
+    #[error("case `{case}`: {quantity} {value} is outside the range [{low}, {high}] the law was fitted on")]
+    OutsideFittedRange {
+        /// Case id.
+        case: String,
+        /// The quantity and its unit (`mean angle [deg]` …).
+        quantity: String,
+        /// The case's value.
+        value: f64,
+        /// Lower end of the fitted range.
+        low: f64,
+        /// Upper end of the fitted range.
+        high: f64,
+    },
 }
 
 impl Error {

@@ -1,6 +1,17 @@
 //! A force law with memory: identification of the lag law ([`law`]) from forced-motion
-//! records (issue 41).
+//! records (issue 41): [`series`] (a case in the law's variables, its separation state at
+//! the periodic steady state), [`fit`] (variable projection: output error on the law's
+//! nonlinear constants, least squares and δ-path selection for the force columns),
+//! [`holdout`] (held-out validation against the memoryless law) and [`document`] (the
+//! `lag_law.json` document of a fit).
 
+pub mod document;
+pub mod fit;
+pub mod holdout;
 pub mod law;
+pub mod series;
 
+pub use fit::{fit, predict, LagFit, LagFitOptions, LagPrediction, LagReport};
+pub use holdout::{compare, held_out, HeldOutReport, HoldOut, MemorylessLaw};
 pub use law::{FittedRange, LagChannel, LagColumn, LagLaw, LagLawDocument, LAG_LAW_FORMAT};
+pub use series::LagSeries;

@@ -1,0 +1,1032 @@
+//! Identification of the lag law ([`super::law`]) from forced-motion records.
+//!
+//! Variable projection: the nonlinear parameters θ = (τ₁, τ₂, α*, m) set the separation
+//! state x(t) of every case at its periodic steady state ([`super::series`]); given θ, the
+//! force coefficients are linear least squares on the columns ([`LagColumn`]) — the lift on
+//! a fixed support (default 1, α_e·κ(x), Bα̇/U), the moment on a support selected sparsely
+//! from all six columns by the δ path of [`crate::regress::path`] (STLSQ with the
+//! scale-free contribution threshold, the sparsest support whose loss 1 − R² is within the
+//! path's limit of the full fit).
+//!
+//! 1. Initial values from the data ([`initial_guess`]): the attached slope C_Lα from the
+//!    samples with |α_e| ≤ 0.12 rad (−2π, lift down, when there are too few or the slope is
+//!    implausible); the hidden state from the Kirchhoff relation κ(x) = C_L/(C_Lα α_e)
+//!    clamped to \[¼, 1\], x = (2√κ − 1)²; (α*, m) on a grid minimising Σ(x − x₀(α_e))²;
+//!    (τ₁, τ₂) by linear least squares of the lag equation
+//!    x − x₀(α_e) = −τ₁ dx/ds − τ₂ (q/2) x₀′(α_e).
+//! 2. Output error: Levenberg–Marquardt on θ (forward-difference Jacobian of the projected
+//!    residual, box bounds by clamping) minimising
+//!    Σ r_L²/SS_L + Σ r_M²/SS_M = (1 − R²_L) + (1 − R²_M) over all training samples,
+//!    first with the full moment support, then again on the selected one.
+//! 3. Report ([`LagReport`]): per-case R², θ with units and Gauss–Newton standard errors and
+//!    correlations from (JᵀJ)⁻¹ at the optimum.
+
+use faer::Mat;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::numerics::qr::ThinQr;
+use crate::numerics::{cholesky_solve, PivotFloor};
+use crate::record::NondimCase;
+use crate::regress::path::{stlsq_path, PathOptions};
+use crate::regress::{CaseFactor, CaseProblem, Measure, Stlsq};
+use crate::{Error, Result};
+
+use super::law::{FittedRange, LagChannel, LagColumn, LagLaw};
+use super::series::LagSeries;
+
+/// Bounds of θ = (τ₁ \[b/U\], τ₂ \[b/U\], α* \[rad\], m): τ₁ ∈ (0.05, 100], τ₂ ∈ \[0, 100\],
+/// α* ∈ (0.02, 1.2), m ∈ \[1, 20\]. A fit ending on an open bound is refused.
+pub const BOUNDS: [(f64, f64); 4] = [(0.05, 100.0), (0.0, 100.0), (0.02, 1.2), (1.0, 20.0)];
+
+/// Names, symbols and units of θ.
+pub const PARAMETERS: [(&str, &str, &str); 4] = [
+    ("tau1", "τ₁", "b/U (convective times)"),
+    ("tau2", "τ₂", "b/U (convective times)"),
+    ("alpha_star", "α*", "rad"),
+    ("sharpness", "m", "1"),
+];
+
+/// |corr(τ₁, τ₂)| above which the report says the data cannot separate the two lags.
+pub const COLLINEAR_CORRELATION: f64 = 0.9;
+
+/// Options of [`fit`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct LagFitOptions {
+    /// Lift support (default 1, α_e·κ(x), Bα̇/U).
+    pub lift_columns: Vec<LagColumn>,
+    /// Candidate moment columns of the sparse selection (default all six).
+    pub moment_columns: Vec<LagColumn>,
+    /// Levenberg–Marquardt iterations per stage.
+    pub max_iter: usize,
+    /// δ path of the moment selection (contribution measure).
+    pub path: PathOptions,
+}
+
+impl Default for LagFitOptions {
+    fn default() -> Self {
+        LagFitOptions {
+            lift_columns: vec![LagColumn::One, LagColumn::Kirchhoff, LagColumn::Q],
+            moment_columns: LagColumn::ALL.to_vec(),
+            max_iter: 40,
+            path: PathOptions::for_measure(Measure::Contribution),
+        }
+    }
+}
+
+impl LagFitOptions {
+    /// Checks the options.
+    ///
+    /// # Errors
+    /// [`Error::InvalidOption`] for an empty or repeated column list, `max_iter` = 0 or bad
+    /// path options.
+    pub fn validate(&self) -> Result<()> {
+        for (name, cols) in [
+            ("lift_columns", &self.lift_columns),
+            ("moment_columns", &self.moment_columns),
+        ] {
+            let mut c = cols.clone();
+            c.sort();
+            c.dedup();
+            if cols.is_empty() || c.len() != cols.len() {
+                return Err(Error::InvalidOption {
+                    name: name.into(),
+                    message: "must list at least one column, each once".into(),
+                });
+            }
+        }
+        if self.max_iter == 0 {
+            return Err(Error::InvalidOption {
+                name: "max_iter".into(),
+                message: "must be ≥ 1".into(),
+            });
+        }
+        self.path.validate()
+    }
+}
+
+/// One parameter of θ in the report.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct LagParameter {
+    /// Name (`tau1`, `tau2`, `alpha_star`, `sharpness`).
+    pub name: String,
+    /// Symbol (τ₁ …).
+    pub symbol: String,
+    /// Value.
+    pub value: f64,
+    /// Unit.
+    pub unit: String,
+    /// Gauss–Newton standard error s·√((JᵀJ)⁻¹)ᵢᵢ (white-residual assumption: optimistic
+    /// for correlated residuals); `None` when JᵀJ is singular.
+    pub standard_error: Option<f64>,
+}
+
+/// Score of one case under a lag law.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct LagCaseScore {
+    /// Case id.
+    pub id: String,
+    /// Reduced frequency K = Bω/U.
+    pub k: f64,
+    /// Mean angle \[deg\].
+    pub mean_deg: f64,
+    /// Pitch amplitude (half peak-to-peak) \[deg\].
+    pub amplitude_deg: f64,
+    /// Whether the periodic steady state was used (else a settled start).
+    pub periodic: bool,
+    /// Samples scored (after any settling).
+    pub samples: usize,
+    /// R² of C_L.
+    pub r2_lift: f64,
+    /// R² of C_M.
+    pub r2_moment: f64,
+}
+
+/// The moment support selection.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct MomentSelection {
+    /// Candidate columns.
+    pub candidates: Vec<LagColumn>,
+    /// Selected columns.
+    pub selected: Vec<LagColumn>,
+    /// Loss 1 − R² of the full support.
+    pub loss_full: f64,
+    /// Loss 1 − R² of the selected support.
+    pub loss_selected: f64,
+    /// Loss limit of the path.
+    pub limit: f64,
+}
+
+/// What [`fit`] reports beside the law.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct LagReport {
+    /// θ with units and standard errors.
+    pub parameters: Vec<LagParameter>,
+    /// Correlation matrix of θ (order of `parameters`) from (JᵀJ)⁻¹; `None` if singular.
+    pub correlation: Option<[[f64; 4]; 4]>,
+    /// corr(τ₁, τ₂).
+    pub tau_correlation: Option<f64>,
+    /// |corr(τ₁, τ₂)| > [`COLLINEAR_CORRELATION`]: the data fix little more than a
+    /// combination of the two lags (typical at low K).
+    pub tau_collinear: bool,
+    /// Per training case.
+    pub cases: Vec<LagCaseScore>,
+    /// Moment support selection.
+    pub moment_selection: MomentSelection,
+    /// Initial θ (from the data, before output error).
+    pub initial: [f64; 4],
+    /// Final objective (1 − R²_L) + (1 − R²_M) over all training samples.
+    pub objective: f64,
+    /// Levenberg–Marquardt iterations (both stages).
+    pub iterations: usize,
+    /// Held-out comparison, when one was asked for.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub held_out: Option<super::holdout::HeldOutReport>,
+}
+
+/// A fitted lag law and its report.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LagFit {
+    /// The law.
+    pub law: LagLaw,
+    /// The report.
+    pub report: LagReport,
+}
+
+/// The law with θ and empty channels (the separation dynamics only).
+pub(crate) fn law_of(theta: [f64; 4]) -> LagLaw {
+    LagLaw {
+        tau1: theta[0],
+        tau2: theta[1],
+        alpha_star: theta[2],
+        sharpness: theta[3],
+        lift: LagChannel { terms: Vec::new() },
+        moment: LagChannel { terms: Vec::new() },
+        range: FittedRange {
+            alpha_e: [0.0, 0.0],
+            k: [0.0, 0.0],
+        },
+    }
+}
+
+fn clamp_theta(t: [f64; 4]) -> [f64; 4] {
+    let mut o = t;
+    for (v, (lo, hi)) in o.iter_mut().zip(BOUNDS) {
+        *v = v.clamp(lo, hi);
+    }
+    o
+}
+
+/// The output-error problem of a set of cases.
+struct Problem<'a> {
+    series: &'a [LagSeries],
+    lift: Vec<LagColumn>,
+    moment: Vec<LagColumn>,
+}
+
+/// One evaluation of the projected problem at θ.
+struct Eval {
+    cost: f64,
+    residual: Vec<f64>,
+    lift: Vec<f64>,
+    moment: Vec<f64>,
+    xs: Vec<Vec<f64>>,
+    starts: Vec<usize>,
+    ss: [f64; 2],
+}
+
+fn ss_about_mean(y: &[f64]) -> f64 {
+    if y.is_empty() {
+        return 0.0;
+    }
+    let m = y.iter().sum::<f64>() / y.len() as f64;
+    y.iter().map(|v| (v - m) * (v - m)).sum()
+}
+
+impl Problem<'_> {
+    /// Separation states of every case (parallel, in case order).
+    fn states(&self, theta: [f64; 4]) -> Result<(Vec<Vec<f64>>, Vec<usize>)> {
+        let law = law_of(theta);
+        let out: Vec<Result<(Vec<f64>, usize)>> = self
+            .series
+            .par_iter()
+            .map(|s| {
+                let mut x = Vec::new();
+                let start = s.simulate(&law, &mut x)?;
+                Ok((x, start))
+            })
+            .collect();
+        let mut xs = Vec::with_capacity(out.len());
+        let mut starts = Vec::with_capacity(out.len());
+        for r in out {
+            let (x, s) = r?;
+            xs.push(x);
+            starts.push(s);
+        }
+        Ok((xs, starts))
+    }
+
+    /// Stacked columns and target of one channel over the scored samples.
+    fn stack(
+        &self,
+        cols: &[LagColumn],
+        xs: &[Vec<f64>],
+        starts: &[usize],
+        lift: bool,
+    ) -> (Vec<Vec<f64>>, Vec<f64>) {
+        let total: usize = self
+            .series
+            .iter()
+            .zip(starts)
+            .map(|(s, &st)| s.len() - st.min(s.len()))
+            .sum();
+        let mut c: Vec<Vec<f64>> = cols.iter().map(|_| Vec::with_capacity(total)).collect();
+        let mut y = Vec::with_capacity(total);
+        for ((s, x), &st) in self.series.iter().zip(xs).zip(starts) {
+            for i in st..s.len() {
+                for (cv, col) in c.iter_mut().zip(cols) {
+                    cv.push(col.value(s.alpha_e[i], s.q[i], x[i]));
+                }
+                y.push(if lift { s.c_lift[i] } else { s.c_moment[i] });
+            }
+        }
+        (c, y)
+    }
+
+    /// Projected evaluation at θ; `fixed` = (starts, SS) of a base point for Jacobian
+    /// columns (so that the residual vector keeps its length and scaling).
+    fn eval(&self, theta: [f64; 4], fixed: Option<(&[usize], [f64; 2])>) -> Result<Eval> {
+        let (xs, mut starts) = self.states(theta)?;
+        if let Some((st, _)) = fixed {
+            starts = st.to_vec();
+        }
+        let mut residual = Vec::new();
+        let mut coefs = [Vec::new(), Vec::new()];
+        let mut ss = [0.0; 2];
+        let mut cost = 0.0;
+        for (k, cols) in [&self.lift, &self.moment].into_iter().enumerate() {
+            let (c, y) = self.stack(cols, &xs, &starts, k == 0);
+            let refs: Vec<&[f64]> = c.iter().map(|v| v.as_slice()).collect();
+            let qr = ThinQr::new(&refs, 1e-10);
+            let r = qr.residual(&y);
+            coefs[k] = qr.solve(&y);
+            ss[k] = match fixed {
+                Some((_, s)) => s[k],
+                None => ss_about_mean(&y),
+            };
+            let scale = if ss[k] > 0.0 { 1.0 / ss[k].sqrt() } else { 1.0 };
+            for v in r {
+                let w = v * scale;
+                cost += w * w;
+                residual.push(w);
+            }
+        }
+        if !cost.is_finite() {
+            return Err(Error::Numerical {
+                context: "lag law output error".into(),
+                message: format!("non-finite objective at θ = {theta:?}"),
+            });
+        }
+        let [lift, moment] = coefs;
+        Ok(Eval {
+            cost,
+            residual,
+            lift,
+            moment,
+            xs,
+            starts,
+            ss,
+        })
+    }
+
+    /// Forward-difference Jacobian (column-major, 4 columns) of the residual at `base`.
+    fn jacobian(&self, theta: [f64; 4], base: &Eval) -> Result<Vec<Vec<f64>>> {
+        let typical = [1.0, 1.0, 0.1, 1.0];
+        let mut jac = Vec::with_capacity(4);
+        for j in 0..4 {
+            let mut h = 1e-6 * theta[j].abs().max(typical[j]);
+            if theta[j] + h > BOUNDS[j].1 {
+                h = -h;
+            }
+            let mut t = theta;
+            t[j] += h;
+            let e = self.eval(t, Some((&base.starts, base.ss)))?;
+            jac.push(
+                e.residual
+                    .iter()
+                    .zip(&base.residual)
+                    .map(|(a, b)| (a - b) / h)
+                    .collect(),
+            );
+        }
+        Ok(jac)
+    }
+
+    /// Levenberg–Marquardt from θ₀ (box bounds by clamping). Returns (θ, eval, iterations).
+    fn minimise(&self, theta0: [f64; 4], max_iter: usize) -> Result<([f64; 4], Eval, usize)> {
+        let mut theta = clamp_theta(theta0);
+        let mut cur = self.eval(theta, None)?;
+        let mut lambda = 1e-3;
+        let mut iters = 0;
+        'outer: for _ in 0..max_iter {
+            iters += 1;
+            let jac = self.jacobian(theta, &cur)?;
+            let (a, g) = normal_equations(&jac, &cur.residual);
+            loop {
+                let mut m = a;
+                for i in 0..4 {
+                    m[i * 4 + i] += lambda * a[i * 4 + i].max(1e-12) + 1e-14;
+                }
+                let mut d = [-g[0], -g[1], -g[2], -g[3]];
+                let ok = cholesky_solve(
+                    &mut m,
+                    4,
+                    &mut d,
+                    1,
+                    PivotFloor::RelativeToLargestDiagonal(1e-15),
+                )
+                .is_ok();
+                if ok {
+                    let mut cand = theta;
+                    for i in 0..4 {
+                        cand[i] += d[i];
+                    }
+                    let cand = clamp_theta(cand);
+                    let moved = (0..4)
+                        .any(|i| (cand[i] - theta[i]).abs() > 1e-12 * theta[i].abs().max(1.0));
+                    if !moved {
+                        break 'outer;
+                    }
+                    // a trial point where a record cannot settle is a rejected step
+                    if let Ok(e) = self.eval(cand, None) {
+                        if e.cost < cur.cost {
+                            let gain = cur.cost - e.cost;
+                            theta = cand;
+                            cur = e;
+                            lambda = (lambda / 3.0).max(1e-9);
+                            if gain <= 1e-9 * cur.cost.max(1e-12) {
+                                break 'outer;
+                            }
+                            continue 'outer;
+                        }
+                    }
+                }
+                lambda *= 4.0;
+                if lambda > 1e10 {
+                    break 'outer;
+                }
+            }
+        }
+        Ok((theta, cur, iters))
+    }
+}
+
+/// JᵀJ (row-major 4×4) and Jᵀr.
+fn normal_equations(jac: &[Vec<f64>], r: &[f64]) -> ([f64; 16], [f64; 4]) {
+    let mut a = [0.0; 16];
+    let mut g = [0.0; 4];
+    for i in 0..4 {
+        g[i] = crate::numerics::qr::dot(&jac[i], r);
+        for j in 0..=i {
+            let v = crate::numerics::qr::dot(&jac[i], &jac[j]);
+            a[i * 4 + j] = v;
+            a[j * 4 + i] = v;
+        }
+    }
+    (a, g)
+}
+
+/// Standard errors and correlation of θ from J at the optimum (`None` if JᵀJ is singular).
+fn covariance(jac: &[Vec<f64>], cost: f64, dof: usize) -> Option<([f64; 4], [[f64; 4]; 4])> {
+    let (a, _) = normal_equations(jac, &vec![0.0; jac[0].len()]);
+    let mut m = a;
+    let mut inv = [0.0; 16];
+    for i in 0..4 {
+        inv[i * 4 + i] = 1.0;
+    }
+    cholesky_solve(
+        &mut m,
+        4,
+        &mut inv,
+        4,
+        PivotFloor::RelativeToLargestDiagonal(1e-13),
+    )
+    .ok()?;
+    let s2 = cost / dof.max(1) as f64;
+    let mut se = [0.0; 4];
+    let mut corr = [[0.0; 4]; 4];
+    for i in 0..4 {
+        se[i] = (s2 * inv[i * 4 + i]).sqrt();
+    }
+    for i in 0..4 {
+        for j in 0..4 {
+            corr[i][j] = inv[i * 4 + j] / (inv[i * 4 + i] * inv[j * 4 + j]).sqrt();
+        }
+    }
+    if se.iter().all(|v| v.is_finite()) && corr.iter().flatten().all(|v| v.is_finite()) {
+        Some((se, corr))
+    } else {
+        None
+    }
+}
+
+/// Initial θ from the data (module docs, step 1).
+pub fn initial_guess(series: &[LagSeries]) -> [f64; 4] {
+    // attached slope C_Lα (lift down: negative for a positive angle)
+    let (mut sxy, mut sxx, mut n_low, mut n_all, mut sign_acc) = (0.0, 0.0, 0usize, 0usize, 0.0);
+    for s in series {
+        for (a, c) in s.alpha_e.iter().zip(&s.c_lift) {
+            n_all += 1;
+            sign_acc += a * c;
+            if a.abs() <= 0.12 {
+                sxy += a * c;
+                sxx += a * a;
+                n_low += 1;
+            }
+        }
+    }
+    let sign = if sign_acc < 0.0 { -1.0 } else { 1.0 };
+    let two_pi = 2.0 * std::f64::consts::PI;
+    let mut slope = sign * two_pi;
+    if n_low * 20 >= n_all && sxx > 0.0 {
+        let s = sxy / sxx;
+        if s * sign > 0.25 * two_pi && s * sign < 2.0 * two_pi {
+            slope = s;
+        }
+    }
+    // reconstructed state, smoothed, and its rate
+    let mut pts: Vec<(f64, f64, f64, f64)> = Vec::new(); // (α_e, q, x, dx/ds)
+    for s in series {
+        let n = s.len();
+        let xr: Vec<f64> = s
+            .alpha_e
+            .iter()
+            .zip(&s.c_lift)
+            .map(|(&a, &c)| {
+                let kappa = if a.abs() >= 0.03 {
+                    (c / (slope * a)).clamp(0.25, 1.0)
+                } else {
+                    1.0
+                };
+                (2.0 * kappa.sqrt() - 1.0).powi(2).clamp(0.0, 1.0)
+            })
+            .collect();
+        let w = s
+            .period_samples
+            .map_or(2, |p| ((p / 40.0).round() as usize).max(1));
+        let sm: Vec<f64> = (0..n)
+            .map(|i| {
+                let (lo, hi) = (i.saturating_sub(w), (i + w).min(n - 1));
+                xr[lo..=hi].iter().sum::<f64>() / (hi - lo + 1) as f64
+            })
+            .collect();
+        let stride = (series.iter().map(|s| s.len()).sum::<usize>() / 6000).max(1);
+        for i in (1..n - 1).step_by(stride) {
+            if s.alpha_e[i].abs() < 0.03 {
+                continue;
+            }
+            let d = (sm[i + 1] - sm[i - 1]) / (2.0 * s.ds);
+            pts.push((s.alpha_e[i], s.q[i], sm[i], d));
+        }
+    }
+    if pts.len() < 8 {
+        return [3.0, 1.0, 0.3, 3.0];
+    }
+    // (α*, m) on a grid
+    let (mut best, mut best_ss) = ((0.3, 3.0), f64::INFINITY);
+    let ms = [1.0, 1.5, 2.0, 3.0, 4.0, 5.0, 6.0, 8.0, 10.0, 14.0, 20.0];
+    for ia in 0..30 {
+        let a_star = (0.03f64.ln() + (1.15f64.ln() - 0.03f64.ln()) * ia as f64 / 29.0).exp();
+        for &m in &ms {
+            let ss: f64 = pts
+                .iter()
+                .map(|&(a, _, x, _)| {
+                    let x0 = 1.0 / (1.0 + (a / a_star).abs().powf(2.0 * m));
+                    (x - x0) * (x - x0)
+                })
+                .sum();
+            if ss < best_ss {
+                best_ss = ss;
+                best = (a_star, m);
+            }
+        }
+    }
+    let (a_star, m) = best;
+    let x0 = |a: f64| 1.0 / (1.0 + (a / a_star).abs().powf(2.0 * m));
+    // (τ₁, τ₂) by least squares of the lag equation
+    let (mut a11, mut a12, mut a22, mut b1, mut b2) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    for &(a, q, x, d) in &pts {
+        let dx0 = (x0(a + 1e-5) - x0(a - 1e-5)) / 2e-5;
+        let c1 = -d;
+        let c2 = -0.5 * q * dx0;
+        let y = x - x0(a);
+        a11 += c1 * c1;
+        a12 += c1 * c2;
+        a22 += c2 * c2;
+        b1 += c1 * y;
+        b2 += c2 * y;
+    }
+    let det = a11 * a22 - a12 * a12;
+    let (mut t1, mut t2) = if det > 1e-12 * (a11 * a22).max(1e-300) {
+        ((b1 * a22 - b2 * a12) / det, (a11 * b2 - a12 * b1) / det)
+    } else if a11 > 0.0 {
+        (b1 / a11, 0.0)
+    } else {
+        (3.0, 1.0)
+    };
+    if !(t1.is_finite() && t1 > 0.0) {
+        t1 = 3.0;
+    }
+    if !(t2.is_finite() && t2 >= 0.0) {
+        t2 = 0.0;
+    }
+    [t1.clamp(0.3, 50.0), t2.min(50.0), a_star, m]
+}
+
+/// Per-case R² (lift, moment) at an evaluation.
+fn case_scores(p: &Problem<'_>, e: &Eval) -> Vec<LagCaseScore> {
+    p.series
+        .iter()
+        .zip(&e.xs)
+        .zip(&e.starts)
+        .map(|((s, x), &st)| {
+            let mut r2 = [0.0; 2];
+            for (k, (cols, coef)) in [(&p.lift, &e.lift), (&p.moment, &e.moment)]
+                .into_iter()
+                .enumerate()
+            {
+                let y = if k == 0 { &s.c_lift } else { &s.c_moment };
+                let pred: Vec<f64> = (st..s.len())
+                    .map(|i| {
+                        cols.iter()
+                            .zip(coef)
+                            .map(|(c, v)| v * c.value(s.alpha_e[i], s.q[i], x[i]))
+                            .sum()
+                    })
+                    .collect();
+                r2[k] = crate::metrics::r_squared(&y[st..], &pred);
+            }
+            LagCaseScore {
+                id: s.id.clone(),
+                k: s.k,
+                mean_deg: s.mean_alpha.to_degrees(),
+                amplitude_deg: s.amplitude.to_degrees(),
+                periodic: s.periodic,
+                samples: s.len() - st,
+                r2_lift: r2[0],
+                r2_moment: r2[1],
+            }
+        })
+        .collect()
+}
+
+/// The moment support chosen by the δ path at θ (module docs).
+fn select_moment(
+    p: &Problem<'_>,
+    e: &Eval,
+    opts: &LagFitOptions,
+) -> Result<(Vec<LagColumn>, MomentSelection)> {
+    let (cols, y) = p.stack(&opts.moment_columns, &e.xs, &e.starts, false);
+    let n = y.len();
+    let ncol = cols.len();
+    let theta = Mat::<f64>::from_fn(n, ncol, |i, j| cols[j][i]);
+    let order: Vec<usize> = (0..ncol).collect();
+    let factor = CaseFactor::new("lag law moment", theta.as_ref(), &order, &[&y])?;
+    let problem = [CaseProblem {
+        factor: &factor,
+        target: 0,
+    }];
+    let template = Stlsq::default();
+    let basis: u64 = (1u64 << ncol) - 1;
+    let (path, _) = stlsq_path(&problem, &[None], &template, basis, 0, &opts.path);
+    let sel = path.selected_support();
+    let selected: Vec<LagColumn> = sel
+        .support
+        .iter()
+        .map(|&j| opts.moment_columns[j])
+        .collect();
+    let full = path
+        .supports
+        .iter()
+        .max_by_key(|s| s.support.len())
+        .map_or(f64::NAN, |s| s.loss);
+    Ok((
+        selected.clone(),
+        MomentSelection {
+            candidates: opts.moment_columns.clone(),
+            selected,
+            loss_full: full,
+            loss_selected: sel.loss,
+            limit: path.limit,
+        },
+    ))
+}
+
+/// Fits a lag law to the forced cases `cases` (module docs).
+///
+/// # Errors
+/// [`Error::InvalidOption`] for bad options; [`Error::InvalidData`] naming a case for
+/// unusable series or an empty input; [`Error::TooShort`] naming the case and the numbers
+/// when a record is too short for the separation state to settle; [`Error::Unphysical`]
+/// when a constant ends on an open bound of its range (α* at 0.02 or 1.2 rad, τ₁ at 0.05)
+/// or the state leaves \[0, 1\]; [`Error::Numerical`] for a non-finite objective.
+pub fn fit(cases: &[NondimCase], opts: &LagFitOptions) -> Result<LagFit> {
+    opts.validate()?;
+    if cases.is_empty() {
+        return Err(Error::InvalidData {
+            case: "-".into(),
+            field: "cases".into(),
+            message: "no case to fit the lag law on".into(),
+        });
+    }
+    let series: Vec<LagSeries> = cases.iter().map(LagSeries::new).collect::<Result<_>>()?;
+    fit_series(&series, opts)
+}
+
+/// [`fit`] on cases already in the lag law's variables.
+///
+/// # Errors
+/// As [`fit`].
+pub fn fit_series(series: &[LagSeries], opts: &LagFitOptions) -> Result<LagFit> {
+    opts.validate()?;
+    let init = initial_guess(series);
+    let mut p = Problem {
+        series,
+        lift: opts.lift_columns.clone(),
+        moment: opts.moment_columns.clone(),
+    };
+    // a few starts around the data's guess; the best by output error goes on
+    let mut starts = vec![init];
+    for t1 in [1.0, 3.0, 8.0] {
+        for t2f in [0.0, 0.5] {
+            starts.push([t1, t1 * t2f, init[2], init[3]]);
+        }
+    }
+    let mut best: Option<([f64; 4], f64)> = None;
+    let mut first_err = None;
+    for s in starts {
+        match p.eval(clamp_theta(s), None) {
+            Ok(e) => {
+                if best.is_none_or(|(_, c)| e.cost < c) {
+                    best = Some((clamp_theta(s), e.cost));
+                }
+            }
+            Err(e) => {
+                first_err.get_or_insert(e);
+            }
+        }
+    }
+    let Some((theta0, _)) = best else {
+        return Err(first_err.unwrap_or_else(|| Error::Numerical {
+            context: "lag law".into(),
+            message: "no starting point".into(),
+        }));
+    };
+    let (theta1, e1, it1) = p.minimise(theta0, opts.max_iter)?;
+    let (moment_cols, selection) = select_moment(&p, &e1, opts)?;
+    p.moment = moment_cols;
+    let (theta, e, it2) = p.minimise(theta1, opts.max_iter)?;
+
+    // refusals: open bounds and the state's range
+    for (i, (lo, hi)) in BOUNDS.iter().enumerate() {
+        let open_lo = i == 0 || i == 2;
+        let open_hi = i == 2;
+        let tol = 1e-3 * (hi - lo).abs().min(1.0);
+        let (name, _, unit) = PARAMETERS[i];
+        if open_lo && theta[i] <= lo + tol {
+            return Err(Error::Unphysical {
+                parameter: format!("{name} [{unit}]"),
+                value: theta[i],
+                reason: format!(
+                    "the fit ran to the lower bound {lo} of its open range: the records do not \
+                     show this constant (no measurable separation lag, or no separation)"
+                ),
+            });
+        }
+        if open_hi && theta[i] >= hi - tol {
+            return Err(Error::Unphysical {
+                parameter: format!("{name} [{unit}]"),
+                value: theta[i],
+                reason: format!(
+                    "the fit ran to the upper bound {hi} of its open range: the records do not \
+                     reach separation"
+                ),
+            });
+        }
+    }
+    for (s, x) in series.iter().zip(&e.xs) {
+        if let Some(v) = x.iter().find(|v| !(0.0..=1.0).contains(*v)) {
+            return Err(Error::Unphysical {
+                parameter: format!("x (case `{}`)", s.id),
+                value: *v,
+                reason: "the separation state left [0, 1]".into(),
+            });
+        }
+    }
+
+    let jac = p.jacobian(theta, &e)?;
+    let n_lin = p.lift.len() + p.moment.len();
+    let dof = e.residual.len().saturating_sub(4 + n_lin);
+    let cov = covariance(&jac, e.cost, dof);
+    let parameters = PARAMETERS
+        .iter()
+        .enumerate()
+        .map(|(i, (name, sym, unit))| LagParameter {
+            name: name.to_string(),
+            symbol: sym.to_string(),
+            value: theta[i],
+            unit: unit.to_string(),
+            standard_error: cov.map(|c| c.0[i]),
+        })
+        .collect();
+    let correlation = cov.map(|c| c.1);
+    let tau_correlation = correlation.map(|c| c[0][1]);
+    let mut lo = f64::INFINITY;
+    let mut hi = f64::NEG_INFINITY;
+    for (s, &st) in series.iter().zip(&e.starts) {
+        for &a in &s.alpha_e[st..] {
+            lo = lo.min(a);
+            hi = hi.max(a);
+        }
+    }
+    let kmin = series.iter().map(|s| s.k).fold(f64::INFINITY, f64::min);
+    let kmax = series.iter().map(|s| s.k).fold(f64::NEG_INFINITY, f64::max);
+    let terms = |cols: &[LagColumn], c: &[f64]| LagChannel {
+        terms: cols.iter().copied().zip(c.iter().copied()).collect(),
+    };
+    let law = LagLaw {
+        tau1: theta[0],
+        tau2: theta[1],
+        alpha_star: theta[2],
+        sharpness: theta[3],
+        lift: terms(&p.lift, &e.lift),
+        moment: terms(&p.moment, &e.moment),
+        range: FittedRange {
+            alpha_e: [lo, hi],
+            k: [kmin, kmax],
+        },
+    };
+    law.check()?;
+    let report = LagReport {
+        parameters,
+        correlation,
+        tau_correlation,
+        tau_collinear: tau_correlation.is_some_and(|c| c.abs() > COLLINEAR_CORRELATION),
+        cases: case_scores(&p, &e),
+        moment_selection: selection,
+        initial: init,
+        objective: e.cost,
+        iterations: it1 + it2,
+        held_out: None,
+    };
+    Ok(LagFit { law, report })
+}
+
+/// A lag law's prediction of one case.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LagPrediction {
+    /// Separation state at every sample.
+    pub x: Vec<f64>,
+    /// First scored sample (0 at the periodic steady state).
+    pub start: usize,
+    /// Predicted C_L at every sample.
+    pub c_lift: Vec<f64>,
+    /// Predicted C_M at every sample.
+    pub c_moment: Vec<f64>,
+    /// Score on the samples from `start`.
+    pub score: LagCaseScore,
+}
+
+/// Predicts the forces of `case` with `law` at the periodic steady state of its motion.
+///
+/// # Errors
+/// As [`LagSeries::new`] and [`LagSeries::simulate`]; [`Error::OutsideFittedRange`] naming
+/// the case when its mean effective angle lies outside the angles the law was fitted on.
+pub fn predict(law: &LagLaw, case: &NondimCase) -> Result<LagPrediction> {
+    let s = LagSeries::new(case)?;
+    predict_series(law, &s)
+}
+
+/// [`predict`] on a case already in the lag law's variables.
+///
+/// # Errors
+/// As [`predict`].
+pub fn predict_series(law: &LagLaw, s: &LagSeries) -> Result<LagPrediction> {
+    law.check()?;
+    let mean_e = s.alpha_e.iter().sum::<f64>() / s.len().max(1) as f64;
+    let [lo, hi] = law.range.alpha_e;
+    if !(mean_e >= lo && mean_e <= hi) {
+        return Err(Error::OutsideFittedRange {
+            case: s.id.clone(),
+            quantity: "mean angle [deg]".into(),
+            value: mean_e.to_degrees(),
+            low: lo.to_degrees(),
+            high: hi.to_degrees(),
+        });
+    }
+    let mut x = Vec::new();
+    let start = s.simulate(law, &mut x)?;
+    let mut cl = Vec::with_capacity(s.len());
+    let mut cm = Vec::with_capacity(s.len());
+    for i in 0..s.len() {
+        let [l, m] = law.coefficients(s.alpha_e[i], s.q[i], x[i]);
+        cl.push(l);
+        cm.push(m);
+    }
+    let score = LagCaseScore {
+        id: s.id.clone(),
+        k: s.k,
+        mean_deg: s.mean_alpha.to_degrees(),
+        amplitude_deg: s.amplitude.to_degrees(),
+        periodic: s.periodic,
+        samples: s.len() - start,
+        r2_lift: crate::metrics::r_squared(&s.c_lift[start..], &cl[start..]),
+        r2_moment: crate::metrics::r_squared(&s.c_moment[start..], &cm[start..]),
+    };
+    Ok(LagPrediction {
+        x,
+        start,
+        c_lift: cl,
+        c_moment: cm,
+        score,
+    })
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+    use crate::record::{CaseMeta, Forcing};
+
+    pub(crate) fn truth() -> LagLaw {
+        LagLaw {
+            tau1: 3.0,
+            tau2: 1.5,
+            alpha_star: 0.22,
+            sharpness: 3.0,
+            lift: LagChannel {
+                terms: vec![
+                    (LagColumn::One, 0.02),
+                    (LagColumn::Kirchhoff, -6.0),
+                    (LagColumn::Q, -0.8),
+                ],
+            },
+            moment: LagChannel {
+                terms: vec![(LagColumn::KirchhoffSep, -1.5), (LagColumn::Q, -0.3)],
+            },
+            range: FittedRange {
+                alpha_e: [0.0, 0.5],
+                k: [0.0, 1.0],
+            },
+        }
+    }
+
+    /// A pitching case of `law` at reduced frequency `k`, mean `mean` and amplitude `amp`
+    /// \[rad\], `cycles` periods of 60 samples.
+    pub(crate) fn case_of(law: &LagLaw, id: &str, k: f64, mean: f64, amp: f64) -> NondimCase {
+        let (u, b) = (10.0, 0.25);
+        let f = k * u / (2.0 * std::f64::consts::PI * b);
+        let dt = 1.0 / (60.0 * f);
+        let n = 180;
+        let w = 2.0 * std::f64::consts::PI * f;
+        let alpha: Vec<f64> = (0..n)
+            .map(|i| mean + amp * (w * i as f64 * dt).sin())
+            .collect();
+        let q: Vec<f64> = (0..n)
+            .map(|i| b * amp * w * (w * i as f64 * dt).cos() / u)
+            .collect();
+        let mut c = NondimCase {
+            meta: CaseMeta {
+                id: id.into(),
+                wind_speed: u,
+                mean_pitch: Some(mean),
+                amplitude: Some(amp),
+                ..CaseMeta::default()
+            },
+            dt,
+            chord: b,
+            x: [alpha, q, vec![0.0; n], vec![0.0; n]],
+            c_lift: vec![0.0; n],
+            c_moment: vec![0.0; n],
+            forcing: Forcing {
+                pitch: Some(f),
+                heave: None,
+            },
+        };
+        let s = LagSeries::new(&c).unwrap();
+        let mut x = Vec::new();
+        s.simulate(law, &mut x).unwrap();
+        for i in 0..n {
+            let [l, m] = law.coefficients(s.alpha_e[i], s.q[i], x[i]);
+            c.c_lift[i] = l;
+            c.c_moment[i] = m;
+        }
+        c
+    }
+
+    #[test]
+    fn recovers_its_own_law_from_three_frequencies() {
+        let t = truth();
+        let cases: Vec<NondimCase> = [0.05, 0.1, 0.2]
+            .iter()
+            .enumerate()
+            .map(|(i, &k)| case_of(&t, &format!("c{i}"), k, 0.25, 0.15))
+            .collect();
+        let f = fit(&cases, &LagFitOptions::default()).unwrap();
+        for c in &f.report.cases {
+            assert!(c.r2_lift > 0.9999 && c.r2_moment > 0.9999, "{c:?}");
+        }
+        assert!((f.law.tau1 - 3.0).abs() < 0.05, "{:?}", f.report.parameters);
+        assert!((f.law.tau2 - 1.5).abs() < 0.05, "{:?}", f.report.parameters);
+        assert!((f.law.alpha_star - 0.22).abs() < 0.005);
+        assert!((f.law.sharpness - 3.0).abs() < 0.1);
+        assert!(f.report.correlation.is_some());
+        assert_eq!(f.report.parameters[0].unit, "b/U (convective times)");
+        let sel = &f.report.moment_selection.selected;
+        assert!(
+            sel.contains(&LagColumn::KirchhoffSep) && sel.contains(&LagColumn::Q),
+            "{sel:?}"
+        );
+        // prediction of an unseen frequency
+        let other = case_of(&t, "c9", 0.15, 0.25, 0.15);
+        let p = predict(&f.law, &other).unwrap();
+        assert!(
+            p.score.r2_lift > 0.999 && p.score.r2_moment > 0.999,
+            "{:?}",
+            p.score
+        );
+    }
+
+    #[test]
+    fn prediction_outside_the_fitted_angles_is_refused_by_name() {
+        let t = truth();
+        let cases = vec![
+            case_of(&t, "a", 0.1, 0.25, 0.15),
+            case_of(&t, "b", 0.2, 0.25, 0.15),
+        ];
+        let f = fit(&cases, &LagFitOptions::default()).unwrap();
+        let far = case_of(&t, "far", 0.1, 0.6, 0.05);
+        let e = predict(&f.law, &far).unwrap_err();
+        assert!(matches!(e, Error::OutsideFittedRange { .. }));
+        assert!(
+            e.to_string().contains("far") && e.to_string().contains("mean angle"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn attached_flow_only_is_refused_with_the_reason() {
+        // angles far below α*: nothing separates, α* runs to its upper bound or the fit
+        // cannot tell τ₁: either way a typed refusal or a law that checks
+        let mut t = truth();
+        t.alpha_star = 1.5;
+        let cases = vec![
+            case_of(&t, "a", 0.1, 0.02, 0.03),
+            case_of(&t, "b", 0.2, 0.02, 0.03),
+        ];
+        match fit(&cases, &LagFitOptions::default()) {
+            Err(Error::Unphysical { .. }) => {}
+            Ok(f) => assert!(f.law.check().is_ok()),
+            Err(e) => panic!("{e}"),
+        }
+    }
+}

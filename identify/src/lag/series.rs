@@ -1,0 +1,373 @@
+//! One forced case in the lag law's variables, and the separation state x(t) it drives at
+//! its periodic steady state.
+//!
+//! The lag equation τ₁ dx/ds + x = x₀(u) (s = tU/b convective time, [`super::law`]) is
+//! integrated exactly per sample step with the input x₀(u) taken linear over the step (a
+//! first-order-hold exponential integrator): with h = Δs/τ₁ and E = e^{−h},
+//!
+//! x_{n+1} = E·x_n + (1 − E)·f_n + (f_{n+1} − f_n)·(1 − (1 − E)/h),  f = x₀(u),
+//!
+//! a convex combination of x_n, f_n and f_{n+1}, so x stays in \[0, 1\].
+//!
+//! Periodic steady state: the equation is linear in x, so with x_p the solution started at
+//! x(0) = 0 and T the forcing period in convective time, x(0)* = x_p(T)/(1 − e^{−T/τ₁}).
+//! That needs the motion to repeat with the forcing period (α_e(t + T) = α_e(t) to
+//! [`PERIODIC_TOLERANCE`] of the amplitude). Otherwise x starts on the static curve and the
+//! first [`SETTLE_TIMES`]·τ₁ convective times are dropped; at least one forcing period (or,
+//! without a known period, half the record) must remain.
+
+use crate::record::NondimCase;
+use crate::{Error, Result};
+
+use super::law::LagLaw;
+
+/// RMS of α_e(t + T) − α_e(t) allowed for a periodic record, as a fraction of the amplitude
+/// (half the peak-to-peak α_e).
+pub const PERIODIC_TOLERANCE: f64 = 0.1;
+
+/// Number of separation lags τ₁ dropped from a record that is not periodic.
+pub const SETTLE_TIMES: f64 = 5.0;
+
+/// One forced case in the lag law's variables.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LagSeries {
+    /// Case id.
+    pub id: String,
+    /// Effective angle α_e = α + ḣ/U \[rad\] (absolute: the mean angle included).
+    pub alpha_e: Vec<f64>,
+    /// q = Bα̇/U.
+    pub q: Vec<f64>,
+    /// C_L (positive down).
+    pub c_lift: Vec<f64>,
+    /// C_M (positive nose-up).
+    pub c_moment: Vec<f64>,
+    /// Sample interval \[s\].
+    pub dt: f64,
+    /// Convective step Δs = dt·2U/B per sample.
+    pub ds: f64,
+    /// Forcing period in samples (T/dt), when a forcing frequency is known.
+    pub period_samples: Option<f64>,
+    /// Whether the motion repeats with the forcing period (module docs).
+    pub periodic: bool,
+    /// RMS of α_e(t + T) − α_e(t) over the amplitude (0 when no period is known).
+    pub periodic_misfit: f64,
+    /// Reduced frequency K = Bω/U of the forcing (pitch first, else heave; 0 if none).
+    pub k: f64,
+    /// Mean of α \[rad\].
+    pub mean_alpha: f64,
+    /// Half the peak-to-peak α \[rad\].
+    pub amplitude: f64,
+}
+
+impl LagSeries {
+    /// The lag law's variables of a nondimensional case.
+    ///
+    /// # Errors
+    /// [`Error::InvalidData`] naming the case for fewer than 8 samples, a non-positive dt,
+    /// chord or wind speed, series of unequal length or a non-finite value.
+    pub fn new(case: &NondimCase) -> Result<LagSeries> {
+        let id = case.meta.id.clone();
+        let bad = |field: &str, message: String| Error::InvalidData {
+            case: id.clone(),
+            field: field.to_string(),
+            message,
+        };
+        let n = case.c_lift.len();
+        if n < 8 {
+            return Err(bad(
+                "samples",
+                format!("{n} samples; the lag law needs ≥ 8"),
+            ));
+        }
+        if case.x.iter().any(|v| v.len() != n) || case.c_moment.len() != n {
+            return Err(bad("samples", "series of unequal length".to_string()));
+        }
+        let u = case.meta.wind_speed;
+        if !(u.is_finite() && u > 0.0) {
+            return Err(bad("wind_speed", format!("{u} m/s must be > 0")));
+        }
+        if !(case.chord.is_finite() && case.chord > 0.0) {
+            return Err(bad("chord", format!("{} m must be > 0", case.chord)));
+        }
+        if !(case.dt.is_finite() && case.dt > 0.0) {
+            return Err(bad("dt", format!("{} s must be > 0", case.dt)));
+        }
+        let alpha_e: Vec<f64> = case.x[0]
+            .iter()
+            .zip(&case.x[3])
+            .map(|(a, h)| a + h)
+            .collect();
+        for (name, v) in [
+            ("alpha_e", &alpha_e),
+            ("q", &case.x[1]),
+            ("c_lift", &case.c_lift),
+            ("c_moment", &case.c_moment),
+        ] {
+            if let Some(i) = v.iter().position(|x| !x.is_finite()) {
+                return Err(bad(name, format!("non-finite value at sample {i}")));
+            }
+        }
+        let ds = case.dt * 2.0 * u / case.chord;
+        let freq = case
+            .forcing
+            .pitch
+            .or(case.meta.freq_pitch)
+            .or(case.forcing.heave)
+            .filter(|f| f.is_finite() && *f > 0.0);
+        let k = freq.map_or(0.0, |f| case.chord * 2.0 * std::f64::consts::PI * f / u);
+        let period_samples = freq.map(|f| 1.0 / (f * case.dt));
+        let (lo, hi) = alpha_e
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+                (a.min(x), b.max(x))
+            });
+        let amp_e = 0.5 * (hi - lo);
+        let (periodic, periodic_misfit) = match period_samples {
+            Some(p) if p + 1.0 < n as f64 && amp_e > 0.0 => {
+                let m = periodic_misfit(&alpha_e, p) / amp_e;
+                (m <= PERIODIC_TOLERANCE, m)
+            }
+            _ => (false, 0.0),
+        };
+        let alpha = &case.x[0];
+        let mean_alpha = alpha.iter().sum::<f64>() / n as f64;
+        let (alo, ahi) = alpha
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+                (a.min(x), b.max(x))
+            });
+        Ok(LagSeries {
+            id: id.clone(),
+            alpha_e,
+            q: case.x[1].clone(),
+            c_lift: case.c_lift.clone(),
+            c_moment: case.c_moment.clone(),
+            dt: case.dt,
+            ds,
+            period_samples,
+            periodic,
+            periodic_misfit,
+            k,
+            mean_alpha,
+            amplitude: 0.5 * (ahi - alo),
+        })
+    }
+
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.alpha_e.len()
+    }
+
+    /// True without samples.
+    pub fn is_empty(&self) -> bool {
+        self.alpha_e.is_empty()
+    }
+
+    /// Separation state x at every sample for `law`'s (τ₁, τ₂, α*, m) (module docs), into
+    /// `x` (resized to the record). Returns the first sample at which x is settled (0 for a
+    /// periodic record).
+    ///
+    /// # Errors
+    /// [`Error::TooShort`] naming the case when a record that is not periodic keeps less
+    /// than one forcing period (half the record without a known period) after the
+    /// [`SETTLE_TIMES`]·τ₁ it needs to settle.
+    pub fn simulate(&self, law: &LagLaw, x: &mut Vec<f64>) -> Result<usize> {
+        let n = self.len();
+        let f: Vec<f64> = self
+            .alpha_e
+            .iter()
+            .zip(&self.q)
+            .map(|(&a, &q)| law.x_static(law.input(a, q)))
+            .collect();
+        let h = self.ds / law.tau1;
+        let e = (-h).exp();
+        let c0 = 1.0 - e;
+        let c1 = 1.0 - c0 / h;
+        let step = |xn: f64, f0: f64, f1: f64| e * xn + c0 * f0 + (f1 - f0) * c1;
+        x.clear();
+        x.resize(n, 0.0);
+        if self.periodic {
+            let p = self.period_samples.unwrap_or(0.0);
+            let whole = p.floor() as usize;
+            let frac = p - whole as f64;
+            let mut xp = 0.0;
+            for i in 0..whole {
+                xp = step(xp, f[i], f[i + 1]);
+            }
+            if frac > 0.0 && whole + 1 < n {
+                // the fractional step to T, the input linear over it
+                let hf = h * frac;
+                let ef = (-hf).exp();
+                let f1 = f[whole] + frac * (f[whole + 1] - f[whole]);
+                xp = ef * xp + (1.0 - ef) * f[whole] + (f1 - f[whole]) * (1.0 - (1.0 - ef) / hf);
+            }
+            let decay = (-h * p).exp();
+            x[0] = (xp / (1.0 - decay)).clamp(0.0, 1.0);
+            for i in 1..n {
+                x[i] = step(x[i - 1], f[i - 1], f[i]);
+            }
+            return Ok(0);
+        }
+        x[0] = f[0];
+        for i in 1..n {
+            x[i] = step(x[i - 1], f[i - 1], f[i]);
+        }
+        let drop = (SETTLE_TIMES * law.tau1 / self.ds).ceil();
+        let need = self.period_samples.unwrap_or(0.5 * n as f64).max(1.0);
+        let left = n as f64 - drop;
+        if left < need {
+            let why = match self.period_samples {
+                Some(_) if self.periodic_misfit > 0.0 => format!(
+                    "the motion is not periodic (α(t+T) differs from α(t) by {:.3} of the amplitude, \
+                     tolerance {PERIODIC_TOLERANCE}), so the separation state must settle from a \
+                     start: {SETTLE_TIMES}·τ₁ = {:.3} s (τ₁ = {:.3} b/U), then one forcing period",
+                    self.periodic_misfit,
+                    drop * self.dt,
+                    law.tau1
+                ),
+                Some(_) => format!(
+                    "the record holds less than two forcing periods, so the separation state must \
+                     settle from a start: {SETTLE_TIMES}·τ₁ = {:.3} s (τ₁ = {:.3} b/U), then one forcing period",
+                    drop * self.dt,
+                    law.tau1
+                ),
+                None => format!(
+                    "no forcing frequency: the separation state must settle from a start, \
+                     {SETTLE_TIMES}·τ₁ = {:.3} s (τ₁ = {:.3} b/U), then half the record",
+                    drop * self.dt,
+                    law.tau1
+                ),
+            };
+            return Err(Error::TooShort {
+                case: self.id.clone(),
+                duration: n as f64 * self.dt,
+                needed: (drop + need) * self.dt,
+                reason: format!("record too short for the separation state to settle: {why}"),
+            });
+        }
+        Ok(drop as usize)
+    }
+}
+
+/// RMS of v(t + T) − v(t) over the samples where t + T is inside the record (T = `p`
+/// samples, v linearly interpolated).
+fn periodic_misfit(v: &[f64], p: f64) -> f64 {
+    let n = v.len();
+    let whole = p.floor() as usize;
+    let frac = p - whole as f64;
+    let mut ss = 0.0;
+    let mut count = 0usize;
+    for i in 0..n {
+        let j = i + whole;
+        if j + 1 >= n {
+            break;
+        }
+        let vt = v[j] + frac * (v[j + 1] - v[j]);
+        ss += (vt - v[i]).powi(2);
+        count += 1;
+    }
+    if count == 0 {
+        return f64::INFINITY;
+    }
+    (ss / count as f64).sqrt()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::lag::{FittedRange, LagChannel};
+    use crate::record::{CaseMeta, Forcing};
+
+    pub(crate) fn law(tau1: f64, tau2: f64) -> LagLaw {
+        LagLaw {
+            tau1,
+            tau2,
+            alpha_star: 0.25,
+            sharpness: 3.0,
+            lift: LagChannel { terms: vec![] },
+            moment: LagChannel { terms: vec![] },
+            range: FittedRange {
+                alpha_e: [0.0, 0.5],
+                k: [0.0, 1.0],
+            },
+        }
+    }
+
+    fn case(cycles: f64, phase_jump: bool) -> NondimCase {
+        let (u, b, f) = (10.0, 0.25, 2.0);
+        let dt = 1.0 / (f * 40.0);
+        let n = (cycles * 40.0) as usize;
+        let w = 2.0 * std::f64::consts::PI * f;
+        let alpha: Vec<f64> = (0..n)
+            .map(|i| {
+                let t = i as f64 * dt;
+                let wi = if phase_jump && i > n / 2 { 1.37 * w } else { w };
+                0.25 + 0.15 * (wi * t).sin()
+            })
+            .collect();
+        let q: Vec<f64> = (0..n)
+            .map(|i| b * 0.15 * w * (w * i as f64 * dt).cos() / u)
+            .collect();
+        NondimCase {
+            meta: CaseMeta {
+                id: "c1".into(),
+                wind_speed: u,
+                ..CaseMeta::default()
+            },
+            dt,
+            chord: b,
+            x: [alpha, q, vec![0.0; n], vec![0.0; n]],
+            c_lift: vec![0.0; n],
+            c_moment: vec![0.0; n],
+            forcing: Forcing {
+                pitch: Some(f),
+                heave: None,
+            },
+        }
+    }
+
+    #[test]
+    fn periodic_state_repeats_after_one_period() {
+        let s = LagSeries::new(&case(3.0, false)).unwrap();
+        assert!(s.periodic);
+        assert!((s.k - 0.25 * 2.0 * std::f64::consts::PI * 2.0 / 10.0).abs() < 1e-12);
+        let mut x = Vec::new();
+        assert_eq!(s.simulate(&law(3.0, 1.0), &mut x).unwrap(), 0);
+        for i in 0..40 {
+            assert!(
+                (x[i] - x[i + 40]).abs() < 1e-9,
+                "{i}: {} {}",
+                x[i],
+                x[i + 40]
+            );
+            assert!((0.0..=1.0).contains(&x[i]));
+        }
+    }
+
+    #[test]
+    fn integrator_is_exact_for_a_ramp() {
+        // τ dx/ds + x = f with f linear in s: x = f − τ f' + C e^{−s/τ}
+        let s = LagSeries::new(&case(3.0, false)).unwrap();
+        let mut l = law(2.0, 0.0);
+        l.alpha_star = 1e3; // x₀ ≈ 1 everywhere
+        let mut x = Vec::new();
+        s.simulate(&l, &mut x).unwrap();
+        assert!(x.iter().all(|v| (v - 1.0).abs() < 1e-9));
+    }
+
+    #[test]
+    fn non_periodic_short_record_names_the_case_and_the_numbers() {
+        let s = LagSeries::new(&case(1.5, true)).unwrap();
+        assert!(!s.periodic);
+        let mut x = Vec::new();
+        let e = s.simulate(&law(20.0, 1.0), &mut x).unwrap_err().to_string();
+        assert!(
+            e.contains("c1") && e.contains("too short") && e.contains("not periodic"),
+            "{e}"
+        );
+        // long enough and a short lag: settles
+        let s = LagSeries::new(&case(40.0, true)).unwrap();
+        assert!(!s.periodic);
+        assert!(s.simulate(&law(0.5, 0.0), &mut x).unwrap() > 0);
+    }
+}
