@@ -23,15 +23,18 @@
 //! **Model file** (`*.model.toml`):
 //!
 //! ```toml
-//! kind = "theodorsen"   # | "quasi_steady" | "steady" | "flat_plate_table" | "derivative_table" | "identified" | "dynamic_stall"
-//! chord = 0.25          # \[m\] (all kinds; for "identified" optional when given elsewhere)
-//! elastic_axis = -0.3   # a, semi-chords aft of mid-chord (theodorsen, dynamic_stall, quasi_steady, steady; default 0)
+//! kind = "theodorsen"   # | "quasi_steady" | "steady" | "flat_plate_table" | "derivative_table" | "identified" | "dynamic_stall" | "lag"
+//! chord = 0.25          # \[m\] (all kinds; for "identified" optional when given elsewhere; for "lag" default the law's)
+//! elastic_axis = -0.3   # a, semi-chords aft of mid-chord (theodorsen, dynamic_stall, quasi_steady, steady; default 0;
+//!                       # lag: places the thin-aerofoil apparent mass, none without it)
 //! noncirculatory = true # quasi_steady (default true), steady (default false)
 //! rfa_lags = 3          # flat_plate_table, derivative_table, identified (default 3)
 //! k = [0.1, 0.2, …]     # flat_plate_table: the K grid (default: reference::flat_plate_k_grid)
 //! # derivative_table: [[derivatives]] k = 0.5, h1 = …, h2, h3, h4, a1, a2, a3, a4
 //! # identified: file = "identification.json" (relative to the model file),
 //! #             groups = ["D"], missing = "error" | "skip" | "flat_plate" | "zero"
+//! # lag: file = "plate.lag_law.json" (a `lag_law.json`, relative to the model file),
+//! #      mean_angle = 0.2 (rad, optional: the trim angle the section is flown about)
 //!
 //! [[nonlinear]]         # any number; names as in DATA_FORMAT.md, total degree ≥ 2
 //! term = "alpha_dot^3"
@@ -40,8 +43,10 @@
 //! # k = [0.3, 0.6], values = [N*(0.3), N*(0.6)], k_power = 3
 //! ```
 //!
-//! A path ending in `.json` (or a file starting with `{`) is read as an
-//! `identification.json` ([`IdentifiedLaw`]). Unknown keys are errors naming the key and
+//! A path ending in `.json` (or a file starting with `{`) is read as a `lag_law.json`
+//! ([`identify::lag::LagLawDocument`], format `aeroform-lag-law/…`: a [`LagAero`] on the
+//! law's chord, no elastic axis hence no apparent mass, no trim) when its `format` field
+//! says so, else as an `identification.json` ([`IdentifiedLaw`]). Unknown keys are errors naming the key and
 //! the file; a key that the `kind` does not use is an error naming it too. A study's
 //! `[aero]` table is the same [`ModelFile`], where `model` and `n_lag` may be written for
 //! `kind` and `rfa_lags`.
@@ -53,7 +58,7 @@ use std::sync::Arc;
 use serde::{Deserialize, Serialize};
 
 use crate::aero::{
-    AeroModel, Channel, Coefficient, DerivativeTable, DynamicStallAero, NonlinearAero,
+    AeroModel, Channel, Coefficient, DerivativeTable, DynamicStallAero, LagAero, NonlinearAero,
     NonlinearTerm, QuasiSteady, QuasiSteadyKind, TheodorsenAero,
 };
 use crate::error::positive;
@@ -246,11 +251,13 @@ pub enum ModelKind {
     Identified,
     /// [`DynamicStallAero::thin_plate`] (Beddoes–Leishman-type dynamic stall).
     DynamicStall,
+    /// [`LagAero`] from the `lag_law.json` `file` (the lag law of `identify --law lag`).
+    Lag,
 }
 
 impl ModelKind {
     /// Every kind, in declaration order.
-    pub const ALL: [ModelKind; 7] = [
+    pub const ALL: [ModelKind; 8] = [
         ModelKind::Theodorsen,
         ModelKind::QuasiSteady,
         ModelKind::Steady,
@@ -258,6 +265,7 @@ impl ModelKind {
         ModelKind::DerivativeTable,
         ModelKind::Identified,
         ModelKind::DynamicStall,
+        ModelKind::Lag,
     ];
 
     /// The name as written in model files and result documents (`theodorsen`, …).
@@ -270,6 +278,7 @@ impl ModelKind {
             ModelKind::DerivativeTable => "derivative_table",
             ModelKind::Identified => "identified",
             ModelKind::DynamicStall => "dynamic_stall",
+            ModelKind::Lag => "lag",
         }
     }
 
@@ -283,6 +292,7 @@ impl ModelKind {
             ModelKind::FlatPlateTable => &["chord", "rfa_lags", "k"],
             ModelKind::DerivativeTable => &["chord", "rfa_lags", "derivatives"],
             ModelKind::Identified => &["chord", "rfa_lags", "file", "groups", "missing"],
+            ModelKind::Lag => &["chord", "elastic_axis", "file", "mean_angle"],
         }
     }
 }
@@ -428,7 +438,8 @@ pub struct ModelFile {
     /// Rows of `derivative_table`.
     #[serde(default)]
     pub derivatives: Option<Vec<Derivatives>>,
-    /// `identification.json` of `identified` (relative to the model file).
+    /// `identification.json` of `identified`, `lag_law.json` of `lag` (relative to the
+    /// model file).
     #[serde(default)]
     pub file: Option<PathBuf>,
     /// Groups of `identified`.
@@ -437,6 +448,11 @@ pub struct ModelFile {
     /// Null-derivative fallback of `identified`.
     #[serde(default)]
     pub missing: Option<MissingDerivative>,
+    /// Trim angle α₀ \[rad\] (nose-up) a `lag` law is flown about (|α₀| < π/2): the
+    /// state and forces are taken about the static equilibrium there
+    /// ([`LagAero::with_mean_angle`]).
+    #[serde(default)]
+    pub mean_angle: Option<f64>,
     /// Nonlinear terms added to the model.
     #[serde(default)]
     pub nonlinear: Vec<NonlinearSpec>,
@@ -456,6 +472,7 @@ impl ModelFile {
             file: None,
             groups: None,
             missing: None,
+            mean_angle: None,
             nonlinear: Vec::new(),
         }
     }
@@ -472,6 +489,7 @@ impl ModelFile {
             ("file", self.file.is_some()),
             ("groups", self.groups.is_some()),
             ("missing", self.missing.is_some()),
+            ("mean_angle", self.mean_angle.is_some()),
         ]
         .into_iter()
         .filter_map(|(name, present)| present.then_some(name))
@@ -494,9 +512,49 @@ impl ModelFile {
             file: self.file.clone().filter(|_| k("file")),
             groups: self.groups.clone().filter(|_| k("groups")),
             missing: self.missing.filter(|_| k("missing")),
+            mean_angle: self.mean_angle.filter(|_| k("mean_angle")),
             nonlinear: self.nonlinear.clone(),
         }
     }
+}
+
+/// Whether a JSON text is a lag-law document: its top-level `format` field starts with
+/// `aeroform-lag-law` (any version: a wrong one is then refused by name by
+/// [`read_lag_law`] rather than read as an identification).
+fn is_lag_law(text: &str) -> bool {
+    serde_json::from_str::<serde_json::Value>(text)
+        .ok()
+        .and_then(|v| v.get("format")?.as_str().map(str::to_owned))
+        .is_some_and(|f| f.starts_with("aeroform-lag-law"))
+}
+
+/// Names the file in a lag-law error.
+fn lag_in(path: &Path, e: Error) -> Error {
+    match e {
+        Error::Identify { source, .. } => Error::Identify {
+            context: path.display().to_string(),
+            source,
+        },
+        other => in_file(&path.display().to_string(), other),
+    }
+}
+
+/// Reads a `lag_law.json` (format [`identify::lag::LAG_LAW_FORMAT`]): the document whose
+/// law [`LagAero`] flies.
+///
+/// # Errors
+/// [`Error::Io`] when it cannot be read; [`Error::Identify`] naming the file and the field
+/// (not the document, wrong `format`, bad `chord`, a law parameter out of its bounds).
+pub fn read_lag_law(path: &Path) -> Result<identify::lag::LagLawDocument> {
+    let text = read_text(path)?;
+    identify::lag::LagLawDocument::from_json(&text, path).map_err(|source| Error::Identify {
+        // a JSON error names the file itself
+        context: match source {
+            identify::Error::Json { .. } => "lag law".into(),
+            _ => format!("lag law {}", path.display()),
+        },
+        source,
+    })
 }
 
 /// A loaded aerodynamic model.
@@ -512,18 +570,29 @@ pub struct LoadedModel {
 }
 
 impl LoadedModel {
-    /// Loads a model file or an `identification.json` (by extension `.json` or a leading
-    /// `{`); `chord` is used when the file gives none (an identification never does).
+    /// Loads a model file, a `lag_law.json` or an `identification.json` (by extension
+    /// `.json` or a leading `{`; a lag law by its `format` field, module docs); `chord` is
+    /// used when the file gives none (an identification never does; a lag law always does,
+    /// and its own chord is used).
     ///
     /// # Errors
     /// [`Error::Io`] when a file cannot be read; [`Error::Toml`] naming the file and the
     /// key (unknown, missing, not used by the kind, wrong type); [`Error::InvalidParameter`]
-    /// naming `file: field`; the errors of the model constructors and of
-    /// [`IdentifiedLaw::read`].
+    /// naming `file: field`; the errors of the model constructors, of
+    /// [`IdentifiedLaw::read`] and of [`read_lag_law`].
     pub fn load(path: &Path, chord: Option<f64>) -> Result<Self> {
         let text = read_text(path)?;
         let is_json =
             path.extension().is_some_and(|e| e == "json") || text.trim_start().starts_with('{');
+        if is_json && is_lag_law(&text) {
+            let doc = read_lag_law(path)?;
+            let model = LagAero::new(doc.law, doc.chord, None).map_err(|e| lag_in(path, e))?;
+            return Ok(LoadedModel {
+                model: Arc::new(model),
+                nonlinear: None,
+                identified: None,
+            });
+        }
         if is_json {
             let chord = chord.ok_or_else(|| Error::Toml {
                 source_name: path.display().to_string(),
@@ -645,6 +714,16 @@ impl LoadedModel {
                 ),
                 None,
             ),
+            ModelKind::Lag => {
+                let file = base.join(f.file.as_ref().ok_or_else(|| need("file"))?);
+                let doc = read_lag_law(&file)?;
+                let mut m = LagAero::new(doc.law, f.chord.unwrap_or(doc.chord), f.elastic_axis)
+                    .map_err(wrap)?;
+                if let Some(a0) = f.mean_angle {
+                    m = m.with_mean_angle(a0).map_err(wrap)?;
+                }
+                (Arc::new(m) as Arc<dyn AeroModel>, None)
+            }
             ModelKind::Identified => {
                 let file = base.join(f.file.as_ref().ok_or_else(|| need("file"))?);
                 let mut o = IdentifiedOptions::new(chord.ok_or_else(|| need("chord"))?);
@@ -731,6 +810,7 @@ impl LoadedModel {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::aero::{QuasiSteady, QuasiSteadyKind};
 
     const RIG: &str = r#"
 mass = 1.0933
@@ -953,5 +1033,80 @@ damping_pitch = 0.005
                 .collect::<Vec<_>>(),
             ["elastic_axis"]
         );
+    }
+
+    /// Issue 41: a `lag_law.json` is a model by its `format` field (directly, on the law's
+    /// chord, no apparent mass) and through a model file (`kind = "lag"`: elastic axis,
+    /// chord, trim); bad documents and keys are refused naming the file and the field.
+    #[test]
+    fn lag_laws_load_directly_and_from_model_files_and_bad_ones_are_named() {
+        let scen = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenarios");
+        let law = scen.join("plate-lag.lag_law.json");
+        let direct = LoadedModel::load(&law, Some(0.3)).unwrap();
+        assert_eq!(direct.model.name(), "lag_law");
+        assert_eq!(direct.model.chord(), 0.25, "the law's own chord");
+        assert_eq!(direct.model.n_lag(), 1);
+        let flow = crate::aero::Flow { rho: 1.2, u: 5.0 };
+        assert_eq!(
+            direct.model.apparent_mass(&flow),
+            nalgebra::Matrix2::zeros()
+        );
+        let file = LoadedModel::load(&scen.join("plate-lag.model.toml"), None).unwrap();
+        assert_eq!(file.model.elastic_axis(), Some(-0.3));
+        // attached: the quasi-steady thin aerofoil about the same axis
+        let qs = QuasiSteady::new(0.25, -0.3, QuasiSteadyKind::QuasiSteady, true).unwrap();
+        let (a, b) = (
+            file.model.frequency_response(&flow, 17.0),
+            qs.frequency_response(&flow, 17.0),
+        );
+        assert!((a - b).norm() < 1e-12 * b.norm(), "{a} vs {b}");
+        let dir = tempfile::tempdir().unwrap();
+        let text = std::fs::read_to_string(&law).unwrap();
+        let write = |name: &str, t: &str| {
+            let p = dir.path().join(name);
+            std::fs::write(&p, t).unwrap();
+            p
+        };
+        let model = |extra: &str| {
+            write(
+                "m.model.toml",
+                &format!(
+                    "kind = \"lag\"\nfile = \"{}\"\n{extra}",
+                    law.display().to_string().replace('\\', "/")
+                ),
+            )
+        };
+        let m = LoadedModel::load(&model("chord = 0.5\nmean_angle = 0.2\n"), None).unwrap();
+        assert_eq!(m.model.chord(), 0.5);
+        let show = |p: &Path| LoadedModel::load(p, None).unwrap_err().to_string();
+        let e = show(&model("mean_angle = 3.0\n"));
+        assert!(e.contains("m.model.toml: mean_angle"), "{e}");
+        let e = show(&model("rfa_lags = 2\n"));
+        assert!(
+            e.contains("`rfa_lags` is not used by kind = \"lag\""),
+            "{e}"
+        );
+        let e = show(&write("n.model.toml", "kind = \"lag\"\n"));
+        assert!(e.contains("missing key `file`"), "{e}");
+        let e = show(&write(
+            "v2.json",
+            &text.replace("aeroform-lag-law/1", "aeroform-lag-law/2"),
+        ));
+        assert!(e.contains("v2.json") && e.contains("field `format`"), "{e}");
+        let e = show(&write(
+            "t.json",
+            &text.replace("\"tau1\": 3.0", "\"tau1\": -3.0"),
+        ));
+        assert!(e.contains("t.json") && e.contains("tau1"), "{e}");
+        let e = show(&write(
+            "c.json",
+            &text.replace("\"chord\": 0.25", "\"chord\": 0.0"),
+        ));
+        assert!(e.contains("c.json") && e.contains("field `chord`"), "{e}");
+        let e = show(&write(
+            "x.json",
+            &text.replace("\"sharpness\"", "\"sharp\""),
+        ));
+        assert!(e.contains("x.json") && e.contains("sharpness"), "{e}");
     }
 }
