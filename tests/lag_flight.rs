@@ -1,0 +1,259 @@
+//! End-to-end tests of the lag law in flight (issue 41, item 4): `flutter`, `lco`, `branch`
+//! and `tunnel forced|free` take a `lag_law.json` (directly, or through a model file
+//! `kind = "lag"`) like any model file. The law is the hand-set plate-rig law of
+//! `scenarios/plate-lag.lag_law.json` on `scenarios/plate-rig.structure.toml`: attached,
+//! it is the quasi-steady thin aerofoil about a = −0.3, so its linear flutter speed is that
+//! model's; above it, separation (half at α* = 0.2 rad) limits the flutter to a stable
+//! stall-flutter LCO. Measured on this commit: U_F = 4.1323 m/s (3.163 Hz), Hopf point at
+//! the same speed, supercritical; LCO pitch amplitudes 13.2°, 16.4°, 22.6°, 28.4° at 4.5,
+//! 5, 6, 7 m/s.
+
+use std::path::{Path, PathBuf};
+
+mod common;
+use common::aeroform;
+
+fn scenario(name: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("scenarios")
+        .join(name)
+        .display()
+        .to_string()
+}
+
+fn s(p: &Path) -> String {
+    p.display().to_string()
+}
+
+fn read_json(p: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(p).unwrap()).unwrap()
+}
+
+const RIG: &str = "plate-rig.structure.toml";
+const LAW: &str = "plate-lag.lag_law.json";
+const LAG_MODEL: &str = "plate-lag.model.toml";
+
+/// Runs `aeroform flutter` on the rig with `model`: the critical speed \[m/s\].
+fn flutter_speed(model: &str, out: &Path) -> f64 {
+    let (ok, stdout, stderr) = aeroform(&[
+        "flutter",
+        "--structure",
+        &scenario(RIG),
+        "--model",
+        model,
+        "--speeds",
+        "2:8:61",
+        "--out",
+        &s(out),
+        "--quiet",
+    ]);
+    assert!(ok, "{stdout}\n{stderr}");
+    read_json(&out.join("flutter.json"))["critical"]["speed"]
+        .as_f64()
+        .unwrap_or_else(|| panic!("no flutter speed with {model}"))
+}
+
+/// The lag law's linear flutter is that of the model it reduces to in attached flow (the
+/// quasi-steady thin aerofoil with its noncirculatory terms about the same axis), and the
+/// law read directly (no elastic axis: no apparent mass) equals a model file without
+/// `elastic_axis`.
+#[test]
+fn linear_flutter_is_the_attached_flow_law() {
+    let dir = tempfile::tempdir().unwrap();
+    let qs = dir.path().join("qs.model.toml");
+    std::fs::write(
+        &qs,
+        "kind = \"quasi_steady\"\nchord = 0.25\nelastic_axis = -0.3\n",
+    )
+    .unwrap();
+    let u_lag = flutter_speed(&scenario(LAG_MODEL), &dir.path().join("lag"));
+    let u_qs = flutter_speed(&s(&qs), &dir.path().join("qs"));
+    assert!(
+        (u_lag - u_qs).abs() < 1e-6 * u_qs,
+        "lag {u_lag} vs quasi-steady {u_qs}"
+    );
+    assert!((u_lag - 4.1323).abs() < 1e-3, "U_F {u_lag}");
+    let no_axis = dir.path().join("noaxis.model.toml");
+    std::fs::write(
+        &no_axis,
+        format!(
+            "kind = \"lag\"\nfile = \"{}\"\n",
+            scenario(LAW).replace('\\', "/")
+        ),
+    )
+    .unwrap();
+    let u_json = flutter_speed(&scenario(LAW), &dir.path().join("json"));
+    let u_file = flutter_speed(&s(&no_axis), &dir.path().join("file"));
+    assert_eq!(u_json, u_file);
+    assert!(
+        (u_json - u_lag).abs() > 1e-3,
+        "the apparent mass matters: {u_json} vs {u_lag}"
+    );
+}
+
+/// `branch` finds the Hopf point at the flutter speed (within 0.5 %), a supercritical
+/// branch of stable cycles whose pitch amplitude grows with U and stays bounded, and
+/// `lco` (time integration, sweeps up and down) lands on it: decay below the flutter
+/// speed, the same amplitude up and down (no hysteresis), within 2 % of the branch.
+#[test]
+fn branch_and_lco_agree_on_a_supercritical_stall_flutter_cycle() {
+    let dir = tempfile::tempdir().unwrap();
+    let out: PathBuf = dir.path().join("branch");
+    let (ok, stdout, stderr) = aeroform(&[
+        "branch",
+        "--structure",
+        &scenario(RIG),
+        "--model",
+        &scenario(LAG_MODEL),
+        "--speeds",
+        "3:7.5",
+        "--max-points",
+        "2000",
+        "--out",
+        &s(&out),
+        "--quiet",
+    ]);
+    assert!(ok, "{stdout}\n{stderr}");
+    let json = read_json(&out.join("branch.json"));
+    let hopf = json["hopf_points"][0]["u"].as_f64().unwrap();
+    let u_f = flutter_speed(&scenario(LAG_MODEL), &dir.path().join("flutter"));
+    assert!((hopf - u_f).abs() < 5e-3 * u_f, "Hopf {hopf} vs U_F {u_f}");
+    let b = &json["branches"][0];
+    assert_eq!(b["criticality"], "supercritical");
+    // The onset is degenerate (x₀ − 1 = O(α^{2m}), m = 4: no cubic term), the branch
+    // rises vertically at the Hopf speed; any fold the scan reports lies on that vertical.
+    for f in json["folds"].as_array().unwrap() {
+        let uf = f["U_m_s"].as_f64().unwrap();
+        assert!((uf - hopf).abs() < 1e-6 * hopf, "fold away from onset: {f}");
+    }
+    let stable: Vec<(f64, f64)> = b["points"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|p| p["stable"] == true && p["u"].as_f64().unwrap() > hopf + 0.05)
+        .map(|p| {
+            (
+                p["u"].as_f64().unwrap(),
+                p["amplitude_alpha"].as_f64().unwrap(),
+            )
+        })
+        .collect();
+    assert!(stable.len() > 50, "{} stable points", stable.len());
+    for w in stable.windows(2) {
+        assert!(w[1].0 > w[0].0 && w[1].1 > w[0].1, "not monotonic: {w:?}");
+    }
+    let branch_amp = |u: f64| {
+        let i = stable
+            .iter()
+            .position(|p| p.0 >= u)
+            .expect("speed on branch");
+        let (p, q) = (stable[i - 1], stable[i]);
+        p.1 + (q.1 - p.1) * (u - p.0) / (q.0 - p.0)
+    };
+    assert!(branch_amp(7.0) < 35f64.to_radians(), "bounded");
+
+    let lco = dir.path().join("lco");
+    let (ok, stdout, stderr) = aeroform(&[
+        "lco",
+        "--structure",
+        &scenario(RIG),
+        "--model",
+        &scenario(LAG_MODEL),
+        "--sweep",
+        "3.5,4.5,5,6,7",
+        "--out",
+        &s(&lco),
+        "--quiet",
+    ]);
+    assert!(ok, "{stdout}\n{stderr}");
+    let json = read_json(&lco.join("lco.json"));
+    for dir in ["up", "down"] {
+        let runs = json["sweep"][dir].as_array().unwrap();
+        assert_eq!(runs.len(), 5);
+        for r in runs {
+            let u = r["u"].as_f64().unwrap();
+            let amp = r["amplitude_alpha"].as_f64().unwrap();
+            if u < u_f {
+                assert_eq!(r["classification"], "Decay", "{dir} {u}: {r}");
+            } else {
+                assert_eq!(r["classification"], "Lco", "{dir} {u}: {r}");
+                let want = branch_amp(u);
+                assert!(
+                    (amp - want).abs() < 0.02 * want,
+                    "{dir} U = {u}: LCO {:.3}° vs branch {:.3}°",
+                    amp.to_degrees(),
+                    want.to_degrees()
+                );
+            }
+        }
+    }
+}
+
+/// The virtual wind tunnel flies the law (forced motion and free response) and a bad law
+/// document is refused naming the file and the field, nothing written.
+#[test]
+fn tunnel_takes_the_law_and_bad_documents_are_refused_by_name() {
+    let dir = tempfile::tempdir().unwrap();
+    let forced = dir.path().join("forced");
+    let (ok, stdout, stderr) = aeroform(&[
+        "tunnel",
+        "forced",
+        "--model",
+        &scenario(LAG_MODEL),
+        "--campaign",
+        "config=A",
+        "--duration",
+        "3",
+        "--out",
+        &s(&forced),
+        "--quiet",
+    ]);
+    assert!(ok, "{stdout}\n{stderr}");
+    assert!(forced.join("manifest.toml").exists());
+    let free = dir.path().join("free");
+    let (ok, stdout, stderr) = aeroform(&[
+        "tunnel",
+        "free",
+        "--structure",
+        &scenario(RIG),
+        "--model",
+        &scenario(LAW),
+        "--speeds",
+        "3,6",
+        "--duration",
+        "4",
+        "--out",
+        &s(&free),
+        "--quiet",
+    ]);
+    assert!(ok, "{stdout}\n{stderr}");
+    assert!(free.join("manifest.toml").exists());
+
+    let text = std::fs::read_to_string(scenario(LAW)).unwrap();
+    let bad = dir.path().join("bad.lag_law.json");
+    std::fs::write(
+        &bad,
+        text.replace("\"alpha_star\": 0.2", "\"alpha_star\": 2.0"),
+    )
+    .unwrap();
+    let out = dir.path().join("never");
+    for (cmd, speeds) in [("flutter", "3:7:9"), ("branch", "3:7")] {
+        let (ok, _, stderr) = aeroform(&[
+            cmd,
+            "--structure",
+            &scenario(RIG),
+            "--model",
+            &s(&bad),
+            "--speeds",
+            speeds,
+            "--out",
+            &s(&out),
+        ]);
+        assert!(!ok);
+        assert!(
+            stderr.contains("bad.lag_law.json") && stderr.contains("alpha_star"),
+            "{cmd}: {stderr}"
+        );
+        assert!(!out.exists(), "{cmd} wrote {}", out.display());
+    }
+}
