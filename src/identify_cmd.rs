@@ -81,6 +81,22 @@ pub struct IdentifyArgs {
     /// Level of the ensemble intervals, in (0, 1).
     #[arg(long, default_value_t = identify::ensemble::DEFAULT_LEVEL)]
     pub level: f64,
+    /// Law kind: `memoryless` (the polynomial law of identification.json) or `lag` (a law
+    /// with one separation state, written to lag_law.json; the sparse-regression flags
+    /// above do not apply to it).
+    #[arg(long, value_enum, default_value_t = LawArg::Memoryless)]
+    pub law: LawArg,
+    /// With `--law lag`: hold out the cases whose reduced frequency (`k=0.1`), mean angle
+    /// (`mean=15`, deg) or pitch amplitude (`amplitude=10`, deg) is nearest the value, fit
+    /// the memoryless and the lag law on the others and score both on them.
+    #[arg(long, value_name = "k=K|mean=DEG|amplitude=DEG")]
+    pub hold_out: Option<String>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum LawArg {
+    Memoryless,
+    Lag,
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -197,8 +213,27 @@ impl IdentifyArgs {
     }
 }
 
-/// Runs `aeroform identify`; returns the result (also written to `OUT/identification.json`).
-pub fn run(args: &IdentifyArgs) -> anyhow::Result<Identification> {
+/// Runs `aeroform identify`: the memoryless law (`OUT/identification.json`) or, with
+/// `--law lag`, the lag law (`OUT/lag_law.json`).
+pub fn run(args: &IdentifyArgs) -> anyhow::Result<()> {
+    match args.law {
+        LawArg::Lag => run_lag(args),
+        LawArg::Memoryless => {
+            if args.hold_out.is_some() {
+                return Err(crate::exit::Usage(
+                    "`--hold-out` compares the memoryless law with the lag law: it needs `--law lag`"
+                        .to_string(),
+                )
+                .into());
+            }
+            run_memoryless(args).map(|_| ())
+        }
+    }
+}
+
+/// The memoryless identification; returns the result (also written to
+/// `OUT/identification.json`).
+fn run_memoryless(args: &IdentifyArgs) -> anyhow::Result<Identification> {
     let settings = args.settings();
     settings
         .validate()
@@ -319,4 +354,200 @@ fn write_timing(
     })?;
     identify::io::write_atomic(path, format!("{json}\n").as_bytes())?;
     Ok(())
+}
+
+/// `--law lag`: fit the lag law (with the held-out comparison when asked), then write
+/// `OUT/lag_law.json`. Nothing is written unless the fit succeeds.
+fn run_lag(args: &IdentifyArgs) -> anyhow::Result<()> {
+    use identify::lag::{HoldOut, LagFitOptions, LagLawDocument};
+    if args.ensemble.is_some() {
+        return Err(crate::exit::Usage(
+            "`--ensemble` is not available with `--law lag` (the lag law reports Gauss–Newton \
+             standard errors and correlations, not bootstrap intervals)"
+                .to_string(),
+        )
+        .into());
+    }
+    let hold_out = match &args.hold_out {
+        Some(s) => Some(
+            s.parse::<HoldOut>()
+                .map_err(|e| crate::exit::Usage(format!("`--hold-out`: {e}")))?,
+        ),
+        None => None,
+    };
+    let pre = args.preprocess();
+    pre.check().context("invalid preprocessing option")?;
+    let path = args.out.join("lag_law.json");
+    let mut written = vec![path.as_path()];
+    written.extend(args.timing_json.as_deref());
+    let inputs = [crate::outdir::Input::new("DATASET", &args.dataset)];
+    for w in &written {
+        crate::outdir::refuse_overlap(w, "output file", &inputs)?;
+    }
+
+    let t_start = Instant::now();
+    let options = ReadOptions {
+        flip_lift: args.flip_lift,
+    };
+    let dataset = read_dataset_with(&args.dataset, &options)
+        .with_context(|| format!("reading data set {}", args.dataset.display()))?;
+    let read_s = t_start.elapsed().as_secs_f64();
+    let t_prep = Instant::now();
+    let prepared = prepare_dataset(&dataset, &pre).context("preprocessing")?;
+    let prepare_s = t_prep.elapsed().as_secs_f64();
+    if prepared.cases.is_empty() {
+        anyhow::bail!(
+            "{}: the data set has no forced-motion case to identify",
+            args.dataset.display()
+        );
+    }
+    let t_id = Instant::now();
+    let opts = LagFitOptions::default();
+    let result = match hold_out {
+        Some(h) => identify::lag::held_out(&prepared.cases, h, &opts).map(|(f, _)| f),
+        None => identify::lag::fit(&prepared.cases, &opts),
+    };
+    // a refused law or a prediction outside the fitted range is about the input (exit 2)
+    let fit = result.map_err(|e| match e {
+        identify::Error::Unphysical { .. } | identify::Error::OutsideFittedRange { .. } => {
+            anyhow::Error::from(crate::exit::Usage(format!("lag law: {e}")))
+        }
+        e => anyhow::Error::from(e).context("lag-law identification"),
+    })?;
+    let identify_s = t_id.elapsed().as_secs_f64();
+    let doc = LagLawDocument::from_fit(&fit, &dataset.manifest.name, prepared.cases[0].chord)?;
+
+    // the fit succeeded: only now is the output folder created and written
+    let _out = crate::outdir::SharedDir::begin(&args.out, &written, &inputs)?;
+    identify::io::write_atomic(&path, doc.to_json()?.as_bytes())?;
+    let total_s = t_start.elapsed().as_secs_f64();
+    if let Some(t) = &args.timing_json {
+        write_timing(
+            t,
+            read_s,
+            prepare_s,
+            identify_s,
+            total_s,
+            prepared.cases.len(),
+        )?;
+    }
+    if !crate::ui::silent() {
+        crate::ui::say!("{}", lag_table(&fit));
+        crate::ui::say!(
+            "{} cases: read {read_s:.3} s, preprocess {prepare_s:.3} s, lag law {identify_s:.3} s; wrote {}",
+            prepared.cases.len(),
+            path.display()
+        );
+    }
+    crate::ui::document(&doc)?;
+    Ok(())
+}
+
+/// The human-readable table of a lag-law fit.
+fn lag_table(fit: &identify::lag::LagFit) -> String {
+    use std::fmt::Write;
+    let r = &fit.report;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "lag law: τ₁ dx/ds + x = x₀(α_e − τ₂·Bα̇/(2U)), x₀ = 1/(1 + |α/α*|^(2m))"
+    );
+    let _ = writeln!(
+        s,
+        "{:<12} {:>12} {:>12}  unit",
+        "parameter", "value", "std. error"
+    );
+    for p in &r.parameters {
+        let se = p
+            .standard_error
+            .map_or("-".to_string(), |v| format!("{v:.4}"));
+        let extra = if p.name == "alpha_star" {
+            format!(" ({:.2} deg)", p.value.to_degrees())
+        } else {
+            String::new()
+        };
+        let _ = writeln!(
+            s,
+            "{:<12} {:>12.4} {:>12}  {}{extra}",
+            p.symbol, p.value, se, p.unit
+        );
+    }
+    match r.tau_correlation {
+        Some(c) if r.tau_collinear => {
+            let _ = writeln!(
+                s,
+                "corr(τ₁, τ₂) = {c:.3}: nearly collinear, the records fix little more than a combination of the two lags"
+            );
+        }
+        Some(c) => {
+            let _ = writeln!(s, "corr(τ₁, τ₂) = {c:.3}");
+        }
+        None => {
+            let _ = writeln!(s, "corr(τ₁, τ₂): JᵀJ singular, no correlation");
+        }
+    }
+    let terms = |ch: &identify::lag::LagChannel| {
+        ch.terms
+            .iter()
+            .map(|(c, v)| format!("{v:+.4}·{}", c.label()))
+            .collect::<Vec<_>>()
+            .join(" ")
+    };
+    let _ = writeln!(s, "C_L = {}", terms(&fit.law.lift));
+    let _ = writeln!(s, "C_M = {}", terms(&fit.law.moment));
+    let _ = writeln!(
+        s,
+        "{:<28} {:>7} {:>7} {:>7} {:>9} {:>9}",
+        "case (fitted)", "K", "mean°", "amp°", "R² C_L", "R² C_M"
+    );
+    for c in &r.cases {
+        let _ = writeln!(
+            s,
+            "{:<28} {:>7.4} {:>7.2} {:>7.2} {:>9.4} {:>9.4}",
+            c.id, c.k, c.mean_deg, c.amplitude_deg, c.r2_lift, c.r2_moment
+        );
+    }
+    if let Some(h) = &r.held_out {
+        let _ = writeln!(
+            s,
+            "held out ({}): memoryless law (cubic, 30 terms + constant, one fit on the training cases) vs lag law",
+            h.spec
+        );
+        let _ = writeln!(
+            s,
+            "{:<28} {:>7} {:>7} {:>11} {:>11} {:>11} {:>11}",
+            "case (held out)",
+            "K",
+            "mean°",
+            "memo R² C_L",
+            "lag R² C_L",
+            "memo R² C_M",
+            "lag R² C_M"
+        );
+        for row in &h.rows {
+            let _ = writeln!(
+                s,
+                "{:<28} {:>7.4} {:>7.2} {:>11.4} {:>11.4} {:>11.4} {:>11.4}",
+                row.id,
+                row.k,
+                row.mean_deg,
+                row.memoryless_r2_lift,
+                row.lag_r2_lift,
+                row.memoryless_r2_moment,
+                row.lag_r2_moment
+            );
+        }
+        let _ = write!(
+            s,
+            "{:<28} {:>7} {:>7} {:>11.4} {:>11.4} {:>11.4} {:>11.4}",
+            "mean",
+            "",
+            "",
+            h.mean_r2_lift[0],
+            h.mean_r2_lift[1],
+            h.mean_r2_moment[0],
+            h.mean_r2_moment[1]
+        );
+    }
+    s.trim_end().to_string()
 }

@@ -179,6 +179,13 @@ pub struct LagReport {
     pub objective: f64,
     /// Levenberg–Marquardt iterations (both stages).
     pub iterations: usize,
+    /// Parameters held fixed (not fitted), by name.
+    #[serde(default)]
+    pub fixed: Vec<String>,
+    /// What the fit had to decide (e.g. a parameter fixed because the records cannot
+    /// separate it).
+    #[serde(default)]
+    pub notes: Vec<String>,
     /// Held-out comparison, when one was asked for.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub held_out: Option<super::holdout::HeldOutReport>,
@@ -222,6 +229,8 @@ struct Problem<'a> {
     series: &'a [LagSeries],
     lift: Vec<LagColumn>,
     moment: Vec<LagColumn>,
+    /// Which of θ are fitted (a fixed one keeps its start value).
+    free: [bool; 4],
 }
 
 /// One evaluation of the projected problem at θ.
@@ -344,6 +353,10 @@ impl Problem<'_> {
         let typical = [1.0, 1.0, 0.1, 1.0];
         let mut jac = Vec::with_capacity(4);
         for j in 0..4 {
+            if !self.free[j] {
+                jac.push(vec![0.0; base.residual.len()]);
+                continue;
+            }
             let mut h = 1e-6 * theta[j].abs().max(typical[j]);
             if theta[j] + h > BOUNDS[j].1 {
                 h = -h;
@@ -376,6 +389,9 @@ impl Problem<'_> {
                 let mut m = a;
                 for i in 0..4 {
                     m[i * 4 + i] += lambda * a[i * 4 + i].max(1e-12) + 1e-14;
+                    if !self.free[i] {
+                        m[i * 4 + i] = 1.0;
+                    }
                 }
                 let mut d = [-g[0], -g[1], -g[2], -g[3]];
                 let ok = cholesky_solve(
@@ -436,19 +452,31 @@ fn normal_equations(jac: &[Vec<f64>], r: &[f64]) -> ([f64; 16], [f64; 4]) {
     (a, g)
 }
 
-/// Standard errors and correlation of θ from J at the optimum (`None` if JᵀJ is singular).
-fn covariance(jac: &[Vec<f64>], cost: f64, dof: usize) -> Option<([f64; 4], [[f64; 4]; 4])> {
+/// Standard errors and correlation of the free parameters of θ from J at the optimum
+/// (`None` if JᵀJ is singular); a fixed parameter has standard error 0 and correlation 0
+/// with the others.
+fn covariance(
+    jac: &[Vec<f64>],
+    cost: f64,
+    dof: usize,
+    free: [bool; 4],
+) -> Option<([f64; 4], [[f64; 4]; 4])> {
     let (a, _) = normal_equations(jac, &vec![0.0; jac[0].len()]);
-    let mut m = a;
-    let mut inv = [0.0; 16];
-    for i in 0..4 {
-        inv[i * 4 + i] = 1.0;
+    let idx: Vec<usize> = (0..4).filter(|&i| free[i]).collect();
+    let k = idx.len();
+    let mut m: Vec<f64> = idx
+        .iter()
+        .flat_map(|&i| idx.iter().map(move |&j| a[i * 4 + j]))
+        .collect();
+    let mut inv = vec![0.0; k * k];
+    for i in 0..k {
+        inv[i * k + i] = 1.0;
     }
     cholesky_solve(
         &mut m,
-        4,
+        k,
         &mut inv,
-        4,
+        k,
         PivotFloor::RelativeToLargestDiagonal(1e-13),
     )
     .ok()?;
@@ -456,11 +484,12 @@ fn covariance(jac: &[Vec<f64>], cost: f64, dof: usize) -> Option<([f64; 4], [[f6
     let mut se = [0.0; 4];
     let mut corr = [[0.0; 4]; 4];
     for i in 0..4 {
-        se[i] = (s2 * inv[i * 4 + i]).sqrt();
+        corr[i][i] = 1.0;
     }
-    for i in 0..4 {
-        for j in 0..4 {
-            corr[i][j] = inv[i * 4 + j] / (inv[i * 4 + i] * inv[j * 4 + j]).sqrt();
+    for (p, &i) in idx.iter().enumerate() {
+        se[i] = (s2 * inv[p * k + p]).sqrt();
+        for (q, &j) in idx.iter().enumerate() {
+            corr[i][j] = inv[p * k + q] / (inv[p * k + p] * inv[q * k + q]).sqrt();
         }
     }
     if se.iter().all(|v| v.is_finite()) && corr.iter().flatten().all(|v| v.is_finite()) {
@@ -662,6 +691,42 @@ fn select_moment(
     ))
 }
 
+/// The output-error stages from the best of `starts`: LM with the full moment support, the
+/// δ-path selection, LM again on the selected support. Returns (θ, evaluation, iterations,
+/// selection); `p.moment` is left on the selected support.
+fn stages(
+    p: &mut Problem<'_>,
+    starts: &[[f64; 4]],
+    opts: &LagFitOptions,
+) -> Result<([f64; 4], Eval, usize, MomentSelection)> {
+    let mut best: Option<([f64; 4], f64)> = None;
+    let mut first_err = None;
+    for &s in starts {
+        let s = clamp_theta(s);
+        match p.eval(s, None) {
+            Ok(e) => {
+                if best.is_none_or(|(_, c)| e.cost < c) {
+                    best = Some((s, e.cost));
+                }
+            }
+            Err(e) => {
+                first_err.get_or_insert(e);
+            }
+        }
+    }
+    let Some((theta0, _)) = best else {
+        return Err(first_err.unwrap_or_else(|| Error::Numerical {
+            context: "lag law".into(),
+            message: "no starting point".into(),
+        }));
+    };
+    let (theta1, e1, it1) = p.minimise(theta0, opts.max_iter)?;
+    let (moment_cols, selection) = select_moment(p, &e1, opts)?;
+    p.moment = moment_cols;
+    let (theta, e, it2) = p.minimise(theta1, opts.max_iter)?;
+    Ok((theta, e, it1 + it2, selection))
+}
+
 /// Fits a lag law to the forced cases `cases` (module docs).
 ///
 /// # Errors
@@ -694,6 +759,7 @@ pub fn fit_series(series: &[LagSeries], opts: &LagFitOptions) -> Result<LagFit> 
         series,
         lift: opts.lift_columns.clone(),
         moment: opts.moment_columns.clone(),
+        free: [true; 4],
     };
     // a few starts around the data's guess; the best by output error goes on
     let mut starts = vec![init];
@@ -702,30 +768,31 @@ pub fn fit_series(series: &[LagSeries], opts: &LagFitOptions) -> Result<LagFit> 
             starts.push([t1, t1 * t2f, init[2], init[3]]);
         }
     }
-    let mut best: Option<([f64; 4], f64)> = None;
-    let mut first_err = None;
-    for s in starts {
-        match p.eval(clamp_theta(s), None) {
-            Ok(e) => {
-                if best.is_none_or(|(_, c)| e.cost < c) {
-                    best = Some((clamp_theta(s), e.cost));
-                }
-            }
-            Err(e) => {
-                first_err.get_or_insert(e);
-            }
-        }
+    let (mut theta, mut e, mut iterations, mut selection) = stages(&mut p, &starts, opts)?;
+    let mut notes = Vec::new();
+    let lo1 = BOUNDS[0].0 + 1e-3;
+    if theta[0] <= lo1 && theta[1] > 0.0 {
+        // the lag ran to its open bound with the input lead carrying the delay: at one or
+        // two close frequencies the two enter the loop nearly as one delay; the nested law
+        // with τ₂ = 0 (a pure separation lag) is fitted instead
+        p.free = [true, false, true, true];
+        p.moment = opts.moment_columns.clone();
+        let sum = (init[0] + init[1]).clamp(0.3, 50.0);
+        let starts: Vec<[f64; 4]> = [sum, 1.0, 3.0, 8.0, 20.0]
+            .iter()
+            .map(|&t1| [t1, 0.0, init[2], init[3]])
+            .collect();
+        let (t, e2, it, sel) = stages(&mut p, &starts, opts)?;
+        notes.push(format!(
+            "with τ₂ free the fit ran τ₁ to its lower bound {} (τ₂ = {:.3} b/U carried the whole \
+             delay): τ₁ and τ₂ are not separable on these records, τ₂ is fixed at 0",
+            BOUNDS[0].0, theta[1]
+        ));
+        theta = t;
+        e = e2;
+        iterations += it;
+        selection = sel;
     }
-    let Some((theta0, _)) = best else {
-        return Err(first_err.unwrap_or_else(|| Error::Numerical {
-            context: "lag law".into(),
-            message: "no starting point".into(),
-        }));
-    };
-    let (theta1, e1, it1) = p.minimise(theta0, opts.max_iter)?;
-    let (moment_cols, selection) = select_moment(&p, &e1, opts)?;
-    p.moment = moment_cols;
-    let (theta, e, it2) = p.minimise(theta1, opts.max_iter)?;
 
     // refusals: open bounds and the state's range
     for (i, (lo, hi)) in BOUNDS.iter().enumerate() {
@@ -767,7 +834,7 @@ pub fn fit_series(series: &[LagSeries], opts: &LagFitOptions) -> Result<LagFit> 
     let jac = p.jacobian(theta, &e)?;
     let n_lin = p.lift.len() + p.moment.len();
     let dof = e.residual.len().saturating_sub(4 + n_lin);
-    let cov = covariance(&jac, e.cost, dof);
+    let cov = covariance(&jac, e.cost, dof, p.free);
     let parameters = PARAMETERS
         .iter()
         .enumerate()
@@ -776,11 +843,13 @@ pub fn fit_series(series: &[LagSeries], opts: &LagFitOptions) -> Result<LagFit> 
             symbol: sym.to_string(),
             value: theta[i],
             unit: unit.to_string(),
-            standard_error: cov.map(|c| c.0[i]),
+            standard_error: cov.map(|c| c.0[i]).filter(|_| p.free[i]),
         })
         .collect();
     let correlation = cov.map(|c| c.1);
-    let tau_correlation = correlation.map(|c| c[0][1]);
+    let tau_correlation = correlation
+        .filter(|_| p.free[0] && p.free[1])
+        .map(|c| c[0][1]);
     let mut lo = f64::INFINITY;
     let mut hi = f64::NEG_INFINITY;
     for (s, &st) in series.iter().zip(&e.starts) {
@@ -816,7 +885,14 @@ pub fn fit_series(series: &[LagSeries], opts: &LagFitOptions) -> Result<LagFit> 
         moment_selection: selection,
         initial: init,
         objective: e.cost,
-        iterations: it1 + it2,
+        iterations,
+        fixed: PARAMETERS
+            .iter()
+            .zip(p.free)
+            .filter(|(_, f)| !f)
+            .map(|(n, _)| n.0.to_string())
+            .collect(),
+        notes,
         held_out: None,
     };
     Ok(LagFit { law, report })
