@@ -257,3 +257,143 @@ fn tunnel_takes_the_law_and_bad_documents_are_refused_by_name() {
         assert!(!out.exists(), "{cmd} wrote {}", out.display());
     }
 }
+
+/// LCO sweep of `model` on the rig at `speeds` (comma list): (U, classification, pitch
+/// amplitude \[rad\]) of the upward runs.
+fn lco_sweep(model: &str, speeds: &str, out: &Path) -> Vec<(f64, String, f64)> {
+    let (ok, stdout, stderr) = aeroform(&[
+        "lco",
+        "--structure",
+        &scenario(RIG),
+        "--model",
+        model,
+        "--sweep",
+        speeds,
+        "--out",
+        &s(out),
+        "--quiet",
+    ]);
+    assert!(ok, "{stdout}\n{stderr}");
+    read_json(&out.join("lco.json"))["sweep"]["up"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| {
+            (
+                r["u"].as_f64().unwrap(),
+                r["classification"].as_str().unwrap().to_string(),
+                r["amplitude_alpha"].as_f64().unwrap(),
+            )
+        })
+        .collect()
+}
+
+/// The truth side of the round trip (issue 41 item 4; fast): the project's stall truth
+/// (`scenarios/plate-stall.model.toml`, Beddoes–Leishman type) on the plate rig has its
+/// stall-flutter LCO above U_F = 6.595 m/s, supercritical, at ≥ 5 speeds. Measured on
+/// this commit: decay at 6 and 6.5 m/s; 15.75°, 17.61°, 18.87°, 20.82° at 7, 7.5, 8,
+/// 9 m/s. These are the amplitudes an identified lag law must reproduce within 5 %.
+#[test]
+fn stall_truth_lco_amplitudes_for_the_round_trip() {
+    let dir = tempfile::tempdir().unwrap();
+    let runs = lco_sweep(
+        &scenario("plate-stall.model.toml"),
+        "6,6.5,7,7.5,8,9",
+        dir.path(),
+    );
+    let want = [0.0, 0.0, 15.75, 17.61, 18.87, 20.82];
+    for ((u, class, amp), w) in runs.iter().zip(want) {
+        if w == 0.0 {
+            assert_eq!(class, "Decay", "{u}");
+        } else {
+            assert_eq!(class, "Lco", "{u}");
+            assert!(
+                (amp.to_degrees() - w).abs() < 0.01 * w,
+                "U = {u}: {:.2}° vs {w}°",
+                amp.to_degrees()
+            );
+        }
+    }
+}
+
+/// The whole round trip (slow, about a minute: `cargo test --release --test lag_flight --
+/// --ignored`): the stall truth → the paper's forced campaign (configurations A–G,
+/// `tunnel forced`) → `identify --law lag` → the lag law flown on the plate rig
+/// (`kind = "lag"`, elastic axis of the truth) → flutter onset and LCO amplitudes against
+/// the truth's. Measured on this commit: onset 6.542 vs 6.595 m/s (−0.8 %); at 7 m/s
+/// 15.96° vs 15.75° (+1.4 %), at 9 m/s 23.58° vs 20.82° (+13 %); at 7.5 and 8 m/s the lag
+/// law's runs stop unsettled at the time cap. The issue's acceptance (amplitudes within
+/// 5 % at ≥ 5 speeds) is therefore not met yet; this test guards the onset (2 %) and the
+/// amplitudes at the settled speeds (15 %).
+#[test]
+#[ignore = "slow: forced campaign and lag-law identification (about a minute)"]
+fn round_trip_stall_truth_to_lag_law_lco() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = dir.path().join("forced");
+    let (ok, stdout, stderr) = aeroform(&[
+        "tunnel",
+        "forced",
+        "--model",
+        &scenario("plate-stall.model.toml"),
+        "--campaign",
+        "paper",
+        "--out",
+        &s(&data),
+        "--quiet",
+    ]);
+    assert!(ok, "{stdout}\n{stderr}");
+    let id = dir.path().join("id");
+    let (ok, stdout, stderr) = aeroform(&[
+        "identify",
+        &s(&data),
+        "--law",
+        "lag",
+        "--out",
+        &s(&id),
+        "--quiet",
+    ]);
+    assert!(ok, "{stdout}\n{stderr}");
+    let model = dir.path().join("lag.model.toml");
+    std::fs::write(
+        &model,
+        format!(
+            "kind = \"lag\"\nfile = \"{}\"\nelastic_axis = -0.3\n",
+            s(&id.join("lag_law.json")).replace('\\', "/")
+        ),
+    )
+    .unwrap();
+    let u_lag = flutter_speed(&s(&model), &dir.path().join("f-lag"));
+    let u_truth = flutter_speed(
+        &scenario("plate-stall.model.toml"),
+        &dir.path().join("f-truth"),
+    );
+    assert!(
+        (u_lag - u_truth).abs() < 0.02 * u_truth,
+        "onset {u_lag} vs truth {u_truth}"
+    );
+    let speeds = "6,6.5,7,7.5,8,9";
+    let lag = lco_sweep(&s(&model), speeds, &dir.path().join("l-lag"));
+    let truth = lco_sweep(
+        &scenario("plate-stall.model.toml"),
+        speeds,
+        &dir.path().join("l-truth"),
+    );
+    let mut compared = 0;
+    for (l, t) in lag.iter().zip(&truth) {
+        eprintln!(
+            "U = {}: lag {} {:.2}°, truth {} {:.2}°",
+            l.0,
+            l.1,
+            l.2.to_degrees(),
+            t.1,
+            t.2.to_degrees()
+        );
+        if l.1 == "Lco" && t.1 == "Lco" {
+            assert!((l.2 - t.2).abs() < 0.15 * t.2, "U = {}", l.0);
+            compared += 1;
+        } else if t.1 == "Decay" {
+            assert_eq!(l.1, "Decay", "U = {}", l.0);
+        }
+    }
+    assert!(compared >= 2, "{compared} settled LCO speeds");
+}
