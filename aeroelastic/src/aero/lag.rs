@@ -91,7 +91,7 @@ impl LagAero {
     /// # Errors
     /// [`Error::InvalidParameter`] (`mean_angle`) unless |α₀| < π/2.
     pub fn with_mean_angle(mut self, alpha0: f64) -> Result<Self> {
-        if !(alpha0.abs() < std::f64::consts::FRAC_PI_2) {
+        if !alpha0.is_finite() || alpha0.abs() >= std::f64::consts::FRAC_PI_2 {
             return Err(Error::param(
                 "mean_angle",
                 alpha0,
