@@ -159,7 +159,7 @@ pub fn run(args: &BranchArgs) -> anyhow::Result<()> {
             stop_text(&b.stop)
         );
         if let BranchEnd::NotConverged { message, .. } = &b.stop {
-            eprintln!("warning: branch {i} stopped early: it did not converge {message}");
+            crate::ui::warning!("warning: branch {i} stopped early: it did not converge {message}");
         }
         for e in &b.events {
             crate::ui::say!(

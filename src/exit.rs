@@ -50,6 +50,14 @@ fn is_input_error(c: &(dyn std::error::Error + 'static)) -> bool {
     {
         return true;
     }
+    // an input refused by its readers: not a regular file, beyond its size cap, not UTF-8
+    // (`identify::io::read_text`), whichever crate's error carries it
+    if let Some(e) = c.downcast_ref::<std::io::Error>() {
+        return matches!(
+            e.kind(),
+            std::io::ErrorKind::InvalidInput | std::io::ErrorKind::InvalidData
+        );
+    }
     // `Context` variants hold their source boxed: the chain shows the box, look inside
     if let Some(e) = c.downcast_ref::<Box<study::Error>>() {
         return is_input_error(&**e);

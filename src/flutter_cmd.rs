@@ -70,7 +70,7 @@ pub fn load(structure: &Path, model: &Path, chord: Option<f64>) -> anyhow::Resul
     // The library's errors name the file and the field.
     let pair = LoadedPair::load(structure, model, chord).context("structure and model files")?;
     for w in pair.warnings() {
-        eprintln!("warning: {}: {w}", model.display());
+        crate::ui::warning!("warning: {}: {w}", model.display());
     }
     Ok(pair)
 }
@@ -177,7 +177,7 @@ pub fn run(args: &FlutterArgs) -> anyhow::Result<()> {
         show("ensemble f_F", &e.flutter_frequency_hz, "Hz");
         show("ensemble U_D", &e.divergence_speed, "m/s");
         for f in &e.failures {
-            eprintln!("warning: ensemble: {f}");
+            crate::ui::warning!("warning: ensemble: {f}");
         }
     }
     crate::ui::say!("wrote {}", path.display());

@@ -169,7 +169,7 @@ pub fn run(args: &LcoArgs) -> anyhow::Result<()> {
             }
         }
         for f in &le.failures {
-            eprintln!("warning: ensemble: {f}");
+            crate::ui::warning!("warning: ensemble: {f}");
         }
         doc.ensemble = Some(le);
     }

@@ -99,7 +99,10 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {}", exit::message(&e));
+            // escaped for the terminal and clipped: file contents quoted in an error are
+            // untrusted (issue 39, rows 4 and 5)
+            let msg = exit::message(&e);
+            eprintln!("error: {}", ui::escape(&ui::clip(&msg, 4096)));
             ExitCode::from(exit::code(&e))
         }
     }

@@ -98,7 +98,7 @@ pub fn merge_run(args: &MergeArgs) -> anyhow::Result<()> {
         .iter()
         .map(|p| {
             let text =
-                std::fs::read_to_string(p).with_context(|| format!("reading {}", p.display()))?;
+                identify::io::read_text(p).with_context(|| format!("reading {}", p.display()))?;
             let v: serde_json::Value = serde_json::from_str(&text)
                 .with_context(|| format!("{}: not JSON", p.display()))?;
             Ok((p.display().to_string(), v))

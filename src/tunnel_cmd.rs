@@ -164,7 +164,7 @@ fn manifest_json(dir: &std::path::Path) -> anyhow::Result<serde_json::Value> {
     }
     let path = dir.join("manifest.toml");
     let text =
-        std::fs::read_to_string(&path).with_context(|| format!("reading {}", path.display()))?;
+        identify::io::read_text(&path).with_context(|| format!("reading {}", path.display()))?;
     let v: toml::Value = toml::from_str(&text).with_context(|| format!("{}", path.display()))?;
     Ok(serde_json::to_value(v)?)
 }

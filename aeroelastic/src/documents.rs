@@ -261,7 +261,7 @@ fn parse_document<T: DeserializeOwned>(text: &str, source: &str, expected: &str)
 
 /// Reads the file `path` as a document of type `T` tagged `expected`.
 fn read_document<T: DeserializeOwned>(path: &Path, expected: &str) -> Result<T> {
-    let text = std::fs::read_to_string(path).map_err(|e| crate::Error::Io {
+    let text = identify::io::read_text(path).map_err(|e| crate::Error::Io {
         path: path.display().to_string(),
         message: e.to_string(),
     })?;

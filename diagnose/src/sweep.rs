@@ -154,7 +154,7 @@ impl SweepSpec {
     /// # Errors
     /// [`Error::Io`] when the file cannot be read; otherwise as [`SweepSpec::from_json`].
     pub fn read(path: &Path) -> Result<Self> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::Io {
+        let text = identify::io::read_text(path).map_err(|e| Error::Io {
             context: format!("reading {}", path.display()),
             message: e.to_string(),
         })?;

@@ -73,6 +73,118 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     Ok(())
 }
 
+/// Opens `path` for reading only when it is a regular file (after following symbolic
+/// links): a FIFO, a device (`/dev/zero`), a socket or a folder is refused without blocking
+/// (the open is non-blocking, the type is read from the open file itself), so a hostile data
+/// set cannot hang or exhaust a reader (issue 39, row 5).
+///
+/// # Errors
+/// [`Error::Io`] as [`open_regular_io`].
+pub fn open_regular(path: &Path) -> Result<std::fs::File> {
+    open_regular_io(path).map_err(|e| Error::io(path, e))
+}
+
+/// [`open_regular`] with a plain I/O error, for the readers of the other crates.
+///
+/// # Errors
+/// The file cannot be opened, or is not a regular file (the message says what it is).
+pub fn open_regular_io(path: &Path) -> std::io::Result<std::fs::File> {
+    let mut o = std::fs::OpenOptions::new();
+    o.read(true);
+    #[cfg(target_os = "linux")]
+    {
+        use std::os::unix::fs::OpenOptionsExt;
+        // O_NONBLOCK: opening a FIFO without a writer returns at once
+        o.custom_flags(0o4000);
+    }
+    let f = o.open(path)?;
+    let m = f.metadata()?;
+    if m.is_file() {
+        return Ok(f);
+    }
+    let what = if m.is_dir() {
+        "a folder"
+    } else {
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::FileTypeExt;
+            let t = m.file_type();
+            if t.is_fifo() {
+                "a FIFO (named pipe)"
+            } else if t.is_char_device() || t.is_block_device() {
+                "a device"
+            } else if t.is_socket() {
+                "a socket"
+            } else {
+                "not a regular file"
+            }
+        }
+        #[cfg(not(unix))]
+        {
+            "not a regular file"
+        }
+    };
+    Err(std::io::Error::new(
+        std::io::ErrorKind::InvalidInput,
+        format!("is {what}; only regular files are read"),
+    ))
+}
+
+/// Reads a whole text file of at most `max_bytes` (a regular file, [`open_regular`]),
+/// checked as UTF-8 with the line and byte of the first invalid sequence.
+///
+/// # Errors
+/// [`Error::Io`] as [`read_text_capped_io`].
+pub fn read_text_capped(path: &Path, max_bytes: u64) -> Result<String> {
+    read_text_capped_io(path, max_bytes).map_err(|e| Error::io(path, e))
+}
+
+/// [`read_text_capped`] with a plain I/O error, for the readers of the other crates; the cap
+/// is [`crate::limits::MAX_TEXT_FILE_BYTES`] unless a caller has its own.
+///
+/// # Errors
+/// As [`open_regular_io`]; the file is larger than `max_bytes` (its size and the cap named);
+/// it is not UTF-8 (line and byte named).
+pub fn read_text_capped_io(path: &Path, max_bytes: u64) -> std::io::Result<String> {
+    use std::io::Read;
+    let f = open_regular_io(path)?;
+    let too_big = |n: u64| {
+        std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!(
+                "{n} bytes or more; files of this kind are read up to {max_bytes} bytes \
+                 (the limits table's MAX_TEXT_FILE_BYTES)"
+            ),
+        )
+    };
+    let len = f.metadata().map(|m| m.len()).unwrap_or(0);
+    if len > max_bytes {
+        return Err(too_big(len));
+    }
+    let mut bytes = Vec::with_capacity(len as usize);
+    f.take(max_bytes + 1).read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > max_bytes {
+        return Err(too_big(bytes.len() as u64));
+    }
+    String::from_utf8(bytes).map_err(|e| {
+        let valid = &e.as_bytes()[..e.utf8_error().valid_up_to()];
+        let line = 1 + valid.iter().filter(|&&b| b == b'\n').count();
+        let col = valid.len() - valid.iter().rposition(|&b| b == b'\n').map_or(0, |p| p + 1);
+        std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            format!("line {line}, byte {}: not valid UTF-8", col + 1),
+        )
+    })
+}
+
+/// [`read_text_capped_io`] with the cap of the limits table.
+///
+/// # Errors
+/// As [`read_text_capped_io`].
+pub fn read_text(path: &Path) -> std::io::Result<String> {
+    read_text_capped_io(path, crate::limits::MAX_TEXT_FILE_BYTES as u64)
+}
+
 /// File an aeroform command writes into its output folder as the very last step before the
 /// folder is moved into place: the folder is complete. Content: `format`, `command`.
 pub const COMPLETE_MARKER: &str = ".aeroform-complete";

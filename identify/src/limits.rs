@@ -79,6 +79,20 @@ pub const MAX_NEWTON_ITERATIONS: usize = 1_000;
 /// by default).
 pub const MAX_N_DELTA: usize = 100_000;
 
+/// Largest text file read whole \[bytes\]: a manifest, study, model or structure file, a
+/// sweep specification, a part or result document, a measured bifurcation table (64 MiB;
+/// the largest shipped one is 30 kB). Beyond it a file is refused before it is read, so a
+/// link to `/dev/zero` or a sparse file cannot exhaust memory (issue 39, row 5).
+pub const MAX_TEXT_FILE_BYTES: f64 = 67_108_864.0;
+/// Largest line of a case CSV \[bytes\] (a row of five numbers is under 120 bytes): a
+/// file without line breaks is refused at this length, not held whole.
+pub const MAX_CSV_LINE_BYTES: usize = 1 << 20;
+/// Largest number of `[[case]]` entries of a data set (ten times the paper's 448 cases ten
+/// times over).
+pub const MAX_DATASET_CASES: usize = 50_000;
+/// Largest number of rows (points) of a measured bifurcation table.
+pub const MAX_MEASURED_POINTS: usize = 100_000;
+
 /// One row of the limits table.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Limit {
@@ -119,6 +133,10 @@ pub const TABLE: &[Limit] = &[
     Limit { name: "MAX_SCAN_SPEEDS", max: MAX_SCAN_SPEEDS as f64, unit: "-", set_by: "Rust API `BranchOptions::n_scan`" },
     Limit { name: "MAX_NEWTON_ITERATIONS", max: MAX_NEWTON_ITERATIONS as f64, unit: "-", set_by: "Rust API `BranchOptions::max_newton`" },
     Limit { name: "MAX_N_DELTA", max: MAX_N_DELTA as f64, unit: "-", set_by: "`identify --n-delta`; study `[identify] n_delta`; Python `n_delta`" },
+    Limit { name: "MAX_TEXT_FILE_BYTES", max: MAX_TEXT_FILE_BYTES, unit: "bytes", set_by: "the size of a manifest, study, model, structure, sweep, part or result document, measured table" },
+    Limit { name: "MAX_CSV_LINE_BYTES", max: MAX_CSV_LINE_BYTES as f64, unit: "bytes", set_by: "a line of a case CSV" },
+    Limit { name: "MAX_DATASET_CASES", max: MAX_DATASET_CASES as f64, unit: "-", set_by: "manifest `[[case]]` entries" },
+    Limit { name: "MAX_MEASURED_POINTS", max: MAX_MEASURED_POINTS as f64, unit: "-", set_by: "rows of a measured bifurcation table (`--measured`, `--measured-branch`)" },
 ];
 
 /// The row of [`TABLE`] named `name` (`MAX_SPEED`).

@@ -41,7 +41,7 @@ pub fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<()> {
 /// [`Error::Io`] when it cannot be read, [`Error::Json`] when it is not a `T`; both name the
 /// file.
 pub fn read_json<T: DeserializeOwned>(path: &Path) -> Result<T> {
-    let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
+    let text = identify::io::read_text(path).map_err(|source| Error::Io {
         context: format!("reading {}", path.display()),
         source,
     })?;

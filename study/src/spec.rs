@@ -758,7 +758,7 @@ impl Study {
     /// # Errors
     /// [`SpecError`] when the file cannot be read (line 0) or does not parse.
     pub fn read(path: &Path) -> Result<Study, SpecError> {
-        let text = std::fs::read_to_string(path).map_err(|e| SpecError {
+        let text = identify::io::read_text(path).map_err(|e| SpecError {
             path: path.display().to_string(),
             line: 0,
             key: "(file)".into(),

@@ -41,9 +41,16 @@ pub struct MeasuredAmplitude {
 /// the line and the column for a missing column, a bad or negative number, a row without
 /// any amplitude or an unknown branch name, or a table without data rows.
 pub fn read_measured_amplitudes(path: &std::path::Path) -> Result<Vec<MeasuredAmplitude>> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::Io {
-        path: path.display().to_string(),
-        message: e.to_string(),
+    let text = identify::io::read_text(path).map_err(|e| match e.kind() {
+        // refused by the reader (not a regular file, too large, not UTF-8): an input error
+        std::io::ErrorKind::InvalidInput | std::io::ErrorKind::InvalidData => Error::InvalidTable {
+            table: path.display().to_string(),
+            message: e.to_string(),
+        },
+        _ => Error::Io {
+            path: path.display().to_string(),
+            message: e.to_string(),
+        },
     })?;
     parse_measured_amplitudes(&text, &path.display().to_string())
 }
@@ -100,6 +107,15 @@ pub fn parse_measured_amplitudes(text: &str, source: &str) -> Result<Vec<Measure
             header = Some((h.len(), cols));
             continue;
         };
+        if out.len() >= identify::limits::MAX_MEASURED_POINTS {
+            return Err(bad(
+                line,
+                format!(
+                    "more than {} data rows (the limits table's MAX_MEASURED_POINTS)",
+                    identify::limits::MAX_MEASURED_POINTS
+                ),
+            ));
+        }
         let f = identify::csv_fields::split_line(l);
         if f.len() < width {
             return Err(bad(
@@ -123,6 +139,27 @@ pub fn parse_measured_amplitudes(text: &str, source: &str) -> Result<Vec<Measure
                 return Err(bad(
                     line,
                     format!("column `{}`: {v} must be finite and ≥ 0", NAMES[k]),
+                ));
+            }
+            // the limits table's bounds, so that one absurd row cannot decide the
+            // diagnosis silently (issue 39, row 6: a speed of 1e308 or 0 gave "Hopf none")
+            use identify::limits as lim;
+            let (max, unit, positive) = match k {
+                1 => (lim::MAX_SPEED, "m/s", true),
+                2 => (lim::MAX_CHORD, "m", false),
+                3 => (lim::MAX_PITCH_DEG.to_radians(), "rad", false),
+                _ => (lim::MAX_RATE, "Hz", false),
+            };
+            if v > max || (positive && v == 0.0) {
+                return Err(bad(
+                    line,
+                    format!(
+                        "column `{}`: {} {unit} is outside {} value ≤ {} {unit} (the limits table)",
+                        NAMES[k],
+                        lim::show(v),
+                        if positive { "0 <" } else { "0 ≤" },
+                        lim::show(max)
+                    ),
                 ));
             }
             Ok(Some(v))

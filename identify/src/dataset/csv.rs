@@ -27,6 +27,14 @@ const SIZING_ROWS: usize = 64;
 /// Names of the recognised columns, in slot order.
 const NAMES: [&str; 5] = ["t", "h", "alpha", "lift", "moment"];
 
+/// At most 40 characters of a field for a message (a hostile field may be a megabyte).
+fn excerpt(f: &str) -> std::borrow::Cow<'_, str> {
+    match f.char_indices().nth(40) {
+        Some((i, _)) => format!("{}…", &f[..i]).into(),
+        None => f.into(),
+    }
+}
+
 fn csv_err(path: &Path, line: usize, field: &str, message: String) -> Error {
     Error::Csv {
         path: path.to_path_buf(),
@@ -44,7 +52,7 @@ fn csv_err(path: &Path, line: usize, field: &str, message: String) -> Error {
 /// [`Error::Io`] when the file cannot be opened or read; otherwise as [`parse_case_csv`]
 /// (a line that is not UTF-8 is an [`Error::Csv`] naming that line).
 pub fn read_case_csv(path: &Path, forces_required: bool) -> Result<CaseTable> {
-    let file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let file = crate::io::open_regular(path)?;
     let size = file.metadata().map(|m| m.len()).unwrap_or(0);
     let reader = std::io::BufReader::with_capacity(1 << 18, file);
     parse_case_reader(reader, size, path, forces_required)
@@ -67,12 +75,28 @@ pub fn parse_case_csv(text: &str, path: &Path, forces_required: bool) -> Result<
     parse_case_reader(text.as_bytes(), text.len() as u64, path, forces_required)
 }
 
-/// Reads one line (without its `\n`) into `buf`; false at the end of the input.
+/// Reads one line (without its `\n`) into `buf`; false at the end of the input. A line
+/// longer than [`crate::limits::MAX_CSV_LINE_BYTES`] is an error (only that much of it is
+/// ever held).
 fn next_line(r: &mut impl BufRead, buf: &mut Vec<u8>, path: &Path) -> Result<bool> {
+    use std::io::Read;
     buf.clear();
-    let n = r.read_until(b'\n', buf).map_err(|e| Error::io(path, e))?;
+    let cap = crate::limits::MAX_CSV_LINE_BYTES;
+    let n = r
+        .by_ref()
+        .take(cap as u64 + 1)
+        .read_until(b'\n', buf)
+        .map_err(|e| Error::io(path, e))?;
     if n == 0 {
         return Ok(false);
+    }
+    if buf.len() > cap && buf.last() != Some(&b'\n') {
+        return Err(csv_err(
+            path,
+            0,
+            "(row)",
+            format!("a line longer than {cap} bytes (the limits table's MAX_CSV_LINE_BYTES); a case file holds one short row of numbers per line"),
+        ));
     }
     if buf.last() == Some(&b'\n') {
         buf.pop();
@@ -172,13 +196,24 @@ fn parse_case_reader(
         }
         data_bytes += buf.len() as u64 + 1;
         data_rows += 1;
+        if data_rows as f64 > crate::limits::MAX_SAMPLES {
+            return Err(csv_err(
+                path,
+                line_no,
+                "(row)",
+                format!(
+                    "more than {} data rows (the limits table's MAX_SAMPLES)",
+                    crate::limits::show(crate::limits::MAX_SAMPLES)
+                ),
+            ));
+        }
         if !sized && data_rows == SIZING_ROWS {
             // Size the columns once from the mean length of the first rows (+5 %), so a
             // long file neither reallocates nor reserves far more than it fills.
             sized = true;
             let mean = data_bytes as f64 / data_rows as f64;
             let rows = size.saturating_sub(header_bytes) as f64 / mean;
-            let rows = (rows * 1.05) as usize + 16;
+            let rows = ((rows * 1.05) as usize + 16).min(crate::limits::MAX_SAMPLES as usize);
             for (k, col) in cols.iter_mut().enumerate() {
                 if found[k] {
                     col.reserve_exact(rows.saturating_sub(col.len()));
@@ -204,7 +239,7 @@ fn parse_case_reader(
                     path,
                     line_no,
                     NAMES[k],
-                    format!("cannot parse `{f}` as a number"),
+                    format!("cannot parse `{}` as a number", excerpt(f)),
                 )
             })?;
             if !x.is_finite() {
@@ -212,7 +247,7 @@ fn parse_case_reader(
                     path,
                     line_no,
                     NAMES[k],
-                    format!("non-finite value `{f}`"),
+                    format!("non-finite value `{}`", excerpt(f)),
                 ));
             }
             cols[k].push(x);

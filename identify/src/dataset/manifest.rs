@@ -147,7 +147,7 @@ impl Manifest {
     /// # Errors
     /// [`Error::Io`] when the file cannot be read; otherwise as [`Manifest::parse`].
     pub fn read(path: &Path) -> Result<Manifest> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let text = crate::io::read_text_capped(path, crate::limits::MAX_TEXT_FILE_BYTES as u64)?;
         if path.extension().is_some_and(|e| e == "json") {
             Manifest::parse_json(&text, path)
         } else {

@@ -94,6 +94,37 @@ pub fn read_dataset_with(dir: &Path, options: &ReadOptions) -> Result<Dataset> {
     if options.flip_lift {
         manifest.convention = manifest.convention.with_lift_flipped();
     }
+    let n_cases = manifest.cases.len();
+    if n_cases > crate::limits::MAX_DATASET_CASES {
+        return Err(crate::Error::Manifest {
+            path: manifest_path(dir),
+            line: 0,
+            field: "case".into(),
+            message: format!(
+                "{n_cases} [[case]] entries; at most {} (the limits table's MAX_DATASET_CASES)",
+                crate::limits::MAX_DATASET_CASES
+            ),
+        });
+    }
+    // One file is one record: a file named by two cases is refused before any is read (a
+    // hostile manifest naming one file 10,000 times took 27 s and 3 GB, issue 39, row 5).
+    let mut seen: std::collections::HashMap<&Path, &str> = std::collections::HashMap::new();
+    for case in &manifest.cases {
+        if let Some(first) = seen.insert(case.file.as_path(), &case.id) {
+            let text = std::fs::read_to_string(manifest_path(dir)).unwrap_or_default();
+            let (field, line) =
+                manifest::case_key_location(&text, &manifest_path(dir), &case.id, "file");
+            return Err(crate::Error::Manifest {
+                path: manifest_path(dir),
+                line,
+                field,
+                message: format!(
+                    "file \"{}\" is already the record of case `{first}`; each case has its own file",
+                    case.file.display()
+                ),
+            });
+        }
+    }
     // Refuse every path that leaves the folder before reading any case file.
     for case in &manifest.cases {
         resolve_case_path(dir, case, "file", &case.file)?;
@@ -101,11 +132,26 @@ pub fn read_dataset_with(dir: &Path, options: &ReadOptions) -> Result<Dataset> {
             resolve_case_path(dir, case, "nowind_file", still)?;
         }
     }
-    let records = manifest
-        .cases
-        .iter()
-        .map(|c| read_case(dir, &manifest, c))
-        .collect::<Result<Vec<_>>>()?;
+    // the samples held, bounded as the generators' are (MAX_SAMPLES: about 1 GB of columns)
+    let mut samples = 0usize;
+    let mut records = Vec::with_capacity(n_cases);
+    for c in &manifest.cases {
+        let r = read_case(dir, &manifest, c)?;
+        samples += r.len() + r.nowind.as_ref().map_or(0, |s| s.len());
+        if samples as f64 > crate::limits::MAX_SAMPLES {
+            return Err(crate::Error::Manifest {
+                path: manifest_path(dir),
+                line: 0,
+                field: "case".into(),
+                message: format!(
+                    "the case files hold more than {} samples in all (reached at case `{}`; the limits table's MAX_SAMPLES)",
+                    crate::limits::show(crate::limits::MAX_SAMPLES),
+                    c.id
+                ),
+            });
+        }
+        records.push(r);
+    }
     Ok(Dataset {
         root: dir.to_path_buf(),
         manifest,

@@ -16,7 +16,7 @@ fn manifest(file: &str, nowind: Option<&str>) -> String {
         "format = \"aeroform-dataset/1\"\nname = \"paths\"\n\n[section]\nchord = 0.25\n\
          span = 0.75\nair_density = 1.225\n\n[units]\nheave = \"mm\"\npitch = \"deg\"\n\
          lift = \"N\"\nmoment = \"N*m\"\n\n[[case]]\nid = \"ok\"\nkind = \"forced\"\n\
-         file = \"a.csv\"\nwind_speed = 5.0\n\n[[case]]\nid = \"x\"\nkind = \"forced\"\n\
+         file = \"b.csv\"\nwind_speed = 5.0\n\n[[case]]\nid = \"x\"\nkind = \"forced\"\n\
          file = {}\nwind_speed = 5.0\n",
         toml_str(file)
     );
@@ -49,6 +49,7 @@ fn layout(tmp: &Path) -> (PathBuf, PathBuf) {
     std::fs::create_dir_all(&ds).unwrap();
     std::fs::create_dir_all(&outside).unwrap();
     std::fs::write(ds.join("a.csv"), CSV).unwrap();
+    std::fs::write(ds.join("b.csv"), CSV).unwrap();
     std::fs::write(outside.join("secret.csv"), CSV).unwrap();
     (ds, outside)
 }
@@ -224,6 +225,12 @@ fn fuzz_regression_dataset_span_overflow_to_infinite_force() {
     let ds = tmp.path();
     let text = manifest("a.csv", None).replace("span = 0.75", "span = 1e-310");
     write_manifest(ds, &text);
+    // the first case's own file (zero forces stay finite whatever the span)
+    std::fs::write(
+        ds.join("b.csv"),
+        "t,h,alpha,lift,moment\n0,0,0,0,0\n0.1,0,0,0,0\n0.2,0,0,0,0\n",
+    )
+    .unwrap();
     std::fs::write(
         ds.join("a.csv"),
         "t,h,alpha,lift,moment\n0,0,0,0,0\n0.1,0,0,0,0\n0.2,1,2,3,4\n",
