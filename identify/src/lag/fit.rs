@@ -755,6 +755,12 @@ pub fn fit(cases: &[NondimCase], opts: &LagFitOptions) -> Result<LagFit> {
 pub fn fit_series(series: &[LagSeries], opts: &LagFitOptions) -> Result<LagFit> {
     opts.validate()?;
     let init = initial_guess(series);
+    // a record that is not periodic must settle at the data's own lag (not only at the
+    // shortest lag the optimiser could run to)
+    let mut x = Vec::new();
+    for s in series.iter().filter(|s| !s.periodic) {
+        s.simulate(&law_of(clamp_theta(init)), &mut x)?;
+    }
     let mut p = Problem {
         series,
         lift: opts.lift_columns.clone(),
