@@ -276,6 +276,7 @@ impl Problem<'_> {
     }
 
     /// Stacked columns and target of one channel over the scored samples.
+    #[allow(clippy::needless_range_loop)] // parallel series indexed together
     fn stack(
         &self,
         cols: &[LagColumn],
@@ -455,6 +456,7 @@ fn normal_equations(jac: &[Vec<f64>], r: &[f64]) -> ([f64; 16], [f64; 4]) {
 /// Standard errors and correlation of the free parameters of θ from J at the optimum
 /// (`None` if JᵀJ is singular); a fixed parameter has standard error 0 and correlation 0
 /// with the others.
+#[allow(clippy::needless_range_loop)] // parallel series indexed together
 fn covariance(
     jac: &[Vec<f64>],
     cost: f64,
@@ -933,6 +935,7 @@ pub fn predict(law: &LagLaw, case: &NondimCase) -> Result<LagPrediction> {
 ///
 /// # Errors
 /// As [`predict`].
+#[allow(clippy::needless_range_loop)] // parallel series indexed together
 pub fn predict_series(law: &LagLaw, s: &LagSeries) -> Result<LagPrediction> {
     law.check()?;
     let mean_e = s.alpha_e.iter().sum::<f64>() / s.len().max(1) as f64;
@@ -1004,6 +1007,7 @@ pub(crate) mod tests {
 
     /// A pitching case of `law` at reduced frequency `k`, mean `mean` and amplitude `amp`
     /// \[rad\], `cycles` periods of 60 samples.
+    #[allow(clippy::needless_range_loop)] // parallel series indexed together
     pub(crate) fn case_of(law: &LagLaw, id: &str, k: f64, mean: f64, amp: f64) -> NondimCase {
         let (u, b) = (10.0, 0.25);
         let f = k * u / (2.0 * std::f64::consts::PI * b);
