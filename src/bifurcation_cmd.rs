@@ -16,7 +16,7 @@ use diagnose::bifurcation::{
 use identify::dataset::{read_dataset, Dataset};
 use identify::io::write_atomic;
 
-use crate::diagnose_cmd::DiagnoseArgs;
+use crate::diagnose_args::DiagnoseArgs;
 
 /// Runs the bifurcation-level diagnosis of `measured` (a CSV table or a data-set folder).
 pub fn run(args: &DiagnoseArgs, measured: &Path) -> anyhow::Result<()> {

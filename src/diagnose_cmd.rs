@@ -7,7 +7,6 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use aeroelastic::files::{LoadedModel, StructureFile};
 use anyhow::{bail, Context};
-use clap::Args;
 use diagnose::bench::{acceptance_lines, confusion_markdown, BlindReport, STRONG_RATIO};
 use diagnose::bench_run::{run_blind, BlindOptions};
 use diagnose::pipeline::{diagnose, diagnose_free, merge_free, DiagnoseOptions};
@@ -15,85 +14,8 @@ use diagnose::Diagnosis;
 use identify::dataset::read_dataset;
 use identify::io::write_atomic;
 
+pub use crate::diagnose_args::DiagnoseArgs;
 use crate::progress::CountBar;
-
-/// Flags of `aeroform diagnose`.
-#[derive(Debug, Args)]
-pub struct DiagnoseArgs {
-    /// Forced-motion data-set folder (DATA_FORMAT.md).
-    #[arg(required_unless_present_any = ["blind", "model"])]
-    pub dataset: Option<PathBuf>,
-    /// Free-response data-set folder of the same section (enables the system level); may
-    /// be repeated (e.g. LCO records and a still-air decay of the same rig).
-    #[arg(long)]
-    pub free: Vec<PathBuf>,
-    /// The sim's aerodynamic model for free-response data or a measured bifurcation
-    /// diagram alone: a model file (`*.model.toml`) or an `identification.json`; needs
-    /// `--free` or `--measured-branch` and no forced data set.
-    #[arg(long, conflicts_with = "dataset")]
-    pub model: Option<PathBuf>,
-    /// Nominal structure file (`*.structure.toml`) replacing the free data set's
-    /// `[structure]`.
-    #[arg(long)]
-    pub structure: Option<PathBuf>,
-    /// Diagnose at the bifurcation level: a measured bifurcation diagram, either a CSV
-    /// table (docs/DATA_FORMAT.md, "Measured bifurcation diagram") or a free-response data
-    /// set of LCO records (one point per record). Needs `--model`; the structure is
-    /// `--structure` or the `[structure]` of the records' (or the first `--free`) data set;
-    /// `--free` data sets give still-air decays (structure first). Writes
-    /// `bifurcation.json`, figures and `diagnosis.html`.
-    #[arg(long, requires = "model", conflicts_with_all = ["dataset", "blind"])]
-    pub measured_branch: Option<PathBuf>,
-    /// Output folder (created if missing); default `out/diagnosis` or `out/blind`.
-    #[arg(long)]
-    pub out: Option<PathBuf>,
-    /// Master seed of every random draw (fold assignment; benchmark labels, strengths and
-    /// noise).
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
-    /// Run the withheld-effect benchmark on N generated data sets instead.
-    #[arg(long, conflicts_with_all = ["dataset", "free", "model"])]
-    pub blind: Option<u128>,
-    /// Replace an existing output folder that aeroform did not write.
-    #[arg(long)]
-    pub force: bool,
-    /// With `--blind`: run only shard i of n (sets whose index ≡ i mod n, each with its
-    /// global seed) and write `blind.part-I-of-N.json`; `aeroform merge` joins the parts.
-    #[arg(long, requires = "blind")]
-    pub shard: Option<String>,
-    /// With `--blind`: draw each set's campaign shape too (1–3 Table I configurations,
-    /// 3–8 wind speeds, 3–8 amplitudes, alternate forms for a third, absolute balance
-    /// noise) and report the statistics per shape class.
-    #[arg(long, requires = "blind", conflicts_with = "shard")]
-    pub shapes: bool,
-    /// With `--blind`: the benchmark at the bifurcation level instead (generated rigs with
-    /// a withheld structural or aerodynamic effect, each a measured bifurcation diagram;
-    /// writes `branch-blind.json`).
-    #[arg(long, requires = "blind", conflicts_with_all = ["shard", "shapes"])]
-    pub branch_level: bool,
-}
-
-impl DiagnoseArgs {
-    /// Every file and folder these flags name for reading (the output may not be, contain
-    /// or lie inside one of them: `outdir::refuse_overlap`).
-    pub fn inputs(&self) -> Vec<crate::outdir::Input<'_>> {
-        use crate::outdir::Input;
-        let mut v: Vec<Input<'_>> = self
-            .dataset
-            .iter()
-            .map(|p| Input::new("FORCED", p))
-            .collect();
-        v.extend(self.free.iter().map(|p| Input::new("--free", p)));
-        v.extend(self.model.iter().map(|p| Input::new("--model", p)));
-        v.extend(self.structure.iter().map(|p| Input::new("--structure", p)));
-        v.extend(
-            self.measured_branch
-                .iter()
-                .map(|p| Input::new("--measured-branch", p)),
-        );
-        v
-    }
-}
 
 /// Runs `aeroform diagnose`.
 pub fn run(args: &DiagnoseArgs) -> anyhow::Result<()> {

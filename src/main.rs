@@ -3,6 +3,7 @@
 
 mod bifurcation_cmd;
 mod branch_cmd;
+mod diagnose_args;
 mod diagnose_cmd;
 mod exit;
 mod flutter_cmd;

@@ -9,13 +9,13 @@ use std::path::{Path, PathBuf};
 
 use diagnose::bifurcation::{BifurcationDiagnosis, BranchKind, DiagramSummary, Errors, Quantity};
 
-use crate::diagnosis_report::{DIAGNOSIS_HTML, FIGURES_DIR};
 use crate::error::Result;
 use crate::figures::branch_comparison::{BranchComparisonFigure, ComparisonDofPanel, DiagramLayer};
 use crate::figures::branch_diagram::{BranchCurve, DiagramPoint};
 use crate::figures::ranking::{RankingBar, RankingFigure, RankingPanel};
 use crate::render::{render_pdf, save, Figure, FigureFiles};
 use crate::report::Report;
+use crate::report_parts::{structure_section, table, DIAGNOSIS_HTML, FIGURES_DIR};
 
 /// File stems of the two figures.
 pub const BIFURCATION_FIGURES: [&str; 2] = ["bifurcation_comparison", "bifurcation_ranking"];
@@ -165,64 +165,6 @@ fn save_all<F: Figure>(f: &F, dir: &Path, stem: &str) -> Result<(FigureFiles, Pa
         identify::io::write_atomic(&pdf, &render_pdf(f)?)?;
     }
     Ok((files, pdf))
-}
-
-/// The still-air decays' table ([`diagnose::structure::StructureCheck`]), or `none` in
-/// words when no decay was analysed.
-pub(crate) fn structure_section(
-    r: &mut Report,
-    s: Option<&diagnose::structure::StructureCheck>,
-    none: &str,
-) {
-    match s {
-        Some(s) => {
-            let rows: Vec<Vec<String>> = s
-                .modes
-                .iter()
-                .map(|m| {
-                    vec![
-                        m.case.clone(),
-                        m.dof.clone(),
-                        format!("{:.4}", m.measured_hz),
-                        format!("{:.4}", m.given_hz),
-                        format!("{:+.2} %", 100.0 * m.frequency_error),
-                        format!("{:.4}", m.measured_zeta),
-                        format!("{:.4}", m.given_zeta),
-                        format!("{:+.2} %", 100.0 * m.backbone_change),
-                        format!("{:.1}", m.exp_over_linear),
-                        m.signature.clone(),
-                    ]
-                })
-                .collect();
-            table(
-                r,
-                "Still-air modes measured (smallest analysed amplitudes) against the given \
-                 structure's; backbone = frequency change from small to large amplitude; \
-                 exp/lin > 1: a linear (dry-friction) envelope",
-                &[
-                    "record",
-                    "DOF",
-                    "f measured [Hz]",
-                    "f given [Hz]",
-                    "Δf",
-                    "ζ measured",
-                    "ζ given",
-                    "backbone",
-                    "exp/lin",
-                    "signature",
-                ],
-                &rows,
-            );
-        }
-        None => {
-            r.text(none);
-        }
-    }
-}
-
-fn table(r: &mut Report, caption: &str, header: &[&str], rows: &[Vec<String>]) {
-    let header: Vec<String> = header.iter().map(|h| h.to_string()).collect();
-    r.table(caption, &header, rows);
 }
 
 fn deg(v: Option<f64>) -> String {

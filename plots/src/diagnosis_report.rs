@@ -16,11 +16,8 @@ use crate::adapters::diagnosis::{
 use crate::error::Result;
 use crate::render::{save, FigureFiles};
 use crate::report::Report;
-
-/// File name of the report written by [`write_diagnosis_outputs`].
-pub const DIAGNOSIS_HTML: &str = "diagnosis.html";
-/// Sub-folder of the output folder that holds the figure files.
-pub const FIGURES_DIR: &str = "figures";
+use crate::report_parts::structure_section;
+pub use crate::report_parts::{DIAGNOSIS_HTML, FIGURES_DIR};
 
 /// Kind, file stem and what is missing when it is not drawn, of each diagnosis figure, in
 /// report order.
@@ -318,7 +315,7 @@ pub fn diagnosis_section(report: &mut Report, diag: &Diagnosis, figures: &[Diagn
         .find(|l| l.level == diagnose::Level::Structural)
     {
         report.section("Structure first: still-air decays");
-        crate::bifurcation_report::structure_section(
+        structure_section(
             report,
             level.structure.as_ref(),
             "No still-air decay (U = 0) among the free runs: the structure is taken as \

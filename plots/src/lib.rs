@@ -17,6 +17,7 @@ pub mod error;
 pub mod figures;
 pub mod render;
 pub mod report;
+mod report_parts;
 pub mod rich;
 pub mod scaled;
 pub mod study_report;

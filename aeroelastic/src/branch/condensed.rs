@@ -45,10 +45,10 @@ use std::f64::consts::TAU;
 use nalgebra::{DMatrix, DVector};
 use num_complex::Complex64;
 
-use super::continuation::{stored_unknowns, PeriodicProblem};
 use super::hopf::QuadraticJacobian;
 use super::orbit::orbit_point;
-use super::{BranchPoint, HopfPoint};
+use super::periodic::{stored_unknowns, PeriodicProblem};
+use super::types::{BranchPoint, HopfPoint};
 use crate::dynamics::SectionDynamics;
 use crate::section::Section;
 use crate::{Error, Result};
@@ -1232,8 +1232,9 @@ impl PeriodicProblem for CondensedBalance<'_> {
 
 #[cfg(test)]
 mod tests {
-    use super::super::continuation::{branch_scales, newton, Closure};
+    use super::super::continuation::{branch_scales, newton};
     use super::super::harmonic::HarmonicBalance;
+    use super::super::periodic::Closure;
     use super::*;
     use crate::reference::hp1_cubic_pitch;
     use crate::structure::{Friction, PolyTerm};

@@ -1,5 +1,7 @@
-//! The continuation core: the periodic-orbit problem every discretisation implements
-//! ([`PeriodicProblem`]) and its scales, the closing equation ([`Closure`]), the chord-Newton
+//! The continuation core: the factory of the periodic-orbit problem of each method
+//! ([`problem`]; the trait every discretisation implements, [`PeriodicProblem`], and the
+//! closing equation [`Closure`] are in `periodic.rs`, below the discretisations), the
+//! shooting scales, the chord-Newton
 //! corrector, the tangent, the pseudo-arclength predictor–corrector of
 //! [`Section::continue_branch`], and the location of folds and multiplier crossings between
 //! consecutive branch points.
@@ -7,71 +9,15 @@
 use identify::numerics::interp::lagrange;
 use nalgebra::{DMatrix, DVector, Dyn};
 
+use super::options::{BranchMethod, BranchOptions};
+use super::periodic::{Closure, PeriodicProblem};
 use super::shooting::Shooting;
-use super::{condensed, harmonic};
-use super::{
-    Branch, BranchEnd, BranchEvent, BranchMethod, BranchOptions, BranchPoint, BranchProgress,
-    EventKind, HopfPoint,
+use super::types::{
+    Branch, BranchEnd, BranchEvent, BranchPoint, BranchProgress, EventKind, HopfPoint,
 };
+use super::{condensed, harmonic};
 use crate::section::Section;
 use crate::{Error, Result};
-
-/// Which extra equation closes the periodic-orbit system.
-pub(super) enum Closure<'a> {
-    /// The pitch-amplitude unknown ([`PeriodicProblem::amplitude_index`]) equals the
-    /// value (start from the Hopf point).
-    Alpha(f64),
-    /// Pseudo-arclength ⟨Y − Y_k, t_k⟩ = Δs.
-    Arclength(&'a DVector<f64>, &'a DVector<f64>, f64),
-    /// U fixed (scaled).
-    Speed(f64),
-}
-
-/// A discretisation of the periodic orbits of a section: scaled unknowns Y whose last
-/// component is U, and m − 1 equations G(Y) = 0 (periodicity and phase). The continuation
-/// adds the m-th equation ([`Closure`]).
-pub(super) trait PeriodicProblem {
-    /// Number of unknowns m (U last).
-    fn unknowns(&self) -> usize;
-    /// Index of the unknown fixed by [`Closure::Alpha`] (a pitch amplitude).
-    fn amplitude_index(&self) -> usize;
-    /// Scale of each unknown.
-    fn scales(&self) -> &[f64];
-    /// G(Y), m − 1 values.
-    fn g(&self, y: &DVector<f64>) -> Result<DVector<f64>>;
-    /// ∂G/∂Y at `y` given G(y), (m − 1) × m.
-    fn jac(&self, y: &DVector<f64>, g0: &DVector<f64>) -> Result<DMatrix<f64>>;
-    /// The converged orbit at `y` with its multipliers.
-    fn point(&self, y: &DVector<f64>, jg: &DMatrix<f64>) -> Result<BranchPoint>;
-    /// Whether [`PeriodicProblem::point`] needs ∂G/∂Y at the solution itself (shooting: its
-    /// block is the monodromy matrix). When not, Newton hands on the Jacobian of its last
-    /// refresh, within the Newton tolerance of the solution, for the tangent.
-    fn jacobian_at_solution(&self) -> bool {
-        true
-    }
-    /// Initial guess at pitch amplitude `a` \[rad\] from the Hopf eigenvector.
-    fn start(&self, hopf: &HopfPoint, a: f64) -> DVector<f64>;
-    /// Scaled unknowns of a point of a branch of this problem.
-    fn scaled(&self, p: &BranchPoint) -> Result<DVector<f64>>;
-}
-
-/// The scaled unknowns a harmonic-balance point stored, when they belong to a problem of `m`
-/// unknowns.
-///
-/// # Errors
-/// [`Error::Numerical`] when they do not (a branch read back from `branch.json`, whose
-/// points keep no coefficients, or one of another method).
-pub(super) fn stored_unknowns(p: &BranchPoint, m: usize) -> Result<DVector<f64>> {
-    if p.unknowns.len() != m {
-        return Err(Error::numerical(
-            "orbit_on_branch",
-            "the branch points carry no harmonic-balance coefficients of this problem (a \
-             branch read back from branch.json, or of another method): continue the branch \
-             again",
-        ));
-    }
-    Ok(DVector::from_column_slice(&p.unknowns))
-}
 
 /// Scales of the shooting unknowns (z₀, T, U) of the branch from `hopf`: each state
 /// component `amplitude_scale` \[rad\] times its Hopf-eigenvector magnitude (at least 1e-3

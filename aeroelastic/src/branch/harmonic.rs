@@ -25,9 +25,9 @@ use std::f64::consts::TAU;
 
 use nalgebra::{DMatrix, DVector};
 
-use super::continuation::{stored_unknowns, PeriodicProblem};
 use super::orbit::orbit_point;
-use super::{BranchPoint, HopfPoint};
+use super::periodic::{stored_unknowns, PeriodicProblem};
+use super::types::{BranchPoint, HopfPoint};
 use crate::dynamics::SectionDynamics;
 use crate::integrate::{OdeSystem, Rk4};
 use crate::section::Section;

@@ -6,7 +6,7 @@ use nalgebra::DMatrix;
 use num_complex::Complex64;
 
 use super::floquet::eigenvalues6;
-use super::HopfPoint;
+use super::types::HopfPoint;
 use crate::dynamics::SectionDynamics;
 use crate::flutter::{eigenvalues, eigenvector};
 use crate::section::Section;

@@ -4,7 +4,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::BranchSet;
+use super::types::BranchSet;
 use crate::{Error, Result};
 
 /// One measured point of a bifurcation diagram (a row of a table like

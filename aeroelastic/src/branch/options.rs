@@ -3,8 +3,8 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::MAX_HARMONICS;
 use crate::{Error, Result};
+use identify::limits::MAX_HARMONICS;
 
 /// Settings of the continuation. Scaled variables: the state is divided by
 /// `amplitude_scale` times the Hopf eigenvector's magnitude of each component (pitch

@@ -5,7 +5,7 @@
 use nalgebra::{DMatrix, DVector};
 
 use super::floquet::floquet;
-use super::BranchPoint;
+use super::types::BranchPoint;
 use crate::Result;
 
 /// One orbit of either discretisation as a [`BranchPoint`]: speed `u` [m/s], frequency

@@ -4,9 +4,9 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use super::continuation::PeriodicProblem;
 use super::orbit::{first_harmonic, orbit_point};
-use super::{BranchPoint, HopfPoint};
+use super::periodic::PeriodicProblem;
+use super::types::{BranchPoint, HopfPoint};
 use crate::dynamics::SectionDynamics;
 use crate::integrate::Rk4;
 use crate::section::Section;

@@ -28,6 +28,7 @@ use nalgebra::Matrix2;
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
+pub use super::scales::Scales;
 use crate::{Effect, Result};
 
 /// One parameter of a candidate.
@@ -87,16 +88,6 @@ pub struct BranchCandidate {
     change: Change,
     /// Largest measured pitch amplitude \[rad\] (friction's regularisation).
     reference_alpha: f64,
-}
-
-/// Reference amplitudes of the measured diagram: the largest pitch \[rad\] and heave \[m\]
-/// amplitudes (a default where a DOF is not measured).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
-pub struct Scales {
-    /// Pitch \[rad\].
-    pub alpha: f64,
-    /// Heave \[m\].
-    pub h: f64,
 }
 
 /// A parameter of unit `unit` whose θ = 1 is `scale` (made positive when the

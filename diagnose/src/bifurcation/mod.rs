@@ -23,6 +23,7 @@ pub mod bench;
 pub mod candidates;
 mod fit;
 pub mod points;
+pub(crate) mod scales;
 
 use aeroelastic::branch::{
     measured_distances, BranchMethod, BranchOptions, BranchSet, EventKind, MeasuredAmplitude,

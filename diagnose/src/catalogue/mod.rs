@@ -17,7 +17,7 @@ pub(crate) use entry::{log_map, DrawContext, Entry};
 use aeroelastic::section::Section;
 use serde::{Deserialize, Serialize};
 
-use crate::bifurcation::candidates::Scales;
+use crate::bifurcation::scales::Scales;
 use crate::{Error, Result};
 
 /// Level at which an effect acts. `Aerodynamic` effects change the forces the section

@@ -227,7 +227,7 @@ pub struct Identification {
     /// coefficient and Eq. 19 value, and the members' coefficients. Absent (not `null`)
     /// when no ensemble was run.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub ensemble: Option<crate::ensemble::Ensemble>,
+    pub ensemble: Option<crate::ensemble::types::Ensemble>,
 }
 
 impl Identification {
