@@ -83,24 +83,53 @@ fn nondim(id: &str, k: f64, mean_deg: f64, amp_deg: f64) -> NondimCase {
 }
 
 /// The held-out comparison of the issue's virtual acceptance: the truth in deep stall about
-/// 15° (± 8°), fitted at K = 0.05 and 0.2, predicting K = 0.1.
-fn virtual_held_out() -> (identify::lag::LagFit, identify::lag::HeldOutReport) {
+/// 15° (± 8°), fitted at K = 0.05 and 0.2, predicting K = 0.1; `circulation_lag` switches
+/// the law's attached-flow (Jones) circulation lag.
+fn virtual_held_out(
+    circulation_lag: bool,
+) -> (identify::lag::LagFit, identify::lag::HeldOutReport) {
     let train = vec![
         nondim("k005", 0.05, 15.0, 8.0),
         nondim("k020", 0.2, 15.0, 8.0),
     ];
     let test = vec![nondim("k010", 0.1, 15.0, 8.0)];
-    compare(&train, &test, "k=0.1", &LagFitOptions::default()).unwrap()
+    let opts = LagFitOptions {
+        circulation_lag,
+        ..LagFitOptions::default()
+    };
+    compare(&train, &test, "k=0.1", &opts).unwrap()
 }
 
-/// The issue's targets (held-out R² ≥ 0.98 lift, ≥ 0.95 moment), not loosened. Measured
-/// on this build: lift 0.962, moment 0.973 (memoryless 0.928, 0.946): the lift target is
-/// missed by 0.018 — see DECISIONS "Lag-law identification (issue 41, round 25)" for why.
+/// The issue's targets (held-out R² ≥ 0.98 lift, ≥ 0.95 moment), not loosened, with the
+/// law as `identify --law lag` fits it (circulation lag on). Measured on this build: lift
+/// 0.9871, moment 0.9974 (memoryless cubic on the same cases 0.9282, 0.9459); without the
+/// circulation lag 0.962 / 0.973 (DECISIONS "The lag law's circulation lag and the
+/// deep-stall round trip").
 #[test]
-#[ignore = "issue 41 lift target not met (0.962 < 0.98); run with --ignored"]
-fn stall_truth_meets_the_issue_targets() {
-    let (_, h) = virtual_held_out();
+fn stall_truth_fitted_on_two_frequencies_predicts_a_third() {
+    let (fit, h) = virtual_held_out(true);
     let row = &h.rows[0];
+    let (fit0, h0) = virtual_held_out(false);
+    let row0 = &h0.rows[0];
+    eprintln!(
+        "held out K = 0.1 at 15° ± 8°: lift R² memoryless {:.4} lag {:.4} (no circulation lag {:.4}); \
+         moment R² memoryless {:.4} lag {:.4} (no circulation lag {:.4}); \
+         τ₁ {:.3} τ₂ {:.3} α* {:.4} m {:.3}; corr(τ₁, τ₂) {:?}; moment {:?}",
+        row.memoryless_r2_lift,
+        row.lag_r2_lift,
+        row0.lag_r2_lift,
+        row.memoryless_r2_moment,
+        row.lag_r2_moment,
+        row0.lag_r2_moment,
+        fit.law.tau1,
+        fit.law.tau2,
+        fit.law.alpha_star,
+        fit.law.sharpness,
+        fit.report.tau_correlation,
+        fit.report.moment_selection.selected
+    );
+    assert!(fit.law.check().is_ok() && fit0.law.check().is_ok());
+    assert!(fit.law.circulation_lag && !fit0.law.circulation_lag);
     assert!(
         row.lag_r2_lift >= 0.98,
         "held-out lift R² {}",
@@ -111,41 +140,10 @@ fn stall_truth_meets_the_issue_targets() {
         "held-out moment R² {}",
         row.lag_r2_moment
     );
-}
-
-/// What this build achieves (a guard against regressions, below the issue's lift target):
-/// the lag law beats the memoryless cubic fitted on the same cases on both forces.
-#[test]
-fn stall_truth_fitted_on_two_frequencies_predicts_a_third() {
-    let (fit, h) = virtual_held_out();
-    let row = &h.rows[0];
-    eprintln!(
-        "held out K = 0.1 at 15° ± 8°: lift R² memoryless {:.4} lag {:.4}; moment R² memoryless {:.4} lag {:.4}; \
-         τ₁ {:.3} τ₂ {:.3} α* {:.4} m {:.3}; corr(τ₁, τ₂) {:?}; moment {:?}",
-        row.memoryless_r2_lift,
-        row.lag_r2_lift,
-        row.memoryless_r2_moment,
-        row.lag_r2_moment,
-        fit.law.tau1,
-        fit.law.tau2,
-        fit.law.alpha_star,
-        fit.law.sharpness,
-        fit.report.tau_correlation,
-        fit.report.moment_selection.selected
-    );
-    assert!(fit.law.check().is_ok());
-    assert!(
-        row.lag_r2_lift >= 0.95,
-        "held-out lift R² {}",
-        row.lag_r2_lift
-    );
-    assert!(
-        row.lag_r2_moment >= 0.95,
-        "held-out moment R² {}",
-        row.lag_r2_moment
-    );
     assert!(row.lag_r2_lift > row.memoryless_r2_lift);
     assert!(row.lag_r2_moment > row.memoryless_r2_moment);
+    // the circulation lag is what closes the gap
+    assert!(row.lag_r2_lift > row0.lag_r2_lift + 0.01);
     // the truth's constants (α₁ = 10°, m = 4, τ_f = 3, τ_p = 1.7): recovered in kind
     assert!((fit.law.alpha_star.to_degrees() - 10.0).abs() < 1.0);
     assert!(fit.law.tau1 > 1.0 && fit.law.tau1 < 5.0);

@@ -31,6 +31,14 @@
 //!   attached-flow (quasi-steady) response; about a trim in stall it carries the lag.
 //!   The columns of the law are affine in (α_e, q) at fixed x, so ∂C/∂α_e and ∂C/∂q are
 //!   differences of the law's own evaluations, exact.
+//! - Circulation lag ([`LagLaw::circulation_lag`] on): two more lag states, the Jones
+//!   states about the trim w_i = z_i − α₀ (lag = [y, w₁, w₂], `n_lag` = 3), with
+//!   ẇ_i = (2U/B)·b_i·(α_e − α₀ − w_i), and the law takes the circulatory angle
+//!   α_c = `circulatory_angle`(α_e, α₀ + w) instead of α_e in its columns and its separation
+//!   input (identify's law module docs). All states are continuous and vanish at the
+//!   equilibrium. In the frequency response α̂_e becomes C_J(iω)·α̂_e with
+//!   C_J(p) = 1 − Σ A_i·p/(p + g_i), g_i = 2U b_i/B: R. T. Jones' approximation of
+//!   Theodorsen's function, exactly the linearised state equation.
 
 use nalgebra::Matrix2;
 use num_complex::Complex64;
@@ -38,10 +46,11 @@ use num_complex::Complex64;
 use super::{thin_airfoil_apparent_mass, AeroModel, Flow};
 use crate::error::{finite, positive};
 use crate::{Error, Result};
-use identify::lag::LagLaw;
+use identify::lag::{circulation_rates, circulatory_angle, LagLaw, CIRCULATION_LAGS};
 
-/// The lag law flown as an aerodynamic model (see the module docs): one lag state, the
-/// separation deficit y = x̄ − x about the trim.
+/// The lag law flown as an aerodynamic model (see the module docs): the lag state y = x̄ − x
+/// (the separation deficit about the trim), and with the law's circulation lag the two
+/// Jones states w₁, w₂ about the trim.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LagAero {
     law: LagLaw,
@@ -130,6 +139,18 @@ impl LagAero {
         )
     }
 
+    /// The law's angle at (α_e, lag): α_c of the Jones states α₀ + w with the circulation
+    /// lag on, α_e otherwise.
+    #[inline]
+    fn angle(&self, alpha_e: f64, lag: &[f64]) -> f64 {
+        if self.law.circulation_lag {
+            let a0 = self.mean_angle.unwrap_or(0.0);
+            circulatory_angle(alpha_e, [a0 + lag[1], a0 + lag[2]])
+        } else {
+            alpha_e
+        }
+    }
+
     /// Slope dx₀/dα of the static separation curve at `alpha` (0 at α = 0, m ≥ 1).
     fn x_static_slope(&self, alpha: f64) -> f64 {
         if alpha == 0.0 {
@@ -149,7 +170,11 @@ impl AeroModel for LagAero {
         self.chord
     }
     fn n_lag(&self) -> usize {
-        1
+        if self.law.circulation_lag {
+            3
+        } else {
+            1
+        }
     }
     fn apparent_mass(&self, flow: &Flow) -> Matrix2<f64> {
         match self.elastic_axis {
@@ -164,21 +189,31 @@ impl AeroModel for LagAero {
             return [0.0; 2];
         }
         let (ae, qq) = self.inputs(flow.u, q, qd);
-        let [cl, cm] = self.law.coefficients(ae, qq, self.x_bar - lag[0]);
+        let ac = self.angle(ae, lag);
+        let [cl, cm] = self.law.coefficients(ac, qq, self.x_bar - lag[0]);
         let p = flow.q_dyn() * self.chord;
         [
             p * (cl - self.c_bar[0]),
             p * self.chord * (cm - self.c_bar[1]),
         ]
     }
-    /// ẏ = −(2U/B)·x_rate(α_e, q, x̄ − y) \[1/s\]; zero at U ≤ 0 (frozen separation).
+    /// ẏ = −(2U/B)·x_rate(α_c, q, x̄ − y) \[1/s\] and, with the circulation lag,
+    /// ẇ_i = (2U/B)·b_i·(α_e − α₀ − w_i) \[rad/s\]; zero at U ≤ 0 (frozen states).
     fn lag_rates(&self, flow: &Flow, q: [f64; 2], qd: [f64; 2], lag: &[f64], out: &mut [f64]) {
         if flow.u <= 0.0 {
-            out[0] = 0.0;
+            out.iter_mut().for_each(|v| *v = 0.0);
             return;
         }
         let (ae, qq) = self.inputs(flow.u, q, qd);
-        out[0] = -2.0 * flow.u / self.chord * self.law.x_rate(ae, qq, self.x_bar - lag[0]);
+        let g = 2.0 * flow.u / self.chord;
+        let ac = self.angle(ae, lag);
+        out[0] = -g * self.law.x_rate(ac, qq, self.x_bar - lag[0]);
+        if self.law.circulation_lag {
+            let a0 = self.mean_angle.unwrap_or(0.0);
+            let r = circulation_rates(ae, [a0 + lag[1], a0 + lag[2]]);
+            out[1] = g * r[0];
+            out[2] = g * r[1];
+        }
     }
     fn frequency_response(&self, flow: &Flow, omega: f64) -> Matrix2<Complex64> {
         let u = flow.u;
@@ -186,11 +221,18 @@ impl AeroModel for LagAero {
         let a0 = self.mean_angle.unwrap_or(0.0);
         let xb = self.x_bar;
         let iw = Complex64::new(0.0, omega);
-        // per unit ĥ: α̂_e = iω/U, q̂ = 0; per unit α̂: α̂_e = 1, q̂ = iωB/U
-        let inputs = [
-            (iw / u, Complex64::new(0.0, 0.0)),
-            (Complex64::new(1.0, 0.0), iw * b_c / u),
-        ];
+        // Jones' lag of the circulatory angle, C_J(iω) = 1 − Σ A_i iω/(iω + g_i)
+        let cj = if self.law.circulation_lag {
+            CIRCULATION_LAGS
+                .iter()
+                .fold(Complex64::new(1.0, 0.0), |c, &(a, b)| {
+                    c - a * iw / (iw + 2.0 * u * b / b_c)
+                })
+        } else {
+            Complex64::new(1.0, 0.0)
+        };
+        // per unit ĥ: α̂_e = iω/U, q̂ = 0; per unit α̂: α̂_e = 1, q̂ = iωB/U (α̂_c = C_J α̂_e)
+        let inputs = [(cj * iw / u, Complex64::new(0.0, 0.0)), (cj, iw * b_c / u)];
         let g = 2.0 * u / (b_c * self.law.tau1);
         let gain = g * self.x_static_slope(self.law.input(a0, 0.0)) / (iw + g);
         let ma = self.apparent_mass(flow);
@@ -212,7 +254,9 @@ impl AeroModel for LagAero {
     fn elastic_axis(&self) -> Option<f64> {
         self.elastic_axis
     }
-    /// Ten separation lags plus the input lead, 10(τ₁ + τ₂)·b/U \[s\].
+    /// Ten separation lags plus the input lead, 10(τ₁ + τ₂)·b/U \[s\] (the Jones states
+    /// are linear and weak, A₁ = 0.165 on the slow one: not counted, as for the stall
+    /// truth).
     fn settle_time(&self, flow: &Flow) -> f64 {
         if flow.u > 0.0 {
             10.0 * (self.law.tau1 + self.law.tau2) * 0.5 * self.chord / flow.u
@@ -253,11 +297,65 @@ mod tests {
                 alpha_e: [-0.5, 0.5],
                 k: [0.05, 1.5],
             },
+            circulation_lag: false,
         }
     }
 
     fn model() -> LagAero {
         LagAero::new(plate_law(), 0.25, Some(-0.3)).unwrap()
+    }
+
+    /// The example law with its circulation lag on.
+    fn lagged() -> LagAero {
+        let mut l = plate_law();
+        l.circulation_lag = true;
+        LagAero::new(l, 0.25, Some(-0.3)).unwrap()
+    }
+
+    /// With the circulation lag the model has the two Jones states; attached, about α = 0,
+    /// its frequency response is the thin aerofoil's with Jones' approximation of
+    /// Theodorsen's function on the circulatory angle (no three-quarter-chord pitch-rate
+    /// term: the law's q column is unlagged); the states vanish at the (trimmed) equilibrium.
+    #[test]
+    fn circulation_lag_states_are_jones_and_zero_at_the_equilibrium() {
+        assert_eq!(CIRCULATION_LAGS, crate::theodorsen::JONES_LAGS);
+        let m = lagged();
+        assert_eq!(m.n_lag(), 3);
+        assert_eq!(model().n_lag(), 1);
+        let flow = Flow { rho: RHO, u: 6.0 };
+        let g = 2.0 * 6.0 / 0.25;
+        let mut r = [0.0; 3];
+        for t in [lagged(), lagged().with_mean_angle(0.22).unwrap()] {
+            let z = t.forces(&flow, [0.0; 2], [0.0; 2], &[0.0; 3]);
+            assert!(z[0].abs() < 1e-12 && z[1].abs() < 1e-12, "{z:?}");
+            t.lag_rates(&flow, [0.0; 2], [0.0; 2], &[0.0; 3], &mut r);
+            assert!(r.iter().all(|v| v.abs() < 1e-12), "{r:?}");
+        }
+        // ẇ_i = g b_i (α_e − α₀ − w_i); the force sees α_c
+        let (q, qd, lag) = ([0.0, 0.1], [0.0; 2], [0.0, 0.02, -0.01]);
+        m.lag_rates(&flow, q, qd, &lag, &mut r);
+        assert!((r[1] - g * 0.0455 * (0.1 - 0.02)).abs() < 1e-12);
+        assert!((r[2] - g * 0.3 * (0.1 + 0.01)).abs() < 1e-12);
+        let ac = (1.0 - 0.165 - 0.335) * 0.1 + 0.165 * 0.02 - 0.335 * 0.01;
+        let mut l = plate_law();
+        l.circulation_lag = true;
+        let p = 0.5 * RHO * 36.0 * 0.25;
+        let f = m.forces(&flow, q, qd, &lag);
+        assert!((f[0] - p * l.coefficients(ac, 0.0, 1.0)[0]).abs() < 1e-12 * p);
+        // attached response: −2πC_J(k) on the angle
+        let omega = 20.0;
+        let h = m.frequency_response(&flow, omega);
+        let k = omega * 0.125 / 6.0;
+        let ik = Complex64::new(0.0, k);
+        let cj = Complex64::new(1.0, 0.0) - 0.165 * ik / (ik + 0.0455) - 0.335 * ik / (ik + 0.3);
+        let h0 = model().frequency_response(&flow, omega);
+        let circ = -2.0 * std::f64::consts::PI * p;
+        let want = h0[(0, 1)] - circ + circ * cj;
+        assert!(
+            (h[(0, 1)] - want).norm() < 1e-9 * p,
+            "{} vs {want}",
+            h[(0, 1)]
+        );
     }
 
     #[test]
@@ -303,7 +401,12 @@ mod tests {
     /// finite differences ([`state_space_response`]), attached and trimmed in stall.
     #[test]
     fn frequency_response_equals_the_linearised_time_domain_form() {
-        for m in [model(), model().with_mean_angle(0.22).unwrap()] {
+        for m in [
+            model(),
+            model().with_mean_angle(0.22).unwrap(),
+            lagged(),
+            lagged().with_mean_angle(0.22).unwrap(),
+        ] {
             let flow = Flow { rho: RHO, u: 7.0 };
             for omega in [0.0, 3.0, 20.0, 80.0] {
                 let h = m.frequency_response(&flow, omega);
@@ -350,8 +453,13 @@ mod tests {
         let flow = Flow { rho: RHO, u: 6.0 };
         let law = plate_law();
         let p = 0.5 * RHO * 36.0 * 0.25;
-        for a0 in [0.0, 0.15, 0.2, 0.3] {
-            let m = model().with_mean_angle(a0).unwrap();
+        for (a0, lag) in [0.0, 0.15, 0.2, 0.3]
+            .into_iter()
+            .flat_map(|a| [(a, false), (a, true)])
+        {
+            let m = if lag { lagged() } else { model() }
+                .with_mean_angle(a0)
+                .unwrap();
             let h = m.frequency_response(&flow, 1e-9);
             let d = 1e-6;
             let stat = |a: f64| law.coefficients(a, 0.0, law.x_static(a));

@@ -61,6 +61,14 @@ pub struct LagFitOptions {
     pub max_iter: usize,
     /// δ path of the moment selection (contribution measure).
     pub path: PathOptions,
+    /// Fit the law with its attached-flow circulation lag ([`LagLaw::circulation_lag`],
+    /// default on: fixed published constants, no parameter fitted).
+    #[serde(default = "default_true")]
+    pub circulation_lag: bool,
+}
+
+fn default_true() -> bool {
+    true
 }
 
 impl Default for LagFitOptions {
@@ -70,6 +78,7 @@ impl Default for LagFitOptions {
             moment_columns: LagColumn::ALL.to_vec(),
             max_iter: 40,
             path: PathOptions::for_measure(Measure::Contribution),
+            circulation_lag: true,
         }
     }
 }
@@ -201,7 +210,7 @@ pub struct LagFit {
 }
 
 /// The law with θ and empty channels (the separation dynamics only).
-pub(crate) fn law_of(theta: [f64; 4]) -> LagLaw {
+pub(crate) fn law_of(theta: [f64; 4], circulation_lag: bool) -> LagLaw {
     LagLaw {
         tau1: theta[0],
         tau2: theta[1],
@@ -213,6 +222,7 @@ pub(crate) fn law_of(theta: [f64; 4]) -> LagLaw {
             alpha_e: [0.0, 0.0],
             k: [0.0, 0.0],
         },
+        circulation_lag,
     }
 }
 
@@ -231,6 +241,8 @@ struct Problem<'a> {
     moment: Vec<LagColumn>,
     /// Which of θ are fitted (a fixed one keeps its start value).
     free: [bool; 4],
+    /// The law's circulation lag.
+    circ: bool,
 }
 
 /// One evaluation of the projected problem at θ.
@@ -255,7 +267,7 @@ fn ss_about_mean(y: &[f64]) -> f64 {
 impl Problem<'_> {
     /// Separation states of every case (parallel, in case order).
     fn states(&self, theta: [f64; 4]) -> Result<(Vec<Vec<f64>>, Vec<usize>)> {
-        let law = law_of(theta);
+        let law = law_of(theta, self.circ);
         let out: Vec<Result<(Vec<f64>, usize)>> = self
             .series
             .par_iter()
@@ -292,10 +304,12 @@ impl Problem<'_> {
             .sum();
         let mut c: Vec<Vec<f64>> = cols.iter().map(|_| Vec::with_capacity(total)).collect();
         let mut y = Vec::with_capacity(total);
+        let law = law_of([1.0; 4], self.circ);
         for ((s, x), &st) in self.series.iter().zip(xs).zip(starts) {
+            let a = s.angle(&law);
             for i in st..s.len() {
                 for (cv, col) in c.iter_mut().zip(cols) {
-                    cv.push(col.value(s.alpha_e[i], s.q[i], x[i]));
+                    cv.push(col.value(a[i], s.q[i], x[i]));
                 }
                 y.push(if lift { s.c_lift[i] } else { s.c_moment[i] });
             }
@@ -621,6 +635,7 @@ fn case_scores(p: &Problem<'_>, e: &Eval) -> Vec<LagCaseScore> {
         .zip(&e.xs)
         .zip(&e.starts)
         .map(|((s, x), &st)| {
+            let a = s.angle(&law_of([1.0; 4], p.circ));
             let mut r2 = [0.0; 2];
             for (k, (cols, coef)) in [(&p.lift, &e.lift), (&p.moment, &e.moment)]
                 .into_iter()
@@ -631,7 +646,7 @@ fn case_scores(p: &Problem<'_>, e: &Eval) -> Vec<LagCaseScore> {
                     .map(|i| {
                         cols.iter()
                             .zip(coef)
-                            .map(|(c, v)| v * c.value(s.alpha_e[i], s.q[i], x[i]))
+                            .map(|(c, v)| v * c.value(a[i], s.q[i], x[i]))
                             .sum()
                     })
                     .collect();
@@ -761,13 +776,14 @@ pub fn fit_series(series: &[LagSeries], opts: &LagFitOptions) -> Result<LagFit> 
     // shortest lag the optimiser could run to)
     let mut x = Vec::new();
     for s in series.iter().filter(|s| !s.periodic) {
-        s.simulate(&law_of(clamp_theta(init)), &mut x)?;
+        s.simulate(&law_of(clamp_theta(init), opts.circulation_lag), &mut x)?;
     }
     let mut p = Problem {
         series,
         lift: opts.lift_columns.clone(),
         moment: opts.moment_columns.clone(),
         free: [true; 4],
+        circ: opts.circulation_lag,
     };
     // a few starts around the data's guess; the best by output error goes on
     let mut starts = vec![init];
@@ -882,6 +898,7 @@ pub fn fit_series(series: &[LagSeries], opts: &LagFitOptions) -> Result<LagFit> 
             alpha_e: [lo, hi],
             k: [kmin, kmax],
         },
+        circulation_lag: p.circ,
     };
     law.check()?;
     let report = LagReport {
@@ -951,10 +968,11 @@ pub fn predict_series(law: &LagLaw, s: &LagSeries) -> Result<LagPrediction> {
     }
     let mut x = Vec::new();
     let start = s.simulate(law, &mut x)?;
+    let a = s.angle(law);
     let mut cl = Vec::with_capacity(s.len());
     let mut cm = Vec::with_capacity(s.len());
     for i in 0..s.len() {
-        let [l, m] = law.coefficients(s.alpha_e[i], s.q[i], x[i]);
+        let [l, m] = law.coefficients(a[i], s.q[i], x[i]);
         cl.push(l);
         cm.push(m);
     }
@@ -1002,6 +1020,7 @@ pub(crate) mod tests {
                 alpha_e: [0.0, 0.5],
                 k: [0.0, 1.0],
             },
+            circulation_lag: true,
         }
     }
 
@@ -1041,8 +1060,9 @@ pub(crate) mod tests {
         let s = LagSeries::new(&c).unwrap();
         let mut x = Vec::new();
         s.simulate(law, &mut x).unwrap();
+        let a = s.angle(law);
         for i in 0..n {
-            let [l, m] = law.coefficients(s.alpha_e[i], s.q[i], x[i]);
+            let [l, m] = law.coefficients(a[i], s.q[i], x[i]);
             c.c_lift[i] = l;
             c.c_moment[i] = m;
         }

@@ -19,6 +19,20 @@
 //!   α_e·((1 + √x)/2)², q, the separation deficit 1 − x and the Kirchhoff lift times it
 //!   (centre-of-pressure travel). The thin-aerofoil apparent mass (acceleration terms) is not
 //!   part of the law: flight adds it (`AeroModel::apparent_mass`).
+//! - Attached-flow circulation lag (switch [`LagLaw::circulation_lag`], off in a document
+//!   that does not name it): the circulation does not follow the angle at once (Wagner's
+//!   indicial lift). With the switch on, every angle the law uses — the columns' α_e and the
+//!   separation input u — is the circulatory angle
+//!   α_c = (1 − A₁ − A₂)·α_e + A₁·z₁ + A₂·z₂, where z_i lags α_e in convective time,
+//!   dz_i/ds = b_i·(α_e − z_i), with R. T. Jones' (1938) fixed approximation of Wagner's
+//!   function, (A₁, b₁) = (0.165, 0.0455), (A₂, b₂) = (0.335, 0.3) ([`CIRCULATION_LAGS`]):
+//!   published constants, not fitted. In steady flow z_i = α_e, so α_c = α_e and the static
+//!   law is unchanged. Driving the separation by the lagged angle is Leishman & Beddoes
+//!   (1989, "A semi-empirical model for dynamic stall", J. Am. Helicopter Soc. 34(3)) and
+//!   Hansen, Gaunaa & Madsen (2004, Risø-R-1354): the separation point follows the effective
+//!   (circulatory) angle, not the geometric one. The pitch-rate column q stays unlagged (it
+//!   carries the noncirculatory and the rate terms together: the law does not know the
+//!   records' elastic axis, so it cannot form the three-quarter-chord downwash).
 
 use serde::{Deserialize, Serialize};
 
@@ -145,6 +159,29 @@ impl LagChannel {
     }
 }
 
+/// R. T. Jones' (1938) two-term approximation of Wagner's indicial lift function,
+/// φ(s) = 1 − A₁e^{−b₁s} − A₂e^{−b₂s} (s = tU/b): the pairs (A_i, b_i) of the circulation
+/// lag (module docs). The same constants as `aeroelastic::theodorsen::JONES_LAGS`.
+pub const CIRCULATION_LAGS: [(f64, f64); 2] = [(0.165, 0.0455), (0.335, 0.3)];
+
+/// The circulatory angle α_c = (1 − A₁ − A₂)·α_e + A₁·z₁ + A₂·z₂ \[rad\] of the Jones states
+/// z = (z₁, z₂) \[rad\] (module docs); α_c = α_e when z₁ = z₂ = α_e.
+#[inline]
+pub fn circulatory_angle(alpha_e: f64, z: [f64; 2]) -> f64 {
+    let [(a1, _), (a2, _)] = CIRCULATION_LAGS;
+    (1.0 - a1 - a2) * alpha_e + a1 * z[0] + a2 * z[1]
+}
+
+/// dz_i/ds = b_i·(α_e − z_i) of the Jones states in convective time s = tU/b; multiply by
+/// 2U/B for d/dt.
+#[inline]
+pub fn circulation_rates(alpha_e: f64, z: [f64; 2]) -> [f64; 2] {
+    [
+        CIRCULATION_LAGS[0].1 * (alpha_e - z[0]),
+        CIRCULATION_LAGS[1].1 * (alpha_e - z[1]),
+    ]
+}
+
 /// The range of the forced data a law was fitted on (for extrapolation warnings).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct FittedRange {
@@ -171,6 +208,11 @@ pub struct LagLaw {
     pub moment: LagChannel,
     /// Range of the data the law was fitted on.
     pub range: FittedRange,
+    /// Attached-flow circulation lag on (module docs): the columns and the separation input
+    /// take the circulatory angle α_c instead of α_e. Absent in a document = off (the law as
+    /// first written).
+    #[serde(default)]
+    pub circulation_lag: bool,
 }
 
 impl LagLaw {
@@ -318,7 +360,29 @@ mod tests {
                 alpha_e: [0.0, 0.5],
                 k: [0.05, 0.2],
             },
+            circulation_lag: false,
         }
+    }
+
+    #[test]
+    fn circulation_lag_is_jones_and_steady_neutral() {
+        // steady: α_c = α_e
+        assert!((circulatory_angle(0.3, [0.3, 0.3]) - 0.3).abs() < 1e-15);
+        assert_eq!(circulation_rates(0.3, [0.3, 0.3]), [0.0, 0.0]);
+        // step response from rest is Wagner–Jones φ(s) = 1 − A₁e^{−b₁s} − A₂e^{−b₂s}
+        let (mut z, ds) = ([0.0, 0.0], 1e-3);
+        for _ in 0..20_000 {
+            let r = circulation_rates(1.0, z);
+            z = [z[0] + ds * r[0], z[1] + ds * r[1]];
+        }
+        let s: f64 = 20.0;
+        let phi = 1.0 - 0.165 * (-0.0455 * s).exp() - 0.335 * (-0.3 * s).exp();
+        assert!((circulatory_angle(1.0, z) - phi).abs() < 1e-3);
+        // a document without the field keeps its meaning (off)
+        let mut v = serde_json::to_value(law()).unwrap();
+        v.as_object_mut().unwrap().remove("circulation_lag");
+        let l: LagLaw = serde_json::from_value(v).unwrap();
+        assert!(!l.circulation_lag);
     }
 
     #[test]

@@ -13,5 +13,8 @@ pub mod series;
 
 pub use fit::{fit, predict, LagFit, LagFitOptions, LagPrediction, LagReport};
 pub use holdout::{compare, held_out, HeldOutReport, HoldOut, MemorylessLaw};
-pub use law::{FittedRange, LagChannel, LagColumn, LagLaw, LagLawDocument, LAG_LAW_FORMAT};
+pub use law::{
+    circulation_rates, circulatory_angle, FittedRange, LagChannel, LagColumn, LagLaw,
+    LagLawDocument, CIRCULATION_LAGS, LAG_LAW_FORMAT,
+};
 pub use series::LagSeries;

@@ -19,7 +19,7 @@
 use crate::record::NondimCase;
 use crate::{Error, Result};
 
-use super::law::LagLaw;
+use super::law::{circulatory_angle, LagLaw, CIRCULATION_LAGS};
 
 /// RMS of α_e(t + T) − α_e(t) allowed for a periodic record, as a fraction of the amplitude
 /// (half the peak-to-peak α_e).
@@ -55,6 +55,12 @@ pub struct LagSeries {
     pub k: f64,
     /// Mean of α \[rad\].
     pub mean_alpha: f64,
+    /// Circulatory angle α_c \[rad\] of the Jones circulation lag ([`super::law`] module
+    /// docs) at every sample: at the periodic steady state of a periodic record (each Jones
+    /// state z_i is the first-order lag of α_e with τ = 1/b_i, computed like x), otherwise
+    /// with both states started at the record's mean α_e (the slow state's own settling,
+    /// 5/b₁ ≈ 110 b/U, is longer than most records).
+    pub alpha_c: Vec<f64>,
     /// Half the peak-to-peak α \[rad\].
     pub amplitude: f64,
 }
@@ -136,7 +142,17 @@ impl LagSeries {
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
                 (a.min(x), b.max(x))
             });
+        let mean_e = alpha_e.iter().sum::<f64>() / n as f64;
+        let mut z = [vec![0.0; n], vec![0.0; n]];
+        for (zi, (_, b)) in z.iter_mut().zip(CIRCULATION_LAGS) {
+            let per = if periodic { period_samples } else { None };
+            first_order(&alpha_e, ds * b, per, mean_e, zi);
+        }
+        let alpha_c: Vec<f64> = (0..n)
+            .map(|i| circulatory_angle(alpha_e[i], [z[0][i], z[1][i]]))
+            .collect();
         Ok(LagSeries {
+            alpha_c,
             id: id.clone(),
             alpha_e,
             q: case.x[1].clone(),
@@ -151,6 +167,16 @@ impl LagSeries {
             mean_alpha,
             amplitude: 0.5 * (ahi - alo),
         })
+    }
+
+    /// The angle `law` takes at every sample \[rad\]: α_c with its circulation lag on, α_e
+    /// otherwise.
+    pub fn angle(&self, law: &LagLaw) -> &[f64] {
+        if law.circulation_lag {
+            &self.alpha_c
+        } else {
+            &self.alpha_e
+        }
     }
 
     /// Number of samples.
@@ -174,44 +200,23 @@ impl LagSeries {
     pub fn simulate(&self, law: &LagLaw, x: &mut Vec<f64>) -> Result<usize> {
         let n = self.len();
         let f: Vec<f64> = self
-            .alpha_e
+            .angle(law)
             .iter()
             .zip(&self.q)
             .map(|(&a, &q)| law.x_static(law.input(a, q)))
             .collect();
-        let h = self.ds / law.tau1;
-        let e = (-h).exp();
-        let c0 = 1.0 - e;
-        let c1 = 1.0 - c0 / h;
-        let step = |xn: f64, f0: f64, f1: f64| e * xn + c0 * f0 + (f1 - f0) * c1;
         x.clear();
         x.resize(n, 0.0);
+        let h = self.ds / law.tau1;
         if self.periodic {
-            let p = self.period_samples.unwrap_or(0.0);
-            let whole = p.floor() as usize;
-            let frac = p - whole as f64;
-            let mut xp = 0.0;
-            for i in 0..whole {
-                xp = step(xp, f[i], f[i + 1]);
-            }
-            if frac > 0.0 && whole + 1 < n {
-                // the fractional step to T, the input linear over it
-                let hf = h * frac;
-                let ef = (-hf).exp();
-                let f1 = f[whole] + frac * (f[whole + 1] - f[whole]);
-                xp = ef * xp + (1.0 - ef) * f[whole] + (f1 - f[whole]) * (1.0 - (1.0 - ef) / hf);
-            }
-            let decay = (-h * p).exp();
-            x[0] = (xp / (1.0 - decay)).clamp(0.0, 1.0);
-            for i in 1..n {
-                x[i] = step(x[i - 1], f[i - 1], f[i]);
+            first_order(&f, h, self.period_samples, f[0], x);
+            // the periodic solution lies in [0, 1]; rounding must not put it outside
+            for v in x.iter_mut() {
+                *v = v.clamp(0.0, 1.0);
             }
             return Ok(0);
         }
-        x[0] = f[0];
-        for i in 1..n {
-            x[i] = step(x[i - 1], f[i - 1], f[i]);
-        }
+        first_order(&f, h, None, f[0], x);
         let drop = (SETTLE_TIMES * law.tau1 / self.ds).ceil();
         let need = self.period_samples.unwrap_or(0.5 * n as f64).max(1.0);
         let left = n as f64 - drop;
@@ -246,6 +251,38 @@ impl LagSeries {
             });
         }
         Ok(drop as usize)
+    }
+}
+
+/// The first-order lag τ dx/ds + x = f sampled at every sample of `f` into `x` (resized
+/// by the caller to f's length), h = Δs/τ, by the first-order-hold exponential step (module
+/// docs). With `period` (samples) x starts on the periodic solution
+/// x(0)* = x_p(T)/(1 − e^{−hT}) (x_p started at 0), otherwise at `start`.
+fn first_order(f: &[f64], h: f64, period: Option<f64>, start: f64, x: &mut [f64]) {
+    let n = f.len();
+    let e = (-h).exp();
+    let c0 = 1.0 - e;
+    let c1 = 1.0 - c0 / h;
+    let step = |xn: f64, f0: f64, f1: f64| e * xn + c0 * f0 + (f1 - f0) * c1;
+    x[0] = start;
+    if let Some(p) = period {
+        let whole = p.floor() as usize;
+        let frac = p - whole as f64;
+        let mut xp = 0.0;
+        for i in 0..whole.min(n.saturating_sub(1)) {
+            xp = step(xp, f[i], f[i + 1]);
+        }
+        if frac > 0.0 && whole + 1 < n {
+            // the fractional step to T, the input linear over it
+            let hf = h * frac;
+            let ef = (-hf).exp();
+            let f1 = f[whole] + frac * (f[whole + 1] - f[whole]);
+            xp = ef * xp + (1.0 - ef) * f[whole] + (f1 - f[whole]) * (1.0 - (1.0 - ef) / hf);
+        }
+        x[0] = xp / (1.0 - (-h * p).exp());
+    }
+    for i in 1..n {
+        x[i] = step(x[i - 1], f[i - 1], f[i]);
     }
 }
 
@@ -290,6 +327,7 @@ mod tests {
                 alpha_e: [0.0, 0.5],
                 k: [0.0, 1.0],
             },
+            circulation_lag: false,
         }
     }
 
@@ -342,6 +380,36 @@ mod tests {
             );
             assert!((0.0..=1.0).contains(&x[i]));
         }
+    }
+
+    #[test]
+    fn circulatory_angle_is_the_jones_response_at_the_periodic_steady_state() {
+        // α_e = 0.25 + 0.15 sin(ωt): α_c = 0.25 + 0.15·Im(C_J(k) e^{iωt}),
+        // C_J(k) = 1 − Σ A_i·ik/(ik + b_i), k = ωb/U (convective frequency)
+        let s = LagSeries::new(&case(3.0, false)).unwrap();
+        let (u, b, f) = (10.0, 0.125, 2.0);
+        let w = 2.0 * std::f64::consts::PI * f;
+        let k = w * b / u;
+        let mut c = num_complex::Complex64::new(1.0, 0.0);
+        for (a, bi) in CIRCULATION_LAGS {
+            let ik = num_complex::Complex64::new(0.0, k);
+            c -= a * ik / (ik + bi);
+        }
+        for i in 0..s.len() {
+            let t = i as f64 * s.dt;
+            let e = num_complex::Complex64::from_polar(1.0, w * t);
+            let want = 0.25 + 0.15 * (c * e).im;
+            assert!(
+                (s.alpha_c[i] - want).abs() < 2e-4,
+                "{i}: {} {want}",
+                s.alpha_c[i]
+            );
+        }
+        // the switch selects the angle
+        let mut l = law(3.0, 1.0);
+        assert_eq!(s.angle(&l).as_ptr(), s.alpha_e.as_ptr());
+        l.circulation_lag = true;
+        assert_eq!(s.angle(&l).as_ptr(), s.alpha_c.as_ptr());
     }
 
     #[test]
