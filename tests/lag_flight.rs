@@ -397,3 +397,164 @@ fn round_trip_stall_truth_to_lag_law_lco() {
     }
     assert!(compared >= 2, "{compared} settled LCO speeds");
 }
+
+/// Pitch-only forced cases of the stall truth (`DynamicStallAero::thin_plate`, a = −0.3,
+/// chord 0.25 m, U = 10 m/s), 100 samples per period, 3 periods after the lag states settle:
+/// (id, K, mean°, amplitude°) each, in the lag law's nondimensional form.
+fn truth_cases(grid: &[(f64, f64, f64)]) -> Vec<identify::record::NondimCase> {
+    use aeroelastic::aero::{DynamicStallAero, Flow};
+    use aeroelastic::tunnel::{forced_forces, Motion, Sine};
+    use identify::record::{CaseMeta, Forcing, NondimCase};
+    let (u, chord, rho) = (10.0, 0.25, 1.225);
+    let model = DynamicStallAero::thin_plate(chord, -0.3).unwrap();
+    let flow = Flow { rho, u };
+    grid.iter()
+        .map(|&(k, mean_deg, amp_deg)| {
+            let f = k * u / (2.0 * std::f64::consts::PI * chord);
+            let motion = Motion {
+                pitch: vec![Sine {
+                    freq: f,
+                    amplitude: amp_deg.to_radians(),
+                    phase: 0.0,
+                }],
+                heave: vec![],
+                mean_pitch: mean_deg.to_radians(),
+            };
+            let dt = 1.0 / (f * 100.0);
+            let n = 300;
+            let pre_roll = 2.0 / f + 60.0 * 0.5 * chord / u;
+            let (l, m) =
+                forced_forces(&model, &flow, &motion, 0.0, dt, n, pre_roll, "truth").unwrap();
+            let (mut a, mut ad) = (Vec::with_capacity(n), Vec::with_capacity(n));
+            for i in 0..n {
+                let (q, qd, _) = motion.eval(i as f64 * dt);
+                a.push(q[1]);
+                ad.push(chord * qd[1] / u);
+            }
+            let p = 0.5 * rho * u * u;
+            NondimCase {
+                meta: CaseMeta {
+                    id: format!("K{k}-M{mean_deg}-A{amp_deg}"),
+                    wind_speed: u,
+                    mean_pitch: Some(mean_deg.to_radians()),
+                    amplitude: Some(amp_deg.to_radians()),
+                    freq_pitch: Some(f),
+                    ..CaseMeta::default()
+                },
+                dt,
+                chord,
+                x: [a, ad, vec![0.0; n], vec![0.0; n]],
+                c_lift: l.iter().map(|v| v / (p * chord)).collect(),
+                c_moment: m.iter().map(|v| v / (p * chord * chord)).collect(),
+                forcing: Forcing {
+                    pitch: Some(f),
+                    heave: None,
+                },
+            }
+        })
+        .collect()
+}
+
+/// Fits the lag law on `grid` of the truth, writes it as a model file (elastic axis of the
+/// truth) in `dir`, and compares its LCO sweep at `speeds` with the truth's: returns
+/// (U, truth class, truth amplitude°, law class, law amplitude°) and prints them.
+fn deep_stall_round_trip(
+    grid: &[(f64, f64, f64)],
+    speeds: &str,
+    dir: &Path,
+) -> Vec<(f64, String, f64, String, f64)> {
+    let cases = truth_cases(grid);
+    let fit = identify::lag::fit(&cases, &identify::lag::LagFitOptions::default()).unwrap();
+    eprintln!(
+        "fitted: τ₁ {:.3} τ₂ {:.3} α* {:.2}° m {:.2}; lift {:?}; moment {:?}",
+        fit.law.tau1,
+        fit.law.tau2,
+        fit.law.alpha_star.to_degrees(),
+        fit.law.sharpness,
+        fit.law.lift.terms,
+        fit.law.moment.terms
+    );
+    let doc = identify::lag::LagLawDocument {
+        format: identify::lag::LAG_LAW_FORMAT.into(),
+        dataset: "stall truth".into(),
+        chord: 0.25,
+        law: fit.law.clone(),
+        report: serde_json::Value::Null,
+    };
+    let law_path = dir.join("lag_law.json");
+    std::fs::write(&law_path, serde_json::to_string_pretty(&doc).unwrap()).unwrap();
+    let model = dir.join("lag.model.toml");
+    std::fs::write(
+        &model,
+        format!(
+            "kind = \"lag\"\nfile = \"{}\"\nelastic_axis = -0.3\n",
+            s(&law_path).replace('\\', "/")
+        ),
+    )
+    .unwrap();
+    let u_lag = flutter_speed(&s(&model), &dir.join("f-lag"));
+    let u_truth = flutter_speed(&scenario("plate-stall.model.toml"), &dir.join("f-truth"));
+    eprintln!(
+        "onset: lag {u_lag:.4} m/s, truth {u_truth:.4} m/s ({:+.2} %)",
+        100.0 * (u_lag / u_truth - 1.0)
+    );
+    let lag = lco_sweep(&s(&model), speeds, &dir.join("l-lag"));
+    let truth = lco_sweep(
+        &scenario("plate-stall.model.toml"),
+        speeds,
+        &dir.join("l-truth"),
+    );
+    let rows: Vec<_> = lag
+        .iter()
+        .zip(&truth)
+        .map(|(l, t)| {
+            (
+                l.0,
+                t.1.clone(),
+                t.2.to_degrees(),
+                l.1.clone(),
+                l.2.to_degrees(),
+            )
+        })
+        .collect();
+    for r in &rows {
+        eprintln!(
+            "U = {}: truth {} {:.2}°, lag {} {:.2}° ({:+.1} %)",
+            r.0,
+            r.1,
+            r.2,
+            r.3,
+            r.4,
+            100.0 * (r.4 / r.2 - 1.0)
+        );
+    }
+    assert!((u_lag - u_truth).abs() < 0.02 * u_truth);
+    rows
+}
+
+/// The deep-stall round trip of the issue (about 2 s, in CI): truth → pitch-only campaign at
+/// K = 0.05, 0.1, 0.2, 0.4, 0.7 about 15° (± 8°) and, because the LCO about α = 0 passes
+/// through stall on both sides, about 0° with amplitudes 10°, 18°, 24° (20 cases) → lag law
+/// (circulation lag on) → flutter and LCO on the plate rig against the truth's. Measured on
+/// this commit: onset 6.6393 vs 6.6410 m/s (−0.03 %); decay at 6 and 6.5 m/s for both; at
+/// 7 m/s 15.03° vs 15.75° (−4.6 %); at 7.5, 8, 9 m/s the law's runs stop `Unsettled` at the
+/// time cap (18.8°, 22.1°, 22.7° vs 17.61°, 18.87°, 20.82°). The issue's 5 % at ≥ 5 speeds
+/// is NOT met; this guards the onset (2 %) and the 7 m/s amplitude (5 %).
+#[test]
+fn deep_stall_round_trip_at_six_speeds() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut grid = Vec::new();
+    for k in [0.05, 0.1, 0.2, 0.4, 0.7] {
+        grid.push((k, 15.0, 8.0));
+        for a in [10.0, 18.0, 24.0] {
+            grid.push((k, 0.0, a));
+        }
+    }
+    let rows = deep_stall_round_trip(&grid, "6,6.5,7,7.5,8,9", dir.path());
+    for r in &rows[..2] {
+        assert!(r.1 == "Decay" && r.3 == "Decay", "{r:?}");
+    }
+    let r = &rows[2];
+    assert!(r.1 == "Lco" && r.3 == "Lco", "{r:?}");
+    assert!((r.4 - r.2).abs() < 0.05 * r.2, "{r:?}");
+}
