@@ -26,6 +26,7 @@ pub fn install() {
             std::ffi::CString::new(std::os::unix::ffi::OsStrExt::as_bytes(b.as_os_str())).ok()
         });
         park_other_threads(Duration::from_secs(2));
+        crate::outdir::after_park();
         if let Some(b) = blocker {
             // SAFETY: a valid NUL-terminated path; unlink only removes the name.
             unsafe { libc::unlink(b.as_ptr()) };

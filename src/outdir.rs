@@ -38,8 +38,8 @@ enum Active {
         staging: PathBuf,
         lock: PathBuf,
     },
-    /// Temporary files of this process in a shared folder.
-    Shared { dir: PathBuf },
+    /// Temporary files of this process in a shared folder, and the folder's lock.
+    Shared { dir: PathBuf, lock: PathBuf },
 }
 
 /// The current output of this process. The signal handler and [`OutDir::commit`] both
@@ -48,7 +48,26 @@ static ACTIVE: Mutex<Option<Active>> = Mutex::new(None);
 
 fn set_active(a: Option<Active>) {
     *ACTIVE.lock().unwrap_or_else(|p| p.into_inner()) = a;
+    // the lock being taken is now registered with its owner (or released)
+    *PENDING_LOCK.lock().unwrap_or_else(|p| p.into_inner()) = None;
 }
+
+/// The shared folder whose temporary files [`after_park`] removes once more.
+static AFTER_PARK: Mutex<Option<PathBuf>> = Mutex::new(None);
+
+/// Called by the interrupt handler once every other thread is parked: removes this
+/// process's temporary files of the shared folder again (a writer may have created one
+/// between [`interrupt_cleanup`] and the parking: the kill campaign saw `.lco.json.PID.tmp`).
+pub fn after_park() {
+    if let Some(dir) = &*AFTER_PARK.lock().unwrap_or_else(|p| p.into_inner()) {
+        remove_temp_files(dir, |pid| pid == std::process::id());
+    }
+}
+
+/// A lock being taken and not yet registered in [`ACTIVE`]: its private PID file and the
+/// lock path. An interrupt in that window removes both (the kill campaign found
+/// `.o.aeroform-lock.PID.tmp` left by a SIGINT while `flutter` took its folder's lock).
+static PENDING_LOCK: Mutex<Option<(PathBuf, PathBuf)>> = Mutex::new(None);
 
 /// Called by the SIGINT/SIGTERM handler: removes the staging folder and the lock (or this
 /// process's temporary files in a shared folder) and returns a sentence for the user and
@@ -66,8 +85,10 @@ pub fn interrupt_cleanup() -> (String, Option<PathBuf>) {
                 out.display()
             )
         }
-        Some(Active::Shared { dir }) => {
+        Some(Active::Shared { dir, lock }) => {
             remove_temp_files(dir, |pid| pid == std::process::id());
+            *AFTER_PARK.lock().unwrap_or_else(|p| p.into_inner()) = Some(dir.clone());
+            let _ = std::fs::remove_file(lock);
             format!(
                 "interrupted: {} holds only complete result files",
                 dir.display()
@@ -75,6 +96,16 @@ pub fn interrupt_cleanup() -> (String, Option<PathBuf>) {
         }
         None => "interrupted".to_string(),
     };
+    let pending = PENDING_LOCK.lock().unwrap_or_else(|p| p.into_inner());
+    if let Some((pid_file, lock)) = &*pending {
+        let _ = std::fs::remove_file(pid_file);
+        let ours =
+            std::fs::read_to_string(lock).is_ok_and(|t| t.trim() == std::process::id().to_string());
+        if ours {
+            let _ = std::fs::remove_file(lock);
+        }
+    }
+    std::mem::forget(pending);
     // keep the guard: the main thread must not start a swap before the process exits
     std::mem::forget(guard);
     (msg, blocker)
@@ -347,6 +378,8 @@ impl Lock {
         // runs started in the same instant cannot both take it for a stale one (issue 27,
         // row 9).
         let pid_file = parent.join(format!(".{name}.aeroform-lock.{}.tmp", std::process::id()));
+        *PENDING_LOCK.lock().unwrap_or_else(|p| p.into_inner()) =
+            Some((pid_file.clone(), path.clone()));
         let write_pid = || -> std::io::Result<()> {
             use std::io::Write;
             let _ = std::fs::remove_file(&pid_file);
@@ -365,7 +398,11 @@ impl Lock {
             )
         })?;
         let result = Self::link_lock(parent, name, &pid_file, path);
+        let mut pending = PENDING_LOCK.lock().unwrap_or_else(|p| p.into_inner());
         let _ = std::fs::remove_file(&pid_file);
+        if result.is_err() {
+            *pending = None;
+        }
         result
     }
 
@@ -421,7 +458,11 @@ impl Lock {
 
 impl Drop for Lock {
     fn drop(&mut self) {
+        let mut pending = PENDING_LOCK.lock().unwrap_or_else(|p| p.into_inner());
         let _ = std::fs::remove_file(&self.path);
+        if pending.as_ref().is_some_and(|(_, l)| *l == self.path) {
+            *pending = None;
+        }
     }
 }
 
@@ -459,6 +500,8 @@ pub struct OutDir {
     out: PathBuf,
     staging: PathBuf,
     command: String,
+    /// `--force`: replace a folder holding files aeroform did not write.
+    force: bool,
     lock: Option<Lock>,
     /// Parent folders of `out` this command created (removed again, when empty, if it
     /// fails before the swap).
@@ -542,18 +585,17 @@ impl OutDir {
                 ))
             }
             Ok(_) => {
-                let ours = dest.join(COMPLETE_MARKER).exists();
-                let empty = std::fs::read_dir(&dest).is_ok_and(|mut d| d.next().is_none());
-                if !ours && !empty && !force {
-                    return Err(refused(
-                        Usage(format!(
-                            "--out {}: the folder exists and holds files aeroform did not \
-                             write (no {COMPLETE_MARKER}); the new results replace the folder \
-                             as a whole, so choose another folder or pass --force to replace it",
-                            out.display()
-                        ))
-                        .into(),
-                    ));
+                if !force {
+                    if let Some(why) = not_ours(&dest) {
+                        return Err(refused(
+                            Usage(format!(
+                                "--out {}: {why}; the new results replace the folder as a \
+                                 whole, so choose another folder or pass --force to replace it",
+                                out.display()
+                            ))
+                            .into(),
+                        ));
+                    }
                 }
             }
         }
@@ -573,6 +615,7 @@ impl OutDir {
             out: dest,
             staging,
             command: command.to_string(),
+            force,
             lock: Some(lock),
             created,
         })
@@ -590,9 +633,29 @@ impl OutDir {
     /// Writing the marker or the rename fails (the previous results are then kept).
     pub fn commit(mut self) -> anyhow::Result<PathBuf> {
         let guard = ACTIVE.lock().unwrap_or_else(|p| p.into_inner());
+        // the check of `begin` again: a file put into the folder while this command ran is
+        // not deleted by the swap (issue 39, row 2a)
+        if !self.force && std::fs::symlink_metadata(&self.out).is_ok() {
+            if let Some(why) = not_ours(&self.out) {
+                drop(guard);
+                return Err(Usage(format!(
+                    "--out {}: {why} (they appeared while this command ran); they are kept and \
+                     the new results were not written: run again, into another folder or \
+                     with --force",
+                    self.out.display()
+                ))
+                .into());
+            }
+        }
+        let files = toml::Value::Array(
+            listing(&self.staging)
+                .into_iter()
+                .map(toml::Value::String)
+                .collect(),
+        );
         let marker = format!(
-            "format = \"aeroform-output/1\"\ncommand = \"{}\"\n",
-            self.command
+            "format = \"aeroform-output/1\"\ncommand = {}\nfiles = {files}\n",
+            toml::Value::String(self.command.clone())
         );
         identify::io::write_atomic(&self.staging.join(COMPLETE_MARKER), marker.as_bytes())?;
         std::fs::remove_file(self.staging.join(INCOMPLETE_MARKER)).map_err(|e| {
@@ -620,6 +683,70 @@ impl Drop for OutDir {
             remove_created(&self.created);
         }
     }
+}
+
+/// Every file and symbolic link below `dir` (symbolic links not followed), as relative
+/// paths with `/`, sorted, without the two folder markers: what a completion marker lists.
+fn listing(dir: &Path) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut stack = vec![PathBuf::new()];
+    while let Some(rel) = stack.pop() {
+        let Ok(entries) = std::fs::read_dir(dir.join(&rel)) else {
+            continue;
+        };
+        for e in entries.flatten() {
+            let r = rel.join(e.file_name());
+            let is_dir = e.file_type().is_ok_and(|t| t.is_dir());
+            if is_dir {
+                stack.push(r);
+            } else {
+                let s = r.to_string_lossy().replace('\\', "/");
+                if s != COMPLETE_MARKER && s != INCOMPLETE_MARKER {
+                    out.push(s);
+                }
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+/// Why an existing output folder may not be replaced without `--force`, or `None` when it
+/// may: empty, or holding exactly what its completion marker lists (a marker of an earlier
+/// version without a list vouches for the whole folder). Files its marker does not list
+/// (another command wrote one into it) are named, at most five.
+fn not_ours(dest: &Path) -> Option<String> {
+    let empty = std::fs::read_dir(dest).is_ok_and(|mut d| d.next().is_none());
+    if empty {
+        return None;
+    }
+    let marker = dest.join(COMPLETE_MARKER);
+    let Ok(text) = identify::io::read_text(&marker) else {
+        return Some(format!(
+            "the folder exists and holds files aeroform did not write (no {COMPLETE_MARKER})"
+        ));
+    };
+    let listed: Option<Vec<String>> = text
+        .parse::<toml::Table>()
+        .ok()
+        .and_then(|t| t.get("files").cloned())
+        .and_then(|f| f.try_into().ok());
+    let mut listed = listed?;
+    listed.sort();
+    let foreign: Vec<String> = listing(dest)
+        .into_iter()
+        .filter(|f| listed.binary_search(f).is_err())
+        .collect();
+    if foreign.is_empty() {
+        return None;
+    }
+    let shown: Vec<&str> = foreign.iter().take(5).map(String::as_str).collect();
+    Some(format!(
+        "the folder holds {} file(s) its {COMPLETE_MARKER} does not list ({}{})",
+        foreign.len(),
+        crate::ui::escape(&shown.join(", ")),
+        if foreign.len() > 5 { ", …" } else { "" }
+    ))
 }
 
 /// Moves `staging` to `dest`: a plain rename when `dest` is absent, else an atomic
@@ -682,23 +809,29 @@ fn exchange(_: &Path, _: &Path) -> std::io::Result<()> {
 pub struct SharedDir {
     /// The folder and its parents this command created, deepest first.
     created: Vec<PathBuf>,
+    /// The folder's lock (the one [`OutDir`] takes): no folder writer replaces the folder
+    /// while a file is written into it, and two commands never write into it at once
+    /// (issue 39, row 2b: `identify` beside `diagnose` on one folder lost its result).
+    lock: Option<Lock>,
 }
 
 impl SharedDir {
     /// Prepares `dir` for the files `written` (paths inside `dir` or anywhere, e.g.
     /// `--timing-json`): none of them may be or lie inside one of `inputs`
     /// ([`refuse_overlap`]); `dir` itself may hold inputs, since only the named files are
-    /// replaced.
+    /// replaced. Takes the folder's lock.
     ///
     /// # Errors
     /// [`Usage`] when a written file is or lies inside an input; the folder cannot be
-    /// created (named in the message).
+    /// created or another live aeroform process holds its lock (named in the message).
     pub fn begin(dir: &Path, written: &[&Path], inputs: &[Input<'_>]) -> anyhow::Result<SharedDir> {
         for w in written {
             refuse_overlap(w, "output file", inputs)?;
         }
         let created = create_dirs(dir)
             .map_err(|e| anyhow::anyhow!("cannot create output folder {}: {e}", dir.display()))?;
+        let (parent, name) = split_out(dir, false)?;
+        let lock = Lock::acquire(&parent, &name).inspect_err(|_| remove_created(&created))?;
         let n = remove_temp_files(dir, |pid| pid != std::process::id() && !pid_alive(pid));
         if n > 0 {
             eprintln!(
@@ -708,16 +841,22 @@ impl SharedDir {
         }
         set_active(Some(Active::Shared {
             dir: dir.to_path_buf(),
+            lock: lock.path.clone(),
         }));
-        Ok(SharedDir { created })
+        Ok(SharedDir {
+            created,
+            lock: Some(lock),
+        })
     }
 }
 
 impl Drop for SharedDir {
-    /// Unregisters the folder; removes the folders [`SharedDir::begin`] created if they
-    /// are still empty (after a success the result file keeps them).
+    /// Unregisters the folder and releases its lock; removes the folders
+    /// [`SharedDir::begin`] created if they are still empty (after a success the result file
+    /// keeps them).
     fn drop(&mut self) {
         set_active(None);
+        self.lock.take();
         remove_created(&self.created);
     }
 }

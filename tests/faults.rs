@@ -982,8 +982,8 @@ fn absurd_inputs_exit_with_1_or_2_and_name_the_field() {
     assert_eq!(code, 2, "{err}");
 }
 
-/// A re-run into an existing aeroform folder replaces it as a whole: no file of the first
-/// run survives (a stale file is gone, the manifest and every CSV come from the second
+/// A re-run into an existing aeroform folder replaces it as a whole (with `--force` when a
+/// file its marker does not list was added): no file of the first run survives (a stale file is gone, the manifest and every CSV come from the second
 /// run), and the folder carries the completion marker.
 #[test]
 fn rerun_replaces_the_folder_as_a_whole() {
@@ -1010,7 +1010,15 @@ fn rerun_replaces_the_folder_as_a_whole() {
     assert_eq!(code, 0, "{err}");
     std::fs::write(out.join("stale-figure.svg"), b"<svg></svg>").unwrap();
     let first = std::fs::read(out.join("cases/D-U6-A12.csv")).ok();
+    // a file its completion marker does not list is someone's: refused, kept (issue 39,
+    // row 2a), unless `--force`, which replaces the folder as a whole
     let (code, _, err) = code_of(&args("1"), tmp.path());
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("stale-figure.svg"), "{err}");
+    assert!(out.join("stale-figure.svg").exists());
+    let mut forced = args("1");
+    forced.push("--force");
+    let (code, _, err) = code_of(&forced, tmp.path());
     assert_eq!(code, 0, "{err}");
     assert!(
         !out.join("stale-figure.svg").exists(),

@@ -610,6 +610,88 @@ fn every_limit_exceeded_at_every_entry_point_is_refused() {
         );
     }
 
+    // Readers' caps (issue 39, row 5): a text file one byte beyond MAX_TEXT_FILE_BYTES
+    // (sparse: no disk used) as a manifest, a study, a sweep specification and a measured
+    // table; a case-file line beyond MAX_CSV_LINE_BYTES; MAX_DATASET_CASES + 1 cases;
+    // MAX_MEASURED_POINTS + 1 measured rows
+    let big = |w: &mut Walk, ext: &str| -> String {
+        let p = w.file(ext, "");
+        let f = std::fs::OpenOptions::new().write(true).open(&p).unwrap();
+        f.set_len(limits::MAX_TEXT_FILE_BYTES as u64 + 1).unwrap();
+        p
+    };
+    let ds = w.dataset("wind_speed = 6.0", "wind_speed = 6.0");
+    let m = Path::new(&ds).join("manifest.toml");
+    std::fs::OpenOptions::new()
+        .write(true)
+        .open(&m)
+        .unwrap()
+        .set_len(limits::MAX_TEXT_FILE_BYTES as u64 + 1)
+        .unwrap();
+    run(
+        &mut w,
+        "MAX_TEXT_FILE_BYTES",
+        vec!["identify".into(), ds],
+        "MAX_TEXT_FILE_BYTES",
+    );
+    let s = big(&mut w, "toml");
+    run(
+        &mut w,
+        "MAX_TEXT_FILE_BYTES",
+        vec!["run".into(), s],
+        "MAX_TEXT_FILE_BYTES",
+    );
+    let s = big(&mut w, "json");
+    run(
+        &mut w,
+        "MAX_TEXT_FILE_BYTES",
+        vec!["sweep".into(), s],
+        "MAX_TEXT_FILE_BYTES",
+    );
+    let s = big(&mut w, "csv");
+    run(
+        &mut w,
+        "MAX_TEXT_FILE_BYTES",
+        st(&["diagnose", "--measured-branch", &s]),
+        "MAX_TEXT_FILE_BYTES",
+    );
+    let ds = w.dataset("wind_speed = 6.0", "wind_speed = 6.0");
+    let case = Path::new(&ds).join("cases/D-U6-A12.csv");
+    let mut text = std::fs::read_to_string(&case).unwrap();
+    text.push_str(&"1".repeat(limits::MAX_CSV_LINE_BYTES + 1));
+    text.push('\n');
+    std::fs::write(&case, text).unwrap();
+    run(
+        &mut w,
+        "MAX_CSV_LINE_BYTES",
+        vec!["identify".into(), ds],
+        "MAX_CSV_LINE_BYTES",
+    );
+    let one = "[[case]]\nid = \"D-U6-A12\"\nkind = \"forced\"\nfile = \"cases/D-U6-A12.csv\"\n\
+               wind_speed = 6.0\nconfig = \"D\"\nfreq_pitch = 2.0\nfreq_heave = 1.3\n";
+    let mut cases = String::with_capacity(200 * (limits::MAX_DATASET_CASES + 1));
+    for i in 0..=limits::MAX_DATASET_CASES {
+        cases.push_str(&one.replace("id = \"D-U6-A12\"", &format!("id = \"c{i}\"")));
+    }
+    let ds = w.dataset(one, &cases);
+    run(
+        &mut w,
+        "MAX_DATASET_CASES",
+        vec!["identify".into(), ds],
+        "MAX_DATASET_CASES",
+    );
+    let mut table = String::from("branch,wind_speed_m_s,pitch_amp_rad\n");
+    for i in 0..=limits::MAX_MEASURED_POINTS {
+        table.push_str(&format!("stable,{},0.05\n", 10.0 + i as f64 * 1e-5));
+    }
+    let t = w.file("csv", &table);
+    run(
+        &mut w,
+        "MAX_MEASURED_POINTS",
+        st(&["diagnose", "--measured-branch", &t]),
+        "MAX_MEASURED_POINTS",
+    );
+
     // Set only through the Rust API (`BranchOptions`): checked by `check()`.
     for (limit, name) in [
         ("MAX_SCAN_SPEEDS", "branch.n_scan"),

@@ -154,9 +154,15 @@ impl SweepSpec {
     /// # Errors
     /// [`Error::Io`] when the file cannot be read; otherwise as [`SweepSpec::from_json`].
     pub fn read(path: &Path) -> Result<Self> {
-        let text = identify::io::read_text(path).map_err(|e| Error::Io {
-            context: format!("reading {}", path.display()),
-            message: e.to_string(),
+        let text = identify::io::read_text(path).map_err(|e| match e.kind() {
+            // refused by the reader (not a regular file, too large, not UTF-8): an input error
+            std::io::ErrorKind::InvalidInput | std::io::ErrorKind::InvalidData => {
+                sweep_err(&path.display().to_string(), e.to_string())
+            }
+            _ => Error::Io {
+                context: format!("reading {}", path.display()),
+                message: e.to_string(),
+            },
         })?;
         Self::from_json(&text, &path.display().to_string())
     }
@@ -493,24 +499,49 @@ impl SweepSpec {
         Ok(json!({
             "format": PART_FORMAT,
             "spec": self.to_value(),
+            "inputs": self.input_digests(),
             "shard": [shard, of],
             "items": items,
             "items_digest": digest,
         }))
     }
+
+    /// The content digest (FNV-1a, 64 bit, hex) of every file the specification names, by
+    /// its field (`structure`, `model`); `"unreadable"` for a file that cannot be read.
+    /// Parts record them and [`merge`] refuses parts computed from different contents of
+    /// the same paths (issue 39, row 3: a model edited between two shards merged silently).
+    pub fn input_digests(&self) -> Value {
+        match self {
+            SweepSpec::Blind(_) => json!({}),
+            SweepSpec::FlutterMap(m) => {
+                let digest = |p: &Path| match identify::io::read_text(p) {
+                    Ok(text) => bytes_digest(text.as_bytes()),
+                    Err(_) => "unreadable".to_string(),
+                };
+                json!({
+                    "structure": digest(&m.structure),
+                    "model": digest(&m.model),
+                })
+            }
+        }
+    }
+}
+
+/// FNV-1a (64 bit, hex) of `bytes`.
+fn bytes_digest(bytes: &[u8]) -> String {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for &b in bytes {
+        h ^= u64::from(b);
+        h = h.wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    format!("{h:016x}")
 }
 
 /// FNV-1a (64 bit, hex) of the compact JSON of a part's items: `merge` recomputes it and
 /// refuses a part whose items were edited after it was written (an integrity check
 /// against accidents, not a signature).
 pub fn items_digest(items: &[Value]) -> String {
-    let text = serde_json::to_string(items).unwrap_or_default();
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    for b in text.bytes() {
-        h ^= u64::from(b);
-        h = h.wrapping_mul(0x0000_0100_0000_01b3);
-    }
-    format!("{h:016x}")
+    bytes_digest(serde_json::to_string(items).unwrap_or_default().as_bytes())
 }
 
 /// Indices of shard `shard` of `of` among `n` items: `shard, shard + of, …`.
@@ -572,6 +603,25 @@ pub fn merge(parts: &[(String, Value)]) -> Result<Value> {
             return Err(sweep_err(
                 name,
                 format!("its `spec` differs from that of {first_name}"),
+            ));
+        }
+        // the same paths with other contents (an input edited between two shards)
+        let (a, b) = (first.get("inputs"), part.get("inputs"));
+        if a != b {
+            let field = match (a, b) {
+                (Some(Value::Object(x)), Some(Value::Object(y))) => x
+                    .iter()
+                    .find(|(k, v)| y.get(*k) != Some(*v))
+                    .map(|(k, _)| format!("`{k}`"))
+                    .unwrap_or_else(|| "an input".into()),
+                _ => "the `inputs` record (a part of an older aeroform)".into(),
+            };
+            return Err(sweep_err(
+                name,
+                format!(
+                    "computed from other contents of {field} than {first_name} (the file \
+                     changed between the shards); re-run every shard on the same inputs"
+                ),
             ));
         }
         match part.get("items") {

@@ -89,6 +89,42 @@ pub struct ReadOptions {
 /// # Errors
 /// As [`read_dataset`].
 pub fn read_dataset_with(dir: &Path, options: &ReadOptions) -> Result<Dataset> {
+    // the folder's identity before and after reading: a writer that replaces the set
+    // (`tunnel … --out` swaps a new folder in) while it is read must not leave a data set
+    // built from old and new files together (issue 39, row 2c)
+    let before = folder_identity(dir);
+    let set = read_dataset_once(dir, options)?;
+    if folder_identity(dir) != before {
+        return Err(crate::Error::io(
+            dir,
+            std::io::Error::new(
+                std::io::ErrorKind::Interrupted,
+                "the data set was replaced by another process while it was read; read it again",
+            ),
+        ));
+    }
+    Ok(set)
+}
+
+/// (device, inode, modification time) of a folder and of its completion marker: changes when
+/// the folder is swapped for another, or rewritten.
+fn folder_identity(dir: &Path) -> Option<(u64, u64, Option<std::time::SystemTime>)> {
+    let m = std::fs::metadata(dir).ok()?;
+    let marker = std::fs::metadata(dir.join(crate::io::COMPLETE_MARKER))
+        .and_then(|m| m.modified())
+        .ok();
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        Some((m.dev(), m.ino(), marker))
+    }
+    #[cfg(not(unix))]
+    {
+        Some((0, 0, marker.or(m.modified().ok())))
+    }
+}
+
+fn read_dataset_once(dir: &Path, options: &ReadOptions) -> Result<Dataset> {
     crate::io::check_complete_folder(dir)?;
     let mut manifest = Manifest::read(&manifest_path(dir))?;
     if options.flip_lift {
