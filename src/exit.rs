@@ -93,6 +93,8 @@ fn is_input_error(c: &(dyn std::error::Error + 'static)) -> bool {
                 | E::InvalidData { .. }
                 | E::IncompleteFolder { .. }
                 | E::Json { .. }
+                | E::Unphysical { .. }
+                | E::OutsideFittedRange { .. }
         );
     }
     if let Some(e) = c.downcast_ref::<aeroelastic::Error>() {

@@ -269,7 +269,7 @@ fn run_memoryless(args: &IdentifyArgs) -> anyhow::Result<Identification> {
     let read_s = t_start.elapsed().as_secs_f64();
     let convention = dataset.manifest.convention;
     if !convention.is_scanlan() && !crate::ui::silent() {
-        eprintln!(
+        crate::ui::warning!(
             "{}: columns read as {} and converted to Scanlan's (h, lift down; alpha, moment nose-up)",
             args.dataset.display(),
             convention.describe()
@@ -407,13 +407,9 @@ fn run_lag(args: &IdentifyArgs) -> anyhow::Result<()> {
         Some(h) => identify::lag::held_out(&prepared.cases, h, &opts).map(|(f, _)| f),
         None => identify::lag::fit(&prepared.cases, &opts),
     };
-    // a refused law or a prediction outside the fitted range is about the input (exit 2)
-    let fit = result.map_err(|e| match e {
-        identify::Error::Unphysical { .. } | identify::Error::OutsideFittedRange { .. } => {
-            anyhow::Error::from(crate::exit::Usage(format!("lag law: {e}")))
-        }
-        e => anyhow::Error::from(e).context("lag-law identification"),
-    })?;
+    // a refused law or a prediction outside the fitted range is about the input: exit 2
+    // (`exit::code` knows `Unphysical` and `OutsideFittedRange`)
+    let fit = result.context("lag-law identification")?;
     let identify_s = t_id.elapsed().as_secs_f64();
     let doc = LagLawDocument::from_fit(&fit, &dataset.manifest.name, prepared.cases[0].chord)?;
 

@@ -24,7 +24,7 @@ pub struct PlotArgs {
 pub fn run(args: &PlotArgs) -> anyhow::Result<()> {
     crate::outdir::check_complete(&args.outdir)?;
     let path = args.outdir.join(names::STUDY);
-    let text = std::fs::read_to_string(&path)
+    let text = identify::io::read_text(&path)
         .with_context(|| format!("{} is not a study output folder", args.outdir.display()))?;
     // the folder is the user's named target and every file of it is carried over; its
     // completion marker keeps the command that computed the results (`plot` only redraws)

@@ -130,10 +130,19 @@ fn key_line(text: &str, key: &str) -> usize {
         .map_or(0, |(k, _)| text[..k.span().start].matches('\n').count() + 1)
 }
 
+/// A model or structure file's text, read by `identify::io::read_text` (regular files only,
+/// at most the limits table's `MAX_TEXT_FILE_BYTES`, UTF-8 errors by line and byte). A
+/// refusal of the reader is an input error ([`Error::Toml`] naming the file).
 fn read_text(path: &Path) -> Result<String> {
-    std::fs::read_to_string(path).map_err(|e| Error::Io {
-        path: path.display().to_string(),
-        message: e.to_string(),
+    identify::io::read_text(path).map_err(|e| match e.kind() {
+        std::io::ErrorKind::InvalidInput | std::io::ErrorKind::InvalidData => Error::Toml {
+            source_name: path.display().to_string(),
+            message: e.to_string(),
+        },
+        _ => Error::Io {
+            path: path.display().to_string(),
+            message: e.to_string(),
+        },
     })
 }
 

@@ -1125,8 +1125,8 @@ mod tests {
         // reproduce it, though the basis is the mid-chord plate
         let mut cases = grid_cases(|_| 0.0);
         for c in &mut cases {
-            let ta = crate::theodorsen::thin_plate_derivatives(c.k_alpha.unwrap(), -0.3);
-            let th = crate::theodorsen::thin_plate_derivatives(c.k_h.unwrap(), -0.3);
+            let ta = crate::aero::thin_plate_derivatives(c.k_alpha.unwrap(), -0.3);
+            let th = crate::aero::thin_plate_derivatives(c.k_h.unwrap(), -0.3);
             let m = &mut c.moment.eq19;
             (m.A1, m.A2, m.A3, m.A4) = (Some(th.a1), Some(ta.a2), Some(ta.a3), Some(th.a4));
             let l = &mut c.lift.eq19;
@@ -1134,7 +1134,7 @@ mod tests {
         }
         let tails = IdentifiedLaw::from_identification(&identification(cases), &opts).unwrap();
         let k = 2.5;
-        let e = crate::theodorsen::thin_plate_derivatives(k, -0.3);
+        let e = crate::aero::thin_plate_derivatives(k, -0.3);
         let t = tails.table().derivatives(k);
         for (name, got, want) in [
             ("H2", t.h2, e.h2),

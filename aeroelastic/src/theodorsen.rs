@@ -189,21 +189,6 @@ impl Derivatives {
     }
 }
 
-/// Thin-plate flutter derivatives about an elastic axis at `a` semi-chords aft of
-/// mid-chord (exact Theodorsen, Scanlan convention of [`Derivatives`]), from the
-/// thin-aerofoil transfer matrix: Q = H(ω = K U/B)/(½ρU²·(1, B; B, B²)). At a = 0 these are
-/// [`flat_plate_derivatives`]. A non-positive `k` gives NaN fields.
-pub fn thin_plate_derivatives(k: f64, a: f64) -> Derivatives {
-    if k.is_nan() || k <= 0.0 || !a.is_finite() {
-        return flat_plate_derivatives(f64::NAN);
-    }
-    use crate::aero::{AeroModel, Flow, TheodorsenAero};
-    // B = 1 m, U = 1 m/s, ρ = 2 kg/m³: ½ρU² = 1 and ω = K
-    let m = TheodorsenAero { chord: 1.0, a };
-    let h = m.frequency_response(&Flow { rho: 2.0, u: 1.0 }, k);
-    Derivatives::from_q_matrix(k, [[h[(0, 0)], h[(0, 1)]], [h[(1, 0)], h[(1, 1)]]])
-}
-
 /// Flat-plate flutter derivatives (elastic axis at mid-chord) in closed form, DESIGN.md §2,
 /// with F + iG = C(K/2) (exact Theodorsen):
 /// H1* = −2πF/K, H2* = −(π/2K)(1 + F + 4G/K), H3* = −(2π/K²)(F − KG/4),
@@ -353,7 +338,10 @@ mod tests {
     #[test]
     fn thin_plate_derivatives_at_mid_chord_are_the_closed_forms_and_move_with_the_axis() {
         for k in [0.3, 0.5, 1.0, 2.0] {
-            let (d, c) = (thin_plate_derivatives(k, 0.0), flat_plate_derivatives(k));
+            let (d, c) = (
+                crate::aero::thin_plate_derivatives(k, 0.0),
+                flat_plate_derivatives(k),
+            );
             for (x, y) in [
                 (d.h1, c.h1),
                 (d.h2, c.h2),
@@ -373,7 +361,7 @@ mod tests {
         // a = −0.3: heave-driven lift is unchanged, the pitch-rate downwash and the moment arm
         // of the circulatory lift about the axis (b/2 → 0.2 b) change
         let (d, c) = (
-            thin_plate_derivatives(1.0, -0.3),
+            crate::aero::thin_plate_derivatives(1.0, -0.3),
             flat_plate_derivatives(1.0),
         );
         assert!(

@@ -258,7 +258,7 @@ fn files_section(report: &mut Report, out: &Path, figures: &[FigureEntry]) {
 /// model flutter runs (from `flutter.json`) as a row after the flutter speed.
 fn round_trip_table(report: &mut Report, out: &Path, reduced: bool) -> Result<()> {
     let path = out.join(names::ROUND_TRIP);
-    let text = std::fs::read_to_string(&path).map_err(|source| Error::Io {
+    let text = identify::io::read_text(&path).map_err(|source| Error::Io {
         context: format!("reading {}", path.display()),
         source,
     })?;

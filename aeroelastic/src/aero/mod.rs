@@ -28,7 +28,7 @@ pub use nonlinear::{channel_name, term_name, Channel, Coefficient, NonlinearAero
 pub use quasi_steady::{QuasiSteady, QuasiSteadyKind};
 pub use stall::DynamicStallAero;
 pub use table::{DerivativeTable, RfaFit};
-pub use unsteady::TheodorsenAero;
+pub use unsteady::{thin_plate_derivatives, TheodorsenAero};
 
 use nalgebra::{DMatrix, Matrix2};
 use num_complex::Complex64;

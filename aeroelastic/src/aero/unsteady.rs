@@ -94,6 +94,23 @@ impl AeroModel for TheodorsenAero {
     }
 }
 
+/// Thin-plate flutter derivatives about an elastic axis at `a` semi-chords aft of
+/// mid-chord (exact Theodorsen, Scanlan convention of [`crate::theodorsen::Derivatives`]), from the
+/// thin-aerofoil transfer matrix: Q = H(ω = K U/B)/(½ρU²·(1, B; B, B²)). At a = 0 these are
+/// [`crate::theodorsen::flat_plate_derivatives`]. A non-positive `k` gives NaN fields.
+pub fn thin_plate_derivatives(k: f64, a: f64) -> crate::theodorsen::Derivatives {
+    if k.is_nan() || k <= 0.0 || !a.is_finite() {
+        return crate::theodorsen::flat_plate_derivatives(f64::NAN);
+    }
+    // B = 1 m, U = 1 m/s, ρ = 2 kg/m³: ½ρU² = 1 and ω = K
+    let m = TheodorsenAero { chord: 1.0, a };
+    let h = m.frequency_response(&Flow { rho: 2.0, u: 1.0 }, k);
+    crate::theodorsen::Derivatives::from_q_matrix(
+        k,
+        [[h[(0, 0)], h[(0, 1)]], [h[(1, 0)], h[(1, 1)]]],
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -21,7 +21,18 @@ use crate::stats::excess_shrink;
 
 use super::candidates::{significance, Scored};
 use super::data::{CaseData, Node, CHANNELS};
-use super::{gaps, gaps_of, noise_gaps, noise_of, ForceOptions};
+
+/// The thresholds of the force level's tests (`ForceOptions`' fields of the same names).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Thresholds {
+    /// Threshold of the gap statistic held-out gap / noise level.
+    pub gap_threshold: f64,
+    /// Significance threshold of a candidate's held-out improvement.
+    pub significance: f64,
+    /// Minimum share of the excess residual energy a candidate must remove.
+    pub min_shrink: f64,
+}
+use super::data::{gaps, gaps_of, noise_gaps, noise_of};
 use crate::numerics::periodogram_full;
 
 /// Noise-unit energy Σ (r/σ̂)² of residuals.
@@ -47,7 +58,7 @@ pub(crate) fn assemble(
     fold_of: &[usize],
     before: &[[Vec<f64>; 2]],
     scored: Vec<(Effect, Scored)>,
-    opts: &ForceOptions,
+    opts: &Thresholds,
 ) -> LevelResult {
     let g = gaps(cases, before);
     let noise = noise_gaps(cases);
@@ -234,7 +245,7 @@ fn locate(
     before: &[[Vec<f64>; 2]],
     after: &[[Vec<f64>; 2]],
     stat: f64,
-    opts: &ForceOptions,
+    opts: &Thresholds,
 ) -> Located {
     let u_rng = [
         cases.iter().map(|c| c.u).fold(f64::INFINITY, f64::min),

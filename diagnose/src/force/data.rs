@@ -263,3 +263,56 @@ pub(crate) fn pool_single_speed_configs(cases: &mut [CaseData]) -> Option<String
     }
     Some(note)
 }
+
+/// Held-out gap metrics of a set of residuals.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Gaps {
+    /// sqrt(Σr²/ΣF²) of lift, moment (forces per unit span).
+    pub channel: [f64; 2],
+    /// rms of the two channels.
+    pub combined: f64,
+}
+
+/// Gap of residuals `res[case][channel]` (C units) in forces: Σ(r·scale)²/Σ(F)².
+pub(crate) fn gaps(cases: &[CaseData], res: &[[Vec<f64>; 2]]) -> Gaps {
+    gaps_of(cases.iter().zip(res))
+}
+
+/// Noise level of the gap of some cases ([`noise_gaps`]).
+pub(crate) fn noise_of<'a>(cases: impl Iterator<Item = &'a CaseData>) -> Gaps {
+    let cases: Vec<&CaseData> = cases.collect();
+    let res: Vec<[Vec<f64>; 2]> = cases
+        .iter()
+        .map(|c| [0, 1].map(|k| vec![c.sigma[k]; c.n]))
+        .collect();
+    gaps_of(cases.into_iter().zip(&res))
+}
+
+/// [`gaps`] of (case, residuals) pairs.
+pub(crate) fn gaps_of<'a>(pairs: impl Iterator<Item = (&'a CaseData, &'a [Vec<f64>; 2])>) -> Gaps {
+    let mut num = [0.0; 2];
+    let mut den = [0.0; 2];
+    for (case, r) in pairs {
+        for c in 0..2 {
+            let s2 = case.scale[c] * case.scale[c];
+            num[c] += s2 * r[c].iter().map(|v| v * v).sum::<f64>();
+            den[c] += s2 * case.y[c].iter().map(|v| v * v).sum::<f64>();
+        }
+    }
+    let channel = [0, 1].map(|c| {
+        if den[c] > 0.0 {
+            (num[c] / den[c]).sqrt()
+        } else {
+            0.0
+        }
+    });
+    Gaps {
+        channel,
+        combined: ((channel[0].powi(2) + channel[1].powi(2)) / 2.0).sqrt(),
+    }
+}
+
+/// Noise level of the gap: Σr² replaced by Σ n σ̂².
+pub(crate) fn noise_gaps(cases: &[CaseData]) -> Gaps {
+    noise_of(cases.iter())
+}

@@ -197,7 +197,7 @@ pub struct LagReport {
     pub notes: Vec<String>,
     /// Held-out comparison, when one was asked for.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub held_out: Option<super::holdout::HeldOutReport>,
+    pub held_out: Option<super::report::HeldOutReport>,
 }
 
 /// A fitted lag law and its report.

@@ -429,7 +429,7 @@ fn ensemble_bar(id: &Identification, i: usize, force: Force, name: &str) -> [f64
 /// K_α), one point set per group (with the ensemble's percentile intervals as error bars
 /// when the identification has an ensemble), with the thin-plate (Theodorsen) derivatives
 /// about the elastic axis at `elastic_axis` semi-chords aft of mid-chord
-/// ([`aeroelastic::theodorsen::thin_plate_derivatives`]; 0 = the flat-plate closed forms)
+/// ([`aeroelastic::aero::thin_plate_derivatives`]; 0 = the flat-plate closed forms)
 /// over the identified K range.
 pub fn derivative_figure(id: &Identification, elastic_axis: f64) -> DerivativeFigure {
     let mut groups: Vec<&str> = id.cases.iter().map(|c| c.group.as_str()).collect();
@@ -560,7 +560,7 @@ pub fn derivative_figure_of(
             let reference_value = reference_k
                 .iter()
                 .map(|&k| {
-                    let d = aeroelastic::theodorsen::thin_plate_derivatives(k, elastic_axis);
+                    let d = aeroelastic::aero::thin_plate_derivatives(k, elastic_axis);
                     d.get(derivative)
                 })
                 .collect();
