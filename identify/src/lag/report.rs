@@ -1,4 +1,4 @@
-//! The held-out comparison's document types (below both [`super::fit`], whose report
+//! The held-out comparison's document types (below both [`super::fit`](mod@super::fit), whose report
 //! carries one, and [`super::holdout`], which computes it).
 
 use serde::{Deserialize, Serialize};
