@@ -692,6 +692,30 @@ fn every_limit_exceeded_at_every_entry_point_is_refused() {
         "MAX_MEASURED_POINTS",
     );
 
+    // MAX_LABEL_CHARS: a `config` label one character beyond the cap; and a manifest
+    // `mean_pitch` one degree beyond MAX_PITCH_DEG
+    let long = "D".repeat(limits::MAX_LABEL_CHARS + 1);
+    let ds = w.dataset("config = \"D\"", &format!("config = \"{long}\""));
+    run(
+        &mut w,
+        "MAX_LABEL_CHARS",
+        vec!["identify".into(), ds],
+        "config",
+    );
+    let ds = w.dataset(
+        "wind_speed = 6.0",
+        &format!(
+            "wind_speed = 6.0\nmean_pitch = {}",
+            above(limits::MAX_PITCH_DEG)
+        ),
+    );
+    run(
+        &mut w,
+        "MAX_PITCH_DEG",
+        vec!["identify".into(), ds],
+        "mean_pitch",
+    );
+
     // Set only through the Rust API (`BranchOptions`): checked by `check()`.
     for (limit, name) in [
         ("MAX_SCAN_SPEEDS", "branch.n_scan"),

@@ -93,6 +93,11 @@ pub const MAX_DATASET_CASES: usize = 50_000;
 /// Largest number of rows (points) of a measured bifurcation table.
 pub const MAX_MEASURED_POINTS: usize = 100_000;
 
+/// Largest label \[characters\]: a manifest's `name`, a case's `id` and `config`. Labels
+/// are drawn in figures and reports; a 20,000-character `config` made `diagnose` take
+/// minutes (issue 39, row 5).
+pub const MAX_LABEL_CHARS: usize = 256;
+
 /// One row of the limits table.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Limit {
@@ -114,7 +119,7 @@ pub const TABLE: &[Limit] = &[
     Limit { name: "MAX_AIR_DENSITY", max: MAX_AIR_DENSITY, unit: "kg/m³", set_by: "manifest and structure `air_density`" },
     Limit { name: "MAX_ELASTIC_AXIS", max: MAX_ELASTIC_AXIS, unit: "semi-chords", set_by: "model `elastic_axis`" },
     Limit { name: "MAX_DAMPING_RATIO", max: MAX_DAMPING_RATIO, unit: "-", set_by: "structure `damping_heave`, `damping_pitch`; Python structure dict" },
-    Limit { name: "MAX_PITCH_DEG", max: MAX_PITCH_DEG, unit: "deg", set_by: "`--alpha0`, `--alpha0-down`; study `[lco] perturbation_deg`; sweep `alpha0`; Python `alpha0`, `alpha0_down`" },
+    Limit { name: "MAX_PITCH_DEG", max: MAX_PITCH_DEG, unit: "deg", set_by: "`--alpha0`, `--alpha0-down`; study `[lco] perturbation_deg`; sweep `alpha0`; Python `alpha0`, `alpha0_down`; manifest `amplitude`, `mean_pitch`" },
     Limit { name: "MAX_NONLINEAR_COEFFICIENT", max: MAX_NONLINEAR_COEFFICIENT, unit: "-", set_by: "model `[[nonlinear]] coefficient`; study `[aero]` terms" },
     Limit { name: "MAX_FORCE_COEFFICIENT", max: MAX_FORCE_COEFFICIENT, unit: "-", set_by: "reached through a model (`tunnel forced`)" },
     Limit { name: "MAX_SPEEDS", max: MAX_SPEEDS as f64, unit: "-", set_by: "`--speeds`, `--sweep` (n of a:b:n or list length); study `n_speeds`, `speeds`; sweep speed lists; Python `speeds`, `sweep`" },
@@ -136,6 +141,7 @@ pub const TABLE: &[Limit] = &[
     Limit { name: "MAX_TEXT_FILE_BYTES", max: MAX_TEXT_FILE_BYTES, unit: "bytes", set_by: "the size of a manifest, study, model, structure, sweep, part or result document, measured table" },
     Limit { name: "MAX_CSV_LINE_BYTES", max: MAX_CSV_LINE_BYTES as f64, unit: "bytes", set_by: "a line of a case CSV" },
     Limit { name: "MAX_DATASET_CASES", max: MAX_DATASET_CASES as f64, unit: "-", set_by: "manifest `[[case]]` entries" },
+    Limit { name: "MAX_LABEL_CHARS", max: MAX_LABEL_CHARS as f64, unit: "characters", set_by: "manifest `name`, case `id` and `config`" },
     Limit { name: "MAX_MEASURED_POINTS", max: MAX_MEASURED_POINTS as f64, unit: "-", set_by: "rows of a measured bifurcation table (`--measured`, `--measured-branch`)" },
 ];
 

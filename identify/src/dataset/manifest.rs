@@ -509,6 +509,21 @@ fn write_table_body(s: &mut String, t: &toml::Table) {
     }
 }
 
+/// Refuses a label longer than [`crate::limits::MAX_LABEL_CHARS`] characters, naming its key.
+fn label_length(node: &Node<'_, '_>, key: &str, value: &str) -> Result<()> {
+    let n = value.chars().count();
+    if n > crate::limits::MAX_LABEL_CHARS {
+        return Err(node.err(
+            key,
+            format!(
+                "{n} characters; a label has at most {} (the limits table's MAX_LABEL_CHARS)",
+                crate::limits::MAX_LABEL_CHARS
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// True for a valid case id: `[A-Za-z0-9._-]+`.
 pub fn is_valid_case_id(id: &str) -> bool {
     !id.is_empty()
@@ -610,6 +625,7 @@ impl<'a> Cx<'a> {
             return Err(root.err("format", format!("\"{format}\" is not \"{FORMAT}\"")));
         }
         let name = root.req_str("name")?.to_string();
+        label_length(&root, "name", &name)?;
         let description = root.opt_str("description")?.map(str::to_string);
 
         let sec_prefix = "section.";
@@ -662,6 +678,26 @@ impl<'a> Cx<'a> {
 
         let extra = root.opt_extra("extra")?;
         let cases = self.cases(&root)?;
+        // angles in the limits table's bound (issue 39, row 6: `mean_pitch = 1e5` was
+        // accepted and `1e300` blamed on "library column 0")
+        for (i, c) in cases.iter().enumerate() {
+            for (key, v) in [("amplitude", c.amplitude), ("mean_pitch", c.mean_pitch)] {
+                let Some(v) = v else { continue };
+                let deg = units.pitch.to_si(v).to_degrees();
+                if let Err(m) = crate::limits::abs_at_most(deg, crate::limits::MAX_PITCH_DEG, "deg")
+                {
+                    let line = self
+                        .case_node(&root, i)
+                        .map(|n| n.line_of(key))
+                        .unwrap_or(0);
+                    return Err(self.err(
+                        line,
+                        &format!("case[{}].{key}", i + 1),
+                        format!("{m} (the limits table's MAX_PITCH_DEG)"),
+                    ));
+                }
+            }
+        }
 
         if structure.is_none() {
             if let Some((i, c)) = cases
@@ -1058,8 +1094,12 @@ impl<'c, 'a> Node<'c, 'a> {
             "extra",
         ])?;
         let id = self.req_str("id")?;
+        label_length(self, "id", id)?;
         if !is_valid_case_id(id) {
             return Err(self.err("id", format!("case id \"{id}\" must match [A-Za-z0-9._-]+")));
+        }
+        if let Some(c) = self.opt_str("config")? {
+            label_length(self, "config", c)?;
         }
         let kind = match self.req_str("kind")? {
             "forced" => CaseKind::Forced,
