@@ -692,7 +692,7 @@ impl<'a> Cx<'a> {
                         .unwrap_or(0);
                     return Err(self.err(
                         line,
-                        &format!("case[{}].{key}", i + 1),
+                        format!("case[{}].{key}", i + 1),
                         format!("{m} (the limits table's MAX_PITCH_DEG)"),
                     ));
                 }
