@@ -193,7 +193,7 @@ fn lift_up_data_set_declared_as_such_identifies_like_scanlan() {
             let id = format!("D-U{u}-A{amp}");
             let mut spec = CaseSpec::forced(&id, format!("cases/{id}.csv"), u);
             spec.config = Some("D".into());
-            spec.amplitude = Some(amp);
+            spec.amplitude = Some(amp.to_radians()); // the manifest is in SI (rad)
             let motion = HarmonicMotion {
                 freq_pitch: 2.0,
                 freq_heave: 1.3,
