@@ -832,6 +832,8 @@ impl SharedDir {
             .map_err(|e| anyhow::anyhow!("cannot create output folder {}: {e}", dir.display()))?;
         let (parent, name) = split_out(dir, false)?;
         let lock = Lock::acquire(&parent, &name).inspect_err(|_| remove_created(&created))?;
+        // a lock PID file of a process killed while taking this lock (the kill campaign)
+        clean_dead_work_folders(&parent);
         let n = remove_temp_files(dir, |pid| pid != std::process::id() && !pid_alive(pid));
         if n > 0 {
             eprintln!(

@@ -145,11 +145,12 @@ fn case_spec(id: String, shape: &CaseShape) -> impl Strategy<Value = CaseSpec> {
     (
         prop_oneof![Just(0.0), magnitude(-3, 3)],
         prop::option::of("[A-G]|\\PC{1,6}"),
-        prop::option::of(prop_oneof![Just(0.0), magnitude(-3, 3)]),
+        // angles within MAX_PITCH_DEG in either pitch unit (≤ 1 rad or 1°; |mean| < 1.5)
+        prop::option::of(prop_oneof![Just(0.0), magnitude(-3, 0)]),
         prop::option::of(prop_oneof![Just(0.0), magnitude(-3, 3)]),
         prop::option::of(below_nyquist()),
         prop::option::of(below_nyquist()),
-        prop::option::of(-30.0f64..30.0),
+        prop::option::of(-1.5f64..1.5),
         prop::option::of(toml_table(2)),
     )
         .prop_map(
