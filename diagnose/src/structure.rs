@@ -323,9 +323,88 @@ fn modes_of(m: &Matrix2<f64>, k: &Matrix2<f64>, c: &Matrix2<f64>) -> Vec<(f64, f
     eigen_of(m, k, c).into_iter().map(|e| (e.0, e.1)).collect()
 }
 
+/// The second mode of a record: the largest spectral peak (Hann window, mean removed)
+/// at least 20 % away from `f`, above two cycles per record and below [`NYQUIST_SHARE`] of
+/// the Nyquist frequency, whose magnitude stands [`NOISE_PROMINENCE`] times above the
+/// spectrum's median; refined by least squares. `None` when there is none.
+fn second_mode(x: &[f64], dt: f64, f: f64) -> Option<f64> {
+    let n = x.len();
+    if n < 16 {
+        return None;
+    }
+    let m = x.iter().sum::<f64>() / n as f64;
+    let len = (4 * n).next_power_of_two();
+    let mut buf = vec![0.0; len];
+    for (i, v) in x.iter().enumerate() {
+        let w = 0.5 - 0.5 * (TAU * i as f64 / (n - 1) as f64).cos();
+        buf[i] = (v - m) * w;
+    }
+    let mut planner = realfft::RealFftPlanner::<f64>::new();
+    let fft = planner.plan_fft_forward(len);
+    let mut spec = fft.make_output_vec();
+    fft.process(&mut buf, &mut spec).ok()?;
+    let mag: Vec<f64> = spec.iter().map(|c| c.norm()).collect();
+    let df = 1.0 / (len as f64 * dt);
+    let mut sorted = mag.clone();
+    sorted.sort_by(f64::total_cmp);
+    let median = sorted[sorted.len() / 2];
+    let lo = 2.0 / (n as f64 * dt);
+    let hi = NYQUIST_SHARE * 0.5 / dt;
+    let mut best: Option<(usize, f64)> = None;
+    for k in 1..mag.len() - 1 {
+        let fk = k as f64 * df;
+        if fk < lo || fk > hi || (fk - f).abs() < 0.2 * f {
+            continue;
+        }
+        if mag[k] >= mag[k - 1] && mag[k] >= mag[k + 1] && best.is_none_or(|b| mag[k] > b.1) {
+            best = Some((k, mag[k]));
+        }
+    }
+    let (k, v) = best?;
+    (v >= NOISE_PROMINENCE * median).then(|| refine_frequency(x, dt, k as f64 * df))
+}
+
+/// Frequency near `f0` (within ±10 %) that best fits `seg` with a sinusoid there and one
+/// at `other` (the record's second mode, fitted jointly so that it does not pull the
+/// estimate): golden-section search on the residual; `None` when the two frequencies are
+/// closer than the window resolves.
+fn refine_beside(seg: &[f64], dt: f64, f0: f64, other: f64) -> Option<f64> {
+    let t = seg.len() as f64 * dt;
+    let res = |f: f64| {
+        if (f - other).abs() < 1.0 / t {
+            return None;
+        }
+        harmonic_fit(seg, dt, &[f, other])
+            .ok()
+            .map(|fit| fit.rms_residual)
+    };
+    let (mut a, mut b) = (0.9 * f0, 1.1 * f0);
+    let g = 0.5 * (5f64.sqrt() - 1.0);
+    let mut c = b - g * (b - a);
+    let mut d = a + g * (b - a);
+    let (mut fc, mut fd) = (res(c)?, res(d)?);
+    for _ in 0..40 {
+        if fc < fd {
+            b = d;
+            d = c;
+            fd = fc;
+            c = b - g * (b - a);
+            fc = res(c)?;
+        } else {
+            a = c;
+            c = d;
+            fc = fd;
+            d = a + g * (b - a);
+            fd = res(d)?;
+        }
+    }
+    Some(0.5 * (a + b))
+}
+
 /// Windows of four periods (half overlap) of `x`: (centre time, first-harmonic
-/// amplitude, frequency refined in the window).
-fn decay_windows(x: &[f64], dt: f64, f: f64) -> Vec<(f64, f64, f64)> {
+/// amplitude, frequency refined in the window). With a second mode `other` in the record,
+/// each window fits both sinusoids, the target's frequency refined beside the other's.
+fn decay_windows(x: &[f64], dt: f64, f: f64, other: Option<f64>) -> Vec<(f64, f64, f64)> {
     let w = ((4.0 / f) / dt).round() as usize;
     let mut out = Vec::new();
     if w < 8 {
@@ -334,9 +413,17 @@ fn decay_windows(x: &[f64], dt: f64, f: f64) -> Vec<(f64, f64, f64)> {
     let mut s = 0;
     while s + w <= x.len() {
         let seg = &x[s..s + w];
-        let fw = refine_frequency(seg, dt, f);
-        let fw = if (fw - f).abs() < 0.25 * f { fw } else { f };
-        if let Some(a) = first_harmonic(seg, dt, fw) {
+        let two = other.and_then(|o| {
+            let fw = refine_beside(seg, dt, f, o)?;
+            let fit = harmonic_fit(seg, dt, &[fw, o]).ok()?;
+            Some((fit.amplitude(0), fw))
+        });
+        let one = || {
+            let fw = refine_frequency(seg, dt, f);
+            let fw = if (fw - f).abs() < 0.25 * f { fw } else { f };
+            first_harmonic(seg, dt, fw).map(|a| (a, fw))
+        };
+        if let Some((a, fw)) = two.or_else(one) {
             out.push(((s as f64 + 0.5 * w as f64) * dt, a, fw));
         }
         s += w / 2;
@@ -559,7 +646,7 @@ fn decay_row(
             x.len() as f64 * dt * f
         ));
     }
-    let win = decay_windows(x, dt, f);
+    let win = decay_windows(x, dt, f, second_mode(x, dt, f));
     let peak = win.iter().map(|w| w.1).fold(0.0, f64::max);
     let w_len = ((4.0 / f) / dt).round().max(1.0);
     let noise_amp = noise_sigma(x) * (2.0 / w_len).sqrt();

@@ -171,6 +171,10 @@ pub struct BranchBenchOptions {
     /// paper's sensor noise). Drawn from the set's seed split once more, so the truth and
     /// its diagram are those of the set without this option.
     pub misgiven_structure: bool,
+    /// With `misgiven_structure`: analyse the decays but fit on the given structure
+    /// anyway (the behaviour before the structure was used: the acceptance's baseline).
+    #[serde(default)]
+    pub hold_given: bool,
 }
 
 /// Relative Hopf-speed tolerance of the structure-first acceptance (issue 42).
@@ -499,7 +503,15 @@ pub fn run_set_with(index: usize, seed: u64, bench: &BranchBenchOptions) -> Resu
             let (given, how) = misgive(&nominal, &mut r2)?;
             let decays = still_air_decays(&t, a_ref, split_seed(set_seed, 2))?;
             let refs: Vec<&Record> = decays.iter().collect();
-            let check = structure_check_records(&refs, &given);
+            let mut check = structure_check_records(&refs, &given);
+            if bench.hold_given {
+                if let Some(c) = check.as_mut() {
+                    c.used = StructureUsed::Given;
+                    c.reason = "held at the given structure by the benchmark option \
+                                `hold_given` (the baseline)"
+                        .into();
+                }
+            }
             (given, Some(how), check)
         } else {
             (nominal.clone(), None, None)
