@@ -10,7 +10,9 @@ fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let seed: u64 = args.first().and_then(|a| a.parse().ok()).unwrap_or(2026);
     let opts = BranchBenchOptions {
-        misgiven_structure: args.iter().any(|a| a == "--misgiven" || a == "--hold-given"),
+        misgiven_structure: args
+            .iter()
+            .any(|a| a == "--misgiven" || a == "--hold-given"),
         hold_given: args.iter().any(|a| a == "--hold-given"),
     };
     let mut idx = Vec::new();

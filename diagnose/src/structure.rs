@@ -554,8 +554,8 @@ fn check_against(
                                     ", ζ {z:.4} ± {sd:.4} vs {:.4} ({zz:+.1} σ)",
                                     md.given_zeta
                                 ),
-                                _ => ", ζ not measured (no linear damping in the decay)"
-                                    .to_string(),
+                                _ =>
+                                    ", ζ not measured (no linear damping in the decay)".to_string(),
                             }
                         )
                     })
@@ -729,7 +729,11 @@ fn decay_row(
         .iter()
         .copied()
         .enumerate()
-        .min_by(|p, q| (p.1 .0 - f_small).abs().total_cmp(&(q.1 .0 - f_small).abs()))
+        .min_by(|p, q| {
+            (p.1 .0 - f_small)
+                .abs()
+                .total_cmp(&(q.1 .0 - f_small).abs())
+        })
         .unwrap_or((0, (f64::NAN, f64::NAN)));
     let backbone_change = (f_large - f_small) / f_small;
     let damping_change = z_large - z_small;
@@ -799,11 +803,7 @@ pub fn identify_structure(
 ) -> Option<StructureIdentification> {
     let kg = [given.k_h, given.k_alpha];
     let cg = [given.c_h, given.c_alpha];
-    let eig = eigen_of(
-        m,
-        &given.stiffness_matrix(),
-        &given.damping_matrix(),
-    );
+    let eig = eigen_of(m, &given.stiffness_matrix(), &given.damping_matrix());
     if eig.len() != 2 || rows.is_empty() {
         return None;
     }
@@ -878,7 +878,12 @@ pub fn identify_structure(
     let floor_hz = |f: f64| 1e-6 * f.abs().max(1e-9);
     let mut meas: Vec<(usize, bool, f64, f64)> = Vec::new();
     for md in &modes {
-        meas.push((md.0, false, md.1.linear_hz, md.1.linear_hz_sd.max(floor_hz(md.1.linear_hz))));
+        meas.push((
+            md.0,
+            false,
+            md.1.linear_hz,
+            md.1.linear_hz_sd.max(floor_hz(md.1.linear_hz)),
+        ));
         if let Some(zr) = md.2 {
             if let (Some(z), Some(sd)) = (zr.linear_zeta, zr.linear_zeta_sd) {
                 meas.push((md.0, true, z, sd.max(1e-6)));
@@ -890,7 +895,11 @@ pub fn identify_structure(
         if k.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
             return None;
         }
-        let e = modes_of(m, &Matrix2::new(k[0], 0.0, 0.0, k[1]), &Matrix2::new(c[0], 0.0, 0.0, c[1]));
+        let e = modes_of(
+            m,
+            &Matrix2::new(k[0], 0.0, 0.0, k[1]),
+            &Matrix2::new(c[0], 0.0, 0.0, c[1]),
+        );
         if e.len() != 2 {
             return None;
         }
@@ -1011,7 +1020,11 @@ pub fn identify_structure(
             held: pos.is_none(),
         });
     }
-    let e_id = modes_of(m, &Matrix2::new(k[0], 0.0, 0.0, k[1]), &Matrix2::new(c[0], 0.0, 0.0, c[1]));
+    let e_id = modes_of(
+        m,
+        &Matrix2::new(k[0], 0.0, 0.0, k[1]),
+        &Matrix2::new(c[0], 0.0, 0.0, c[1]),
+    );
     let mut differs = false;
     let out_modes: Vec<ModeIdentification> = modes
         .iter()

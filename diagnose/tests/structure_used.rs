@@ -90,7 +90,11 @@ fn a_misgiven_frequency_is_identified_from_the_decays_and_carries_the_hopf_speed
         let u_given = first_hopf(&given);
         let check = structure_check(&refs, &given).expect("still-air decays");
         let v = serde_json::to_value(&check).unwrap();
-        assert_eq!(v["used"], "identified", "{dof} × {factor}: {}", check.summary);
+        assert_eq!(
+            v["used"], "identified",
+            "{dof} × {factor}: {}",
+            check.summary
+        );
         let modal: ModalStructure =
             serde_json::from_value(v["identified"]["modal"].clone()).expect("identified.modal");
         let mut st = Structure::from_modal(&modal).unwrap();
@@ -102,7 +106,10 @@ fn a_misgiven_frequency_is_identified_from_the_decays_and_carries_the_hopf_speed
              {u_id:.3} m/s"
         );
         // the setting matters: the given structure's Hopf speed is off by more than 1 %
-        assert!((u_given / u_truth - 1.0).abs() > 0.01, "{u_given} {u_truth}");
+        assert!(
+            (u_given / u_truth - 1.0).abs() > 0.01,
+            "{u_given} {u_truth}"
+        );
         // acceptance: within 1 % of the truth's after the correction
         assert!((u_id / u_truth - 1.0).abs() < 0.01, "{u_id} vs {u_truth}");
         // the intervals hold the truth's stiffnesses
@@ -158,4 +165,38 @@ fn a_correct_structure_is_kept_and_a_noise_only_record_is_no_mode() {
     }
     assert_eq!(check.modes.len(), 1, "{}", check.summary);
     assert_eq!(check.modes[0].dof, "pitch");
+}
+
+/// The generated benchmark's acceptance (issue 42): rigs whose given structure is off by
+/// 3–8 % in one frequency, with two still-air decays of the truth. After the correction the
+/// named model's Hopf speed lies within 1 % of the truth's with its criticality in ≥ 90 % of
+/// the sets, and no effect-free set is named an effect. About 20 s a set on 2 cores.
+#[test]
+#[ignore = "slow: 20 generated rigs at the bifurcation level (about 7 min)"]
+fn misgiven_structures_of_the_generated_benchmark_are_corrected() {
+    use diagnose::bifurcation::bench::{run_bench_with, BranchBenchOptions};
+    let opts = BranchBenchOptions {
+        misgiven_structure: true,
+        hold_given: false,
+    };
+    let r = run_bench_with(20, 2026, &opts, &|o| {
+        eprintln!(
+            "set {} {:?} → {} ({:?}): truth Hopf {:?}, named {:?}",
+            o.index, o.truth, o.verdict, o.structure_used, o.truth_hopf, o.named_hopf
+        )
+    })
+    .unwrap();
+    eprintln!(
+        "Hopf within 1 %: {:.3}, criticality right: {:.3}, both: {:.3}, effect-free named: {}",
+        r.hopf_within_tolerance,
+        r.criticality_right,
+        r.hopf_and_criticality_right,
+        r.effect_free_named
+    );
+    assert!(
+        r.hopf_and_criticality_right >= 0.9,
+        "{}",
+        r.hopf_and_criticality_right
+    );
+    assert_eq!(r.effect_free_named, 0);
 }

@@ -409,8 +409,16 @@ fn measure(
 fn misgive(nominal: &Section, rng: &mut ChaCha8Rng) -> Result<(Section, Misgiven)> {
     let mut st = nominal.structure.clone();
     let off: f64 = rng.random_range(0.03..0.08);
-    let factor = if rng.random_bool(0.5) { 1.0 + off } else { 1.0 - off };
-    let dof = if rng.random_bool(0.5) { "heave" } else { "pitch" };
+    let factor = if rng.random_bool(0.5) {
+        1.0 + off
+    } else {
+        1.0 - off
+    };
+    let dof = if rng.random_bool(0.5) {
+        "heave"
+    } else {
+        "pitch"
+    };
     // frequency × factor at the same damping ratio: k × factor², c × factor
     if dof == "heave" {
         st.k_h *= factor * factor;
@@ -522,7 +530,10 @@ pub fn run_set_with(index: usize, seed: u64, bench: &BranchBenchOptions) -> Resu
             None => d.nominal.hopf.first(),
         }
         .map(|h| (h.u, h.criticality.clone()));
-        let structure_used = d.structure.as_ref().map_or(StructureUsed::Given, |c| c.used);
+        let structure_used = d
+            .structure
+            .as_ref()
+            .map_or(StructureUsed::Given, |c| c.used);
         let nominal_score = d.nominal.errors.score;
         let correct = match truth.expected() {
             None => d.verdict.effect.is_none() && d.verdict.name == Verdict::None,

@@ -36,11 +36,11 @@ use aeroelastic::section::Section;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+pub use crate::structure::{structure_check_records, StructureGap, StructureUsed};
 use crate::{Effect, Error, Level, Result, Verdict};
 use candidates::{BranchCandidate, ParameterSpec, Scales};
 use fit::{diagram, levenberg_marquardt, residuals, start_grid, Setting};
 pub use points::{points_from_records, structure_check, RecordRole, RecordUse, StructureCheck};
-pub use crate::structure::{structure_check_records, StructureGap, StructureUsed};
 
 /// The `format` of a bifurcation-level diagnosis document.
 pub const FORMAT: &str = "aeroform-bifurcation-diagnosis/1";
@@ -628,7 +628,9 @@ pub fn diagnose_branches(
     let mut candidates: Vec<CandidateResult> = done.into_iter().flatten().collect();
     candidates.sort_by(|a, b| a.held_out.score.total_cmp(&b.held_out.score));
     let mut verdict = verdict(&candidates, nominal_score, opts);
-    verdict.explanation.push_str(&structure_sentence(structure.as_ref()));
+    verdict
+        .explanation
+        .push_str(&structure_sentence(structure.as_ref()));
     Ok(BifurcationDiagnosis {
         format: FORMAT.into(),
         version: version.into(),
