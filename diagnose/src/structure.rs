@@ -788,7 +788,8 @@ fn decay_row(
 /// frequencies and damping ratios.
 ///
 /// Rows are grouped by the given mode they are nearest to; each mode takes the frequency
-/// and the damping ratio of its row of smallest uncertainty. Unknowns: with two modes'
+/// and the damping ratio of its row of smallest uncertainty (no damping ratio when a row
+/// of the mode shows a dry-friction envelope: one mode has one damping). Unknowns: with two modes'
 /// frequencies both stiffnesses, with one the stiffness of the DOF that dominates that
 /// mode (the larger share of the given mode's kinetic energy, M_ii φ_i²), the other held;
 /// dampers alike from the measured damping ratios. Gauss–Newton on the residuals divided
@@ -821,10 +822,14 @@ pub fn identify_structure(
         else {
             continue;
         };
+        // one mode, one damping mechanism: a dry-friction envelope in any channel of the
+        // mode leaves it without a linear damping ratio (Bristol: pitch channel linear,
+        // heave channel of the same mode read as exponential)
+        let friction = of.iter().any(|r| r.exp_over_linear > 2.0);
         let zr = of
             .iter()
             .copied()
-            .filter(|r| r.linear_zeta.is_some() && r.linear_zeta_sd.is_some())
+            .filter(|r| !friction && r.linear_zeta.is_some() && r.linear_zeta_sd.is_some())
             .min_by(|a, b| {
                 a.linear_zeta_sd
                     .unwrap_or(f64::INFINITY)
