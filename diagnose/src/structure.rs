@@ -650,7 +650,8 @@ fn decay_row(
     let peak = win.iter().map(|w| w.1).fold(0.0, f64::max);
     let w_len = ((4.0 / f) / dt).round().max(1.0);
     let noise_amp = noise_sigma(x) * (2.0 / w_len).sqrt();
-    if !(peak >= NOISE_PROMINENCE * noise_amp) || peak <= 0.0 {
+    let stands_out = peak >= NOISE_PROMINENCE * noise_amp && peak > 0.0;
+    if !stands_out {
         return Err(format!(
             "no mode stands out of the noise (largest window amplitude {peak:.3e} is {:.1}× \
              the noise's, at least {NOISE_PROMINENCE} asked)",

@@ -340,7 +340,7 @@ fn measure(
     n: usize,
     heave_only: bool,
     rng: &mut ChaCha8Rng,
-) -> Option<(Vec<MeasuredAmplitude>, Option<(f64, String)>)> {
+) -> Option<(Vec<MeasuredAmplitude>, Option<HopfOf>)> {
     let opts = BifurcationOptions::default().branch;
     let hopf = truth.hopf_points(0.5, 200.0, 400).ok()?;
     let uh = hopf.first()?.u;
@@ -404,6 +404,9 @@ fn measure(
         .map(|b| (b.hopf.u, b.criticality.clone()));
     (out.len() >= 4 && speeds >= 3).then_some((out, hopf))
 }
+
+/// A first Hopf point: speed \[m/s\] and criticality.
+type HopfOf = (f64, String);
 
 /// The structure handed to the diagnosis when it is mis-given, and how.
 fn misgive(nominal: &Section, rng: &mut ChaCha8Rng) -> Result<(Section, Misgiven)> {
