@@ -149,6 +149,30 @@ fn print(d: &BifurcationDiagnosis) {
     crate::ui::say!("  {}", d.verdict.explanation);
     if let Some(s) = &d.structure {
         crate::ui::say!("structure (still-air decays): {}", s.summary);
+        crate::ui::say!("structure used: {:?}: {}", s.used, s.reason);
+        if let Some(id) = &s.identified {
+            for p in &id.parameters {
+                crate::ui::say!(
+                    "  {:<8} given {:.6e}  identified {:.6e}  [{:.6e}, {:.6e}] {}{}",
+                    p.name,
+                    p.given,
+                    p.identified,
+                    p.interval[0],
+                    p.interval[1],
+                    p.unit,
+                    if p.held { " (held)" } else { "" }
+                );
+            }
+        }
+        if let Some(g) = &s.gap {
+            crate::ui::say!(
+                "  the correction alone: nominal score {:.3} → {:.3}; Hopf {} → {} m/s",
+                g.given,
+                g.identified,
+                g.hopf_given.map_or("–".into(), |u| format!("{u:.3}")),
+                g.hopf_identified.map_or("–".into(), |u| format!("{u:.3}"))
+            );
+        }
     }
     let diag = |name: &str, s: &diagnose::bifurcation::DiagramSummary| {
         let hopf: Vec<String> = s
@@ -205,8 +229,16 @@ fn print(d: &BifurcationDiagnosis) {
 }
 
 /// `diagnose --blind N --branch-level`: the generated benchmark at the bifurcation level.
-pub fn blind(n: usize, seed: u64, out: &Path, force: bool) -> anyhow::Result<()> {
-    use diagnose::bifurcation::bench::{run_bench, BranchOutcome, STRONG_SCORE};
+pub fn blind(
+    n: usize,
+    seed: u64,
+    bench: &diagnose::bifurcation::bench::BranchBenchOptions,
+    out: &Path,
+    force: bool,
+) -> anyhow::Result<()> {
+    use diagnose::bifurcation::bench::{
+        run_bench_with, BranchOutcome, HOPF_TOLERANCE, STRONG_SCORE,
+    };
     let dir = crate::outdir::OutDir::begin(out, "diagnose --blind --branch-level", force, &[])?;
     let bar = crate::progress::CountBar::new("branch-level sets", n);
     let done = std::sync::atomic::AtomicUsize::new(0);
@@ -214,7 +246,7 @@ pub fn blind(n: usize, seed: u64, out: &Path, force: bool) -> anyhow::Result<()>
         let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
         bar.set(k, format!("set {}: {:?} → {}", o.index, o.truth, o.verdict));
     };
-    let r = run_bench(n, seed, &obs);
+    let r = run_bench_with(n, seed, bench, &obs);
     bar.finish();
     let r = r?;
     let mut text = serde_json::to_string_pretty(&r)?;
@@ -243,6 +275,15 @@ pub fn blind(n: usize, seed: u64, out: &Path, force: bool) -> anyhow::Result<()>
         "top-1 on strong sets (nominal score ≥ {STRONG_SCORE}): {:.1} %; effect-free sets `none`: {:.1} %",
         100.0 * r.top1_strong,
         100.0 * r.none_on_effect_free
+    );
+    crate::ui::say!(
+        "named model's Hopf speed within {:.0} % of the truth's: {:.1} %; criticality right: \
+         {:.1} %; both: {:.1} %; effect-free sets named an effect: {}",
+        100.0 * HOPF_TOLERANCE,
+        100.0 * r.hopf_within_tolerance,
+        100.0 * r.criticality_right,
+        100.0 * r.hopf_and_criticality_right,
+        r.effect_free_named
     );
     crate::ui::say!("wrote {}", out.join("branch-blind.json").display());
     crate::ui::document(&r)

@@ -60,6 +60,11 @@ pub struct DiagnoseArgs {
     /// writes `branch-blind.json`).
     #[arg(long, requires = "blind", conflicts_with_all = ["shard", "shapes"])]
     pub branch_level: bool,
+    /// With `--blind N --branch-level`: mis-give each rig's structure (one DOF's
+    /// frequency 3–8 % off, recorded per set as `misgiven`) and add two still-air decays
+    /// of the truth, so that the structure is identified from them first (issue 42).
+    #[arg(long, requires = "branch_level")]
+    pub misgiven_structure: bool,
 }
 
 impl DiagnoseArgs {

@@ -26,6 +26,7 @@ pub fn run(args: &DiagnoseArgs) -> anyhow::Result<()> {
             ("--shard", args.shard.is_some()),
             ("--shapes", args.shapes),
             ("--branch-level", args.branch_level),
+            ("--misgiven-structure", args.misgiven_structure),
         ]
         .into_iter()
         .find_map(|(f, given)| given.then_some(f));
@@ -47,7 +48,11 @@ pub fn run(args: &DiagnoseArgs) -> anyhow::Result<()> {
             return blind_shard(n, args.seed, s, &out);
         }
         if args.branch_level {
-            return crate::bifurcation_cmd::blind(n, args.seed, &out, args.force);
+            let bench = diagnose::bifurcation::bench::BranchBenchOptions {
+                misgiven_structure: args.misgiven_structure,
+                hold_given: false,
+            };
+            return crate::bifurcation_cmd::blind(n, args.seed, &bench, &out, args.force);
         }
         return blind(n, args.seed, args.shapes, &out, args.force);
     }

@@ -536,6 +536,10 @@ pub struct LevelResult {
     /// structure with the air's fitted apparent mass ([`crate::structure`]: frequency and
     /// damping against amplitude, envelope shape); `None` without a still-air run (the
     /// structural candidates then rest on the flow runs' amplitude dependence alone).
+    /// With a given model (`diagnose --free … --model M`, structure first): against the
+    /// nominal structure with the model's apparent mass at U = 0, with the linear
+    /// structure identified from the decays, the structure `used` and the `gap` before
+    /// and after the correction alone.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub structure: Option<crate::structure::StructureCheck>,
 }

@@ -9,8 +9,10 @@
 use std::f64::consts::TAU;
 
 use aeroelastic::section::Section;
-use identify::dataset::Dataset;
-use identify::preprocess::{dominant_frequency, harmonic_fit, refine_frequency};
+use aeroelastic::structure::Structure;
+use identify::dataset::{Dataset, ModalStructure};
+use identify::preprocess::{dominant_frequency, harmonic_fit, noise_sigma, refine_frequency};
+use identify::record::Record;
 use nalgebra::{DMatrix, Matrix2};
 use serde::{Deserialize, Serialize};
 
@@ -43,6 +45,29 @@ pub(crate) fn line_fit(x: &[f64], y: &[f64]) -> (f64, f64, f64) {
     (slope, icpt, sse)
 }
 
+/// A mode must stand out of the noise: the largest window amplitude of a decay is at least
+/// this multiple of the first-harmonic amplitude scale of the record's white noise,
+/// σ̂ √(2/w) (σ̂ by [`identify::preprocess::noise_sigma`], w samples per window; for
+/// noise alone the window amplitude is Rayleigh with that scale and exceeds 10 of it with
+/// probability e⁻⁵⁰).
+pub const NOISE_PROMINENCE: f64 = 10.0;
+
+/// Highest analysed frequency as a share of the Nyquist frequency 1/(2 dt): above it a
+/// window of four periods holds fewer than 2.5 samples per period and the peak of a
+/// noise-only record sits there (issue 42: a heave "mode" at 256 Hz of a 512 Hz record
+/// holding only noise).
+pub const NYQUIST_SHARE: f64 = 0.8;
+
+/// Coverage factor of the decay analysis's uncertainties: the measured frequency or
+/// damping ratio differs from the given structure's when the difference exceeds this many
+/// standard uncertainties, and the identified stiffnesses and dampers are given as
+/// intervals of ± this many standard uncertainties (≈ 95 %).
+pub const COVERAGE: f64 = 2.0;
+
+/// Independent estimates per window: the windows overlap by half, so n windows hold about
+/// n/2 independent estimates and a least-squares standard error is multiplied by √2.
+const OVERLAP_INFLATION: f64 = std::f64::consts::SQRT_2;
+
 /// One mode of the still-air decay against the given structure.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct ModeCheck {
@@ -72,6 +97,127 @@ pub struct ModeCheck {
     pub exp_over_linear: f64,
     /// What the decay says, in words.
     pub signature: String,
+    /// Index of the given structure's still-air mode it is compared with (0: the lower).
+    #[serde(default)]
+    pub given_mode: usize,
+    /// The linear (zero-amplitude) frequency \[Hz\]: intercept of the windows' frequency
+    /// against their squared amplitude, f = f₀ + b A² (the backbone of a smooth stiffness
+    /// polynomial starts quadratic in A).
+    #[serde(default)]
+    pub linear_hz: f64,
+    /// Standard uncertainty of `linear_hz` \[Hz\]: the intercept's least-squares standard
+    /// error from the window-to-window scatter, × √2 for the half-overlapping windows.
+    #[serde(default)]
+    pub linear_hz_sd: f64,
+    /// The linear damping ratio: intercept of the local damping ratios (windows i and i+2,
+    /// ζ = ln(A_i/A_{i+2}) / (2π f Δt)) against A_i A_{i+2}; `null` when the envelope is
+    /// closer to linear than exponential (dry friction has no linear damping ratio) or fewer
+    /// than three window pairs stand out of the noise.
+    #[serde(default)]
+    pub linear_zeta: Option<f64>,
+    /// Standard uncertainty of `linear_zeta` (as `linear_hz_sd`).
+    #[serde(default)]
+    pub linear_zeta_sd: Option<f64>,
+}
+
+/// Which structure a level's candidates were fitted on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum StructureUsed {
+    /// The given structure (the decays agree with it within their uncertainty, none was
+    /// given, or the identification failed: `reason` says which).
+    Given,
+    /// The linear structure identified from the still-air decays.
+    Identified,
+}
+
+/// One linear structural parameter, given against identified.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct StructureParameter {
+    /// `k_h` \[N/m\], `k_alpha` \[N m/rad\], `c_h` \[N s/m\] or `c_alpha` \[N m s/rad\]
+    /// (per unit span).
+    pub name: String,
+    /// Unit.
+    pub unit: String,
+    /// Given value.
+    pub given: f64,
+    /// Identified value (the given one when held).
+    pub identified: f64,
+    /// Interval of ± [`COVERAGE`] standard uncertainties, propagated from the measured
+    /// modes' uncertainties through the linearised mode equations (stiffnesses: on
+    /// log k); the given value twice when held.
+    pub interval: [f64; 2],
+    /// Held at the given value (no measured mode informs it).
+    pub held: bool,
+}
+
+/// One still-air mode: given, measured, identified.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct ModeIdentification {
+    /// Index of the given still-air mode (0: the lower frequency).
+    pub mode: usize,
+    /// Frequency of the given structure's mode \[Hz\].
+    pub given_hz: f64,
+    /// Its damping ratio.
+    pub given_zeta: f64,
+    /// Measured linear frequency (the row of smallest uncertainty) \[Hz\].
+    pub measured_hz: f64,
+    /// Its standard uncertainty \[Hz\].
+    pub measured_hz_sd: f64,
+    /// Measured linear damping ratio, when a row gives one.
+    pub measured_zeta: Option<f64>,
+    /// Its standard uncertainty.
+    pub measured_zeta_sd: Option<f64>,
+    /// (measured − given) frequency in standard uncertainties.
+    pub frequency_z: f64,
+    /// (measured − given) damping ratio in standard uncertainties, when measured.
+    pub zeta_z: Option<f64>,
+    /// Frequency of this mode of the identified structure \[Hz\].
+    pub identified_hz: f64,
+    /// Damping ratio of this mode of the identified structure.
+    pub identified_zeta: f64,
+    /// The rows it was read from (`case dof`).
+    pub from: Vec<String>,
+}
+
+/// The gap before and after the correction of the structure alone (no candidate).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct StructureGap {
+    /// The level's metric (the bifurcation level's normalised score, the system level's
+    /// held-out gap).
+    pub metric: String,
+    /// The nominal model on the given structure.
+    pub given: f64,
+    /// The nominal model on the identified structure.
+    pub identified: f64,
+    /// The nominal model's first Hopf speed on the given structure \[m/s\], when known.
+    pub hopf_given: Option<f64>,
+    /// …and on the identified structure \[m/s\].
+    pub hopf_identified: Option<f64>,
+}
+
+/// The linear structure identified from the still-air decays (DESIGN §5, structure
+/// first): stiffness and damping per DOF with the masses (mass, inertia, static
+/// unbalance, and the air's apparent mass in still air) held, such that the still-air
+/// modes of M q̈ + C q̇ + K q = 0 reproduce the measured modal frequencies and damping
+/// ratios (Gauss–Newton on the residuals divided by their uncertainties).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct StructureIdentification {
+    /// The measured modes against the given and identified structures.
+    pub modes: Vec<ModeIdentification>,
+    /// k_h, k_α, c_h, c_α: given, identified, interval, held.
+    pub parameters: Vec<StructureParameter>,
+    /// The identified structure in the modal form (uncoupled frequencies and damping
+    /// ratios of the structure alone, masses as given).
+    pub modal: ModalStructure,
+    /// A measured mode differs from the given structure's beyond [`COVERAGE`] standard
+    /// uncertainties (frequency or damping ratio).
+    pub differs: bool,
+    /// Sum of squared normalised residuals at the solution (0 when as many parameters as
+    /// measured quantities are fitted).
+    pub chi2: f64,
+    /// The solve reached its tolerance.
+    pub converged: bool,
 }
 
 /// The still-air decays against the given structure (DESIGN §5, "structure first").
@@ -83,22 +229,56 @@ pub struct StructureCheck {
     pub worst_frequency_error: f64,
     /// Summary in words.
     pub summary: String,
+    /// Records and DOFs not analysed, and why (no mode out of the noise, near Nyquist,
+    /// too short).
+    #[serde(default)]
+    pub refused: Vec<String>,
+    /// The given structure in the modal form.
+    #[serde(default)]
+    pub given: Option<ModalStructure>,
+    /// The linear structure identified from the decays, when a mode was measured.
+    #[serde(default)]
+    pub identified: Option<StructureIdentification>,
+    /// The structure the level's candidates were fitted on.
+    #[serde(default = "given_used")]
+    pub used: StructureUsed,
+    /// Why that one, in words.
+    #[serde(default)]
+    pub reason: String,
+    /// What the correction alone did to the level's gap (when the identified structure is
+    /// used).
+    #[serde(default)]
+    pub gap: Option<StructureGap>,
 }
 
-/// The given structure's still-air modes (structure plus the aerodynamic apparent mass at
-/// U = 0): (frequency \[Hz\], damping ratio), increasing frequency.
-fn still_air_modes(section: &Section) -> Vec<(f64, f64)> {
-    let s = &section.structure;
-    modes_of(
-        &section.total_mass(0.0),
-        &s.stiffness_matrix(),
-        &s.damping_matrix(),
-    )
+fn given_used() -> StructureUsed {
+    StructureUsed::Given
 }
 
-/// Modes (frequency \[Hz\], damping ratio) of M q̈ + C q̇ + K q = 0, increasing frequency;
-/// empty when M is singular.
-fn modes_of(m: &Matrix2<f64>, k: &Matrix2<f64>, c: &Matrix2<f64>) -> Vec<(f64, f64)> {
+impl StructureCheck {
+    /// The structure the level uses: `given` with k_h, k_α, c_h, c_α of the identification
+    /// when [`StructureCheck::used`] is `identified`, else `given` unchanged (nonlinear
+    /// terms always kept).
+    pub fn used_structure(&self, given: &Structure) -> Structure {
+        let mut s = given.clone();
+        if let (StructureUsed::Identified, Some(id)) = (self.used, &self.identified) {
+            for p in &id.parameters {
+                match p.name.as_str() {
+                    "k_h" => s.k_h = p.identified,
+                    "k_alpha" => s.k_alpha = p.identified,
+                    "c_h" => s.c_h = p.identified,
+                    "c_alpha" => s.c_alpha = p.identified,
+                    _ => {}
+                }
+            }
+        }
+        s
+    }
+}
+
+/// Eigenvalues (upper half plane) and mode shapes (h, α) of M q̈ + C q̇ + K q = 0,
+/// increasing frequency; empty when M is singular.
+fn eigen_of(m: &Matrix2<f64>, k: &Matrix2<f64>, c: &Matrix2<f64>) -> Vec<(f64, f64, [f64; 2])> {
     let Some(mi) = m.try_inverse() else {
         return Vec::new();
     };
@@ -113,19 +293,118 @@ fn modes_of(m: &Matrix2<f64>, k: &Matrix2<f64>, c: &Matrix2<f64>) -> Vec<(f64, f
             a[(2 + i, 2 + j)] = -c[(i, j)];
         }
     }
-    let mut out: Vec<(f64, f64)> = a
+    let mut out: Vec<(f64, f64, [f64; 2])> = a
         .complex_eigenvalues()
         .iter()
         .filter(|l| l.im > 0.0)
-        .map(|l| (l.norm() / TAU, -l.re / l.norm()))
+        .map(|l| {
+            // undamped shape of the mode: (K − ω² M) φ = 0 at ω = |λ|
+            let w2 = l.norm_sqr();
+            let d = k - Matrix2::identity() * w2;
+            let phi = if d[(0, 1)].abs() > d[(0, 0)].abs().max(1e-300) * 1e-12 {
+                [-d[(0, 1)], d[(0, 0)]]
+            } else if d[(1, 0)].abs() > 0.0 {
+                [d[(1, 1)], -d[(1, 0)]]
+            } else if d[(0, 0)].abs() < d[(1, 1)].abs() {
+                [1.0, 0.0]
+            } else {
+                [0.0, 1.0]
+            };
+            (l.norm() / TAU, -l.re / l.norm(), phi)
+        })
         .collect();
     out.sort_by(|x, y| x.0.total_cmp(&y.0));
     out
 }
 
+/// Modes (frequency \[Hz\], damping ratio) of M q̈ + C q̇ + K q = 0, increasing frequency;
+/// empty when M is singular.
+fn modes_of(m: &Matrix2<f64>, k: &Matrix2<f64>, c: &Matrix2<f64>) -> Vec<(f64, f64)> {
+    eigen_of(m, k, c).into_iter().map(|e| (e.0, e.1)).collect()
+}
+
+/// The second mode of a record: the largest spectral peak (Hann window, mean removed)
+/// at least 20 % away from `f`, above two cycles per record and below [`NYQUIST_SHARE`] of
+/// the Nyquist frequency, whose magnitude stands [`NOISE_PROMINENCE`] times above the
+/// spectrum's median; refined by least squares. `None` when there is none.
+fn second_mode(x: &[f64], dt: f64, f: f64) -> Option<f64> {
+    let n = x.len();
+    if n < 16 {
+        return None;
+    }
+    let m = x.iter().sum::<f64>() / n as f64;
+    let len = (4 * n).next_power_of_two();
+    let mut buf = vec![0.0; len];
+    for (i, v) in x.iter().enumerate() {
+        let w = 0.5 - 0.5 * (TAU * i as f64 / (n - 1) as f64).cos();
+        buf[i] = (v - m) * w;
+    }
+    let mut planner = realfft::RealFftPlanner::<f64>::new();
+    let fft = planner.plan_fft_forward(len);
+    let mut spec = fft.make_output_vec();
+    fft.process(&mut buf, &mut spec).ok()?;
+    let mag: Vec<f64> = spec.iter().map(|c| c.norm()).collect();
+    let df = 1.0 / (len as f64 * dt);
+    let mut sorted = mag.clone();
+    sorted.sort_by(f64::total_cmp);
+    let median = sorted[sorted.len() / 2];
+    let lo = 2.0 / (n as f64 * dt);
+    let hi = NYQUIST_SHARE * 0.5 / dt;
+    let mut best: Option<(usize, f64)> = None;
+    for k in 1..mag.len() - 1 {
+        let fk = k as f64 * df;
+        if fk < lo || fk > hi || (fk - f).abs() < 0.2 * f {
+            continue;
+        }
+        if mag[k] >= mag[k - 1] && mag[k] >= mag[k + 1] && best.is_none_or(|b| mag[k] > b.1) {
+            best = Some((k, mag[k]));
+        }
+    }
+    let (k, v) = best?;
+    (v >= NOISE_PROMINENCE * median).then(|| refine_frequency(x, dt, k as f64 * df))
+}
+
+/// Frequency near `f0` (within ±10 %) that best fits `seg` with a sinusoid there and one
+/// at `other` (the record's second mode, fitted jointly so that it does not pull the
+/// estimate): golden-section search on the residual; `None` when the two frequencies are
+/// closer than the window resolves.
+fn refine_beside(seg: &[f64], dt: f64, f0: f64, other: f64) -> Option<f64> {
+    let t = seg.len() as f64 * dt;
+    let res = |f: f64| {
+        if (f - other).abs() < 1.0 / t {
+            return None;
+        }
+        harmonic_fit(seg, dt, &[f, other])
+            .ok()
+            .map(|fit| fit.rms_residual)
+    };
+    let (mut a, mut b) = (0.9 * f0, 1.1 * f0);
+    let g = 0.5 * (5f64.sqrt() - 1.0);
+    let mut c = b - g * (b - a);
+    let mut d = a + g * (b - a);
+    let (mut fc, mut fd) = (res(c)?, res(d)?);
+    for _ in 0..40 {
+        if fc < fd {
+            b = d;
+            d = c;
+            fd = fc;
+            c = b - g * (b - a);
+            fc = res(c)?;
+        } else {
+            a = c;
+            c = d;
+            fc = fd;
+            d = a + g * (b - a);
+            fd = res(d)?;
+        }
+    }
+    Some(0.5 * (a + b))
+}
+
 /// Windows of four periods (half overlap) of `x`: (centre time, first-harmonic
-/// amplitude, frequency refined in the window).
-fn decay_windows(x: &[f64], dt: f64, f: f64) -> Vec<(f64, f64, f64)> {
+/// amplitude, frequency refined in the window). With a second mode `other` in the record,
+/// each window fits both sinusoids, the target's frequency refined beside the other's.
+fn decay_windows(x: &[f64], dt: f64, f: f64, other: Option<f64>) -> Vec<(f64, f64, f64)> {
     let w = ((4.0 / f) / dt).round() as usize;
     let mut out = Vec::new();
     if w < 8 {
@@ -134,9 +413,17 @@ fn decay_windows(x: &[f64], dt: f64, f: f64) -> Vec<(f64, f64, f64)> {
     let mut s = 0;
     while s + w <= x.len() {
         let seg = &x[s..s + w];
-        let fw = refine_frequency(seg, dt, f);
-        let fw = if (fw - f).abs() < 0.25 * f { fw } else { f };
-        if let Some(a) = first_harmonic(seg, dt, fw) {
+        let two = other.and_then(|o| {
+            let fw = refine_beside(seg, dt, f, o)?;
+            let fit = harmonic_fit(seg, dt, &[fw, o]).ok()?;
+            Some((fit.amplitude(0), fw))
+        });
+        let one = || {
+            let fw = refine_frequency(seg, dt, f);
+            let fw = if (fw - f).abs() < 0.25 * f { fw } else { f };
+            first_harmonic(seg, dt, fw).map(|a| (a, fw))
+        };
+        if let Some((a, fw)) = two.or_else(one) {
             out.push(((s as f64 + 0.5 * w as f64) * dt, a, fw));
         }
         s += w / 2;
@@ -144,47 +431,69 @@ fn decay_windows(x: &[f64], dt: f64, f: f64) -> Vec<(f64, f64, f64)> {
     out
 }
 
-/// Analyses the still-air records (U = 0) of `sets` against `section`'s structure; `None`
-/// when there is none.
+/// Analyses the still-air records (U = 0) of `sets` against `section`'s structure (with
+/// the aerodynamic model's apparent mass at U = 0) and identifies the linear structure
+/// from them ([`identify_structure`]); `None` when there is no still-air record.
 pub fn structure_check(sets: &[&Dataset], section: &Section) -> Option<StructureCheck> {
-    check_against(sets, &still_air_modes(section))
+    let recs: Vec<&Record> = sets.iter().flat_map(|s| s.records.iter()).collect();
+    structure_check_records(&recs, section)
+}
+
+/// As [`structure_check`] on records (those at U = 0 are analysed; case ids from the
+/// records' metadata).
+pub fn structure_check_records(records: &[&Record], section: &Section) -> Option<StructureCheck> {
+    let s = &section.structure;
+    check_against(
+        records,
+        &section.total_mass(0.0),
+        &s.stiffness_matrix(),
+        &s.damping_matrix(),
+        Some(s),
+    )
 }
 
 /// As [`structure_check`], against the modes of M q̈ + C q̇ + K q = 0 (mass, damping and
 /// stiffness matrices per unit span: the nominal structure, with the air's mass where it
-/// is known).
+/// is known). No structure is identified (the matrices carry no structure to correct).
 pub fn structure_check_matrices(
     sets: &[&Dataset],
     m: &Matrix2<f64>,
     k: &Matrix2<f64>,
     c: &Matrix2<f64>,
 ) -> Option<StructureCheck> {
-    check_against(sets, &modes_of(m, k, c))
+    let recs: Vec<&Record> = sets.iter().flat_map(|s| s.records.iter()).collect();
+    check_against(&recs, m, k, c, None)
 }
 
-fn check_against(sets: &[&Dataset], modes_given: &[(f64, f64)]) -> Option<StructureCheck> {
-    let modes_given = modes_given.to_vec();
+fn check_against(
+    records: &[&Record],
+    m: &Matrix2<f64>,
+    k: &Matrix2<f64>,
+    c: &Matrix2<f64>,
+    given: Option<&Structure>,
+) -> Option<StructureCheck> {
+    let modes_given = modes_of(m, k, c);
     let mut rows = Vec::new();
-    for set in sets {
-        for (spec, rec) in set.manifest.cases.iter().zip(&set.records) {
-            if rec.meta.wind_speed > 0.0 {
-                continue;
-            }
-            for (dof, x) in [("pitch", &rec.alpha), ("heave", &rec.h)] {
-                if let Some(row) = decay_row(&spec.id, dof, x, rec.dt, &modes_given) {
-                    rows.push(row);
-                }
+    let mut refused = Vec::new();
+    for rec in records {
+        if rec.meta.wind_speed > 0.0 {
+            continue;
+        }
+        for (dof, x) in [("pitch", &rec.alpha), ("heave", &rec.h)] {
+            match decay_row(&rec.meta.id, dof, x, rec.dt, &modes_given) {
+                Ok(row) => rows.push(row),
+                Err(why) => refused.push(format!("{} {dof}: {why}", rec.meta.id)),
             }
         }
     }
-    if rows.is_empty() {
+    if rows.is_empty() && refused.is_empty() {
         return None;
     }
     let worst = rows
         .iter()
         .map(|r| r.frequency_error.abs())
         .fold(0.0, f64::max);
-    let summary = rows
+    let mut summary = rows
         .iter()
         .map(|r| {
             format!(
@@ -201,11 +510,117 @@ fn check_against(sets: &[&Dataset], modes_given: &[(f64, f64)]) -> Option<Struct
         })
         .collect::<Vec<_>>()
         .join("; ");
+    if !refused.is_empty() {
+        if !summary.is_empty() {
+            summary.push_str("; ");
+        }
+        summary.push_str(&format!("not analysed: {}", refused.join("; ")));
+    }
+    let given_modal = given.and_then(|s| s.modal().ok());
+    let (identified, used, reason) = match given {
+        None => (
+            None,
+            StructureUsed::Given,
+            "the structure is compared, not identified, at this level".to_string(),
+        ),
+        Some(_) if rows.is_empty() => (
+            None,
+            StructureUsed::Given,
+            "no still-air mode stands out of the noise: the structure is taken as given"
+                .to_string(),
+        ),
+        Some(st) => match identify_structure(&rows, m, st) {
+            None => (
+                None,
+                StructureUsed::Given,
+                "the identification of the structure from the decays failed (a singular \
+                 mass matrix or an overdamped mode): the structure is taken as given"
+                    .to_string(),
+            ),
+            Some(id) => {
+                let words = id
+                    .modes
+                    .iter()
+                    .map(|md| {
+                        format!(
+                            "mode {} {:.4} ± {:.4} Hz measured vs {:.4} Hz given ({:+.1} σ){}",
+                            md.mode + 1,
+                            md.measured_hz,
+                            md.measured_hz_sd,
+                            md.given_hz,
+                            md.frequency_z,
+                            match (md.measured_zeta, md.measured_zeta_sd, md.zeta_z) {
+                                (Some(z), Some(sd), Some(zz)) => format!(
+                                    ", ζ {z:.4} ± {sd:.4} vs {:.4} ({zz:+.1} σ)",
+                                    md.given_zeta
+                                ),
+                                _ =>
+                                    ", ζ not measured (no linear damping in the decay)".to_string(),
+                            }
+                        )
+                    })
+                    .collect::<Vec<_>>()
+                    .join("; ");
+                let (used, why) = if !id.differs {
+                    (
+                        StructureUsed::Given,
+                        format!(
+                            "the decays agree with the given structure within {COVERAGE} \
+                             standard uncertainties ({words}): the given structure is used"
+                        ),
+                    )
+                } else if !id.converged {
+                    (
+                        StructureUsed::Given,
+                        format!(
+                            "the decays differ from the given structure ({words}) but no \
+                             linear structure with the given masses reproduces them \
+                             (χ² {:.2}): the given structure is used",
+                            id.chi2
+                        ),
+                    )
+                } else {
+                    (
+                        StructureUsed::Identified,
+                        format!(
+                            "the decays differ from the given structure beyond {COVERAGE} \
+                             standard uncertainties ({words}): the structure identified from \
+                             them is used"
+                        ),
+                    )
+                };
+                (Some(id), used, why)
+            }
+        },
+    };
     Some(StructureCheck {
         modes: rows,
         worst_frequency_error: worst,
         summary,
+        refused,
+        given: given_modal,
+        identified,
+        used,
+        reason,
+        gap: None,
     })
+}
+
+/// Standard error of the intercept of the least-squares line through (x, y), × the
+/// overlap inflation; `(intercept, se)`.
+fn intercept_with_se(x: &[f64], y: &[f64]) -> (f64, f64) {
+    let n = x.len() as f64;
+    let (slope, icpt, sse) = line_fit(x, y);
+    let _ = slope;
+    let mx = x.iter().sum::<f64>() / n;
+    let sxx: f64 = x.iter().map(|v| (v - mx).powi(2)).sum();
+    let s2 = sse / (n - 2.0).max(1.0);
+    let var = if sxx > 0.0 {
+        s2 * (1.0 / n + mx * mx / sxx)
+    } else {
+        s2 / n
+    };
+    (icpt, OVERLAP_INFLATION * var.max(0.0).sqrt())
 }
 
 fn decay_row(
@@ -214,20 +629,45 @@ fn decay_row(
     x: &[f64],
     dt: f64,
     modes_given: &[(f64, f64)],
-) -> Option<ModeCheck> {
-    let f0 = dominant_frequency(x, dt)?;
+) -> std::result::Result<ModeCheck, String> {
+    let f0 = dominant_frequency(x, dt).ok_or("flat record: no spectral peak")?;
     let f = refine_frequency(x, dt, f0);
-    if (x.len() as f64 * dt * f) < MIN_PERIODS {
-        return None;
+    let nyquist = 0.5 / dt;
+    if !(f.is_finite() && f > 0.0) || f > NYQUIST_SHARE * nyquist {
+        return Err(format!(
+            "its spectral peak ({f:.3} Hz) lies above {:.0} % of the Nyquist frequency \
+             ({nyquist:.3} Hz): not a mode",
+            100.0 * NYQUIST_SHARE
+        ));
     }
-    let win = decay_windows(x, dt, f);
+    if (x.len() as f64 * dt * f) < MIN_PERIODS {
+        return Err(format!(
+            "{:.1} periods of {f:.3} Hz, fewer than {MIN_PERIODS}",
+            x.len() as f64 * dt * f
+        ));
+    }
+    let win = decay_windows(x, dt, f, second_mode(x, dt, f));
     let peak = win.iter().map(|w| w.1).fold(0.0, f64::max);
-    // Noise floor: the windows' amplitude at the end of a decay, or 5 % of the peak.
+    let w_len = ((4.0 / f) / dt).round().max(1.0);
+    let noise_amp = noise_sigma(x) * (2.0 / w_len).sqrt();
+    let stands_out = peak >= NOISE_PROMINENCE * noise_amp && peak > 0.0;
+    if !stands_out {
+        return Err(format!(
+            "no mode stands out of the noise (largest window amplitude {peak:.3e} is {:.1}× \
+             the noise's, at least {NOISE_PROMINENCE} asked)",
+            peak / noise_amp.max(f64::MIN_POSITIVE)
+        ));
+    }
+    // Noise floor: the windows' amplitude at the end of a decay, 5 % of the peak, or three
+    // times the noise's window amplitude.
     let tail = win.last().map_or(0.0, |w| w.1);
-    let floor = (2.0 * tail).max(0.05 * peak);
+    let floor = (2.0 * tail).max(0.05 * peak).max(3.0 * noise_amp);
     let good: Vec<(f64, f64, f64)> = win.iter().copied().filter(|w| w.1 > floor).collect();
     if good.len() < 4 {
-        return None;
+        return Err(format!(
+            "{} window(s) of four periods above the noise floor, fewer than 4",
+            good.len()
+        ));
     }
     let t: Vec<f64> = good.iter().map(|w| w.0).collect();
     let a: Vec<f64> = good.iter().map(|w| w.1).collect();
@@ -260,11 +700,42 @@ fn decay_row(
     let f_small = mean(late, 2);
     let f_large = mean(early, 2);
     let (z_small, z_large) = (zeta(late), zeta(early));
-    let given = modes_given
+    // The linear frequency: f against A², intercept and its standard error.
+    let a2: Vec<f64> = a.iter().map(|v| v * v).collect();
+    let fw: Vec<f64> = good.iter().map(|w| w.2).collect();
+    let (linear_hz, linear_hz_sd) = intercept_with_se(&a2, &fw);
+    // The linear damping ratio: local ratios of windows i, i+2 (no shared samples)
+    // against A_i A_{i+2}.
+    let (linear_zeta, linear_zeta_sd) = if exp_over_linear > 2.0 || good.len() < 5 {
+        (None, None)
+    } else {
+        let mut xs = Vec::new();
+        let mut zs = Vec::new();
+        for i in 0..good.len() - 2 {
+            let (p, q) = (good[i], good[i + 2]);
+            let fm = 0.5 * (p.2 + q.2);
+            if q.0 > p.0 && fm > 0.0 {
+                zs.push((p.1 / q.1).ln() / (TAU * fm * (q.0 - p.0)));
+                xs.push(p.1 * q.1);
+            }
+        }
+        if zs.len() >= 3 {
+            let (z0, sd) = intercept_with_se(&xs, &zs);
+            (Some(z0), Some(sd))
+        } else {
+            (None, None)
+        }
+    };
+    let (given_mode, given) = modes_given
         .iter()
-        .min_by(|p, q| (p.0 - f_small).abs().total_cmp(&(q.0 - f_small).abs()))
         .copied()
-        .unwrap_or((f64::NAN, f64::NAN));
+        .enumerate()
+        .min_by(|p, q| {
+            (p.1 .0 - f_small)
+                .abs()
+                .total_cmp(&(q.1 .0 - f_small).abs())
+        })
+        .unwrap_or((0, (f64::NAN, f64::NAN)));
     let backbone_change = (f_large - f_small) / f_small;
     let damping_change = z_large - z_small;
     let mut sig = Vec::new();
@@ -290,7 +761,7 @@ fn decay_row(
     } else {
         sig.push("exponential envelope (viscous)".into());
     }
-    Some(ModeCheck {
+    Ok(ModeCheck {
         case: case.to_string(),
         dof: dof.to_string(),
         measured_hz: f_small,
@@ -303,6 +774,308 @@ fn decay_row(
         damping_change,
         exp_over_linear,
         signature: sig.join("; "),
+        given_mode,
+        linear_hz,
+        linear_hz_sd,
+        linear_zeta,
+        linear_zeta_sd,
+    })
+}
+
+/// Identifies the linear structure from the decay rows `rows` (DESIGN §5, structure
+/// first): the given structure `given` with its stiffnesses and dampers (k_h, k_α, c_h,
+/// c_α) adjusted so that the still-air modes of M q̈ + C q̇ + K q = 0 (M = `m`: the
+/// structure's masses and the air's apparent mass, held) reproduce the measured linear
+/// frequencies and damping ratios.
+///
+/// Rows are grouped by the given mode they are nearest to; each mode takes the frequency
+/// and the damping ratio of its row of smallest uncertainty (no damping ratio when a row
+/// of the mode shows a dry-friction envelope: one mode has one damping). Unknowns: with two modes'
+/// frequencies both stiffnesses, with one the stiffness of the DOF that dominates that
+/// mode (the larger share of the given mode's kinetic energy, M_ii φ_i²), the other held;
+/// dampers alike from the measured damping ratios. Gauss–Newton on the residuals divided
+/// by their standard uncertainties (stiffness as log k, dampers scaled by the given
+/// critical damping), from the given structure; intervals from the inverse of JᵀJ at the
+/// solution (± [`COVERAGE`] standard uncertainties). `None` when M is singular or a mode
+/// of the given structure is overdamped.
+pub fn identify_structure(
+    rows: &[ModeCheck],
+    m: &Matrix2<f64>,
+    given: &Structure,
+) -> Option<StructureIdentification> {
+    let kg = [given.k_h, given.k_alpha];
+    let cg = [given.c_h, given.c_alpha];
+    let eig = eigen_of(m, &given.stiffness_matrix(), &given.damping_matrix());
+    if eig.len() != 2 || rows.is_empty() {
+        return None;
+    }
+    // per given mode: the best frequency row and the best damping row
+    let mut modes: Vec<(usize, &ModeCheck, Option<&ModeCheck>, Vec<String>)> = Vec::new();
+    for j in 0..2 {
+        let of: Vec<&ModeCheck> = rows
+            .iter()
+            .filter(|r| r.given_mode == j && r.linear_hz.is_finite())
+            .collect();
+        let Some(fr) = of
+            .iter()
+            .copied()
+            .min_by(|a, b| a.linear_hz_sd.total_cmp(&b.linear_hz_sd))
+        else {
+            continue;
+        };
+        // one mode, one damping mechanism: a dry-friction envelope in any channel of the
+        // mode leaves it without a linear damping ratio (Bristol: pitch channel linear,
+        // heave channel of the same mode read as exponential)
+        let friction = of.iter().any(|r| r.exp_over_linear > 2.0);
+        let zr = of
+            .iter()
+            .copied()
+            .filter(|r| !friction && r.linear_zeta.is_some() && r.linear_zeta_sd.is_some())
+            .min_by(|a, b| {
+                a.linear_zeta_sd
+                    .unwrap_or(f64::INFINITY)
+                    .total_cmp(&b.linear_zeta_sd.unwrap_or(f64::INFINITY))
+            });
+        let from = of.iter().map(|r| format!("{} {}", r.case, r.dof)).collect();
+        modes.push((j, fr, zr, from));
+    }
+    if modes.is_empty() {
+        return None;
+    }
+    // The DOF dominating a given mode: the larger share M_ii φ_i² of its kinetic energy.
+    let dominant = |j: usize| {
+        let phi = eig[j].2;
+        let e = [m[(0, 0)] * phi[0] * phi[0], m[(1, 1)] * phi[1] * phi[1]];
+        usize::from(e[1] > e[0])
+    };
+    let k_free: Vec<usize> = if modes.len() >= 2 {
+        vec![0, 1]
+    } else {
+        vec![dominant(modes[0].0)]
+    };
+    let z_modes: Vec<usize> = modes
+        .iter()
+        .filter(|md| md.2.is_some())
+        .map(|md| md.0)
+        .collect();
+    let c_free: Vec<usize> = match z_modes.len() {
+        0 => vec![],
+        1 => vec![dominant(z_modes[0])],
+        _ => vec![0, 1],
+    };
+    // scales: critical damping of each DOF
+    let c_scale = [
+        2.0 * (kg[0] * m[(0, 0)]).abs().sqrt().max(f64::MIN_POSITIVE),
+        2.0 * (kg[1] * m[(1, 1)]).abs().sqrt().max(f64::MIN_POSITIVE),
+    ];
+    let n_p = k_free.len() + c_free.len();
+    let unpack = |p: &[f64]| {
+        let mut k = kg;
+        let mut c = cg;
+        for (i, &d) in k_free.iter().enumerate() {
+            k[d] = kg[d] * p[i].exp();
+        }
+        for (i, &d) in c_free.iter().enumerate() {
+            c[d] = cg[d] + c_scale[d] * p[k_free.len() + i];
+        }
+        (k, c)
+    };
+    // measured quantities: (mode, is_zeta, value, sd)
+    let floor_hz = |f: f64| 1e-6 * f.abs().max(1e-9);
+    let mut meas: Vec<(usize, bool, f64, f64)> = Vec::new();
+    for md in &modes {
+        meas.push((
+            md.0,
+            false,
+            md.1.linear_hz,
+            md.1.linear_hz_sd.max(floor_hz(md.1.linear_hz)),
+        ));
+        if let Some(zr) = md.2 {
+            if let (Some(z), Some(sd)) = (zr.linear_zeta, zr.linear_zeta_sd) {
+                meas.push((md.0, true, z, sd.max(1e-6)));
+            }
+        }
+    }
+    let residual = |p: &[f64]| -> Option<Vec<f64>> {
+        let (k, c) = unpack(p);
+        if k.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
+            return None;
+        }
+        let e = modes_of(
+            m,
+            &Matrix2::new(k[0], 0.0, 0.0, k[1]),
+            &Matrix2::new(c[0], 0.0, 0.0, c[1]),
+        );
+        if e.len() != 2 {
+            return None;
+        }
+        Some(
+            meas.iter()
+                .map(|&(j, is_z, v, sd)| (if is_z { e[j].1 } else { e[j].0 } - v) / sd)
+                .collect(),
+        )
+    };
+    let jac = |p: &[f64], r0: &[f64]| -> Option<DMatrix<f64>> {
+        let mut jm = DMatrix::<f64>::zeros(r0.len(), n_p);
+        for i in 0..n_p {
+            let hstep = 1e-7;
+            let mut q = p.to_vec();
+            q[i] += hstep;
+            let r1 = residual(&q)?;
+            for (row, (a, b)) in r1.iter().zip(r0).enumerate() {
+                jm[(row, i)] = (a - b) / hstep;
+            }
+        }
+        Some(jm)
+    };
+    let cost = |r: &[f64]| r.iter().map(|v| v * v).sum::<f64>();
+    let mut p = vec![0.0; n_p];
+    let mut r = residual(&p)?;
+    let mut converged = n_p == 0;
+    let mut lambda = 1e-6;
+    for _ in 0..100 {
+        if n_p == 0 {
+            break;
+        }
+        let jm = jac(&p, &r)?;
+        let jt = jm.transpose();
+        let g = &jt * DMatrix::from_column_slice(r.len(), 1, &r);
+        let h = &jt * &jm;
+        let mut stepped = false;
+        for _ in 0..30 {
+            let mut a = h.clone();
+            for i in 0..n_p {
+                a[(i, i)] += lambda * h[(i, i)].max(1e-12);
+            }
+            let Some(delta) = a.lu().solve(&(-&g)) else {
+                lambda *= 10.0;
+                continue;
+            };
+            let q: Vec<f64> = p.iter().zip(delta.iter()).map(|(x, d)| x + d).collect();
+            if let Some(rq) = residual(&q) {
+                if cost(&rq) <= cost(&r) {
+                    let small = delta.iter().all(|d| d.abs() < 1e-10);
+                    p = q;
+                    r = rq;
+                    lambda = (lambda * 0.1).max(1e-12);
+                    stepped = true;
+                    if small {
+                        converged = true;
+                    }
+                    break;
+                }
+            }
+            lambda *= 10.0;
+        }
+        if !stepped || converged {
+            converged = converged || cost(&r) < 1e-12;
+            break;
+        }
+    }
+    let chi2 = cost(&r);
+    // a square system must be solved; an overdetermined one within its degrees of freedom
+    let dof = meas.len().saturating_sub(n_p).max(1) as f64;
+    converged = converged && chi2 <= COVERAGE * COVERAGE * dof;
+    // uncertainty of the scaled parameters
+    let cov = if n_p > 0 {
+        let jm = jac(&p, &r)?;
+        (jm.transpose() * &jm).try_inverse()
+    } else {
+        None
+    };
+    let sd_p: Vec<f64> = (0..n_p)
+        .map(|i| cov.as_ref().map_or(f64::NAN, |c| c[(i, i)].max(0.0).sqrt()))
+        .collect();
+    let (k, c) = unpack(&p);
+    let mut parameters = Vec::new();
+    for d in 0..2 {
+        let (name, unit) = [("k_h", "N/m"), ("k_alpha", "N m/rad")][d];
+        let pos = k_free.iter().position(|&x| x == d);
+        let interval = match pos {
+            Some(i) => [
+                k[d] * (-COVERAGE * sd_p[i]).exp(),
+                k[d] * (COVERAGE * sd_p[i]).exp(),
+            ],
+            None => [kg[d], kg[d]],
+        };
+        parameters.push(StructureParameter {
+            name: name.into(),
+            unit: unit.into(),
+            given: kg[d],
+            identified: k[d],
+            interval,
+            held: pos.is_none(),
+        });
+    }
+    for d in 0..2 {
+        let (name, unit) = [("c_h", "N s/m"), ("c_alpha", "N m s/rad")][d];
+        let pos = c_free.iter().position(|&x| x == d);
+        let interval = match pos {
+            Some(i) => {
+                let half = COVERAGE * c_scale[d] * sd_p[k_free.len() + i];
+                [c[d] - half, c[d] + half]
+            }
+            None => [cg[d], cg[d]],
+        };
+        parameters.push(StructureParameter {
+            name: name.into(),
+            unit: unit.into(),
+            given: cg[d],
+            identified: c[d],
+            interval,
+            held: pos.is_none(),
+        });
+    }
+    let e_id = modes_of(
+        m,
+        &Matrix2::new(k[0], 0.0, 0.0, k[1]),
+        &Matrix2::new(c[0], 0.0, 0.0, c[1]),
+    );
+    let mut differs = false;
+    let out_modes: Vec<ModeIdentification> = modes
+        .iter()
+        .map(|(j, fr, zr, from)| {
+            let j = *j;
+            let sd_f = fr.linear_hz_sd.max(floor_hz(fr.linear_hz));
+            let fz = (fr.linear_hz - eig[j].0) / sd_f;
+            let (mz, msd) = match zr {
+                Some(z) => (z.linear_zeta, z.linear_zeta_sd),
+                None => (None, None),
+            };
+            let zz = match (mz, msd) {
+                (Some(z), Some(sd)) => Some((z - eig[j].1) / sd.max(1e-6)),
+                _ => None,
+            };
+            differs |= fz.abs() > COVERAGE || zz.is_some_and(|v| v.abs() > COVERAGE);
+            ModeIdentification {
+                mode: j,
+                given_hz: eig[j].0,
+                given_zeta: eig[j].1,
+                measured_hz: fr.linear_hz,
+                measured_hz_sd: fr.linear_hz_sd,
+                measured_zeta: mz,
+                measured_zeta_sd: msd,
+                frequency_z: fz,
+                zeta_z: zz,
+                identified_hz: e_id.get(j).map_or(f64::NAN, |e| e.0),
+                identified_zeta: e_id.get(j).map_or(f64::NAN, |e| e.1),
+                from: from.clone(),
+            }
+        })
+        .collect();
+    let mut st = given.clone();
+    st.k_h = k[0];
+    st.k_alpha = k[1];
+    st.c_h = c[0];
+    st.c_alpha = c[1];
+    let modal = st.modal().ok()?;
+    Some(StructureIdentification {
+        modes: out_modes,
+        parameters,
+        modal,
+        differs,
+        chi2,
+        converged,
     })
 }
 

@@ -20,14 +20,17 @@ use aeroelastic::aero::TheodorsenAero;
 use aeroelastic::branch::{predicted_at, MeasuredAmplitude};
 use aeroelastic::section::Section;
 use aeroelastic::structure::{add_poly_term, Friction, NondimStructure, PolyTerm, Structure};
+use aeroelastic::tunnel::{free_record, FreeOptions};
 use identify::numerics::split_seed;
+use identify::record::Record;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
 
 use super::candidates::ScaledAero;
-use super::{diagnose_branches, BifurcationOptions};
+use super::{diagnose_branches, BifurcationOptions, StructureUsed};
+use crate::structure::structure_check_records;
 use crate::{Effect, Error, Result, Verdict};
 
 /// Relative amplitude noise of the generated measured points.
@@ -110,7 +113,72 @@ pub struct BranchOutcome {
     pub shrink: Option<f64>,
     /// Wall time \[s\].
     pub seconds: f64,
+    /// The given structure's error, when the set mis-gives it
+    /// ([`BranchBenchOptions::misgiven_structure`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub misgiven: Option<Misgiven>,
+    /// The structure the diagnosis used (`given` without still-air decays).
+    #[serde(default = "given_used")]
+    pub structure_used: StructureUsed,
+    /// The truth's first Hopf point: speed \[m/s\] and criticality.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub truth_hopf: Option<(f64, String)>,
+    /// The named model's first Hopf point (the named candidate's fit, or the nominal model
+    /// on the structure used when no effect is named): speed \[m/s\] and criticality.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub named_hopf: Option<(f64, String)>,
 }
+
+fn given_used() -> StructureUsed {
+    StructureUsed::Given
+}
+
+impl BranchOutcome {
+    /// The named model's Hopf speed within `tol` (relative) of the truth's.
+    pub fn hopf_within(&self, tol: f64) -> bool {
+        match (&self.truth_hopf, &self.named_hopf) {
+            (Some(t), Some(n)) => (n.0 / t.0 - 1.0).abs() <= tol,
+            _ => false,
+        }
+    }
+
+    /// The named model's Hopf point has the truth's criticality.
+    pub fn criticality_right(&self) -> bool {
+        match (&self.truth_hopf, &self.named_hopf) {
+            (Some(t), Some(n)) => t.1 == n.1,
+            _ => false,
+        }
+    }
+}
+
+/// How a set mis-gives its structure: the truth's uncoupled frequency of one DOF,
+/// multiplied by `factor` in the structure handed to the diagnosis (damping ratio kept),
+/// with still-air decays of the truth in the set.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct Misgiven {
+    /// `heave` or `pitch`.
+    pub dof: String,
+    /// Given frequency / truth's frequency (0.92–0.97 or 1.03–1.08).
+    pub factor: f64,
+}
+
+/// Options of the bifurcation-level benchmark.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct BranchBenchOptions {
+    /// Mis-give the structure: the diagnosis gets the truth's structure with one DOF's
+    /// uncoupled frequency 3–8 % off (either sign, DOF drawn; damping ratio kept), and two
+    /// still-air decays of the truth (a pitch and a heave release, 20 s at 200 Hz, the
+    /// paper's sensor noise). Drawn from the set's seed split once more, so the truth and
+    /// its diagram are those of the set without this option.
+    pub misgiven_structure: bool,
+    /// With `misgiven_structure`: analyse the decays but fit on the given structure
+    /// anyway (the behaviour before the structure was used: the acceptance's baseline).
+    #[serde(default)]
+    pub hold_given: bool,
+}
+
+/// Relative Hopf-speed tolerance of the structure-first acceptance (issue 42).
+pub const HOPF_TOLERANCE: f64 = 0.01;
 
 /// Per truth: sets, strong sets, correct among the strong ones, correct overall.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
@@ -142,6 +210,22 @@ pub struct BranchBenchReport {
     pub top1_strong: f64,
     /// Effect-free sets called `none`.
     pub none_on_effect_free: f64,
+    /// The options the sets were drawn with.
+    #[serde(default)]
+    pub options: BranchBenchOptions,
+    /// Sets whose named model's first Hopf speed lies within [`HOPF_TOLERANCE`] of the
+    /// truth's (share of all sets).
+    #[serde(default)]
+    pub hopf_within_tolerance: f64,
+    /// Sets whose named model's first Hopf point has the truth's criticality (share).
+    #[serde(default)]
+    pub criticality_right: f64,
+    /// Sets with both (share).
+    #[serde(default)]
+    pub hopf_and_criticality_right: f64,
+    /// Effect-free sets named an effect (count).
+    #[serde(default)]
+    pub effect_free_named: usize,
 }
 
 /// A drawn rig: the nominal section (known nonlinear pitch spring) and its reference
@@ -256,7 +340,7 @@ fn measure(
     n: usize,
     heave_only: bool,
     rng: &mut ChaCha8Rng,
-) -> Option<Vec<MeasuredAmplitude>> {
+) -> Option<(Vec<MeasuredAmplitude>, Option<HopfOf>)> {
     let opts = BifurcationOptions::default().branch;
     let hopf = truth.hopf_points(0.5, 200.0, 400).ok()?;
     let uh = hopf.first()?.u;
@@ -313,7 +397,73 @@ fn measure(
         u.dedup();
         u.len()
     };
-    (out.len() >= 4 && speeds >= 3).then_some(out)
+    let hopf = set
+        .branches
+        .iter()
+        .min_by(|a, b| a.hopf.u.total_cmp(&b.hopf.u))
+        .map(|b| (b.hopf.u, b.criticality.clone()));
+    (out.len() >= 4 && speeds >= 3).then_some((out, hopf))
+}
+
+/// A first Hopf point: speed \[m/s\] and criticality.
+type HopfOf = (f64, String);
+
+/// The structure handed to the diagnosis when it is mis-given, and how.
+fn misgive(nominal: &Section, rng: &mut ChaCha8Rng) -> Result<(Section, Misgiven)> {
+    let mut st = nominal.structure.clone();
+    let off: f64 = rng.random_range(0.03..0.08);
+    let factor = if rng.random_bool(0.5) {
+        1.0 + off
+    } else {
+        1.0 - off
+    };
+    let dof = if rng.random_bool(0.5) {
+        "heave"
+    } else {
+        "pitch"
+    };
+    // frequency × factor at the same damping ratio: k × factor², c × factor
+    if dof == "heave" {
+        st.k_h *= factor * factor;
+        st.c_h *= factor;
+    } else {
+        st.k_alpha *= factor * factor;
+        st.c_alpha *= factor;
+    }
+    let s = Section::new(st, nominal.aero.clone(), nominal.rho)
+        .map_err(|e| Error::aeroelastic("mis-given structure", e))?;
+    Ok((
+        s,
+        Misgiven {
+            dof: dof.into(),
+            factor,
+        },
+    ))
+}
+
+/// Two still-air decays of `truth` (pitch released from a fifth of the reference
+/// amplitude, heave from the same times the semi-chord), 20 s at 200 Hz with the paper's
+/// sensor noise, seeded from `seed`.
+fn still_air_decays(truth: &Section, a_ref: f64, seed: u64) -> Result<Vec<Record>> {
+    let b = truth.semi_chord();
+    let mut out = Vec::new();
+    for (i, (id, initial)) in [
+        ("decay-pitch", [0.0, 0.2 * a_ref, 0.0, 0.0]),
+        ("decay-heave", [0.2 * a_ref * b, 0.0, 0.0, 0.0]),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let mut opts = FreeOptions::new(seed);
+        opts.rate = 200.0;
+        opts.duration = 20.0;
+        opts.record_forces = false;
+        opts.initial = initial;
+        let (rec, _) = free_record(truth, 0.0, id, &opts, split_seed(seed, i as u64))
+            .map_err(|e| Error::aeroelastic("still-air decay of the truth", e))?;
+        out.push(rec);
+    }
+    Ok(out)
 }
 
 /// Runs set `index` of the benchmark with master seed `seed`.
@@ -322,6 +472,15 @@ fn measure(
 /// [`Error::Data`] when no rig with a measurable diagram was drawn in 30 tries; the
 /// errors of [`diagnose_branches`].
 pub fn run_set(index: usize, seed: u64) -> Result<BranchOutcome> {
+    run_set_with(index, seed, &BranchBenchOptions::default())
+}
+
+/// Runs set `index` of the benchmark with master seed `seed` and options `bench`.
+///
+/// # Errors
+/// As [`run_set`]; [`Error::Aeroelastic`] when a still-air decay of the truth cannot be
+/// simulated.
+pub fn run_set_with(index: usize, seed: u64, bench: &BranchBenchOptions) -> Result<BranchOutcome> {
     let set_seed = split_seed(seed, index as u64);
     let mut rng = ChaCha8Rng::seed_from_u64(set_seed);
     let truth = BranchTruth::ALL[rng.random_range(0..BranchTruth::ALL.len())];
@@ -341,7 +500,7 @@ pub fn run_set(index: usize, seed: u64) -> Result<BranchOutcome> {
                 continue;
             }
         };
-        let Some(points) = measure(&t, n_speeds, heave_only, &mut rng) else {
+        let Some((points, truth_hopf)) = measure(&t, n_speeds, heave_only, &mut rng) else {
             why.push(format!(
                 "strength {strength:.2} sign {sign}: no measurable diagram"
             ));
@@ -349,7 +508,35 @@ pub fn run_set(index: usize, seed: u64) -> Result<BranchOutcome> {
         };
         let t0 = std::time::Instant::now();
         let opts = BifurcationOptions::default();
-        let d = diagnose_branches(&points, &nominal, None, vec![], &opts, vec![], "bench")?;
+        // a separate stream: the truth and its diagram do not depend on the option
+        let (given, misgiven, check) = if bench.misgiven_structure {
+            let mut r2 = ChaCha8Rng::seed_from_u64(split_seed(set_seed, 1));
+            let (given, how) = misgive(&nominal, &mut r2)?;
+            let decays = still_air_decays(&t, a_ref, split_seed(set_seed, 2))?;
+            let refs: Vec<&Record> = decays.iter().collect();
+            let mut check = structure_check_records(&refs, &given);
+            if bench.hold_given {
+                if let Some(c) = check.as_mut() {
+                    c.used = StructureUsed::Given;
+                    c.reason = "held at the given structure by the benchmark option \
+                                `hold_given` (the baseline)"
+                        .into();
+                }
+            }
+            (given, Some(how), check)
+        } else {
+            (nominal.clone(), None, None)
+        };
+        let d = diagnose_branches(&points, &given, check, vec![], &opts, vec![], "bench")?;
+        let named_hopf = match d.verdict.candidate {
+            Some(i) => d.candidates[i].fit.hopf.first(),
+            None => d.nominal.hopf.first(),
+        }
+        .map(|h| (h.u, h.criticality.clone()));
+        let structure_used = d
+            .structure
+            .as_ref()
+            .map_or(StructureUsed::Given, |c| c.used);
         let nominal_score = d.nominal.errors.score;
         let correct = match truth.expected() {
             None => d.verdict.effect.is_none() && d.verdict.name == Verdict::None,
@@ -368,6 +555,10 @@ pub fn run_set(index: usize, seed: u64) -> Result<BranchOutcome> {
             correct,
             shrink: d.verdict.shrink,
             seconds: t0.elapsed().as_secs_f64(),
+            misgiven,
+            structure_used,
+            truth_hopf,
+            named_hopf,
         });
     }
     Err(Error::data(
@@ -388,9 +579,23 @@ pub fn run_bench(
     seed: u64,
     observer: &dyn Fn(&BranchOutcome),
 ) -> Result<BranchBenchReport> {
+    run_bench_with(n, seed, &BranchBenchOptions::default(), observer)
+}
+
+/// Runs `n` sets with master seed `seed` and options `bench`; `observer` sees each
+/// outcome.
+///
+/// # Errors
+/// As [`run_set_with`].
+pub fn run_bench_with(
+    n: usize,
+    seed: u64,
+    bench: &BranchBenchOptions,
+    observer: &dyn Fn(&BranchOutcome),
+) -> Result<BranchBenchReport> {
     let mut outcomes = Vec::with_capacity(n);
     for i in 0..n {
-        let o = run_set(i, seed)?;
+        let o = run_set_with(i, seed, bench)?;
         observer(&o);
         outcomes.push(o);
     }
@@ -422,11 +627,31 @@ pub fn run_bench(
             v.iter().filter(|o| o.correct).count() as f64 / v.len() as f64
         }
     };
+    let share = |f: &dyn Fn(&BranchOutcome) -> bool| {
+        if outcomes.is_empty() {
+            f64::NAN
+        } else {
+            outcomes.iter().filter(|o| f(o)).count() as f64 / outcomes.len() as f64
+        }
+    };
+    let hopf_within_tolerance = share(&|o| o.hopf_within(HOPF_TOLERANCE));
+    let criticality_right = share(&|o| o.criticality_right());
+    let hopf_and_criticality_right =
+        share(&|o| o.hopf_within(HOPF_TOLERANCE) && o.criticality_right());
+    let effect_free_named = free
+        .iter()
+        .filter(|o| matches!(o.verdict, Verdict::Effect(_)))
+        .count();
     Ok(BranchBenchReport {
         format: "aeroform-branch-blind/1".into(),
         seed,
         top1_strong: frac(&strong),
         none_on_effect_free: frac(&free),
+        options: *bench,
+        hopf_within_tolerance,
+        criticality_right,
+        hopf_and_criticality_right,
+        effect_free_named,
         outcomes,
         per_truth,
     })

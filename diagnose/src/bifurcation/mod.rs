@@ -14,7 +14,10 @@
 //!
 //! Still-air decays given with the measured diagram identify the structure first
 //! ([`points::structure_check`]): the report states how the given structure's still-air
-//! modes differ from the measured ones before any flow-dependent candidate.
+//! modes differ from the measured ones before any flow-dependent candidate, and when they
+//! differ beyond their uncertainty the nominal model and every candidate are fitted on the
+//! linear structure identified from them (`structure.used`, `structure.gap`: what the
+//! correction alone did to the nominal score and Hopf speed).
 //!
 //! Units: U [m/s], pitch amplitudes \[rad\], heave amplitudes \[m\] (first harmonic, peak),
 //! frequencies \[Hz\].
@@ -33,6 +36,7 @@ use aeroelastic::section::Section;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+pub use crate::structure::{structure_check_records, StructureGap, StructureUsed};
 use crate::{Effect, Error, Level, Result, Verdict};
 use candidates::{BranchCandidate, ParameterSpec, Scales};
 use fit::{diagram, levenberg_marquardt, residuals, start_grid, Setting};
@@ -268,7 +272,9 @@ pub struct BifurcationDiagnosis {
     pub normalisation: Scales,
     /// Continuation range [m/s].
     pub speed_range: [f64; 2],
-    /// The still-air decays against the given structure (structure first), when given.
+    /// The still-air decays against the given structure (structure first), when given:
+    /// the modes, the structure identified from them with intervals, which structure the
+    /// level used (`used`) and what the correction alone did (`gap`).
     pub structure: Option<StructureCheck>,
     /// The nominal model's diagram (nothing fitted: its errors are held-out errors).
     pub nominal: DiagramSummary,
@@ -423,12 +429,15 @@ fn summary(set: Option<BranchSet>, measured: &[MeasuredAmplitude], s: &Setting) 
 }
 
 /// Diagnoses the measured bifurcation diagram `measured` against the nominal `section`.
-/// `decays` are still-air records (structure first); `records` says where the measured
-/// points came from (empty for a table).
+/// `structure` is the still-air decays' check ([`structure_check`], structure first):
+/// when its `used` is `identified`, the nominal model and every candidate use the
+/// identified linear structure (the given one's nonlinear terms kept) and its `gap` is
+/// filled; `records` says where the measured points came from (empty for a table).
 ///
 /// # Errors
 /// [`Error::Data`] for a measured diagram with fewer than two distinct speeds (nothing
-/// to hold out) or non-finite values; [`Error::Setting`] for bad options.
+/// to hold out) or non-finite values; [`Error::Setting`] for bad options;
+/// [`Error::Aeroelastic`] when the identified structure makes no valid section.
 pub fn diagnose_branches(
     measured: &[MeasuredAmplitude],
     section: &Section,
@@ -439,6 +448,23 @@ pub fn diagnose_branches(
     version: &str,
 ) -> Result<BifurcationDiagnosis> {
     let t0 = std::time::Instant::now();
+    // Structure first: the candidates are fitted on the structure identified from the
+    // still-air decays when they differ from the given one beyond their uncertainty.
+    let mut structure = structure;
+    let given_section = section;
+    let identified_section;
+    let section: &Section = match structure.as_ref() {
+        Some(c) if c.used == StructureUsed::Identified => {
+            identified_section = Section::new(
+                c.used_structure(&section.structure),
+                section.aero.clone(),
+                section.rho,
+            )
+            .map_err(|e| Error::aeroelastic("the structure identified from the decays", e))?;
+            &identified_section
+        }
+        _ => section,
+    };
     opts.branch
         .check()
         .map_err(|e| Error::aeroelastic("bifurcation options", e))?;
@@ -523,23 +549,38 @@ pub fn diagnose_branches(
     let all: Vec<&MeasuredAmplitude> = measured.iter().collect();
     // A linear section has no limit cycle: its "branch" is the vertical family of
     // neutral orbits at the Hopf speed, not a diagram; only its Hopf points are reported.
-    let nominal = if section.structure.is_linear() && section.aero.is_linear() {
-        let mut s = summary(None, measured, &setting);
-        s.hopf = section
-            .hopf_points(range[0], range[1], branch.n_scan)
-            .unwrap_or_default()
-            .iter()
-            .map(|h| HopfSummary {
-                u: h.u,
-                frequency_hz: h.omega / std::f64::consts::TAU,
-                criticality: "degenerate (linear section: no limit cycle)".into(),
-            })
-            .collect();
-        s
-    } else {
-        summary(diagram(section, &setting), measured, &setting)
+    let nominal_of = |section: &Section| {
+        if section.structure.is_linear() && section.aero.is_linear() {
+            let mut s = summary(None, measured, &setting);
+            s.hopf = section
+                .hopf_points(range[0], range[1], branch.n_scan)
+                .unwrap_or_default()
+                .iter()
+                .map(|h| HopfSummary {
+                    u: h.u,
+                    frequency_hz: h.omega / std::f64::consts::TAU,
+                    criticality: "degenerate (linear section: no limit cycle)".into(),
+                })
+                .collect();
+            s
+        } else {
+            summary(diagram(section, &setting), measured, &setting)
+        }
     };
+    let nominal = nominal_of(section);
     let nominal_score = nominal.errors.score;
+    if let Some(c) = structure.as_mut() {
+        if c.used == StructureUsed::Identified {
+            let g = nominal_of(given_section);
+            c.gap = Some(StructureGap {
+                metric: "normalised score of the nominal model at the measured points".into(),
+                given: g.errors.score,
+                identified: nominal_score,
+                hopf_given: g.hopf.first().map(|h| h.u),
+                hopf_identified: nominal.hopf.first().map(|h| h.u),
+            });
+        }
+    }
     let scales = Scales {
         alpha: max_of(&|m| m.amplitude_alpha).max(s_alpha),
         h: max_of(&|m| m.amplitude_h).max(s_h),
@@ -586,7 +627,10 @@ pub fn diagnose_branches(
     }
     let mut candidates: Vec<CandidateResult> = done.into_iter().flatten().collect();
     candidates.sort_by(|a, b| a.held_out.score.total_cmp(&b.held_out.score));
-    let verdict = verdict(&candidates, nominal_score, opts);
+    let mut verdict = verdict(&candidates, nominal_score, opts);
+    verdict
+        .explanation
+        .push_str(&structure_sentence(structure.as_ref()));
     Ok(BifurcationDiagnosis {
         format: FORMAT.into(),
         version: version.into(),
@@ -607,6 +651,26 @@ pub fn diagnose_branches(
         verdict,
         seconds: t0.elapsed().as_secs_f64(),
     })
+}
+
+/// The verdict's sentence on the structure it used (empty without still-air decays).
+fn structure_sentence(c: Option<&StructureCheck>) -> String {
+    let Some(c) = c else {
+        return String::new();
+    };
+    match (c.used, &c.gap) {
+        (StructureUsed::Identified, Some(g)) => format!(
+            "; on the structure identified from the still-air decays (the correction alone \
+             moves the nominal score {:.3} → {:.3}{})",
+            g.given,
+            g.identified,
+            match (g.hopf_given, g.hopf_identified) {
+                (Some(a), Some(b)) => format!(" and its Hopf speed {a:.3} → {b:.3} m/s"),
+                _ => String::new(),
+            }
+        ),
+        _ => "; on the given structure".to_string(),
+    }
 }
 
 /// The candidates of every catalogue effect for `base` and measured amplitudes `s`, in
