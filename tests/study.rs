@@ -721,3 +721,56 @@ fn paper_campaign_draws_every_results_section_figure() {
         .collect();
     assert!(still.iter().map(|v| v.abs()).fold(0.0, f64::max) > 0.1);
 }
+
+/// A study flies the law with memory (issue 41 item 4): `[aero] model = "lag"` with the
+/// lag_law.json as `file`, relative to the study file. In attached flow the plate-rig law
+/// is the quasi-steady thin aerofoil about the same axis (tests/lag_flight.rs), so the
+/// study's flutter run of `quasi_steady` (the same [aero] table) has the same speed; above
+/// it the LCO stage finds the stall-flutter cycle, below it a decay.
+#[test]
+fn a_study_flies_the_lag_law() {
+    let tmp = tempfile::tempdir().unwrap();
+    let law = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scenarios/plate-lag.lag_law.json"
+    );
+    std::fs::copy(law, tmp.path().join("law.json")).unwrap();
+    let study = tmp.path().join("lag.toml");
+    // the plate rig (scenarios/plate-rig.structure.toml) in nondimensional form
+    std::fs::write(
+        &study,
+        "name = \"lag\"\n\
+         [structure]\nmu = 18.19\nr_alpha2 = 0.3397\nsigma = 0.5714\nx_alpha = 0.08\n\
+         semi_chord = 0.125\nomega_alpha = 21.99\nrho = 1.225\n\
+         [aero]\nmodel = \"lag\"\nfile = \"law.json\"\nelastic_axis = -0.3\n\
+         [flutter]\nu_min = 2.0\nu_max = 8.0\nn_speeds = 61\n\
+         [[flutter.run]]\nlabel = \"lag law\"\nmethod = \"pk\"\n\
+         [[flutter.run]]\nlabel = \"quasi-steady\"\nmethod = \"pk\"\nmodel = \"quasi_steady\"\n\
+         [lco]\nspeeds = [3.0, 6.0]\n",
+    )
+    .unwrap();
+    let out = tmp.path().join("out");
+    let (ok, stdout, err) = aeroform(&[
+        "run",
+        study.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stdout}\n{err}");
+    let fl: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("flutter.json")).unwrap()).unwrap();
+    let u = |i: usize| fl[i]["analysis"]["flutter"]["u"].as_f64().unwrap();
+    assert!(
+        (u(0) - u(1)).abs() < 1e-6 * u(1),
+        "lag {} vs quasi-steady {}",
+        u(0),
+        u(1)
+    );
+    let lco: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("lco.json")).unwrap()).unwrap();
+    eprintln!("U_F {}; lco {}", u(0), lco);
+    let runs = lco["sweep"]["up"].as_array().unwrap();
+    assert_eq!(runs[0]["classification"], "Decay", "{lco}");
+    assert_eq!(runs[1]["classification"], "Lco", "{lco}");
+    assert!(runs[1]["amplitude_alpha"].as_f64().unwrap() > 5f64.to_radians());
+}

@@ -96,3 +96,25 @@ def test_branch_by_harmonic_balance_finds_the_same_fold(tmp_path):
     assert abs(f_hb - f_sh) < 1e-4 * f_sh
     with pytest.raises(aeroform.AeroformError, match="collocation"):
         aeroform.branch(str(BS), str(BM), (12.0, 20.0), method="collocation")
+
+
+def test_lag_law_is_flown_like_any_model(tmp_path):
+    """The law with memory (`identify --law lag`'s lag_law.json, here through the model file
+    `kind = "lag"` of the plate rig) in flutter, lco and branch: the CLI's documents, and a
+    stall-flutter cycle above the flutter speed (tests/lag_flight.rs: U_F 4.13 m/s)."""
+    lag = SCENARIOS / "plate-lag.model.toml"
+    run_cli("flutter", "--structure", S, "--model", lag, "--speeds", "2:8:61", "--out", tmp_path / "f")
+    cli = json.loads((tmp_path / "f" / "flutter.json").read_text())
+    py = aeroform.flutter(str(S), str(lag), "2:8:61")
+    assert max_difference(cli, py) == 0.0
+    assert 4.0 < py["critical"]["speed"] < 4.3
+    run_cli("lco", "--structure", S, "--model", lag, "--speed", "5", "--out", tmp_path / "l")
+    cli = json.loads((tmp_path / "l" / "lco.json").read_text())
+    py = aeroform.lco(str(S), str(lag), speed=5.0)
+    assert max_difference(cli, py) == 0.0
+    assert py["run"]["classification"] == "Lco"
+    run_cli("branch", "--structure", S, "--model", lag, "--speeds", "3:6", "--out", tmp_path / "b")
+    cli = json.loads((tmp_path / "b" / "branch.json").read_text())
+    py = aeroform.branch(str(S), str(lag), "3:6")
+    assert max_difference(cli["hopf_points"], py["hopf_points"]) == 0.0
+    assert py["branches"][0]["criticality"] == "supercritical"

@@ -210,7 +210,7 @@ pub fn virtual_model(study: &Study, v: &VirtualSpec, chord: f64) -> Result<Arc<d
     let Some(a) = &v.aero else {
         return Err(Error::Study("[data.virtual]: no model".into()));
     };
-    model_of(a.kind, chord, a, true).context("[data.virtual.aero]")
+    model_of(a.kind, chord, a, true, &study.base).context("[data.virtual.aero]")
 }
 
 fn virtual_campaign(
@@ -403,7 +403,8 @@ pub fn structure(s: &StudyStructure) -> Result<Structure> {
 /// The model of kind `kind` with the parameters of the study's model table `a` (the
 /// keys `kind` uses; [`ModelFile::for_kind`]) for the chord `chord` \[m\], with `a`'s
 /// nonlinear terms when `terms`, built by the one model constructor
-/// [`LoadedModel::from_spec`].
+/// [`LoadedModel::from_spec`]; a `file` (the `lag` kind's lag_law.json) is relative to
+/// `base`, the study file's folder.
 ///
 /// # Errors
 /// `identified` (the study's own law comes from [`Derived`]) or invalid parameters.
@@ -412,6 +413,7 @@ pub fn model_of(
     chord: f64,
     a: &ModelFile,
     terms: bool,
+    base: &Path,
 ) -> Result<Arc<dyn AeroModel>> {
     if kind == ModelKind::Identified {
         return Err(Error::Study(
@@ -422,7 +424,7 @@ pub fn model_of(
     if !terms {
         spec.nonlinear.clear();
     }
-    Ok(LoadedModel::from_spec(&spec, "[aero]", Path::new("."), Some(chord))?.model)
+    Ok(LoadedModel::from_spec(&spec, "[aero]", base, Some(chord))?.model)
 }
 
 /// Models derived from the study's own data: the identified law (when `[aero]` or a
@@ -529,7 +531,7 @@ fn named_aero(
             )),
         },
         StudyModel::Truth => truth_model(study, s),
-        StudyModel::Kind(kind) => model_of(kind, 2.0 * s.linear.semi_chord, a, terms),
+        StudyModel::Kind(kind) => model_of(kind, 2.0 * s.linear.semi_chord, a, terms, &study.base),
     }
 }
 

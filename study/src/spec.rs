@@ -791,6 +791,9 @@ impl Study {
         if let Some(p) = self.spec.branch.as_ref().and_then(|b| b.measured.as_ref()) {
             v.push(("branch.measured", self.base.join(p)));
         }
+        if let Some(p) = self.spec.aero.as_ref().and_then(|a| a.file.as_ref()) {
+            v.push(("aero.file", self.base.join(p)));
+        }
         v
     }
 
@@ -1229,6 +1232,14 @@ impl Study {
                 if let Some(m) = r.model {
                     let k = format!("flutter.run[{i}].model");
                     check_model(&k, m, s.data.is_some(), has_virtual)?;
+                    let no_file = s.aero.as_ref().is_none_or(|a| a.file.is_none());
+                    if m == StudyModel::Kind(ModelKind::Lag) && no_file {
+                        return err(
+                            &k,
+                            "`lag` flies the lag_law.json named by `aero.file`; [aero] has none"
+                                .into(),
+                        );
+                    }
                 }
             }
         }
@@ -1500,7 +1511,8 @@ fn check_model(
 
 /// Checks an `[aero]`-like table (a [`ModelFile`]) whose dotted prefix is `prefix`: a kind
 /// the study can build (not `dynamic_stall`; `identified` only where `allow_identified`),
-/// no `chord` (the study's) and no `file` (an `identified` model is the study's own), an
+/// no `chord` (the study's), a `file` for `lag` only (its lag_law.json; an `identified` model
+/// is the study's own), an
 /// elastic axis on the chord, 1..=8 lag roots, nonlinear terms that convert
 /// ([`aeroelastic::files::NonlinearSpec::to_term`]).
 fn check_aero(prefix: &str, a: &ModelFile, allow_identified: bool) -> Result<(), (String, String)> {
@@ -1525,11 +1537,28 @@ fn check_aero(prefix: &str, a: &ModelFile, allow_identified: bool) -> Result<(),
                 .into(),
         ));
     }
-    if a.file.is_some() {
-        return Err((
-            key("file"),
-            "a study's `identified` model is its own identification; give no `file`".into(),
-        ));
+    match (a.kind, &a.file) {
+        (ModelKind::Lag, None) => {
+            return Err((
+                key("file"),
+                "`lag` needs `file`: a lag_law.json (`aeroform identify DATASET --law lag`), \
+                 relative to the study file"
+                    .into(),
+            ))
+        }
+        (ModelKind::Identified, Some(_)) => {
+            return Err((
+                key("file"),
+                "a study's `identified` model is its own identification; give no `file`".into(),
+            ))
+        }
+        (k, Some(_)) if k != ModelKind::Lag => {
+            return Err((
+                key("file"),
+                format!("`{k}` takes no `file` (only `lag` does: its lag_law.json)"),
+            ))
+        }
+        _ => {}
     }
     if let Some(e) = a.elastic_axis {
         if !(e.is_finite() && e.abs() <= 1.0) {
@@ -1558,6 +1587,34 @@ mod tests {
 
     fn parse(text: &str) -> Result<Study, SpecError> {
         Study::parse(text, Path::new("s.toml"), Path::new("."))
+    }
+
+    /// `lag` takes its law from `aero.file` (relative to the study file, an input of the
+    /// study); every other kind refuses a `file`, by key and line.
+    #[test]
+    fn lag_needs_its_file_and_other_kinds_refuse_one() {
+        let base = "name = \"x\"\n[structure]\nmu = 20.0\nr_alpha2 = 0.25\nsigma = 0.5\n[aero]\n";
+        // a missing key is located at its table
+        let e = parse(&format!("{base}model = \"lag\"\n")).unwrap_err();
+        assert_eq!((e.key.as_str(), e.line), ("aero.file", 6), "{e}");
+        assert!(e.message.contains("identify DATASET --law lag"), "{e}");
+        let e = parse(&format!(
+            "{base}model = \"theodorsen\"\nfile = \"l.json\"\n"
+        ))
+        .unwrap_err();
+        assert_eq!((e.key.as_str(), e.line), ("aero.file", 8), "{e}");
+        assert!(e.message.contains("only `lag`"), "{e}");
+        let s = parse(&format!("{base}model = \"lag\"\nfile = \"l.json\"\n")).unwrap();
+        assert!(s
+            .inputs()
+            .iter()
+            .any(|(k, p)| *k == "aero.file" && p.ends_with("l.json")));
+        let e = parse(&format!(
+            "{base}model = \"theodorsen\"\n[flutter]\nu_min = 1.0\nu_max = 2.0\n\
+             [[flutter.run]]\nlabel = \"l\"\nmethod = \"pk\"\nmodel = \"lag\"\n"
+        ))
+        .unwrap_err();
+        assert_eq!(e.key, "flutter.run[0].model", "{e}");
     }
 
     #[test]
