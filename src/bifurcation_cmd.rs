@@ -174,13 +174,33 @@ fn print(d: &BifurcationDiagnosis) {
             );
         }
     }
+    let extrapolated = |x: bool| if x { " [extrapolation]" } else { "" };
     let diag = |name: &str, s: &diagnose::bifurcation::DiagramSummary| {
         let hopf: Vec<String> = s
             .hopf
             .iter()
-            .map(|h| format!("{:.3} m/s {:.3} Hz {}", h.u, h.frequency_hz, h.criticality))
+            .map(|h| {
+                format!(
+                    "{:.3} m/s {:.3} Hz {}{}",
+                    h.u,
+                    h.frequency_hz,
+                    h.criticality,
+                    extrapolated(h.extrapolation)
+                )
+            })
             .collect();
-        let folds: Vec<String> = s.folds.iter().map(|f| format!("{:.3} m/s", f.u)).collect();
+        let folds: Vec<String> = s
+            .folds
+            .iter()
+            .map(|f| {
+                format!(
+                    "{:.3} m/s ({:.2}°){}",
+                    f.u,
+                    f.amplitude1_alpha.to_degrees(),
+                    extrapolated(f.extrapolation)
+                )
+            })
+            .collect();
         crate::ui::say!(
             "{name}: Hopf {}; folds {}",
             if hopf.is_empty() {

@@ -207,7 +207,18 @@ fn diagram_rows(name: &str, s: &DiagramSummary) -> Vec<String> {
         name.to_string(),
         s.hopf
             .iter()
-            .map(|h| format!("{:.3} m/s, {:.3} Hz", h.u, h.frequency_hz))
+            .map(|h| {
+                format!(
+                    "{:.3} m/s, {:.3} Hz{}",
+                    h.u,
+                    h.frequency_hz,
+                    if h.extrapolation {
+                        " (extrapolation)"
+                    } else {
+                        ""
+                    }
+                )
+            })
             .collect::<Vec<_>>()
             .join("; "),
         s.hopf
@@ -217,7 +228,18 @@ fn diagram_rows(name: &str, s: &DiagramSummary) -> Vec<String> {
             .join("; "),
         s.folds
             .iter()
-            .map(|f| format!("{:.3} m/s ({:.2}°)", f.u, f.amplitude1_alpha.to_degrees()))
+            .map(|f| {
+                format!(
+                    "{:.3} m/s ({:.2}°){}",
+                    f.u,
+                    f.amplitude1_alpha.to_degrees(),
+                    if f.extrapolation {
+                        " (extrapolation)"
+                    } else {
+                        ""
+                    }
+                )
+            })
             .collect::<Vec<_>>()
             .join("; "),
     ]
@@ -262,7 +284,8 @@ pub fn bifurcation_report(
             "model",
             "Hopf (speed, frequency)",
             "criticality",
-            "folds (speed, pitch amplitude)",
+            "folds (speed, pitch amplitude); extrapolation = outside the measured speeds or \
+             amplitudes",
         ],
         &rows,
     );
@@ -360,7 +383,7 @@ pub fn bifurcation_report(
                 c.fit
                     .folds
                     .iter()
-                    .map(|f| format!("{:.2}", f.u))
+                    .map(|f| format!("{:.2}{}", f.u, if f.extrapolation { "*" } else { "" }))
                     .collect::<Vec<_>>()
                     .join(", "),
                 c.parameters
@@ -374,7 +397,8 @@ pub fn bifurcation_report(
     table(
         &mut r,
         "Candidates, best held-out score first (pitch [deg] and heave [mm] RMS held out; \
-         folds [m/s] and parameters of the fit on all points)",
+         folds [m/s], * outside the measured speeds or amplitudes, and parameters of the fit \
+         on all points)",
         &[
             "candidate",
             "params",

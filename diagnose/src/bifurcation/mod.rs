@@ -153,6 +153,10 @@ pub struct HopfSummary {
     pub frequency_hz: f64,
     /// `subcritical` / `supercritical` (from its branch).
     pub criticality: String,
+    /// The speed lies outside the measured speeds' range ([`Extent`]): a prediction the
+    /// data do not test (issue 42).
+    #[serde(default)]
+    pub extrapolation: bool,
 }
 
 /// A fold of cycles of a predicted diagram.
@@ -164,6 +168,58 @@ pub struct FoldSummary {
     pub amplitude1_alpha: f64,
     /// First-harmonic heave amplitude \[m\].
     pub amplitude1_h: f64,
+    /// The fold lies outside the measured speeds' range or above the largest measured
+    /// amplitude of a measured DOF ([`Extent`]): a turning point the data do not show.
+    #[serde(default)]
+    pub extrapolation: bool,
+}
+
+/// The part of the (speed, amplitude) plane the measured points span: a predicted Hopf
+/// point outside [u_min, u_max], or a fold outside it or above the largest measured pitch or
+/// heave amplitude, is an extrapolation (flagged, not scored).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Extent {
+    /// Smallest and largest measured speed [m/s].
+    pub u: [f64; 2],
+    /// Largest measured first-harmonic pitch amplitude \[rad\] (`None`: pitch not measured).
+    pub alpha_max: Option<f64>,
+    /// Largest measured first-harmonic heave amplitude \[m\] (`None`: heave not measured).
+    pub h_max: Option<f64>,
+}
+
+impl Extent {
+    /// The extent of `measured` (`None` when it is empty).
+    pub fn of(measured: &[MeasuredAmplitude]) -> Option<Extent> {
+        let first = measured.first()?;
+        let mut e = Extent {
+            u: [first.u, first.u],
+            alpha_max: None,
+            h_max: None,
+        };
+        for m in measured {
+            e.u = [e.u[0].min(m.u), e.u[1].max(m.u)];
+            if let Some(a) = m.amplitude_alpha {
+                e.alpha_max = Some(e.alpha_max.map_or(a, |v| v.max(a)));
+            }
+            if let Some(h) = m.amplitude_h {
+                e.h_max = Some(e.h_max.map_or(h, |v| v.max(h)));
+            }
+        }
+        Some(e)
+    }
+
+    /// Whether speed `u` lies outside the measured speeds.
+    pub fn outside_speeds(&self, u: f64) -> bool {
+        u < self.u[0] || u > self.u[1]
+    }
+
+    /// Whether an orbit at speed `u` with amplitudes (`alpha`, `h`) lies outside the
+    /// measured extent.
+    pub fn outside(&self, u: f64, alpha: f64, h: f64) -> bool {
+        self.outside_speeds(u)
+            || self.alpha_max.is_some_and(|a| alpha > a)
+            || self.h_max.is_some_and(|m| h > m)
+    }
 }
 
 /// A predicted diagram against the measured points.
@@ -389,6 +445,9 @@ fn summary(set: Option<BranchSet>, measured: &[MeasuredAmplitude], s: &Setting) 
             })
             .collect(),
     };
+    let extent = Extent::of(measured);
+    let outside_speeds = |u: f64| extent.is_some_and(|e| e.outside_speeds(u));
+    let outside = |u: f64, a: f64, h: f64| extent.is_some_and(|e| e.outside(u, a, h));
     let (hopf, folds) = match &set {
         Some(set) => (
             set.branches
@@ -397,6 +456,7 @@ fn summary(set: Option<BranchSet>, measured: &[MeasuredAmplitude], s: &Setting) 
                     u: b.hopf.u,
                     frequency_hz: b.hopf.omega / std::f64::consts::TAU,
                     criticality: b.criticality.clone(),
+                    extrapolation: outside_speeds(b.hopf.u),
                 })
                 .collect(),
             set.branches
@@ -411,6 +471,7 @@ fn summary(set: Option<BranchSet>, measured: &[MeasuredAmplitude], s: &Setting) 
                                 u: e.u,
                                 amplitude1_alpha: p.amplitude1_alpha,
                                 amplitude1_h: p.amplitude1_h,
+                                extrapolation: outside(e.u, p.amplitude1_alpha, p.amplitude1_h),
                             }
                         })
                 })
@@ -560,6 +621,7 @@ pub fn diagnose_branches(
                     u: h.u,
                     frequency_hz: h.omega / std::f64::consts::TAU,
                     criticality: "degenerate (linear section: no limit cycle)".into(),
+                    extrapolation: Extent::of(measured).is_some_and(|e| e.outside_speeds(h.u)),
                 })
                 .collect();
             s
@@ -937,5 +999,48 @@ fn verdict(ranked: &[CandidateResult], nominal: f64, opts: &BifurcationOptions) 
                 100.0 * opts.min_shrink
             ),
         }
+    }
+}
+
+#[cfg(test)]
+mod extent_tests {
+    use super::*;
+
+    fn point(u: f64, a: Option<f64>) -> MeasuredAmplitude {
+        MeasuredAmplitude {
+            line: 0,
+            stable: true,
+            u,
+            amplitude_h: None,
+            amplitude_alpha: a,
+            frequency_hz: None,
+        }
+    }
+
+    /// The measured extent: speeds [min, max], the largest amplitude of each measured DOF; a
+    /// fold beyond either is flagged, one inside is not; a DOF that was not measured does
+    /// not bound.
+    #[test]
+    fn folds_and_hopf_points_outside_the_measured_points_are_extrapolations() {
+        let m = [
+            point(14.9, Some(0.05)),
+            point(17.3, Some(0.08)),
+            point(15.6, Some(0.01)),
+        ];
+        let e = Extent::of(&m).unwrap();
+        assert_eq!(e.u, [14.9, 17.3]);
+        assert_eq!(e.alpha_max, Some(0.08));
+        assert_eq!(e.h_max, None);
+        assert!(!e.outside(16.0, 0.07, 1.0), "inside; heave not measured");
+        assert!(
+            e.outside(16.0, 0.09, 0.0),
+            "above the largest pitch amplitude"
+        );
+        assert!(
+            e.outside(14.6, 0.04, 0.0),
+            "below the slowest measured speed"
+        );
+        assert!(e.outside_speeds(17.957) && !e.outside_speeds(17.3));
+        assert!(Extent::of(&[]).is_none());
     }
 }
