@@ -15,6 +15,15 @@ impl std::fmt::Display for Usage {
 
 impl std::error::Error for Usage {}
 
+/// Returns a [`Usage`] error (exit code 2) with the `format!` message: a flag or input the
+/// binary itself refuses.
+macro_rules! refuse {
+    ($($arg:tt)*) => {
+        return Err($crate::exit::Usage(format!($($arg)*)).into())
+    };
+}
+pub(crate) use refuse;
+
 /// The message of an error and its causes, `outer: inner: …`, each cause written once: the
 /// crates' context variants (`{context}: {source}`) already print their source, which
 /// `{:#}` would print a second time ("x: No such file or directory (os error 2): x: No such
@@ -50,13 +59,20 @@ fn is_input_error(c: &(dyn std::error::Error + 'static)) -> bool {
     {
         return true;
     }
-    // an input refused by its readers: not a regular file, beyond its size cap, not UTF-8
-    // (`identify::io::read_text`), whichever crate's error carries it
+    // an input refused by its readers: missing, not a regular file, beyond its size cap,
+    // not UTF-8 (`identify::io::read_text`, `open_regular`: an `InputFileError` inside),
+    // whichever crate's error carries it
     if let Some(e) = c.downcast_ref::<std::io::Error>() {
-        return matches!(
-            e.kind(),
-            std::io::ErrorKind::InvalidInput | std::io::ErrorKind::InvalidData
-        );
+        return identify::io::is_input_error(e)
+            || matches!(
+                e.kind(),
+                std::io::ErrorKind::InvalidInput | std::io::ErrorKind::InvalidData
+            );
+    }
+    // a JSON input (a part document, a result file `plot` reads) that does not parse or
+    // has the wrong shape; a failing writer is an I/O error
+    if let Some(e) = c.downcast_ref::<serde_json::Error>() {
+        return !e.is_io();
     }
     // `Context` variants hold their source boxed: the chain shows the box, look inside
     if let Some(e) = c.downcast_ref::<Box<study::Error>>() {
@@ -101,8 +117,12 @@ fn is_input_error(c: &(dyn std::error::Error + 'static)) -> bool {
         use aeroelastic::Error as E;
         return matches!(
             e,
-            E::InvalidParameter { .. } | E::Toml { .. } | E::InvalidTable { .. }
-        );
+            E::InvalidParameter { .. }
+                | E::Toml { .. }
+                | E::InvalidTable { .. }
+                | E::Document { .. }
+                | E::WrongFormat { .. }
+        ) || matches!(e, E::Identify { source, .. } if is_input_error(source));
     }
     if let Some(e) = c.downcast_ref::<diagnose::Error>() {
         use diagnose::Error as E;

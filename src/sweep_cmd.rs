@@ -48,6 +48,7 @@ fn write_json(
         .parent()
         .filter(|d| !d.as_os_str().is_empty())
         .unwrap_or(std::path::Path::new("."));
+    crate::outdir::refuse_symlink(path, "output file")?;
     let _shared = crate::outdir::SharedDir::begin(dir, &[path], inputs)?;
     write_atomic(path, format!("{v:#}\n").as_bytes())?;
     Ok(())
@@ -87,7 +88,7 @@ pub fn merge_run(args: &MergeArgs) -> anyhow::Result<()> {
         _ => a == b,
     };
     if let Some(p) = args.parts.iter().find(|p| same(&args.out, p)) {
-        anyhow::bail!(
+        crate::exit::refuse!(
             "merge: OUT {} is also one of the parts ({}); give a new file for the merged document",
             args.out.display(),
             p.display()

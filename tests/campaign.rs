@@ -143,6 +143,8 @@ struct Tally {
     refused: usize,
     named: usize,
     unnamed: Vec<String>,
+    /// Refusals that exited 1 (a runtime failure) instead of 2 (an input error).
+    exit1: Vec<String>,
 }
 
 /// Every file of an accepted result is complete: JSON parses, PNG has its end chunk, SVG
@@ -537,6 +539,9 @@ fn bad_input_campaign(every: usize, seed: u64) -> Tally {
         } else {
             t.refused += 1;
             assert!(!err.trim().is_empty(), "{what}: refused without a message");
+            if code != Some(2) {
+                t.exit1.push(format!("{what}: {}", err.trim()));
+            }
             assert!(
                 !out.exists(),
                 "{what}: a refused run left {}",
@@ -562,6 +567,9 @@ fn report(t: &Tally) {
     );
     for u in &t.unnamed {
         println!("  not named: {u}");
+    }
+    for u in &t.exit1 {
+        println!("  exit 1: {u}");
     }
 }
 

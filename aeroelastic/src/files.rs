@@ -134,12 +134,12 @@ fn key_line(text: &str, key: &str) -> usize {
 /// at most the limits table's `MAX_TEXT_FILE_BYTES`, UTF-8 errors by line and byte). A
 /// refusal of the reader is an input error ([`Error::Toml`] naming the file).
 fn read_text(path: &Path) -> Result<String> {
-    identify::io::read_text(path).map_err(|e| match e.kind() {
-        std::io::ErrorKind::InvalidInput | std::io::ErrorKind::InvalidData => Error::Toml {
+    identify::io::read_text(path).map_err(|e| match identify::io::is_input_error(&e) {
+        true => Error::Toml {
             source_name: path.display().to_string(),
             message: e.to_string(),
         },
-        _ => Error::Io {
+        false => Error::Io {
             path: path.display().to_string(),
             message: e.to_string(),
         },
