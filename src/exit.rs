@@ -126,11 +126,14 @@ fn is_input_error(c: &(dyn std::error::Error + 'static)) -> bool {
     }
     if let Some(e) = c.downcast_ref::<diagnose::Error>() {
         use diagnose::Error as E;
-        // `Sweep`: a sweep specification, `--shard i/n` or a part document
-        return matches!(
-            e,
-            E::Setting { .. } | E::UnknownEffect { .. } | E::Data { .. } | E::Sweep { .. }
-        );
+        // `Sweep`: a sweep specification, `--shard i/n` or a part document; a file the
+        // specification names (`structure`, `model`) refused by its reader
+        return match e {
+            E::Setting { .. } | E::UnknownEffect { .. } | E::Data { .. } | E::Sweep { .. } => true,
+            E::Aeroelastic { source, .. } => is_input_error(&**source),
+            E::Identify { source, .. } => is_input_error(&**source),
+            _ => false,
+        };
     }
     false
 }
@@ -189,6 +192,30 @@ mod tests {
         // a bad `--shard` (issue 27, row 17)
         let shard = diagnose::sweep::parse_shard("3/2").unwrap_err();
         assert_eq!(code(&anyhow::Error::from(shard)), 2);
+    }
+
+    /// Issue 39, row 7: the refusals that exited 1 — a missing input (inside any crate's
+    /// error), a JSON document that does not parse, a file named by a sweep specification —
+    /// exit 2 by their type; a failing disk stays 1.
+    #[test]
+    fn reader_refusals_and_json_errors_exit_2_by_type() {
+        let dir = tempfile::tempdir().unwrap();
+        let missing = dir.path().join("missing.json");
+        let e = identify::io::read_text(&missing).unwrap_err();
+        let e = anyhow::Error::new(e).context("reading missing.json");
+        assert_eq!(code(&e), 2);
+        let e = identify::Error::io(&missing, identify::io::read_text(&missing).unwrap_err());
+        assert_eq!(code(&anyhow::Error::from(e)), 2);
+        let j = serde_json::from_str::<serde_json::Value>("{").unwrap_err();
+        assert_eq!(code(&anyhow::Error::new(j).context("p0.json: not JSON")), 2);
+        let a = aeroelastic::files::StructureFile::read(&missing).unwrap_err();
+        let d = diagnose::Error::Aeroelastic {
+            context: "sweep files".into(),
+            source: Box::new(a),
+        };
+        assert_eq!(code(&anyhow::Error::from(d)), 2);
+        let disk = identify::Error::io(&missing, std::io::Error::other("disk"));
+        assert_eq!(code(&anyhow::Error::from(disk)), 1);
     }
 
     #[test]

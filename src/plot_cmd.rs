@@ -68,7 +68,24 @@ pub fn run(args: &PlotArgs) -> anyhow::Result<()> {
     // refusal names a file that exists when the message is read, not the staging copy
     // (issue 39, row 7); the figures and the report are written into the staging folder.
     let study = Study::parse(&text, &path, &staged)?;
-    let figs = render_all_from(&study, &args.outdir, &staged, &crate::version())?;
+    let figs = render_all_from(&study, &args.outdir, &staged, &crate::version()).map_err(|e| {
+        if e.is_data() {
+            // the figures are drawn from the folder's result files: they do not fit
+            // together (edited or damaged), an input error naming the folder
+            let mut why = e.to_string();
+            let mut cause = std::error::Error::source(&e);
+            while let Some(c) = cause {
+                why = format!("{why}: {c}");
+                cause = c.source();
+            }
+            anyhow::Error::from(crate::exit::Usage(format!(
+                "{}: the result files do not fit together: {why}; run the study again",
+                args.outdir.display()
+            )))
+        } else {
+            e.into()
+        }
+    })?;
     let out = dir.commit()?;
     crate::ui::say!(
         "redrew {} figures and {}",

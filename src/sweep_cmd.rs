@@ -65,13 +65,15 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<()> {
     let inputs = [Input::new("SPEC", &args.spec)];
     // refused before the (long) run, not after it
     crate::outdir::refuse_overlap(&out, "--out", &inputs)?;
+    // a refusal while running (a file the specification names) names the specification
+    let spec_ctx = || format!("sweep {}", args.spec.display());
     let doc = match shard {
-        Some((i, n)) => spec.run_shard(i, n)?,
+        Some((i, n)) => spec.run_shard(i, n).with_context(spec_ctx)?,
         None => {
             let bar = CountBar::new("sweep", spec.n_items());
             let doc = spec.run_local(&|i| bar.tick(format!("item {i}")));
             bar.finish();
-            doc?
+            doc.with_context(spec_ctx)?
         }
     };
     write_json(&out, &doc, &inputs)?;

@@ -323,6 +323,46 @@ fn round_trip_table(report: &mut Report, out: &Path, reduced: bool) -> Result<()
     Ok(())
 }
 
+/// Refuses a case series whose arrays do not pair up (an edited or damaged result file that
+/// `plot` reads), naming the file and the field, before a figure is drawn from it.
+fn check_series(x: &CaseSeries, path: &Path) -> Result<()> {
+    let (n, m) = (x.t.len(), x.freq.len());
+    let fields = [
+        ("alpha_deg", x.alpha_deg.len(), "t", n),
+        ("h_mm", x.h_mm.len(), "t", n),
+        ("c_lift", x.c_lift.len(), "t", n),
+        ("c_lift_model", x.c_lift_model.len(), "t", n),
+        ("c_moment", x.c_moment.len(), "t", n),
+        ("c_moment_model", x.c_moment_model.len(), "t", n),
+        ("lift_spectrum", x.lift_spectrum.len(), "freq", m),
+        (
+            "lift_model_spectrum",
+            x.lift_model_spectrum.len(),
+            "freq",
+            m,
+        ),
+        ("moment_spectrum", x.moment_spectrum.len(), "freq", m),
+        (
+            "moment_model_spectrum",
+            x.moment_model_spectrum.len(),
+            "freq",
+            m,
+        ),
+    ];
+    for (field, len, of, want) in fields {
+        if len != want {
+            return Err(Error::Io {
+                context: format!("reading {}", path.display()),
+                source: identify::io::input_error(
+                    std::io::ErrorKind::InvalidData,
+                    format!("field `{field}`: {len} values where `{of}` has {want}"),
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
 /// Draws every figure of the study from the results in `out`, writes `figures.json` and
 /// `report.html`; returns the figure list. `version` is the text of the report's
 /// `version` row (the binary's `aeroform <version> (<git describe>)`).
@@ -405,7 +445,10 @@ pub fn render_all_from(
             s.outputs.series_cases.clone()
         };
         for w in &wanted {
-            series.push(read_json(&sdir.join(format!("{w}.json")))?);
+            let path = sdir.join(format!("{w}.json"));
+            let x: CaseSeries = read_json(&path)?;
+            check_series(&x, &path)?;
+            series.push(x);
         }
         if cv.wants("time_series") {
             for x in &series {
