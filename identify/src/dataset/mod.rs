@@ -351,7 +351,8 @@ fn resolve_case_path(dir: &Path, case: &CaseSpec, key: &str, rel: &Path) -> Resu
                 line,
                 field,
                 message: format!(
-                    "path \"{}\": no such file in the data set folder {}",
+                    "path \"{}\": no such file (or a symbolic link to none) in the data set \
+                     folder {}",
                     rel.display(),
                     dir.display()
                 ),
