@@ -8,7 +8,7 @@ use std::path::Path;
 use aeroelastic::files::{LoadedModel, StructureFile};
 use aeroelastic::section::Section;
 use aeroelastic::structure::Structure;
-use anyhow::{bail, Context};
+use anyhow::Context;
 use diagnose::bifurcation::{
     diagnose_branches, points_from_records, structure_check, BifurcationDiagnosis,
     BifurcationOptions, BranchKind, Quantity,
@@ -27,7 +27,7 @@ pub fn run(args: &DiagnoseArgs, measured: &Path) -> anyhow::Result<()> {
     // before the inputs are read and the candidates fitted (`OutDir::begin` checks it again)
     crate::outdir::refuse_overlap(&out, "--out", &args.inputs())?;
     let Some(model_path) = &args.model else {
-        bail!("--measured-branch needs --model M (the sim's aerodynamic model)");
+        crate::exit::refuse!("--measured-branch needs --model M (the sim's aerodynamic model)");
     };
     // Every input is read and checked before the output folder is touched.
     let records: Option<Dataset> = if measured.is_dir() {
@@ -68,7 +68,7 @@ pub fn run(args: &DiagnoseArgs, measured: &Path) -> anyhow::Result<()> {
         }
         None => {
             let Some(set) = manifest_of() else {
-                bail!(
+                crate::exit::refuse!(
                     "no structure: give --structure S, or data sets whose manifest has a \
                      [structure]"
                 );

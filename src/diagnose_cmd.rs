@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use aeroelastic::files::{LoadedModel, StructureFile};
-use anyhow::{bail, Context};
+use anyhow::Context;
 use diagnose::bench::{acceptance_lines, confusion_markdown, BlindReport, STRONG_RATIO};
 use diagnose::bench_run::{run_blind, BlindOptions};
 use diagnose::pipeline::{diagnose, diagnose_free, merge_free, DiagnoseOptions};
@@ -92,7 +92,7 @@ pub fn run(args: &DiagnoseArgs) -> anyhow::Result<()> {
     if let Some(s) = &args.structure {
         let sf = StructureFile::read(s).with_context(|| format!("reading {}", s.display()))?;
         if !sf.nonlinear.is_empty() {
-            bail!(
+            crate::exit::refuse!(
                 "{}: the diagnosis's nominal structure is linear (stiffness terms, freeplay and \
                  friction are what the catalogue looks for); remove them",
                 s.display()
@@ -113,7 +113,9 @@ pub fn run(args: &DiagnoseArgs) -> anyhow::Result<()> {
         (Some(d), None, _) => {
             Input::Forced(read_dataset(d).with_context(|| format!("reading {}", d.display()))?)
         }
-        _ => bail!("give a forced data-set folder, --free FREE --model M, or --blind N"),
+        _ => crate::exit::refuse!(
+            "give a forced data-set folder, --free FREE --model M, or --blind N"
+        ),
     };
     let dir = crate::outdir::OutDir::begin(&out, "diagnose", args.force, &args.inputs())?;
     let t = std::time::Instant::now();
@@ -222,6 +224,7 @@ fn blind_shard(n: usize, seed: u64, shard: &str, out: &Path) -> anyhow::Result<(
     let spec = diagnose::sweep::SweepSpec::Blind(diagnose::sweep::BlindSweep { n, seed });
     spec.validate("--blind")?;
     let path = out.join(format!("blind.part-{i}-of-{k}.json"));
+    crate::outdir::refuse_symlink(out, "--out")?;
     let _out = crate::outdir::SharedDir::begin(out, &[&path], &[])?;
     let part = spec.run_shard(i, k)?;
     write_json(&path, &part)?;

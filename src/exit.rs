@@ -15,6 +15,15 @@ impl std::fmt::Display for Usage {
 
 impl std::error::Error for Usage {}
 
+/// Returns a [`Usage`] error (exit code 2) with the `format!` message: a flag or input the
+/// binary itself refuses.
+macro_rules! refuse {
+    ($($arg:tt)*) => {
+        return Err($crate::exit::Usage(format!($($arg)*)).into())
+    };
+}
+pub(crate) use refuse;
+
 /// The message of an error and its causes, `outer: inner: …`, each cause written once: the
 /// crates' context variants (`{context}: {source}`) already print their source, which
 /// `{:#}` would print a second time ("x: No such file or directory (os error 2): x: No such
@@ -50,13 +59,20 @@ fn is_input_error(c: &(dyn std::error::Error + 'static)) -> bool {
     {
         return true;
     }
-    // an input refused by its readers: not a regular file, beyond its size cap, not UTF-8
-    // (`identify::io::read_text`), whichever crate's error carries it
+    // an input refused by its readers: missing, not a regular file, beyond its size cap,
+    // not UTF-8 (`identify::io::read_text`, `open_regular`: an `InputFileError` inside),
+    // whichever crate's error carries it
     if let Some(e) = c.downcast_ref::<std::io::Error>() {
-        return matches!(
-            e.kind(),
-            std::io::ErrorKind::InvalidInput | std::io::ErrorKind::InvalidData
-        );
+        return identify::io::is_input_error(e)
+            || matches!(
+                e.kind(),
+                std::io::ErrorKind::InvalidInput | std::io::ErrorKind::InvalidData
+            );
+    }
+    // a JSON input (a part document, a result file `plot` reads) that does not parse or
+    // has the wrong shape; a failing writer is an I/O error
+    if let Some(e) = c.downcast_ref::<serde_json::Error>() {
+        return !e.is_io();
     }
     // `Context` variants hold their source boxed: the chain shows the box, look inside
     if let Some(e) = c.downcast_ref::<Box<study::Error>>() {
@@ -101,16 +117,23 @@ fn is_input_error(c: &(dyn std::error::Error + 'static)) -> bool {
         use aeroelastic::Error as E;
         return matches!(
             e,
-            E::InvalidParameter { .. } | E::Toml { .. } | E::InvalidTable { .. }
-        );
+            E::InvalidParameter { .. }
+                | E::Toml { .. }
+                | E::InvalidTable { .. }
+                | E::Document { .. }
+                | E::WrongFormat { .. }
+        ) || matches!(e, E::Identify { source, .. } if is_input_error(source));
     }
     if let Some(e) = c.downcast_ref::<diagnose::Error>() {
         use diagnose::Error as E;
-        // `Sweep`: a sweep specification, `--shard i/n` or a part document
-        return matches!(
-            e,
-            E::Setting { .. } | E::UnknownEffect { .. } | E::Data { .. } | E::Sweep { .. }
-        );
+        // `Sweep`: a sweep specification, `--shard i/n` or a part document; a file the
+        // specification names (`structure`, `model`) refused by its reader
+        return match e {
+            E::Setting { .. } | E::UnknownEffect { .. } | E::Data { .. } | E::Sweep { .. } => true,
+            E::Aeroelastic { source, .. } => is_input_error(&**source),
+            E::Identify { source, .. } => is_input_error(&**source),
+            _ => false,
+        };
     }
     false
 }
@@ -169,6 +192,30 @@ mod tests {
         // a bad `--shard` (issue 27, row 17)
         let shard = diagnose::sweep::parse_shard("3/2").unwrap_err();
         assert_eq!(code(&anyhow::Error::from(shard)), 2);
+    }
+
+    /// Issue 39, row 7: the refusals that exited 1 — a missing input (inside any crate's
+    /// error), a JSON document that does not parse, a file named by a sweep specification —
+    /// exit 2 by their type; a failing disk stays 1.
+    #[test]
+    fn reader_refusals_and_json_errors_exit_2_by_type() {
+        let dir = tempfile::tempdir().unwrap();
+        let missing = dir.path().join("missing.json");
+        let e = identify::io::read_text(&missing).unwrap_err();
+        let e = anyhow::Error::new(e).context("reading missing.json");
+        assert_eq!(code(&e), 2);
+        let e = identify::Error::io(&missing, identify::io::read_text(&missing).unwrap_err());
+        assert_eq!(code(&anyhow::Error::from(e)), 2);
+        let j = serde_json::from_str::<serde_json::Value>("{").unwrap_err();
+        assert_eq!(code(&anyhow::Error::new(j).context("p0.json: not JSON")), 2);
+        let a = aeroelastic::files::StructureFile::read(&missing).unwrap_err();
+        let d = diagnose::Error::Aeroelastic {
+            context: "sweep files".into(),
+            source: Box::new(a),
+        };
+        assert_eq!(code(&anyhow::Error::from(d)), 2);
+        let disk = identify::Error::io(&missing, std::io::Error::other("disk"));
+        assert_eq!(code(&anyhow::Error::from(disk)), 1);
     }
 
     #[test]

@@ -79,7 +79,7 @@ pub fn load(structure: &Path, model: &Path, chord: Option<f64>) -> anyhow::Resul
 pub fn run(args: &FlutterArgs) -> anyhow::Result<()> {
     let speeds = aeroform::limits::parse_speeds("--speeds", &args.speeds)?;
     if speeds.len() < 2 {
-        anyhow::bail!(
+        crate::exit::refuse!(
             "speeds `{}`: a flutter scan needs at least 2 speeds",
             args.speeds
         );
@@ -95,6 +95,7 @@ pub fn run(args: &FlutterArgs) -> anyhow::Result<()> {
         .flutter(method, &opts)
         .context("flutter analysis")?;
     let path = args.out.join("flutter.json");
+    crate::outdir::refuse_symlink(&args.out, "--out")?;
     let _out = crate::outdir::SharedDir::begin(
         &args.out,
         &[&path],

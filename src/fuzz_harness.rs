@@ -10,6 +10,10 @@
 //! - [`study()`]: the study-file TOML text.
 //! - [`identification`]: the `identification.json` text.
 //! - [`cli`]: lines `FLAG VALUE` of the numeric command-line flags.
+//! - [`aero_files`]: a structure or model file (the same bytes read as each).
+//! - [`part()`]: a part document of `merge`.
+//! - [`results`]: a result file `plot` reads (`flutter.json`, `lco.json`, `cases.json`, a
+//!   case series).
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -376,4 +380,98 @@ pub fn identification(data: &[u8]) {
         let _ = m.forces(&flow, [0.001, 0.02], [0.01, 0.1], &lag);
         let _ = law.series(aeroelastic::theodorsen::Derivative::A2);
     }
+}
+
+/// Writes `data` as `name` into a fresh [`Scratch`] folder: (folder guard, file path).
+fn scratch_file(name: &str, data: &[u8]) -> Option<(Scratch, PathBuf)> {
+    let s = Scratch::new()?;
+    let p = s.0.join(name);
+    std::fs::write(&p, data).ok()?;
+    Some((s, p))
+}
+
+/// An error of a file reader names the file and is short (issue 39, row 7: every refusal
+/// carries its location; a hostile file cannot make a huge message).
+///
+/// # Panics
+/// When the message does not name `name` or is longer than 64 kB.
+fn assert_names(message: &str, name: &str) {
+    assert!(message.contains(name), "`{name}` not named: {message}");
+    assert!(message.len() < 1 << 16, "a {}-byte message", message.len());
+}
+
+/// Structure- and model-file harness: the bytes as a file read by
+/// [`aeroelastic::files::StructureFile::read`] and by
+/// [`aeroelastic::files::LoadedModel::load`] (the readers of `--structure` and `--model`,
+/// byte level: UTF-8, byte-order mark, TOML, values, limits).
+///
+/// # Panics
+/// When a refusal does not name the file.
+pub fn aero_files(data: &[u8]) {
+    if let Some((_s, p)) = scratch_file("fuzz.structure.toml", data) {
+        match aeroelastic::files::StructureFile::read(&p) {
+            Ok(sf) => {
+                let _ = sf.spec();
+            }
+            Err(e) => assert_names(&e.to_string(), "fuzz.structure.toml"),
+        }
+    }
+    if let Some((_s, p)) = scratch_file("fuzz.model.toml", data) {
+        if let Err(e) = aeroelastic::files::LoadedModel::load(&p, Some(0.25)) {
+            assert_names(&e.to_string(), "fuzz.model.toml");
+        }
+    }
+}
+
+/// Part-document harness (`aeroform merge`): the bytes read as a part file
+/// ([`identify::io::read_text`], JSON) and merged with itself as the only part
+/// ([`diagnose::sweep::merge`]); a merged document is a JSON object.
+///
+/// # Panics
+/// Only if a reader or the merge panics, or a merge accepted gives no object.
+pub fn part(data: &[u8]) {
+    let Some((_s, p)) = scratch_file("fuzz.part.json", data) else {
+        return;
+    };
+    let Ok(text) = identify::io::read_text(&p) else {
+        return;
+    };
+    let Ok(v) = serde_json::from_str::<serde_json::Value>(&text) else {
+        return;
+    };
+    if let Ok(doc) = diagnose::sweep::merge(&[("fuzz.part.json".to_string(), v)]) {
+        assert!(doc.is_object(), "merged document is not an object");
+    }
+}
+
+/// Result-file harness (`aeroform plot`): the bytes read by the study crate's JSON reader
+/// ([`study::files::read_json`]) as each result file `plot` reads: `flutter.json`,
+/// `lco.json`, `cases.json` and a case series.
+///
+/// # Panics
+/// When a refusal does not name the file.
+pub fn results(data: &[u8]) {
+    use aeroelastic::documents::{FlutterDoc, LcoDoc};
+    use identify::record::CaseMeta;
+    use identify::series::CaseSeries;
+    use study::files::read_json;
+    fn one<T: serde::de::DeserializeOwned>(data: &[u8], name: &str) {
+        let Some((_s, p)) = scratch_file(name, data) else {
+            return;
+        };
+        if let Err(e) = read_json::<T>(&p) {
+            // the context names the file, the cause says what is wrong
+            let mut m = e.to_string();
+            let mut src = std::error::Error::source(&e);
+            while let Some(s) = src {
+                m.push_str(&format!(": {s}"));
+                src = s.source();
+            }
+            assert_names(&m, name);
+        }
+    }
+    one::<Vec<FlutterDoc>>(data, "flutter.json");
+    one::<LcoDoc>(data, "lco.json");
+    one::<Vec<CaseMeta>>(data, "cases.json");
+    one::<CaseSeries>(data, "series.json");
 }

@@ -259,6 +259,7 @@ fn run_memoryless(args: &IdentifyArgs) -> anyhow::Result<Identification> {
     for w in &written {
         crate::outdir::refuse_overlap(w, "output file", &inputs)?;
     }
+    crate::outdir::refuse_symlink(&args.out, "--out")?;
 
     let t_start = Instant::now();
     let options = ReadOptions {
@@ -280,7 +281,7 @@ fn run_memoryless(args: &IdentifyArgs) -> anyhow::Result<Identification> {
     let prepared = prepare_dataset(&dataset, &pre).context("preprocessing")?;
     let prepare_s = t_prep.elapsed().as_secs_f64();
     if prepared.cases.is_empty() {
-        anyhow::bail!(
+        crate::exit::refuse!(
             "{}: the data set has no forced-motion case to identify",
             args.dataset.display()
         );
@@ -384,6 +385,7 @@ fn run_lag(args: &IdentifyArgs) -> anyhow::Result<()> {
     for w in &written {
         crate::outdir::refuse_overlap(w, "output file", &inputs)?;
     }
+    crate::outdir::refuse_symlink(&args.out, "--out")?;
 
     let t_start = Instant::now();
     let options = ReadOptions {
@@ -396,7 +398,7 @@ fn run_lag(args: &IdentifyArgs) -> anyhow::Result<()> {
     let prepared = prepare_dataset(&dataset, &pre).context("preprocessing")?;
     let prepare_s = t_prep.elapsed().as_secs_f64();
     if prepared.cases.is_empty() {
-        anyhow::bail!(
+        crate::exit::refuse!(
             "{}: the data set has no forced-motion case to identify",
             args.dataset.display()
         );

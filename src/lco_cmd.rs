@@ -78,6 +78,7 @@ pub fn run(args: &LcoArgs) -> anyhow::Result<()> {
     let pert = l.section.perturbation(args.alpha0.to_radians());
     let pert_down = l.section.perturbation(args.alpha0_down.to_radians());
     let path = args.out.join("lco.json");
+    crate::outdir::refuse_symlink(&args.out, "--out")?;
     let _out = crate::outdir::SharedDir::begin(
         &args.out,
         &[&path],

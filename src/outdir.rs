@@ -359,6 +359,29 @@ pub fn refuse_overlap(out: &Path, out_flag: &str, inputs: &[Input<'_>]) -> anyho
     Ok(())
 }
 
+/// Refuses an output the user named (`--out` of the single-file writers `identify`,
+/// `flutter`, `lco`, `diagnose --blind --shard`; the output file of `sweep` and `merge`)
+/// when it is a symbolic link: writing through it would put the results wherever the link
+/// points, as [`OutDir::begin`] refuses for the folder writers (issue 39, row 7).
+///
+/// # Errors
+/// [`Usage`] naming the flag and the path.
+pub fn refuse_symlink(out: &Path, flag: &str) -> anyhow::Result<()> {
+    match std::fs::symlink_metadata(out) {
+        Ok(m) if m.file_type().is_symlink() => Err(Usage(format!(
+            "{flag} {}: is a symbolic link; give the {} itself",
+            out.display(),
+            if m.is_dir() || out.is_dir() {
+                "folder"
+            } else {
+                "file"
+            }
+        ))
+        .into()),
+        _ => Ok(()),
+    }
+}
+
 /// The lock `P/.NAME.aeroform-lock` of an output folder, held until dropped.
 pub struct Lock {
     path: PathBuf,

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use anyhow::Context;
 use clap::Args;
 
-use plots::study_report::render_all;
+use plots::study_report::render_all_from;
 use study::run::names;
 use study::Study;
 
@@ -24,8 +24,13 @@ pub struct PlotArgs {
 pub fn run(args: &PlotArgs) -> anyhow::Result<()> {
     crate::outdir::check_complete(&args.outdir)?;
     let path = args.outdir.join(names::STUDY);
-    let text = identify::io::read_text(&path)
-        .with_context(|| format!("{} is not a study output folder", args.outdir.display()))?;
+    let text = identify::io::read_text(&path).with_context(|| {
+        format!(
+            "{}: {} is not a study output folder",
+            path.display(),
+            args.outdir.display()
+        )
+    })?;
     // the folder is the user's named target and every file of it is carried over; its
     // completion marker keeps the command that computed the results (`plot` only redraws)
     let command = std::fs::read_to_string(args.outdir.join(crate::outdir::COMPLETE_MARKER))
@@ -38,13 +43,49 @@ pub fn run(args: &PlotArgs) -> anyhow::Result<()> {
             })
         })
         .unwrap_or_else(|| "plot".to_string());
+    // what `plot` rewrites must be of its kind: a folder in place of `figures.json` would
+    // fail in the staging copy, under a name gone when the message is read
+    for (name, folder) in [
+        (names::FIGURE_LIST, false),
+        (names::REPORT, false),
+        (names::FIGURES, true),
+    ] {
+        let p = args.outdir.join(name);
+        if std::fs::symlink_metadata(&p).is_ok_and(|m| m.is_dir() != folder || m.is_symlink()) {
+            crate::exit::refuse!(
+                "{}: not a {}; `plot` rewrites it (remove it or run the study again)",
+                p.display(),
+                if folder { "folder" } else { "regular file" }
+            );
+        }
+    }
     let dir = crate::outdir::OutDir::begin(&args.outdir, &command, true, &[])?;
     copy_tree(&args.outdir, dir.path())
         .with_context(|| format!("copying {} to redraw it", args.outdir.display()))?;
     let staged = dir.path().to_path_buf();
-    // relative data paths are not needed: nothing is recomputed
-    let study = Study::parse(&text, &staged.join(names::STUDY), &staged)?;
-    let figs = render_all(&study, &staged, &crate::version())?;
+    // relative data paths are not needed: nothing is recomputed. The result files are read
+    // from the folder the user named (copied byte for byte into the staging folder), so a
+    // refusal names a file that exists when the message is read, not the staging copy
+    // (issue 39, row 7); the figures and the report are written into the staging folder.
+    let study = Study::parse(&text, &path, &staged)?;
+    let figs = render_all_from(&study, &args.outdir, &staged, &crate::version()).map_err(|e| {
+        if e.is_data() {
+            // the figures are drawn from the folder's result files: they do not fit
+            // together (edited or damaged), an input error naming the folder
+            let mut why = e.to_string();
+            let mut cause = std::error::Error::source(&e);
+            while let Some(c) = cause {
+                why = format!("{why}: {c}");
+                cause = c.source();
+            }
+            anyhow::Error::from(crate::exit::Usage(format!(
+                "{}: the result files do not fit together: {why}; run the study again",
+                args.outdir.display()
+            )))
+        } else {
+            e.into()
+        }
+    })?;
     let out = dir.commit()?;
     crate::ui::say!(
         "redrew {} figures and {}",

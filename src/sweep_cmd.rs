@@ -48,6 +48,7 @@ fn write_json(
         .parent()
         .filter(|d| !d.as_os_str().is_empty())
         .unwrap_or(std::path::Path::new("."));
+    crate::outdir::refuse_symlink(path, "output file")?;
     let _shared = crate::outdir::SharedDir::begin(dir, &[path], inputs)?;
     write_atomic(path, format!("{v:#}\n").as_bytes())?;
     Ok(())
@@ -64,13 +65,15 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<()> {
     let inputs = [Input::new("SPEC", &args.spec)];
     // refused before the (long) run, not after it
     crate::outdir::refuse_overlap(&out, "--out", &inputs)?;
+    // a refusal while running (a file the specification names) names the specification
+    let spec_ctx = || format!("sweep {}", args.spec.display());
     let doc = match shard {
-        Some((i, n)) => spec.run_shard(i, n)?,
+        Some((i, n)) => spec.run_shard(i, n).with_context(spec_ctx)?,
         None => {
             let bar = CountBar::new("sweep", spec.n_items());
             let doc = spec.run_local(&|i| bar.tick(format!("item {i}")));
             bar.finish();
-            doc?
+            doc.with_context(spec_ctx)?
         }
     };
     write_json(&out, &doc, &inputs)?;
@@ -87,7 +90,7 @@ pub fn merge_run(args: &MergeArgs) -> anyhow::Result<()> {
         _ => a == b,
     };
     if let Some(p) = args.parts.iter().find(|p| same(&args.out, p)) {
-        anyhow::bail!(
+        crate::exit::refuse!(
             "merge: OUT {} is also one of the parts ({}); give a new file for the merged document",
             args.out.display(),
             p.display()

@@ -17,6 +17,17 @@
 //! nothing after the next clean run, and the inputs must be unchanged (no write outside
 //! the output).
 //!
+//! **Bytes (issue 39, row 7).** Every reader of a text input (data-set manifest and case
+//! CSV, structure, model and `identification.json` as a model, study, sweep specification,
+//! part document of `merge`, measured LCO table, the result files `plot` reads) gets
+//! byte-level faults: a missing file, a folder or `/dev/zero` in its place, empty, cut in
+//! half, invalid UTF-8, a NUL, a control character escaped inside a string, a byte-order
+//! mark, CRLF line ends, and seeded random byte flips, insertions, deletions and repeated
+//! lines. Each run must finish within 60 s with exit 0 or 2 (an input refusal is exit code
+//! 2), a refusal must name the file and never the vanished staging folder, an acceptance
+//! must leave complete results, nothing may stay beside the output and no other input may
+//! change; the peak memory of each run is measured (`/usr/bin/time -f %M`).
+//!
 //! The CI variants take a seeded sample; the long forms (`--ignored`) run all ≥ 300 bad
 //! inputs and ≥ 300 cycles: `cargo test --release --test campaign -- --ignored --nocapture`.
 
@@ -143,6 +154,8 @@ struct Tally {
     refused: usize,
     named: usize,
     unnamed: Vec<String>,
+    /// Refusals that exited 1 (a runtime failure) instead of 2 (an input error).
+    exit1: Vec<String>,
 }
 
 /// Every file of an accepted result is complete: JSON parses, PNG has its end chunk, SVG
@@ -537,6 +550,9 @@ fn bad_input_campaign(every: usize, seed: u64) -> Tally {
         } else {
             t.refused += 1;
             assert!(!err.trim().is_empty(), "{what}: refused without a message");
+            if code != Some(2) {
+                t.exit1.push(format!("{code:?} {what}: {}", err.trim()));
+            }
             assert!(
                 !out.exists(),
                 "{what}: a refused run left {}",
@@ -563,6 +579,9 @@ fn report(t: &Tally) {
     for u in &t.unnamed {
         println!("  not named: {u}");
     }
+    for u in &t.exit1 {
+        println!("  exit {u}");
+    }
 }
 
 /// CI form: a seeded sample of one in fourteen bad inputs.
@@ -571,6 +590,11 @@ fn bad_inputs_never_panic_and_leave_nothing_sampled() {
     let t = bad_input_campaign(14, 27);
     report(&t);
     assert!(t.runs >= 60, "{} runs", t.runs);
+    assert!(
+        t.exit1.is_empty(),
+        "input refusals exiting 1: {:?}",
+        t.exit1
+    );
     assert!(
         t.unnamed.len() * 20 <= t.refused,
         "more than 5 % of the refusals name neither file nor key"
@@ -585,9 +609,398 @@ fn bad_inputs_never_panic_and_leave_nothing() {
     report(&t);
     assert!(t.runs >= 300, "{} runs", t.runs);
     assert!(
+        t.exit1.is_empty(),
+        "input refusals exiting 1: {:?}",
+        t.exit1
+    );
+    assert!(
         t.unnamed.len() * 20 <= t.refused,
         "more than 5 % of the refusals name neither file nor key"
     );
+}
+
+/// The inputs of the byte-level family, generated into `dir`: (file, command reading it).
+fn byte_readers(dir: &Path) -> Vec<(String, Vec<String>)> {
+    let s = |x: &str| x.to_string();
+    let (code, err) = run(
+        dir,
+        &[
+            s("tunnel"),
+            s("forced"),
+            s("--model"),
+            scenario("plate-truth.model.toml"),
+            s("--campaign"),
+            s("config=D"),
+            s("--duration"),
+            s("1"),
+            s("--out"),
+            s("ds"),
+        ],
+    );
+    assert_eq!(code, Some(0), "{err}");
+    let (code, err) = run(dir, &[s("run"), s("--out"), s("q")]);
+    assert_eq!(code, Some(0), "{err}");
+    for (from, to) in [
+        ("plate-rig.structure.toml", "s.toml"),
+        ("plate-truth.model.toml", "m.toml"),
+        ("quickstart.toml", "study.toml"),
+        ("bristol-spring1-lco-amplitudes.csv", "lco.csv"),
+    ] {
+        std::fs::copy(scenario(from), dir.join(to)).unwrap();
+    }
+    let spec = format!(
+        "{{\n  \"kind\": \"flutter_map\",\n  \"structure\": \"{}\",\n  \"model\": \"{}\",\n  \
+         \"speeds\": [2.0, 12.0],\n  \"grid\": {{\"mu\": [20.0, 40.0]}}\n}}\n",
+        scenario("plate-rig.structure.toml"),
+        scenario("plate-truth.model.toml")
+    );
+    std::fs::write(dir.join("spec.json"), spec).unwrap();
+    for i in 0..2 {
+        let (code, err) = run(
+            dir,
+            &[
+                s("sweep"),
+                s("spec.json"),
+                s("--shard"),
+                format!("{i}/2"),
+                s("--out"),
+                format!("p{i}.json"),
+            ],
+        );
+        assert_eq!(code, Some(0), "{err}");
+    }
+    let case = std::fs::read_dir(dir.join("ds/cases"))
+        .unwrap()
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .min()
+        .unwrap();
+    let v = |a: &[&str]| a.iter().map(|x| x.to_string()).collect::<Vec<_>>();
+    let flutter = |m: &str| {
+        v(&[
+            "flutter",
+            "--structure",
+            "s.toml",
+            "--model",
+            m,
+            "--speeds",
+            "2:12:11",
+            "--out",
+            "o",
+        ])
+    };
+    let (bs, bm) = (
+        scenario("bristol-spring1.structure.toml"),
+        scenario("bristol-spring1.model.toml"),
+    );
+    let mut out = vec![
+        (s("ds/manifest.toml"), v(&["identify", "ds", "--out", "o"])),
+        (
+            format!("ds/cases/{case}"),
+            v(&["identify", "ds", "--out", "o"]),
+        ),
+        (s("s.toml"), flutter("m.toml")),
+        (s("m.toml"), flutter("m.toml")),
+        (s("q/identification.json"), flutter("q/identification.json")),
+        (s("study.toml"), v(&["run", "study.toml", "--out", "o"])),
+        (
+            s("spec.json"),
+            v(&["sweep", "spec.json", "--out", "o.json"]),
+        ),
+        (s("p0.json"), v(&["merge", "o.json", "p0.json", "p1.json"])),
+        (
+            s("lco.csv"),
+            v(&[
+                "branch",
+                "--structure",
+                &bs,
+                "--model",
+                &bm,
+                "--speeds",
+                "15:25",
+                "--measured",
+                "lco.csv",
+                "--out",
+                "o",
+            ]),
+        ),
+    ];
+    for f in [
+        "study.toml",
+        "identification.json",
+        "cases.json",
+        "flutter.json",
+        "lco.json",
+        "series/D-U10-A6.json",
+    ] {
+        out.push((format!("q/{f}"), v(&["plot", "q"])));
+    }
+    out
+}
+
+/// The byte-level faults of one file: (label, new content or `None` for a path fault).
+fn byte_mutations(b: &[u8], rng: &mut Rng, random: usize) -> Vec<(String, Option<Vec<u8>>)> {
+    let mut out: Vec<(String, Option<Vec<u8>>)> = vec![
+        ("missing".into(), None),
+        ("a folder".into(), None),
+        ("/dev/zero".into(), None),
+        ("empty".into(), Some(Vec::new())),
+        ("cut in half".into(), Some(b[..b.len() / 2].to_vec())),
+    ];
+    let at = |rng: &mut Rng| rng.below(b.len() as u64) as usize;
+    let insert = |i: usize, x: &[u8]| [&b[..i], x, &b[i..]].concat();
+    let i = at(rng);
+    out.push((format!("0xFF at byte {i}"), Some(insert(i, b"\xff"))));
+    let i = at(rng);
+    out.push((format!("NUL at byte {i}"), Some(insert(i, b"\0"))));
+    out.push(("BOM".into(), Some(insert(0, b"\xef\xbb\xbf"))));
+    out.push((
+        "CRLF".into(),
+        Some(
+            String::from_utf8_lossy(b)
+                .replace('\n', "\r\n")
+                .into_bytes(),
+        ),
+    ));
+    // a control character escaped inside the first string value (valid TOML and JSON)
+    if let Some(q) = b
+        .windows(3)
+        .position(|w| w == b"= \"" || w == b": \"")
+        .map(|p| p + 3)
+    {
+        out.push(("\\u0001 in a string".into(), Some(insert(q, b"\\u0001"))));
+    }
+    let lines: Vec<&[u8]> = b.split(|c| *c == b'\n').collect();
+    for k in 0..random {
+        let mut v = b.to_vec();
+        let label = match rng.below(4) {
+            0 => {
+                let i = at(rng);
+                let x = rng.below(256) as u8;
+                v[i] = x;
+                format!("random {k}: byte {i} = {x:#04x}")
+            }
+            1 => {
+                let i = at(rng);
+                let x = rng.below(256) as u8;
+                v.insert(i, x);
+                format!("random {k}: {x:#04x} inserted at byte {i}")
+            }
+            2 => {
+                let i = at(rng);
+                let n = 1 + rng.below(16) as usize;
+                v.drain(i..(i + n).min(v.len()));
+                format!("random {k}: {n} bytes deleted at byte {i}")
+            }
+            _ => {
+                let l = rng.below(lines.len() as u64) as usize;
+                let mut w: Vec<&[u8]> = lines.clone();
+                w.insert(l, lines[l]);
+                v = w.join(&b'\n');
+                format!("random {k}: line {} repeated", l + 1)
+            }
+        };
+        out.push((label, Some(v)));
+    }
+    out
+}
+
+/// What the byte-level family found.
+#[derive(Default)]
+struct ByteTally {
+    runs: usize,
+    accepted: usize,
+    refused: usize,
+    named: usize,
+    /// Refusals of `plot` naming the folder, figure and field (not the file).
+    named_folder: usize,
+    unnamed: Vec<String>,
+    /// Refusals with another code than 2.
+    not_2: Vec<String>,
+    slowest: f64,
+    /// Peak resident memory \[KB\] and the run that reached it.
+    peak_kb: (u64, String),
+}
+
+/// Runs with `/usr/bin/time -f %M` when it is there: (exit code, stderr, seconds, peak KB).
+fn run_measured(dir: &Path, args: &[String]) -> (Option<i32>, String, f64, u64) {
+    let time = Path::new("/usr/bin/time");
+    let mem = dir.join(".peak-kb");
+    let t = Instant::now();
+    let child = if time.exists() {
+        Command::new(time)
+            .current_dir(dir)
+            .args(["-f", "%M", "-o"])
+            .arg(&mem)
+            .arg(BIN)
+            .args(args)
+            .arg("--quiet")
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap()
+    } else {
+        spawn(dir, args)
+    };
+    let (code, err) = finish(child, &args.join(" "));
+    let secs = t.elapsed().as_secs_f64();
+    let kb = std::fs::read_to_string(&mem)
+        .ok()
+        .and_then(|t| t.lines().last()?.trim().parse().ok())
+        .unwrap_or(0);
+    let _ = std::fs::remove_file(&mem);
+    // `time` reports a child's signal as "Command terminated by signal N" and exits 128+N
+    let code = if err.contains("Command terminated by signal") {
+        None
+    } else {
+        code
+    };
+    (code, err, secs, kb)
+}
+
+fn byte_campaign(every: usize, random: usize, seed: u64) -> ByteTally {
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    let readers = byte_readers(dir);
+    // what `plot` rewrites is its output, not an input
+    let inputs = |dir: &Path| {
+        let mut m = snapshot(dir);
+        m.retain(|k, _| {
+            !(k.starts_with("q/figures")
+                || k == "q/report.html"
+                || k.starts_with("q/.aeroform")
+                || k.starts_with(".peak"))
+        });
+        m
+    };
+    let before = inputs(dir);
+    let mut rng = Rng(seed);
+    let mut t = ByteTally::default();
+    let mut n = 0usize;
+    let offset = rng.below(every as u64) as usize;
+    for (file, args) in &readers {
+        let p = dir.join(file);
+        let clean = std::fs::read(&p).unwrap();
+        let name = file.rsplit('/').next().unwrap().to_string();
+        for (label, content) in byte_mutations(&clean, &mut rng, random) {
+            n += 1;
+            if !(n + offset).is_multiple_of(every) {
+                continue;
+            }
+            std::fs::remove_file(&p).unwrap();
+            match (&content, label.as_str()) {
+                (Some(c), _) => std::fs::write(&p, c).unwrap(),
+                (None, "a folder") => std::fs::create_dir(&p).unwrap(),
+                (None, "/dev/zero") => std::os::unix::fs::symlink("/dev/zero", &p).unwrap(),
+                _ => {}
+            }
+            let (code, err, secs, kb) = run_measured(dir, args);
+            let _ = std::fs::remove_dir(&p);
+            let _ = std::fs::remove_file(&p);
+            std::fs::write(&p, &clean).unwrap();
+            let what = format!("{file} {label} ({})", args[0]);
+            t.runs += 1;
+            t.slowest = t.slowest.max(secs);
+            if kb > t.peak_kb.0 {
+                t.peak_kb = (kb, what.clone());
+            }
+            assert!(secs < 60.0, "{what}: {secs:.1} s (a hang)");
+            assert!(
+                matches!(code, Some(0..=2)),
+                "{what}: exit {code:?} (panic 101, abort 134, or a signal): {err}"
+            );
+            assert!(!err.contains("panicked"), "{what}: {err}");
+            assert!(!err.contains("aeroform-staging"), "{what}: {err}");
+            let out = if args[0] == "sweep" || args[0] == "merge" {
+                dir.join("o.json")
+            } else if args[0] == "plot" {
+                dir.join("q")
+            } else {
+                dir.join("o")
+            };
+            if code == Some(0) {
+                t.accepted += 1;
+                if out.is_dir() {
+                    assert_complete(&out, &what);
+                } else {
+                    assert!(out.exists(), "{what}: accepted without a result");
+                    assert_complete(&out, &what);
+                }
+            } else {
+                t.refused += 1;
+                if code != Some(2) {
+                    t.not_2.push(format!("{code:?} {what}: {}", err.trim()));
+                }
+                if args[0] != "plot" {
+                    assert!(
+                        !out.exists(),
+                        "{what}: a refused run left {}",
+                        out.display()
+                    );
+                }
+                if err.contains(&name) {
+                    t.named += 1;
+                } else if args[0] == "plot" && err.contains("q: the result files do not fit") {
+                    // arrays of one figure that do not pair up, found when it is drawn: the
+                    // folder `plot` reads, the figure and the field are named
+                    t.named_folder += 1;
+                } else {
+                    t.unnamed.push(format!("{what}: {}", err.trim()));
+                }
+            }
+            let _ = std::fs::remove_dir_all(dir.join("o"));
+            let _ = std::fs::remove_file(dir.join("o.json"));
+            let left: Vec<String> = leftovers(dir, &[])
+                .into_iter()
+                .filter(|n| n.starts_with('.'))
+                .collect();
+            assert!(left.is_empty(), "{what}: left {left:?}");
+        }
+    }
+    let after = inputs(dir);
+    let changed: Vec<&String> = before
+        .keys()
+        .filter(|k| after.get(*k) != before.get(*k))
+        .collect();
+    assert!(changed.is_empty(), "inputs changed: {changed:?}");
+    t
+}
+
+fn byte_report(t: &ByteTally) {
+    println!(
+        "bytes: {} runs, {} accepted (complete results), {} refused, {} naming the file, {} \
+         the folder, figure and field; slowest {:.1} s; peak memory {} KB ({})",
+        t.runs, t.accepted, t.refused, t.named, t.named_folder, t.slowest, t.peak_kb.0, t.peak_kb.1
+    );
+    for u in &t.unnamed {
+        println!("  not named: {u}");
+    }
+    for u in &t.not_2 {
+        println!("  exit {u}");
+    }
+}
+
+/// CI form: a seeded sample of one in twenty-five byte-level faults.
+#[test]
+fn byte_faults_of_every_reader_are_refused_with_exit_2_sampled() {
+    let t = byte_campaign(25, 24, 39);
+    byte_report(&t);
+    assert!(t.runs >= 15, "{} runs", t.runs);
+    assert!(t.not_2.is_empty(), "refusals exiting other than 2");
+    assert!(t.unnamed.is_empty(), "refusals not naming the file");
+    assert!(t.peak_kb.0 <= 1 << 20, "peak memory above 1 GB");
+}
+
+/// Long form: every byte-level fault of every reader (≥ 500).
+#[test]
+#[ignore = "≈ 3–5 min; run with --ignored --nocapture"]
+fn byte_faults_of_every_reader_are_refused_with_exit_2() {
+    let t = byte_campaign(1, 24, 39);
+    byte_report(&t);
+    assert!(t.runs >= 500, "{} runs", t.runs);
+    assert!(t.not_2.is_empty(), "refusals exiting other than 2");
+    assert!(t.unnamed.is_empty(), "refusals not naming the file");
+    assert!(t.peak_kb.0 <= 1 << 20, "peak memory above 1 GB");
 }
 
 /// One writing command: its output (a folder, or a file for `sweep`/`merge`) and the two

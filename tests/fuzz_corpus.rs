@@ -118,3 +118,18 @@ fn study_harness_survives_every_number_replaced_by_an_extreme_value() {
     }
     assert!(n > 500, "only {n} mutations");
 }
+
+#[test]
+fn aero_files_harness_runs_on_its_corpus() {
+    run("aero_files", aeroform::fuzz_harness::aero_files);
+}
+
+#[test]
+fn part_harness_runs_on_its_corpus() {
+    run("part", aeroform::fuzz_harness::part);
+}
+
+#[test]
+fn results_harness_runs_on_its_corpus() {
+    run("results", aeroform::fuzz_harness::results);
+}

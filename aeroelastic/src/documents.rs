@@ -261,9 +261,15 @@ fn parse_document<T: DeserializeOwned>(text: &str, source: &str, expected: &str)
 
 /// Reads the file `path` as a document of type `T` tagged `expected`.
 fn read_document<T: DeserializeOwned>(path: &Path, expected: &str) -> Result<T> {
-    let text = identify::io::read_text(path).map_err(|e| crate::Error::Io {
-        path: path.display().to_string(),
-        message: e.to_string(),
+    let text = identify::io::read_text(path).map_err(|e| {
+        let (path, message) = (path.display().to_string(), e.to_string());
+        // refused by the reader (missing, not a regular file, too large, not UTF-8): an
+        // input error, as a document that does not parse
+        if identify::io::is_input_error(&e) {
+            crate::Error::Document { path, message }
+        } else {
+            crate::Error::Io { path, message }
+        }
     })?;
     parse_document(&text, &path.display().to_string(), expected)
 }

@@ -134,12 +134,12 @@ fn key_line(text: &str, key: &str) -> usize {
 /// at most the limits table's `MAX_TEXT_FILE_BYTES`, UTF-8 errors by line and byte). A
 /// refusal of the reader is an input error ([`Error::Toml`] naming the file).
 fn read_text(path: &Path) -> Result<String> {
-    identify::io::read_text(path).map_err(|e| match e.kind() {
-        std::io::ErrorKind::InvalidInput | std::io::ErrorKind::InvalidData => Error::Toml {
+    identify::io::read_text(path).map_err(|e| match identify::io::is_input_error(&e) {
+        true => Error::Toml {
             source_name: path.display().to_string(),
             message: e.to_string(),
         },
-        _ => Error::Io {
+        false => Error::Io {
             path: path.display().to_string(),
             message: e.to_string(),
         },
@@ -537,6 +537,35 @@ fn is_lag_law(text: &str) -> bool {
         .is_some_and(|f| f.starts_with("aeroform-lag-law"))
 }
 
+/// An error of a file that the key `key` of the model file `model` names, with the model
+/// file and the key in front: a missing or malformed law file is refused where it is named
+/// (issue 39, row 7: every refusal carries its location).
+fn by_key(model: &str, key: &str, e: Error) -> Error {
+    let at = |what: &str| format!("{model}: key `{key}`: {what}");
+    match e {
+        Error::Toml {
+            source_name,
+            message,
+        } => Error::Toml {
+            source_name: at(&source_name),
+            message,
+        },
+        Error::Io { path, message } => Error::Io {
+            path: at(&path),
+            message,
+        },
+        Error::Document { path, message } => Error::Document {
+            path: at(&path),
+            message,
+        },
+        Error::Identify { context, source } => Error::Identify {
+            context: at(&context),
+            source,
+        },
+        other => other,
+    }
+}
+
 /// Names the file in a lag-law error.
 fn lag_in(path: &Path, e: Error) -> Error {
     match e {
@@ -725,7 +754,7 @@ impl LoadedModel {
             ),
             ModelKind::Lag => {
                 let file = base.join(f.file.as_ref().ok_or_else(|| need("file"))?);
-                let doc = read_lag_law(&file)?;
+                let doc = read_lag_law(&file).map_err(|e| by_key(source, "file", e))?;
                 let mut m = LagAero::new(doc.law, f.chord.unwrap_or(doc.chord), f.elastic_axis)
                     .map_err(wrap)?;
                 if let Some(a0) = f.mean_angle {
@@ -739,7 +768,7 @@ impl LoadedModel {
                 o.groups = f.groups.clone();
                 o.missing = f.missing.unwrap_or_default();
                 o.rfa_lags = lags;
-                let law = IdentifiedLaw::read(&file, &o)?;
+                let law = IdentifiedLaw::read(&file, &o).map_err(|e| by_key(source, "file", e))?;
                 (law.table().clone() as Arc<dyn AeroModel>, Some(law))
             }
         };

@@ -154,16 +154,15 @@ impl SweepSpec {
     /// # Errors
     /// [`Error::Io`] when the file cannot be read; otherwise as [`SweepSpec::from_json`].
     pub fn read(path: &Path) -> Result<Self> {
-        let text = identify::io::read_text(path).map_err(|e| match e.kind() {
-            // refused by the reader (not a regular file, too large, not UTF-8): an input error
-            std::io::ErrorKind::InvalidInput | std::io::ErrorKind::InvalidData => {
-                sweep_err(&path.display().to_string(), e.to_string())
-            }
-            _ => Error::Io {
-                context: format!("reading {}", path.display()),
-                message: e.to_string(),
-            },
-        })?;
+        let text =
+            identify::io::read_text(path).map_err(|e| match identify::io::is_input_error(&e) {
+                // refused by the reader (missing, not a regular file, too large, not UTF-8): an input error
+                true => sweep_err(&path.display().to_string(), e.to_string()),
+                false => Error::Io {
+                    context: format!("reading {}", path.display()),
+                    message: e.to_string(),
+                },
+            })?;
         Self::from_json(&text, &path.display().to_string())
     }
 

@@ -73,6 +73,131 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     Ok(())
 }
 
+/// An input file refused by its reader: missing, unreadable, not a regular file, beyond its
+/// size cap, or not UTF-8. It travels inside the [`std::io::Error`] the readers return
+/// (its kind kept: `NotFound`, `PermissionDenied`, `InvalidInput`, `InvalidData`), so a
+/// caller of any crate can tell an input error (the command line's exit code 2) from a
+/// failure of the machine by the type, whatever context wraps it (issue 39, row 7).
+#[derive(Debug)]
+pub struct InputFileError {
+    /// What is wrong, with the line and byte where there is one.
+    pub message: String,
+}
+
+impl std::fmt::Display for InputFileError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.message)
+    }
+}
+
+impl std::error::Error for InputFileError {}
+
+/// A [`std::io::Error`] of `kind` carrying an [`InputFileError`].
+pub fn input_error(kind: std::io::ErrorKind, message: impl Into<String>) -> std::io::Error {
+    std::io::Error::new(
+        kind,
+        InputFileError {
+            message: message.into(),
+        },
+    )
+}
+
+/// True when `e` is an input file refused by its reader ([`InputFileError`] inside).
+pub fn is_input_error(e: &std::io::Error) -> bool {
+    e.get_ref().is_some_and(|i| i.is::<InputFileError>())
+}
+
+/// An error opening or reading an input: a missing file, a permission refused, a folder
+/// where a file belongs are input errors ([`input_error`], the kind kept); anything else
+/// (a failing disk) is passed on as it is.
+fn opening_error(e: std::io::Error) -> std::io::Error {
+    use std::io::ErrorKind as K;
+    let input = matches!(
+        e.kind(),
+        K::NotFound | K::PermissionDenied | K::InvalidInput | K::InvalidData
+    ) || matches!(e.raw_os_error(), Some(20 | 21 | 36 | 40)); // ENOTDIR EISDIR ENAMETOOLONG ELOOP
+    if input && !is_input_error(&e) {
+        input_error(e.kind(), e.to_string())
+    } else {
+        e
+    }
+}
+
+/// The position of an invalid UTF-8 sequence in a text file: 1-based line, 1-based byte
+/// within that line, and 0-based byte offset from the start of the file.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Utf8Position {
+    /// 1-based line.
+    pub line: usize,
+    /// 1-based byte within the line.
+    pub byte: usize,
+    /// 0-based byte offset from the start of the file.
+    pub offset: u64,
+}
+
+impl std::fmt::Display for Utf8Position {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "line {}, byte {} (offset {} in the file): not valid UTF-8",
+            self.line, self.byte, self.offset
+        )
+    }
+}
+
+/// `bytes` as text, or where its first invalid UTF-8 sequence is: the one UTF-8 check of
+/// every reader of text inputs (whole files through [`read_text`], case CSVs line by line).
+/// `line` and `offset` are the line number (1-based) and file offset (0-based) of the first
+/// byte of `bytes`.
+///
+/// # Errors
+/// The [`Utf8Position`] of the first invalid sequence.
+pub fn utf8_text(
+    bytes: &[u8],
+    line: usize,
+    offset: u64,
+) -> std::result::Result<&str, Utf8Position> {
+    std::str::from_utf8(bytes).map_err(|e| {
+        let valid = &bytes[..e.valid_up_to()];
+        let newlines = valid.iter().filter(|&&b| b == b'\n').count();
+        let col = valid.len() - valid.iter().rposition(|&b| b == b'\n').map_or(0, |p| p + 1);
+        Utf8Position {
+            line: line + newlines,
+            byte: col + 1,
+            offset: offset + valid.len() as u64,
+        }
+    })
+}
+
+/// The byte-order mark of UTF-8, `EF BB BF`: accepted at the start of every text input
+/// (TOML, CSV, JSON, measured tables) and removed by the one reader ([`read_text`], and the
+/// case-CSV reader), never part of the first key or column name (docs/DATA_FORMAT.md).
+pub const UTF8_BOM: &str = "\u{feff}";
+
+/// Characters a label or other user string may not hold: every control character but the
+/// tab, line feed and carriage return (C0, DEL, C1) and the non-characters U+FFFE and
+/// U+FFFF. They are not allowed in XML (the SVG figures and the HTML reports fail at the
+/// figure stage, issue 39 row 7) or move the terminal; readers refuse them when the file is
+/// read, naming the key. Returns the first such character and its 1-based position.
+pub fn disallowed_char(s: &str) -> Option<(usize, char)> {
+    s.chars().enumerate().find_map(|(i, c)| {
+        let bad = (c.is_control() && !matches!(c, '\t' | '\n' | '\r'))
+            || c == '\u{fffe}'
+            || c == '\u{ffff}';
+        bad.then_some((i + 1, c))
+    })
+}
+
+/// The message for a [`disallowed_char`] finding: the character's code and position.
+pub fn disallowed_char_message(pos: usize, c: char) -> String {
+    format!(
+        "character {pos} is U+{:04X}, a control character: labels and other texts that reach \
+         the figures and reports may not hold control characters (other than tab and line \
+         breaks)",
+        c as u32
+    )
+}
+
 /// Opens `path` for reading only when it is a regular file (after following symbolic
 /// links): a FIFO, a device (`/dev/zero`), a socket or a folder is refused without blocking
 /// (the open is non-blocking, the type is read from the open file itself), so a hostile data
@@ -87,7 +212,8 @@ pub fn open_regular(path: &Path) -> Result<std::fs::File> {
 /// [`open_regular`] with a plain I/O error, for the readers of the other crates.
 ///
 /// # Errors
-/// The file cannot be opened, or is not a regular file (the message says what it is).
+/// The file cannot be opened, or is not a regular file (the message says what it is);
+/// refusals of the input are [`InputFileError`]s ([`is_input_error`]).
 pub fn open_regular_io(path: &Path) -> std::io::Result<std::fs::File> {
     let mut o = std::fs::OpenOptions::new();
     o.read(true);
@@ -97,7 +223,7 @@ pub fn open_regular_io(path: &Path) -> std::io::Result<std::fs::File> {
         // O_NONBLOCK: opening a FIFO without a writer returns at once
         o.custom_flags(0o4000);
     }
-    let f = o.open(path)?;
+    let f = o.open(path).map_err(opening_error)?;
     let m = f.metadata()?;
     if m.is_file() {
         return Ok(f);
@@ -124,7 +250,7 @@ pub fn open_regular_io(path: &Path) -> std::io::Result<std::fs::File> {
             "not a regular file"
         }
     };
-    Err(std::io::Error::new(
+    Err(input_error(
         std::io::ErrorKind::InvalidInput,
         format!("is {what}; only regular files are read"),
     ))
@@ -140,16 +266,18 @@ pub fn read_text_capped(path: &Path, max_bytes: u64) -> Result<String> {
 }
 
 /// [`read_text_capped`] with a plain I/O error, for the readers of the other crates; the cap
-/// is [`crate::limits::MAX_TEXT_FILE_BYTES`] unless a caller has its own.
+/// is [`crate::limits::MAX_TEXT_FILE_BYTES`] unless a caller has its own. A leading UTF-8
+/// byte-order mark is removed ([`UTF8_BOM`]).
 ///
 /// # Errors
 /// As [`open_regular_io`]; the file is larger than `max_bytes` (its size and the cap named);
-/// it is not UTF-8 (line and byte named).
+/// it is not UTF-8 (line, byte and offset named, [`utf8_text`]). Every refusal of the input
+/// is an [`InputFileError`].
 pub fn read_text_capped_io(path: &Path, max_bytes: u64) -> std::io::Result<String> {
     use std::io::Read;
     let f = open_regular_io(path)?;
     let too_big = |n: u64| {
-        std::io::Error::new(
+        input_error(
             std::io::ErrorKind::InvalidData,
             format!(
                 "{n} bytes or more; files of this kind are read up to {max_bytes} bytes \
@@ -166,14 +294,18 @@ pub fn read_text_capped_io(path: &Path, max_bytes: u64) -> std::io::Result<Strin
     if bytes.len() as u64 > max_bytes {
         return Err(too_big(bytes.len() as u64));
     }
+    let start = if bytes.starts_with(UTF8_BOM.as_bytes()) {
+        UTF8_BOM.len()
+    } else {
+        0
+    };
+    bytes.drain(..start);
     String::from_utf8(bytes).map_err(|e| {
-        let valid = &e.as_bytes()[..e.utf8_error().valid_up_to()];
-        let line = 1 + valid.iter().filter(|&&b| b == b'\n').count();
-        let col = valid.len() - valid.iter().rposition(|&b| b == b'\n').map_or(0, |p| p + 1);
-        std::io::Error::new(
-            std::io::ErrorKind::InvalidData,
-            format!("line {line}, byte {}: not valid UTF-8", col + 1),
-        )
+        let message = match utf8_text(e.as_bytes(), 1, start as u64) {
+            Err(p) => p.to_string(),
+            Ok(_) => "not valid UTF-8".to_string(),
+        };
+        input_error(std::io::ErrorKind::InvalidData, message)
     })
 }
 
@@ -261,6 +393,36 @@ pub fn check_complete_folder(dir: &Path) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn text_inputs_drop_a_bom_and_name_the_line_byte_and_offset_of_bad_utf8() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("a.json");
+        std::fs::write(&p, b"\xef\xbb\xbf{\"a\": 1}\n").unwrap();
+        assert_eq!(read_text(&p).unwrap(), "{\"a\": 1}\n");
+        std::fs::write(&p, b"ab\ncd\n\xef\xbb\xbfx\xffy\n").unwrap();
+        let e = read_text(&p).unwrap_err();
+        assert!(is_input_error(&e));
+        assert_eq!(
+            e.to_string(),
+            "line 3, byte 5 (offset 10 in the file): not valid UTF-8"
+        );
+        let e = read_text(&dir.path().join("missing.toml")).unwrap_err();
+        assert!(is_input_error(&e) && e.kind() == std::io::ErrorKind::NotFound);
+        let e = read_text(dir.path()).unwrap_err();
+        assert!(is_input_error(&e), "{e}");
+        assert!(!is_input_error(&std::io::Error::other("disk")));
+    }
+
+    #[test]
+    fn control_characters_are_disallowed_in_labels() {
+        assert_eq!(disallowed_char("Theodorsen–Jones (p)\tok\n"), None);
+        assert_eq!(disallowed_char("a\u{1}b"), Some((2, '\u{1}')));
+        assert_eq!(disallowed_char("ab\u{1b}[2J"), Some((3, '\u{1b}')));
+        assert_eq!(disallowed_char("\u{7f}"), Some((1, '\u{7f}')));
+        assert_eq!(disallowed_char("\u{9b}"), Some((1, '\u{9b}')));
+        assert_eq!(disallowed_char("x\u{ffff}"), Some((2, '\u{ffff}')));
+    }
 
     #[test]
     fn work_folder_names_are_recognised() {

@@ -104,6 +104,21 @@ pub enum Error {
     },
 }
 
+impl Error {
+    /// True when the figure's data are at fault ([`Error::NoData`],
+    /// [`Error::LengthMismatch`], [`Error::InvalidInput`], also inside [`Error::Context`]):
+    /// when the data come from result files (`aeroform plot`), those files are.
+    pub fn is_data(&self) -> bool {
+        match self {
+            Error::NoData { .. } | Error::LengthMismatch { .. } | Error::InvalidInput { .. } => {
+                true
+            }
+            Error::Context { source, .. } => source.is_data(),
+            _ => false,
+        }
+    }
+}
+
 /// Puts what was being done in front of an error ([`Error::Context`]).
 pub(crate) trait Context<T> {
     /// Wraps the error with the context `f()`, computed only on error.

@@ -323,6 +323,46 @@ fn round_trip_table(report: &mut Report, out: &Path, reduced: bool) -> Result<()
     Ok(())
 }
 
+/// Refuses a case series whose arrays do not pair up (an edited or damaged result file that
+/// `plot` reads), naming the file and the field, before a figure is drawn from it.
+fn check_series(x: &CaseSeries, path: &Path) -> Result<()> {
+    let (n, m) = (x.t.len(), x.freq.len());
+    let fields = [
+        ("alpha_deg", x.alpha_deg.len(), "t", n),
+        ("h_mm", x.h_mm.len(), "t", n),
+        ("c_lift", x.c_lift.len(), "t", n),
+        ("c_lift_model", x.c_lift_model.len(), "t", n),
+        ("c_moment", x.c_moment.len(), "t", n),
+        ("c_moment_model", x.c_moment_model.len(), "t", n),
+        ("lift_spectrum", x.lift_spectrum.len(), "freq", m),
+        (
+            "lift_model_spectrum",
+            x.lift_model_spectrum.len(),
+            "freq",
+            m,
+        ),
+        ("moment_spectrum", x.moment_spectrum.len(), "freq", m),
+        (
+            "moment_model_spectrum",
+            x.moment_model_spectrum.len(),
+            "freq",
+            m,
+        ),
+    ];
+    for (field, len, of, want) in fields {
+        if len != want {
+            return Err(Error::Io {
+                context: format!("reading {}", path.display()),
+                source: identify::io::input_error(
+                    std::io::ErrorKind::InvalidData,
+                    format!("field `{field}`: {len} values where `{of}` has {want}"),
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
 /// Draws every figure of the study from the results in `out`, writes `figures.json` and
 /// `report.html`; returns the figure list. `version` is the text of the report's
 /// `version` row (the binary's `aeroform <version> (<git describe>)`).
@@ -331,6 +371,22 @@ fn round_trip_table(report: &mut Report, out: &Path, reduced: bool) -> Result<()
 /// A missing or malformed result file ([`Error::Study`], naming it), a figure that cannot
 /// be drawn ([`Error::Context`] naming the figure), a write failure.
 pub fn render_all(study: &Study, out: &Path, version: &str) -> Result<Vec<FigureEntry>> {
+    render_all_from(study, out, out, version)
+}
+
+/// [`render_all`] reading the result files from `src` and writing the figures,
+/// `figures.json` and the report into `out` (`aeroform plot` redraws a finished folder in a
+/// staging copy: a refusal of a result file names the folder the user gave, not the staging
+/// copy that is gone when the message is read, issue 39 row 7).
+///
+/// # Errors
+/// As [`render_all`].
+pub fn render_all_from(
+    study: &Study,
+    src: &Path,
+    out: &Path,
+    version: &str,
+) -> Result<Vec<FigureEntry>> {
     let dir = out.join(names::FIGURES);
     identify::io::create_dir_below(out, Path::new(names::FIGURES))?;
     let mut cv = Canvas {
@@ -355,7 +411,7 @@ pub fn render_all(study: &Study, out: &Path, version: &str) -> Result<Vec<Figure
     ];
 
     // ---- identification
-    let id_path = out.join(names::IDENTIFICATION);
+    let id_path = src.join(names::IDENTIFICATION);
     let id: Option<Identification> = if s.data.is_some() {
         Some(
             Identification::read(&id_path)
@@ -375,10 +431,10 @@ pub fn render_all(study: &Study, out: &Path, version: &str) -> Result<Vec<Figure
     report.key_values("Study", &summary);
 
     if let Some(id) = &id {
-        let metas: Vec<CaseMeta> = read_json(&out.join(names::CASES))?;
+        let metas: Vec<CaseMeta> = read_json(&src.join(names::CASES))?;
         // series figures
         let mut series: Vec<CaseSeries> = vec![];
-        let sdir = out.join(names::SERIES);
+        let sdir = src.join(names::SERIES);
         let wanted: Vec<String> = if s.outputs.series_cases.is_empty() {
             let mut v = vec![metas[0].id.clone()];
             if metas.len() > 1 {
@@ -389,7 +445,10 @@ pub fn render_all(study: &Study, out: &Path, version: &str) -> Result<Vec<Figure
             s.outputs.series_cases.clone()
         };
         for w in &wanted {
-            series.push(read_json(&sdir.join(format!("{w}.json")))?);
+            let path = sdir.join(format!("{w}.json"));
+            let x: CaseSeries = read_json(&path)?;
+            check_series(&x, &path)?;
+            series.push(x);
         }
         if cv.wants("time_series") {
             for x in &series {
@@ -421,10 +480,10 @@ pub fn render_all(study: &Study, out: &Path, version: &str) -> Result<Vec<Figure
                 }
             }
         }
-        let paper: Option<PaperFigures> = out
+        let paper: Option<PaperFigures> = src
             .join(names::PAPER_FIGURES)
             .exists()
-            .then(|| read_json(&out.join(names::PAPER_FIGURES)))
+            .then(|| read_json(&src.join(names::PAPER_FIGURES)))
             .transpose()?;
         let paper = paper.unwrap_or_default();
         if cv.wants("force_decomposition") {
@@ -601,11 +660,11 @@ pub fn render_all(study: &Study, out: &Path, version: &str) -> Result<Vec<Figure
         for d in &paper.delta_fits {
             table_iii(&mut report, d);
         }
-        if out.join(names::TABLE_IV).exists() {
+        if src.join(names::TABLE_IV).exists() {
             csv_file_table(
                 &mut report,
                 "Table IV: identified vs true coefficients over the noise realisations",
-                &out.join(names::TABLE_IV),
+                &src.join(names::TABLE_IV),
                 false,
             );
         }
@@ -616,7 +675,7 @@ pub fn render_all(study: &Study, out: &Path, version: &str) -> Result<Vec<Figure
                     "Eq. 19 flutter derivatives per case (N* and the other metrics in {})",
                     names::DERIVATIVES
                 ),
-                &out.join(names::DERIVATIVES),
+                &src.join(names::DERIVATIVES),
                 Some(
                     &["case", "U_m_s", "amplitude_deg", "K_alpha", "K_h"]
                         .into_iter()
@@ -656,7 +715,7 @@ pub fn render_all(study: &Study, out: &Path, version: &str) -> Result<Vec<Figure
     let flutter_runs: Option<Vec<FlutterDoc>> = s
         .flutter
         .is_some()
-        .then(|| read_json(&out.join(names::FLUTTER)))
+        .then(|| read_json(&src.join(names::FLUTTER)))
         .transpose()?;
     if let (Some(f), Some(runs)) = (&s.flutter, &flutter_runs) {
         if cv.wants("vg") {
@@ -741,7 +800,7 @@ pub fn render_all(study: &Study, out: &Path, version: &str) -> Result<Vec<Figure
 
     // ---- LCO
     if let Some(l) = &s.lco {
-        let stage: LcoDoc = read_json(&out.join(names::LCO))?;
+        let stage: LcoDoc = read_json(&src.join(names::LCO))?;
         let empty = aeroelastic::lco::Hysteresis {
             up: vec![],
             down: vec![],
@@ -816,17 +875,17 @@ pub fn render_all(study: &Study, out: &Path, version: &str) -> Result<Vec<Figure
         csv_file_table(
             &mut report,
             "LCO runs",
-            &out.join(names::LCO_AMPLITUDES),
+            &src.join(names::LCO_AMPLITUDES),
             reduced,
         );
         if l.compare_truth {
-            round_trip_table(&mut report, out, reduced)?;
+            round_trip_table(&mut report, src, reduced)?;
         }
         if stage.ensemble.is_some() {
             csv_file_table(
                 &mut report,
                 "LCO amplitude intervals over the identification ensemble",
-                &out.join(names::LCO_INTERVALS),
+                &src.join(names::LCO_INTERVALS),
                 reduced,
             );
         }
@@ -836,7 +895,7 @@ pub fn render_all(study: &Study, out: &Path, version: &str) -> Result<Vec<Figure
 
     // ---- LCO branches by continuation
     if s.branch.is_some() {
-        branch_section(&mut cv, &mut report, out, s.lco.is_some())?;
+        branch_section(&mut cv, &mut report, src, s.lco.is_some())?;
     }
 
     // ---- settings

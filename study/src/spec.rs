@@ -642,6 +642,35 @@ impl std::fmt::Display for SpecError {
 
 impl std::error::Error for SpecError {}
 
+/// The dotted key (`flutter.run[1].label`) of the first string below `t` holding a character
+/// [`identify::io::disallowed_char`] refuses, with the message.
+fn first_bad_string(t: &toml::Table, prefix: &str) -> Option<(String, String)> {
+    fn walk(v: &toml::Value, key: &str) -> Option<(String, String)> {
+        match v {
+            toml::Value::String(s) => identify::io::disallowed_char(s).map(|(pos, c)| {
+                (
+                    key.to_string(),
+                    identify::io::disallowed_char_message(pos, c),
+                )
+            }),
+            toml::Value::Array(a) => a
+                .iter()
+                .enumerate()
+                .find_map(|(i, x)| walk(x, &format!("{key}[{i}]"))),
+            toml::Value::Table(t) => first_bad_string(t, key),
+            _ => None,
+        }
+    }
+    t.iter().find_map(|(k, v)| {
+        let key = if prefix.is_empty() {
+            k.clone()
+        } else {
+            format!("{prefix}.{k}")
+        };
+        walk(v, &key)
+    })
+}
+
 /// Line index of a text and its span tree, to name the line of a dotted key.
 struct Lines<'a> {
     starts: Vec<usize>,
@@ -738,6 +767,21 @@ impl Study {
                 message: msg,
             }
         })?;
+        // every string of the study may reach a figure (SVG), the report (HTML) or the
+        // terminal: a control character is refused here, by key and line, not at the figure
+        // stage (issue 39, row 7)
+        if let Some((key, message)) = text
+            .parse::<toml::Table>()
+            .ok()
+            .and_then(|t| first_bad_string(&t, ""))
+        {
+            return Err(SpecError {
+                path: display,
+                line: lines.line_of(&key),
+                key,
+                message,
+            });
+        }
         let study = Study {
             spec,
             text: text.to_string(),
@@ -1350,6 +1394,13 @@ impl Study {
                 return err(
                     &format!("outputs.series_cases[{i}]"),
                     format!("`{c}` is not a case id ([A-Za-z0-9._-]+)"),
+                );
+            }
+            // a repeated case drew its figures again (10× the time, issue 39 row 7)
+            if let Some(j) = s.outputs.series_cases[..i].iter().position(|x| x == c) {
+                return err(
+                    &format!("outputs.series_cases[{i}]"),
+                    format!("`{c}` is already entry {j} of the list; name each case once"),
                 );
             }
         }

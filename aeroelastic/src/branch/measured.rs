@@ -41,17 +41,18 @@ pub struct MeasuredAmplitude {
 /// the line and the column for a missing column, a bad or negative number, a row without
 /// any amplitude or an unknown branch name, or a table without data rows.
 pub fn read_measured_amplitudes(path: &std::path::Path) -> Result<Vec<MeasuredAmplitude>> {
-    let text = identify::io::read_text(path).map_err(|e| match e.kind() {
-        // refused by the reader (not a regular file, too large, not UTF-8): an input error
-        std::io::ErrorKind::InvalidInput | std::io::ErrorKind::InvalidData => Error::InvalidTable {
-            table: path.display().to_string(),
-            message: e.to_string(),
-        },
-        _ => Error::Io {
-            path: path.display().to_string(),
-            message: e.to_string(),
-        },
-    })?;
+    let text =
+        identify::io::read_text(path).map_err(|e| match identify::io::is_input_error(&e) {
+            // refused by the reader (missing, not a regular file, too large, not UTF-8): an input error
+            true => Error::InvalidTable {
+                table: path.display().to_string(),
+                message: e.to_string(),
+            },
+            false => Error::Io {
+                path: path.display().to_string(),
+                message: e.to_string(),
+            },
+        })?;
     parse_measured_amplitudes(&text, &path.display().to_string())
 }
 

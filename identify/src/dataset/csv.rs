@@ -113,18 +113,13 @@ fn parse_case_reader(
     forces_required: bool,
 ) -> Result<CaseTable> {
     let mut buf: Vec<u8> = Vec::with_capacity(256);
-    let not_utf8 = |line: usize, e: std::str::Utf8Error| {
-        csv_err(
-            path,
-            line,
-            "(row)",
-            format!("not valid UTF-8 (byte {} of the line)", e.valid_up_to() + 1),
-        )
-    };
+    let not_utf8 = |p: crate::io::Utf8Position| csv_err(path, p.line, "(row)", p.to_string());
     next_line(&mut r, &mut buf, path)?;
     let header_bytes = buf.len() as u64 + 1;
-    let header_owned = std::str::from_utf8(&buf)
-        .map_err(|e| not_utf8(1, e))?
+    // the file offset of the line in `buf` (every line before it ended in `\n`)
+    let mut line_start = 0u64;
+    let header_owned = crate::io::utf8_text(&buf, 1, 0)
+        .map_err(not_utf8)?
         .to_string();
     let header = header_owned
         .strip_prefix('\u{feff}')
@@ -178,9 +173,12 @@ fn parse_case_reader(
     let mut line_no = 1usize;
     let mut sized = false;
     let (mut data_bytes, mut data_rows) = (0u64, 0usize);
+    let mut last_len = buf.len() as u64;
     while next_line(&mut r, &mut buf, path)? {
         line_no += 1;
-        let line = std::str::from_utf8(&buf).map_err(|e| not_utf8(line_no, e))?;
+        line_start += last_len + 1;
+        last_len = buf.len() as u64;
+        let line = crate::io::utf8_text(&buf, line_no, line_start).map_err(not_utf8)?;
         let line = line.strip_suffix('\r').unwrap_or(line);
         if line.trim().is_empty() {
             blank_line.get_or_insert(line_no);
@@ -542,6 +540,8 @@ mod tests {
         let e = read_case_csv(&f, false).unwrap_err();
         assert!(matches!(&e, Error::Csv { line: 3, .. }), "{e:?}");
         assert!(msg(&e).contains("UTF-8"), "{e}");
+        // line 3 starts at offset 16; the bad byte is its third
+        assert!(msg(&e).contains("byte 3 (offset 18 in the file)"), "{e}");
         std::fs::write(&f, b"t,\xfeh,alpha\n").unwrap();
         let e = read_case_csv(&f, false).unwrap_err();
         assert!(matches!(&e, Error::Csv { line: 1, .. }), "{e:?}");

@@ -925,7 +925,12 @@ impl<'c, 'a> Node<'c, 'a> {
     fn opt_str(&self, key: &str) -> Result<Option<&'c str>> {
         match self.values.get(key) {
             None => Ok(None),
-            Some(toml::Value::String(s)) => Ok(Some(s.as_str())),
+            Some(toml::Value::String(s)) => match crate::io::disallowed_char(s) {
+                // every string of a manifest may reach a figure, a report or the terminal
+                // (issue 39, row 7): refused here, by line and key
+                Some((pos, c)) => Err(self.err(key, crate::io::disallowed_char_message(pos, c))),
+                None => Ok(Some(s.as_str())),
+            },
             Some(v) => Err(self.err(key, format!("expected a string, found {}", v.type_str()))),
         }
     }

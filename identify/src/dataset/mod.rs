@@ -312,11 +312,13 @@ pub fn declared_frequency_missing(x: &[f64], dt: f64, f: f64) -> Option<(f64, f6
 /// manifests built in code), and a path that resolves outside the folder through a
 /// symbolic link (a link as the file itself or as a folder on the way): both the folder and
 /// the file are canonicalised and the file must lie under the folder. Links that stay
-/// inside are accepted. A file that does not exist is left to the read, which reports it.
+/// inside are accepted. A file that does not exist is refused naming the manifest line and
+/// key.
 ///
 /// # Errors
 /// [`crate::Error::Manifest`] naming `dir/manifest.toml`, the line of the key, the field
-/// (`case[i].file` / `case[i].nowind_file`), the path and where it resolves;
+/// (`case[i].file` / `case[i].nowind_file`), the path and where it resolves, or that it does
+/// not exist;
 /// [`crate::Error::Io`] when the folder itself cannot be resolved.
 fn resolve_case_path(dir: &Path, case: &CaseSpec, key: &str, rel: &Path) -> Result<PathBuf> {
     let manifest_path = self::manifest_path(dir);
@@ -337,8 +339,26 @@ fn resolve_case_path(dir: &Path, case: &CaseSpec, key: &str, rel: &Path) -> Resu
         return Err(refuse(why.to_string()));
     }
     let joined = dir.join(rel);
-    let Ok(real) = std::fs::canonicalize(&joined) else {
-        return Ok(joined);
+    let real = match std::fs::canonicalize(&joined) {
+        Ok(r) => r,
+        // a missing case file is refused where it is named: manifest line and key (issue
+        // 39, row 7), not as a bare path
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            let text = std::fs::read_to_string(&manifest_path).unwrap_or_default();
+            let (field, line) = manifest::case_key_location(&text, &manifest_path, &case.id, key);
+            return Err(crate::Error::Manifest {
+                path: manifest_path.clone(),
+                line,
+                field,
+                message: format!(
+                    "path \"{}\": no such file (or a symbolic link to none) in the data set \
+                     folder {}",
+                    rel.display(),
+                    dir.display()
+                ),
+            });
+        }
+        Err(_) => return Ok(joined),
     };
     let root = std::fs::canonicalize(dir).map_err(|e| crate::Error::io(dir, e))?;
     if real.starts_with(&root) {

@@ -187,12 +187,19 @@ fn data_set_folder_reached_through_a_symlink_is_accepted() {
 
 #[cfg(unix)]
 #[test]
-fn dangling_symlink_is_an_io_error() {
+fn dangling_symlink_is_refused_by_manifest_line_and_key() {
     let tmp = tempfile::tempdir().unwrap();
     let (ds, outside) = layout(tmp.path());
     symlink(&outside.join("missing.csv"), &ds.join("x.csv"));
     write_manifest(&ds, &manifest("x.csv", None));
-    assert!(matches!(read_dataset(&ds).unwrap_err(), Error::Io { .. }));
+    // issue 39, row 7: a case file that does not exist is refused where it is named (it was
+    // a bare I/O error naming the path)
+    let e = read_dataset(&ds).unwrap_err();
+    assert!(
+        matches!(&e, Error::Manifest { field, line, .. } if field.ends_with(".file") && *line > 0),
+        "{e:?}"
+    );
+    assert!(e.to_string().contains("no such file"), "{e}");
 }
 
 #[cfg(unix)]
