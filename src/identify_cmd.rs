@@ -251,23 +251,9 @@ fn run_memoryless(args: &IdentifyArgs) -> anyhow::Result<Identification> {
         }
     }
 
-    // the files this command writes, checked against its input before it is read
     let path = args.out.join("identification.json");
-    let mut written = vec![path.as_path()];
-    written.extend(args.timing_json.as_deref());
-    let inputs = [crate::outdir::Input::new("DATASET", &args.dataset)];
-    for w in &written {
-        crate::outdir::refuse_overlap(w, "output file", &inputs)?;
-    }
-    crate::outdir::refuse_symlink(&args.out, "--out")?;
-
     let t_start = Instant::now();
-    let options = ReadOptions {
-        flip_lift: args.flip_lift,
-    };
-    let dataset = read_dataset_with(&args.dataset, &options)
-        .with_context(|| format!("reading data set {}", args.dataset.display()))?;
-    let read_s = t_start.elapsed().as_secs_f64();
+    let (dataset, read_s) = checked_read(args, &path)?;
     let convention = dataset.manifest.convention;
     if !convention.is_scanlan() && !crate::ui::silent() {
         crate::ui::warning!(
@@ -288,6 +274,7 @@ fn run_memoryless(args: &IdentifyArgs) -> anyhow::Result<Identification> {
     }
 
     // every input is read and checked: only now is the output folder created
+    let (written, inputs) = outputs(args, &path);
     let _out = crate::outdir::SharedDir::begin(&args.out, &written, &inputs)?;
     let t_id = Instant::now();
     let bar = IdentifyBar::new();
@@ -359,6 +346,41 @@ fn write_timing(
 
 /// `--law lag`: fit the lag law (with the held-out comparison when asked), then write
 /// `OUT/lag_law.json`. Nothing is written unless the fit succeeds.
+/// The files the command writes (`document` and `--timing-json`) and its input, the data
+/// set.
+fn outputs<'a>(
+    args: &'a IdentifyArgs,
+    document: &'a Path,
+) -> (Vec<&'a Path>, [crate::outdir::Input<'a>; 1]) {
+    let mut written = vec![document];
+    written.extend(args.timing_json.as_deref());
+    (
+        written,
+        [crate::outdir::Input::new("DATASET", &args.dataset)],
+    )
+}
+
+/// Checks the files the command writes ([`outputs`]) against its input before anything is
+/// read (no output may be, contain or lie inside the data set; `--out` no symbolic link),
+/// then reads the data set: (data set, seconds to read it).
+fn checked_read(
+    args: &IdentifyArgs,
+    document: &Path,
+) -> anyhow::Result<(identify::dataset::Dataset, f64)> {
+    let (written, inputs) = outputs(args, document);
+    for w in &written {
+        crate::outdir::refuse_overlap(w, "output file", &inputs)?;
+    }
+    crate::outdir::refuse_symlink(&args.out, "--out")?;
+    let t = Instant::now();
+    let options = ReadOptions {
+        flip_lift: args.flip_lift,
+    };
+    let dataset = read_dataset_with(&args.dataset, &options)
+        .with_context(|| format!("reading data set {}", args.dataset.display()))?;
+    Ok((dataset, t.elapsed().as_secs_f64()))
+}
+
 fn run_lag(args: &IdentifyArgs) -> anyhow::Result<()> {
     use identify::lag::{HoldOut, LagFitOptions, LagLawDocument};
     if args.ensemble.is_some() {
@@ -379,21 +401,8 @@ fn run_lag(args: &IdentifyArgs) -> anyhow::Result<()> {
     let pre = args.preprocess();
     pre.check().context("invalid preprocessing option")?;
     let path = args.out.join("lag_law.json");
-    let mut written = vec![path.as_path()];
-    written.extend(args.timing_json.as_deref());
-    let inputs = [crate::outdir::Input::new("DATASET", &args.dataset)];
-    for w in &written {
-        crate::outdir::refuse_overlap(w, "output file", &inputs)?;
-    }
-    crate::outdir::refuse_symlink(&args.out, "--out")?;
-
     let t_start = Instant::now();
-    let options = ReadOptions {
-        flip_lift: args.flip_lift,
-    };
-    let dataset = read_dataset_with(&args.dataset, &options)
-        .with_context(|| format!("reading data set {}", args.dataset.display()))?;
-    let read_s = t_start.elapsed().as_secs_f64();
+    let (dataset, read_s) = checked_read(args, &path)?;
     let t_prep = Instant::now();
     let prepared = prepare_dataset(&dataset, &pre).context("preprocessing")?;
     let prepare_s = t_prep.elapsed().as_secs_f64();
@@ -416,6 +425,7 @@ fn run_lag(args: &IdentifyArgs) -> anyhow::Result<()> {
     let doc = LagLawDocument::from_fit(&fit, &dataset.manifest.name, prepared.cases[0].chord)?;
 
     // the fit succeeded: only now is the output folder created and written
+    let (written, inputs) = outputs(args, &path);
     let _out = crate::outdir::SharedDir::begin(&args.out, &written, &inputs)?;
     identify::io::write_atomic(&path, doc.to_json()?.as_bytes())?;
     let total_s = t_start.elapsed().as_secs_f64();
