@@ -20,30 +20,7 @@ fn spawn(dir: &Path, args: &[&str]) -> Child {
 }
 
 fn forced(dir: &Path, out: &str, seed: &str) {
-    forced_for(dir, out, seed, "2");
-}
-
-fn forced_for(dir: &Path, out: &str, seed: &str, duration: &str) {
-    let model = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/plate-truth.model.toml");
-    let (code, o, e) = aeroform_code_in(
-        dir,
-        &[
-            "--quiet",
-            "tunnel",
-            "forced",
-            "--model",
-            &model.display().to_string(),
-            "--campaign",
-            "config=D",
-            "--duration",
-            duration,
-            "--seed",
-            seed,
-            "--out",
-            out,
-        ],
-    );
-    assert_eq!(code, 0, "{o}\n{e}");
+    common::forced_set(dir, out, seed, "2");
 }
 
 /// Row 2a: a file the user puts into OUT while `diagnose` runs is not deleted when the
@@ -157,7 +134,7 @@ fn an_input_replaced_while_read_is_an_error_not_a_mix() {
     let mut pure = Vec::new();
     let t = Instant::now();
     for seed in ["1", "2"] {
-        forced_for(d, "DS", seed, "8");
+        common::forced_set(d, "DS", seed, "8");
         let (code, _, e) = aeroform_code_in(d, &["--quiet", "identify", "DS", "--out", "P"]);
         assert_eq!(code, 0, "{e}");
         pure.push(coefficients("P").expect("an identification with cases"));

@@ -5,7 +5,6 @@
 //! refused by row and column (exit code 2), and nothing is written.
 
 mod common;
-use common::aeroform_code_in;
 
 use std::path::Path;
 use std::process::{Command, Stdio};
@@ -14,24 +13,7 @@ use std::time::{Duration, Instant};
 /// A forced data set `tmp/DS` (configuration D, 2 s records) from the virtual tunnel.
 fn dataset() -> tempfile::TempDir {
     let tmp = tempfile::tempdir().unwrap();
-    let model = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/plate-truth.model.toml");
-    let (code, out, err) = aeroform_code_in(
-        tmp.path(),
-        &[
-            "--quiet",
-            "tunnel",
-            "forced",
-            "--model",
-            &model.display().to_string(),
-            "--campaign",
-            "config=D",
-            "--duration",
-            "2",
-            "--out",
-            "DS",
-        ],
-    );
-    assert_eq!(code, 0, "{out}\n{err}");
+    common::forced_set(tmp.path(), "DS", "1", "2");
     tmp
 }
 

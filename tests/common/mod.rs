@@ -39,3 +39,29 @@ pub fn aeroform_code_in(dir: &Path, args: &[&str]) -> (i32, String, String) {
         String::from_utf8_lossy(&out.stderr).into_owned(),
     )
 }
+
+/// Writes, in `dir`, the forced campaign of configuration D of the plate truth
+/// (`scenarios/plate-truth.model.toml`) as the data set `out`, records of `duration` s,
+/// master seed `seed`; panics unless the command succeeds.
+pub fn forced_set(dir: &Path, out: &str, seed: &str, duration: &str) {
+    let model = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/plate-truth.model.toml");
+    let (code, o, e) = aeroform_code_in(
+        dir,
+        &[
+            "--quiet",
+            "tunnel",
+            "forced",
+            "--model",
+            &model.display().to_string(),
+            "--campaign",
+            "config=D",
+            "--duration",
+            duration,
+            "--seed",
+            seed,
+            "--out",
+            out,
+        ],
+    );
+    assert_eq!(code, 0, "{o}\n{e}");
+}
