@@ -383,13 +383,15 @@ fn checked_read(
 
 fn run_lag(args: &IdentifyArgs) -> anyhow::Result<()> {
     use identify::lag::{HoldOut, LagFitOptions, LagLawDocument};
-    if args.ensemble.is_some() {
-        return Err(crate::exit::Usage(
-            "`--ensemble` is not available with `--law lag` (the lag law reports Gauss–Newton \
-             standard errors and correlations, not bootstrap intervals)"
-                .to_string(),
-        )
-        .into());
+    if let Some(n) = args.ensemble {
+        aeroform::limits::count("--ensemble", n as u128, aeroform::limits::MAX_ENSEMBLE)?;
+        if n < 2 || args.hold_out.is_some() {
+            return Err(crate::exit::Usage(format!(
+                "`--ensemble {n}` with `--law lag`: needs at least 2 members and no \
+                 `--hold-out` (the intervals are of the law fitted on every case)"
+            ))
+            .into());
+        }
     }
     let hold_out = match &args.hold_out {
         Some(s) => Some(
@@ -420,8 +422,30 @@ fn run_lag(args: &IdentifyArgs) -> anyhow::Result<()> {
     };
     // a refused law or a prediction outside the fitted range is about the input: exit 2
     // (`exit::code` knows `Unphysical` and `OutsideFittedRange`)
-    let fit = result.context("lag-law identification")?;
+    let mut fit = result.context("lag-law identification")?;
     let identify_s = t_id.elapsed().as_secs_f64();
+    if let Some(n) = args.ensemble {
+        let t_e = Instant::now();
+        let mut es = identify::ensemble::EnsembleSettings::new(n, args.seed);
+        es.level = args.level;
+        let series = prepared
+            .cases
+            .iter()
+            .map(identify::lag::LagSeries::new)
+            .collect::<identify::Result<Vec<_>>>()
+            .context("lag-law ensemble")?;
+        let e = identify::lag::ensemble::bootstrap(&series, &fit, &opts, &es)
+            .context("lag-law ensemble (residual block bootstrap)")?;
+        if !crate::ui::silent() {
+            crate::ui::say!(
+                "ensemble: {n} residual block-bootstrap members (seed {}, {} refused) in {:.3} s",
+                args.seed,
+                e.refused,
+                t_e.elapsed().as_secs_f64()
+            );
+        }
+        fit.report.ensemble = Some(e);
+    }
     let doc = LagLawDocument::from_fit(&fit, &dataset.manifest.name, prepared.cases[0].chord)?;
 
     // the fit succeeded: only now is the output folder created and written
@@ -479,6 +503,21 @@ fn lag_table(fit: &identify::lag::LagFit) -> String {
             "{:<12} {:>12.4} {:>12}  {}{extra}",
             p.symbol, p.value, se, p.unit
         );
+    }
+    if let Some(e) = &r.ensemble {
+        for p in &e.parameters {
+            let _ = writeln!(
+                s,
+                "{:<12} {:.0} % interval [{:.4}, {:.4}], median {:.4} ({} of {} members)",
+                p.name,
+                100.0 * e.level,
+                p.interval.lower,
+                p.interval.upper,
+                p.interval.median,
+                e.members - e.refused,
+                e.members
+            );
+        }
     }
     match r.tau_correlation {
         Some(c) if r.tau_collinear => {

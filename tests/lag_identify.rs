@@ -232,7 +232,8 @@ fn cli_writes_the_lag_law_document_with_the_held_out_table() {
     for args in [
         vec!["--hold-out", "k=0.1"],
         vec!["--law", "lag", "--hold-out", "speed=3"],
-        vec!["--law", "lag", "--ensemble", "10"],
+        vec!["--law", "lag", "--ensemble", "10", "--hold-out", "k=0.1"],
+        vec!["--law", "lag", "--ensemble", "1"],
     ] {
         let mut a = vec![
             "identify",
@@ -246,6 +247,47 @@ fn cli_writes_the_lag_law_document_with_the_held_out_table() {
         assert!(!out2.exists(), "{args:?} wrote {}", out2.display());
     }
     let _ = HoldOut::K(0.1);
+
+    // the residual block-bootstrap ensemble: intervals of the four constants, seed recorded,
+    // the fitted value inside each interval
+    let out3 = tmp.path().join("out3");
+    let (ok, stdout, stderr) = common::aeroform(&[
+        "identify",
+        data.to_str().unwrap(),
+        "--law",
+        "lag",
+        "--ensemble",
+        "8",
+        "--seed",
+        "11",
+        "--out",
+        out3.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stdout}\n{stderr}");
+    assert!(stdout.contains("90 % interval"), "{stdout}");
+    let path = out3.join("lag_law.json");
+    let doc = LagLawDocument::from_json(&std::fs::read_to_string(&path).unwrap(), &path).unwrap();
+    let e = &doc.report["ensemble"];
+    assert_eq!(e["members"], 8);
+    assert_eq!(e["seed"], "11");
+    let fitted = [
+        doc.law.tau1,
+        doc.law.tau2,
+        doc.law.alpha_star,
+        doc.law.sharpness,
+    ];
+    for (p, v) in e["parameters"].as_array().unwrap().iter().zip(fitted) {
+        let i = &p["interval"];
+        let (lo, hi) = (i["lower"].as_f64().unwrap(), i["upper"].as_f64().unwrap());
+        assert!(lo <= hi, "{p}");
+        // the members refit the fitted law plus resampled residuals: they scatter about it
+        let pad = 0.05 * v.abs().max(1e-3);
+        assert!(
+            lo - pad <= v && v <= hi + pad,
+            "{} = {v} outside {p}",
+            p["name"]
+        );
+    }
 }
 
 #[test]

@@ -198,6 +198,10 @@ pub struct LagReport {
     /// Held-out comparison, when one was asked for.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub held_out: Option<super::report::HeldOutReport>,
+    /// Residual block-bootstrap intervals of the constants, when an ensemble was asked for
+    /// ([`super::ensemble::bootstrap`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ensemble: Option<super::ensemble::LagEnsemble>,
 }
 
 /// A fitted lag law and its report.
@@ -919,6 +923,7 @@ pub fn fit_series(series: &[LagSeries], opts: &LagFitOptions) -> Result<LagFit> 
             .collect(),
         notes,
         held_out: None,
+        ensemble: None,
     };
     Ok(LagFit { law, report })
 }

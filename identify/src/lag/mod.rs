@@ -6,6 +6,7 @@
 //! `lag_law.json` document of a fit).
 
 pub mod document;
+pub mod ensemble;
 pub mod fit;
 pub mod holdout;
 pub mod law;
