@@ -72,7 +72,9 @@ pub struct IdentifyArgs {
     #[arg(long)]
     pub timing_json: Option<PathBuf>,
     /// Block-bootstrap ensemble of N members (intervals of every coefficient and
-    /// derivative, written to the `ensemble` section of identification.json).
+    /// derivative, written to the `ensemble` section of identification.json; with
+    /// `--law lag`, residual block bootstrap: intervals of τ₁, τ₂, α*, m in lag_law.json's
+    /// `report.ensemble`).
     #[arg(long, value_name = "N")]
     pub ensemble: Option<usize>,
     /// Seed of the ensemble's draws (recorded in the output).
