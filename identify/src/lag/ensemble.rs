@@ -15,41 +15,14 @@
 //! ensemble does, so a member does not depend on the number of members or on the thread
 //! that ran it.
 
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
-use rayon::prelude::*;
-use serde::{Deserialize, Serialize};
-
 use super::fit::{fit_series, predict_series, LagFit, LagFitOptions, PARAMETERS};
+pub use super::report::{LagEnsemble, LagParameterInterval};
 use super::series::LagSeries;
 use crate::ensemble::{EnsembleSettings, Interval};
 use crate::Result;
-
-/// A constant's ensemble interval.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
-pub struct LagParameterInterval {
-    /// Name (`tau1`, `tau2`, `alpha_star`, `sharpness`).
-    pub name: String,
-    /// Unit.
-    pub unit: String,
-    /// Median and percentile interval of the members' values.
-    pub interval: Interval,
-}
-
-/// The ensemble of a lag-law fit (module docs).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
-pub struct LagEnsemble {
-    /// Members asked for.
-    pub members: usize,
-    /// Master seed of the draws (a string: a u64 does not fit every JSON reader).
-    pub seed: String,
-    /// Confidence level of the intervals.
-    pub level: f64,
-    /// Members whose fit was refused (not in the intervals).
-    pub refused: usize,
-    /// Intervals of τ₁, τ₂, α*, m.
-    pub parameters: Vec<LagParameterInterval>,
-}
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rayon::prelude::*;
 
 /// Residual block-bootstrap ensemble of `fit` on `series` (module docs), `settings`'
 /// members, seed and level (its block length is one forcing period here).

@@ -199,9 +199,9 @@ pub struct LagReport {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub held_out: Option<super::report::HeldOutReport>,
     /// Residual block-bootstrap intervals of the constants, when an ensemble was asked for
-    /// ([`super::ensemble::bootstrap`]).
+    /// ([`super::ensemble::bootstrap`](crate::lag::ensemble::bootstrap)).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub ensemble: Option<super::ensemble::LagEnsemble>,
+    pub ensemble: Option<super::report::LagEnsemble>,
 }
 
 /// A fitted lag law and its report.
