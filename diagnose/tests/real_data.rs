@@ -128,6 +128,36 @@ fn pitch_only_campaign_with_two_groups_is_diagnosed_leave_one_group_out() {
     assert!(d.levels[0].before.is_finite() && d.levels[0].before > 0.0);
 }
 
+/// The law with memory as the `dynamic_stall` form (issue 41 item 5): on the deep-stall
+/// S809 pair (18.8° ± 10.7°, K = 0.05 and 0.1) each record is predicted from a lag law
+/// fitted on the other, and that beats the section's memoryless law by more than the naming
+/// rule's 30 % of the excess; the verdict carries the fitted constants.
+#[test]
+fn deep_stall_records_are_named_dynamic_stall_by_the_law_with_memory() {
+    let ds = read_dataset(&data("osu-s809")).unwrap();
+    let d = diagnose(&ds, None, &DiagnoseOptions::new(1), "test").unwrap();
+    assert_eq!(
+        d.verdict.effect,
+        diagnose::Verdict::Effect(Effect::DynamicStall),
+        "{:?}",
+        d.verdict
+    );
+    let c = d.levels[0]
+        .candidates
+        .iter()
+        .find(|c| c.effect == Effect::DynamicStall)
+        .unwrap();
+    assert!(c.significant && c.shrink > 0.25, "{c:?}");
+    let tau1: Vec<f64> = c
+        .parameters
+        .iter()
+        .filter(|(n, _)| n.contains("lag_law_tau1"))
+        .map(|p| p.1)
+        .collect();
+    assert_eq!(tau1.len(), 2, "{:?}", c.parameters);
+    assert!(tau1.iter().all(|t| *t > 0.5 && *t < 100.0), "{tau1:?}");
+}
+
 #[test]
 fn one_group_is_a_clear_error() {
     let ds = read_dataset(&data("gu-naca0015")).unwrap();

@@ -43,9 +43,91 @@ impl Entry for DynamicStall {
 }
 
 impl ForceFit for DynamicStall {
+    /// Two forms, the one with the lower held-out energy kept (the choice counts one
+    /// parameter in both): the dead-zone pool on top of the section's law ([`sparse`]),
+    /// and the law with memory instead of it ([`lag_form`]).
     fn fit(&self, cx: &Context<'_>) -> Scored {
-        sparse(cx, &pool(), STALL_TERMS, 2)
+        let mut pooled = sparse(cx, &pool(), STALL_TERMS, 2);
+        pooled.n_params += 1;
+        let Ok(mut lag) = lag_form(cx) else {
+            return pooled;
+        };
+        lag.n_params += 1;
+        if energy(cx.cases, &lag.residuals) < energy(cx.cases, &pooled.residuals) {
+            lag
+        } else {
+            pooled
+        }
     }
+}
+
+/// Noise-unit energy Σ (r/σ̂)² of held-out residuals over cases and channels.
+fn energy(cases: &[CaseData], res: &[[Vec<f64>; 2]]) -> f64 {
+    cases
+        .iter()
+        .zip(res)
+        .map(|(c, r)| {
+            (0..2)
+                .map(|k| {
+                    let s = c.sigma[k].max(1e-300);
+                    r[k].iter().map(|v| (v / s).powi(2)).sum::<f64>()
+                })
+                .sum::<f64>()
+        })
+        .sum()
+}
+
+/// The law with memory as the stall form (issue 41 item 5): per fold, the lag law of
+/// [`identify::lag`] (one separation state, Kirchhoff lift, δ-selected moment columns,
+/// circulation lag) fitted on the training nodes' cases by output error, and the held-out
+/// cases predicted by it **instead of** the section's law (a per-node law fitted on the
+/// training loop is a Fourier series of it and carries little of the loop to another
+/// frequency or mean angle). Parameters: θ = (τ₁, τ₂, α*, m) and the law's nonzero force
+/// coefficients, mean over folds; the fitted constants per fold in `parameters`.
+///
+/// # Errors
+/// The first fold whose fit or prediction the lag law refuses (too short, not periodic,
+/// a held-out mean angle outside the training range), as its message.
+fn lag_form(cx: &Context<'_>) -> Result<Scored, String> {
+    let (cases, nodes, folds) = (cx.cases, cx.nodes, cx.folds);
+    let opts = identify::lag::LagFitOptions::default();
+    let mut res = vec![[Vec::new(), Vec::new()]; cases.len()];
+    let mut parameters = Vec::new();
+    let mut n_params = 0usize;
+    for f in folds {
+        let train: Vec<identify::record::NondimCase> = f
+            .train
+            .iter()
+            .flat_map(|&n| nodes[n].cases.iter().map(|&i| cases[i].nd.clone()))
+            .collect();
+        let fit = identify::lag::fit(&train, &opts).map_err(|e| e.to_string())?;
+        let law = &fit.law;
+        for &n in &f.test {
+            for &i in &nodes[n].cases {
+                let p = identify::lag::predict(law, &cases[i].nd).map_err(|e| e.to_string())?;
+                for (k, pred) in [&p.c_lift, &p.c_moment].into_iter().enumerate() {
+                    res[i][k] = cases[i].y[k].iter().zip(pred).map(|(y, p)| y - p).collect();
+                }
+            }
+        }
+        let nonzero = |c: &identify::lag::LagChannel| c.terms.iter().filter(|t| t.1 != 0.0).count();
+        n_params += 4 + nonzero(&law.lift) + nonzero(&law.moment);
+        for (name, v) in [
+            ("tau1 [b/U]", law.tau1),
+            ("tau2 [b/U]", law.tau2),
+            ("alpha_star [deg]", law.alpha_star.to_degrees()),
+            ("sharpness", law.sharpness),
+        ] {
+            parameters.push((format!("fold{}_lag_law_{name}", f.index), v));
+        }
+    }
+    Ok(Scored {
+        residuals: res,
+        n_params: n_params.div_ceil(folds.len().max(1)),
+        n_nuisance: 0,
+        parameters,
+        failure: None,
+    })
 }
 
 /// A lagged dead-zone column of the pool (see [`stall_column`]).
