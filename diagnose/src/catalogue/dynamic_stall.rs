@@ -8,6 +8,9 @@
 //!   its periodic solution from the harmonic motion; the lagged copies give hysteresis),
 //!   each also in Kirchhoff's form ([`stall_column`]). Each chosen term counts its β and
 //!   two hyperparameters (α_c, lag).
+//! * Force level, second form: the law with memory of [`identify::lag`] fitted per fold on
+//!   the training nodes and predicting the held-out cases instead of the section's law
+//!   ([`lag_form`]); of the two forms the one with the lower held-out energy is kept.
 //! * Generator: separation above α_crit from 27.5° down to 10°, lag 1.5 chords.
 
 use aeroelastic::effects::{Form, InjectedEffect};
