@@ -472,3 +472,155 @@ pub(crate) fn start_grid(n: usize) -> Vec<Vec<f64>> {
     out.retain(|v| v.iter().any(|x| *x != 0.0));
     out
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use aeroelastic::branch::{Branch, BranchEnd, BranchPoint, Criticality, HopfPoint};
+
+    fn point(u: f64, a: f64, stable: bool) -> BranchPoint {
+        BranchPoint {
+            u,
+            period: 0.4,
+            omega: std::f64::consts::TAU * 2.5,
+            amplitude_alpha: a,
+            amplitude_h: 0.3 * a,
+            amplitude1_alpha: a,
+            amplitude1_h: 0.3 * a,
+            max_floquet: 1.0,
+            stable,
+            multipliers: Vec::new(),
+            state: Vec::new(),
+            unknowns: Vec::new(),
+        }
+    }
+
+    /// A subcritical diagram: Hopf at 18 m/s (2.5 Hz), the unstable branch down to a fold
+    /// at 15 m/s (0.03 rad), the stable branch from there up to 17.5 m/s.
+    fn subcritical(opts: &BranchOptions) -> Predicted {
+        let hopf = HopfPoint {
+            u: 18.0,
+            omega: std::f64::consts::TAU * 2.5,
+            dsigma_du: 0.1,
+            eigenvector: Vec::new(),
+        };
+        let points = vec![
+            point(18.0, 0.0, false),
+            point(16.5, 0.015, false),
+            point(15.0, 0.03, false),
+            point(15.0, 0.03, true),
+            point(16.5, 0.06, true),
+            point(17.5, 0.08, true),
+        ];
+        let set = BranchSet {
+            hopf_points: vec![hopf.clone()],
+            branches: vec![Branch {
+                hopf,
+                points,
+                events: Vec::new(),
+                stop: BranchEnd::MaxPoints,
+                criticality: "subcritical".into(),
+                scales: Vec::new(),
+            }],
+            options: *opts,
+            u_range: [10.0, 30.0],
+        };
+        Predicted {
+            hopf: vec![HopfAt {
+                u: 18.0,
+                frequency_hz: 2.5,
+                dsigma_du: 0.1,
+                criticality: "subcritical".into(),
+            }],
+            set: Some(set),
+            linear: false,
+        }
+    }
+
+    fn setting(opts: &BranchOptions) -> Setting<'_> {
+        Setting {
+            branch: opts,
+            range: [10.0, 30.0],
+            s_alpha: 0.05,
+            s_h: 0.015,
+            s_u: 0.3,
+            noise: 0.05,
+            onset_sd: 0.01,
+            dofs: [true, false],
+            row_speeds: [f64::INFINITY, f64::NEG_INFINITY],
+        }
+    }
+
+    /// An onset row: one stated uncertainty of speed or frequency costs the amplitude
+    /// uncertainty; a wrong criticality costs 1; no Hopf point at all costs more than any
+    /// Hopf point in range.
+    #[test]
+    fn onset_residuals_weigh_speed_frequency_and_criticality() {
+        let opts = BranchOptions::default();
+        let s = setting(&opts);
+        let p = subcritical(&opts);
+        let mut o = MeasuredOnset {
+            line: 0,
+            u: 18.0 / 0.99,
+            u_sd: None,
+            frequency_hz: Some(2.5 / 1.01),
+            frequency_sd_hz: None,
+            criticality: Some(Criticality::Subcritical),
+        };
+        let z = onset_residuals(&p, &o, &s);
+        assert_eq!(z.len(), 3);
+        // (18 − 18/0.99) / (0.01 · 18/0.99) = −1 standard uncertainty
+        assert!((z[0] + 0.05).abs() < 1e-9, "{z:?}");
+        assert!((z[1] - 0.05).abs() < 1e-9, "{z:?}");
+        assert_eq!(z[2], 0.0);
+        o.criticality = Some(Criticality::Supercritical);
+        o.u_sd = Some(18.0 / 0.99 * 0.005);
+        let z = onset_residuals(&p, &o, &s);
+        assert!((z[0] + 0.1).abs() < 1e-9, "a stated uncertainty: {z:?}");
+        assert_eq!(z[2], 1.0, "wrong criticality");
+        let none = Predicted::default();
+        let z = onset_residuals(&none, &o, &s);
+        assert!(z[0] > 10.0 && z[1] == 0.0 && z[2] == 1.0, "{z:?}");
+    }
+
+    /// An absence row: a stable cycle coexisting with a stable equilibrium is reached when
+    /// the perturbation tried exceeds the unstable cycle below it (or none is stated);
+    /// above the Hopf point the equilibrium is unstable; below the fold nothing is
+    /// predicted.
+    #[test]
+    fn absence_rows_see_reachable_cycles_only() {
+        let opts = BranchOptions::default();
+        let s = setting(&opts);
+        let p = subcritical(&opts);
+        let row = |u: f64, pa: Option<f64>| MeasuredAbsence {
+            line: 0,
+            u,
+            max_perturbation_alpha: pa,
+            max_perturbation_h: None,
+        };
+        let f = absence_finding(&p, &row(16.5, None));
+        assert!(f.equilibrium_stable && f.predicts_lco, "{f:?}");
+        assert!((f.lco.unwrap().0 - 0.06).abs() < 1e-12);
+        assert!((f.threshold.unwrap().0 - 0.015).abs() < 1e-12);
+        assert_eq!(absence_residuals(&f, &s), vec![0.06 / 0.05]);
+        // kicked to 0.01 rad only: below the unstable cycle, no contradiction
+        let f = absence_finding(&p, &row(16.5, Some(0.01)));
+        assert!(!f.predicts_lco);
+        assert_eq!(absence_residuals(&f, &s), vec![0.0]);
+        assert!(absence_finding(&p, &row(16.5, Some(0.02))).predicts_lco);
+        // below the fold
+        let f = absence_finding(&p, &row(14.0, None));
+        assert!(f.equilibrium_stable && !f.predicts_lco && f.lco.is_none());
+        // above the Hopf point: flutter without a bounded cycle in the diagram
+        let f = absence_finding(&p, &row(19.0, Some(0.001)));
+        assert!(!f.equilibrium_stable && f.predicts_lco && f.lco.is_none());
+        assert_eq!(absence_residuals(&f, &s), vec![1.0]);
+        // a linear section has no cycle: only its equilibrium counts
+        let lin = Predicted {
+            linear: true,
+            ..subcritical(&opts)
+        };
+        assert!(!absence_finding(&lin, &row(16.5, None)).predicts_lco);
+        assert!(absence_finding(&lin, &row(18.5, None)).predicts_lco);
+    }
+}

@@ -1371,4 +1371,96 @@ mod extent_tests {
         assert!(e.outside_speeds(17.957) && !e.outside_speeds(17.3));
         assert!(Extent::of(&[]).is_none());
     }
+
+    fn candidate(effect: Effect, n_params: usize, score: f64, contradicts: bool) -> CandidateResult {
+        let errors = Errors {
+            rows: Vec::new(),
+            score,
+        };
+        let absence = AbsenceDistance {
+            measured: MeasuredAbsence {
+                line: 2,
+                u: 14.0,
+                max_perturbation_alpha: None,
+                max_perturbation_h: None,
+            },
+            equilibrium_stable: true,
+            lco_alpha: contradicts.then_some(0.1),
+            lco_h: None,
+            threshold_alpha: None,
+            threshold_h: None,
+            predicts_lco: contradicts,
+            z: vec![if contradicts { 2.0 } else { 0.0 }],
+        };
+        let spec = ParameterSpec {
+            name: "p".into(),
+            unit: "-".into(),
+            convention: "-".into(),
+            scale: 1.0,
+            even: false,
+        };
+        CandidateResult {
+            effect,
+            level: effect.level(),
+            variant: "v".into(),
+            extends: None,
+            parameters: (0..n_params)
+                .map(|_| FittedParameter {
+                    spec: spec.clone(),
+                    value: 0.0,
+                    fold_values: Vec::new(),
+                })
+                .collect(),
+            fit: DiagramSummary {
+                hopf: Vec::new(),
+                folds: Vec::new(),
+                points: Vec::new(),
+                errors: errors.clone(),
+                branches: None,
+                onsets: Vec::new(),
+                absences: vec![absence],
+            },
+            held_out_points: Vec::new(),
+            held_out_onsets: Vec::new(),
+            held_out_absences: Vec::new(),
+            held_out: errors,
+            score_se: 0.02,
+            shrink: 1.0 - score / 1.0,
+            evaluations: 1,
+            theta: Vec::new(),
+        }
+    }
+
+    /// Within one standard error, the simplest candidate is named unless its fit predicts an
+    /// LCO where none was observed and another within the error does not; when every one
+    /// within the error contradicts, the rule is the plain one.
+    #[test]
+    fn the_ranking_passes_over_a_candidate_that_invents_an_lco() {
+        let opts = BifurcationOptions::default();
+        let ranked = vec![
+            candidate(Effect::StructuralPolynomial, 3, 0.150, false),
+            candidate(Effect::StructuralCubic, 1, 0.160, true),
+            candidate(Effect::AddedMass, 2, 0.165, false),
+            candidate(Effect::Friction, 1, 0.5, false),
+        ];
+        let v = verdict(&ranked, 1.0, &opts);
+        assert_eq!(v.effect, Some(Effect::AddedMass), "{v:?}");
+        assert_eq!(v.contradicting, vec![ranked[1].label()]);
+        assert_eq!(v.richer, vec![ranked[0].label()]);
+        assert!(v.explanation.contains("passed over"), "{}", v.explanation);
+        // without the absence row's contradiction: the simplest within the error
+        let mut plain = ranked.clone();
+        plain[1].fit.absences[0].predicts_lco = false;
+        let v = verdict(&plain, 1.0, &opts);
+        assert_eq!(v.effect, Some(Effect::StructuralCubic), "{v:?}");
+        assert!(v.contradicting.is_empty());
+        // every candidate within the error contradicts: the plain rule
+        let mut all = ranked.clone();
+        for c in &mut all[..3] {
+            c.fit.absences[0].predicts_lco = true;
+        }
+        let v = verdict(&all, 1.0, &opts);
+        assert_eq!(v.effect, Some(Effect::StructuralCubic), "{v:?}");
+        assert!(v.contradicting.is_empty());
+    }
 }
