@@ -5,13 +5,13 @@
 
 use std::path::Path;
 
+use aeroelastic::branch::{
+    parse_absence_arg, parse_onset_arg, read_measured_diagram, MeasuredDiagram,
+};
 use aeroelastic::files::{LoadedModel, StructureFile};
 use aeroelastic::section::Section;
 use aeroelastic::structure::Structure;
 use anyhow::Context;
-use aeroelastic::branch::{
-    parse_absence_arg, parse_onset_arg, read_measured_diagram, MeasuredDiagram,
-};
 use diagnose::bifurcation::{
     diagnose_diagram, points_from_records, structure_check, BifurcationDiagnosis,
     BifurcationOptions, BranchKind, Quantity,
@@ -273,20 +273,26 @@ fn print(d: &BifurcationDiagnosis) {
         }
     }
     for (k, a) in d.absences.iter().enumerate() {
-        crate::ui::say!("no LCO observed at {:.3} m/s: models that predict one there", a.u);
+        crate::ui::say!(
+            "no LCO observed at {:.3} m/s: models that predict one there",
+            a.u
+        );
         let mut any = false;
-        for (name, x) in std::iter::once(("nominal".to_string(), d.nominal.absences.get(k)))
-            .chain(d.candidates.iter().map(|c| (c.label(), c.fit.absences.get(k))))
-        {
+        for (name, x) in std::iter::once(("nominal".to_string(), d.nominal.absences.get(k))).chain(
+            d.candidates
+                .iter()
+                .map(|c| (c.label(), c.fit.absences.get(k))),
+        ) {
             if let Some(x) = x.filter(|x| x.predicts_lco) {
                 any = true;
                 crate::ui::say!(
                     "  {:<42} {}",
                     name,
-                    x.lco_alpha.map_or("flutter without a bounded cycle".into(), |a| format!(
-                        "stable cycle {:.3}°",
-                        a.to_degrees()
-                    ))
+                    x.lco_alpha
+                        .map_or("flutter without a bounded cycle".into(), |a| format!(
+                            "stable cycle {:.3}°",
+                            a.to_degrees()
+                        ))
                 );
             }
         }

@@ -150,11 +150,14 @@ fn misgiven_case(factor: f64, speeds: &[f64]) -> (MeasuredDiagram, (f64, f64, St
 
 /// What an onset row does to a rig whose given pitch frequency is 6 % high (Hopf +19 %) and
 /// whose measured cycles lie in the lower half of the subcritical range: it enters every
-/// diagram's report and the held-out score; a candidate that keeps the wrong Hopf speed pays
-/// for it (w·ΔU/σ_U on the held-out onset), one that moves it pays less; the verdict without
-/// the row keeps the given structure's wrong Hopf speed.
+/// diagram's report and the held-out score as w·ΔU/σ_U; a stiffness candidate keeps the given
+/// structure's Hopf point and pays for it; the verdict without the row keeps a Hopf speed more
+/// than 1 % off the truth's. (With the row the named model's Hopf is not yet within 1 %:
+/// DECISIONS, "Measured onsets … round 27".)
 fn onset_row_costs_a_wrong_hopf_speed(factor: f64, speeds: &[f64]) {
     let (mut d, h, given) = misgiven_case(factor, speeds);
+    let u_given = given.hopf_points(8.0, 30.0, 400).unwrap()[0].u;
+    assert!((u_given / h.0 - 1.0).abs() > 0.03, "{u_given} vs {}", h.0);
     let without = run(&d, &given);
     let (u0, _) = named_hopf(&without);
     assert!(
@@ -168,7 +171,11 @@ fn onset_row_costs_a_wrong_hopf_speed(factor: f64, speeds: &[f64]) {
     for c in &with.candidates {
         let o = &c.fit.onsets[0];
         let hopf = c.fit.hopf.iter().map(|h| h.u).fold(f64::INFINITY, f64::min);
-        assert!((o.predicted_u.unwrap() - hopf).abs() < 1e-9, "{}", c.label());
+        assert!(
+            (o.predicted_u.unwrap() - hopf).abs() < 1e-9,
+            "{}",
+            c.label()
+        );
         let held = &c.held_out_onsets[0];
         let z = w * held.d_u.unwrap() / (0.01 * h.0);
         assert!((held.z[0] - z).abs() < 1e-9, "{}: {:?}", c.label(), held.z);
@@ -177,8 +184,19 @@ fn onset_row_costs_a_wrong_hopf_speed(factor: f64, speeds: &[f64]) {
             .iter()
             .find(|b| b.label() == c.label())
             .unwrap();
-        // a held-out Hopf point more than 5 standard uncertainties off costs
-        if held.z[0].abs() > 5.0 * w {
+        // a stiffness term cannot move a Hopf point: a polynomial keeps the given structure's
+        if c.effect == diagnose::Effect::StructuralPolynomial
+            || c.effect == diagnose::Effect::StructuralCubic
+        {
+            assert!(
+                (held.predicted_u.unwrap() - u_given).abs() < 1e-6 * u_given,
+                "{}: {:?} vs {u_given}",
+                c.label(),
+                held.predicted_u
+            );
+        }
+        // a held-out onset worse than the candidate's RMS residual without it raises its score
+        if held.z[0].abs() > 1.2 * before.held_out.score {
             assert!(
                 c.held_out.score > before.held_out.score,
                 "{}: {} → {}",

@@ -40,8 +40,8 @@ pub use crate::structure::{structure_check_records, StructureGap, StructureUsed}
 use crate::{Effect, Error, Level, Result, Verdict};
 use candidates::{BranchCandidate, ParameterSpec, Scales};
 use fit::{
-    absence_finding, absence_residuals, all_residuals, first_hopf, hopf_scan,
-    levenberg_marquardt, onset_residuals, predict, start_grid, Predicted, Rows, Setting,
+    absence_finding, absence_residuals, all_residuals, first_hopf, hopf_scan, levenberg_marquardt,
+    onset_residuals, predict, start_grid, Predicted, Rows, Setting,
 };
 pub use points::{points_from_records, structure_check, RecordRole, RecordUse, StructureCheck};
 
@@ -1372,7 +1372,12 @@ mod extent_tests {
         assert!(Extent::of(&[]).is_none());
     }
 
-    fn candidate(effect: Effect, n_params: usize, score: f64, contradicts: bool) -> CandidateResult {
+    fn candidate(
+        effect: Effect,
+        n_params: usize,
+        score: f64,
+        contradicts: bool,
+    ) -> CandidateResult {
         let errors = Errors {
             rows: Vec::new(),
             score,
