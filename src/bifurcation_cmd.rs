@@ -5,12 +5,15 @@
 
 use std::path::Path;
 
+use aeroelastic::branch::{
+    parse_absence_arg, parse_onset_arg, read_measured_diagram, MeasuredDiagram,
+};
 use aeroelastic::files::{LoadedModel, StructureFile};
 use aeroelastic::section::Section;
 use aeroelastic::structure::Structure;
 use anyhow::Context;
 use diagnose::bifurcation::{
-    diagnose_branches, points_from_records, structure_check, BifurcationDiagnosis,
+    diagnose_diagram, points_from_records, structure_check, BifurcationDiagnosis,
     BifurcationOptions, BranchKind, Quantity,
 };
 use identify::dataset::{read_dataset, Dataset};
@@ -40,15 +43,29 @@ pub fn run(args: &DiagnoseArgs, measured: &Path) -> anyhow::Result<()> {
         .iter()
         .map(|f| read_dataset(f).with_context(|| format!("reading {}", f.display())))
         .collect::<anyhow::Result<Vec<_>>>()?;
-    let (points, uses) = match &records {
-        Some(set) => points_from_records(set)
-            .with_context(|| format!("measured branch points of {}", measured.display()))?,
+    let (mut diagram, uses) = match &records {
+        Some(set) => {
+            let (points, uses) = points_from_records(set)
+                .with_context(|| format!("measured branch points of {}", measured.display()))?;
+            (
+                MeasuredDiagram {
+                    points,
+                    ..MeasuredDiagram::default()
+                },
+                uses,
+            )
+        }
         None => (
-            aeroelastic::branch::read_measured_amplitudes(measured)
-                .context("measured bifurcation diagram")?,
+            read_measured_diagram(measured).context("measured bifurcation diagram")?,
             Vec::new(),
         ),
     };
+    for o in &args.onset {
+        diagram.onsets.push(parse_onset_arg(o)?);
+    }
+    for a in &args.no_lco {
+        diagram.absences.push(parse_absence_arg(a)?);
+    }
     let manifest_of = || {
         records
             .iter()
@@ -100,6 +117,8 @@ pub fn run(args: &DiagnoseArgs, measured: &Path) -> anyhow::Result<()> {
         format!("model: {}", model_path.display()),
     ];
     inputs.extend(free.iter().map(|f| format!("free: {}", f.root.display())));
+    inputs.extend(args.onset.iter().map(|o| format!("onset: {o}")));
+    inputs.extend(args.no_lco.iter().map(|a| format!("no LCO: {a}")));
     let dir = crate::outdir::OutDir::begin(
         &out,
         "diagnose --measured-branch",
@@ -110,8 +129,8 @@ pub fn run(args: &DiagnoseArgs, measured: &Path) -> anyhow::Result<()> {
         "diagnose",
         "continuation of every candidate, leave-one-speed-out",
     );
-    let d = diagnose_branches(
-        &points,
+    let d = diagnose_diagram(
+        &diagram,
         &section,
         check,
         uses,
@@ -218,6 +237,68 @@ fn print(d: &BifurcationDiagnosis) {
     diag("nominal", &d.nominal);
     if let Some(i) = d.verdict.candidate {
         diag("named", &d.candidates[i].fit);
+    }
+    for (k, o) in d.onsets.iter().enumerate() {
+        crate::ui::say!(
+            "measured onset {:.3} m/s{}{}: first Hopf point of each model (fitted on all points; \
+             held out)",
+            o.u,
+            o.frequency_hz
+                .map_or(String::new(), |f| format!(" {f:.3} Hz")),
+            o.criticality
+                .map_or(String::new(), |c| format!(" {}", c.name()))
+        );
+        let row = |name: &str, x: Option<&diagnose::bifurcation::OnsetDistance>| {
+            let Some(x) = x else { return };
+            crate::ui::say!(
+                "  {:<42} {}{}",
+                name,
+                match (x.predicted_u, x.predicted_frequency_hz) {
+                    (Some(u), Some(f)) => format!(
+                        "{u:.3} m/s ({:+.2} %) {f:.3} Hz {}",
+                        100.0 * (u / o.u - 1.0),
+                        x.predicted_criticality.as_deref().unwrap_or("")
+                    ),
+                    _ => "no Hopf point in range".into(),
+                },
+                match x.criticality_right {
+                    Some(false) => " [criticality wrong]",
+                    _ => "",
+                }
+            );
+        };
+        row("nominal", d.nominal.onsets.get(k));
+        for c in &d.candidates {
+            row(&c.label(), c.fit.onsets.get(k));
+        }
+    }
+    for (k, a) in d.absences.iter().enumerate() {
+        crate::ui::say!(
+            "no LCO observed at {:.3} m/s: models that predict one there",
+            a.u
+        );
+        let mut any = false;
+        for (name, x) in std::iter::once(("nominal".to_string(), d.nominal.absences.get(k))).chain(
+            d.candidates
+                .iter()
+                .map(|c| (c.label(), c.fit.absences.get(k))),
+        ) {
+            if let Some(x) = x.filter(|x| x.predicts_lco) {
+                any = true;
+                crate::ui::say!(
+                    "  {:<42} {}",
+                    name,
+                    x.lco_alpha
+                        .map_or("flutter without a bounded cycle".into(), |a| format!(
+                            "stable cycle {:.3}°",
+                            a.to_degrees()
+                        ))
+                );
+            }
+        }
+        if !any {
+            crate::ui::say!("  none");
+        }
     }
     crate::ui::say!(
         "{:<44} {:>9} {:>8} {:>11} {:>11}",

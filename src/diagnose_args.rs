@@ -33,6 +33,25 @@ pub struct DiagnoseArgs {
     /// `bifurcation.json`, figures and `diagnosis.html`.
     #[arg(long, requires = "model", conflicts_with_all = ["dataset", "blind"])]
     pub measured_branch: Option<PathBuf>,
+    /// With `--measured-branch`: a measured flutter onset (Hopf point),
+    /// `U[:F][:sub|super][:sd=SD]` — speed [m/s], then in any order its frequency [Hz], its
+    /// criticality and the speed's standard uncertainty [m/s] (default 1 %); may be
+    /// repeated. Adds to a table's `onset` rows (the record route has no table).
+    #[arg(
+        long,
+        requires = "measured_branch",
+        value_name = "U[:F][:sub|super][:sd=SD]"
+    )]
+    pub onset: Vec<String>,
+    /// With `--measured-branch`: no LCO observed at speed U [m/s], `U[:PITCH_RAD[:HEAVE_M]]`
+    /// with the largest pitch [rad] and heave [m] perturbation tried (peak; `-` when
+    /// unknown); may be repeated. Adds to a table's `none` rows.
+    #[arg(
+        long = "no-lco",
+        requires = "measured_branch",
+        value_name = "U[:PITCH_RAD[:HEAVE_M]]"
+    )]
+    pub no_lco: Vec<String>,
     /// Output folder (created if missing); default `out/diagnosis` or `out/blind`.
     #[arg(long)]
     pub out: Option<PathBuf>,

@@ -310,3 +310,60 @@ fn branch_counts_are_capped_on_the_command_line_and_in_a_study() {
     );
     assert!(!dir.path().join("r").join("branch.json").exists());
 }
+
+/// Issue 42 item 2: malformed measured onsets and absences are refused before anything is
+/// written, with exit 2, naming the flag or the file, line and column; `--onset` needs
+/// `--measured-branch`.
+#[test]
+fn malformed_onsets_and_absences_are_refused_by_name() {
+    let dir = tmp();
+    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("diagnose/tests/data");
+    let points = s(&data.join("bristol-spring1-record-points.csv"));
+    let out = dir.path().join("bif");
+    let base = |extra: &[&str], table: &str| {
+        let mut a = vec![
+            "diagnose".to_string(),
+            "--measured-branch".into(),
+            table.to_string(),
+            "--structure".into(),
+            scenario("bristol-spring1.structure.toml"),
+            "--model".into(),
+            scenario("bristol-spring1.model.toml"),
+            "--out".into(),
+            s(&out),
+        ];
+        a.extend(extra.iter().map(|x| x.to_string()));
+        a
+    };
+    for (extra, needle) in [
+        (vec!["--onset", "17.9:fast"], "--onset"),
+        (vec!["--onset", "17.9:sub:super"], "criticality given twice"),
+        (vec!["--no-lco", "14:abc"], "--no-lco"),
+        (vec!["--no-lco", "0"], "wind_speed_m_s"),
+    ] {
+        let a = base(&extra, &points);
+        let refs: Vec<&str> = a.iter().map(String::as_str).collect();
+        let (code, stdout, stderr) = common::aeroform_code_in(dir.path(), &refs);
+        assert_eq!(code, 2, "{extra:?}: {stdout}\n{stderr}");
+        assert!(stderr.contains(needle), "{extra:?}: {stderr}");
+        assert!(!out.exists());
+    }
+    let bad = dir.path().join("bad.csv");
+    std::fs::write(
+        &bad,
+        "branch,wind_speed_m_s,pitch_amp_rad,criticality\nstable,15,0.04,\nonset,17.9,,hyper\n",
+    )
+    .unwrap();
+    let a = base(&[], &s(&bad));
+    let refs: Vec<&str> = a.iter().map(String::as_str).collect();
+    let (code, _, stderr) = common::aeroform_code_in(dir.path(), &refs);
+    assert_eq!(code, 2, "{stderr}");
+    assert!(
+        stderr.contains("bad.csv") && stderr.contains("line 3") && stderr.contains("criticality"),
+        "{stderr}"
+    );
+    assert!(!out.exists());
+    let (code, _, stderr) = common::aeroform_code_in(dir.path(), &["diagnose", "--onset", "17.9"]);
+    assert_eq!(code, 2, "{stderr}");
+    assert!(stderr.contains("--measured-branch"), "{stderr}");
+}

@@ -29,31 +29,114 @@ pub struct MeasuredAmplitude {
     pub frequency_hz: Option<f64>,
 }
 
-/// Reads a measured bifurcation diagram: CSV with a header naming `branch` (`stable` or
-/// `unstable`), `wind_speed_m_s` and at least one of `heave_amp_m` \[m\] and `pitch_amp_rad`
-/// \[rad\] (first-harmonic peak amplitudes), optionally `freq_hz` \[Hz\]; other columns are
-/// ignored (the last column may contain commas); lines starting with `#` are comments. A
-/// missing value is an empty field, `nan` or `-`; every row needs a speed and at least one
-/// amplitude (docs/DATA_FORMAT.md, "Measured bifurcation diagram").
+/// The measured criticality of a flutter onset.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum Criticality {
+    /// Limit cycles exist below the onset speed (a jump to a finite-amplitude cycle at the
+    /// onset, hysteresis on the way back).
+    Subcritical,
+    /// Limit cycles are born at the onset with zero amplitude and grow above it.
+    Supercritical,
+}
+
+impl Criticality {
+    /// `subcritical` / `supercritical` (as a continued branch's `criticality`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Criticality::Subcritical => "subcritical",
+            Criticality::Supercritical => "supercritical",
+        }
+    }
+
+    fn parse(s: &str) -> Option<Criticality> {
+        match s {
+            "subcritical" | "sub" => Some(Criticality::Subcritical),
+            "supercritical" | "super" => Some(Criticality::Supercritical),
+            _ => None,
+        }
+    }
+}
+
+/// A measured flutter onset (Hopf point): the wind speed at which the rig's equilibrium
+/// lost stability (a row `onset` of a measured diagram, or `diagnose --onset`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct MeasuredOnset {
+    /// Line in the file (1-based; 0 for a command-line onset).
+    pub line: usize,
+    /// Onset (Hopf) speed [m/s].
+    pub u: f64,
+    /// Its standard uncertainty [m/s], if stated (`wind_speed_sd_m_s`).
+    #[serde(default)]
+    pub u_sd: Option<f64>,
+    /// Frequency of the oscillation at onset \[Hz\], if measured.
+    #[serde(default)]
+    pub frequency_hz: Option<f64>,
+    /// Its standard uncertainty \[Hz\], if stated (`freq_sd_hz`).
+    #[serde(default)]
+    pub frequency_sd_hz: Option<f64>,
+    /// Sub- or supercritical, if known.
+    #[serde(default)]
+    pub criticality: Option<Criticality>,
+}
+
+/// "No LCO observed at U": the rig was perturbed at speed `u` (up to the largest
+/// perturbation tried, when known) and always returned to rest (a row `none` of a measured
+/// diagram, or `diagnose --no-lco`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct MeasuredAbsence {
+    /// Line in the file (1-based; 0 for a command-line row).
+    pub line: usize,
+    /// Wind speed [m/s].
+    pub u: f64,
+    /// Largest pitch perturbation tried \[rad\] (peak), if known.
+    #[serde(default)]
+    pub max_perturbation_alpha: Option<f64>,
+    /// Largest heave perturbation tried \[m\] (peak, positive down), if known.
+    #[serde(default)]
+    pub max_perturbation_h: Option<f64>,
+}
+
+/// A measured bifurcation diagram: LCO amplitude points, measured onsets and speeds
+/// where no LCO was observed.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct MeasuredDiagram {
+    /// Rows `stable` / `unstable`.
+    pub points: Vec<MeasuredAmplitude>,
+    /// Rows `onset`.
+    pub onsets: Vec<MeasuredOnset>,
+    /// Rows `none`.
+    pub absences: Vec<MeasuredAbsence>,
+}
+
+fn read_table_text(path: &std::path::Path) -> Result<String> {
+    identify::io::read_text(path).map_err(|e| match identify::io::is_input_error(&e) {
+        // refused by the reader (missing, not a regular file, too large, not UTF-8): an input error
+        true => Error::InvalidTable {
+            table: path.display().to_string(),
+            message: e.to_string(),
+        },
+        false => Error::Io {
+            path: path.display().to_string(),
+            message: e.to_string(),
+        },
+    })
+}
+
+/// Reads the LCO amplitude rows of a measured bifurcation diagram: CSV with a header naming
+/// `branch` (`stable` or `unstable`), `wind_speed_m_s` and at least one of `heave_amp_m`
+/// \[m\] and `pitch_amp_rad` \[rad\] (first-harmonic peak amplitudes), optionally `freq_hz`
+/// \[Hz\]; other columns are ignored (the last column may contain commas); lines starting
+/// with `#` are comments. A missing value is an empty field, `nan` or `-`; every row needs a
+/// speed and at least one amplitude (docs/DATA_FORMAT.md, "Measured bifurcation diagram").
+/// Rows `onset` and `none` are checked and left out ([`read_measured_diagram`] reads them).
 ///
 /// # Errors
 /// [`Error::Io`] when the file cannot be read; [`Error::InvalidTable`] naming the file,
 /// the line and the column for a missing column, a bad or negative number, a row without
-/// any amplitude or an unknown branch name, or a table without data rows.
+/// any amplitude or an unknown branch name, or a table without amplitude rows.
 pub fn read_measured_amplitudes(path: &std::path::Path) -> Result<Vec<MeasuredAmplitude>> {
-    let text =
-        identify::io::read_text(path).map_err(|e| match identify::io::is_input_error(&e) {
-            // refused by the reader (missing, not a regular file, too large, not UTF-8): an input error
-            true => Error::InvalidTable {
-                table: path.display().to_string(),
-                message: e.to_string(),
-            },
-            false => Error::Io {
-                path: path.display().to_string(),
-                message: e.to_string(),
-            },
-        })?;
-    parse_measured_amplitudes(&text, &path.display().to_string())
+    parse_measured_amplitudes(&read_table_text(path)?, &path.display().to_string())
 }
 
 /// [`read_measured_amplitudes`] on the text of a file named `source` (for messages).
@@ -61,27 +144,105 @@ pub fn read_measured_amplitudes(path: &std::path::Path) -> Result<Vec<MeasuredAm
 /// # Errors
 /// As [`read_measured_amplitudes`].
 pub fn parse_measured_amplitudes(text: &str, source: &str) -> Result<Vec<MeasuredAmplitude>> {
+    let d = parse_measured_diagram(text, source)?;
+    if d.points.is_empty() {
+        return Err(Error::InvalidTable {
+            table: source.to_string(),
+            message: "no LCO amplitude rows (`stable` / `unstable`)".into(),
+        });
+    }
+    Ok(d.points)
+}
+
+/// Reads a measured bifurcation diagram with its onset and absence rows: the table of
+/// [`read_measured_amplitudes`] whose `branch` may also be
+///
+/// - `onset`: a measured flutter onset (Hopf point) at `wind_speed_m_s`, with optional
+///   `freq_hz` \[Hz\], `criticality` (`subcritical` / `supercritical`) and the standard
+///   uncertainties `wind_speed_sd_m_s` [m/s] and `freq_sd_hz` \[Hz\] (both > 0); no
+///   amplitude;
+/// - `none`: no LCO observed at `wind_speed_m_s`, with the largest perturbation tried in
+///   the optional columns `max_perturbation_pitch_rad` \[rad\] and
+///   `max_perturbation_heave_m` \[m\] (peak); no amplitude, frequency or criticality.
+///
+/// The amplitude columns are needed only when the table has `stable`/`unstable` rows.
+/// Every file valid before these rows existed reads unchanged.
+///
+/// # Errors
+/// As [`read_measured_amplitudes`]; [`Error::InvalidTable`] naming the file, line and
+/// column also for a value in a column the row's kind does not take, an unknown
+/// criticality, a zero uncertainty, or a table without any data row.
+pub fn read_measured_diagram(path: &std::path::Path) -> Result<MeasuredDiagram> {
+    parse_measured_diagram(&read_table_text(path)?, &path.display().to_string())
+}
+
+/// The columns of a measured diagram, in index order of [`parse_measured_diagram`].
+const NAMES: [&str; 10] = [
+    "branch",
+    "wind_speed_m_s",
+    "heave_amp_m",
+    "pitch_amp_rad",
+    "freq_hz",
+    "criticality",
+    "max_perturbation_pitch_rad",
+    "max_perturbation_heave_m",
+    "wind_speed_sd_m_s",
+    "freq_sd_hz",
+];
+
+/// One checked number of column `k` (`None` when missing), with the limits table's bounds.
+fn number(s: &str, k: usize) -> std::result::Result<Option<f64>, String> {
+    if s.is_empty() || s == "-" || s.eq_ignore_ascii_case("nan") {
+        return Ok(None);
+    }
+    let v: f64 = s
+        .parse()
+        .map_err(|_| format!("column `{}`: `{s}` is not a number", NAMES[k]))?;
+    if !v.is_finite() || v < 0.0 {
+        return Err(format!("column `{}`: {v} must be finite and ≥ 0", NAMES[k]));
+    }
+    // the limits table's bounds, so that one absurd row cannot decide the
+    // diagnosis silently (issue 39, row 6: a speed of 1e308 or 0 gave "Hopf none")
+    use identify::limits as lim;
+    let (max, unit, positive) = match k {
+        1 => (lim::MAX_SPEED, "m/s", true),
+        2 | 7 => (lim::MAX_CHORD, "m", false),
+        3 | 6 => (lim::MAX_PITCH_DEG.to_radians(), "rad", false),
+        8 => (lim::MAX_SPEED, "m/s", true),
+        9 => (lim::MAX_RATE, "Hz", true),
+        _ => (lim::MAX_RATE, "Hz", false),
+    };
+    if v > max || (positive && v == 0.0) {
+        return Err(format!(
+            "column `{}`: {} {unit} is outside {} value ≤ {} {unit} (the limits table)",
+            NAMES[k],
+            lim::show(v),
+            if positive { "0 <" } else { "0 ≤" },
+            lim::show(max)
+        ));
+    }
+    Ok(Some(v))
+}
+
+/// [`read_measured_diagram`] on the text of a file named `source` (for messages).
+///
+/// # Errors
+/// As [`read_measured_diagram`].
+pub fn parse_measured_diagram(text: &str, source: &str) -> Result<MeasuredDiagram> {
     let bad = |line: usize, msg: String| Error::InvalidTable {
         table: source.to_string(),
         message: format!("line {line}: {msg}"),
     };
-    // (branch, speed) required; heave, pitch, frequency optional columns.
-    const NAMES: [&str; 5] = [
-        "branch",
-        "wind_speed_m_s",
-        "heave_amp_m",
-        "pitch_amp_rad",
-        "freq_hz",
-    ];
-    let mut header: Option<(usize, [Option<usize>; 5])> = None;
-    let mut out = Vec::new();
+    let mut header: Option<(usize, [Option<usize>; NAMES.len()], Vec<String>)> = None;
+    let mut out = MeasuredDiagram::default();
+    let mut rows = 0usize;
     for (i, raw) in text.lines().enumerate() {
         let line = i + 1;
         let l = raw.trim();
         if l.is_empty() || l.starts_with('#') {
             continue;
         }
-        let Some((width, cols)) = header else {
+        let Some((width, cols, names)) = &header else {
             let h = identify::csv_fields::split_line(l);
             let cols = NAMES.map(|name| h.iter().position(|c| c == name));
             for k in 0..2 {
@@ -96,19 +257,11 @@ pub fn parse_measured_amplitudes(text: &str, source: &str) -> Result<Vec<Measure
                     ));
                 }
             }
-            if cols[2].is_none() && cols[3].is_none() {
-                return Err(bad(
-                    line,
-                    format!(
-                        "header has neither `heave_amp_m` nor `pitch_amp_rad` (columns: {})",
-                        h.join(", ")
-                    ),
-                ));
-            }
-            header = Some((h.len(), cols));
+            header = Some((h.len(), cols, h));
             continue;
         };
-        if out.len() >= identify::limits::MAX_MEASURED_POINTS {
+        let (width, cols) = (*width, *cols);
+        if rows >= identify::limits::MAX_MEASURED_POINTS {
             return Err(bad(
                 line,
                 format!(
@@ -117,6 +270,7 @@ pub fn parse_measured_amplitudes(text: &str, source: &str) -> Result<Vec<Measure
                 ),
             ));
         }
+        rows += 1;
         let f = identify::csv_fields::split_line(l);
         if f.len() < width {
             return Err(bad(
@@ -124,81 +278,198 @@ pub fn parse_measured_amplitudes(text: &str, source: &str) -> Result<Vec<Measure
                 format!("{} fields, the header has {width}", f.len()),
             ));
         }
-        let num = |k: usize| -> Result<Option<f64>> {
-            let Some(c) = cols[k] else { return Ok(None) };
-            let s = f[c].as_str();
-            if s.is_empty() || s == "-" || s.eq_ignore_ascii_case("nan") {
-                return Ok(None);
+        let text_of = |k: usize| -> &str { cols[k].map_or("", |c| f[c].as_str()) };
+        let num =
+            |k: usize| -> Result<Option<f64>> { number(text_of(k), k).map_err(|m| bad(line, m)) };
+        let kind = text_of(0);
+        // a column this row's kind does not take must be empty
+        let empty = |ks: &[usize]| -> Result<()> {
+            for &k in ks {
+                let s = text_of(k);
+                if !(s.is_empty() || s == "-" || s.eq_ignore_ascii_case("nan")) {
+                    return Err(bad(
+                        line,
+                        format!(
+                            "column `{}`: a `{kind}` row takes no value (`{s}`)",
+                            NAMES[k]
+                        ),
+                    ));
+                }
             }
-            let v: f64 = s.parse().map_err(|_| {
-                bad(
-                    line,
-                    format!("column `{}`: `{s}` is not a number", NAMES[k]),
-                )
-            })?;
-            if !v.is_finite() || v < 0.0 {
-                return Err(bad(
-                    line,
-                    format!("column `{}`: {v} must be finite and ≥ 0", NAMES[k]),
-                ));
-            }
-            // the limits table's bounds, so that one absurd row cannot decide the
-            // diagnosis silently (issue 39, row 6: a speed of 1e308 or 0 gave "Hopf none")
-            use identify::limits as lim;
-            let (max, unit, positive) = match k {
-                1 => (lim::MAX_SPEED, "m/s", true),
-                2 => (lim::MAX_CHORD, "m", false),
-                3 => (lim::MAX_PITCH_DEG.to_radians(), "rad", false),
-                _ => (lim::MAX_RATE, "Hz", false),
-            };
-            if v > max || (positive && v == 0.0) {
-                return Err(bad(
-                    line,
-                    format!(
-                        "column `{}`: {} {unit} is outside {} value ≤ {} {unit} (the limits table)",
-                        NAMES[k],
-                        lim::show(v),
-                        if positive { "0 <" } else { "0 ≤" },
-                        lim::show(max)
-                    ),
-                ));
-            }
-            Ok(Some(v))
+            Ok(())
         };
-        let stable = match f[cols[0].expect("checked")].as_str() {
-            "stable" => true,
-            "unstable" => false,
+        let u = || -> Result<f64> {
+            num(1)?.ok_or_else(|| bad(line, "column `wind_speed_m_s`: no value".into()))
+        };
+        match kind {
+            "stable" | "unstable" => {
+                if cols[2].is_none() && cols[3].is_none() {
+                    return Err(bad(
+                        line,
+                        format!(
+                            "a `{kind}` row needs an amplitude, but the header has neither \
+                             `heave_amp_m` nor `pitch_amp_rad` (columns: {})",
+                            names.join(", ")
+                        ),
+                    ));
+                }
+                empty(&[5, 6, 7, 8, 9])?;
+                let u = u()?;
+                let (amplitude_h, amplitude_alpha) = (num(2)?, num(3)?);
+                if amplitude_h.is_none() && amplitude_alpha.is_none() {
+                    return Err(bad(
+                        line,
+                        "neither `heave_amp_m` nor `pitch_amp_rad` has a value".into(),
+                    ));
+                }
+                out.points.push(MeasuredAmplitude {
+                    line,
+                    stable: kind == "stable",
+                    u,
+                    amplitude_h,
+                    amplitude_alpha,
+                    frequency_hz: num(4)?.filter(|&v| v > 0.0),
+                });
+            }
+            "onset" => {
+                empty(&[2, 3, 6, 7])?;
+                let crit = text_of(5);
+                let criticality = match crit {
+                    "" | "-" => None,
+                    s => Some(Criticality::parse(s).ok_or_else(|| {
+                        bad(
+                            line,
+                            format!(
+                                "column `criticality`: `{s}` is neither `subcritical` nor \
+                                 `supercritical` (or empty: unknown)"
+                            ),
+                        )
+                    })?),
+                };
+                let frequency_hz = num(4)?.filter(|&v| v > 0.0);
+                let frequency_sd_hz = num(9)?;
+                if frequency_sd_hz.is_some() && frequency_hz.is_none() {
+                    return Err(bad(
+                        line,
+                        "column `freq_sd_hz`: an uncertainty without a frequency".into(),
+                    ));
+                }
+                out.onsets.push(MeasuredOnset {
+                    line,
+                    u: u()?,
+                    u_sd: num(8)?,
+                    frequency_hz,
+                    frequency_sd_hz,
+                    criticality,
+                });
+            }
+            "none" => {
+                empty(&[2, 3, 4, 5, 8, 9])?;
+                out.absences.push(MeasuredAbsence {
+                    line,
+                    u: u()?,
+                    max_perturbation_alpha: num(6)?,
+                    max_perturbation_h: num(7)?,
+                });
+            }
             other => {
                 return Err(bad(
                     line,
-                    format!("column `branch`: `{other}` is neither `stable` nor `unstable`"),
+                    format!(
+                        "column `branch`: `{other}` is none of `stable`, `unstable`, `onset` \
+                         (a measured flutter onset) and `none` (no LCO observed)"
+                    ),
                 ))
             }
-        };
-        let u = num(1)?.ok_or_else(|| bad(line, "column `wind_speed_m_s`: no value".into()))?;
-        let (amplitude_h, amplitude_alpha) = (num(2)?, num(3)?);
-        if amplitude_h.is_none() && amplitude_alpha.is_none() {
-            return Err(bad(
-                line,
-                "neither `heave_amp_m` nor `pitch_amp_rad` has a value".into(),
-            ));
         }
-        out.push(MeasuredAmplitude {
-            line,
-            stable,
-            u,
-            amplitude_h,
-            amplitude_alpha,
-            frequency_hz: num(4)?.filter(|&v| v > 0.0),
-        });
     }
-    if out.is_empty() {
+    if rows == 0 {
         return Err(Error::InvalidTable {
             table: source.to_string(),
             message: "no data rows".into(),
         });
     }
     Ok(out)
+}
+
+/// A measured onset from the command line: `U[:F][:sub|super][:sd=SD]` — speed [m/s],
+/// then in any order a frequency \[Hz\], a criticality (`sub`, `subcritical`, `super`,
+/// `supercritical`) and the speed's standard uncertainty `sd=SD` [m/s].
+///
+/// # Errors
+/// [`Error::InvalidTable`] (table `--onset`) naming the part that is not a number, out of
+/// the limits table's bounds, or given twice.
+pub fn parse_onset_arg(s: &str) -> Result<MeasuredOnset> {
+    let bad = |m: String| Error::InvalidTable {
+        table: "--onset".into(),
+        message: format!("`{s}`: {m}"),
+    };
+    let mut parts = s.split(':').map(str::trim);
+    let u = number(parts.next().unwrap_or(""), 1)
+        .map_err(bad)?
+        .ok_or_else(|| bad("no speed (`U[:F][:sub|super][:sd=SD]`)".into()))?;
+    let mut o = MeasuredOnset {
+        line: 0,
+        u,
+        u_sd: None,
+        frequency_hz: None,
+        frequency_sd_hz: None,
+        criticality: None,
+    };
+    for p in parts {
+        if let Some(c) = Criticality::parse(p) {
+            if o.criticality.replace(c).is_some() {
+                return Err(bad("criticality given twice".into()));
+            }
+        } else if let Some(v) = p.strip_prefix("sd=") {
+            let v = number(v, 8).map_err(bad)?;
+            if v.is_none() || o.u_sd.replace(v.unwrap_or(0.0)).is_some() {
+                return Err(bad("`sd=` needs one value, once".into()));
+            }
+        } else {
+            let v = number(p, 4)
+                .map_err(|_| {
+                    bad(format!(
+                        "`{p}` is neither a frequency [Hz], `sub`/`super` nor `sd=SD`"
+                    ))
+                })?
+                .filter(|&v| v > 0.0)
+                .ok_or_else(|| bad(format!("`{p}`: the frequency must be > 0")))?;
+            if o.frequency_hz.replace(v).is_some() {
+                return Err(bad("frequency given twice".into()));
+            }
+        }
+    }
+    Ok(o)
+}
+
+/// "No LCO observed" from the command line: `U[:PITCH_RAD[:HEAVE_M]]` — speed [m/s] and
+/// the largest pitch \[rad\] and heave \[m\] perturbation tried (peak; `-` or empty for
+/// unknown).
+///
+/// # Errors
+/// [`Error::InvalidTable`] (table `--no-lco`) naming the part that is not a number or out
+/// of the limits table's bounds, or more than three parts.
+pub fn parse_absence_arg(s: &str) -> Result<MeasuredAbsence> {
+    let bad = |m: String| Error::InvalidTable {
+        table: "--no-lco".into(),
+        message: format!("`{s}`: {m}"),
+    };
+    let parts: Vec<&str> = s.split(':').map(str::trim).collect();
+    if parts.len() > 3 {
+        return Err(bad(
+            "more than three parts (`U[:PITCH_RAD[:HEAVE_M]]`)".into()
+        ));
+    }
+    let get = |i: usize, k: usize| -> Result<Option<f64>> {
+        parts.get(i).map_or(Ok(None), |p| number(p, k).map_err(bad))
+    };
+    Ok(MeasuredAbsence {
+        line: 0,
+        u: get(0, 1)?.ok_or_else(|| bad("no speed".into()))?,
+        max_perturbation_alpha: get(1, 6)?,
+        max_perturbation_h: get(2, 7)?,
+    })
 }
 
 /// Distance of one measured point to the predicted branch of the same stability.
@@ -329,6 +600,123 @@ mod tests {
                 .unwrap_err()
                 .to_string();
             assert!(e.contains(needle) && e.contains("bad.csv"), "{e}");
+        }
+    }
+
+    /// Onset and absence rows: read with their optional columns beside amplitude rows; an
+    /// old table reads unchanged; a table of onsets alone needs no amplitude column.
+    #[test]
+    fn onset_and_absence_rows() {
+        let t = "branch,wind_speed_m_s,heave_amp_m,pitch_amp_rad,freq_hz,criticality,\
+                 max_perturbation_pitch_rad,wind_speed_sd_m_s,source\n\
+                 stable,15,0.02,0.05,2.4,,,,a, b\n\
+                 onset,17.93,,,2.46,subcritical,,0.05,estimate\n\
+                 onset,18.1,-,nan,,,,,second\n\
+                 none,12,,,,,0.1,,kicked\n";
+        let d = parse_measured_diagram(t, "t.csv").unwrap();
+        assert_eq!(d.points.len(), 1);
+        assert_eq!(d.onsets.len(), 2);
+        assert_eq!(d.onsets[0].u, 17.93);
+        assert_eq!(d.onsets[0].u_sd, Some(0.05));
+        assert_eq!(d.onsets[0].frequency_hz, Some(2.46));
+        assert_eq!(d.onsets[0].criticality, Some(Criticality::Subcritical));
+        assert_eq!(d.onsets[1].criticality, None);
+        assert_eq!(d.onsets[1].line, 4);
+        assert_eq!(d.absences.len(), 1);
+        assert_eq!(d.absences[0].max_perturbation_alpha, Some(0.1));
+        assert_eq!(d.absences[0].max_perturbation_h, None);
+        // the amplitude rows alone, as before
+        assert_eq!(parse_measured_amplitudes(t, "t.csv").unwrap(), d.points);
+        let only =
+            parse_measured_diagram("branch,wind_speed_m_s\nonset,17.9\nnone,10\n", "o").unwrap();
+        assert_eq!(
+            (only.points.len(), only.onsets.len(), only.absences.len()),
+            (0, 1, 1)
+        );
+        let e = parse_measured_amplitudes("branch,wind_speed_m_s\nonset,17.9\n", "o.csv")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("no LCO amplitude rows") && e.contains("o.csv"),
+            "{e}"
+        );
+        // an old table: the same points as the old reader gave
+        let old = "branch,wind_speed_m_s,heave_amp_m,pitch_amp_rad,freq_hz,source\n\
+                   stable,14.9,0.0191,0.0462,2.449,record 1\nunstable,15.7,,0.0321,nan,x\n";
+        let o = parse_measured_diagram(old, "old").unwrap();
+        assert_eq!(o.points.len(), 2);
+        assert!(o.onsets.is_empty() && o.absences.is_empty());
+    }
+
+    /// Malformed onset and absence rows are refused naming file, line and column.
+    #[test]
+    fn malformed_onset_and_absence_rows_are_refused() {
+        let head = "branch,wind_speed_m_s,pitch_amp_rad,freq_hz,criticality,\
+                    max_perturbation_pitch_rad,wind_speed_sd_m_s,freq_sd_hz\n";
+        for (row, needle) in [
+            ("onset,17.9,0.02,,,,,", "pitch_amp_rad"),
+            ("onset,17.9,,,hyper,,,", "criticality"),
+            ("onset,17.9,,,,0.1,,", "max_perturbation_pitch_rad"),
+            ("onset,17.9,,,,,0,", "wind_speed_sd_m_s"),
+            ("onset,17.9,,,,,,0.1", "freq_sd_hz"),
+            ("onset,,,,,,,", "wind_speed_m_s"),
+            ("none,12,,2.4,,,,", "freq_hz"),
+            ("none,12,,,subcritical,,,", "criticality"),
+            ("none,12,,,,-0.1,,", "max_perturbation_pitch_rad"),
+            ("stable,12,0.1,,subcritical,,,", "criticality"),
+            ("flutter,12,,,,,,", "`flutter`"),
+        ] {
+            let e = parse_measured_diagram(&format!("{head}{row}\n"), "bad.csv")
+                .unwrap_err()
+                .to_string();
+            assert!(
+                e.contains(needle) && e.contains("bad.csv") && e.contains("line 2"),
+                "{row}: {e}"
+            );
+        }
+    }
+
+    /// Command-line onsets and absences: parts in any order, refusals name the flag.
+    #[test]
+    fn onset_and_absence_arguments() {
+        let o = parse_onset_arg("17.93:2.46:sub:sd=0.05").unwrap();
+        assert_eq!(
+            (o.u, o.frequency_hz, o.criticality, o.u_sd),
+            (
+                17.93,
+                Some(2.46),
+                Some(Criticality::Subcritical),
+                Some(0.05)
+            )
+        );
+        let o = parse_onset_arg("18:supercritical").unwrap();
+        assert_eq!(
+            (o.frequency_hz, o.criticality),
+            (None, Some(Criticality::Supercritical))
+        );
+        let a = parse_absence_arg("12:0.1").unwrap();
+        assert_eq!(
+            (a.u, a.max_perturbation_alpha, a.max_perturbation_h),
+            (12.0, Some(0.1), None)
+        );
+        let a = parse_absence_arg("12:-:0.01").unwrap();
+        assert_eq!(
+            (a.max_perturbation_alpha, a.max_perturbation_h),
+            (None, Some(0.01))
+        );
+        for (s, flag) in [
+            ("x", "--onset"),
+            ("17:2:3", "--onset"),
+            ("17:sub:super", "--onset"),
+            ("0", "--onset"),
+            ("17:sd=0", "--onset"),
+        ] {
+            let e = parse_onset_arg(s).unwrap_err().to_string();
+            assert!(e.contains(flag) && e.contains(s), "{s}: {e}");
+        }
+        for s in ["", "12:a", "12:0.1:0.1:1", "-3"] {
+            let e = parse_absence_arg(s).unwrap_err().to_string();
+            assert!(e.contains("--no-lco"), "{s}: {e}");
         }
     }
 }

@@ -16,10 +16,25 @@
 //!   measured speed, so that a branch whose fold moved past a measured speed is pulled
 //!   back continuously instead of dropping out.
 //!
+//! - per measured onset (a row `onset`): w·(U_Hopf − U_onset)/σ_U for the model's first
+//!   (lowest) Hopf point, w·(f_Hopf − f_onset)/σ_f when the frequency was measured, and 1
+//!   when the criticality was measured and the model's differs (a linear section's is
+//!   degenerate); w = the amplitude uncertainty (default 0.05), σ the row's stated
+//!   uncertainty or the default relative one (1 %) times the value — one standard
+//!   uncertainty of the onset weighs as much as one of an amplitude, and a wrong
+//!   criticality as much as a missed amplitude;
+//! - per "no LCO observed" row (`none`), per measured DOF: a_LCO/s_d when the model has a
+//!   stable cycle at that speed that the rig would have reached (the equilibrium is
+//!   unstable there, or the perturbation tried exceeds the unstable cycle below it, or no
+//!   perturbation is stated), 1 when the equilibrium is unstable with no bounded cycle,
+//!   else 0.
+//!
 //! The score that decides is the plain one at the measured speed (a point the model
 //! leaves uncovered counts with predicted amplitude 0), on held-out speeds only.
 
-use aeroelastic::branch::{BranchOptions, BranchSet, MeasuredAmplitude};
+use aeroelastic::branch::{
+    BranchOptions, BranchSet, MeasuredAbsence, MeasuredAmplitude, MeasuredOnset,
+};
 use aeroelastic::section::Section;
 use nalgebra::{DMatrix, DVector};
 
@@ -36,6 +51,16 @@ pub(crate) struct Setting<'a> {
     pub s_h: f64,
     /// Speed scale [m/s].
     pub s_u: f64,
+    /// Amplitude uncertainty (relative): the weight w of an onset residual.
+    pub noise: f64,
+    /// Default relative uncertainty of a measured onset speed and frequency.
+    pub onset_sd: f64,
+    /// Whether the measured points hold pitch and heave amplitudes (the DOFs an absence
+    /// row's residuals are taken in).
+    pub dofs: [bool; 2],
+    /// Smallest and largest speed of the onset and absence rows [m/s] (`[∞, −∞]` without
+    /// any): they widen the measured extent.
+    pub row_speeds: [f64; 2],
 }
 
 impl Setting<'_> {
@@ -62,6 +87,229 @@ pub(crate) fn diagram(section: &Section, s: &Setting) -> Option<BranchSet> {
     section
         .lco_branches(s.range[0], s.range[1], s.branch, &|_| {})
         .ok()
+}
+
+/// The criticality written for a linear section's Hopf point.
+pub(crate) const DEGENERATE: &str = "degenerate (linear section: no limit cycle)";
+
+/// A Hopf point of a predicted diagram.
+#[derive(Debug, Clone)]
+pub(crate) struct HopfAt {
+    /// Speed [m/s].
+    pub u: f64,
+    /// Frequency \[Hz\].
+    pub frequency_hz: f64,
+    /// dσ/dU at the crossing [1/m] (> 0: the equilibrium loses stability with U).
+    pub dsigma_du: f64,
+    /// `subcritical`, `supercritical` or [`DEGENERATE`].
+    pub criticality: String,
+}
+
+/// A predicted diagram: its continued branches and Hopf points (increasing U).
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Predicted {
+    /// The continued branches (`None`: no Hopf point in range or no continuation).
+    pub set: Option<BranchSet>,
+    /// The Hopf points.
+    pub hopf: Vec<HopfAt>,
+    /// A linear section (no limit cycle: its "branch" is the neutral family).
+    pub linear: bool,
+}
+
+/// The diagram of `section` and its Hopf points; when the continuation gives no branches
+/// and `hopf_anyway`, the Hopf points by the eigenvalue scan alone (for onset and absence
+/// rows).
+pub(crate) fn predict(section: Option<&Section>, s: &Setting, hopf_anyway: bool) -> Predicted {
+    let Some(section) = section else {
+        return Predicted::default();
+    };
+    let linear = section.structure.is_linear() && section.aero.is_linear();
+    let set = diagram(section, s);
+    let hopf = match &set {
+        Some(set) => set
+            .branches
+            .iter()
+            .map(|b| HopfAt {
+                u: b.hopf.u,
+                frequency_hz: b.hopf.omega / std::f64::consts::TAU,
+                dsigma_du: b.hopf.dsigma_du,
+                criticality: if linear {
+                    DEGENERATE.into()
+                } else {
+                    b.criticality.clone()
+                },
+            })
+            .collect(),
+        None if hopf_anyway => hopf_scan(section, s, linear),
+        None => Vec::new(),
+    };
+    Predicted { set, hopf, linear }
+}
+
+/// The Hopf points of `section` by the eigenvalue scan alone (criticality unknown unless
+/// linear).
+pub(crate) fn hopf_scan(section: &Section, s: &Setting, linear: bool) -> Vec<HopfAt> {
+    section
+        .hopf_points(s.range[0], s.range[1], s.branch.n_scan)
+        .unwrap_or_default()
+        .iter()
+        .map(|h| HopfAt {
+            u: h.u,
+            frequency_hz: h.omega / std::f64::consts::TAU,
+            dsigma_du: h.dsigma_du,
+            criticality: if linear {
+                DEGENERATE.into()
+            } else {
+                "unknown (no continued branch)".into()
+            },
+        })
+        .collect()
+}
+
+/// The Hopf point a measured onset is compared with: the model's first (lowest-speed) one,
+/// where its equilibrium first loses stability.
+pub(crate) fn first_hopf(p: &Predicted) -> Option<&HopfAt> {
+    p.hopf.iter().min_by(|a, b| a.u.total_cmp(&b.u))
+}
+
+/// Residuals of a measured onset against `p` (layout: speed, frequency if measured,
+/// criticality if measured; module documentation).
+pub(crate) fn onset_residuals(p: &Predicted, o: &MeasuredOnset, s: &Setting) -> Vec<f64> {
+    let h = first_hopf(p);
+    let w = s.noise;
+    let sd_u = o.u_sd.unwrap_or(s.onset_sd * o.u);
+    let mut r = Vec::with_capacity(3);
+    r.push(match h {
+        Some(h) => w * (h.u - o.u) / sd_u,
+        // no Hopf point in range: as far as the range's end
+        None => w * (s.range[1] - o.u).abs().max(s.range[1] - s.range[0]) / sd_u,
+    });
+    if let Some(f) = o.frequency_hz {
+        let sd_f = o.frequency_sd_hz.unwrap_or(s.onset_sd * f);
+        // no Hopf point: the speed residual carries it
+        r.push(h.map_or(0.0, |h| w * (h.frequency_hz - f) / sd_f));
+    }
+    if let Some(c) = o.criticality {
+        r.push(if h.is_some_and(|h| h.criticality == c.name()) {
+            0.0
+        } else {
+            1.0
+        });
+    }
+    r
+}
+
+/// What a model predicts at a speed where no LCO was observed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct AbsenceFinding {
+    /// The equilibrium is stable there (fewer destabilising than restabilising Hopf
+    /// points below).
+    pub equilibrium_stable: bool,
+    /// The smallest stable cycle there: first-harmonic pitch \[rad\] and heave \[m\].
+    pub lco: Option<(f64, f64)>,
+    /// The unstable cycle below it (the edge of the rest state's basin), if any.
+    pub threshold: Option<(f64, f64)>,
+    /// The rig would have shown a cycle (or a divergence) with the perturbation tried.
+    pub predicts_lco: bool,
+}
+
+/// The model's cycles at an absence row's speed ([`AbsenceFinding`]).
+pub(crate) fn absence_finding(p: &Predicted, a: &MeasuredAbsence) -> AbsenceFinding {
+    let crossings: f64 = p
+        .hopf
+        .iter()
+        .filter(|h| h.u < a.u)
+        .map(|h| h.dsigma_du.signum())
+        .sum();
+    let equilibrium_stable = crossings <= 0.0;
+    let probe = |stable: bool| MeasuredAmplitude {
+        line: 0,
+        stable,
+        u: a.u,
+        amplitude_h: Some(0.0),
+        amplitude_alpha: Some(0.0),
+        frequency_hz: None,
+    };
+    let at = |stable: bool| {
+        p.set
+            .as_ref()
+            .filter(|_| !p.linear)
+            .and_then(|set| aeroelastic::branch::predicted_at(set, &probe(stable)))
+            .map(|(al, h, _)| (al, h))
+    };
+    let lco = at(true);
+    let threshold = at(false).filter(|t| lco.is_some_and(|l| t.0 < l.0));
+    let predicts_lco = if !equilibrium_stable {
+        true
+    } else {
+        match (lco, threshold) {
+            (None, _) => false,
+            // no basin edge below the cycle, or no perturbation stated: reached
+            (Some(_), None) => true,
+            (Some(_), Some(t)) => {
+                if a.max_perturbation_alpha.is_none() && a.max_perturbation_h.is_none() {
+                    true
+                } else {
+                    a.max_perturbation_alpha.is_some_and(|x| x >= t.0)
+                        || a.max_perturbation_h.is_some_and(|x| x >= t.1)
+                }
+            }
+        }
+    };
+    AbsenceFinding {
+        equilibrium_stable,
+        lco,
+        threshold,
+        predicts_lco,
+    }
+}
+
+/// Residuals of an absence row (one per measured DOF; module documentation).
+pub(crate) fn absence_residuals(f: &AbsenceFinding, s: &Setting) -> Vec<f64> {
+    let mut r = Vec::with_capacity(2);
+    for (k, scale) in [(0, s.s_alpha), (1, s.s_h)] {
+        if !s.dofs[k] {
+            continue;
+        }
+        r.push(match (f.predicts_lco, f.lco) {
+            (false, _) => 0.0,
+            (true, Some(l)) => [l.0, l.1][k] / scale,
+            // unstable equilibrium without a bounded cycle: the rig would have fluttered
+            (true, None) => 1.0,
+        });
+    }
+    r
+}
+
+/// The rows a fit or a held-out score sees.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Rows<'a> {
+    /// Amplitude points.
+    pub points: &'a [&'a MeasuredAmplitude],
+    /// Measured onsets.
+    pub onsets: &'a [&'a MeasuredOnset],
+    /// Speeds where no LCO was observed.
+    pub absences: &'a [&'a MeasuredAbsence],
+}
+
+impl Rows<'_> {
+    /// Whether the rows hold an onset or an absence (the Hopf points are needed).
+    pub fn need_hopf(&self) -> bool {
+        !self.onsets.is_empty() || !self.absences.is_empty()
+    }
+}
+
+/// Every residual of `rows` against `p`: the points' ([`residuals`]), then the onsets',
+/// then the absences'.
+pub(crate) fn all_residuals(p: &Predicted, rows: &Rows, s: &Setting) -> Vec<f64> {
+    let mut r = residuals(p.set.as_ref(), rows.points, s);
+    for o in rows.onsets {
+        r.extend(onset_residuals(p, o, s));
+    }
+    for a in rows.absences {
+        r.extend(absence_residuals(&absence_finding(p, a), s));
+    }
+    r
 }
 
 /// Residuals of the measured points `pts` against `set` (layout per point: pitch if
@@ -223,4 +471,156 @@ pub(crate) fn start_grid(n: usize) -> Vec<Vec<f64>> {
     }
     out.retain(|v| v.iter().any(|x| *x != 0.0));
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use aeroelastic::branch::{Branch, BranchEnd, BranchPoint, Criticality, HopfPoint};
+
+    fn point(u: f64, a: f64, stable: bool) -> BranchPoint {
+        BranchPoint {
+            u,
+            period: 0.4,
+            omega: std::f64::consts::TAU * 2.5,
+            amplitude_alpha: a,
+            amplitude_h: 0.3 * a,
+            amplitude1_alpha: a,
+            amplitude1_h: 0.3 * a,
+            max_floquet: 1.0,
+            stable,
+            multipliers: Vec::new(),
+            state: Vec::new(),
+            unknowns: Vec::new(),
+        }
+    }
+
+    /// A subcritical diagram: Hopf at 18 m/s (2.5 Hz), the unstable branch down to a fold
+    /// at 15 m/s (0.03 rad), the stable branch from there up to 17.5 m/s.
+    fn subcritical(opts: &BranchOptions) -> Predicted {
+        let hopf = HopfPoint {
+            u: 18.0,
+            omega: std::f64::consts::TAU * 2.5,
+            dsigma_du: 0.1,
+            eigenvector: Vec::new(),
+        };
+        let points = vec![
+            point(18.0, 0.0, false),
+            point(16.5, 0.015, false),
+            point(15.0, 0.03, false),
+            point(15.0, 0.03, true),
+            point(16.5, 0.06, true),
+            point(17.5, 0.08, true),
+        ];
+        let set = BranchSet {
+            hopf_points: vec![hopf.clone()],
+            branches: vec![Branch {
+                hopf,
+                points,
+                events: Vec::new(),
+                stop: BranchEnd::MaxPoints,
+                criticality: "subcritical".into(),
+                scales: Vec::new(),
+            }],
+            options: *opts,
+            u_range: [10.0, 30.0],
+        };
+        Predicted {
+            hopf: vec![HopfAt {
+                u: 18.0,
+                frequency_hz: 2.5,
+                dsigma_du: 0.1,
+                criticality: "subcritical".into(),
+            }],
+            set: Some(set),
+            linear: false,
+        }
+    }
+
+    fn setting(opts: &BranchOptions) -> Setting<'_> {
+        Setting {
+            branch: opts,
+            range: [10.0, 30.0],
+            s_alpha: 0.05,
+            s_h: 0.015,
+            s_u: 0.3,
+            noise: 0.05,
+            onset_sd: 0.01,
+            dofs: [true, false],
+            row_speeds: [f64::INFINITY, f64::NEG_INFINITY],
+        }
+    }
+
+    /// An onset row: one stated uncertainty of speed or frequency costs the amplitude
+    /// uncertainty; a wrong criticality costs 1; no Hopf point at all costs more than any
+    /// Hopf point in range.
+    #[test]
+    fn onset_residuals_weigh_speed_frequency_and_criticality() {
+        let opts = BranchOptions::default();
+        let s = setting(&opts);
+        let p = subcritical(&opts);
+        let mut o = MeasuredOnset {
+            line: 0,
+            u: 18.0 / 0.99,
+            u_sd: None,
+            frequency_hz: Some(2.5 / 1.01),
+            frequency_sd_hz: None,
+            criticality: Some(Criticality::Subcritical),
+        };
+        let z = onset_residuals(&p, &o, &s);
+        assert_eq!(z.len(), 3);
+        // (18 − 18/0.99) / (0.01 · 18/0.99) = −1 standard uncertainty
+        assert!((z[0] + 0.05).abs() < 1e-9, "{z:?}");
+        assert!((z[1] - 0.05).abs() < 1e-9, "{z:?}");
+        assert_eq!(z[2], 0.0);
+        o.criticality = Some(Criticality::Supercritical);
+        o.u_sd = Some(18.0 / 0.99 * 0.005);
+        let z = onset_residuals(&p, &o, &s);
+        assert!((z[0] + 0.1).abs() < 1e-9, "a stated uncertainty: {z:?}");
+        assert_eq!(z[2], 1.0, "wrong criticality");
+        let none = Predicted::default();
+        let z = onset_residuals(&none, &o, &s);
+        assert!(z[0] > 10.0 && z[1] == 0.0 && z[2] == 1.0, "{z:?}");
+    }
+
+    /// An absence row: a stable cycle coexisting with a stable equilibrium is reached when
+    /// the perturbation tried exceeds the unstable cycle below it (or none is stated);
+    /// above the Hopf point the equilibrium is unstable; below the fold nothing is
+    /// predicted.
+    #[test]
+    fn absence_rows_see_reachable_cycles_only() {
+        let opts = BranchOptions::default();
+        let s = setting(&opts);
+        let p = subcritical(&opts);
+        let row = |u: f64, pa: Option<f64>| MeasuredAbsence {
+            line: 0,
+            u,
+            max_perturbation_alpha: pa,
+            max_perturbation_h: None,
+        };
+        let f = absence_finding(&p, &row(16.5, None));
+        assert!(f.equilibrium_stable && f.predicts_lco, "{f:?}");
+        assert!((f.lco.unwrap().0 - 0.06).abs() < 1e-12);
+        assert!((f.threshold.unwrap().0 - 0.015).abs() < 1e-12);
+        assert_eq!(absence_residuals(&f, &s), vec![0.06 / 0.05]);
+        // kicked to 0.01 rad only: below the unstable cycle, no contradiction
+        let f = absence_finding(&p, &row(16.5, Some(0.01)));
+        assert!(!f.predicts_lco);
+        assert_eq!(absence_residuals(&f, &s), vec![0.0]);
+        assert!(absence_finding(&p, &row(16.5, Some(0.02))).predicts_lco);
+        // below the fold
+        let f = absence_finding(&p, &row(14.0, None));
+        assert!(f.equilibrium_stable && !f.predicts_lco && f.lco.is_none());
+        // above the Hopf point: flutter without a bounded cycle in the diagram
+        let f = absence_finding(&p, &row(19.0, Some(0.001)));
+        assert!(!f.equilibrium_stable && f.predicts_lco && f.lco.is_none());
+        assert_eq!(absence_residuals(&f, &s), vec![1.0]);
+        // a linear section has no cycle: only its equilibrium counts
+        let lin = Predicted {
+            linear: true,
+            ..subcritical(&opts)
+        };
+        assert!(!absence_finding(&lin, &row(16.5, None)).predicts_lco);
+        assert!(absence_finding(&lin, &row(18.5, None)).predicts_lco);
+    }
 }

@@ -29,8 +29,8 @@ pub mod points;
 pub(crate) mod scales;
 
 use aeroelastic::branch::{
-    measured_distances, BranchMethod, BranchOptions, BranchSet, EventKind, MeasuredAmplitude,
-    MeasuredDistance,
+    measured_distances, BranchMethod, BranchOptions, BranchSet, EventKind, MeasuredAbsence,
+    MeasuredAmplitude, MeasuredDiagram, MeasuredDistance, MeasuredOnset,
 };
 use aeroelastic::section::Section;
 use rayon::prelude::*;
@@ -39,7 +39,10 @@ use serde::{Deserialize, Serialize};
 pub use crate::structure::{structure_check_records, StructureGap, StructureUsed};
 use crate::{Effect, Error, Level, Result, Verdict};
 use candidates::{BranchCandidate, ParameterSpec, Scales};
-use fit::{diagram, levenberg_marquardt, residuals, start_grid, Setting};
+use fit::{
+    absence_finding, absence_residuals, all_residuals, first_hopf, hopf_scan, levenberg_marquardt,
+    onset_residuals, predict, start_grid, Predicted, Rows, Setting,
+};
 pub use points::{points_from_records, structure_check, RecordRole, RecordUse, StructureCheck};
 
 /// The `format` of a bifurcation-level diagnosis document.
@@ -66,6 +69,15 @@ pub struct BifurcationOptions {
     pub min_shrink: f64,
     /// Levenberg–Marquardt iterations of a fit on all points (folds take half).
     pub max_iterations: usize,
+    /// Relative standard uncertainty of a measured onset speed and frequency when the row
+    /// states none (default 0.01): one such uncertainty weighs as much as one amplitude
+    /// uncertainty (DECISIONS, "Issue 42 item 2, round 27").
+    #[serde(default = "default_onset_uncertainty")]
+    pub onset_uncertainty: f64,
+}
+
+fn default_onset_uncertainty() -> f64 {
+    0.01
 }
 
 impl Default for BifurcationOptions {
@@ -78,6 +90,7 @@ impl Default for BifurcationOptions {
             amplitude_noise: 0.05,
             min_shrink: 0.3,
             max_iterations: 30,
+            onset_uncertainty: default_onset_uncertainty(),
         }
     }
 }
@@ -129,8 +142,9 @@ pub struct Errors {
     pub rows: Vec<ErrorRow>,
     /// Normalised score: √(mean of ((pred − meas)/max(meas, s_d/4))²) over every measured
     /// amplitude (relative errors), s_d the RMS measured amplitude of DOF d (uncovered
-    /// points predicted 0, i.e. an error of 1), and of (pred − meas)/meas over every
-    /// measured frequency of a covered point.
+    /// points predicted 0, i.e. an error of 1), of (pred − meas)/meas over every
+    /// measured frequency of a covered point, and of the onset and absence rows' residuals
+    /// (`z` of [`OnsetDistance`] and [`AbsenceDistance`]).
     pub score: f64,
 }
 
@@ -174,6 +188,52 @@ pub struct FoldSummary {
     pub extrapolation: bool,
 }
 
+/// A measured onset against a predicted diagram's first Hopf point.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct OnsetDistance {
+    /// The measured onset.
+    pub measured: MeasuredOnset,
+    /// The model's first Hopf speed [m/s] (`null`: none in the continuation range).
+    pub predicted_u: Option<f64>,
+    /// Its frequency \[Hz\].
+    pub predicted_frequency_hz: Option<f64>,
+    /// Its criticality (`subcritical`, `supercritical`, degenerate for a linear section).
+    pub predicted_criticality: Option<String>,
+    /// Predicted − measured speed [m/s].
+    pub d_u: Option<f64>,
+    /// The predicted criticality is the measured one (`null` when it was not measured).
+    pub criticality_right: Option<bool>,
+    /// Normalised residuals entering the score: w·ΔU/σ_U, w·Δf/σ_f if the frequency was
+    /// measured, 0 or 1 for the criticality if measured (w the amplitude uncertainty).
+    pub z: Vec<f64>,
+}
+
+/// A speed where no LCO was observed against a predicted diagram.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct AbsenceDistance {
+    /// The absence row.
+    pub measured: MeasuredAbsence,
+    /// The model's equilibrium is stable at that speed.
+    pub equilibrium_stable: bool,
+    /// First-harmonic pitch amplitude \[rad\] of the smallest stable cycle the model has
+    /// there, if any.
+    pub lco_alpha: Option<f64>,
+    /// Its heave amplitude \[m\].
+    pub lco_h: Option<f64>,
+    /// Pitch amplitude \[rad\] of the unstable cycle below it (the perturbation that
+    /// reaches it), if any.
+    pub threshold_alpha: Option<f64>,
+    /// Its heave amplitude \[m\].
+    pub threshold_h: Option<f64>,
+    /// The model predicts an LCO (or flutter) the rig would have shown with the
+    /// perturbation tried: a contradiction of the row.
+    pub predicts_lco: bool,
+    /// Normalised residuals entering the score (per measured DOF: the cycle's amplitude
+    /// over the RMS measured amplitude, 1 for flutter without a bounded cycle, 0 when no
+    /// LCO is predicted).
+    pub z: Vec<f64>,
+}
+
 /// The part of the (speed, amplitude) plane the measured points span: a predicted Hopf
 /// point outside [u_min, u_max], or a fold outside it or above the largest measured pitch or
 /// heave amplitude, is an extrapolation (flagged, not scored).
@@ -208,6 +268,15 @@ impl Extent {
         Some(e)
     }
 
+    /// The extent widened to the speeds `[lo, hi]` (measured onsets and absences: speeds
+    /// the rig was tested at); unchanged when `lo > hi`.
+    pub fn widen(mut self, [lo, hi]: [f64; 2]) -> Extent {
+        if lo <= hi {
+            self.u = [self.u[0].min(lo), self.u[1].max(hi)];
+        }
+        self
+    }
+
     /// Whether speed `u` lies outside the measured speeds.
     pub fn outside_speeds(&self, u: f64) -> bool {
         u < self.u[0] || u > self.u[1]
@@ -236,6 +305,20 @@ pub struct DiagramSummary {
     /// The continued branches (for the figure); `null` when the section has no Hopf point
     /// in the range.
     pub branches: Option<BranchSet>,
+    /// Each measured onset against the first Hopf point (absent without onset rows).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub onsets: Vec<OnsetDistance>,
+    /// Each speed where no LCO was observed against the predicted cycles there (absent
+    /// without such rows).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub absences: Vec<AbsenceDistance>,
+}
+
+impl DiagramSummary {
+    /// Absence rows this diagram contradicts (it predicts an LCO the rig would have shown).
+    pub fn contradicted_absences(&self) -> usize {
+        self.absences.iter().filter(|a| a.predicts_lco).count()
+    }
 }
 
 /// A fitted parameter.
@@ -267,6 +350,12 @@ pub struct CandidateResult {
     pub fit: DiagramSummary,
     /// Held-out predictions: each point predicted by the fit without its speed.
     pub held_out_points: Vec<MeasuredDistance>,
+    /// Held-out onsets: each measured onset against the fit without its speed.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub held_out_onsets: Vec<OnsetDistance>,
+    /// Held-out absences: each absence row against the fit without its speed.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub held_out_absences: Vec<AbsenceDistance>,
     /// Held-out errors.
     pub held_out: Errors,
     /// Standard error of the held-out score over the speed groups, at least the amplitude
@@ -301,6 +390,10 @@ pub struct BranchVerdict {
     /// Candidates with a better held-out score within one standard error of the best
     /// (the richer ones the one-standard-error rule passed over).
     pub richer: Vec<String>,
+    /// Candidates within one standard error of the best passed over because their fit
+    /// predicts an LCO where none was observed (absent without such candidates).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub contradicting: Vec<String>,
     /// Held-out shrink of the named candidate.
     pub shrink: Option<f64>,
     /// Why, in words.
@@ -320,9 +413,16 @@ pub struct BifurcationDiagnosis {
     pub options: BifurcationOptions,
     /// The measured points.
     pub measured: Vec<MeasuredAmplitude>,
+    /// The measured onsets (rows `onset`; absent without any).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub onsets: Vec<MeasuredOnset>,
+    /// The speeds where no LCO was observed (rows `none`; absent without any).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub absences: Vec<MeasuredAbsence>,
     /// What became of each record (points extracted from records, decays).
     pub records: Vec<RecordUse>,
-    /// The distinct measured speeds: the folds of leave-one-speed-out.
+    /// The distinct measured speeds (of points, onsets and absences): the folds of
+    /// leave-one-speed-out.
     pub speed_groups: Vec<f64>,
     /// Normalising amplitudes: RMS measured pitch \[rad\] and heave \[m\].
     pub normalisation: Scales,
@@ -345,8 +445,7 @@ pub struct BifurcationDiagnosis {
 }
 
 /// Groups of equal measured speed (within 1e-6 relative), increasing.
-fn speed_groups(measured: &[MeasuredAmplitude]) -> Vec<f64> {
-    let mut u: Vec<f64> = measured.iter().map(|m| m.u).collect();
+fn speed_groups(mut u: Vec<f64>) -> Vec<f64> {
     u.sort_by(f64::total_cmp);
     u.dedup_by(|a, b| (*a - *b).abs() <= 1e-6 * b.abs().max(1.0));
     u
@@ -356,8 +455,9 @@ fn same_speed(a: f64, b: f64) -> bool {
     (a - b).abs() <= 1e-6 * b.abs().max(1.0)
 }
 
-/// Errors of predictions `d` (one per measured point).
-fn errors(d: &[MeasuredDistance], s: &Setting) -> Errors {
+/// Errors of predictions `d` (one per measured point) and the onset and absence rows'
+/// normalised residuals `extra`.
+fn errors(d: &[MeasuredDistance], extra: &[f64], s: &Setting) -> Errors {
     let mut rows = Vec::new();
     for branch in [BranchKind::Stable, BranchKind::Unstable, BranchKind::All] {
         let sel: Vec<&MeasuredDistance> = d
@@ -402,7 +502,8 @@ fn errors(d: &[MeasuredDistance], s: &Setting) -> Errors {
             }
         }
     }
-    let z = normalised(d, s);
+    let mut z = normalised(d, s);
+    z.extend_from_slice(extra);
     let score = if z.is_empty() {
         0.0
     } else {
@@ -445,7 +546,7 @@ fn summary(set: Option<BranchSet>, measured: &[MeasuredAmplitude], s: &Setting) 
             })
             .collect(),
     };
-    let extent = Extent::of(measured);
+    let extent = Extent::of(measured).map(|e| e.widen(s.row_speeds));
     let outside_speeds = |u: f64| extent.is_some_and(|e| e.outside_speeds(u));
     let outside = |u: f64, a: f64, h: f64| extent.is_some_and(|e| e.outside(u, a, h));
     let (hopf, folds) = match &set {
@@ -479,14 +580,82 @@ fn summary(set: Option<BranchSet>, measured: &[MeasuredAmplitude], s: &Setting) 
         ),
         None => (Vec::new(), Vec::new()),
     };
-    let errors = errors(&points, s);
+    let errors = errors(&points, &[], s);
     DiagramSummary {
         hopf,
         folds,
         points,
         errors,
         branches: set,
+        onsets: Vec::new(),
+        absences: Vec::new(),
     }
+}
+
+/// The onset and absence rows against `p`.
+fn row_distances(
+    p: &Predicted,
+    onsets: &[MeasuredOnset],
+    absences: &[MeasuredAbsence],
+    s: &Setting,
+) -> (Vec<OnsetDistance>, Vec<AbsenceDistance>) {
+    let h = first_hopf(p);
+    let o = onsets
+        .iter()
+        .map(|o| OnsetDistance {
+            measured: o.clone(),
+            predicted_u: h.map(|h| h.u),
+            predicted_frequency_hz: h.map(|h| h.frequency_hz),
+            predicted_criticality: h.map(|h| h.criticality.clone()),
+            d_u: h.map(|h| h.u - o.u),
+            criticality_right: o
+                .criticality
+                .map(|c| h.is_some_and(|h| h.criticality == c.name())),
+            z: onset_residuals(p, o, s),
+        })
+        .collect();
+    let a = absences
+        .iter()
+        .map(|a| {
+            let f = absence_finding(p, a);
+            AbsenceDistance {
+                measured: a.clone(),
+                equilibrium_stable: f.equilibrium_stable,
+                lco_alpha: f.lco.map(|l| l.0),
+                lco_h: f.lco.map(|l| l.1),
+                threshold_alpha: f.threshold.map(|t| t.0),
+                threshold_h: f.threshold.map(|t| t.1),
+                predicts_lco: f.predicts_lco,
+                z: absence_residuals(&f, s),
+            }
+        })
+        .collect();
+    (o, a)
+}
+
+/// The rows' residuals, flattened.
+fn row_z(o: &[OnsetDistance], a: &[AbsenceDistance]) -> Vec<f64> {
+    o.iter()
+        .flat_map(|x| x.z.iter().copied())
+        .chain(a.iter().flat_map(|x| x.z.iter().copied()))
+        .collect()
+}
+
+/// `sum` with the onset and absence rows of `d` against `p` added (and in its score).
+fn with_rows(
+    mut sum: DiagramSummary,
+    p: &Predicted,
+    d: &MeasuredDiagram,
+    s: &Setting,
+) -> DiagramSummary {
+    if d.onsets.is_empty() && d.absences.is_empty() {
+        return sum;
+    }
+    let (o, a) = row_distances(p, &d.onsets, &d.absences, s);
+    sum.errors = errors(&sum.points, &row_z(&o, &a), s);
+    sum.onsets = o;
+    sum.absences = a;
+    sum
 }
 
 /// Diagnoses the measured bifurcation diagram `measured` against the nominal `section`.
@@ -508,7 +677,59 @@ pub fn diagnose_branches(
     inputs: Vec<String>,
     version: &str,
 ) -> Result<BifurcationDiagnosis> {
+    let d = MeasuredDiagram {
+        points: measured.to_vec(),
+        ..MeasuredDiagram::default()
+    };
+    diagnose_diagram(&d, section, structure, records, opts, inputs, version)
+}
+
+/// [`diagnose_branches`] of a measured diagram with onset and absence rows
+/// ([`MeasuredDiagram`]): each measured onset and each speed where no LCO was observed
+/// enters the fit and the leave-one-speed-out score (held out with its speed; residuals in
+/// the module `fit`), every diagram reports its first Hopf point against each onset and
+/// its cycles at each absence speed, and the one-standard-error rule passes over a
+/// candidate whose fit predicts an LCO where none was observed when another within the
+/// standard error does not. Without such rows the result is that of
+/// [`diagnose_branches`].
+///
+/// # Errors
+/// As [`diagnose_branches`]; [`Error::Data`] also for a diagram without amplitude points
+/// (the amplitude scales need at least one) or an onset/absence row with a non-finite or
+/// non-positive speed, and [`Error::Setting`] for an `onset_uncertainty` outside (0, 1).
+pub fn diagnose_diagram(
+    diagram_in: &MeasuredDiagram,
+    section: &Section,
+    structure: Option<StructureCheck>,
+    records: Vec<RecordUse>,
+    opts: &BifurcationOptions,
+    inputs: Vec<String>,
+    version: &str,
+) -> Result<BifurcationDiagnosis> {
     let t0 = std::time::Instant::now();
+    let measured: &[MeasuredAmplitude] = &diagram_in.points;
+    let (onsets, absences) = (&diagram_in.onsets, &diagram_in.absences);
+    let row_us: Vec<f64> = onsets
+        .iter()
+        .map(|o| o.u)
+        .chain(absences.iter().map(|a| a.u))
+        .collect();
+    if let Some(u) = row_us.iter().find(|u| !(u.is_finite() && **u > 0.0)) {
+        return Err(Error::data(
+            "measured diagram",
+            format!("an onset or absence row at {u} m/s: speeds must be finite and > 0"),
+        ));
+    }
+    if measured.is_empty() {
+        return Err(Error::data(
+            "measured diagram",
+            "no LCO amplitude point: onsets and absences alone give no amplitude scale",
+        ));
+    }
+    let row_speeds = [
+        row_us.iter().copied().fold(f64::INFINITY, f64::min),
+        row_us.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+    ];
     // Structure first: the candidates are fitted on the structure identified from the
     // still-air decays when they differ from the given one beyond their uncertainty.
     let mut structure = structure;
@@ -532,19 +753,26 @@ pub fn diagnose_branches(
     for (name, v) in [
         ("amplitude_noise", opts.amplitude_noise),
         ("min_shrink", opts.min_shrink),
+        ("onset_uncertainty", opts.onset_uncertainty),
     ] {
         if !(v.is_finite() && v > 0.0 && v < 1.0) {
             return Err(Error::setting(name, v, "must lie in (0, 1)"));
         }
     }
-    let groups = speed_groups(measured);
+    let groups = speed_groups(
+        measured
+            .iter()
+            .map(|m| m.u)
+            .chain(row_us.iter().copied())
+            .collect(),
+    );
     if groups.len() < 2 {
         return Err(Error::data(
             "measured diagram",
             format!(
                 "{} point(s) at {} distinct speed(s): leave-one-speed-out needs at least two \
                  speeds",
-                measured.len(),
+                measured.len() + row_us.len(),
                 groups.len()
             ),
         ));
@@ -578,6 +806,7 @@ pub fn diagnose_branches(
             "every measured amplitude is zero",
         ));
     }
+    // the points' speeds widened to the onset and absence rows' (unchanged without them)
     let u_max_meas = groups[groups.len() - 1];
     let u_min_meas = groups[0];
     let mean_u = measured.iter().map(|m| m.u).sum::<f64>() / measured.len() as f64;
@@ -591,6 +820,13 @@ pub fn diagnose_branches(
         s_alpha,
         s_h,
         s_u: 0.02 * mean_u,
+        noise: opts.amplitude_noise,
+        onset_sd: opts.onset_uncertainty,
+        dofs: [
+            measured.iter().any(|m| m.amplitude_alpha.is_some()),
+            measured.iter().any(|m| m.amplitude_h.is_some()),
+        ],
+        row_speeds,
     };
     let hopf_nominal = section
         .hopf_points(probe.range[0], probe.range[1], branch.n_scan)
@@ -608,25 +844,43 @@ pub fn diagnose_branches(
     let range = [0.7 * u_min_meas, hi];
     let setting = Setting { range, ..probe };
     let all: Vec<&MeasuredAmplitude> = measured.iter().collect();
+    let all_onsets: Vec<&MeasuredOnset> = onsets.iter().collect();
+    let all_absences: Vec<&MeasuredAbsence> = absences.iter().collect();
+    let all_rows = Rows {
+        points: &all,
+        onsets: &all_onsets,
+        absences: &all_absences,
+    };
     // A linear section has no limit cycle: its "branch" is the vertical family of
     // neutral orbits at the Hopf speed, not a diagram; only its Hopf points are reported.
     let nominal_of = |section: &Section| {
         if section.structure.is_linear() && section.aero.is_linear() {
             let mut s = summary(None, measured, &setting);
-            s.hopf = section
-                .hopf_points(range[0], range[1], branch.n_scan)
-                .unwrap_or_default()
+            let hopf = hopf_scan(section, &setting, true);
+            s.hopf = hopf
                 .iter()
                 .map(|h| HopfSummary {
                     u: h.u,
-                    frequency_hz: h.omega / std::f64::consts::TAU,
-                    criticality: "degenerate (linear section: no limit cycle)".into(),
-                    extrapolation: Extent::of(measured).is_some_and(|e| e.outside_speeds(h.u)),
+                    frequency_hz: h.frequency_hz,
+                    criticality: h.criticality.clone(),
+                    extrapolation: Extent::of(measured)
+                        .is_some_and(|e| e.widen(row_speeds).outside_speeds(h.u)),
                 })
                 .collect();
-            s
+            let p = Predicted {
+                set: None,
+                hopf,
+                linear: true,
+            };
+            with_rows(s, &p, diagram_in, &setting)
         } else {
-            summary(diagram(section, &setting), measured, &setting)
+            let p = predict(Some(section), &setting, all_rows.need_hopf());
+            with_rows(
+                summary(p.set.clone(), measured, &setting),
+                &p,
+                diagram_in,
+                &setting,
+            )
         }
     };
     let nominal = nominal_of(section);
@@ -672,8 +926,8 @@ pub fn diagnose_branches(
                     &cat[i],
                     &cat,
                     section,
-                    measured,
-                    &all,
+                    diagram_in,
+                    &all_rows,
                     &groups,
                     &setting,
                     opts,
@@ -699,6 +953,8 @@ pub fn diagnose_branches(
         inputs,
         options: opts.clone(),
         measured: measured.to_vec(),
+        onsets: onsets.clone(),
+        absences: absences.clone(),
         records,
         speed_groups: groups,
         normalisation: Scales {
@@ -771,22 +1027,24 @@ fn fit_candidate(
     c: &BranchCandidate,
     cat: &[BranchCandidate],
     section: &Section,
-    measured: &[MeasuredAmplitude],
-    all: &[&MeasuredAmplitude],
+    diagram_in: &MeasuredDiagram,
+    all: &Rows,
     groups: &[f64],
     setting: &Setting,
     opts: &BifurcationOptions,
     nominal_score: f64,
     parent: Option<Vec<f64>>,
 ) -> Result<CandidateResult> {
+    let measured: &[MeasuredAmplitude] = &diagram_in.points;
+    let need_hopf = all.need_hopf();
     let evals = std::sync::atomic::AtomicUsize::new(0);
-    let eval = |theta: &[f64], pts: &[&MeasuredAmplitude]| -> Vec<f64> {
+    let predicted = |theta: &[f64]| -> Predicted {
         evals.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        let set = c
-            .apply(section, theta)
-            .ok()
-            .and_then(|s| diagram(&s, setting));
-        residuals(set.as_ref(), pts, setting)
+        let s = c.apply(section, theta).ok();
+        predict(s.as_ref(), setting, need_hopf)
+    };
+    let eval = |theta: &[f64], rows: &Rows| -> Vec<f64> {
+        all_residuals(&predicted(theta), rows, setting)
     };
     let n = c.parameters.len();
     // Start: the best point of the grid (and the origin's neighbourhood).
@@ -819,15 +1077,25 @@ fn fit_candidate(
             even.iter().for_each(|&k| v[k] = -v[k]);
         }
     };
-    // Leave one speed out, each fold from the all-points optimum.
+    // Leave one speed out, each fold from the all-points optimum; an onset or absence row
+    // is held out with its speed.
     let mut held = vec![None; measured.len()];
+    let mut held_onsets = vec![None; diagram_in.onsets.len()];
+    let mut held_absences = vec![None; diagram_in.absences.len()];
     let mut fold_values = vec![Vec::new(); n];
     for &g in groups {
-        let train: Vec<&MeasuredAmplitude> = all
-            .iter()
-            .copied()
-            .filter(|m| !same_speed(m.u, g))
-            .collect();
+        let keep = |u: f64| !same_speed(u, g);
+        let train_points: Vec<&MeasuredAmplitude> =
+            all.points.iter().copied().filter(|m| keep(m.u)).collect();
+        let train_onsets: Vec<&MeasuredOnset> =
+            all.onsets.iter().copied().filter(|m| keep(m.u)).collect();
+        let train_absences: Vec<&MeasuredAbsence> =
+            all.absences.iter().copied().filter(|m| keep(m.u)).collect();
+        let train = Rows {
+            points: &train_points,
+            onsets: &train_onsets,
+            absences: &train_absences,
+        };
         let f_train = |th: &[f64]| eval(th, &train);
         let r = levenberg_marquardt(&f_train, &full.theta, opts.max_iterations / 2);
         let mut v = c.values(&r.theta);
@@ -840,12 +1108,8 @@ fn fit_candidate(
             .filter(|m| same_speed(m.u, g))
             .cloned()
             .collect();
-        let set = c
-            .apply(section, &r.theta)
-            .ok()
-            .and_then(|s| diagram(&s, setting));
-        evals.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-        let d = match &set {
+        let p = predicted(&r.theta);
+        let d = match &p.set {
             Some(set) => measured_distances(set, &test),
             None => summary(None, &test, setting).points,
         };
@@ -855,12 +1119,32 @@ fn fit_candidate(
                 held[i] = it.next();
             }
         }
+        let (o, a) = row_distances(&p, &diagram_in.onsets, &diagram_in.absences, setting);
+        for (i, o) in o.into_iter().enumerate() {
+            if same_speed(o.measured.u, g) {
+                held_onsets[i] = Some(o);
+            }
+        }
+        for (i, a) in a.into_iter().enumerate() {
+            if same_speed(a.measured.u, g) {
+                held_absences[i] = Some(a);
+            }
+        }
     }
     let held: Vec<MeasuredDistance> = held
         .into_iter()
         .map(|d| d.expect("every point held out once"))
         .collect();
-    let held_out = errors(&held, setting);
+    let held_onsets: Vec<OnsetDistance> = held_onsets
+        .into_iter()
+        .map(|d| d.expect("every onset held out once"))
+        .collect();
+    let held_absences: Vec<AbsenceDistance> = held_absences
+        .into_iter()
+        .map(|d| d.expect("every absence held out once"))
+        .collect();
+    let held_z = row_z(&held_onsets, &held_absences);
+    let held_out = errors(&held, &held_z, setting);
     // Standard error of the score over the speed groups (delta method on its square).
     let per_group: Vec<f64> = groups
         .iter()
@@ -870,7 +1154,13 @@ fn fit_candidate(
                 .filter(|x| same_speed(x.measured.u, g))
                 .cloned()
                 .collect();
-            let z = normalised(&d, setting);
+            let mut z = normalised(&d, setting);
+            for o in held_onsets.iter().filter(|o| same_speed(o.measured.u, g)) {
+                z.extend_from_slice(&o.z);
+            }
+            for a in held_absences.iter().filter(|a| same_speed(a.measured.u, g)) {
+                z.extend_from_slice(&a.z);
+            }
             z.iter().map(|v| v * v).sum::<f64>() / z.len().max(1) as f64
         })
         .collect();
@@ -881,18 +1171,20 @@ fn fit_candidate(
     // Floored at the resolution the measurement allows: the amplitude uncertainty over the
     // number of held-out residuals (noise-free points would otherwise leave no standard
     // error and let a richer candidate win by a rounding difference).
-    let n_res = normalised(&held, setting).len().max(1) as f64;
+    let n_res = (normalised(&held, setting).len() + held_z.len()).max(1) as f64;
     let resolution = opts.amplitude_noise / n_res.sqrt();
     let score_se = if held_out.score > 0.0 {
         (se_sq / (2.0 * held_out.score)).max(resolution)
     } else {
         resolution
     };
-    let set_all = c
-        .apply(section, &full.theta)
-        .ok()
-        .and_then(|s| diagram(&s, setting));
-    let fit = summary(set_all, measured, setting);
+    let p_all = predicted(&full.theta);
+    let fit = with_rows(
+        summary(p_all.set.clone(), measured, setting),
+        &p_all,
+        diagram_in,
+        setting,
+    );
     let mut values = c.values(&full.theta);
     flip(&mut values);
     Ok(CandidateResult {
@@ -913,6 +1205,8 @@ fn fit_candidate(
             .collect(),
         fit,
         held_out_points: held,
+        held_out_onsets: held_onsets,
+        held_out_absences: held_absences,
         shrink: if nominal_score > 0.0 {
             1.0 - held_out.score / nominal_score
         } else {
@@ -920,7 +1214,7 @@ fn fit_candidate(
         },
         held_out,
         score_se,
-        evaluations: evals.load(std::sync::atomic::Ordering::Relaxed) + 1,
+        evaluations: evals.load(std::sync::atomic::Ordering::Relaxed),
         theta: full.theta,
     })
 }
@@ -934,6 +1228,7 @@ fn verdict(ranked: &[CandidateResult], nominal: f64, opts: &BifurcationOptions) 
             name: Verdict::None,
             candidate: None,
             richer: Vec::new(),
+            contradicting: Vec::new(),
             shrink: None,
             explanation: format!(
                 "the nominal model's error at the measured points ({nominal:.3} of the RMS \
@@ -948,15 +1243,34 @@ fn verdict(ranked: &[CandidateResult], nominal: f64, opts: &BifurcationOptions) 
             name: Verdict::Unexplained,
             candidate: None,
             richer: Vec::new(),
+            contradicting: Vec::new(),
             shrink: None,
             explanation: "no candidate could be fitted".into(),
         };
     };
     let bar = best.held_out.score + best.score_se;
-    let (idx, chosen) = ranked
+    // Within one standard error, a candidate whose fit predicts an LCO where none was
+    // observed is passed over when another does not (issue 42).
+    let within: Vec<(usize, &CandidateResult)> = ranked
         .iter()
         .enumerate()
         .filter(|(_, c)| c.held_out.score <= bar)
+        .collect();
+    let consistent = within
+        .iter()
+        .any(|(_, c)| c.fit.contradicted_absences() == 0);
+    let contradicting: Vec<String> = if consistent {
+        within
+            .iter()
+            .filter(|(_, c)| c.fit.contradicted_absences() > 0)
+            .map(|(_, c)| c.label())
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let (idx, chosen) = within
+        .into_iter()
+        .filter(|(_, c)| !consistent || c.fit.contradicted_absences() == 0)
         .min_by(|(_, a), (_, b)| {
             a.parameters
                 .len()
@@ -965,18 +1279,31 @@ fn verdict(ranked: &[CandidateResult], nominal: f64, opts: &BifurcationOptions) 
         })
         // a non-finite score leaves no candidate under the bar: the best stands
         .unwrap_or((0, best));
-    let richer: Vec<String> = ranked[..idx].iter().map(|c| c.label()).collect();
+    let richer: Vec<String> = ranked[..idx]
+        .iter()
+        .map(|c| c.label())
+        .filter(|l| !contradicting.contains(l))
+        .collect();
     if chosen.shrink >= opts.min_shrink {
+        let passed = if contradicting.is_empty() {
+            String::new()
+        } else {
+            format!(
+                " that predicts no LCO where none was observed (passed over: {})",
+                contradicting.join(", ")
+            )
+        };
         BranchVerdict {
             effect: Some(chosen.effect),
             name: Verdict::Effect(chosen.effect),
             candidate: Some(idx),
             richer,
+            contradicting,
             shrink: Some(chosen.shrink),
             explanation: format!(
                 "{} removes {:.1} % of the nominal held-out error ({:.3} → {:.3} of the RMS \
                  amplitude); it is the simplest candidate within one standard error ({:.3}) \
-                 of the best held-out score",
+                 of the best held-out score{passed}",
                 chosen.label(),
                 100.0 * chosen.shrink,
                 nominal,
@@ -990,6 +1317,7 @@ fn verdict(ranked: &[CandidateResult], nominal: f64, opts: &BifurcationOptions) 
             name: Verdict::Unexplained,
             candidate: None,
             richer: Vec::new(),
+            contradicting: Vec::new(),
             shrink: Some(best.shrink),
             explanation: format!(
                 "the nominal error ({nominal:.3}) is significant but the best candidate, {}, \
@@ -1042,5 +1370,102 @@ mod extent_tests {
         );
         assert!(e.outside_speeds(17.957) && !e.outside_speeds(17.3));
         assert!(Extent::of(&[]).is_none());
+    }
+
+    fn candidate(
+        effect: Effect,
+        n_params: usize,
+        score: f64,
+        contradicts: bool,
+    ) -> CandidateResult {
+        let errors = Errors {
+            rows: Vec::new(),
+            score,
+        };
+        let absence = AbsenceDistance {
+            measured: MeasuredAbsence {
+                line: 2,
+                u: 14.0,
+                max_perturbation_alpha: None,
+                max_perturbation_h: None,
+            },
+            equilibrium_stable: true,
+            lco_alpha: contradicts.then_some(0.1),
+            lco_h: None,
+            threshold_alpha: None,
+            threshold_h: None,
+            predicts_lco: contradicts,
+            z: vec![if contradicts { 2.0 } else { 0.0 }],
+        };
+        let spec = ParameterSpec {
+            name: "p".into(),
+            unit: "-".into(),
+            convention: "-".into(),
+            scale: 1.0,
+            even: false,
+        };
+        CandidateResult {
+            effect,
+            level: effect.level(),
+            variant: "v".into(),
+            extends: None,
+            parameters: (0..n_params)
+                .map(|_| FittedParameter {
+                    spec: spec.clone(),
+                    value: 0.0,
+                    fold_values: Vec::new(),
+                })
+                .collect(),
+            fit: DiagramSummary {
+                hopf: Vec::new(),
+                folds: Vec::new(),
+                points: Vec::new(),
+                errors: errors.clone(),
+                branches: None,
+                onsets: Vec::new(),
+                absences: vec![absence],
+            },
+            held_out_points: Vec::new(),
+            held_out_onsets: Vec::new(),
+            held_out_absences: Vec::new(),
+            held_out: errors,
+            score_se: 0.02,
+            shrink: 1.0 - score / 1.0,
+            evaluations: 1,
+            theta: Vec::new(),
+        }
+    }
+
+    /// Within one standard error, the simplest candidate is named unless its fit predicts an
+    /// LCO where none was observed and another within the error does not; when every one
+    /// within the error contradicts, the rule is the plain one.
+    #[test]
+    fn the_ranking_passes_over_a_candidate_that_invents_an_lco() {
+        let opts = BifurcationOptions::default();
+        let ranked = vec![
+            candidate(Effect::StructuralPolynomial, 3, 0.150, false),
+            candidate(Effect::StructuralCubic, 1, 0.160, true),
+            candidate(Effect::AddedMass, 2, 0.165, false),
+            candidate(Effect::Friction, 1, 0.5, false),
+        ];
+        let v = verdict(&ranked, 1.0, &opts);
+        assert_eq!(v.effect, Some(Effect::AddedMass), "{v:?}");
+        assert_eq!(v.contradicting, vec![ranked[1].label()]);
+        assert_eq!(v.richer, vec![ranked[0].label()]);
+        assert!(v.explanation.contains("passed over"), "{}", v.explanation);
+        // without the absence row's contradiction: the simplest within the error
+        let mut plain = ranked.clone();
+        plain[1].fit.absences[0].predicts_lco = false;
+        let v = verdict(&plain, 1.0, &opts);
+        assert_eq!(v.effect, Some(Effect::StructuralCubic), "{v:?}");
+        assert!(v.contradicting.is_empty());
+        // every candidate within the error contradicts: the plain rule
+        let mut all = ranked.clone();
+        for c in &mut all[..3] {
+            c.fit.absences[0].predicts_lco = true;
+        }
+        let v = verdict(&all, 1.0, &opts);
+        assert_eq!(v.effect, Some(Effect::StructuralCubic), "{v:?}");
+        assert!(v.contradicting.is_empty());
     }
 }
