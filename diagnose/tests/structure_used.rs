@@ -12,9 +12,10 @@ use std::sync::Arc;
 
 use aeroelastic::aero::{AeroModel, TheodorsenAero};
 use aeroelastic::section::Section;
-use aeroelastic::structure::{NondimStructure, PolyTerm, Structure};
+use aeroelastic::structure::{Friction, NondimStructure, PolyTerm, Structure};
 use aeroelastic::tunnel::{free_dataset, FreeOptions};
 use diagnose::bifurcation::structure_check;
+use diagnose::structure::conform_to_decays;
 use identify::dataset::{Dataset, ModalStructure};
 
 /// A rig as the bifurcation benchmark draws them, with a hardening cubic pitch spring (a
@@ -165,6 +166,103 @@ fn a_correct_structure_is_kept_and_a_noise_only_record_is_no_mode() {
     }
     assert_eq!(check.modes.len(), 1, "{}", check.summary);
     assert_eq!(check.modes[0].dof, "pitch");
+}
+
+/// The truth's change that a decay cannot tell from the linear structure: a regularised
+/// pitch friction (its slope at rest, T_c/ε, is a viscous damper there) or a heavier
+/// heaving mass (read as a softer heave spring at the given mass).
+fn changed(s: &Section, what: &str) -> Section {
+    let mut st = s.structure.clone();
+    match what {
+        "friction" => {
+            // as the benchmark's friction truth: ε a tenth of the reference orbit's peak
+            // velocity; T_c/ε a damping ratio of about 0.8 % on the pitch spring
+            st.nonlinear.friction = Some(Friction {
+                heave_force: 0.0,
+                pitch_moment: 0.005 * st.k_alpha * 0.05,
+                heave_smoothing: None,
+                pitch_smoothing: Some(0.1 * st.omega_alpha() * 0.05),
+            })
+        }
+        _ => st.mass *= 1.2,
+    }
+    Section::new(st, s.aero.clone(), s.rho).unwrap()
+}
+
+/// Structure first for every candidate: a change that alters the model at rest (damping
+/// from a friction's pre-sliding slope, mass) is conformed to the decays — the springs and
+/// dampers re-identified under it — so that the identification's reading of the change
+/// (a larger pitch damper, a softer heave spring) is not counted twice: the truth's own
+/// change on the identified structure comes back with the truth's linear structure.
+#[test]
+fn a_change_at_rest_is_conformed_to_the_decays_and_gives_back_the_truths_structure() {
+    let base = truth();
+    for what in ["friction", "added mass"] {
+        let t = changed(&base, what);
+        let sets = decays(&t);
+        let refs: Vec<&Dataset> = sets.iter().collect();
+        let given = misgiven(&base, "pitch", 1.05);
+        let check = structure_check(&refs, &given).expect("still-air decays");
+        assert_eq!(
+            serde_json::to_value(&check).unwrap()["used"],
+            "identified",
+            "{what}: {}",
+            check.summary
+        );
+        let id = Section::new(
+            check.used_structure(&given.structure),
+            given.aero.clone(),
+            given.rho,
+        )
+        .unwrap();
+        // the truth's change applied on the identified structure, as a candidate is
+        let mut st = id.structure.clone();
+        if what == "friction" {
+            st.nonlinear.friction = t.structure.nonlinear.friction;
+        } else {
+            st.mass = t.structure.mass;
+        }
+        let on_id = Section::new(st, id.aero.clone(), id.rho).unwrap();
+        let conformed = conform_to_decays(&check, &id, on_id.clone()).expect("conformed");
+        let (ts, is, cs) = (&t.structure, &id.structure, &conformed.structure);
+        let (u_t, u_on, u_c) = (first_hopf(&t), first_hopf(&on_id), first_hopf(&conformed));
+        eprintln!(
+            "{what}: k_h truth {:.2} identified {:.2} conformed {:.2}; k_α {:.4} {:.4} {:.4}; \
+             c_h {:.4} {:.4} {:.4}; c_α {:.5} {:.5} {:.5}; Hopf truth {u_t:.3}, change on \
+             the identified {u_on:.3}, conformed {u_c:.3} m/s",
+            ts.k_h, is.k_h, cs.k_h, ts.k_alpha, is.k_alpha, cs.k_alpha, ts.c_h, is.c_h,
+            cs.c_h, ts.c_alpha, is.c_alpha, cs.c_alpha
+        );
+        if what == "friction" {
+            // the decay reads the friction's slope at rest T_c/ε as pitch damping ...
+            let f = ts.nonlinear.friction.unwrap();
+            let slope = f.pitch_moment / f.pitch_smoothing.unwrap();
+            assert!(
+                (is.c_alpha - ts.c_alpha - slope).abs() < 0.2 * slope,
+                "identified c_α {} truth {} slope {slope}",
+                is.c_alpha,
+                ts.c_alpha
+            );
+            // ... which the conformed friction candidate does not count twice
+            assert!(
+                (cs.c_alpha - ts.c_alpha).abs() < 0.2 * slope,
+                "conformed c_α {} truth {} slope {slope}",
+                cs.c_alpha,
+                ts.c_alpha
+            );
+        } else {
+            // a heavier heaving mass is read as a softer heave spring at the given mass ...
+            assert!(is.k_h < 0.9 * ts.k_h, "identified k_h {} truth {}", is.k_h, ts.k_h);
+            // ... which the conformed added mass gives back, with the truth's Hopf speed
+            assert!((cs.k_h / ts.k_h - 1.0).abs() < 0.01, "{} {}", cs.k_h, ts.k_h);
+            assert!((u_on / u_t - 1.0).abs() > 0.01, "{what}: {u_on} vs {u_t}");
+        }
+        assert!((cs.k_alpha / ts.k_alpha - 1.0).abs() < 0.01);
+        assert!((u_c / u_t - 1.0).abs() < 0.01, "{what}: {u_c} vs {u_t}");
+        // nothing to conform: the identified section itself comes back unchanged
+        let same = conform_to_decays(&check, &id, id.clone()).unwrap();
+        assert_eq!(same.structure, id.structure);
+    }
 }
 
 /// The generated benchmark's acceptance (issue 42): rigs whose given structure is off by
