@@ -34,6 +34,7 @@ fn main() {
                 if detail {
                     if let Some(c) = &d.structure {
                         eprintln!("set {i} structure: {}", c.reason);
+                        eprintln!("  decays: {}", c.summary);
                         if let Some(id) = &c.identified {
                             for p in &id.parameters {
                                 eprintln!(

@@ -4,7 +4,14 @@
 //! against amplitude), and the shape of the envelope (exponential for viscous damping,
 //! linear for dry friction), against the modes of the given structure in still air. The
 //! system level reports it for the free runs it scores, the bifurcation level for the
-//! decays it is given.
+//! decays it is given. A given mode that dominates no record is read as a record's second
+//! mode; a mode damped out within four windows of four periods in windows of two.
+//!
+//! When the decays differ from the given structure, the linear structure is identified
+//! from them ([`identify_structure`]) and, at the bifurcation level, every candidate's
+//! change is conformed to them ([`conform_to_decays`]): a decay measures the whole model at
+//! rest, so a candidate that adds mass or damping there has its springs and dampers
+//! re-identified under it.
 
 use std::f64::consts::TAU;
 
@@ -1276,6 +1283,60 @@ pub fn conform_to_decays(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_mode_damped_out_within_four_long_windows_is_read_in_short_ones() {
+        // ζ = 0.08 at 3 Hz: the amplitude falls by e^(−2π·0.08·6) = 0.05 every two
+        // four-period windows (half overlap), so fewer than 4 stand above 5 % of the peak
+        let dt = 1.0 / 200.0;
+        let (f, z): (f64, f64) = (3.0, 0.08);
+        let wd = TAU * f * (1.0 - z * z).sqrt();
+        let x: Vec<f64> = (0..4000)
+            .map(|i| {
+                let t = i as f64 * dt;
+                0.01 * (-z * TAU * f * t).exp() * (wd * t).cos()
+            })
+            .collect();
+        let r = decay_row("c", "pitch", &x, dt, &[(3.0, 0.05)]).unwrap();
+        // a decay oscillates at the damped frequency (measured: −0.7 % from it)
+        let fd = wd / TAU;
+        assert!((r.linear_hz / fd - 1.0).abs() < 0.01, "{} vs {fd}", r.linear_hz);
+        // the envelope's damping ratio (fewer than five windows leave no linear one)
+        assert!((r.measured_zeta / z - 1.0).abs() < 0.1, "{r:?}");
+    }
+
+    #[test]
+    fn rest_linearisation_is_a_frictions_slope_at_rest() {
+        use aeroelastic::structure::{Friction, NondimStructure, PolyTerm};
+        let mut st = Structure::from_nondimensional(&NondimStructure {
+            mu: 50.0,
+            r_alpha2: 0.3,
+            sigma: 0.6,
+            x_alpha: 0.2,
+            semi_chord: 0.15,
+            omega_alpha: TAU * 3.0,
+            rho: 1.2,
+            zeta_h: 0.01,
+            zeta_alpha: 0.015,
+        })
+        .unwrap();
+        st.nonlinear.pitch_stiffness_terms.push(PolyTerm {
+            power: 3,
+            coefficient: 1e4,
+        });
+        let (k, c) = rest_linearisation(&st);
+        assert_eq!((k, c), (Matrix2::zeros(), Matrix2::zeros()));
+        st.nonlinear.friction = Some(Friction {
+            heave_force: 0.0,
+            pitch_moment: 0.02,
+            heave_smoothing: None,
+            pitch_smoothing: Some(1e-3),
+        });
+        let (k, c) = rest_linearisation(&st);
+        assert_eq!(k, Matrix2::zeros());
+        assert!((c[(1, 1)] / 20.0 - 1.0).abs() < 1e-6, "{c}");
+        assert_eq!((c[(0, 0)], c[(0, 1)], c[(1, 0)]), (0.0, 0.0, 0.0));
+    }
 
     #[test]
     fn decay_row_reads_frequency_damping_and_a_linear_envelope() {
