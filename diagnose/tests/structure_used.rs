@@ -230,8 +230,18 @@ fn a_change_at_rest_is_conformed_to_the_decays_and_gives_back_the_truths_structu
             "{what}: k_h truth {:.2} identified {:.2} conformed {:.2}; k_α {:.4} {:.4} {:.4}; \
              c_h {:.4} {:.4} {:.4}; c_α {:.5} {:.5} {:.5}; Hopf truth {u_t:.3}, change on \
              the identified {u_on:.3}, conformed {u_c:.3} m/s",
-            ts.k_h, is.k_h, cs.k_h, ts.k_alpha, is.k_alpha, cs.k_alpha, ts.c_h, is.c_h,
-            cs.c_h, ts.c_alpha, is.c_alpha, cs.c_alpha
+            ts.k_h,
+            is.k_h,
+            cs.k_h,
+            ts.k_alpha,
+            is.k_alpha,
+            cs.k_alpha,
+            ts.c_h,
+            is.c_h,
+            cs.c_h,
+            ts.c_alpha,
+            is.c_alpha,
+            cs.c_alpha
         );
         if what == "friction" {
             // the decay reads the friction's slope at rest T_c/ε as pitch damping ...
@@ -252,9 +262,19 @@ fn a_change_at_rest_is_conformed_to_the_decays_and_gives_back_the_truths_structu
             );
         } else {
             // a heavier heaving mass is read as a softer heave spring at the given mass ...
-            assert!(is.k_h < 0.9 * ts.k_h, "identified k_h {} truth {}", is.k_h, ts.k_h);
+            assert!(
+                is.k_h < 0.9 * ts.k_h,
+                "identified k_h {} truth {}",
+                is.k_h,
+                ts.k_h
+            );
             // ... which the conformed added mass gives back, with the truth's Hopf speed
-            assert!((cs.k_h / ts.k_h - 1.0).abs() < 0.01, "{} {}", cs.k_h, ts.k_h);
+            assert!(
+                (cs.k_h / ts.k_h - 1.0).abs() < 0.01,
+                "{} {}",
+                cs.k_h,
+                ts.k_h
+            );
             assert!((u_on / u_t - 1.0).abs() > 0.01, "{what}: {u_on} vs {u_t}");
         }
         assert!((cs.k_alpha / ts.k_alpha - 1.0).abs() < 0.01);
@@ -355,5 +375,10 @@ fn a_still_air_decay_does_not_raise_the_free_response_levels_null() {
         }
         nulls.push(null_level(&level));
     }
-    assert!(nulls[1] < 1.5 * nulls[0], "null {} → {}", nulls[0], nulls[1]);
+    assert!(
+        nulls[1] < 1.5 * nulls[0],
+        "null {} → {}",
+        nulls[0],
+        nulls[1]
+    );
 }
