@@ -2,9 +2,10 @@
 //! `cargo run --release -p diagnose --example branch_one -- SEED INDEX... [--misgiven]`
 //! (`--misgiven`: the structure handed to the diagnosis has one DOF's frequency 3–8 % off,
 //! with still-air decays of the truth; `--hold-given`: the same, fitted on the given
-//! structure anyway; `A..B` runs indices A to B − 1).
+//! structure anyway; `A..B` runs indices A to B − 1; `--detail`: also the structure's
+//! reason and every candidate's held-out score, shrink and first Hopf point, on stderr).
 
-use diagnose::bifurcation::bench::{run_set_with, BranchBenchOptions};
+use diagnose::bifurcation::bench::{run_set_diagnosis, BranchBenchOptions};
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -25,9 +26,43 @@ fn main() {
             idx.push(i);
         }
     }
+    let detail = args.iter().any(|a| a == "--detail");
     for i in idx {
-        match run_set_with(i, seed, &opts) {
-            Ok(o) => println!("{}", serde_json::to_string(&o).unwrap_or_default()),
+        match run_set_diagnosis(i, seed, &opts) {
+            Ok((o, d)) => {
+                println!("{}", serde_json::to_string(&o).unwrap_or_default());
+                if detail {
+                    if let Some(c) = &d.structure {
+                        eprintln!("set {i} structure: {}", c.reason);
+                        eprintln!("  decays: {}", c.summary);
+                        if let Some(id) = &c.identified {
+                            for p in &id.parameters {
+                                eprintln!(
+                                    "  {} given {:.5e} identified {:.5e} held {}",
+                                    p.name, p.given, p.identified, p.held
+                                );
+                            }
+                        }
+                    }
+                    eprintln!(
+                        "  nominal score {:.4} hopf {:?}",
+                        d.nominal.errors.score,
+                        d.nominal.hopf.first().map(|h| (h.u, h.criticality.clone()))
+                    );
+                    for c in &d.candidates {
+                        eprintln!(
+                            "  {:40} held-out {:.4} ± {:.4} shrink {:+.3} hopf {:?} values {:?}",
+                            c.label(),
+                            c.held_out.score,
+                            c.score_se,
+                            c.shrink,
+                            c.fit.hopf.first().map(|h| (h.u, h.criticality.clone())),
+                            c.parameters.iter().map(|p| p.value).collect::<Vec<_>>()
+                        );
+                    }
+                    eprintln!("  verdict: {}", d.verdict.explanation);
+                }
+            }
             Err(e) => eprintln!("set {i}: {e}"),
         }
     }

@@ -4,7 +4,14 @@
 //! against amplitude), and the shape of the envelope (exponential for viscous damping,
 //! linear for dry friction), against the modes of the given structure in still air. The
 //! system level reports it for the free runs it scores, the bifurcation level for the
-//! decays it is given.
+//! decays it is given. A given mode that dominates no record is read as a record's second
+//! mode; a mode damped out within four windows of four periods in windows of two.
+//!
+//! When the decays differ from the given structure, the linear structure is identified
+//! from them ([`identify_structure`]) and, at the bifurcation level, every candidate's
+//! change is conformed to them ([`conform_to_decays`]): a decay measures the whole model at
+//! rest, so a candidate that adds mass or damping there has its springs and dampers
+//! re-identified under it.
 
 use std::f64::consts::TAU;
 
@@ -401,11 +408,17 @@ fn refine_beside(seg: &[f64], dt: f64, f0: f64, other: f64) -> Option<f64> {
     Some(0.5 * (a + b))
 }
 
-/// Windows of four periods (half overlap) of `x`: (centre time, first-harmonic
+/// Windows of `periods` periods (half overlap) of `x`: (centre time, first-harmonic
 /// amplitude, frequency refined in the window). With a second mode `other` in the record,
 /// each window fits both sinusoids, the target's frequency refined beside the other's.
-fn decay_windows(x: &[f64], dt: f64, f: f64, other: Option<f64>) -> Vec<(f64, f64, f64)> {
-    let w = ((4.0 / f) / dt).round() as usize;
+fn decay_windows(
+    x: &[f64],
+    dt: f64,
+    f: f64,
+    other: Option<f64>,
+    periods: f64,
+) -> Vec<(f64, f64, f64)> {
+    let w = ((periods / f) / dt).round() as usize;
     let mut out = Vec::new();
     if w < 8 {
         return out;
@@ -486,6 +499,30 @@ fn check_against(
             }
         }
     }
+    // A given still-air mode that is no record's dominant one (e.g. a pitch mode damped
+    // out within a few periods, whose release the heave mode then dominates) is read as
+    // the second mode of the records that show it: the row of smallest uncertainty.
+    for j in 0..modes_given.len() {
+        if rows.iter().any(|r| r.given_mode == j) {
+            continue;
+        }
+        let best = records
+            .iter()
+            .filter(|rec| rec.meta.wind_speed <= 0.0)
+            .flat_map(|rec| {
+                [("pitch", &rec.alpha), ("heave", &rec.h)]
+                    .into_iter()
+                    .filter_map(|(dof, x)| {
+                        decay_row_at(&rec.meta.id, dof, x, rec.dt, &modes_given, true).ok()
+                    })
+            })
+            .filter(|r| r.given_mode == j && r.linear_hz.is_finite())
+            .min_by(|a, b| a.linear_hz_sd.total_cmp(&b.linear_hz_sd));
+        if let Some(mut r) = best {
+            r.signature.push_str(" (second mode of the record)");
+            rows.push(r);
+        }
+    }
     if rows.is_empty() && refused.is_empty() {
         return None;
     }
@@ -529,7 +566,7 @@ fn check_against(
             "no still-air mode stands out of the noise: the structure is taken as given"
                 .to_string(),
         ),
-        Some(st) => match identify_structure(&rows, m, st) {
+        Some(st) => match identify_at_rest(&rows, m, st) {
             None => (
                 None,
                 StructureUsed::Given,
@@ -574,8 +611,8 @@ fn check_against(
                         StructureUsed::Given,
                         format!(
                             "the decays differ from the given structure ({words}) but no \
-                             linear structure with the given masses reproduces them \
-                             (χ² {:.2}): the given structure is used",
+                             valid linear structure with the given masses reproduces them \
+                             (χ² {:.2}, or a negative damper): the given structure is used",
                             id.chi2
                         ),
                     )
@@ -630,8 +667,28 @@ fn decay_row(
     dt: f64,
     modes_given: &[(f64, f64)],
 ) -> std::result::Result<ModeCheck, String> {
+    decay_row_at(case, dof, x, dt, modes_given, false)
+}
+
+/// [`decay_row`] of the record's dominant mode, or with `second` of its second mode
+/// ([`second_mode`]: the largest prominent spectral peak ≥ 20 % away from the dominant
+/// one), each fitted jointly beside the other in every window.
+fn decay_row_at(
+    case: &str,
+    dof: &str,
+    x: &[f64],
+    dt: f64,
+    modes_given: &[(f64, f64)],
+    second: bool,
+) -> std::result::Result<ModeCheck, String> {
     let f0 = dominant_frequency(x, dt).ok_or("flat record: no spectral peak")?;
-    let f = refine_frequency(x, dt, f0);
+    let f_dom = refine_frequency(x, dt, f0);
+    let (f, other) = if second {
+        let f2 = second_mode(x, dt, f_dom).ok_or("no second mode stands out of the noise")?;
+        (f2, Some(f_dom))
+    } else {
+        (f_dom, None)
+    };
     let nyquist = 0.5 / dt;
     if !(f.is_finite() && f > 0.0) || f > NYQUIST_SHARE * nyquist {
         return Err(format!(
@@ -646,29 +703,42 @@ fn decay_row(
             x.len() as f64 * dt * f
         ));
     }
-    let win = decay_windows(x, dt, f, second_mode(x, dt, f));
-    let peak = win.iter().map(|w| w.1).fold(0.0, f64::max);
-    let w_len = ((4.0 / f) / dt).round().max(1.0);
-    let noise_amp = noise_sigma(x) * (2.0 / w_len).sqrt();
-    let stands_out = peak >= NOISE_PROMINENCE * noise_amp && peak > 0.0;
-    if !stands_out {
-        return Err(format!(
-            "no mode stands out of the noise (largest window amplitude {peak:.3e} is {:.1}× \
-             the noise's, at least {NOISE_PROMINENCE} asked)",
-            peak / noise_amp.max(f64::MIN_POSITIVE)
-        ));
-    }
-    // Noise floor: the windows' amplitude at the end of a decay, 5 % of the peak, or three
-    // times the noise's window amplitude.
-    let tail = win.last().map_or(0.0, |w| w.1);
-    let floor = (2.0 * tail).max(0.05 * peak).max(3.0 * noise_amp);
-    let good: Vec<(f64, f64, f64)> = win.iter().copied().filter(|w| w.1 > floor).collect();
-    if good.len() < 4 {
-        return Err(format!(
-            "{} window(s) of four periods above the noise floor, fewer than 4",
-            good.len()
-        ));
-    }
+    let other = if second { other } else { second_mode(x, dt, f) };
+    // Windows of four periods; a mode damped out within fewer than four of them (a
+    // friction-damped pitch mode) is read in windows of two periods.
+    let analyse = |periods: f64| -> std::result::Result<Vec<(f64, f64, f64)>, String> {
+        let win = decay_windows(x, dt, f, other, periods);
+        let peak = win.iter().map(|w| w.1).fold(0.0, f64::max);
+        let w_len = ((periods / f) / dt).round().max(1.0);
+        let noise_amp = noise_sigma(x) * (2.0 / w_len).sqrt();
+        let stands_out = peak >= NOISE_PROMINENCE * noise_amp && peak > 0.0;
+        if !stands_out {
+            return Err(format!(
+                "no mode stands out of the noise (largest window amplitude {peak:.3e} is \
+                 {:.1}× the noise's, at least {NOISE_PROMINENCE} asked)",
+                peak / noise_amp.max(f64::MIN_POSITIVE)
+            ));
+        }
+        // Noise floor: the windows' amplitude at the end of a decay, 5 % of the peak, or
+        // three times the noise's window amplitude.
+        let tail = win.last().map_or(0.0, |w| w.1);
+        let floor = (2.0 * tail).max(0.05 * peak).max(3.0 * noise_amp);
+        let good: Vec<(f64, f64, f64)> = win.iter().copied().filter(|w| w.1 > floor).collect();
+        if good.len() < 4 {
+            return Err(format!(
+                "{} window(s) of {periods} periods above the noise floor, fewer than 4",
+                good.len()
+            ));
+        }
+        Ok(good)
+    };
+    let good = match analyse(4.0) {
+        Ok(g) => g,
+        Err(why) if why.contains("window(s)") => {
+            analyse(2.0).map_err(|w2| format!("{why}; {w2}"))?
+        }
+        Err(why) => return Err(why),
+    };
     let t: Vec<f64> = good.iter().map(|w| w.0).collect();
     let a: Vec<f64> = good.iter().map(|w| w.1).collect();
     let la: Vec<f64> = a.iter().map(|v| v.ln()).collect();
@@ -803,9 +873,37 @@ pub fn identify_structure(
     m: &Matrix2<f64>,
     given: &Structure,
 ) -> Option<StructureIdentification> {
+    identify_with(rows, m, given, &Matrix2::zeros(), &Matrix2::zeros())
+}
+
+/// [`identify_with`] with the rest terms of `st`'s nonlinear terms ([`rest_linearisation`]).
+fn identify_at_rest(
+    rows: &[ModeCheck],
+    m: &Matrix2<f64>,
+    st: &Structure,
+) -> Option<StructureIdentification> {
+    let (ke, ce) = rest_linearisation(st);
+    identify_with(rows, m, st, &ke, &ce)
+}
+
+/// [`identify_structure`] for a structure whose nonlinear terms add the stiffness `ke` and
+/// damping `ce` at rest ([`rest_linearisation`]): the still-air modes are those of
+/// M q̈ + (C + ce) q̇ + (K + ke) q = 0, and only K = diag(k_h, k_α), C = diag(c_h, c_α)
+/// are adjusted.
+fn identify_with(
+    rows: &[ModeCheck],
+    m: &Matrix2<f64>,
+    given: &Structure,
+    ke: &Matrix2<f64>,
+    ce: &Matrix2<f64>,
+) -> Option<StructureIdentification> {
     let kg = [given.k_h, given.k_alpha];
     let cg = [given.c_h, given.c_alpha];
-    let eig = eigen_of(m, &given.stiffness_matrix(), &given.damping_matrix());
+    let eig = eigen_of(
+        m,
+        &(given.stiffness_matrix() + ke),
+        &(given.damping_matrix() + ce),
+    );
     if eig.len() != 2 || rows.is_empty() {
         return None;
     }
@@ -903,8 +1001,8 @@ pub fn identify_structure(
         }
         let e = modes_of(
             m,
-            &Matrix2::new(k[0], 0.0, 0.0, k[1]),
-            &Matrix2::new(c[0], 0.0, 0.0, c[1]),
+            &(Matrix2::new(k[0], 0.0, 0.0, k[1]) + ke),
+            &(Matrix2::new(c[0], 0.0, 0.0, c[1]) + ce),
         );
         if e.len() != 2 {
             return None;
@@ -976,6 +1074,10 @@ pub fn identify_structure(
     // a square system must be solved; an overdetermined one within its degrees of freedom
     let dof = meas.len().saturating_sub(n_p).max(1) as f64;
     converged = converged && chi2 <= COVERAGE * COVERAGE * dof;
+    // a negative damper is no structure (generated set 11 of seed 2027: c_α −0.081 from a
+    // friction-damped second mode, and the level then failed)
+    let (k_sol, c_sol) = unpack(&p);
+    converged = converged && k_sol.iter().all(|v| *v > 0.0) && c_sol.iter().all(|v| *v >= 0.0);
     // uncertainty of the scaled parameters
     let cov = if n_p > 0 {
         let jm = jac(&p, &r)?;
@@ -1028,8 +1130,8 @@ pub fn identify_structure(
     }
     let e_id = modes_of(
         m,
-        &Matrix2::new(k[0], 0.0, 0.0, k[1]),
-        &Matrix2::new(c[0], 0.0, 0.0, c[1]),
+        &(Matrix2::new(k[0], 0.0, 0.0, k[1]) + ke),
+        &(Matrix2::new(c[0], 0.0, 0.0, c[1]) + ce),
     );
     let mut differs = false;
     let out_modes: Vec<ModeIdentification> = modes
@@ -1079,9 +1181,183 @@ pub fn identify_structure(
     })
 }
 
+/// The stiffness and damping that the nonlinear terms of `st` add at rest (q = q̇ = 0):
+/// the Jacobian of [`Structure::restoring`] at the origin minus the linear springs and
+/// dampers, by central differences (10⁻⁹ m or rad, 10⁻⁹ m/s or rad/s). Polynomial terms
+/// of power ≥ 2 add nothing; a regularised Coulomb friction F_c tanh(v/ε) adds the viscous
+/// damping F_c/ε (its pre-sliding slope), which a still-air decay measures as damping.
+/// Returns (stiffness \[N/m, N m/rad\], damping \[N s/m, N m s/rad\]) per unit span.
+pub fn rest_linearisation(st: &Structure) -> (Matrix2<f64>, Matrix2<f64>) {
+    let d = 1e-9;
+    let mut k = Matrix2::zeros();
+    let mut c = Matrix2::zeros();
+    for j in 0..2 {
+        let mut qp = [0.0; 2];
+        let mut qm = [0.0; 2];
+        qp[j] = d;
+        qm[j] = -d;
+        let (kp, km) = (st.restoring(qp, [0.0; 2]), st.restoring(qm, [0.0; 2]));
+        let (cp, cm) = (st.restoring([0.0; 2], qp), st.restoring([0.0; 2], qm));
+        for i in 0..2 {
+            k[(i, j)] = (kp[i] - km[i]) / (2.0 * d);
+            c[(i, j)] = (cp[i] - cm[i]) / (2.0 * d);
+        }
+    }
+    // the linear springs and dampers exactly (no rounding of k·d / d)
+    let kl = st.stiffness_matrix();
+    let cl = st.damping_matrix();
+    for i in 0..2 {
+        for j in 0..2 {
+            let (a, b) = (k[(i, j)] - kl[(i, j)], c[(i, j)] - cl[(i, j)]);
+            // differences below the central difference's rounding are zero
+            k[(i, j)] = if a.abs() > 1e-6 * kl[(i, i)].abs() {
+                a
+            } else {
+                0.0
+            };
+            c[(i, j)] = if b.abs() > 1e-6 * cl[(i, i)].abs().max(1e-12) {
+                b
+            } else {
+                0.0
+            };
+        }
+    }
+    (k, c)
+}
+
+/// The decays as a constraint on a model (structure first, applied to every candidate):
+/// `section` (a candidate's change applied to the structure identified from the decays)
+/// with its linear springs and dampers k_h, k_α, c_h, c_α re-identified so that its own
+/// still-air modes — its mass matrix with the air's apparent mass at U = 0, and the
+/// stiffness and damping its nonlinear terms add at rest ([`rest_linearisation`]) —
+/// reproduce the measured ones of `check` again, the same parameters free as in
+/// `check`'s identification.
+///
+/// A decay measures the whole model at rest: a candidate that adds mass (added mass, a
+/// scale on the air's apparent mass) or damping at rest (a regularised friction's slope)
+/// would otherwise count twice what the identification already put into the springs and
+/// dampers. Returns `section` unchanged when its mass matrix and rest linearisation equal
+/// `base`'s (relative 10⁻¹²) or `check` does not use the identified structure.
+///
+/// # Errors
+/// [`crate::Error::Data`] when no linear structure with the candidate's masses and rest
+/// terms reproduces the decays (the solve fails or leaves χ² above its degrees of
+/// freedom), or the re-identified structure is invalid (e.g. a negative damper: the
+/// candidate's damping at rest exceeds what the decays measured).
+pub fn conform_to_decays(
+    check: &StructureCheck,
+    base: &Section,
+    section: Section,
+) -> crate::Result<Section> {
+    if check.used != StructureUsed::Identified || check.identified.is_none() {
+        return Ok(section);
+    }
+    let m = section.total_mass(0.0);
+    let (ke, ce) = rest_linearisation(&section.structure);
+    let m0 = base.total_mass(0.0);
+    let (ke0, ce0) = rest_linearisation(&base.structure);
+    let same = |a: &Matrix2<f64>, b: &Matrix2<f64>, scale: f64| {
+        (a - b).iter().all(|v| v.abs() <= 1e-12 * scale)
+    };
+    let st = &section.structure;
+    if same(&m, &m0, m0.norm())
+        && same(&ke, &ke0, st.k_h.max(st.k_alpha))
+        && same(&ce, &ce0, st.c_h.max(st.c_alpha).max(f64::MIN_POSITIVE))
+        && st.k_h == base.structure.k_h
+        && st.k_alpha == base.structure.k_alpha
+        && st.c_h == base.structure.c_h
+        && st.c_alpha == base.structure.c_alpha
+    {
+        return Ok(section);
+    }
+    let id = identify_with(&check.modes, &m, st, &ke, &ce)
+        .filter(|id| id.converged)
+        .ok_or_else(|| {
+            crate::Error::data(
+                "still-air decays",
+                "no linear structure with the candidate's masses and rest terms reproduces \
+                 the measured still-air modes",
+            )
+        })?;
+    let mut s = st.clone();
+    for p in &id.parameters {
+        match p.name.as_str() {
+            "k_h" => s.k_h = p.identified,
+            "k_alpha" => s.k_alpha = p.identified,
+            "c_h" => s.c_h = p.identified,
+            "c_alpha" => s.c_alpha = p.identified,
+            _ => {}
+        }
+    }
+    Section::new(s, section.aero.clone(), section.rho).map_err(|e| {
+        crate::Error::data(
+            "still-air decays",
+            format!("the structure re-identified under the candidate is invalid: {e}"),
+        )
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_mode_damped_out_within_four_long_windows_is_read_in_short_ones() {
+        // ζ = 0.08 at 3 Hz: the amplitude falls by e^(−2π·0.08·6) = 0.05 every two
+        // four-period windows (half overlap), so fewer than 4 stand above 5 % of the peak
+        let dt = 1.0 / 200.0;
+        let (f, z): (f64, f64) = (3.0, 0.08);
+        let wd = TAU * f * (1.0 - z * z).sqrt();
+        let x: Vec<f64> = (0..4000)
+            .map(|i| {
+                let t = i as f64 * dt;
+                0.01 * (-z * TAU * f * t).exp() * (wd * t).cos()
+            })
+            .collect();
+        let r = decay_row("c", "pitch", &x, dt, &[(3.0, 0.05)]).unwrap();
+        // a decay oscillates at the damped frequency (measured: −0.7 % from it)
+        let fd = wd / TAU;
+        assert!(
+            (r.linear_hz / fd - 1.0).abs() < 0.01,
+            "{} vs {fd}",
+            r.linear_hz
+        );
+        // the envelope's damping ratio (fewer than five windows leave no linear one)
+        assert!((r.measured_zeta / z - 1.0).abs() < 0.1, "{r:?}");
+    }
+
+    #[test]
+    fn rest_linearisation_is_a_frictions_slope_at_rest() {
+        use aeroelastic::structure::{Friction, NondimStructure, PolyTerm};
+        let mut st = Structure::from_nondimensional(&NondimStructure {
+            mu: 50.0,
+            r_alpha2: 0.3,
+            sigma: 0.6,
+            x_alpha: 0.2,
+            semi_chord: 0.15,
+            omega_alpha: TAU * 3.0,
+            rho: 1.2,
+            zeta_h: 0.01,
+            zeta_alpha: 0.015,
+        })
+        .unwrap();
+        st.nonlinear.pitch_stiffness_terms.push(PolyTerm {
+            power: 3,
+            coefficient: 1e4,
+        });
+        let (k, c) = rest_linearisation(&st);
+        assert_eq!((k, c), (Matrix2::zeros(), Matrix2::zeros()));
+        st.nonlinear.friction = Some(Friction {
+            heave_force: 0.0,
+            pitch_moment: 0.02,
+            heave_smoothing: None,
+            pitch_smoothing: Some(1e-3),
+        });
+        let (k, c) = rest_linearisation(&st);
+        assert_eq!(k, Matrix2::zeros());
+        assert!((c[(1, 1)] / 20.0 - 1.0).abs() < 1e-6, "{c}");
+        assert_eq!((c[(0, 0)], c[(0, 1)], c[(1, 0)]), (0.0, 0.0, 0.0));
+    }
 
     #[test]
     fn decay_row_reads_frequency_damping_and_a_linear_envelope() {

@@ -12,9 +12,10 @@ use std::sync::Arc;
 
 use aeroelastic::aero::{AeroModel, TheodorsenAero};
 use aeroelastic::section::Section;
-use aeroelastic::structure::{NondimStructure, PolyTerm, Structure};
+use aeroelastic::structure::{Friction, NondimStructure, PolyTerm, Structure};
 use aeroelastic::tunnel::{free_dataset, FreeOptions};
 use diagnose::bifurcation::structure_check;
+use diagnose::structure::conform_to_decays;
 use identify::dataset::{Dataset, ModalStructure};
 
 /// A rig as the bifurcation benchmark draws them, with a hardening cubic pitch spring (a
@@ -163,8 +164,137 @@ fn a_correct_structure_is_kept_and_a_noise_only_record_is_no_mode() {
             0.5 / dt
         );
     }
-    assert_eq!(check.modes.len(), 1, "{}", check.summary);
-    assert_eq!(check.modes[0].dof, "pitch");
+    // every row is read from the pitch record (since round 27 the heave mode, which no
+    // record then dominates, is read there as the record's second mode); the noise-only
+    // heave record gives none and is listed as refused
+    assert!(!check.modes.is_empty(), "{}", check.summary);
+    assert!(
+        check.modes.iter().all(|m| m.dof == "pitch"),
+        "{}",
+        check.summary
+    );
+    assert!(
+        check.refused.iter().any(|r| r.contains("heave")),
+        "{:?}",
+        check.refused
+    );
+}
+
+/// The truth's change that a decay cannot tell from the linear structure: a regularised
+/// pitch friction (its slope at rest, T_c/ε, is a viscous damper there) or a heavier
+/// heaving mass (read as a softer heave spring at the given mass).
+fn changed(s: &Section, what: &str) -> Section {
+    let mut st = s.structure.clone();
+    match what {
+        "friction" => {
+            // as the benchmark's friction truth: ε a tenth of the reference orbit's peak
+            // velocity; T_c/ε a damping ratio of about 0.8 % on the pitch spring
+            st.nonlinear.friction = Some(Friction {
+                heave_force: 0.0,
+                pitch_moment: 0.005 * st.k_alpha * 0.05,
+                heave_smoothing: None,
+                pitch_smoothing: Some(0.1 * st.omega_alpha() * 0.05),
+            })
+        }
+        _ => st.mass *= 1.2,
+    }
+    Section::new(st, s.aero.clone(), s.rho).unwrap()
+}
+
+/// Structure first for every candidate: a change that alters the model at rest (damping
+/// from a friction's pre-sliding slope, mass) is conformed to the decays — the springs and
+/// dampers re-identified under it — so that the identification's reading of the change
+/// (a larger pitch damper, a softer heave spring) is not counted twice: the truth's own
+/// change on the identified structure comes back with the truth's linear structure.
+#[test]
+fn a_change_at_rest_is_conformed_to_the_decays_and_gives_back_the_truths_structure() {
+    let base = truth();
+    for what in ["friction", "added mass"] {
+        let t = changed(&base, what);
+        let sets = decays(&t);
+        let refs: Vec<&Dataset> = sets.iter().collect();
+        let given = misgiven(&base, "pitch", 1.05);
+        let check = structure_check(&refs, &given).expect("still-air decays");
+        assert_eq!(
+            serde_json::to_value(&check).unwrap()["used"],
+            "identified",
+            "{what}: {}",
+            check.summary
+        );
+        let id = Section::new(
+            check.used_structure(&given.structure),
+            given.aero.clone(),
+            given.rho,
+        )
+        .unwrap();
+        // the truth's change applied on the identified structure, as a candidate is
+        let mut st = id.structure.clone();
+        if what == "friction" {
+            st.nonlinear.friction = t.structure.nonlinear.friction;
+        } else {
+            st.mass = t.structure.mass;
+        }
+        let on_id = Section::new(st, id.aero.clone(), id.rho).unwrap();
+        let conformed = conform_to_decays(&check, &id, on_id.clone()).expect("conformed");
+        let (ts, is, cs) = (&t.structure, &id.structure, &conformed.structure);
+        let (u_t, u_on, u_c) = (first_hopf(&t), first_hopf(&on_id), first_hopf(&conformed));
+        eprintln!(
+            "{what}: k_h truth {:.2} identified {:.2} conformed {:.2}; k_α {:.4} {:.4} {:.4}; \
+             c_h {:.4} {:.4} {:.4}; c_α {:.5} {:.5} {:.5}; Hopf truth {u_t:.3}, change on \
+             the identified {u_on:.3}, conformed {u_c:.3} m/s",
+            ts.k_h,
+            is.k_h,
+            cs.k_h,
+            ts.k_alpha,
+            is.k_alpha,
+            cs.k_alpha,
+            ts.c_h,
+            is.c_h,
+            cs.c_h,
+            ts.c_alpha,
+            is.c_alpha,
+            cs.c_alpha
+        );
+        if what == "friction" {
+            // the decay reads the friction's slope at rest T_c/ε as pitch damping ...
+            let f = ts.nonlinear.friction.unwrap();
+            let slope = f.pitch_moment / f.pitch_smoothing.unwrap();
+            assert!(
+                (is.c_alpha - ts.c_alpha - slope).abs() < 0.2 * slope,
+                "identified c_α {} truth {} slope {slope}",
+                is.c_alpha,
+                ts.c_alpha
+            );
+            // ... which the conformed friction candidate does not count twice
+            assert!(
+                (cs.c_alpha - ts.c_alpha).abs() < 0.2 * slope,
+                "conformed c_α {} truth {} slope {slope}",
+                cs.c_alpha,
+                ts.c_alpha
+            );
+        } else {
+            // a heavier heaving mass is read as a softer heave spring at the given mass ...
+            assert!(
+                is.k_h < 0.9 * ts.k_h,
+                "identified k_h {} truth {}",
+                is.k_h,
+                ts.k_h
+            );
+            // ... which the conformed added mass gives back, with the truth's Hopf speed
+            assert!(
+                (cs.k_h / ts.k_h - 1.0).abs() < 0.01,
+                "{} {}",
+                cs.k_h,
+                ts.k_h
+            );
+            assert!((u_on / u_t - 1.0).abs() > 0.01, "{what}: {u_on} vs {u_t}");
+        }
+        assert!((cs.k_alpha / ts.k_alpha - 1.0).abs() < 0.01);
+        assert!((u_c / u_t - 1.0).abs() < 0.01, "{what}: {u_c} vs {u_t}");
+        // nothing to conform: the identified section itself comes back unchanged
+        let same = conform_to_decays(&check, &id, id.clone()).unwrap();
+        assert_eq!(same.structure, id.structure);
+    }
 }
 
 /// The generated benchmark's acceptance (issue 42): rigs whose given structure is off by
@@ -199,4 +329,68 @@ fn misgiven_structures_of_the_generated_benchmark_are_corrected() {
         r.hopf_and_criticality_right
     );
     assert_eq!(r.effect_free_named, 0);
+}
+
+/// Issue 42 item 5: a still-air decay among the free runs of a forced-and-free set must
+/// not raise the free-response level's null (the noise and the sim's own jackknife
+/// uncertainty) nor hide the flow runs' gap: the project's own generator, effect-free
+/// truth, four limit-cycle runs at 1.05–1.2 U_F, with and without a still-air decay.
+///
+/// **Open (round 27): this test fails** and is ignored so that CI stays meaningful; run it
+/// with `-- --ignored`. Measured: null 0.0028 → 0.0106 (3.8×) and gap statistic 2.1 → 1.15
+/// when the decay is added. The cause is not the jackknife (model level 0.0014 → 0.0013):
+/// the level pools each run's normalised energies by a plain mean, and a decay that sinks
+/// into its noise within the record has a normalised noise energy ten times a limit
+/// cycle's (0.023 against 0.0013–0.0037), so it dominates both the null and the gap and
+/// pulls their ratio to 1 (docs/DECISIONS.md, round 27).
+#[test]
+#[ignore = "open (issue 42 item 5): fails, cause found, not fixed; see the doc comment"]
+fn a_still_air_decay_does_not_raise_the_free_response_levels_null() {
+    use diagnose::blind::{generate, BlindEffect, BlindScenario};
+    use diagnose::system::{null_level, system_level, SystemOptions};
+    // limit cycles above the flutter speed: runs whose signal stands far above the noise
+    let plain = BlindScenario {
+        free_speed_factors: vec![1.05, 1.1, 1.15, 1.2],
+        ..BlindScenario::default()
+    };
+    let mut with = plain.clone();
+    with.free_speed_factors.insert(0, 0.0);
+    let mut o = SystemOptions {
+        simulate: false,
+        ..SystemOptions::default()
+    };
+    o.seed = 5;
+    let mut nulls = Vec::new();
+    for sc in [&plain, &with] {
+        let set = generate(
+            BlindEffect::None,
+            0.0,
+            aeroelastic::effects::Form::Primary,
+            5,
+            sc,
+        )
+        .unwrap();
+        let level = system_level(&set.forced, &set.free, &o).unwrap();
+        eprintln!(
+            "{} free runs: noise {:.4}, model {:?}, null {:.4}, before {:.4}",
+            set.free.records.len(),
+            level.noise_level,
+            level.model_level,
+            null_level(&level),
+            level.before
+        );
+        for c in &level.cases {
+            eprintln!(
+                "  {} U {:.2}: before {:.4} noise {:.4}",
+                c.id, c.wind_speed, c.before, c.noise_level
+            );
+        }
+        nulls.push(null_level(&level));
+    }
+    assert!(
+        nulls[1] < 1.5 * nulls[0],
+        "null {} → {}",
+        nulls[0],
+        nulls[1]
+    );
 }

@@ -481,6 +481,18 @@ pub fn run_set(index: usize, seed: u64) -> Result<BranchOutcome> {
 /// As [`run_set`]; [`Error::Aeroelastic`] when a still-air decay of the truth cannot be
 /// simulated.
 pub fn run_set_with(index: usize, seed: u64, bench: &BranchBenchOptions) -> Result<BranchOutcome> {
+    run_set_diagnosis(index, seed, bench).map(|(o, _)| o)
+}
+
+/// [`run_set_with`] with the set's whole diagnosis (for inspection).
+///
+/// # Errors
+/// As [`run_set_with`].
+pub fn run_set_diagnosis(
+    index: usize,
+    seed: u64,
+    bench: &BranchBenchOptions,
+) -> Result<(BranchOutcome, super::BifurcationDiagnosis)> {
     let set_seed = split_seed(seed, index as u64);
     let mut rng = ChaCha8Rng::seed_from_u64(set_seed);
     let truth = BranchTruth::ALL[rng.random_range(0..BranchTruth::ALL.len())];
@@ -542,7 +554,7 @@ pub fn run_set_with(index: usize, seed: u64, bench: &BranchBenchOptions) -> Resu
             None => d.verdict.effect.is_none() && d.verdict.name == Verdict::None,
             Some(e) => d.verdict.effect == Some(e),
         };
-        return Ok(BranchOutcome {
+        let outcome = BranchOutcome {
             index,
             seed: set_seed,
             truth,
@@ -559,7 +571,8 @@ pub fn run_set_with(index: usize, seed: u64, bench: &BranchBenchOptions) -> Resu
             structure_used,
             truth_hopf,
             named_hopf,
-        });
+        };
+        return Ok((outcome, d));
     }
     Err(Error::data(
         "bifurcation benchmark",

@@ -29,6 +29,7 @@ use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
 pub use super::scales::Scales;
+use crate::structure::{conform_to_decays, StructureCheck};
 use crate::{Effect, Result};
 
 /// One parameter of a candidate.
@@ -88,6 +89,10 @@ pub struct BranchCandidate {
     change: Change,
     /// Largest measured pitch amplitude \[rad\] (friction's regularisation).
     reference_alpha: f64,
+    /// The still-air decays' check when the level runs on the structure identified from
+    /// them: every change is then conformed to the decays
+    /// ([`crate::structure::conform_to_decays`]).
+    decays: Option<Arc<StructureCheck>>,
 }
 
 /// A parameter of unit `unit` whose θ = 1 is `scale` (made positive when the
@@ -166,12 +171,22 @@ impl BranchCandidate {
             extends_key: extends,
             change,
             reference_alpha: 0.0,
+            decays: None,
         }
     }
 
     /// With the largest measured pitch amplitude \[rad\] (friction's regularisation).
     pub(crate) fn with_reference_alpha(mut self, alpha: f64) -> Self {
         self.reference_alpha = alpha;
+        self
+    }
+
+    /// With the still-air decays' check `decays` (structure first): when it uses the
+    /// identified structure, [`BranchCandidate::apply`] re-identifies the linear springs
+    /// and dampers under each change so that the changed model still reproduces the
+    /// measured still-air modes ([`crate::structure::conform_to_decays`]).
+    pub fn with_decays(mut self, decays: Option<Arc<StructureCheck>>) -> Self {
+        self.decays = decays;
         self
     }
 
@@ -198,9 +213,14 @@ impl BranchCandidate {
 
     /// The nominal section with this candidate's change at scaled parameters `theta`.
     ///
+    /// With still-air decays ([`BranchCandidate::with_decays`]) the changed section's
+    /// linear springs and dampers are re-identified from them
+    /// ([`crate::structure::conform_to_decays`]).
+    ///
     /// # Errors
     /// [`crate::Error::Aeroelastic`] when the changed structure is invalid (e.g. a mass
-    /// change that makes the mass matrix indefinite).
+    /// change that makes the mass matrix indefinite); [`crate::Error::Data`] when no
+    /// linear structure with the change reproduces the decays.
     pub fn apply(&self, base: &Section, theta: &[f64]) -> Result<Section> {
         let v = self.values(theta);
         let mut st = base.structure.clone();
@@ -258,7 +278,12 @@ impl BranchCandidate {
                 });
             }
         }
-        Section::new(st, aero, base.rho).map_err(|e| crate::Error::aeroelastic(self.label(), e))
+        let s = Section::new(st, aero, base.rho)
+            .map_err(|e| crate::Error::aeroelastic(self.label(), e))?;
+        match &self.decays {
+            Some(check) => conform_to_decays(check, base, s),
+            None => Ok(s),
+        }
     }
 }
 

@@ -901,7 +901,16 @@ pub fn diagnose_diagram(
         alpha: max_of(&|m| m.amplitude_alpha).max(s_alpha),
         h: max_of(&|m| m.amplitude_h).max(s_h),
     };
-    let cat = catalogue(section, scales);
+    // Structure first, for every candidate: on the identified structure each change is
+    // conformed to the decays (its springs and dampers re-identified under it).
+    let decays = structure
+        .as_ref()
+        .filter(|c| c.used == StructureUsed::Identified)
+        .map(|c| std::sync::Arc::new(c.clone()));
+    let cat: Vec<BranchCandidate> = catalogue(section, scales)
+        .into_iter()
+        .map(|c| c.with_decays(decays.clone()))
+        .collect();
     // Nested candidates start from the optimum of the one they extend: fit by depth.
     let depth = |mut i: usize| {
         let mut d = 0;
