@@ -253,7 +253,8 @@ fn parse_case_reader(
             if k == usize::MAX {
                 continue;
             }
-            let f = field.trim();
+            // already trimmed by `csv_fields::fields`
+            let f: &str = &field;
             if f.is_empty() {
                 return Err(csv_err(path, line_no, NAMES[k], "empty field".into()));
             }
