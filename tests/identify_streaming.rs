@@ -177,12 +177,15 @@ fn identify_peak_kb(dir: &Path, out: &Path) -> Option<u64> {
     Some(text.lines().last().unwrap().trim().parse().unwrap())
 }
 
-/// Peak memory at `n` and `10 n` copies of the 64 cases of 2 s: the held identification
-/// grew by ≈ 0.13 MB per case of 1,024 samples (≈ 150 MB more at 1,280 cases), the streamed
-/// one must not grow by more than a fifth (nor more than 25 MB).
-fn peak_does_not_grow_with_the_cases(n: usize) {
+/// Peak memory at `n` and `10 n` copies of the 64 cases of 8 s (4,096 samples each). The
+/// held identification grew by ≈ 115 B per sample, 0.47 MB per such case (0.59 MB per case
+/// of 5,120 samples, docs/DECISIONS.md "Where the time goes"); streamed, what grows is the
+/// per-case summary the group stage needs whatever the record length (the p × p factor and
+/// Gram matrix, the key projections, a coefficient vector per δ of the path: ≈ 60 kB), so
+/// the growth must stay under 0.15 MB per case.
+fn peak_grows_by_the_summaries_only(n: usize) {
     let tmp = tempfile::tempdir().unwrap();
-    let src = campaign(tmp.path(), "2");
+    let src = campaign(tmp.path(), "8");
     let (small, large) = (tmp.path().join("small"), tmp.path().join("large"));
     repeated(&src, &small, n);
     repeated(&src, &large, 10 * n);
@@ -191,23 +194,28 @@ fn peak_does_not_grow_with_the_cases(n: usize) {
         return;
     };
     let b = identify_peak_kb(&large, &tmp.path().join("out-large")).unwrap();
-    eprintln!("peak: {} cases {a} kB, {} cases {b} kB", 64 * n, 640 * n);
+    let per_case_mb = (b as f64 - a as f64) / 1e3 / (576 * n) as f64;
+    eprintln!(
+        "peak: {} cases {a} kB, {} cases {b} kB: {per_case_mb:.3} MB per case",
+        64 * n,
+        640 * n
+    );
     assert!(
-        (b as f64) < 1.2 * a as f64 && b < a + 25_000,
-        "peak {a} kB at {} cases, {b} kB at {} cases",
+        per_case_mb < 0.15,
+        "peak {a} kB at {} cases, {b} kB at {} cases: {per_case_mb:.3} MB per case",
         64 * n,
         640 * n
     );
 }
 
 #[test]
-fn peak_memory_does_not_grow_from_128_to_1280_cases() {
-    peak_does_not_grow_with_the_cases(2);
+fn peak_memory_grows_by_the_summaries_only_64_to_640_cases() {
+    peak_grows_by_the_summaries_only(1);
 }
 
-/// The slow form: 640 and 6,400 cases.
+/// The slow form: 320 and 3,200 cases.
 #[test]
 #[ignore]
-fn peak_memory_does_not_grow_from_640_to_6400_cases() {
-    peak_does_not_grow_with_the_cases(10);
+fn peak_memory_grows_by_the_summaries_only_320_to_3200_cases() {
+    peak_grows_by_the_summaries_only(5);
 }
