@@ -14,7 +14,7 @@
 //!
 //! A third group, `stream`, times the hot path of `aeroform identify` on files: parsing one
 //! case CSV of 10 s (`read_case_csv_stamped`: one buffered pass, fingerprint included) and
-//! the streaming pass over the 56 cases of configuration D of the plate truth written to a
+//! the streaming pass over the 64 cases of configuration D (`stream_pass`) of the plate truth written to a
 //! temporary folder (`workflow::prepare_streaming`: read, preprocess, prepare case by case).
 //!
 //! Run: `cargo bench --bench identify` (`-- stream` for the third group alone).
@@ -214,7 +214,7 @@ fn bench(c: &mut Criterion) {
     g.finish();
 }
 
-/// The configuration-D campaign of the plate truth (56 cases × 10 s), written to `dir`.
+/// The configuration-D campaign of the plate truth (64 cases × 10 s), written to `dir`.
 fn written_campaign(dir: &std::path::Path) {
     use aeroelastic::files::LoadedModel;
     use aeroelastic::tunnel::{self, Campaign, ForcedOptions};
@@ -248,9 +248,9 @@ fn bench_stream(c: &mut Criterion) {
         b.iter(|| read_case_csv_stamped(&file, true).unwrap())
     });
     g.finish();
-    let mut g = c.benchmark_group("stream");
+    let mut g = c.benchmark_group("stream_pass");
     g.sample_size(10);
-    g.bench_function("prepare_streaming, 56 cases x 10 s", |b| {
+    g.bench_function("prepare_streaming, 64 cases x 10 s", |b| {
         b.iter(|| {
             prepare_streaming(
                 &dir,

@@ -465,7 +465,7 @@ impl<R> HashingReader<R> {
     }
 
     /// Number of bytes read so far.
-    pub fn bytes(&self) -> u64 {
+    pub fn bytes_read(&self) -> u64 {
         self.bytes
     }
 
@@ -636,7 +636,7 @@ mod tests {
             let mut buf = vec![0u8; chunk];
             while r.read(&mut buf).unwrap() > 0 {}
             assert_eq!(r.finish(), whole, "chunk {chunk}");
-            assert_eq!(r.bytes(), 1000);
+            assert_eq!(r.bytes_read(), 1000);
         }
         // one byte changed, one byte more, a zero byte appended: different fingerprints
         let mut other = data.clone();

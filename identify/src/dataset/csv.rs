@@ -76,7 +76,7 @@ pub fn read_case_csv_stamped(
     Ok((
         table,
         crate::io::FileStamp {
-            size: h.bytes(),
+            size: h.bytes_read(),
             modified,
             hash: h.finish(),
         },
