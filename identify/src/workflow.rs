@@ -244,7 +244,7 @@ impl StreamedDataset {
                         )
                     };
                     return Err(crate::Error::io(
-                        &self.root.join(file),
+                        self.root.join(file),
                         std::io::Error::new(
                             std::io::ErrorKind::Interrupted,
                             format!(
