@@ -12,7 +12,12 @@
 //! diagnosis's force level) can identify its training sets on 28 of those cases: a full
 //! `identify()` per fold, and the staged API (`prepare` once, `Prepared::identify` per fold).
 //!
-//! Run: `cargo bench --bench identify`.
+//! A third group, `stream`, times the hot path of `aeroform identify` on files: parsing one
+//! case CSV of 10 s (`read_case_csv_stamped`: one buffered pass, fingerprint included) and
+//! the streaming pass over the 64 cases of configuration D (`stream_pass`) of the plate truth written to a
+//! temporary folder (`workflow::prepare_streaming`: read, preprocess, prepare case by case).
+//!
+//! Run: `cargo bench --bench identify` (`-- stream` for the third group alone).
 
 use std::time::Instant;
 
@@ -209,5 +214,56 @@ fn bench(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, bench);
+/// The configuration-D campaign of the plate truth (64 cases × 10 s), written to `dir`.
+fn written_campaign(dir: &std::path::Path) {
+    use aeroelastic::files::LoadedModel;
+    use aeroelastic::tunnel::{self, Campaign, ForcedOptions};
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let truth = LoadedModel::load(&root.join("scenarios/plate-truth.model.toml"), None)
+        .unwrap()
+        .nonlinear
+        .unwrap();
+    let campaign = Campaign::paper_config("D").unwrap();
+    let opts = ForcedOptions::paper(1);
+    let (manifest, records) =
+        tunnel::forced_dataset(&truth, &campaign.cases(), &opts, &|_| {}).unwrap();
+    tunnel::write(dir, &manifest, &records).unwrap();
+}
+
+fn bench_stream(c: &mut Criterion) {
+    use identify::dataset::{read_case_csv_stamped, ReadOptions};
+    use identify::preprocess::PreprocessOptions;
+    use identify::workflow::prepare_streaming;
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().join("d");
+    written_campaign(&dir);
+    let m = identify::dataset::read_dataset(&dir).unwrap().manifest;
+    let file = dir.join(&m.cases[0].file);
+    let bytes = std::fs::metadata(&file).unwrap().len();
+    let settings = IdentifySettings::default();
+    let mut g = c.benchmark_group("stream");
+    g.sample_size(10);
+    g.throughput(criterion::Throughput::Bytes(bytes));
+    g.bench_function("parse one case CSV (10 s, 512 Hz)", |b| {
+        b.iter(|| read_case_csv_stamped(&file, true).unwrap())
+    });
+    g.finish();
+    let mut g = c.benchmark_group("stream_pass");
+    g.sample_size(10);
+    g.bench_function("prepare_streaming, 64 cases x 10 s", |b| {
+        b.iter(|| {
+            prepare_streaming(
+                &dir,
+                &ReadOptions::default(),
+                &PreprocessOptions::default(),
+                &settings,
+                &|_| {},
+            )
+            .unwrap()
+        })
+    });
+    g.finish();
+}
+
+criterion_group!(benches, bench, bench_stream);
 criterion_main!(benches);

@@ -255,8 +255,19 @@ fn run_memoryless(args: &IdentifyArgs) -> anyhow::Result<Identification> {
 
     let path = args.out.join("identification.json");
     let t_start = Instant::now();
-    let (dataset, read_s) = checked_read(args, &path)?;
-    let convention = dataset.manifest.convention;
+    // streamed case by case (identify::workflow::prepare_streaming): memory does not grow
+    // with the number of cases; the per-case preparation runs with the reading
+    let bar = IdentifyBar::new();
+    let streamed = checked_stream(args, &path, &settings, &pre, &|p| bar.observe(p));
+    let streamed = match streamed {
+        Ok(s) => s,
+        Err(e) => {
+            bar.finish();
+            return Err(e);
+        }
+    };
+    let stream_s = t_start.elapsed().as_secs_f64();
+    let convention = streamed.manifest.convention;
     if !convention.is_scanlan() && !crate::ui::silent() {
         crate::ui::warning!(
             "{}: columns read as {} and converted to Scanlan's (h, lift down; alpha, moment nose-up)",
@@ -264,34 +275,38 @@ fn run_memoryless(args: &IdentifyArgs) -> anyhow::Result<Identification> {
             convention.describe()
         );
     }
-
-    let t_prep = Instant::now();
-    let prepared = prepare_dataset(&dataset, &pre).context("preprocessing")?;
-    let prepare_s = t_prep.elapsed().as_secs_f64();
-    if prepared.cases.is_empty() {
+    let n_cases = streamed.prepared.len();
+    if n_cases == 0 {
+        bar.finish();
         crate::exit::refuse!(
             "{}: the data set has no forced-motion case to identify",
             args.dataset.display()
         );
     }
+    // wall time of the pass split by stage: the preparation's own wall time, the rest in
+    // proportion of the reading and preprocessing thread-seconds
+    let sec = streamed.seconds;
+    let rest = (stream_s - sec.prepare).max(0.0);
+    let share = sec.read / (sec.read + sec.preprocess).max(f64::MIN_POSITIVE);
+    let (read_s, prepare_s) = (rest * share, rest * (1.0 - share));
 
     // every input is read and checked: only now is the output folder created
     let (written, inputs) = outputs(args, &path);
     let _out = crate::outdir::SharedDir::begin(&args.out, &written, &inputs)?;
     let t_id = Instant::now();
-    let bar = IdentifyBar::new();
-    let result =
-        identify::pipeline::identify(&prepared.cases, &settings, &dataset.manifest.name, &|p| {
-            bar.observe(p)
-        });
+    let result = streamed
+        .prepared
+        .identify_all(&streamed.manifest.name, &|p| bar.observe(p));
     bar.finish();
     let mut result = result.context("identification")?;
-    let identify_s = t_id.elapsed().as_secs_f64();
+    let identify_s = t_id.elapsed().as_secs_f64() + sec.prepare;
     if let Some(n) = args.ensemble {
         let t_e = Instant::now();
         let mut es = identify::ensemble::EnsembleSettings::new(n, args.seed);
         es.level = args.level;
-        let e = identify::ensemble::bootstrap(&prepared.cases, &result, &es)
+        // the cases are read again, batch by batch, each checked unchanged
+        let e = streamed
+            .bootstrap(&result, &es)
             .context("ensemble (block bootstrap)")?;
         result.ensemble = Some(e);
         if !crate::ui::silent() {
@@ -306,20 +321,13 @@ fn run_memoryless(args: &IdentifyArgs) -> anyhow::Result<Identification> {
     result.write(&path)?;
     let total_s = t_start.elapsed().as_secs_f64();
     if let Some(t) = &args.timing_json {
-        write_timing(
-            t,
-            read_s,
-            prepare_s,
-            identify_s,
-            total_s,
-            prepared.cases.len(),
-        )?;
+        write_timing(t, read_s, prepare_s, identify_s, total_s, n_cases)?;
     }
     if !crate::ui::silent() {
         crate::ui::say!("{}", result.summary_table());
         crate::ui::say!(
             "{} cases: read {read_s:.3} s, preprocess {prepare_s:.3} s, identify {identify_s:.3} s; wrote {}",
-            prepared.cases.len(),
+            n_cases,
             path.display()
         );
     }
@@ -381,6 +389,27 @@ fn checked_read(
     let dataset = read_dataset_with(&args.dataset, &options)
         .with_context(|| format!("reading data set {}", args.dataset.display()))?;
     Ok((dataset, t.elapsed().as_secs_f64()))
+}
+
+/// [`checked_read`]'s checks, then the data set streamed case by case into the first stage
+/// of the identification ([`identify::workflow::prepare_streaming`]).
+fn checked_stream(
+    args: &IdentifyArgs,
+    document: &Path,
+    settings: &IdentifySettings,
+    pre: &PreprocessOptions,
+    observer: &dyn Fn(identify::pipeline::Progress),
+) -> anyhow::Result<identify::workflow::StreamedDataset> {
+    let (written, inputs) = outputs(args, document);
+    for w in &written {
+        crate::outdir::refuse_overlap(w, "output file", &inputs)?;
+    }
+    crate::outdir::refuse_symlink(&args.out, "--out")?;
+    let options = ReadOptions {
+        flip_lift: args.flip_lift,
+    };
+    identify::workflow::prepare_streaming(&args.dataset, &options, pre, settings, observer)
+        .with_context(|| format!("reading data set {}", args.dataset.display()))
 }
 
 fn run_lag(args: &IdentifyArgs) -> anyhow::Result<()> {

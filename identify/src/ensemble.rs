@@ -343,6 +343,52 @@ pub fn bootstrap(
     })
 }
 
+/// The ensemble entries of the cases of `id` whose samples are `cases` (a part of the
+/// identification's cases, e.g. one batch re-read from disk by a streaming caller), in the
+/// order of `cases`: each entry is exactly the one [`bootstrap`] gives that case (its draws
+/// depend on the seed and the case's index in `id`, not on the other cases).
+///
+/// # Errors
+/// As [`bootstrap`].
+pub fn bootstrap_subset(
+    cases: &[NondimCase],
+    id: &Identification,
+    settings: &EnsembleSettings,
+) -> Result<Vec<CaseEnsemble>> {
+    settings.validate()?;
+    if matches!(id.settings.regressor, RegressorChoice::Pysindy(_)) || id.settings.ridge != 0.0 {
+        return Err(Error::InvalidOption {
+            name: "ensemble".to_string(),
+            message: "the bootstrap re-fits by least squares: use the stlsq or least_squares \
+                      regressor with ridge = 0"
+                .to_string(),
+        });
+    }
+    let lib = Library::new(id.settings.library, id.settings.constant);
+    let index: std::collections::HashMap<&str, usize> = id
+        .cases
+        .iter()
+        .enumerate()
+        .map(|(i, c)| (c.id.as_str(), i))
+        .collect();
+    let work: Vec<(usize, &NondimCase)> = cases
+        .iter()
+        .map(|x| {
+            index
+                .get(x.meta.id.as_str())
+                .map(|&i| (i, x))
+                .ok_or_else(|| Error::InvalidData {
+                    case: x.meta.id.clone(),
+                    field: "id".to_string(),
+                    message: "case not among the identification's cases".to_string(),
+                })
+        })
+        .collect::<Result<_>>()?;
+    work.par_iter()
+        .map(|&(i, case)| case_ensemble(&lib, id, i, case, settings))
+        .collect()
+}
+
 fn case_ensemble(
     lib: &Library,
     id: &Identification,

@@ -390,6 +390,113 @@ pub fn check_complete_folder(dir: &Path) -> Result<()> {
     }
 }
 
+/// What a file was when it was read: its size \[bytes\], modification time and a 64-bit
+/// fingerprint of its bytes ([`HashingReader`]). A reader that must read a file again (a
+/// consumer that needs the samples after a streaming pass dropped them) compares the two
+/// stamps, so that a file replaced in between is an error, not a mix of old and new data.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct FileStamp {
+    /// Bytes read (the file's length when read to its end).
+    pub size: u64,
+    /// Modification time from the metadata of the open file, when the platform gives it.
+    pub modified: Option<std::time::SystemTime>,
+    /// [`HashingReader::finish`] of the bytes read.
+    pub hash: u64,
+}
+
+/// A reader that fingerprints the bytes passing through it: 8-byte little-endian words
+/// mixed by `s ← rotl(s ⊕ w, 29) · 0x9E37_79B9_7F4A_7C15` (the last partial word
+/// zero-padded, then the length), finished by a 64-bit avalanche. Not cryptographic: it
+/// tells a file rewritten between two reads from the same file (with the size and the
+/// modification time, [`FileStamp`]) at ≈ 0.1 ns per byte, i.e. without slowing a parser.
+#[derive(Debug)]
+pub struct HashingReader<R> {
+    inner: R,
+    state: u64,
+    carry: [u8; 8],
+    carry_len: usize,
+    bytes: u64,
+}
+
+fn mix_word(state: u64, w: u64) -> u64 {
+    (state ^ w)
+        .rotate_left(29)
+        .wrapping_mul(0x9E37_79B9_7F4A_7C15)
+}
+
+impl<R> HashingReader<R> {
+    /// Wraps `inner`.
+    pub fn new(inner: R) -> Self {
+        Self {
+            inner,
+            state: 0x243F_6A88_85A3_08D3,
+            carry: [0; 8],
+            carry_len: 0,
+            bytes: 0,
+        }
+    }
+
+    fn mix(&mut self, w: u64) {
+        self.state = mix_word(self.state, w);
+    }
+
+    fn update(&mut self, mut data: &[u8]) {
+        self.bytes += data.len() as u64;
+        if self.carry_len > 0 {
+            let take = (8 - self.carry_len).min(data.len());
+            self.carry[self.carry_len..self.carry_len + take].copy_from_slice(&data[..take]);
+            self.carry_len += take;
+            data = &data[take..];
+            if self.carry_len < 8 {
+                return;
+            }
+            self.mix(u64::from_le_bytes(self.carry));
+            self.carry_len = 0;
+        }
+        let mut words = data.chunks_exact(8);
+        for w in &mut words {
+            let mut b = [0u8; 8];
+            b.copy_from_slice(w);
+            self.mix(u64::from_le_bytes(b));
+        }
+        let rest = words.remainder();
+        self.carry[..rest.len()].copy_from_slice(rest);
+        self.carry_len = rest.len();
+    }
+
+    /// Number of bytes read so far.
+    pub fn bytes_read(&self) -> u64 {
+        self.bytes
+    }
+
+    /// The fingerprint of the bytes read so far (the reader may go on).
+    pub fn finish(&self) -> u64 {
+        let mut state = self.state;
+        if self.carry_len > 0 {
+            let mut b = [0u8; 8];
+            b[..self.carry_len].copy_from_slice(&self.carry[..self.carry_len]);
+            state = mix_word(state, u64::from_le_bytes(b));
+        }
+        let mut z = mix_word(state, self.bytes);
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+
+    /// The wrapped reader.
+    pub fn get_ref(&self) -> &R {
+        &self.inner
+    }
+}
+
+impl<R: std::io::Read> std::io::Read for HashingReader<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        self.update(&buf[..n]);
+        Ok(n)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -513,5 +620,36 @@ mod tests {
         assert!(e.contains("out"), "{e}");
         std::fs::write(&root, "").unwrap();
         assert!(create_dir_below(&root, Path::new("a")).is_err());
+    }
+
+    #[test]
+    fn the_fingerprint_does_not_depend_on_how_the_bytes_arrive() {
+        use std::io::Read;
+        let data: Vec<u8> = (0..1000u32).map(|i| (i * 37 % 251) as u8).collect();
+        let whole = {
+            let mut r = HashingReader::new(&data[..]);
+            std::io::copy(&mut r, &mut std::io::sink()).unwrap();
+            r.finish()
+        };
+        for chunk in [1usize, 3, 7, 8, 9, 64, 999] {
+            let mut r = HashingReader::new(&data[..]);
+            let mut buf = vec![0u8; chunk];
+            while r.read(&mut buf).unwrap() > 0 {}
+            assert_eq!(r.finish(), whole, "chunk {chunk}");
+            assert_eq!(r.bytes_read(), 1000);
+        }
+        // one byte changed, one byte more, a zero byte appended: different fingerprints
+        let mut other = data.clone();
+        other[500] ^= 1;
+        let fp = |d: &[u8]| {
+            let mut r = HashingReader::new(d);
+            std::io::copy(&mut r, &mut std::io::sink()).unwrap();
+            r.finish()
+        };
+        assert_ne!(fp(&other), whole);
+        assert_ne!(fp(&data[..999]), whole);
+        let mut longer = data.clone();
+        longer.push(0);
+        assert_ne!(fp(&longer), whole);
     }
 }

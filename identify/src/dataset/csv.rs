@@ -52,10 +52,35 @@ fn csv_err(path: &Path, line: usize, field: &str, message: String) -> Error {
 /// [`Error::Io`] when the file cannot be opened or read; otherwise as [`parse_case_csv`]
 /// (a line that is not UTF-8 is an [`Error::Csv`] naming that line).
 pub fn read_case_csv(path: &Path, forces_required: bool) -> Result<CaseTable> {
+    read_case_csv_stamped(path, forces_required).map(|(t, _)| t)
+}
+
+/// [`read_case_csv`], with what the file was when read ([`crate::io::FileStamp`]: its size,
+/// the modification time of the open file and the fingerprint of the bytes parsed, taken in
+/// the same pass).
+///
+/// # Errors
+/// As [`read_case_csv`].
+pub fn read_case_csv_stamped(
+    path: &Path,
+    forces_required: bool,
+) -> Result<(CaseTable, crate::io::FileStamp)> {
     let file = crate::io::open_regular(path)?;
-    let size = file.metadata().map(|m| m.len()).unwrap_or(0);
-    let reader = std::io::BufReader::with_capacity(1 << 18, file);
-    parse_case_reader(reader, size, path, forces_required)
+    let meta = file.metadata().ok();
+    let size = meta.as_ref().map_or(0, |m| m.len());
+    let modified = meta.and_then(|m| m.modified().ok());
+    let mut reader =
+        std::io::BufReader::with_capacity(1 << 18, crate::io::HashingReader::new(file));
+    let table = parse_case_reader(&mut reader, size, path, forces_required)?;
+    let h = reader.get_ref();
+    Ok((
+        table,
+        crate::io::FileStamp {
+            size: h.bytes_read(),
+            modified,
+            hash: h.finish(),
+        },
+    ))
 }
 
 /// Parses case-file text (`path` only names the file in errors).
@@ -228,7 +253,8 @@ fn parse_case_reader(
             if k == usize::MAX {
                 continue;
             }
-            let f = field.trim();
+            // already trimmed by `csv_fields::fields`
+            let f: &str = &field;
             if f.is_empty() {
                 return Err(csv_err(path, line_no, NAMES[k], "empty field".into()));
             }

@@ -15,7 +15,9 @@ mod write;
 use std::path::{Path, PathBuf};
 
 pub use self::convention::{Angular, Convention, Linear};
-pub use self::csv::{check_sampling, parse_case_csv, read_case_csv, CaseTable};
+pub use self::csv::{
+    check_sampling, parse_case_csv, read_case_csv, read_case_csv_stamped, CaseTable,
+};
 pub use self::manifest::{
     is_valid_case_id, CaseSpec, Manifest, ModalStructure, FORMAT, PLAUSIBLE_MAX,
 };
@@ -92,18 +94,40 @@ pub fn read_dataset_with(dir: &Path, options: &ReadOptions) -> Result<Dataset> {
     // the folder's identity before and after reading: a writer that replaces the set
     // (`tunnel … --out` swaps a new folder in) while it is read must not leave a data set
     // built from old and new files together (issue 39, row 2c)
-    let before = folder_identity(dir);
+    let before = FolderStamp::of(dir);
     let set = read_dataset_once(dir, options)?;
-    if folder_identity(dir) != before {
-        return Err(crate::Error::io(
+    before.check(dir)?;
+    Ok(set)
+}
+
+/// What a data-set folder is (device, inode and the modification time of its completion
+/// marker): [`FolderStamp::of`] before and after reading its files case by case tells a set
+/// swapped for another while it was read (issue 39, row 2c), as [`read_dataset_with`] does.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct FolderStamp(Option<(u64, u64, Option<std::time::SystemTime>)>);
+
+impl FolderStamp {
+    /// The stamp of `dir` now.
+    pub fn of(dir: &Path) -> Self {
+        Self(folder_identity(dir))
+    }
+
+    /// `Ok` when `dir` is still the folder stamped `self`.
+    ///
+    /// # Errors
+    /// [`crate::Error::Io`] (interrupted) naming `dir`: the set was replaced or rewritten.
+    pub fn check(&self, dir: &Path) -> Result<()> {
+        if folder_identity(dir) == self.0 {
+            return Ok(());
+        }
+        Err(crate::Error::io(
             dir,
             std::io::Error::new(
                 std::io::ErrorKind::Interrupted,
                 "the data set was replaced by another process while it was read; read it again",
             ),
-        ));
+        ))
     }
-    Ok(set)
 }
 
 /// (device, inode, modification time) of a folder and of its completion marker: changes when
@@ -125,6 +149,62 @@ fn folder_identity(dir: &Path) -> Option<(u64, u64, Option<std::time::SystemTime
 }
 
 fn read_dataset_once(dir: &Path, options: &ReadOptions) -> Result<Dataset> {
+    let manifest = open_dataset(dir, options)?;
+    // the samples held, bounded as the generators' are (MAX_SAMPLES: about 1 GB of columns)
+    let mut samples = SampleCount::default();
+    let mut records = Vec::with_capacity(manifest.cases.len());
+    for c in &manifest.cases {
+        let r = read_case(dir, &manifest, c)?;
+        samples.add(dir, c, &r)?;
+        records.push(r);
+    }
+    Ok(Dataset {
+        root: dir.to_path_buf(),
+        manifest,
+        records,
+    })
+}
+
+/// The running count of the samples of a data set's records, against the limits table's
+/// `MAX_SAMPLES` (the same bound whether the records are held together or read one by one).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct SampleCount(usize);
+
+impl SampleCount {
+    /// Adds the samples of `record` (its still-air run included), the record of `case` in
+    /// the data set `dir`.
+    ///
+    /// # Errors
+    /// [`crate::Error::Manifest`] naming the manifest and the case at which the total
+    /// exceeds `MAX_SAMPLES`.
+    pub fn add(&mut self, dir: &Path, case: &CaseSpec, record: &Record) -> Result<()> {
+        self.0 += record.len() + record.nowind.as_ref().map_or(0, |s| s.len());
+        if self.0 as f64 > crate::limits::MAX_SAMPLES {
+            return Err(crate::Error::Manifest {
+                path: manifest_path(dir),
+                line: 0,
+                field: "case".into(),
+                message: format!(
+                    "the case files hold more than {} samples in all (reached at case `{}`; the limits table's MAX_SAMPLES)",
+                    crate::limits::show(crate::limits::MAX_SAMPLES),
+                    case.id
+                ),
+            });
+        }
+        Ok(())
+    }
+}
+
+/// Reads and checks a data set's manifest and every case path it names, without reading
+/// any case file: the first part of [`read_dataset_with`], for readers that then read the
+/// cases one by one ([`read_case_stamped`]). The folder must be complete, the manifest
+/// valid, its `[[case]]` entries at most `MAX_DATASET_CASES`, no file named by two cases,
+/// no path leaving the folder. With `options.flip_lift` the returned manifest carries the
+/// flipped convention.
+///
+/// # Errors
+/// As [`read_dataset`], for everything but the case files' contents.
+pub fn open_dataset(dir: &Path, options: &ReadOptions) -> Result<Manifest> {
     crate::io::check_complete_folder(dir)?;
     let mut manifest = Manifest::read(&manifest_path(dir))?;
     if options.flip_lift {
@@ -168,31 +248,7 @@ fn read_dataset_once(dir: &Path, options: &ReadOptions) -> Result<Dataset> {
             resolve_case_path(dir, case, "nowind_file", still)?;
         }
     }
-    // the samples held, bounded as the generators' are (MAX_SAMPLES: about 1 GB of columns)
-    let mut samples = 0usize;
-    let mut records = Vec::with_capacity(n_cases);
-    for c in &manifest.cases {
-        let r = read_case(dir, &manifest, c)?;
-        samples += r.len() + r.nowind.as_ref().map_or(0, |s| s.len());
-        if samples as f64 > crate::limits::MAX_SAMPLES {
-            return Err(crate::Error::Manifest {
-                path: manifest_path(dir),
-                line: 0,
-                field: "case".into(),
-                message: format!(
-                    "the case files hold more than {} samples in all (reached at case `{}`; the limits table's MAX_SAMPLES)",
-                    crate::limits::show(crate::limits::MAX_SAMPLES),
-                    c.id
-                ),
-            });
-        }
-        records.push(r);
-    }
-    Ok(Dataset {
-        root: dir.to_path_buf(),
-        manifest,
-        records,
-    })
+    Ok(manifest)
 }
 
 /// Reads one case of a data set in folder `dir` and converts it to SI per unit span and to
@@ -213,22 +269,49 @@ fn read_dataset_once(dir: &Path, options: &ReadOptions) -> Result<Dataset> {
 /// through a symbolic link, or when `freq_pitch`/`freq_heave` is not below the record's
 /// Nyquist frequency; [`crate::Error::Csv`] for a value beyond [`MAX_ABS_SI`].
 pub fn read_case(dir: &Path, manifest: &Manifest, case: &CaseSpec) -> Result<Record> {
+    read_case_stamped(dir, manifest, case).map(|(r, _)| r)
+}
+
+/// What the files of one case were when read: the case file and its still-air run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct CaseStamps {
+    /// The case file `file`.
+    pub file: crate::io::FileStamp,
+    /// The still-air run `nowind_file`, when the case names one.
+    pub nowind: Option<crate::io::FileStamp>,
+}
+
+/// [`read_case`], with the stamps (size, modification time, content fingerprint) of the
+/// files read, taken in the same pass ([`read_case_csv_stamped`]).
+///
+/// # Errors
+/// As [`read_case`].
+pub fn read_case_stamped(
+    dir: &Path,
+    manifest: &Manifest,
+    case: &CaseSpec,
+) -> Result<(Record, CaseStamps)> {
     let meta = manifest.case_meta(case);
     let file = resolve_case_path(dir, case, "file", &case.file)?;
     let still_file = match &case.nowind_file {
         Some(p) => Some(resolve_case_path(dir, case, "nowind_file", p)?),
         None => None,
     };
-    let mut rec = read_record(
+    let (mut rec, file_stamp) = read_record(
         &file,
         manifest,
         case.kind,
         case.kind == CaseKind::Forced,
         meta.clone(),
     )?;
+    let mut stamps = CaseStamps {
+        file: file_stamp,
+        nowind: None,
+    };
     if let Some(still) = &still_file {
-        let still = read_record(still, manifest, case.kind, true, meta)?;
+        let (still, stamp) = read_record(still, manifest, case.kind, true, meta)?;
         rec.nowind = Some(Box::new(still));
+        stamps.nowind = Some(stamp);
     }
     // A forcing frequency at or above Nyquist cannot be in the record: refuse it (it would
     // otherwise silently null the derivatives of the case).
@@ -282,7 +365,7 @@ pub fn read_case(dir: &Path, manifest: &Manifest, case: &CaseSpec) -> Result<Rec
             }
         }
     }
-    Ok(rec)
+    Ok((rec, stamps))
 }
 
 /// Relative distance between a declared forcing frequency and the record's own beyond
@@ -390,9 +473,9 @@ fn read_record(
     kind: CaseKind,
     forces_required: bool,
     meta: CaseMeta,
-) -> Result<Record> {
-    let table = read_case_csv(path, forces_required)?;
-    record_from_table(table, path, manifest, kind, meta)
+) -> Result<(Record, crate::io::FileStamp)> {
+    let (table, stamp) = read_case_csv_stamped(path, forces_required)?;
+    Ok((record_from_table(table, path, manifest, kind, meta)?, stamp))
 }
 
 /// Converts the columns of one case, in the manifest's units, to a [`Record`] in SI per

@@ -22,7 +22,7 @@ use crate::eq19::{Eq19Values, LiftEq19, MomentEq19, EQ19_TERMS};
 use crate::identifiability::{self, BasisMode, CaseIdentifiability, RankOptions};
 use crate::library::Library;
 use crate::metrics::{self, HarmonicProjector};
-use crate::record::NondimCase;
+use crate::record::{CaseMeta, NondimCase};
 use crate::regress::adapter::{self};
 use crate::regress::path::{self, DeltaPath, KeyProjection, PathOptions};
 use crate::regress::{
@@ -245,7 +245,7 @@ fn prepare_case(
     })
 }
 
-fn group_name(case: &NondimCase, by: GroupBy) -> String {
+fn group_name(case: &CaseSummary, by: GroupBy) -> String {
     match by {
         GroupBy::Config => case.meta.config.clone().unwrap_or_else(|| "-".to_string()),
         GroupBy::WindSpeed => format!("U={}", case.meta.wind_speed),
@@ -254,6 +254,26 @@ fn group_name(case: &NondimCase, by: GroupBy) -> String {
             None => "amplitude=-".to_string(),
         },
         GroupBy::None => case.meta.id.clone(),
+    }
+}
+
+/// What the group stage needs of a case besides its [`CaseWork`]: the manifest descriptors
+/// (id, group keys, wind speed) and the reduced frequencies, O(1) per case (the samples
+/// are not kept: [`Prepared::push`]).
+#[derive(Debug, Clone)]
+struct CaseSummary {
+    meta: CaseMeta,
+    k_alpha: Option<f64>,
+    k_h: Option<f64>,
+}
+
+impl CaseSummary {
+    fn of(case: &NondimCase) -> Self {
+        Self {
+            meta: case.meta.clone(),
+            k_alpha: case.k_alpha(),
+            k_h: case.k_h(),
+        }
     }
 }
 
@@ -375,7 +395,7 @@ fn finite(x: f64) -> Option<f64> {
 /// Per-case result of one force.
 fn force_result<E: From<Eq19Values>>(
     lib: &Library,
-    case: &NondimCase,
+    case: &CaseSummary,
     w: &CaseWork,
     target: usize,
     basis: Mask,
@@ -394,7 +414,7 @@ fn force_result<E: From<Eq19Values>>(
             .ok()
             .and_then(|j| (basis >> j & 1 == 1).then_some(raw[j]))
     });
-    let eq19 = Eq19Values::from_coefficients(xi, case.k_alpha(), case.k_h());
+    let eq19 = Eq19Values::from_coefficients(xi, case.k_alpha, case.k_h);
     let support: Vec<usize> = (0..raw.len()).filter(|&j| raw[j] != 0.0).collect();
     let scaled: Vec<f64> = support
         .iter()
@@ -447,6 +467,11 @@ pub fn identify(
 /// the other cases, so identifying a subset gives exactly what [`identify`] gives on those
 /// cases alone, at the cost of the group stage only (a cross-validation's folds prepare
 /// once).
+///
+/// What is kept per case is O(p²) (the p × p factor and Gram matrix of its library, the key
+/// projections, the identifiability) plus its manifest descriptors, never its samples: a
+/// campaign can be prepared case by case ([`Prepared::start`], [`Prepared::push`]) in
+/// memory that does not grow with the samples.
 pub struct Prepared<'c> {
     cases: &'c [NondimCase],
     settings: IdentifySettings,
@@ -454,7 +479,10 @@ pub struct Prepared<'c> {
     order: Vec<usize>,
     opts: PathOptions,
     kept: Mask,
+    deltas: Vec<f64>,
     work: Vec<CaseWork>,
+    summaries: Vec<CaseSummary>,
+    ids: std::collections::HashSet<String>,
 }
 
 /// Prepares every case of `cases` for identification with `settings` (the first stage of
@@ -471,7 +499,7 @@ pub fn prepare<'c>(
     settings: &IdentifySettings,
     observer: &dyn Fn(Progress),
 ) -> Result<Prepared<'c>> {
-    settings.validate()?;
+    let mut prepared = Prepared::start(settings)?;
     if cases.is_empty() {
         return Err(Error::InvalidData {
             case: "-".to_string(),
@@ -479,62 +507,118 @@ pub fn prepare<'c>(
             message: "no case to identify".to_string(),
         });
     }
-    let mut seen = std::collections::HashSet::new();
-    for c in cases {
-        if !seen.insert(c.meta.id.as_str()) {
-            return Err(Error::InvalidData {
-                case: c.meta.id.clone(),
-                field: "id".to_string(),
-                message: "duplicate case id".to_string(),
-            });
-        }
-    }
-    let lib = Library::new(settings.library, settings.constant);
-    let order = identifiability::priority_order(&lib);
-    let opts = settings.path_options();
-    let deltas = opts.grid();
-    let mut kept_cols = vec![false; lib.len()];
-    for t in &settings.kept_terms {
-        kept_cols[lib.index_of(t)?] = true;
-    }
-    let kept = bools_to_mask(&kept_cols);
-
+    prepared.check_ids(cases)?;
     // per case, in batches so that progress is reported on this thread
     let total = cases.len();
-    let batch = batch_size();
-    let mut work: Vec<CaseWork> = Vec::with_capacity(total);
-    for chunk in cases.chunks(batch) {
-        let done: Vec<Result<CaseWork>> = chunk
-            .par_iter()
-            .map(|c| prepare_case(c, &lib, &order, settings, &deltas))
-            .collect();
-        for w in done {
-            work.push(w?);
-        }
+    for chunk in cases.chunks(batch_size()) {
+        prepared.push(chunk)?;
         observer(Progress::Cases {
-            done: work.len(),
+            done: prepared.len(),
             total,
         });
     }
-    Ok(Prepared {
-        cases,
-        settings: settings.clone(),
-        lib,
-        order,
-        opts,
-        kept,
-        work,
-    })
+    prepared.cases = cases;
+    Ok(prepared)
 }
 
 /// Parallel batch size: enough tasks per batch to keep every thread busy, few enough
 /// batches that progress moves.
-fn batch_size() -> usize {
+pub fn batch_size() -> usize {
     (4 * rayon::current_num_threads()).max(8)
 }
 
+impl Prepared<'static> {
+    /// An empty preparation with `settings`, to which cases are added batch by batch with
+    /// [`Prepared::push`] (the streaming form of [`prepare`]: the caller may drop each
+    /// batch's samples once pushed). [`Prepared::cases`] stays empty.
+    ///
+    /// # Errors
+    /// [`Error::InvalidOption`] for invalid settings (an unknown kept term names it).
+    pub fn start(settings: &IdentifySettings) -> Result<Self> {
+        settings.validate()?;
+        let lib = Library::new(settings.library, settings.constant);
+        let order = identifiability::priority_order(&lib);
+        let opts = settings.path_options();
+        let deltas = opts.grid();
+        let mut kept_cols = vec![false; lib.len()];
+        for t in &settings.kept_terms {
+            kept_cols[lib.index_of(t)?] = true;
+        }
+        let kept = bools_to_mask(&kept_cols);
+        Ok(Prepared {
+            cases: &[],
+            settings: settings.clone(),
+            lib,
+            order,
+            opts,
+            kept,
+            deltas,
+            work: Vec::new(),
+            summaries: Vec::new(),
+            ids: std::collections::HashSet::new(),
+        })
+    }
+}
+
 impl<'c> Prepared<'c> {
-    /// The prepared cases, in input order (the indices [`Prepared::identify`] takes).
+    /// Refuses a case id given twice in `cases` or already pushed.
+    fn check_ids(&self, cases: &[NondimCase]) -> Result<()> {
+        let mut seen = std::collections::HashSet::new();
+        for c in cases {
+            if self.ids.contains(&c.meta.id) || !seen.insert(c.meta.id.as_str()) {
+                return Err(Error::InvalidData {
+                    case: c.meta.id.clone(),
+                    field: "id".to_string(),
+                    message: "duplicate case id".to_string(),
+                });
+            }
+        }
+        Ok(())
+    }
+
+    /// Prepares the cases of `batch` (in parallel) and appends them, in order, after the
+    /// cases prepared so far; only their O(p²) summaries are kept, so the caller may drop
+    /// the samples. The result of [`Prepared::identify`] does not depend on how the cases
+    /// were split into batches.
+    ///
+    /// # Errors
+    /// As [`prepare`], for the first failing case of the batch in order (nothing of the
+    /// batch is appended then).
+    pub fn push(&mut self, batch: &[NondimCase]) -> Result<()> {
+        self.check_ids(batch)?;
+        let (lib, order, settings, deltas) = (&self.lib, &self.order, &self.settings, &self.deltas);
+        let done: Vec<Result<CaseWork>> = batch
+            .par_iter()
+            .map(|c| prepare_case(c, lib, order, settings, deltas))
+            .collect();
+        let done = done.into_iter().collect::<Result<Vec<CaseWork>>>()?;
+        self.work.extend(done);
+        for c in batch {
+            self.ids.insert(c.meta.id.clone());
+            self.summaries.push(CaseSummary::of(c));
+        }
+        Ok(())
+    }
+
+    /// Number of cases prepared.
+    pub fn len(&self) -> usize {
+        self.summaries.len()
+    }
+
+    /// True when no case is prepared.
+    pub fn is_empty(&self) -> bool {
+        self.summaries.is_empty()
+    }
+
+    /// The manifest descriptors of the prepared cases, in order (the indices
+    /// [`Prepared::identify`] takes).
+    pub fn metas(&self) -> impl ExactSizeIterator<Item = &CaseMeta> {
+        self.summaries.iter().map(|s| &s.meta)
+    }
+
+    /// The prepared cases, in input order (the indices [`Prepared::identify`] takes), as
+    /// given to [`prepare`]; empty when the cases were pushed ([`Prepared::push`]), whose
+    /// samples are not kept.
     pub fn cases(&self) -> &'c [NondimCase] {
         self.cases
     }
@@ -553,7 +637,7 @@ impl<'c> Prepared<'c> {
         dataset_name: &str,
         observer: &dyn Fn(Progress),
     ) -> Result<Identification> {
-        let all: Vec<usize> = (0..self.cases.len()).collect();
+        let all: Vec<usize> = (0..self.len()).collect();
         self.identify(&all, dataset_name, observer)
     }
 
@@ -604,20 +688,20 @@ impl<'c> Prepared<'c> {
         if subset.is_empty() {
             return Err(bad("no case to identify".to_string()));
         }
-        let mut seen = vec![false; self.cases.len()];
+        let mut seen = vec![false; self.len()];
         for &i in subset {
             match seen.get_mut(i) {
                 None => {
                     return Err(bad(format!(
                         "case index {i} is out of range (0..{})",
-                        self.cases.len()
+                        self.len()
                     )))
                 }
                 Some(s) if *s => return Err(bad(format!("case index {i} is given twice"))),
                 Some(s) => *s = true,
             }
         }
-        let cases: Vec<&NondimCase> = subset.iter().map(|&i| &self.cases[i]).collect();
+        let cases: Vec<&CaseSummary> = subset.iter().map(|&i| &self.summaries[i]).collect();
         let work: Vec<&CaseWork> = subset.iter().map(|&i| &self.work[i]).collect();
         let (settings, lib, opts) = (&self.settings, &self.lib, &self.opts);
         let names = lib.names();
@@ -717,8 +801,8 @@ impl<'c> Prepared<'c> {
                     id: c.meta.id.clone(),
                     group: group_list[case_group[i]].0.clone(),
                     wind_speed: c.meta.wind_speed,
-                    k_alpha: c.k_alpha(),
-                    k_h: c.k_h(),
+                    k_alpha: c.k_alpha,
+                    k_h: c.k_h,
                     rank: w.ident.rank,
                     dependencies: w.ident.dependency_strings(),
                     mean_pitch: w.centring.as_ref().map(|c| c.mean_pitch),
