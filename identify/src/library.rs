@@ -822,11 +822,16 @@ mod tests {
                 .map(|i| ((i * (v + 2)) as f64 * 0.0107).sin() * (0.3 + 0.1 * v as f64))
                 .collect()
         });
-        let z: Vec<f64> = (0..n).map(|i| 0.5 + 0.4 * (i as f64 * 0.0031).cos()).collect();
+        let z: Vec<f64> = (0..n)
+            .map(|i| 0.5 + 0.4 * (i as f64 * 0.0031).cos())
+            .collect();
         let states = [("x", z.as_slice())];
-        let signals = Signals { x: &x, states: &states };
-        let state = StateTerms::new("x", &[(1, Term::ONE), (1, Term::linear(0)), (2, Term::ONE)])
-            .unwrap();
+        let signals = Signals {
+            x: &x,
+            states: &states,
+        };
+        let state =
+            StateTerms::new("x", &[(1, Term::ONE), (1, Term::linear(0)), (2, Term::ONE)]).unwrap();
         assert_eq!(state.term_names(), ["x", "x*alpha", "x^2"]);
         let lib = Composite::new(vec![
             Box::new(Library::new(LibraryKind::Paper30, false)),
@@ -846,14 +851,20 @@ mod tests {
         ])
         .unwrap_err()
         .to_string();
-        assert!(e.contains("`alpha`") && e.contains("paper30") && e.contains("full34"), "{e}");
+        assert!(
+            e.contains("`alpha`") && e.contains("paper30") && e.contains("full34"),
+            "{e}"
+        );
         let e = Composite::new(vec![Box::new(state.clone()), Box::new(state)])
             .unwrap_err()
             .to_string();
         assert!(e.contains("term `x`"), "{e}");
         assert!(StateTerms::new("alpha", &[]).is_err());
         let none: [(&str, &[f64]); 0] = [];
-        let bare = Signals { x: &x, states: &none };
+        let bare = Signals {
+            x: &x,
+            states: &none,
+        };
         assert!(lib.evaluate(&bare).unwrap_err().to_string().contains("`x`"));
 
         // y = 1.5 α − 0.8 x·α + 0.3 x²: STLSQ on the composite finds exactly these terms
@@ -862,7 +873,10 @@ mod tests {
             .collect();
         let order: Vec<usize> = (0..lib.len()).collect();
         let f = CaseFactor::new("c", theta.as_ref(), &order, &[&y]).unwrap();
-        let cases = [CaseProblem { factor: &f, target: 0 }];
+        let cases = [CaseProblem {
+            factor: &f,
+            target: 0,
+        }];
         let shared = FitSettings {
             measure: Measure::Contribution,
             group_rule: crate::regress::GroupRule::Norm,
@@ -882,8 +896,11 @@ mod tests {
             shared,
             options: &options,
         };
-        let (path, coefs) =
-            run_path(reg, &group, &PathOptions::for_measure(Measure::Contribution));
+        let (path, coefs) = run_path(
+            reg,
+            &group,
+            &PathOptions::for_measure(Measure::Contribution),
+        );
         let sel: Vec<&str> = path
             .selected_support()
             .support
