@@ -10,7 +10,8 @@ use identify::identifiability::BasisMode;
 use identify::library::LibraryKind;
 use identify::pipeline::{GroupBy, Identification, IdentifySettings, RegressorChoice};
 use identify::preprocess::{PreprocessOptions, VelocityMethod};
-use identify::regress::adapter::PysindyOptions;
+use identify::regress::plugin::{OptionValue, Regressor};
+use identify::regress::plugins;
 use identify::regress::{GroupRule, Measure};
 use identify::workflow::prepare_dataset;
 
@@ -34,9 +35,13 @@ pub struct IdentifyArgs {
     /// (a rank-deficient library is then an error).
     #[arg(long, value_enum, default_value_t = BasisArg::Canonical)]
     pub basis: BasisArg,
-    /// Sparse optimiser.
-    #[arg(long, value_enum, default_value_t = RegressorArg::Stlsq)]
-    pub regressor: RegressorArg,
+    /// Sparse optimiser: a registered regressor (see `--help` for the list and options).
+    #[arg(long, default_value = "stlsq", value_parser = regressor_names(), long_help = plugins::help(plugins::registry()))]
+    pub regressor: String,
+    /// An option of the chosen regressor, `NAME=VALUE` (repeatable; the list under
+    /// `--regressor` in `--help`).
+    #[arg(long, value_name = "NAME=VALUE")]
+    pub regressor_option: Vec<String>,
     /// Threshold measure: scale-free contribution ‖ξθ‖/‖y‖ or the paper's raw |ξ|.
     #[arg(long, value_enum, default_value_t = MeasureArg::Contribution)]
     pub measure: MeasureArg,
@@ -52,11 +57,11 @@ pub struct IdentifyArgs {
     /// Number of key frequencies of the Eq. 14 loss.
     #[arg(long)]
     pub k_key: Option<usize>,
-    /// pysindy mode: ridge α of its STLSQ.
-    #[arg(long, default_value_t = 0.05)]
-    pub pysindy_alpha: f64,
-    /// pysindy mode: skip the unbiasing refit.
-    #[arg(long)]
+    /// Deprecated spelling of `--regressor-option alpha=A`.
+    #[arg(long, hide = true)]
+    pub pysindy_alpha: Option<f64>,
+    /// Deprecated spelling of `--regressor-option unbias=false`.
+    #[arg(long, hide = true)]
     pub pysindy_no_unbias: bool,
     /// How α̇ and ḣ are obtained from the measured motion.
     #[arg(long, value_enum, default_value_t = VelocityArg::Auto)]
@@ -121,11 +126,15 @@ pub enum BasisArg {
     Full,
 }
 
-#[derive(Debug, Clone, Copy, ValueEnum)]
-pub enum RegressorArg {
-    Stlsq,
-    Pysindy,
-    Lsq,
+/// The names and aliases of the registered regressors (`--regressor`'s possible values).
+fn regressor_names() -> clap::builder::PossibleValuesParser {
+    clap::builder::PossibleValuesParser::new(plugins::registry().iter().flat_map(|r| {
+        std::iter::once(clap::builder::PossibleValue::new(r.name())).chain(
+            r.aliases()
+                .iter()
+                .map(|a| clap::builder::PossibleValue::new(*a).hide(true)),
+        )
+    }))
 }
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -150,8 +159,60 @@ pub enum VelocityArg {
 }
 
 impl IdentifyArgs {
+    /// The regressor choice of `--regressor` and `--regressor-option` (each value parsed
+    /// by the option's declared type).
+    ///
+    /// # Errors
+    /// A usage error naming the option for a value without `=`, an option the regressor
+    /// does not have, or a value not of its type.
+    pub fn regressor_choice(&self) -> anyhow::Result<RegressorChoice> {
+        let reg: &dyn Regressor = plugins::find(&self.regressor)?;
+        let mut pairs: Vec<(String, String)> = Vec::new();
+        for o in &self.regressor_option {
+            let (k, v) = o.split_once('=').ok_or_else(|| {
+                crate::exit::Usage(format!("`--regressor-option {o}`: expected NAME=VALUE"))
+            })?;
+            pairs.push((k.trim().to_string(), v.to_string()));
+        }
+        if let Some(a) = self.pysindy_alpha {
+            pairs.push(("alpha".to_string(), a.to_string()));
+        }
+        if self.pysindy_no_unbias {
+            pairs.push(("unbias".to_string(), "false".to_string()));
+        }
+        let mut choice = RegressorChoice::new(reg.name());
+        for (k, v) in pairs {
+            let spec = reg.options().iter().find(|s| s.name == k).ok_or_else(|| {
+                crate::exit::Usage(format!(
+                    "`--regressor-option {k}=…`: `{}` has {}",
+                    reg.name(),
+                    if reg.options().is_empty() {
+                        "no options".to_string()
+                    } else {
+                        format!(
+                            "the options {}",
+                            reg.options()
+                                .iter()
+                                .map(|s| s.name)
+                                .collect::<Vec<_>>()
+                                .join(", ")
+                        )
+                    }
+                ))
+            })?;
+            let value: OptionValue = spec
+                .parse(reg.name(), &v)
+                .map_err(|e| crate::exit::Usage(format!("`--regressor-option`: {e}")))?;
+            choice = choice.with(&k, value);
+        }
+        Ok(choice)
+    }
+
     /// Identification settings these flags select (validated by the library).
-    pub fn settings(&self) -> IdentifySettings {
+    ///
+    /// # Errors
+    /// As [`IdentifyArgs::regressor_choice`].
+    pub fn settings(&self) -> anyhow::Result<IdentifySettings> {
         let mut s = IdentifySettings {
             library: match self.library {
                 LibraryArg::Paper30 => LibraryKind::Paper30,
@@ -172,15 +233,7 @@ impl IdentifyArgs {
                 GroupRuleArg::Mean => GroupRule::Mean,
             },
             ridge: self.ridge,
-            regressor: match self.regressor {
-                RegressorArg::Stlsq => RegressorChoice::Stlsq,
-                RegressorArg::Lsq => RegressorChoice::LeastSquares,
-                RegressorArg::Pysindy => RegressorChoice::Pysindy(PysindyOptions {
-                    alpha: self.pysindy_alpha,
-                    unbias: !self.pysindy_no_unbias,
-                    ..PysindyOptions::default()
-                }),
-            },
+            regressor: self.regressor_choice()?,
             group_by: match self.group_by {
                 GroupByArg::Config => GroupBy::Config,
                 GroupByArg::WindSpeed => GroupBy::WindSpeed,
@@ -195,7 +248,7 @@ impl IdentifyArgs {
         if let Some(k) = self.k_key {
             s.k_key = k;
         }
-        s
+        Ok(s)
     }
 
     /// Preprocessing options these flags select.
@@ -236,7 +289,7 @@ pub fn run(args: &IdentifyArgs) -> anyhow::Result<()> {
 /// The memoryless identification; returns the result (also written to
 /// `OUT/identification.json`).
 fn run_memoryless(args: &IdentifyArgs) -> anyhow::Result<Identification> {
-    let settings = args.settings();
+    let settings = args.settings()?;
     settings
         .validate()
         .context("invalid identification option")?;

@@ -44,8 +44,9 @@ use rayon::prelude::*;
 use crate::eq19::{Eq19Values, LiftEq19, MomentEq19, EQ19_TERMS};
 use crate::library::Library;
 use crate::numerics::qr;
-use crate::pipeline::{Identification, RegressorChoice, TermMap};
+use crate::pipeline::{Identification, TermMap};
 use crate::record::NondimCase;
+use crate::regress::plugins;
 use crate::{Error, Result};
 
 pub(crate) mod types;
@@ -297,8 +298,10 @@ fn eq19_of(
 /// (seed, i, m), so the result depends neither on the thread count nor on the order of work.
 ///
 /// # Errors
-/// [`Error::InvalidOption`] for invalid settings, or when the identification used ridge or
-/// the pysindy regressor (the re-fit is plain least squares); [`Error::InvalidData`] naming
+/// [`Error::InvalidOption`] for invalid settings, an unregistered regressor, or when the
+/// identification used ridge or a regressor whose coefficients are not plain least squares
+/// on the support ([`crate::regress::plugin::Regressor::refits_by_least_squares`]: the
+/// re-fit is plain least squares); [`Error::InvalidData`] naming
 /// the case when a case of `id` is missing from `cases`, or a support term is unknown to
 /// the library.
 pub fn bootstrap(
@@ -307,14 +310,7 @@ pub fn bootstrap(
     settings: &EnsembleSettings,
 ) -> Result<Ensemble> {
     settings.validate()?;
-    if matches!(id.settings.regressor, RegressorChoice::Pysindy(_)) || id.settings.ridge != 0.0 {
-        return Err(Error::InvalidOption {
-            name: "ensemble".to_string(),
-            message: "the bootstrap re-fits by least squares: use the stlsq or least_squares \
-                      regressor with ridge = 0"
-                .to_string(),
-        });
-    }
+    check_refits(id)?;
     let lib = Library::new(id.settings.library, id.settings.constant);
     let work: Vec<(usize, &NondimCase)> = id
         .cases
@@ -343,6 +339,27 @@ pub fn bootstrap(
     })
 }
 
+/// Refuses an identification whose coefficients the bootstrap's least-squares re-fit
+/// would not reproduce: ridge, or a regressor that does not re-fit by least squares.
+fn check_refits(id: &Identification) -> Result<()> {
+    let refits = plugins::find(&id.settings.regressor.kind)?.refits_by_least_squares();
+    if !refits || id.settings.ridge != 0.0 {
+        let fit: Vec<&str> = plugins::registry()
+            .iter()
+            .filter(|r| r.refits_by_least_squares())
+            .map(|r| r.name())
+            .collect();
+        return Err(Error::InvalidOption {
+            name: "ensemble".to_string(),
+            message: format!(
+                "the bootstrap re-fits by least squares: use the {} regressor with ridge = 0",
+                fit.join(" or ")
+            ),
+        });
+    }
+    Ok(())
+}
+
 /// The ensemble entries of the cases of `id` whose samples are `cases` (a part of the
 /// identification's cases, e.g. one batch re-read from disk by a streaming caller), in the
 /// order of `cases`: each entry is exactly the one [`bootstrap`] gives that case (its draws
@@ -356,14 +373,7 @@ pub fn bootstrap_subset(
     settings: &EnsembleSettings,
 ) -> Result<Vec<CaseEnsemble>> {
     settings.validate()?;
-    if matches!(id.settings.regressor, RegressorChoice::Pysindy(_)) || id.settings.ridge != 0.0 {
-        return Err(Error::InvalidOption {
-            name: "ensemble".to_string(),
-            message: "the bootstrap re-fits by least squares: use the stlsq or least_squares \
-                      regressor with ridge = 0"
-                .to_string(),
-        });
-    }
+    check_refits(id)?;
     let lib = Library::new(id.settings.library, id.settings.constant);
     let index: std::collections::HashMap<&str, usize> = id
         .cases

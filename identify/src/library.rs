@@ -405,6 +405,260 @@ impl Library {
     }
 }
 
+/// The signals a term set is evaluated on: the four regression variables and any named
+/// internal states of the case (e.g. the lag law's separation state `x`), each one value per
+/// sample.
+#[derive(Debug, Clone, Copy)]
+pub struct Signals<'a> {
+    /// (α, Bα̇/U, h/B, ḣ/U), nondimensional.
+    pub x: &'a [Vec<f64>; 4],
+    /// Named states, (name, series); nondimensional.
+    pub states: &'a [(&'a str, &'a [f64])],
+}
+
+impl<'a> Signals<'a> {
+    /// The state `name`.
+    ///
+    /// # Errors
+    /// [`Error::InvalidOption`] (option `library`) naming the state when the signals lack it.
+    pub fn state(&self, name: &str) -> Result<&'a [f64]> {
+        self.states
+            .iter()
+            .find(|(n, _)| *n == name)
+            .map(|(_, v)| *v)
+            .ok_or_else(|| Error::InvalidOption {
+                name: "library".to_string(),
+                message: format!("the state `{name}` its terms need is not among the signals"),
+            })
+    }
+}
+
+/// A set of candidate terms: names and values on [`Signals`]. [`Library`] (the Eq. 19
+/// polynomial library) is one; [`StateTerms`] (a state's terms) another; [`Composite`]
+/// joins several into one library.
+pub trait TermSet: Send + Sync {
+    /// Short name of the set (in error messages): `paper30`, `state x`.
+    fn set_name(&self) -> String;
+    /// Term names in column order.
+    fn term_names(&self) -> Vec<String>;
+    /// Values of every term on the rows `r0 .. r0 + out.nrows()` into `out` (one column per
+    /// term).
+    ///
+    /// # Errors
+    /// [`Error::InvalidOption`] when a signal the terms need is missing.
+    fn evaluate_set(&self, signals: &Signals<'_>, r0: usize, out: MatMut<'_, f64>) -> Result<()>;
+}
+
+impl TermSet for Library {
+    fn set_name(&self) -> String {
+        format!("{:?}", self.kind).to_lowercase()
+    }
+    fn term_names(&self) -> Vec<String> {
+        self.names()
+    }
+    fn evaluate_set(&self, signals: &Signals<'_>, r0: usize, out: MatMut<'_, f64>) -> Result<()> {
+        self.evaluate_rows(signals.x, r0, out);
+        Ok(())
+    }
+}
+
+/// A state's terms: each the state raised to a power times a monomial of the regression
+/// variables, named `<state>` (power 1, monomial 1), `<state>^p`, `<state>*<monomial>`
+/// (e.g. `x`, `x^2`, `x*alpha`): the terms a law with an internal state adds to the
+/// Eq. 19 library.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StateTerms {
+    state: String,
+    terms: Vec<(u8, Term)>,
+}
+
+impl StateTerms {
+    /// The terms `state^power · monomial` of the list.
+    ///
+    /// # Errors
+    /// [`Error::InvalidOption`] (option `library`) for an empty or non-identifier state
+    /// name, a power 0 or above 3.
+    pub fn new(state: &str, terms: &[(u8, Term)]) -> Result<StateTerms> {
+        let bad = |message: String| Error::InvalidOption {
+            name: "library".to_string(),
+            message,
+        };
+        if state.is_empty()
+            || !state.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+            || VARIABLES.contains(&state)
+        {
+            return Err(bad(format!(
+                "state name `{state}` must be an identifier other than the four variables"
+            )));
+        }
+        if let Some((p, t)) = terms.iter().find(|(p, _)| *p == 0 || *p > 3) {
+            return Err(bad(format!(
+                "term `{state}^{p}*{t}`: the state's power must be 1, 2 or 3"
+            )));
+        }
+        Ok(StateTerms {
+            state: state.to_string(),
+            terms: terms.to_vec(),
+        })
+    }
+}
+
+impl TermSet for StateTerms {
+    fn set_name(&self) -> String {
+        format!("state {}", self.state)
+    }
+    fn term_names(&self) -> Vec<String> {
+        self.terms
+            .iter()
+            .map(|(p, t)| {
+                let s = if *p == 1 {
+                    self.state.clone()
+                } else {
+                    format!("{}^{p}", self.state)
+                };
+                if t.degree() == 0 {
+                    s
+                } else {
+                    format!("{s}*{}", t.name())
+                }
+            })
+            .collect()
+    }
+    fn evaluate_set(
+        &self,
+        signals: &Signals<'_>,
+        r0: usize,
+        mut out: MatMut<'_, f64>,
+    ) -> Result<()> {
+        let z = signals.state(&self.state)?;
+        for (j, (p, t)) in self.terms.iter().enumerate() {
+            for (i, c) in out.as_mut().col_mut(j).iter_mut().enumerate() {
+                let r = r0 + i;
+                let x = [
+                    signals.x[0][r],
+                    signals.x[1][r],
+                    signals.x[2][r],
+                    signals.x[3][r],
+                ];
+                *c = z[r].powi(*p as i32) * t.eval_at(x);
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Several term sets as one library (columns in set order), names unique across the sets.
+pub struct Composite {
+    sets: Vec<Box<dyn TermSet>>,
+    names: Vec<String>,
+    offsets: Vec<usize>,
+}
+
+impl std::fmt::Debug for Composite {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Composite")
+            .field("names", &self.names)
+            .finish()
+    }
+}
+
+impl Composite {
+    /// Joins `sets` (e.g. the Eq. 19 library and a state's terms).
+    ///
+    /// # Errors
+    /// [`Error::InvalidOption`] (option `library`) naming the term and the two sets when a
+    /// term name appears twice, or when no set has a term.
+    pub fn new(sets: Vec<Box<dyn TermSet>>) -> Result<Composite> {
+        let mut names: Vec<String> = Vec::new();
+        let mut owner: Vec<usize> = Vec::new();
+        let mut offsets = Vec::with_capacity(sets.len());
+        for (k, s) in sets.iter().enumerate() {
+            offsets.push(names.len());
+            for n in s.term_names() {
+                if let Some(i) = names.iter().position(|m| *m == n) {
+                    return Err(Error::InvalidOption {
+                        name: "library".to_string(),
+                        message: format!(
+                            "term `{n}` is in both `{}` and `{}`: names must be unique",
+                            sets[owner[i]].set_name(),
+                            s.set_name()
+                        ),
+                    });
+                }
+                names.push(n);
+                owner.push(k);
+            }
+        }
+        if names.is_empty() {
+            return Err(Error::InvalidOption {
+                name: "library".to_string(),
+                message: "no term".to_string(),
+            });
+        }
+        Ok(Composite {
+            sets,
+            names,
+            offsets,
+        })
+    }
+
+    /// Term names in column order.
+    pub fn names(&self) -> &[String] {
+        &self.names
+    }
+
+    /// Number of terms.
+    pub fn len(&self) -> usize {
+        self.names.len()
+    }
+
+    /// Never true ([`Composite::new`] refuses an empty library).
+    pub fn is_empty(&self) -> bool {
+        self.names.is_empty()
+    }
+
+    /// Column of the term `name` (exact name).
+    pub fn index_of(&self, name: &str) -> Option<usize> {
+        self.names.iter().position(|n| n == name)
+    }
+
+    /// Values of every term on rows `r0 .. r0 + out.nrows()` (as [`TermSet::evaluate_set`]).
+    ///
+    /// # Errors
+    /// As [`TermSet::evaluate_set`].
+    ///
+    /// # Panics
+    /// When `out` does not have one column per term (a programming error).
+    #[track_caller]
+    pub fn evaluate_rows(
+        &self,
+        signals: &Signals<'_>,
+        r0: usize,
+        mut out: MatMut<'_, f64>,
+    ) -> Result<()> {
+        assert_eq!(out.ncols(), self.len(), "one output column per term");
+        for (k, s) in self.sets.iter().enumerate() {
+            let end = self.offsets.get(k + 1).copied().unwrap_or(self.len());
+            let cols = out
+                .as_mut()
+                .subcols_mut(self.offsets[k], end - self.offsets[k]);
+            s.evaluate_set(signals, r0, cols)?;
+        }
+        Ok(())
+    }
+
+    /// The n × p matrix of every term on all samples.
+    ///
+    /// # Errors
+    /// As [`TermSet::evaluate_set`].
+    pub fn evaluate(&self, signals: &Signals<'_>) -> Result<Mat<f64>> {
+        let n = signals.x[0].len();
+        let mut theta = Mat::<f64>::zeros(n, self.len());
+        self.evaluate_rows(signals, 0, theta.as_mut())?;
+        Ok(theta)
+    }
+}
+
 #[cfg(test)]
 mod tests {
 
@@ -553,5 +807,107 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// Issue 40 item 2: the Eq. 19 library plus a state's terms as one library; duplicate
+    /// names refused naming the term; the composite's columns regress like any library
+    /// (the registered STLSQ recovers a law with a state term).
+    #[test]
+    fn eq19_library_and_state_terms_compose() {
+        use crate::regress::plugin::{run_path, FitSettings, GroupInput, RegressorChoice};
+        use crate::regress::{path::PathOptions, plugins, CaseFactor, CaseProblem, Measure};
+        let n = 3000;
+        let x: [Vec<f64>; 4] = std::array::from_fn(|v| {
+            (0..n)
+                .map(|i| ((i * (v + 2)) as f64 * 0.0107).sin() * (0.3 + 0.1 * v as f64))
+                .collect()
+        });
+        let z: Vec<f64> = (0..n)
+            .map(|i| 0.5 + 0.4 * (i as f64 * 0.0031).cos())
+            .collect();
+        let states = [("x", z.as_slice())];
+        let signals = Signals {
+            x: &x,
+            states: &states,
+        };
+        let state =
+            StateTerms::new("x", &[(1, Term::ONE), (1, Term::linear(0)), (2, Term::ONE)]).unwrap();
+        assert_eq!(state.term_names(), ["x", "x*alpha", "x^2"]);
+        let lib = Composite::new(vec![
+            Box::new(Library::new(LibraryKind::Paper30, false)),
+            Box::new(state.clone()),
+        ])
+        .unwrap();
+        assert_eq!(lib.len(), 33);
+        assert_eq!(lib.names()[30], "x");
+        let theta = lib.evaluate(&signals).unwrap();
+        let j = lib.index_of("x*alpha").unwrap();
+        assert_eq!(theta[(7, j)], z[7] * x[0][7]);
+        assert_eq!(theta[(7, 0)], x[0][7]);
+
+        let e = Composite::new(vec![
+            Box::new(Library::new(LibraryKind::Paper30, false)),
+            Box::new(Library::new(LibraryKind::Full34, false)),
+        ])
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("`alpha`") && e.contains("paper30") && e.contains("full34"),
+            "{e}"
+        );
+        let e = Composite::new(vec![Box::new(state.clone()), Box::new(state)])
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("term `x`"), "{e}");
+        assert!(StateTerms::new("alpha", &[]).is_err());
+        let none: [(&str, &[f64]); 0] = [];
+        let bare = Signals {
+            x: &x,
+            states: &none,
+        };
+        assert!(lib.evaluate(&bare).unwrap_err().to_string().contains("`x`"));
+
+        // y = 1.5 α − 0.8 x·α + 0.3 x²: STLSQ on the composite finds exactly these terms
+        let y: Vec<f64> = (0..n)
+            .map(|i| 1.5 * x[0][i] - 0.8 * z[i] * x[0][i] + 0.3 * z[i] * z[i])
+            .collect();
+        let order: Vec<usize> = (0..lib.len()).collect();
+        let f = CaseFactor::new("c", theta.as_ref(), &order, &[&y]).unwrap();
+        let cases = [CaseProblem {
+            factor: &f,
+            target: 0,
+        }];
+        let shared = FitSettings {
+            measure: Measure::Contribution,
+            group_rule: crate::regress::GroupRule::Norm,
+            ridge: 0.0,
+            max_iter: 25,
+        };
+        let (reg, options, _) = RegressorChoice::new("stlsq")
+            .resolve(plugins::registry(), &shared)
+            .unwrap();
+        let group = GroupInput {
+            cases: &cases,
+            keys: &[None],
+            data: &[None],
+            target: 0,
+            basis: (1u64 << lib.len()) - 1,
+            kept: 0,
+            shared,
+            options: &options,
+        };
+        let (path, coefs) = run_path(
+            reg,
+            &group,
+            &PathOptions::for_measure(Measure::Contribution),
+        );
+        let sel: Vec<&str> = path
+            .selected_support()
+            .support
+            .iter()
+            .map(|&j| lib.names()[j].as_str())
+            .collect();
+        assert_eq!(sel, ["alpha", "x*alpha", "x^2"]);
+        assert!((coefs[0][lib.index_of("x^2").unwrap()] - 0.3).abs() < 1e-9);
     }
 }

@@ -39,6 +39,7 @@ __all__ = [
     "sweep_local",
     "parse_speeds",
     "limits",
+    "regressors",
 ]
 
 PathLike = Union[str, "os.PathLike[str]"]
@@ -214,6 +215,14 @@ def limits() -> Dict[str, Dict[str, Any]]:
     }
 
 
+def regressors() -> List[Dict[str, Any]]:
+    """The registered regressors (``regress::plugins``, the list ``aeroform identify --help``
+    shows): per regressor its ``name``, ``aliases``, ``doc``, ``path_parameter`` (``name``,
+    ``unit``) and ``options`` (``name``, ``type``, ``default``, ``min``, ``max``, ``doc``): the
+    keys :func:`identify` accepts in ``regressor_options``."""
+    return json.loads(_core.regressors())
+
+
 def read_dataset(path: PathLike) -> Dataset:
     """Reads a data-set folder (manifest.toml + case CSV files, docs/DATA_FORMAT.md)."""
     return Dataset(_core.read_dataset(os.fspath(path)))
@@ -300,16 +309,14 @@ def _check_channel(ch: str) -> None:
         raise AeroformError(f"channel `{ch}`: expected `lift` or `moment`")
 
 
-_REGRESSORS = {"stlsq": "stlsq", "lsq": "least_squares", "least_squares": "least_squares"}
-
-
 def identify(
     dataset: Union[Dataset, PathLike],
     *,
     velocity: str = "auto",
     subtract_nowind: bool = True,
-    pysindy_alpha: float = 0.05,
-    pysindy_unbias: bool = True,
+    regressor_options: Optional[Mapping[str, Any]] = None,
+    pysindy_alpha: Optional[float] = None,
+    pysindy_unbias: Optional[bool] = None,
     ensemble: Optional[int] = None,
     seed: int = 2024,
     level: float = 0.9,
@@ -323,8 +330,12 @@ def identify(
     (``canonical``/``full``), ``measure`` (``contribution``/``coefficient``),
     ``group_rule`` (``norm``/``all``/``any``/``mean``), ``group_by`` (``config``/
     ``wind_speed``/``amplitude``/``none``), ``ridge``, ``n_delta``, ``k_key``,
-    ``kept_terms``, … and ``regressor`` (``stlsq``, ``lsq``, ``pysindy`` or the
-    settings' dict form). An unknown name raises :class:`AeroformError` naming it.
+    ``kept_terms``, … and ``regressor``: the name of a registered regressor (see
+    :func:`regressors`: ``stlsq``, ``pysindy``, ``least_squares`` alias ``lsq``) or the
+    settings' dict form (``{"kind": name, option: value, …}``). ``regressor_options`` are
+    the chosen regressor's options (``{"alpha": 0.1}`` for ``pysindy``);
+    ``pysindy_alpha``/``pysindy_unbias`` are the deprecated spellings of its ``alpha`` and
+    ``unbias``. An unknown name raises :class:`AeroformError` naming it.
 
     ``ensemble=N`` adds a block-bootstrap ensemble of N members (``seed``, interval
     ``level``), as ``aeroform identify --ensemble N --seed S --level L``: the ``ensemble``
@@ -332,19 +343,18 @@ def identify(
     ``flutter(..., ensemble=N)`` propagates to the flutter and divergence speeds.
     """
     ds = _as_dataset(dataset)
-    reg = settings.get("regressor")
+    reg = settings.get("regressor", "stlsq")
+    opts: Dict[str, Any] = dict(regressor_options or {})
+    if pysindy_alpha is not None:
+        opts.setdefault("alpha", pysindy_alpha)
+    if pysindy_unbias is not None:
+        opts.setdefault("unbias", pysindy_unbias)
     if isinstance(reg, str):
-        if reg == "pysindy":
-            settings["regressor"] = {
-                "kind": "pysindy",
-                "alpha": pysindy_alpha,
-                "max_iter": 20,
-                "unbias": pysindy_unbias,
-            }
-        elif reg in _REGRESSORS:
-            settings["regressor"] = {"kind": _REGRESSORS[reg]}
-        else:
-            raise AeroformError(f"regressor `{reg}`: expected stlsq, lsq or pysindy")
+        settings["regressor"] = {"kind": reg, **opts}
+    elif isinstance(reg, Mapping):
+        settings["regressor"] = {**reg, **opts}
+    else:
+        raise AeroformError(f"regressor `{reg!r}`: expected a name or a dict")
     text = _core.identify(
         ds._inner, json.dumps(settings), velocity, subtract_nowind, ensemble, seed, level
     )

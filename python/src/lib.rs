@@ -480,6 +480,14 @@ fn limits() -> Vec<(&'static str, f64, &'static str, &'static str)> {
         .collect()
 }
 
+/// The registered regressors (`identify::regress::plugins`) as JSON text: per regressor its
+/// name, aliases, doc, path parameter and options (name, type, default, range, doc).
+#[pyfunction]
+fn regressors() -> String {
+    let r = identify::regress::plugins::registry();
+    identify::regress::plugins::describe(r).to_string()
+}
+
 /// Sim-to-real diagnosis (`aeroform diagnose`): returns the `diagnosis.json` document.
 #[pyfunction]
 #[pyo3(name = "diagnose", signature = (forced, free = None, seed = 1))]
@@ -562,6 +570,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(branch, m)?)?;
     m.add_function(wrap_pyfunction!(py_diagnose, m)?)?;
     m.add_function(wrap_pyfunction!(limits, m)?)?;
+    m.add_function(wrap_pyfunction!(regressors, m)?)?;
     m.add_function(wrap_pyfunction!(sweep_n_items, m)?)?;
     m.add_function(wrap_pyfunction!(sweep_run_items, m)?)?;
     m.add_function(wrap_pyfunction!(sweep_assemble, m)?)?;

@@ -26,6 +26,25 @@ def test_settings_have_the_cli_meaning(forced_dataset, tmp_path):
     assert ident["settings"]["group_by"] == "none"
 
 
+def test_regressors_come_from_the_registry_and_take_their_options(forced_dataset, tmp_path):
+    regs = {r["name"]: r for r in aeroform.regressors()}
+    assert {"stlsq", "pysindy", "least_squares"} <= regs.keys()
+    assert "lsq" in regs["least_squares"]["aliases"]
+    alpha = [o for o in regs["pysindy"]["options"] if o["name"] == "alpha"][0]
+    assert alpha["type"] == "number" and alpha["default"] == 0.05
+    run_cli("identify", forced_dataset, "--out", tmp_path, "--quiet", "--group-by", "none",
+            "--regressor", "pysindy", "--regressor-option", "alpha=0.1")
+    cli = json.loads((tmp_path / "identification.json").read_text())
+    assert cli["settings"]["regressor"] == {"kind": "pysindy", "alpha": 0.1, "max_iter": 20, "unbias": True}
+    ident = aeroform.identify(forced_dataset, group_by="none", regressor="pysindy",
+                              regressor_options={"alpha": 0.1})
+    assert max_difference(cli, dict(ident)) <= 1e-12
+    with pytest.raises(aeroform.AeroformError, match="pysindy.alpha"):
+        aeroform.identify(forced_dataset, regressor="pysindy", regressor_options={"alpha": -1})
+    with pytest.raises(aeroform.AeroformError, match="stlsq.alpha"):
+        aeroform.identify(forced_dataset, regressor_options={"alpha": 0.1})
+
+
 def test_unknown_setting_and_bad_values_raise_naming_them(forced_dataset):
     with pytest.raises(aeroform.AeroformError, match="n_delt"):
         aeroform.identify(forced_dataset, n_delt=10)

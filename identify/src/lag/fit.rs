@@ -28,7 +28,9 @@ use serde::{Deserialize, Serialize};
 use crate::numerics::qr::ThinQr;
 use crate::numerics::{cholesky_solve, PivotFloor};
 use crate::record::NondimCase;
-use crate::regress::path::{stlsq_path, PathOptions};
+use crate::regress::path::PathOptions;
+use crate::regress::plugin::{run_path, FitSettings, GroupInput, RegressorChoice};
+use crate::regress::plugins;
 use crate::regress::{CaseFactor, CaseProblem, Measure, Stlsq};
 use crate::{Error, Result};
 
@@ -686,9 +688,28 @@ fn select_moment(
         factor: &factor,
         target: 0,
     }];
-    let template = Stlsq::default();
+    // the registered STLSQ plug-in (default shared settings: contribution measure, no
+    // ridge), found by name like every regressor
+    let d = Stlsq::default();
+    let shared = FitSettings {
+        measure: d.measure,
+        group_rule: d.group_rule,
+        ridge: d.ridge,
+        max_iter: d.max_iter,
+    };
+    let (reg, options, _) = RegressorChoice::new("stlsq").resolve(plugins::registry(), &shared)?;
     let basis: u64 = (1u64 << ncol) - 1;
-    let (path, _) = stlsq_path(&problem, &[None], &template, basis, 0, &opts.path);
+    let group = GroupInput {
+        cases: &problem,
+        keys: &[None],
+        data: &[None],
+        target: 0,
+        basis,
+        kept: 0,
+        shared,
+        options: &options,
+    };
+    let (path, _) = run_path(reg, &group, &opts.path);
     let sel = path.selected_support();
     let selected: Vec<LagColumn> = sel
         .support

@@ -23,11 +23,10 @@ use crate::identifiability::{self, BasisMode, CaseIdentifiability, RankOptions};
 use crate::library::Library;
 use crate::metrics::{self, HarmonicProjector};
 use crate::record::{CaseMeta, NondimCase};
-use crate::regress::adapter::{self};
-use crate::regress::path::{self, DeltaPath, KeyProjection, PathOptions};
-use crate::regress::{
-    self, bools_to_mask, CaseFactor, CaseProblem, FitCache, LeastSquares, Mask, Stlsq,
-};
+use crate::regress::path::{DeltaPath, KeyProjection, PathOptions};
+use crate::regress::plugin::{run_path, CaseData, CaseInput, GroupInput, Options, Regressor};
+use crate::regress::plugins;
+use crate::regress::{self, bools_to_mask, CaseFactor, CaseProblem, Mask};
 use crate::{Error, Result};
 
 mod result;
@@ -43,8 +42,8 @@ struct CaseWork {
     /// Key projections of (moment, lift); `None` without candidate tones.
     keys: [Option<KeyProjection>; 2],
     key_freqs: [Vec<f64>; 2],
-    /// pysindy mode: per target, per δ, raw coefficients.
-    pysindy: Option<[Vec<Vec<f64>>; 2]>,
+    /// The regressor's per-case data ([`Regressor::prepare_case`]).
+    data: Option<CaseData>,
     /// Centring about a mean pitch, when applied.
     centring: Option<Centring>,
 }
@@ -130,12 +129,20 @@ fn check_case(case: &NondimCase) -> Result<()> {
     Ok(())
 }
 
+/// The chosen regressor and its resolved options.
+#[derive(Clone, Copy)]
+struct Chosen<'a> {
+    reg: &'static dyn Regressor,
+    options: &'a Options,
+}
+
 fn prepare_case(
     case: &NondimCase,
     lib: &Library,
     order: &[usize],
     s: &IdentifySettings,
     deltas: &[f64],
+    chosen: Chosen<'_>,
 ) -> Result<CaseWork> {
     check_case(case)?;
     let id = &case.meta.id;
@@ -223,24 +230,22 @@ fn prepare_case(
             });
         }
     }
-    let pysindy = match &s.regressor {
-        RegressorChoice::Pysindy(o) => {
-            let basis: Vec<usize> = (0..lib.len()).filter(|&j| ident.in_basis[j]).collect();
-            // comparison mode: pysindy works on the whole matrix
-            let theta = lib.evaluate(x);
-            Some([
-                adapter::path_case(theta.as_ref(), &basis, &case.c_moment, deltas, o),
-                adapter::path_case(theta.as_ref(), &basis, &case.c_lift, deltas, o),
-            ])
-        }
-        _ => None,
-    };
+    let basis: Vec<usize> = (0..lib.len()).filter(|&j| ident.in_basis[j]).collect();
+    let data = chosen.reg.prepare_case(&CaseInput {
+        id,
+        library: lib,
+        x,
+        measured: [&case.c_moment, &case.c_lift],
+        basis: &basis,
+        grid: deltas,
+        options: chosen.options,
+    })?;
     Ok(CaseWork {
         factor,
         ident,
         keys,
         key_freqs,
-        pysindy,
+        data,
         centring,
     })
 }
@@ -288,6 +293,7 @@ fn run_group(
     work: &[&CaseWork],
     target: usize,
     s: &IdentifySettings,
+    chosen: Chosen<'_>,
     basis: Mask,
     kept: Mask,
     opts: &PathOptions,
@@ -300,63 +306,20 @@ fn run_group(
         })
         .collect();
     let keys: Vec<Option<&KeyProjection>> = work.iter().map(|w| w.keys[target].as_ref()).collect();
-    match &s.regressor {
-        RegressorChoice::Stlsq => {
-            let template = Stlsq {
-                threshold: 0.0,
-                measure: s.measure,
-                group_rule: s.group_rule,
-                ridge: s.ridge,
-                max_iter: s.max_iter,
-            };
-            let (path, fit) = path::stlsq_path(&cases, &keys, &template, basis, kept, opts);
-            GroupOutcome {
-                path,
-                coefficients: fit.coefficients,
-            }
-        }
-        RegressorChoice::LeastSquares => {
-            let mut cache = FitCache::default();
-            let fit = regress::fit_group(&cases, &LeastSquares, basis, basis, &mut cache);
-            let path = path::summarise(
-                &[0.0],
-                vec![(basis, fit.coefficients.clone())],
-                &cases,
-                &keys,
-                opts,
-            );
-            GroupOutcome {
-                path,
-                coefficients: fit.coefficients,
-            }
-        }
-        RegressorChoice::Pysindy(_) => {
-            let deltas = opts.grid();
-            let per_delta: Vec<(Mask, Vec<Vec<f64>>)> = (0..deltas.len())
-                .map(|d| {
-                    let coefs: Vec<Vec<f64>> = work
-                        .iter()
-                        .map(|w| {
-                            w.pysindy
-                                .as_ref()
-                                .map(|p| p[target][d].clone())
-                                .unwrap_or_default()
-                        })
-                        .collect();
-                    let mask = coefs.iter().fold(0u64, |m, c| {
-                        m | c
-                            .iter()
-                            .enumerate()
-                            .fold(0u64, |a, (j, &x)| if x != 0.0 { a | 1 << j } else { a })
-                    });
-                    (mask, coefs)
-                })
-                .collect();
-            let path = path::summarise(&deltas, per_delta, &cases, &keys, opts);
-            let coefficients = path.selected_support().coefficients.clone();
-            GroupOutcome { path, coefficients }
-        }
-    }
+    let data: Vec<Option<&(dyn std::any::Any + Send + Sync)>> =
+        work.iter().map(|w| w.data.as_deref()).collect();
+    let group = GroupInput {
+        cases: &cases,
+        keys: &keys,
+        data: &data,
+        target,
+        basis,
+        kept,
+        shared: s.fit_settings(),
+        options: chosen.options,
+    };
+    let (path, coefficients) = run_path(chosen.reg, &group, opts);
+    GroupOutcome { path, coefficients }
 }
 
 fn group_force(path: &DeltaPath, names: &[String]) -> GroupForce {
@@ -467,14 +430,11 @@ pub fn identify(
 /// the other cases, so identifying a subset gives exactly what [`identify`] gives on those
 /// cases alone, at the cost of the group stage only (a cross-validation's folds prepare
 /// once).
-///
-/// What is kept per case is O(p²) (the p × p factor and Gram matrix of its library, the key
-/// projections, the identifiability) plus its manifest descriptors, never its samples: a
-/// campaign can be prepared case by case ([`Prepared::start`], [`Prepared::push`]) in
-/// memory that does not grow with the samples.
 pub struct Prepared<'c> {
     cases: &'c [NondimCase],
     settings: IdentifySettings,
+    regressor: &'static dyn Regressor,
+    regressor_options: Options,
     lib: Library,
     order: Vec<usize>,
     opts: PathOptions,
@@ -499,7 +459,22 @@ pub fn prepare<'c>(
     settings: &IdentifySettings,
     observer: &dyn Fn(Progress),
 ) -> Result<Prepared<'c>> {
-    let mut prepared = Prepared::start(settings)?;
+    prepare_in(cases, settings, plugins::registry(), observer)
+}
+
+/// [`prepare`] with the regressor looked up in `registry` instead of the registered ones
+/// ([`plugins::registry`]; a test registers its own this way). The prepared settings hold
+/// the canonical regressor choice (its registered name and every option's value).
+///
+/// # Errors
+/// As [`prepare`].
+pub fn prepare_in<'c>(
+    cases: &'c [NondimCase],
+    settings: &IdentifySettings,
+    registry: &[&'static dyn Regressor],
+    observer: &dyn Fn(Progress),
+) -> Result<Prepared<'c>> {
+    let mut prepared = Prepared::start_in(settings, registry)?;
     if cases.is_empty() {
         return Err(Error::InvalidData {
             case: "-".to_string(),
@@ -533,13 +508,32 @@ impl Prepared<'static> {
     /// batch's samples once pushed). [`Prepared::cases`] stays empty.
     ///
     /// # Errors
-    /// [`Error::InvalidOption`] for invalid settings (an unknown kept term names it).
+    /// [`Error::InvalidOption`] for invalid settings (an unknown kept term or regressor
+    /// names it).
     pub fn start(settings: &IdentifySettings) -> Result<Self> {
-        settings.validate()?;
+        Self::start_in(settings, plugins::registry())
+    }
+
+    /// [`Prepared::start`] with the regressor looked up in `registry` ([`prepare_in`]).
+    ///
+    /// # Errors
+    /// As [`Prepared::start`].
+    pub fn start_in(
+        settings: &IdentifySettings,
+        registry: &[&'static dyn Regressor],
+    ) -> Result<Self> {
+        settings.validate_in(registry)?;
+        let (regressor, regressor_options, canonical) = settings.regressor_in(registry)?;
+        let settings = IdentifySettings {
+            regressor: canonical,
+            ..settings.clone()
+        };
         let lib = Library::new(settings.library, settings.constant);
         let order = identifiability::priority_order(&lib);
-        let opts = settings.path_options();
-        let deltas = opts.grid();
+        let opts = settings.path_options_in(registry);
+        let deltas = regressor
+            .path_parameter(&settings.fit_settings())
+            .values(&opts);
         let mut kept_cols = vec![false; lib.len()];
         for t in &settings.kept_terms {
             kept_cols[lib.index_of(t)?] = true;
@@ -547,7 +541,9 @@ impl Prepared<'static> {
         let kept = bools_to_mask(&kept_cols);
         Ok(Prepared {
             cases: &[],
-            settings: settings.clone(),
+            settings,
+            regressor,
+            regressor_options,
             lib,
             order,
             opts,
@@ -587,9 +583,13 @@ impl<'c> Prepared<'c> {
     pub fn push(&mut self, batch: &[NondimCase]) -> Result<()> {
         self.check_ids(batch)?;
         let (lib, order, settings, deltas) = (&self.lib, &self.order, &self.settings, &self.deltas);
+        let chosen = Chosen {
+            reg: self.regressor,
+            options: &self.regressor_options,
+        };
         let done: Vec<Result<CaseWork>> = batch
             .par_iter()
-            .map(|c| prepare_case(c, lib, order, settings, deltas))
+            .map(|c| prepare_case(c, lib, order, settings, deltas, chosen))
             .collect();
         let done = done.into_iter().collect::<Result<Vec<CaseWork>>>()?;
         self.work.extend(done);
@@ -704,6 +704,10 @@ impl<'c> Prepared<'c> {
         let cases: Vec<&CaseSummary> = subset.iter().map(|&i| &self.summaries[i]).collect();
         let work: Vec<&CaseWork> = subset.iter().map(|&i| &self.work[i]).collect();
         let (settings, lib, opts) = (&self.settings, &self.lib, &self.opts);
+        let chosen = Chosen {
+            reg: self.regressor,
+            options: &self.regressor_options,
+        };
         let names = lib.names();
         let total = cases.len();
         let batch = batch_size();
@@ -740,7 +744,15 @@ impl<'c> Prepared<'c> {
                     let (g, target) = tasks[k];
                     let members: Vec<&CaseWork> =
                         group_list[g].1.iter().map(|&i| work[i]).collect();
-                    run_group(&members, target, settings, bases[g], kept[target], opts)
+                    run_group(
+                        &members,
+                        target,
+                        settings,
+                        chosen,
+                        bases[g],
+                        kept[target],
+                        opts,
+                    )
                 })
                 .collect();
             for (&k, r) in chunk.iter().zip(res) {

@@ -6,8 +6,10 @@ use serde::{Deserialize, Serialize};
 use crate::identifiability::{self, BasisMode, RankOptions};
 use crate::library::{Library, LibraryKind};
 use crate::metrics;
-use crate::regress::adapter::PysindyOptions;
 use crate::regress::path::{self, PathOptions};
+use crate::regress::plugin::{FitSettings, Options, PathGrid, Regressor};
+pub use crate::regress::plugin::{OptionValue, RegressorChoice};
+use crate::regress::plugins;
 use crate::regress::{GroupRule, Measure, Stlsq};
 use crate::{Error, Result};
 
@@ -30,20 +32,6 @@ pub enum GroupBy {
     Amplitude,
     /// Every case alone (group name = case id).
     None,
-}
-
-/// Which sparse optimiser runs along the δ path.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Default, schemars::JsonSchema)]
-#[serde(rename_all = "snake_case", tag = "kind")]
-pub enum RegressorChoice {
-    /// (Group) STLSQ on the column-normalised basis (default).
-    #[default]
-    Stlsq,
-    /// pysindy 2.1 STLSQ per case on raw columns (comparison mode; the group support is the
-    /// union of the case supports).
-    Pysindy(PysindyOptions),
-    /// Plain least squares on the whole identifiable basis (no δ path).
-    LeastSquares,
 }
 
 /// Every option of the identification (`identify()`) that changes the result.
@@ -85,7 +73,8 @@ pub struct IdentifySettings {
     pub k_key: usize,
     /// Highest order |m| + |n| of candidate tones.
     pub max_harmonic_order: u32,
-    /// Optimiser.
+    /// Optimiser: a registered regressor's name (`kind`) and its options
+    /// ([`crate::regress::plugins`]).
     pub regressor: RegressorChoice,
     /// Grouping of cases.
     pub group_by: GroupBy,
@@ -120,7 +109,7 @@ impl Default for IdentifySettings {
             loss_noise: path::DEFAULT_LOSS_NOISE,
             k_key: metrics::DEFAULT_K_KEY,
             max_harmonic_order: metrics::DEFAULT_MAX_ORDER,
-            regressor: RegressorChoice::Stlsq,
+            regressor: RegressorChoice::default(),
             group_by: GroupBy::Config,
             centre_mean_angle: true,
         }
@@ -128,19 +117,55 @@ impl Default for IdentifySettings {
 }
 
 impl IdentifySettings {
-    /// The measure the δ grid applies to (raw coefficients in pysindy mode).
+    /// The settings every regressor shares ([`FitSettings`]).
+    pub fn fit_settings(&self) -> FitSettings {
+        FitSettings {
+            measure: self.measure,
+            group_rule: self.group_rule,
+            ridge: self.ridge,
+            max_iter: self.max_iter,
+        }
+    }
+
+    /// The regressor of [`plugins::registry`] these settings choose, its resolved options and
+    /// the canonical choice ([`RegressorChoice::resolve`]).
+    ///
+    /// # Errors
+    /// As [`RegressorChoice::resolve`].
+    pub fn regressor_in<'r>(
+        &self,
+        registry: &[&'r dyn Regressor],
+    ) -> Result<(&'r dyn Regressor, Options, RegressorChoice)> {
+        self.regressor.resolve(registry, &self.fit_settings())
+    }
+
+    /// The measure the δ grid applies to: that of the regressor's path parameter (raw
+    /// coefficients in pysindy mode), the settings' `measure` for a regressor without a
+    /// path or not registered.
     pub fn effective_measure(&self) -> Measure {
-        match self.regressor {
-            RegressorChoice::Pysindy(_) => Measure::Coefficient,
+        self.effective_measure_in(plugins::registry())
+    }
+
+    /// [`IdentifySettings::effective_measure`] among the regressors of `registry`.
+    pub fn effective_measure_in(&self, registry: &[&dyn Regressor]) -> Measure {
+        match crate::regress::plugin::find(registry, &self.regressor.kind)
+            .map(|r| r.path_parameter(&self.fit_settings()).grid)
+        {
+            Ok(PathGrid::Log { measure }) => measure,
             _ => self.measure,
         }
     }
 
     /// The δ path options these settings imply.
     pub fn path_options(&self) -> PathOptions {
+        self.path_options_in(plugins::registry())
+    }
+
+    /// [`IdentifySettings::path_options`] among the regressors of `registry`.
+    pub fn path_options_in(&self, registry: &[&dyn Regressor]) -> PathOptions {
         let (lo, hi) = match self.delta_range {
             Some([a, b]) => (a, b),
-            None => path::default_range(self.effective_measure()),
+            None => path::default_range(self.effective_measure_in(registry)),
         };
         PathOptions {
             n_delta: self.n_delta,
@@ -152,18 +177,26 @@ impl IdentifySettings {
         }
     }
 
-    /// Checks every option once, at the boundary.
+    /// Checks every option once, at the boundary, against the registered regressors.
     ///
     /// # Errors
     /// [`Error::InvalidOption`] naming the option (e.g. `k_key`, `delta_range`,
-    /// `kept_terms`) and its value.
+    /// `kept_terms`, `regressor`, `pysindy.alpha`) and its value.
     pub fn validate(&self) -> Result<()> {
+        self.validate_in(plugins::registry())
+    }
+
+    /// [`IdentifySettings::validate`] against the regressors of `registry`.
+    ///
+    /// # Errors
+    /// As [`IdentifySettings::validate`].
+    pub fn validate_in(&self, registry: &[&dyn Regressor]) -> Result<()> {
         RankOptions {
             tol: self.rank_tol,
             near_tol: self.near_tol,
         }
         .validate()?;
-        self.path_options().validate()?;
+        self.path_options_in(registry).validate()?;
         Stlsq {
             threshold: 0.0,
             measure: self.measure,
@@ -172,9 +205,7 @@ impl IdentifySettings {
             max_iter: self.max_iter,
         }
         .validate()?;
-        if let RegressorChoice::Pysindy(o) = &self.regressor {
-            o.validate()?;
-        }
+        self.regressor_in(registry)?;
         // k_key key frequencies are picked among the tones of harmonic order ≤ 20 (at most
         // a few hundred): a larger count is a typo, refused before any allocation.
         if self.k_key == 0 || self.k_key > 1000 {

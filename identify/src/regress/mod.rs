@@ -8,7 +8,12 @@
 //!   (or ridge) fits, the unbiasing refit and the history. Implementations: [`Stlsq`] (with
 //!   its group-removal rule) and [`LeastSquares`].
 //! - [`path`]: the δ path and the selection of the sparsest support under a loss limit.
-//! - [`adapter`]: the pysindy-compatible mode, through [`pysindy::PysindyStlsq`].
+//! - [`plugin`]: the [`plugin::Regressor`] trait (a regressor as a plug-in: its name, options,
+//!   path parameter and fits along the path) and [`plugins`]: the registry and the
+//!   registered regressors (STLSQ, pysindy, least squares). Nothing outside `plugins`
+//!   names a regressor.
+//! - [`adapter`]: the pysindy-compatible estimator's options and per-case paths, through
+//!   [`pysindy::PysindyStlsq`].
 //!
 //! Coefficients come in two scales: *scaled* (coefficient of the column-normalised term,
 //! ξ_s = ξ·d_j with d_j the column's 2-norm) and *raw* (coefficient of the library term in
@@ -17,6 +22,8 @@
 pub mod adapter;
 pub mod factor;
 pub mod path;
+pub mod plugin;
+pub mod plugins;
 pub mod pysindy;
 
 use std::collections::HashMap;

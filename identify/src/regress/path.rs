@@ -1,8 +1,9 @@
 //! The δ path (paper Alg. 3) and the selection of the sparsest adequate support.
 //!
 //! δ runs over a logarithmic grid (default 50 values from 1e-4 to 1 for the contribution
-//! measure, from 1e-3 to 10 for the raw-coefficient measure). For each δ the (group) STLSQ
-//! support and coefficients are computed from the whole identifiable basis; the path's
+//! measure, from 1e-3 to 10 for the raw-coefficient measure). For each δ a regressor's
+//! support and coefficients are computed from the whole identifiable basis (each plug-in
+//! walks its own path parameter, [`super::plugin::Regressor::fit_path`]); the path's
 //! distinct supports are scored by their key-frequency loss (Eq. 14, mean over the cases of
 //! the group). The selected support is the sparsest one whose loss is under the limit
 //!
@@ -23,7 +24,7 @@
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
-use super::{fit_group, mask_to_vec, CaseProblem, FitCache, GroupFit, Mask, Measure, Stlsq};
+use super::{mask_to_vec, CaseProblem, Mask, Measure};
 use crate::{Error, Result};
 
 /// Options of the δ path.
@@ -338,45 +339,6 @@ fn noise_loss(case: &CaseProblem<'_>, key: Option<&KeyProjection>, raw: &[f64]) 
     } else {
         0.0
     }
-}
-
-/// The δ path of (group) STLSQ: for each δ of the grid, [`fit_group`] with
-/// `Stlsq { threshold: δ, ..template }` from the whole `basis`, never removing `kept`.
-/// Returns the path and the group fit of the selected support (coefficients from the exact
-/// QR solve).
-///
-/// # Panics
-/// When `cases` is empty or `keys` has another length (programming errors).
-#[track_caller]
-pub fn stlsq_path(
-    cases: &[CaseProblem<'_>],
-    keys: &[Option<&KeyProjection>],
-    template: &Stlsq,
-    basis: Mask,
-    kept: Mask,
-    opts: &PathOptions,
-) -> (DeltaPath, GroupFit) {
-    let deltas = opts.grid();
-    let mut cache = FitCache::default();
-    let reg = |d: f64| Stlsq {
-        threshold: d,
-        ..*template
-    };
-    // per δ only the support and the raw coefficients are kept (a whole GroupFit per δ held
-    // 2 × n_delta × cases × p values: 0.8 GB for one group of 10,000 cases, issue 43 item 6)
-    let per_delta = deltas
-        .iter()
-        .map(|&d| {
-            let f = fit_group(cases, &reg(d), basis, kept & basis, &mut cache);
-            (super::vec_to_mask(&f.support), f.coefficients)
-        })
-        .collect();
-    let path = summarise(&deltas, per_delta, cases, keys, opts);
-    let first = path.supports[path.selected].deltas[0];
-    // the selected δ's fit again: every support it visits is in the memo, so this is the
-    // same fit, at the cost of expanding its coefficients
-    let chosen = fit_group(cases, &reg(first), basis, kept & basis, &mut cache);
-    (path, chosen)
 }
 
 #[cfg(test)]
