@@ -17,7 +17,7 @@ use aeroelastic::effects::{Form, InjectedEffect};
 
 use super::entry::{Draw, DrawContext, Entry};
 use super::Level;
-use crate::force::candidates::{sparse, Context, ForceFit, PoolColumn, Scored};
+use crate::force::candidates::{noise_energy, sparse, Context, ForceFit, PoolColumn, Scored};
 use crate::force::data::CaseData;
 
 /// Largest number of terms of the selection (2 → 3 raised the held-out excess shrink of
@@ -56,28 +56,12 @@ impl ForceFit for DynamicStall {
             return pooled;
         };
         lag.n_params += 1;
-        if energy(cx.cases, &lag.residuals) < energy(cx.cases, &pooled.residuals) {
+        if noise_energy(cx.cases, &lag.residuals) < noise_energy(cx.cases, &pooled.residuals) {
             lag
         } else {
             pooled
         }
     }
-}
-
-/// Noise-unit energy Σ (r/σ̂)² of held-out residuals over cases and channels.
-fn energy(cases: &[CaseData], res: &[[Vec<f64>; 2]]) -> f64 {
-    cases
-        .iter()
-        .zip(res)
-        .map(|(c, r)| {
-            (0..2)
-                .map(|k| {
-                    let s = c.sigma[k].max(1e-300);
-                    r[k].iter().map(|v| (v / s).powi(2)).sum::<f64>()
-                })
-                .sum::<f64>()
-        })
-        .sum()
 }
 
 /// The law with memory as the stall form (issue 41 item 5): per fold, the lag law of

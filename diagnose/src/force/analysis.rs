@@ -35,21 +35,7 @@ pub(crate) struct Thresholds {
 use super::data::{gaps, gaps_of, noise_gaps, noise_of};
 use crate::numerics::periodogram_full;
 
-/// Noise-unit energy Σ (r/σ̂)² of residuals.
-fn energy_w(cases: &[CaseData], res: &[[Vec<f64>; 2]]) -> f64 {
-    cases
-        .iter()
-        .zip(res)
-        .map(|(c, r)| {
-            (0..2)
-                .map(|k| {
-                    let s = c.sigma[k].max(1e-300);
-                    r[k].iter().map(|v| (v / s) * (v / s)).sum::<f64>()
-                })
-                .sum::<f64>()
-        })
-        .sum()
-}
+use super::candidates::noise_energy as energy_w;
 
 /// Builds the level result.
 pub(crate) fn assemble(

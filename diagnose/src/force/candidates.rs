@@ -282,6 +282,23 @@ pub(crate) fn sparse<P: PoolColumn>(
     }
 }
 
+/// Noise-unit energy Σ (r/σ̂)² of held-out residuals `res` (`[case][channel]`) over cases
+/// and channels, σ̂ each case's channel noise.
+pub(crate) fn noise_energy(cases: &[CaseData], res: &[[Vec<f64>; 2]]) -> f64 {
+    cases
+        .iter()
+        .zip(res)
+        .map(|(c, r)| {
+            (0..2)
+                .map(|k| {
+                    let s = c.sigma[k].max(1e-300);
+                    r[k].iter().map(|v| (v / s) * (v / s)).sum::<f64>()
+                })
+                .sum::<f64>()
+        })
+        .sum()
+}
+
 /// Significance of a candidate: (statistic z, threshold, significant, excess share removed,
 /// score). `e_before`, `e_after` in noise units, `n` samples, `p` shared and `q` nuisance
 /// parameters; significant when z > `threshold` and the share ≥ `min_shrink`.
