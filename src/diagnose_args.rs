@@ -84,6 +84,12 @@ pub struct DiagnoseArgs {
     /// of the truth, so that the structure is identified from them first (issue 42).
     #[arg(long, requires = "branch_level")]
     pub misgiven_structure: bool,
+    /// With `--blind`: close the loop of every `extrapolation` (issue 42 item 4): run the
+    /// recommended forced tests (the plan `diagnose` writes as `follow_up.campaign.toml`)
+    /// on the set's truth and diagnose the set again; blind.json records the second verdict
+    /// per set and confusion.md how many it got right.
+    #[arg(long, requires = "blind", conflicts_with_all = ["shard", "branch_level"])]
+    pub follow_up: bool,
 }
 
 impl DiagnoseArgs {

@@ -54,7 +54,7 @@ pub fn run(args: &DiagnoseArgs) -> anyhow::Result<()> {
             };
             return crate::bifurcation_cmd::blind(n, args.seed, &bench, &out, args.force);
         }
-        return blind(n, args.seed, args.shapes, &out, args.force);
+        return blind(n, args.seed, args.shapes, args.follow_up, &out, args.force);
     }
     if let Some(m) = &args.measured_branch {
         return crate::bifurcation_cmd::run(args, m);
@@ -131,9 +131,22 @@ pub fn run(args: &DiagnoseArgs) -> anyhow::Result<()> {
     let diag = diag?;
     let secs = t.elapsed().as_secs_f64();
     write_json(&dir.path().join("diagnosis.json"), &diag)?;
+    let plan = &diag.follow_up;
+    if let Some(plan) = plan {
+        write_atomic(&dir.path().join(FOLLOW_UP_FILE), plan.to_toml()?.as_bytes())?;
+    }
     let files = plots::write_diagnosis_outputs(&diag, dir.path())?;
     dir.commit()?;
     print_diagnosis(&diag, secs);
+    if let Some(plan) = plan {
+        crate::ui::say!(
+            "follow-up: {} forced cases in {} row(s) would cover the free runs outside the \
+             forced range: {} (aeroform tunnel forced --campaign-file)",
+            plan.cases().len(),
+            plan.rows.len(),
+            out.join(FOLLOW_UP_FILE).display()
+        );
+    }
     crate::ui::say!(
         "wrote {} and {} figure/report files to {}",
         out.join("diagnosis.json").display(),
@@ -142,6 +155,10 @@ pub fn run(args: &DiagnoseArgs) -> anyhow::Result<()> {
     );
     crate::ui::document(&diag)
 }
+
+/// The follow-up campaign plan `diagnose` writes beside diagnosis.json when free runs lie
+/// outside the forced range (issue 42 item 4).
+const FOLLOW_UP_FILE: &str = "follow_up.campaign.toml";
 
 fn write_json<T: serde::Serialize>(path: &Path, value: &T) -> anyhow::Result<()> {
     let mut text = serde_json::to_string_pretty(value)?;
@@ -188,10 +205,18 @@ fn print_diagnosis(d: &Diagnosis, secs: f64) {
     crate::ui::say!("diagnosed in {secs:.2} s");
 }
 
-fn blind(n: usize, seed: u64, shapes: bool, out: &Path, force: bool) -> anyhow::Result<()> {
+fn blind(
+    n: usize,
+    seed: u64,
+    shapes: bool,
+    follow_up: bool,
+    out: &Path,
+    force: bool,
+) -> anyhow::Result<()> {
     let dir = crate::outdir::OutDir::begin(out, "diagnose --blind", force, &[])?;
     let mut opts = BlindOptions::new(n, seed);
     opts.shapes = shapes;
+    opts.follow_up = follow_up;
     let bar = CountBar::new("blind", n);
     let wrong = AtomicUsize::new(0);
     let t = std::time::Instant::now();
@@ -291,6 +316,32 @@ fn blind_text(r: &BlindReport, secs: f64) -> String {
                 }
             ));
         }
+    }
+    let followed: Vec<_> = r
+        .outcomes
+        .iter()
+        .filter(|o| o.follow_up.is_some())
+        .collect();
+    if !followed.is_empty() {
+        let right = followed
+            .iter()
+            .filter(|o| o.follow_up_correct() == Some(true))
+            .count();
+        let right_before = followed.iter().filter(|o| o.correct()).count();
+        let cases: usize = followed
+            .iter()
+            .filter_map(|o| o.follow_up.as_ref())
+            .map(|f| f.cases)
+            .sum();
+        t.push_str(&format!(
+            "\n## Follow-up of the `extrapolation` verdicts (recommended forced tests run on the truth)\n\n\
+             {} sets followed up ({} forced cases added in all): right after {} ({:.0} %), right before {}.\n",
+            followed.len(),
+            cases,
+            right,
+            100.0 * right as f64 / followed.len() as f64,
+            right_before
+        ));
     }
     t.push_str(
         "\n## Per effect (strong sets)\n\n| effect | correct | strong sets |\n|---|---:|---:|\n",

@@ -59,6 +59,10 @@ pub struct ForcedArgs {
     /// `paper` (configurations A–G) or `config=X` (one configuration).
     #[arg(long, default_value = "paper")]
     pub campaign: aeroelastic::tunnel::CampaignName,
+    /// A campaign plan file (`aeroform-campaign/1`, e.g. the `follow_up.campaign.toml`
+    /// that `aeroform diagnose` writes): its rows' cases instead of `--campaign`.
+    #[arg(long, conflicts_with = "campaign")]
+    pub campaign_file: Option<PathBuf>,
     /// Output data-set folder.
     #[arg(long, default_value = "out/forced")]
     pub out: PathBuf,
@@ -170,23 +174,30 @@ fn manifest_json(dir: &std::path::Path) -> anyhow::Result<serde_json::Value> {
 }
 
 fn forced(a: &ForcedArgs) -> anyhow::Result<()> {
-    let campaign = a.campaign.campaign().context("--campaign")?;
+    let cases = match &a.campaign_file {
+        Some(path) => {
+            let text = identify::io::read_text(path)
+                .with_context(|| format!("--campaign-file {}", path.display()))?;
+            aeroelastic::tunnel::CampaignPlan::parse(&text, &path.display().to_string())
+                .context("--campaign-file")?
+                .cases()
+        }
+        None => a.campaign.campaign().context("--campaign")?.cases(),
+    };
     let mut opts = ForcedOptions::paper(a.seed);
     if a.still_air {
         opts = opts.with_paper_still_air();
     }
-    let cases = campaign.cases();
     let records = cases.len() * if a.still_air { 2 } else { 1 };
     aeroform::limits::samples("--duration", "rate", records, a.duration, opts.rate)?;
     let m = LoadedModel::load(&a.model, a.chord).context("model file")?;
     opts.duration = a.duration;
     opts.section.chord = m.model.chord();
-    let dir = OutDir::begin(
-        &a.out,
-        "tunnel forced",
-        a.force,
-        &[Input::new("--model", &a.model)],
-    )?;
+    let mut inputs = vec![Input::new("--model", &a.model)];
+    if let Some(p) = &a.campaign_file {
+        inputs.push(Input::new("--campaign-file", p));
+    }
+    let dir = OutDir::begin(&a.out, "tunnel forced", a.force, &inputs)?;
     let bar = CountBar::new("cases", cases.len());
     let obs = |p: TunnelProgress| bar.tick(p.id);
     let r = tunnel::forced_dataset(m.model.as_ref(), &cases, &opts, &obs);

@@ -137,7 +137,54 @@ fn diagnose_reports_coverage_and_extrapolation() {
         "Forced cases that would cover",
         "free-1",
         "K_α range",
+        "Recommended forced tests",
     ] {
         assert!(html.contains(s), "report lacks {s:?}");
     }
+    // the recommendation is a campaign file the virtual tunnel runs (issue 42 item 4)
+    let plan_file = out.join("follow_up.campaign.toml");
+    let plan = aeroelastic::tunnel::CampaignPlan::parse(
+        &std::fs::read_to_string(&plan_file).unwrap(),
+        "follow_up.campaign.toml",
+    )
+    .unwrap();
+    assert_eq!(serde_json::to_value(&plan).unwrap(), doc["follow_up"]);
+    let tests = tmp.path().join("follow-up");
+    let (ok, stdout, stderr) = aeroform(&[
+        "tunnel",
+        "forced",
+        "--model",
+        "scenarios/plate-truth.model.toml",
+        "--campaign-file",
+        plan_file.to_str().unwrap(),
+        "--duration",
+        "1",
+        "--out",
+        tests.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stdout}\n{stderr}");
+    let manifest = std::fs::read_to_string(tests.join("manifest.toml")).unwrap();
+    assert_eq!(manifest.matches("[[case]]").count(), plan.cases().len());
+    // a plan with a bad speed is refused naming the field
+    let bad = tmp.path().join("bad.campaign.toml");
+    std::fs::write(
+        &bad,
+        std::fs::read_to_string(&plan_file).unwrap().replacen(
+            "wind_speeds = [",
+            "wind_speeds = [-1.0, ",
+            1,
+        ),
+    )
+    .unwrap();
+    let (ok, _, stderr) = aeroform(&[
+        "tunnel",
+        "forced",
+        "--model",
+        "scenarios/plate-truth.model.toml",
+        "--campaign-file",
+        bad.to_str().unwrap(),
+        "--out",
+        tmp.path().join("bad-out").to_str().unwrap(),
+    ]);
+    assert!(!ok && stderr.contains("wind_speeds[0]"), "{stderr}");
 }

@@ -307,6 +307,30 @@ pub struct BlindOutcome {
     /// Free runs outside the forced range (system level's coverage), when assessed.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub uncovered_runs: Option<usize>,
+    /// The closed loop of an `extrapolation` (`diagnose --blind … --follow-up`): the
+    /// recommended forced tests run on the truth and the set diagnosed again.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub follow_up: Option<FollowUpOutcome>,
+}
+
+/// What the follow-up tests of one set gave ([`crate::follow_up::plan`] run on the truth).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct FollowUpOutcome {
+    /// Forced cases added (rows × wind speeds × amplitudes of the plan).
+    pub cases: usize,
+    /// Rows of the plan (one per configuration).
+    pub rows: usize,
+    /// The verdict on the set with the follow-up cases (written as its name).
+    pub verdict: Verdict,
+    /// Its confidence.
+    pub confidence: f64,
+    /// True gap / noise-level gap after the follow-up (the effect-free twin given the same
+    /// tests; 1 for effect-free sets): whether the effect is visible once the runs are
+    /// covered ([`STRONG_RATIO`]).
+    pub gap_ratio: f64,
+    /// Free runs still outside the forced range after the follow-up.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub uncovered_runs: Option<usize>,
 }
 
 impl BlindOutcome {
@@ -318,6 +342,15 @@ impl BlindOutcome {
     /// Whether the true gap is at least [`STRONG_RATIO`] × the noise-level gap.
     pub fn strong(&self) -> bool {
         self.gap_ratio >= STRONG_RATIO
+    }
+
+    /// Whether the follow-up verdict is the right one (as [`BlindOutcome::correct`]);
+    /// `None` without a follow-up.
+    pub fn follow_up_correct(&self) -> Option<bool> {
+        let f = self.follow_up.as_ref()?;
+        let mut o = self.clone();
+        o.verdict = Some(f.verdict);
+        Some(o.correct())
     }
 
     /// Whether the verdict is the right one (`unexplained` is right for the outside effect;
@@ -759,6 +792,7 @@ mod tests {
             error: None,
             seconds: 0.1,
             uncovered_runs: None,
+            follow_up: None,
         }
     }
 

@@ -5,8 +5,10 @@ use std::time::Instant;
 use aeroelastic::effects::Form;
 use rayon::prelude::*;
 
+use crate::bench::FollowUpOutcome;
 use crate::bench::{draw_specs, summarize, BlindOutcome, BlindReport, BlindSpec};
-use crate::blind::{generate, BlindEffect, BlindScenario};
+use crate::blind::{follow_up_forced, generate, BlindEffect, BlindScenario};
+use crate::effect::Verdict;
 use crate::pipeline::{diagnose, DiagnoseOptions};
 use crate::report::Diagnosis;
 use crate::{Error, Result};
@@ -27,6 +29,10 @@ pub struct BlindOptions {
     /// Draw each set's campaign shape ([`crate::bench::CampaignShape`]); `form` and the
     /// scenario's campaign and noise then come from the shape.
     pub shapes: bool,
+    /// Close the loop of every `extrapolation`: run the recommended forced tests
+    /// ([`crate::follow_up::plan`]) on the truth and diagnose the set again
+    /// ([`BlindOutcome::follow_up`]).
+    pub follow_up: bool,
 }
 
 impl BlindOptions {
@@ -43,6 +49,7 @@ impl BlindOptions {
             scenario: BlindScenario::default(),
             diagnose,
             shapes: false,
+            follow_up: false,
         }
     }
 }
@@ -80,15 +87,15 @@ pub fn run_one(spec: &BlindSpec, opts: &BlindOptions) -> Result<(BlindOutcome, D
     };
     let set = generate(effect, spec.strength, form, spec.seed, &scenario)?;
     let diag = diagnose(&set.forced, Some(&set.free), &dopts, "blind")?;
-    let ratio = if effect == BlindEffect::None {
-        1.0
+    // Baseline gaps only: no candidates are needed for the twin.
+    let mut topts = dopts.clone();
+    topts.force.candidates.clear();
+    let (ratio, twin) = if effect == BlindEffect::None {
+        (1.0, None)
     } else {
         let twin = generate(BlindEffect::None, 0.0, form, spec.seed, &scenario)?;
-        // Baseline gaps only: no candidates are needed for the twin.
-        let mut topts = dopts.clone();
-        topts.force.candidates.clear();
         let twin_diag = diagnose(&twin.forced, Some(&twin.free), &topts, "blind twin")?;
-        gap_ratio(&diag, &twin_diag)
+        (gap_ratio(&diag, &twin_diag), Some(twin))
     };
     let true_candidate_shrink = diag
         .candidates
@@ -112,8 +119,58 @@ pub fn run_one(spec: &BlindSpec, opts: &BlindOptions) -> Result<(BlindOutcome, D
             .iter()
             .find_map(|l| l.coverage.as_ref())
             .map(|c| c.runs.iter().filter(|r| !r.covered).count()),
+        follow_up: None,
     };
+    let mut outcome = outcome;
+    if opts.follow_up && diag.verdict.effect == Verdict::Extrapolation {
+        if let Some(plan) = &diag.follow_up {
+            let cases = plan.cases();
+            let forced = follow_up_forced(
+                effect,
+                spec.strength,
+                form,
+                spec.seed,
+                &scenario,
+                &set.forced,
+                &cases,
+            )?;
+            let again = diagnose(&forced, Some(&set.free), &dopts, "blind follow-up")?;
+            // the twin gets the same tests: the effect's own gap once the runs are covered
+            let gap_ratio = match &twin {
+                None => 1.0,
+                Some(twin) => {
+                    let tf = follow_up_forced(
+                        BlindEffect::None,
+                        0.0,
+                        form,
+                        spec.seed,
+                        &scenario,
+                        &twin.forced,
+                        &cases,
+                    )?;
+                    let td = diagnose(&tf, Some(&twin.free), &topts, "blind twin follow-up")?;
+                    self::gap_ratio(&again, &td)
+                }
+            };
+            outcome.follow_up = Some(FollowUpOutcome {
+                cases: cases.len(),
+                rows: plan.rows.len(),
+                verdict: again.verdict.effect,
+                confidence: again.verdict.confidence,
+                gap_ratio,
+                uncovered_runs: uncovered(&again),
+            });
+        }
+        outcome.seconds = t.elapsed().as_secs_f64();
+    }
     Ok((outcome, diag))
+}
+
+fn uncovered(d: &Diagnosis) -> Option<usize> {
+    d.levels
+        .iter()
+        .find_map(|l| l.coverage.as_ref())
+        .map(|c| c.runs.iter().filter(|r| !r.covered).count())
 }
 
 /// [`run_one`] with a failure recorded in the outcome (verdict `error`, the message in
@@ -164,5 +221,6 @@ fn failed(spec: &BlindSpec, e: &Error, seconds: f64) -> BlindOutcome {
         error: Some(e.to_string()),
         seconds,
         uncovered_runs: None,
+        follow_up: None,
     }
 }

@@ -325,7 +325,7 @@ pub fn generate_injected(
     let rho = rig_file.air_density;
     let chord = truth.chord();
     let inj = inj.to_vec();
-    let forced = forced_set(&truth, &inj, sc, rho, seed)?;
+    let forced = forced_set(&truth, &inj, sc, rho, seed, &sc.campaign.cases(), 0)?;
     let base = Section::new(structure, truth, rho).map_err(ae("blind: section"))?;
     let free = free_set(&base, &inj, sc, chord, seed)?;
     Ok(BlindSet {
@@ -341,14 +341,68 @@ pub fn generate_injected(
     })
 }
 
+/// The forced records of a blind set's truth for further `cases` (a follow-up campaign,
+/// [`crate::follow_up::plan`]), appended to `forced` (the set's own forced records, whose
+/// cases keep their records and noise): the same truth, injections and noise model as
+/// [`generate`] with the same arguments, the new cases' random draws seeded by their
+/// position after the set's own cases. Case ids already in `forced` are refused.
+///
+/// # Errors
+/// As [`generate`]; [`Error::Setting`] for a repeated case id.
+pub fn follow_up_forced(
+    effect: BlindEffect,
+    strength: f64,
+    form: Form,
+    seed: u64,
+    scenario: &BlindScenario,
+    forced: &Dataset,
+    cases: &[aeroelastic::tunnel::ForcedCase],
+) -> Result<Dataset> {
+    if let Some(c) = cases
+        .iter()
+        .find(|c| forced.manifest.cases.iter().any(|s| s.id == c.id))
+    {
+        return Err(Error::setting(
+            "follow-up case",
+            c.wind_speed,
+            &format!("case id `{}` is already in the forced set", c.id),
+        ));
+    }
+    let sc = scenario;
+    let rig_file = StructureFile::parse(&sc.rig, "rig structure").map_err(ae("blind: rig"))?;
+    let mm = rig_file
+        .structure()
+        .map_err(ae("blind: rig"))?
+        .mass_matrix();
+    let rig = [[mm[(0, 0)], mm[(0, 1)]], [mm[(1, 0)], mm[(1, 1)]]];
+    let (inj, _) = injection(effect, strength, form, sc, rig, seed);
+    let loaded = LoadedModel::parse(&sc.truth_model, "truth model", Path::new("."), None)
+        .map_err(ae("blind: truth model"))?;
+    let truth: Arc<dyn AeroModel> = loaded.model;
+    let extra = forced_set(
+        &truth,
+        &inj,
+        sc,
+        rig_file.air_density,
+        seed,
+        cases,
+        forced.records.len(),
+    )?;
+    let mut out = forced.clone();
+    out.manifest.cases.extend(extra.manifest.cases);
+    out.records.extend(extra.records);
+    Ok(out)
+}
+
 fn forced_set(
     truth: &Arc<dyn AeroModel>,
     inj: &[Injection],
     sc: &BlindScenario,
     rho: f64,
     seed: u64,
+    cases: &[aeroelastic::tunnel::ForcedCase],
+    first: usize,
 ) -> Result<Dataset> {
-    let cases = sc.campaign.cases();
     let dt = 1.0 / sc.forced_rate;
     let n = (sc.forced_rate * sc.forced_duration).round() as usize;
     let units = tunnel::paper_units();
@@ -358,6 +412,7 @@ fn forced_set(
         .par_iter()
         .enumerate()
         .map(|(i, c)| {
+            let i = i + first;
             let flow = Flow {
                 rho,
                 u: c.wind_speed,

@@ -22,6 +22,7 @@ pub mod blind;
 mod catalogue;
 pub mod effect;
 pub mod error;
+pub mod follow_up;
 pub mod force;
 mod numerics;
 pub mod physics;

@@ -80,7 +80,9 @@ pub fn diagnose(
         )?);
         inputs.push(free.root.display().to_string());
     }
-    Ok(assemble(levels, &opts.rules, opts.seed, version, inputs))
+    let mut d = assemble(levels, &opts.rules, opts.seed, version, inputs);
+    d.follow_up = crate::follow_up::plan(&d, forced);
+    Ok(d)
 }
 
 /// Diagnoses free-response records alone against a given sim: `model` (a model file or an

@@ -709,6 +709,12 @@ pub struct Diagnosis {
     pub version: String,
     /// Input data sets (folders or names).
     pub inputs: Vec<String>,
+    /// The forced tests that would cover the free runs outside the forced range, ranked
+    /// (issue 42 item 4; [`crate::follow_up::plan`]); absent when every run is covered.
+    /// Also written as `follow_up.campaign.toml` for `aeroform tunnel forced
+    /// --campaign-file`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub follow_up: Option<aeroelastic::tunnel::CampaignPlan>,
 }
 
 #[cfg(test)]

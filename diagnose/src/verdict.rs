@@ -499,6 +499,7 @@ pub fn assemble(
         seed,
         version: version.into(),
         inputs,
+        follow_up: None,
     }
 }
 

@@ -148,3 +148,69 @@ fn a_strong_effect_beyond_the_forced_range_is_still_named() {
         describe(&d)
     );
 }
+
+/// Issue 42 item 4, the closed loop on the same campaign: an effect-free set whose free runs
+/// lie beyond the forced range is `extrapolation`; the diagnosis recommends forced tests
+/// (`Diagnosis::follow_up`, a plan `tunnel forced --campaign-file` reads), each uncovered
+/// run named in a row; run on the truth and appended to the forced set, they cover every
+/// run that was outside, and the set is diagnosed again as effect-free (`none`).
+#[test]
+fn the_recommended_forced_tests_cover_the_runs_and_settle_an_effect_free_set() {
+    let scenario = high_speed_campaign();
+    let seed = 3;
+    let set = generate(BlindEffect::None, 0.0, Form::Primary, seed, &scenario).unwrap();
+    let d = run(&set);
+    let msg = describe(&d);
+    assert_eq!(d.verdict.effect, Verdict::Extrapolation, "{msg}");
+    let plan = d.follow_up.clone().expect("a follow-up plan");
+    let text = plan.to_toml().unwrap();
+    let back = aeroelastic::tunnel::CampaignPlan::parse(&text, "follow_up.campaign.toml").unwrap();
+    assert_eq!(back, plan);
+    let cov = d.levels.last().unwrap().coverage.clone().unwrap();
+    for r in cov
+        .runs
+        .iter()
+        .filter(|r| !r.covered && r.k_alpha.is_some())
+    {
+        assert!(
+            plan.rows.iter().any(|row| row.covers.contains(&r.id)),
+            "run {} not in the plan:\n{text}",
+            r.id
+        );
+    }
+    // ranks are 1..n in order of the covered runs' gap
+    for (i, r) in plan.rows.iter().enumerate() {
+        assert_eq!(r.rank, i + 1);
+        assert!(r.amplitudes_deg.len() >= 2, "{text}");
+    }
+    let cases = plan.cases();
+    let forced = diagnose::blind::follow_up_forced(
+        BlindEffect::None,
+        0.0,
+        Form::Primary,
+        seed,
+        &scenario,
+        &set.forced,
+        &cases,
+    )
+    .unwrap();
+    assert_eq!(forced.records.len(), set.forced.records.len() + cases.len());
+    // the set's own records are kept as they were
+    assert_eq!(forced.records[0], set.forced.records[0]);
+    let again = diagnose(&forced, Some(&set.free), &DiagnoseOptions::new(1), "test").unwrap();
+    let msg2 = describe(&again);
+    let cov2 = again.levels.last().unwrap().coverage.as_ref().unwrap();
+    for r in cov
+        .runs
+        .iter()
+        .filter(|r| !r.covered && r.k_alpha.is_some())
+    {
+        let r2 = cov2.runs.iter().find(|x| x.id == r.id).unwrap();
+        assert!(
+            r2.outside.iter().all(|o| !o.starts_with("K_α")),
+            "{} still outside in K_α after the follow-up:\n{msg2}",
+            r.id
+        );
+    }
+    assert_eq!(again.verdict.effect, Verdict::None, "{msg}\n---\n{msg2}");
+}

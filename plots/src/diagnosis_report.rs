@@ -309,6 +309,9 @@ pub fn diagnosis_section(report: &mut Report, diag: &Diagnosis, figures: &[Diagn
     if let Some(cov) = diag.levels.iter().find_map(|l| l.coverage.as_ref()) {
         coverage_section(report, cov);
     }
+    if let Some(plan) = &diag.follow_up {
+        follow_up_section(report, plan);
+    }
     if let Some(level) = diag
         .levels
         .iter()
@@ -457,6 +460,45 @@ pub fn diagnosis_section(report: &mut Report, diag: &Diagnosis, figures: &[Diagn
 /// The "Coverage" section: every free run's response K and amplitude against the forced
 /// range, how the gap changes with Theodorsen-shaped tails, and the forced cases that would
 /// cover the runs outside.
+/// The recommended forced tests (`follow_up.campaign.toml`), one row per configuration.
+fn follow_up_section(report: &mut Report, plan: &aeroelastic::tunnel::CampaignPlan) {
+    let list = |v: &[f64]| v.iter().map(|x| short(*x)).collect::<Vec<_>>().join(", ");
+    let rows: Vec<Vec<String>> = plan
+        .rows
+        .iter()
+        .map(|r| {
+            let c = &r.configuration;
+            vec![
+                r.rank.to_string(),
+                c.name.clone(),
+                short(c.freq_pitch),
+                short(c.freq_heave),
+                short(c.amplitude_ratio),
+                short(c.mean_pitch_deg),
+                list(&r.wind_speeds),
+                list(&r.amplitudes_deg),
+                r.reason.clone().unwrap_or_default(),
+            ]
+        })
+        .collect();
+    report.table(
+        "Recommended forced tests (follow_up.campaign.toml; run with `aeroform tunnel forced --campaign-file`): each row's configuration at every listed wind speed and pitch amplitude, ranked by the held-out gap of the free runs it covers",
+        &[
+            "rank",
+            "configuration",
+            "f_α [Hz]",
+            "f_h [Hz]",
+            "r_A [mm/deg]",
+            "ᾱ [deg]",
+            "U [m/s]",
+            "α amplitude [deg]",
+            "why",
+        ]
+        .map(String::from),
+        &rows,
+    );
+}
+
 fn coverage_section(report: &mut Report, cov: &diagnose::report::Coverage) {
     report.section("Coverage");
     let outside = cov.runs.iter().filter(|r| !r.covered).count();

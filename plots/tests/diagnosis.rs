@@ -354,6 +354,7 @@ fn full_diagnosis() -> Diagnosis {
         seed: 7,
         version: "aeroform 0.1.0 (test)".into(),
         inputs: vec!["blind/forced".into(), "blind/free".into()],
+        follow_up: None,
     }
 }
 
@@ -381,6 +382,7 @@ fn minimal_diagnosis() -> Diagnosis {
         seed: 0,
         version: String::new(),
         inputs: vec![],
+        follow_up: None,
     }
 }
 

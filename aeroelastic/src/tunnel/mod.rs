@@ -51,6 +51,7 @@ mod forced;
 mod free;
 mod motion;
 mod noise;
+mod plan;
 mod write;
 
 pub use forced::{forced_dataset, forced_forces, forced_record, ForcedOptions, RigMass, StillAir};
@@ -60,6 +61,7 @@ pub use motion::{
     CampaignName, Configuration, ForcedCase, Motion, Sine,
 };
 pub use noise::{add_noise, peak, BalanceNoise, SensorNoise};
+pub use plan::{CampaignPlan, PlanRow, PLAN_FORMAT};
 pub use write::{paper_units, write};
 
 /// Progress of a tunnel run, after each case.
