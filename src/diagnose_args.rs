@@ -12,6 +12,11 @@ pub struct DiagnoseArgs {
     /// Forced-motion data-set folder (DATA_FORMAT.md).
     #[arg(required_unless_present_any = ["blind", "model"])]
     pub dataset: Option<PathBuf>,
+    /// Further forced-motion data-set folders of the same section, diagnosed with FORCED
+    /// as one campaign (e.g. the follow-up tests recorded from `follow_up.campaign.toml`);
+    /// may be repeated. Case ids that repeat get the folder name as prefix.
+    #[arg(long, requires = "dataset")]
+    pub forced_extra: Vec<PathBuf>,
     /// Free-response data-set folder of the same section (enables the system level); may
     /// be repeated (e.g. LCO records and a still-air decay of the same rig).
     #[arg(long)]
@@ -102,6 +107,11 @@ impl DiagnoseArgs {
             .iter()
             .map(|p| Input::new("FORCED", p))
             .collect();
+        v.extend(
+            self.forced_extra
+                .iter()
+                .map(|p| Input::new("--forced-extra", p)),
+        );
         v.extend(self.free.iter().map(|p| Input::new("--free", p)));
         v.extend(self.model.iter().map(|p| Input::new("--model", p)));
         v.extend(self.structure.iter().map(|p| Input::new("--structure", p)));

@@ -111,7 +111,31 @@ pub fn run(args: &DiagnoseArgs) -> anyhow::Result<()> {
             LoadedModel::load(m, chord).with_context(|| format!("loading {}", m.display()))?,
         ),
         (Some(d), None, _) => {
-            Input::Forced(read_dataset(d).with_context(|| format!("reading {}", d.display()))?)
+            let mut sets =
+                vec![read_dataset(d).with_context(|| format!("reading {}", d.display()))?];
+            for e in &args.forced_extra {
+                let extra = read_dataset(e).with_context(|| format!("reading {}", e.display()))?;
+                let (a, b) = (&sets[0].manifest.section, &extra.manifest.section);
+                if (a.air_density - b.air_density).abs() > 1e-9 * a.air_density
+                    || (a.span - b.span).abs() > 1e-9 * a.span
+                {
+                    crate::exit::refuse!(
+                        "--forced-extra {}: its section (span {} m, air density {} kg/m³) is \
+                         not FORCED's (span {} m, air density {} kg/m³)",
+                        e.display(),
+                        b.span,
+                        b.air_density,
+                        a.span,
+                        a.air_density
+                    );
+                }
+                sets.push(extra);
+            }
+            Input::Forced(if sets.len() == 1 {
+                sets.pop().expect("one set")
+            } else {
+                merge_free(&sets)?
+            })
         }
         _ => crate::exit::refuse!(
             "give a forced data-set folder, --free FREE --model M, or --blind N"
