@@ -262,3 +262,101 @@ fn absence_rows_against_a_supercritical_rig() {
     // the nominal linear model is stable below its Hopf point: no contradiction either
     assert_eq!(r.nominal.contradicted_absences(), 0);
 }
+
+/// The truth's first Hopf point (speed, frequency) from the nominal scan.
+fn truth_hopf(s: &Section) -> (f64, f64) {
+    let h = s
+        .hopf_points(8.0, 30.0, 400)
+        .unwrap()
+        .into_iter()
+        .min_by(|a, b| a.u.total_cmp(&b.u))
+        .unwrap();
+    (h.u, h.omega / std::f64::consts::TAU)
+}
+
+/// Structure first with a measured onset (issue 42, round 28; fast, no candidate fitted):
+/// on the generated rig with the given pitch frequency ±6 % (given Hopf +19 % / −17 %), an
+/// onset of the truth corrects the linear structure so that the nominal Hopf point meets it
+/// — speed and frequency: k_h and k_α; speed alone: the stiffness the Hopf speed is most
+/// sensitive to (here k_α) — and an onset within its uncertainty changes nothing.
+#[test]
+fn a_measured_onset_corrects_the_structure_and_one_within_its_uncertainty_does_not() {
+    use diagnose::structure::{with_onsets, StructureUsed};
+    let truth = with_pitch_terms(&linear_section(), &[(2, 800.0), (3, 6000.0)]);
+    let (u_t, f_t) = truth_hopf(&truth);
+    for factor in [1.06, 0.94] {
+        let given = pitch_frequency_times(&truth, factor);
+        let (u_g, _) = truth_hopf(&given);
+        assert!((u_g / u_t - 1.0).abs() > 0.1, "{u_g} vs {u_t}");
+        for with_freq in [true, false] {
+            let onset = MeasuredOnset {
+                line: 0,
+                u: u_t,
+                u_sd: None,
+                frequency_hz: with_freq.then_some(f_t),
+                frequency_sd_hz: None,
+                criticality: Some(Criticality::Subcritical),
+            };
+            let c = with_onsets(None, &given, &[onset], 0.01).expect("a check");
+            assert_eq!(c.used, StructureUsed::Identified, "{}", c.reason);
+            let id = c.identified.as_ref().unwrap();
+            assert!(id.onsets_used && id.converged, "{id:?}");
+            let s = id.hopf_sensitivity.unwrap();
+            // the Hopf speed of this rig is most sensitive to the pitch spring
+            assert!(s[1].abs() > s[0].abs(), "{s:?}");
+            let held: Vec<bool> = id.parameters.iter().map(|p| p.held).collect();
+            assert_eq!(
+                held,
+                vec![!with_freq, false, true, true],
+                "{:?}",
+                id.parameters
+            );
+            let used = Section::new(
+                c.used_structure(&given.structure),
+                given.aero.clone(),
+                given.rho,
+            )
+            .unwrap();
+            let (u, f) = truth_hopf(&used);
+            assert!(
+                (u / u_t - 1.0).abs() < 1e-3,
+                "{factor} {with_freq}: {u} vs {u_t}"
+            );
+            if with_freq {
+                assert!((f / f_t - 1.0).abs() < 1e-3, "{f} vs {f_t}");
+            }
+            let o = &c.onsets[0];
+            assert!((o.given_u.unwrap() - u_g).abs() < 1e-6 * u_g);
+            assert!((o.used_u.unwrap() - u).abs() < 1e-6 * u);
+            // the identified pitch stiffness is the truth's within 2 % (the given c_α,
+            // also off by the factor, is held)
+            let ka = id.parameters[1].identified;
+            eprintln!(
+                "factor {factor} freq {with_freq}: k_h {:.3} → {:.3} (truth {:.3}), k_α {:.4} → \
+                 {ka:.4} (truth {:.4}); Hopf {u_g:.3} → {u:.3} (truth {u_t:.3}); sens {s:?}",
+                id.parameters[0].given,
+                id.parameters[0].identified,
+                truth.structure.k_h,
+                id.parameters[1].given,
+                truth.structure.k_alpha
+            );
+            assert!(
+                (ka / truth.structure.k_alpha - 1.0).abs() < 0.02,
+                "{ka} vs {}",
+                truth.structure.k_alpha
+            );
+        }
+    }
+    // an onset within its uncertainty (0.5 % and 0.5 % off, σ = 1 %) changes nothing
+    let onset = MeasuredOnset {
+        line: 0,
+        u: u_t * 1.005,
+        u_sd: None,
+        frequency_hz: Some(f_t * 0.995),
+        frequency_sd_hz: None,
+        criticality: None,
+    };
+    let c = with_onsets(None, &truth, &[onset], 0.01).unwrap();
+    assert_eq!(c.used, StructureUsed::Given, "{}", c.reason);
+    assert_eq!(c.used_structure(&truth.structure), truth.structure);
+}
