@@ -148,13 +148,15 @@ fn misgiven_case(factor: f64, speeds: &[f64]) -> (MeasuredDiagram, (f64, f64, St
     )
 }
 
-/// What an onset row does to a rig whose given pitch frequency is 6 % high (Hopf +19 %) and
-/// whose measured cycles lie in the lower half of the subcritical range: it enters every
-/// diagram's report and the held-out score as w·ΔU/σ_U; a stiffness candidate keeps the given
-/// structure's Hopf point and pays for it; the verdict without the row keeps a Hopf speed more
-/// than 1 % off the truth's. (With the row the named model's Hopf is not yet within 1 %:
-/// DECISIONS, "Measured onsets … round 27".)
-fn onset_row_costs_a_wrong_hopf_speed(factor: f64, speeds: &[f64]) {
+/// Issue 42's acceptance on a generated rig whose given pitch frequency is off by `factor`
+/// (given Hopf +19 % at 1.06, −17 % at 0.94) and whose measured cycles lie in the lower
+/// part of the subcritical range: without the onset the named model keeps a Hopf speed more
+/// than 1 % off the truth's; with the truth's onset (speed, frequency, criticality) the
+/// onset corrects the structure first (`structure.used` = identified, `structure.gap` from
+/// the given to the truth's Hopf speed) and the named model's Hopf point lies within 1 %
+/// of the truth's with its criticality. Every onset residual is w·ΔU/σ_U of the diagram's
+/// first Hopf point.
+fn the_named_models_hopf_meets_the_onset(factor: f64, speeds: &[f64]) {
     let (mut d, h, given) = misgiven_case(factor, speeds);
     let u_given = given.hopf_points(8.0, 30.0, 400).unwrap()[0].u;
     assert!((u_given / h.0 - 1.0).abs() > 0.03, "{u_given} vs {}", h.0);
@@ -179,59 +181,59 @@ fn onset_row_costs_a_wrong_hopf_speed(factor: f64, speeds: &[f64]) {
         let held = &c.held_out_onsets[0];
         let z = w * held.d_u.unwrap() / (0.01 * h.0);
         assert!((held.z[0] - z).abs() < 1e-9, "{}: {:?}", c.label(), held.z);
-        let before = without
-            .candidates
-            .iter()
-            .find(|b| b.label() == c.label())
-            .unwrap();
-        // a stiffness term cannot move a Hopf point: a polynomial keeps the given structure's
-        if c.effect == diagnose::Effect::StructuralPolynomial
-            || c.effect == diagnose::Effect::StructuralCubic
-        {
-            assert!(
-                (held.predicted_u.unwrap() - u_given).abs() < 1e-6 * u_given,
-                "{}: {:?} vs {u_given}",
-                c.label(),
-                held.predicted_u
-            );
-        }
-        // a held-out onset worse than the candidate's RMS residual without it raises its score
-        if held.z[0].abs() > 1.2 * before.held_out.score {
-            assert!(
-                c.held_out.score > before.held_out.score,
-                "{}: {} → {}",
-                c.label(),
-                before.held_out.score,
-                c.held_out.score
-            );
-        }
     }
-    assert_eq!(with.onsets.len(), 1);
-    assert_eq!(with.nominal.onsets[0].criticality_right, Some(true));
+    let st = with
+        .structure
+        .as_ref()
+        .expect("the onset's structure check");
+    assert_eq!(
+        st.used,
+        diagnose::structure::StructureUsed::Identified,
+        "{}",
+        st.reason
+    );
+    let gap = st.gap.as_ref().expect("what the correction alone did");
+    assert!(
+        (gap.hopf_given.unwrap() / u_given - 1.0).abs() < 1e-3,
+        "{gap:?}"
+    );
+    assert!(
+        (gap.hopf_identified.unwrap() / h.0 - 1.0).abs() < 1e-3,
+        "{gap:?}"
+    );
+    let (u1, crit) = named_hopf(&with);
     eprintln!(
-        "factor {factor}: truth Hopf {:.3}; named without {:?} ({}), with {:?} ({})",
+        "factor {factor}: truth Hopf {:.3} ({}); named without {:?} ({}), with ({u1:.3}, {crit}) \
+         ({}); gap {gap:?}",
         h.0,
+        h.2,
         named_hopf(&without),
         without.verdict.name,
-        named_hopf(&with),
-        with.verdict.name
+        with.verdict.explanation
     );
+    assert!(
+        (u1 / h.0 - 1.0).abs() < 0.01,
+        "named model's Hopf {u1} vs the truth's {}",
+        h.0
+    );
+    assert_eq!(crit, h.2, "criticality");
+    assert_eq!(with.nominal.onsets[0].criticality_right, Some(true));
 }
 
-/// Two full bifurcation-level diagnoses (≈ 100 s on 2 cores): `#[ignore]`d to keep CI within
-/// its budget; the onset residuals and their held-out weighting run in CI as unit tests of
-/// `diagnose::bifurcation::fit` and `::mod`.
+/// Acceptance, given pitch frequency 6 % high (two full diagnoses, several minutes on the
+/// shared 2 cores): `#[ignore]`d; the structure correction itself runs in CI
+/// (`a_measured_onset_corrects_the_structure_and_one_within_its_uncertainty_does_not`).
 #[test]
 #[ignore]
-fn an_onset_row_costs_a_model_that_keeps_a_wrong_hopf_speed() {
-    onset_row_costs_a_wrong_hopf_speed(1.06, &[15.0, 15.3, 15.6, 15.9]);
+fn the_named_models_hopf_meets_an_onset_with_the_pitch_frequency_given_high() {
+    the_named_models_hopf_meets_the_onset(1.06, &[15.0, 15.3, 15.6, 15.9]);
 }
 
-/// Slow variant: the other sign, six speeds.
+/// Acceptance, given pitch frequency 6 % low, six speeds.
 #[test]
 #[ignore]
-fn an_onset_row_costs_a_wrong_hopf_speed_slow() {
-    onset_row_costs_a_wrong_hopf_speed(0.94, &[15.0, 15.3, 15.6, 15.9, 16.2, 16.5]);
+fn the_named_models_hopf_meets_an_onset_with_the_pitch_frequency_given_low() {
+    the_named_models_hopf_meets_the_onset(0.94, &[15.0, 15.3, 15.6, 15.9, 16.2, 16.5]);
 }
 
 /// Absence rows on a supercritical rig (hardening cubic, cycles above the Hopf point only):
@@ -345,6 +347,18 @@ fn a_measured_onset_corrects_the_structure_and_one_within_its_uncertainty_does_n
                 "{ka} vs {}",
                 truth.structure.k_alpha
             );
+            // a candidate that moves the Hopf point (10 % more heaving mass) is conformed
+            // to the onset as to a decay: its springs re-identified, its Hopf point the
+            // onset's again
+            let mut heavier = used.structure.clone();
+            heavier.mass *= 1.1;
+            let heavier = Section::new(heavier, used.aero.clone(), used.rho).unwrap();
+            let (u_heavy, _) = truth_hopf(&heavier);
+            assert!((u_heavy / u_t - 1.0).abs() > 0.01, "{u_heavy} vs {u_t}");
+            let conformed = diagnose::structure::conform_to_decays(&c, &used, heavier).unwrap();
+            let (u_c, _) = truth_hopf(&conformed);
+            assert!((u_c / u_t - 1.0).abs() < 1e-3, "conformed {u_c} vs {u_t}");
+            assert_eq!(conformed.structure.mass, used.structure.mass * 1.1);
         }
     }
     // an onset within its uncertainty (0.5 % and 0.5 % off, σ = 1 %) changes nothing
