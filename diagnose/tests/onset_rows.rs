@@ -135,8 +135,24 @@ fn onset_of(h: &(f64, f64, String), sd: Option<f64>) -> MeasuredOnset {
 /// the structure given to the diagnosis with the truth's pitch frequency times `factor`
 /// (the nonlinear spring known): the given structure's Hopf speed is off by several %.
 fn misgiven_case(factor: f64, speeds: &[f64]) -> (MeasuredDiagram, (f64, f64, String), Section) {
+    misgiven_dof_case("pitch", factor, speeds)
+}
+
+/// As [`misgiven_case`] with the uncoupled frequency of `dof` (`pitch` or `heave`) off.
+fn misgiven_dof_case(
+    dof: &str,
+    factor: f64,
+    speeds: &[f64],
+) -> (MeasuredDiagram, (f64, f64, String), Section) {
     let truth = with_pitch_terms(&linear_section(), &[(2, 800.0), (3, 6000.0)]);
-    let given = pitch_frequency_times(&truth, factor);
+    let given = if dof == "pitch" {
+        pitch_frequency_times(&truth, factor)
+    } else {
+        let mut st = truth.structure.clone();
+        st.k_h *= factor * factor;
+        st.c_h *= factor;
+        Section::new(st, truth.aero.clone(), truth.rho).unwrap()
+    };
     let (points, h) = measured_from(&truth, speeds, 0.02);
     (
         MeasuredDiagram {
@@ -157,16 +173,24 @@ fn misgiven_case(factor: f64, speeds: &[f64]) -> (MeasuredDiagram, (f64, f64, St
 /// of the truth's with its criticality. Every onset residual is w·ΔU/σ_U of the diagram's
 /// first Hopf point.
 fn the_named_models_hopf_meets_the_onset(factor: f64, speeds: &[f64]) {
-    let (mut d, h, given) = misgiven_case(factor, speeds);
+    named_hopf_meets_the_onset("pitch", factor, speeds, true);
+}
+
+/// [`the_named_models_hopf_meets_the_onset`] with `dof`'s frequency off; `baseline`: also
+/// diagnose without the onset and require its named Hopf point more than 1 % off.
+fn named_hopf_meets_the_onset(dof: &str, factor: f64, speeds: &[f64], baseline: bool) {
+    let (mut d, h, given) = misgiven_dof_case(dof, factor, speeds);
     let u_given = given.hopf_points(8.0, 30.0, 400).unwrap()[0].u;
     assert!((u_given / h.0 - 1.0).abs() > 0.03, "{u_given} vs {}", h.0);
-    let without = run(&d, &given);
-    let (u0, _) = named_hopf(&without);
-    assert!(
-        (u0 / h.0 - 1.0).abs() > 0.01,
-        "without the onset the named model's Hopf {u0} is already within 1 % of {}",
-        h.0
-    );
+    let without = baseline.then(|| run(&d, &given));
+    if let Some(without) = &without {
+        let (u0, _) = named_hopf(without);
+        assert!(
+            (u0 / h.0 - 1.0).abs() > 0.01,
+            "without the onset the named model's Hopf {u0} is already within 1 % of {}",
+            h.0
+        );
+    }
     d.onsets.push(onset_of(&h, None));
     let with = run(&d, &given);
     let w = BifurcationOptions::default().amplitude_noise;
@@ -203,12 +227,12 @@ fn the_named_models_hopf_meets_the_onset(factor: f64, speeds: &[f64]) {
     );
     let (u1, crit) = named_hopf(&with);
     eprintln!(
-        "factor {factor}: truth Hopf {:.3} ({}); named without {:?} ({}), with ({u1:.3}, {crit}) \
-         ({}); gap {gap:?}",
+        "{dof} factor {factor}: truth Hopf {:.3} ({}); given {u_given:.3}; named without {:?}, \
+         with ({u1:.3}, {crit}) ({:?}: {}); gap {gap:?}",
         h.0,
         h.2,
-        named_hopf(&without),
-        without.verdict.name,
+        without.as_ref().map(|w| (named_hopf(w), w.verdict.name)),
+        with.verdict.name,
         with.verdict.explanation
     );
     assert!(
@@ -234,6 +258,22 @@ fn the_named_models_hopf_meets_an_onset_with_the_pitch_frequency_given_high() {
 #[ignore]
 fn the_named_models_hopf_meets_an_onset_with_the_pitch_frequency_given_low() {
     the_named_models_hopf_meets_the_onset(0.94, &[15.0, 15.3, 15.6, 15.9, 16.2, 16.5]);
+}
+
+/// Acceptance over further mis-given structures (pitch frequency ±3 %, heave frequency
+/// ±5 %), with the onset only (about 2 min each on the shared 2 cores).
+#[test]
+#[ignore]
+fn the_named_models_hopf_meets_an_onset_over_further_misgivings() {
+    let speeds = [15.0, 15.3, 15.6, 15.9];
+    for (dof, factor) in [
+        ("pitch", 1.03),
+        ("pitch", 0.97),
+        ("heave", 1.05),
+        ("heave", 0.95),
+    ] {
+        named_hopf_meets_the_onset(dof, factor, &speeds, false);
+    }
 }
 
 /// Absence rows on a supercritical rig (hardening cubic, cycles above the Hopf point only):
