@@ -132,13 +132,8 @@ fn onset_of(h: &(f64, f64, String), sd: Option<f64>) -> MeasuredOnset {
 }
 
 /// The truth (the Bristol linear section with k₂α² + k₃α³), its diagram at `speeds`, and
-/// the structure given to the diagnosis with the truth's pitch frequency times `factor`
+/// the structure given to the diagnosis with the truth's uncoupled frequency of `dof` (`pitch` or `heave`) times `factor`
 /// (the nonlinear spring known): the given structure's Hopf speed is off by several %.
-fn misgiven_case(factor: f64, speeds: &[f64]) -> (MeasuredDiagram, (f64, f64, String), Section) {
-    misgiven_dof_case("pitch", factor, speeds)
-}
-
-/// As [`misgiven_case`] with the uncoupled frequency of `dof` (`pitch` or `heave`) off.
 fn misgiven_dof_case(
     dof: &str,
     factor: f64,
