@@ -12,6 +12,11 @@
 //! change is conformed to them ([`conform_to_decays`]): a decay measures the whole model at
 //! rest, so a candidate that adds mass or damping there has its springs and dampers
 //! re-identified under it.
+//!
+//! At the bifurcation level measured flutter onsets join the decays ([`with_onsets`]): the
+//! nominal model's first Hopf point against each onset's speed and frequency, fitted
+//! jointly with the decays' modes (every residual divided by its standard uncertainty),
+//! and every candidate conformed to both.
 
 use std::f64::consts::TAU;
 
