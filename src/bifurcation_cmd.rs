@@ -169,6 +169,23 @@ fn print(d: &BifurcationDiagnosis) {
     if let Some(s) = &d.structure {
         crate::ui::say!("structure (still-air decays): {}", s.summary);
         crate::ui::say!("structure used: {:?}: {}", s.used, s.reason);
+        let hz = |v: Option<f64>| v.map_or("–".into(), |x| format!("{x:.3} Hz"));
+        let ms = |v: Option<f64>| v.map_or("–".into(), |x| format!("{x:.3} m/s"));
+        for o in &s.onsets {
+            crate::ui::say!(
+                "  onset {:.3} ± {:.3} m/s{}: Hopf point of the given structure {} at {} ({}), \
+                 of the structure used {} at {}",
+                o.u,
+                o.u_sd,
+                o.frequency_hz
+                    .map_or(String::new(), |f| format!(" at {f:.3} Hz")),
+                ms(o.given_u),
+                hz(o.given_frequency_hz),
+                o.u_z.map_or("–".into(), |z| format!("{z:+.1} σ")),
+                ms(o.used_u),
+                hz(o.used_frequency_hz)
+            );
+        }
         if let Some(id) = &s.identified {
             for p in &id.parameters {
                 crate::ui::say!(

@@ -12,6 +12,11 @@
 //! change is conformed to them ([`conform_to_decays`]): a decay measures the whole model at
 //! rest, so a candidate that adds mass or damping there has its springs and dampers
 //! re-identified under it.
+//!
+//! At the bifurcation level measured flutter onsets join the decays ([`with_onsets`]): the
+//! nominal model's first Hopf point against each onset's speed and frequency, fitted
+//! jointly with the decays' modes (every residual divided by its standard uncertainty),
+//! and every candidate conformed to both.
 
 use std::f64::consts::TAU;
 
@@ -225,6 +230,75 @@ pub struct StructureIdentification {
     pub chi2: f64,
     /// The solve reached its tolerance.
     pub converged: bool,
+    /// The measured onsets of [`StructureCheck::onsets`] entered this identification
+    /// (jointly with the decays' modes, each residual divided by its standard uncertainty).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub onsets_used: bool,
+    /// Sensitivity of the given structure's first Hopf speed to each stiffness,
+    /// ∂ln U_H/∂ln k_h and ∂ln U_H/∂ln k_α (central differences of ±1 %), when onsets were
+    /// given: with a speed alone the stiffness of the larger magnitude is identified (the
+    /// smallest relative change that meets the onset).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hopf_sensitivity: Option<[f64; 2]>,
+}
+
+/// A measured flutter onset (Hopf point) against the given and the used structure's
+/// nominal model (structure first: a measured onset informs the linear structure as a
+/// decay does; DECISIONS, "issue 42 item 2, round 28").
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct OnsetIdentification {
+    /// Measured onset speed \[m/s\].
+    pub u: f64,
+    /// Its standard uncertainty \[m/s\] (stated, or the default relative one × `u`).
+    pub u_sd: f64,
+    /// Measured onset frequency \[Hz\], if measured.
+    pub frequency_hz: Option<f64>,
+    /// Its standard uncertainty \[Hz\], when a frequency is measured.
+    pub frequency_sd_hz: Option<f64>,
+    /// First Hopf speed of the nominal model on the given structure \[m/s\] (none in
+    /// [0.5 u, 2 u]: `null`).
+    pub given_u: Option<f64>,
+    /// Its frequency \[Hz\].
+    pub given_frequency_hz: Option<f64>,
+    /// (given − measured) speed in standard uncertainties.
+    pub u_z: Option<f64>,
+    /// (given − measured) frequency in standard uncertainties.
+    pub frequency_z: Option<f64>,
+    /// First Hopf speed of the nominal model on the structure the level uses \[m/s\].
+    pub used_u: Option<f64>,
+    /// Its frequency \[Hz\].
+    pub used_frequency_hz: Option<f64>,
+}
+
+/// The first (lowest-speed) Hopf point (speed \[m/s\], frequency \[Hz\]) of the section
+/// `st`, `aero`, `rho` in [0.5 u_min, 2 u_max] of the onsets `rows` (`None` when there is
+/// none or the section is invalid).
+fn onset_hopf(
+    st: &Structure,
+    aero: &std::sync::Arc<dyn aeroelastic::aero::AeroModel>,
+    rho: f64,
+    rows: &[OnsetIdentification],
+) -> Option<(f64, f64)> {
+    let lo = rows.iter().map(|o| o.u).fold(f64::INFINITY, f64::min);
+    let hi = rows.iter().map(|o| o.u).fold(0.0, f64::max);
+    let s = Section::new(st.clone(), aero.clone(), rho).ok()?;
+    s.hopf_points(0.5 * lo, 2.0 * hi, ONSET_SCAN)
+        .ok()?
+        .into_iter()
+        .min_by(|a, b| a.u.total_cmp(&b.u))
+        .map(|h| (h.u, h.omega / TAU))
+}
+
+/// Speeds scanned for the Hopf point of a structure meeting a measured onset (over
+/// [0.5, 2] × the onset speed; each crossing then solved to 10⁻¹² U).
+const ONSET_SCAN: usize = 160;
+
+/// The measured onsets as the identification reads them, with the aerodynamic model and
+/// air density that make a structure a section.
+struct OnsetFit<'a> {
+    rows: &'a [OnsetIdentification],
+    aero: std::sync::Arc<dyn aeroelastic::aero::AeroModel>,
+    rho: f64,
 }
 
 /// The still-air decays against the given structure (DESIGN §5, "structure first").
@@ -256,6 +330,10 @@ pub struct StructureCheck {
     /// used).
     #[serde(default)]
     pub gap: Option<StructureGap>,
+    /// Measured onsets against the given and the used structure (bifurcation level with
+    /// onset rows; [`with_onsets`]).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub onsets: Vec<OnsetIdentification>,
 }
 
 fn given_used() -> StructureUsed {
@@ -640,6 +718,7 @@ fn check_against(
         used,
         reason,
         gap: None,
+        onsets: Vec::new(),
     })
 }
 
@@ -873,7 +952,15 @@ pub fn identify_structure(
     m: &Matrix2<f64>,
     given: &Structure,
 ) -> Option<StructureIdentification> {
-    identify_with(rows, m, given, &Matrix2::zeros(), &Matrix2::zeros())
+    identify_with(
+        rows,
+        m,
+        given,
+        &Matrix2::zeros(),
+        &Matrix2::zeros(),
+        None,
+        None,
+    )
 }
 
 /// [`identify_with`] with the rest terms of `st`'s nonlinear terms ([`rest_linearisation`]).
@@ -883,28 +970,39 @@ fn identify_at_rest(
     st: &Structure,
 ) -> Option<StructureIdentification> {
     let (ke, ce) = rest_linearisation(st);
-    identify_with(rows, m, st, &ke, &ce)
+    identify_with(rows, m, st, &ke, &ce, None, None)
 }
 
 /// [`identify_structure`] for a structure whose nonlinear terms add the stiffness `ke` and
 /// damping `ce` at rest ([`rest_linearisation`]): the still-air modes are those of
 /// M q̈ + (C + ce) q̇ + (K + ke) q = 0, and only K = diag(k_h, k_α), C = diag(c_h, c_α)
 /// are adjusted.
+///
+/// With `onsets` the measured onsets join the decays' modes in one weighted least squares
+/// (each residual divided by its standard uncertainty): the first Hopf point of the
+/// section (`given` with the adjusted K, C; `onsets`' aerodynamic model) against each
+/// onset's speed and, when measured, frequency. Their stiffnesses: a frequency measured,
+/// both; a speed alone, the one the Hopf speed is most sensitive to (largest
+/// |∂ln U_H/∂ln k|). `free` (k_h, k_α, c_h, c_α) overrides the free set (a candidate
+/// conformed with the level's set).
 fn identify_with(
     rows: &[ModeCheck],
     m: &Matrix2<f64>,
     given: &Structure,
     ke: &Matrix2<f64>,
     ce: &Matrix2<f64>,
+    onsets: Option<&OnsetFit>,
+    free: Option<[bool; 4]>,
 ) -> Option<StructureIdentification> {
     let kg = [given.k_h, given.k_alpha];
     let cg = [given.c_h, given.c_alpha];
+    let onsets = onsets.filter(|o| !o.rows.is_empty());
     let eig = eigen_of(
         m,
         &(given.stiffness_matrix() + ke),
         &(given.damping_matrix() + ce),
     );
-    if eig.len() != 2 || rows.is_empty() {
+    if eig.len() != 2 || (rows.is_empty() && onsets.is_none()) {
         return None;
     }
     // per given mode: the best frequency row and the best damping row
@@ -937,30 +1035,71 @@ fn identify_with(
         let from = of.iter().map(|r| format!("{} {}", r.case, r.dof)).collect();
         modes.push((j, fr, zr, from));
     }
-    if modes.is_empty() {
+    if modes.is_empty() && onsets.is_none() {
         return None;
     }
+    // The given structure's first Hopf point and its sensitivity to each stiffness.
+    let hopf_at = |k: [f64; 2], c: [f64; 2]| {
+        onsets.and_then(|o| {
+            let mut st = given.clone();
+            (st.k_h, st.k_alpha, st.c_h, st.c_alpha) = (k[0], k[1], c[0], c[1]);
+            onset_hopf(&st, &o.aero, o.rho, o.rows)
+        })
+    };
+    let hopf_given = hopf_at(kg, cg);
+    if onsets.is_some() && hopf_given.is_none() {
+        // no Hopf point near the onsets on the given structure: nothing to start from
+        return None;
+    }
+    let sensitivity = onsets.and_then(|_| {
+        let mut out = [0.0; 2];
+        for (d, o) in out.iter_mut().enumerate() {
+            let (mut kp, mut km) = (kg, kg);
+            kp[d] *= 1.01;
+            km[d] /= 1.01;
+            let (up, um) = (hopf_at(kp, cg)?.0, hopf_at(km, cg)?.0);
+            *o = (up / um).ln() / (2.0 * 1.01f64.ln());
+        }
+        Some(out)
+    });
     // The DOF dominating a given mode: the larger share M_ii φ_i² of its kinetic energy.
     let dominant = |j: usize| {
         let phi = eig[j].2;
         let e = [m[(0, 0)] * phi[0] * phi[0], m[(1, 1)] * phi[1] * phi[1]];
         usize::from(e[1] > e[0])
     };
-    let k_free: Vec<usize> = if modes.len() >= 2 {
-        vec![0, 1]
-    } else {
-        vec![dominant(modes[0].0)]
-    };
+    let mut k_set = [false; 2];
+    if modes.len() >= 2 {
+        k_set = [true, true];
+    } else if let Some(md) = modes.first() {
+        k_set[dominant(md.0)] = true;
+    }
+    if let Some(o) = onsets {
+        if o.rows.iter().any(|r| r.frequency_hz.is_some()) {
+            k_set = [true, true];
+        } else if let Some(sv) = sensitivity {
+            k_set[usize::from(sv[1].abs() > sv[0].abs())] = true;
+        } else {
+            return None;
+        }
+    }
     let z_modes: Vec<usize> = modes
         .iter()
         .filter(|md| md.2.is_some())
         .map(|md| md.0)
         .collect();
-    let c_free: Vec<usize> = match z_modes.len() {
-        0 => vec![],
-        1 => vec![dominant(z_modes[0])],
-        _ => vec![0, 1],
-    };
+    let mut c_set = [false; 2];
+    match z_modes.len() {
+        0 => {}
+        1 => c_set[dominant(z_modes[0])] = true,
+        _ => c_set = [true, true],
+    }
+    if let Some(f) = free {
+        k_set = [f[0], f[1]];
+        c_set = [f[2], f[3]];
+    }
+    let k_free: Vec<usize> = (0..2).filter(|&d| k_set[d]).collect();
+    let c_free: Vec<usize> = (0..2).filter(|&d| c_set[d]).collect();
     // scales: critical damping of each DOF
     let c_scale = [
         2.0 * (kg[0] * m[(0, 0)]).abs().sqrt().max(f64::MIN_POSITIVE),
@@ -978,40 +1117,68 @@ fn identify_with(
         }
         (k, c)
     };
-    // measured quantities: (mode, is_zeta, value, sd)
+    // measured quantities: (what, index, value, sd); what 0 frequency, 1 damping ratio of
+    // still-air mode `index`, 2 speed, 3 frequency of onset `index`
     let floor_hz = |f: f64| 1e-6 * f.abs().max(1e-9);
-    let mut meas: Vec<(usize, bool, f64, f64)> = Vec::new();
+    let mut meas: Vec<(u8, usize, f64, f64)> = Vec::new();
     for md in &modes {
         meas.push((
+            0,
             md.0,
-            false,
             md.1.linear_hz,
             md.1.linear_hz_sd.max(floor_hz(md.1.linear_hz)),
         ));
         if let Some(zr) = md.2 {
             if let (Some(z), Some(sd)) = (zr.linear_zeta, zr.linear_zeta_sd) {
-                meas.push((md.0, true, z, sd.max(1e-6)));
+                meas.push((1, md.0, z, sd.max(1e-6)));
             }
         }
+    }
+    if let Some(o) = onsets {
+        for (i, r) in o.rows.iter().enumerate() {
+            meas.push((2, i, r.u, r.u_sd));
+            if let (Some(f), Some(sd)) = (r.frequency_hz, r.frequency_sd_hz) {
+                meas.push((3, i, f, sd));
+            }
+        }
+    }
+    if meas.len() < n_p {
+        return None;
     }
     let residual = |p: &[f64]| -> Option<Vec<f64>> {
         let (k, c) = unpack(p);
         if k.iter().any(|v| !(v.is_finite() && *v > 0.0)) {
             return None;
         }
-        let e = modes_of(
-            m,
-            &(Matrix2::new(k[0], 0.0, 0.0, k[1]) + ke),
-            &(Matrix2::new(c[0], 0.0, 0.0, c[1]) + ce),
-        );
-        if e.len() != 2 {
-            return None;
-        }
-        Some(
-            meas.iter()
-                .map(|&(j, is_z, v, sd)| (if is_z { e[j].1 } else { e[j].0 } - v) / sd)
-                .collect(),
-        )
+        let e = if modes.is_empty() {
+            Vec::new()
+        } else {
+            let e = modes_of(
+                m,
+                &(Matrix2::new(k[0], 0.0, 0.0, k[1]) + ke),
+                &(Matrix2::new(c[0], 0.0, 0.0, c[1]) + ce),
+            );
+            if e.len() != 2 {
+                return None;
+            }
+            e
+        };
+        let h = if onsets.is_some() {
+            Some(hopf_at(k, c)?)
+        } else {
+            None
+        };
+        meas.iter()
+            .map(|&(what, j, v, sd)| {
+                let x = match what {
+                    0 => e[j].0,
+                    1 => e[j].1,
+                    2 => h?.0,
+                    _ => h?.1,
+                };
+                Some((x - v) / sd)
+            })
+            .collect()
     };
     let jac = |p: &[f64], r0: &[f64]| -> Option<DMatrix<f64>> {
         let mut jm = DMatrix::<f64>::zeros(r0.len(), n_p);
@@ -1165,6 +1332,16 @@ fn identify_with(
             }
         })
         .collect();
+    // an onset differs when the given structure's Hopf point lies beyond COVERAGE
+    // standard uncertainties of it (speed or frequency)
+    if let (Some(o), Some(h)) = (onsets, hopf_given) {
+        for r in o.rows {
+            differs |= ((h.0 - r.u) / r.u_sd).abs() > COVERAGE;
+            if let (Some(f), Some(sd)) = (r.frequency_hz, r.frequency_sd_hz) {
+                differs |= ((h.1 - f) / sd).abs() > COVERAGE;
+            }
+        }
+    }
     let mut st = given.clone();
     st.k_h = k[0];
     st.k_alpha = k[1];
@@ -1178,6 +1355,8 @@ fn identify_with(
         differs,
         chi2,
         converged,
+        onsets_used: onsets.is_some(),
+        hopf_sensitivity: sensitivity,
     })
 }
 
@@ -1236,8 +1415,11 @@ pub fn rest_linearisation(st: &Structure) -> (Matrix2<f64>, Matrix2<f64>) {
 /// A decay measures the whole model at rest: a candidate that adds mass (added mass, a
 /// scale on the air's apparent mass) or damping at rest (a regularised friction's slope)
 /// would otherwise count twice what the identification already put into the springs and
-/// dampers. Returns `section` unchanged when its mass matrix and rest linearisation equal
-/// `base`'s (relative 10⁻¹²) or `check` does not use the identified structure.
+/// dampers. When the identification used measured onsets ([`with_onsets`]), the changed
+/// model's first Hopf point must meet them too (the same joint weighted least squares, the
+/// same free parameters). Returns `section` unchanged when its mass matrix, rest
+/// linearisation (and, with onsets, aerodynamic model) equal `base`'s (relative 10⁻¹²) or
+/// `check` does not use the identified structure.
 ///
 /// # Errors
 /// [`crate::Error::Data`] when no linear structure with the candidate's masses and rest
@@ -1260,7 +1442,17 @@ pub fn conform_to_decays(
         (a - b).iter().all(|v| v.abs() <= 1e-12 * scale)
     };
     let st = &section.structure;
-    if same(&m, &m0, m0.norm())
+    let used = check.identified.as_ref().expect("checked above");
+    let onsets = (used.onsets_used && !check.onsets.is_empty()).then(|| OnsetFit {
+        rows: &check.onsets,
+        aero: section.aero.clone(),
+        rho: section.rho,
+    });
+    // with onsets a change of the aerodynamic model moves the Hopf point too
+    let same_aero = onsets.is_none()
+        || (std::sync::Arc::ptr_eq(&section.aero, &base.aero) && section.rho == base.rho);
+    if same_aero
+        && same(&m, &m0, m0.norm())
         && same(&ke, &ke0, st.k_h.max(st.k_alpha))
         && same(&ce, &ce0, st.c_h.max(st.c_alpha).max(f64::MIN_POSITIVE))
         && st.k_h == base.structure.k_h
@@ -1270,7 +1462,8 @@ pub fn conform_to_decays(
     {
         return Ok(section);
     }
-    let id = identify_with(&check.modes, &m, st, &ke, &ce)
+    let free = [0, 1, 2, 3].map(|i| used.parameters.get(i).is_some_and(|p| !p.held));
+    let id = identify_with(&check.modes, &m, st, &ke, &ce, onsets.as_ref(), Some(free))
         .filter(|id| id.converged)
         .ok_or_else(|| {
             crate::Error::data(
@@ -1295,6 +1488,194 @@ pub fn conform_to_decays(
             format!("the structure re-identified under the candidate is invalid: {e}"),
         )
     })
+}
+
+/// Structure first with measured onsets (issue 42, round 28): a measured flutter onset is
+/// a property of the linear structure in the flow as a still-air decay is of the structure
+/// at rest, so it informs the same identification. `check` is the decays' check (`None`
+/// without decays), `section` the given nominal section, `onsets` the measured onsets,
+/// `default_sd` the relative standard uncertainty of an onset speed or frequency that
+/// states none.
+///
+/// The given structure's first Hopf point (the nominal model, in [0.5, 2] × the onset
+/// speeds) is compared with each onset; decays and onsets are then fitted jointly
+/// ([`identify_structure`]'s weighted least squares with the onsets' speed and frequency
+/// residuals added, each divided by its standard uncertainty: neither is a constraint nor
+/// ignored). Free: the decays' parameters, and for the onsets with a measured frequency
+/// both stiffnesses, with a speed alone the stiffness the Hopf speed is most sensitive to.
+/// The identified structure is used when a decay or an onset differs from the given
+/// structure beyond [`COVERAGE`] standard uncertainties and the joint solve converges
+/// (χ² within its degrees of freedom). When it does not (the decays and the onset admit no
+/// common linear structure: a flow effect moves the Hopf point), the decays' own
+/// identification stands and the onset is left to the candidates; `reason` says which.
+/// Without onsets `check` is returned unchanged.
+pub fn with_onsets(
+    check: Option<StructureCheck>,
+    section: &Section,
+    onsets: &[aeroelastic::branch::MeasuredOnset],
+    default_sd: f64,
+) -> Option<StructureCheck> {
+    if onsets.is_empty() {
+        return check;
+    }
+    let st = &section.structure;
+    let rows: Vec<OnsetIdentification> = onsets
+        .iter()
+        .map(|o| OnsetIdentification {
+            u: o.u,
+            u_sd: o.u_sd.unwrap_or(default_sd * o.u),
+            frequency_hz: o.frequency_hz,
+            frequency_sd_hz: o
+                .frequency_hz
+                .map(|f| o.frequency_sd_hz.unwrap_or(default_sd * f)),
+            given_u: None,
+            given_frequency_hz: None,
+            u_z: None,
+            frequency_z: None,
+            used_u: None,
+            used_frequency_hz: None,
+        })
+        .collect();
+    let mut c = check.unwrap_or_else(|| StructureCheck {
+        modes: Vec::new(),
+        worst_frequency_error: 0.0,
+        summary: "no still-air decay given".into(),
+        refused: Vec::new(),
+        given: st.modal().ok(),
+        identified: None,
+        used: StructureUsed::Given,
+        reason: String::new(),
+        gap: None,
+        onsets: Vec::new(),
+    });
+    let m = section.total_mass(0.0);
+    let (ke, ce) = rest_linearisation(st);
+    let fit = OnsetFit {
+        rows: &rows,
+        aero: section.aero.clone(),
+        rho: section.rho,
+    };
+    let joint = identify_with(&c.modes, &m, st, &ke, &ce, Some(&fit), None);
+    let given_h = onset_hopf(st, &section.aero, section.rho, &rows);
+    let words = |h: Option<(f64, f64)>| {
+        rows.iter()
+            .map(|o| {
+                let z = h.map(|h| (h.0 - o.u) / o.u_sd);
+                format!(
+                    "onset {:.3} ± {:.3} m/s{} against the given structure's Hopf point {}",
+                    o.u,
+                    o.u_sd,
+                    match (o.frequency_hz, o.frequency_sd_hz) {
+                        (Some(f), Some(sd)) => format!(" at {f:.3} ± {sd:.3} Hz"),
+                        _ => String::new(),
+                    },
+                    match (h, z) {
+                        (Some(h), Some(z)) => format!(
+                            "{:.3} m/s ({z:+.1} σ) at {:.3} Hz{}",
+                            h.0,
+                            h.1,
+                            match (o.frequency_hz, o.frequency_sd_hz) {
+                                (Some(f), Some(sd)) => format!(" ({:+.1} σ)", (h.1 - f) / sd),
+                                _ => String::new(),
+                            }
+                        ),
+                        _ => "(none within [0.5, 2] × the onset speed)".into(),
+                    }
+                )
+            })
+            .collect::<Vec<_>>()
+            .join("; ")
+    };
+    let onset_words = words(given_h);
+    match joint {
+        None => {
+            c.reason = format!(
+                "{}; the measured onset could not be read into the structure ({onset_words}): \
+                 it is left to the candidates",
+                c.reason
+            );
+        }
+        Some(j) if !j.differs => {
+            // the decays and the onsets agree with the given structure
+            c.reason = format!(
+                "the decays and the measured onset agree with the given structure within \
+                 {COVERAGE} standard uncertainties ({onset_words}): the given structure is used"
+            );
+        }
+        Some(j) if j.converged => {
+            let params = j
+                .parameters
+                .iter()
+                .filter(|p| !p.held)
+                .map(|p| {
+                    format!(
+                        "{} {:.5} → {:.5} [{:.5}, {:.5}] {}",
+                        p.name, p.given, p.identified, p.interval[0], p.interval[1], p.unit
+                    )
+                })
+                .collect::<Vec<_>>()
+                .join(", ");
+            let sens = j.hopf_sensitivity.map_or(String::new(), |s| {
+                format!(
+                    "; ∂ln U_H/∂ln k_h {:+.3}, ∂ln U_H/∂ln k_α {:+.3}",
+                    s[0], s[1]
+                )
+            });
+            c.reason = format!(
+                "the {} differ from the given structure beyond {COVERAGE} standard \
+                 uncertainties ({onset_words}{}): the structure identified from them jointly \
+                 (χ² {:.2}; {params}{sens}) is used",
+                if c.modes.is_empty() {
+                    "measured onset"
+                } else {
+                    "decays and the measured onset"
+                },
+                if c.modes.is_empty() {
+                    String::new()
+                } else {
+                    format!("; decays: {}", c.reason)
+                },
+                j.chi2
+            );
+            c.used = StructureUsed::Identified;
+            c.identified = Some(j);
+        }
+        Some(j) => {
+            c.reason = format!(
+                "{}; the measured onset and the decays admit no common linear structure with \
+                 the given masses ({onset_words}; joint χ² {:.2}): {}",
+                c.reason,
+                j.chi2,
+                if c.used == StructureUsed::Identified {
+                    "the decays' structure is used and the onset is left to the candidates"
+                } else {
+                    "the onset is left to the candidates"
+                }
+            );
+        }
+    }
+    let used = c.used_structure(st);
+    let used_h = onset_hopf(&used, &section.aero, section.rho, &rows);
+    c.onsets = rows
+        .into_iter()
+        .map(|mut o| {
+            if let Some(h) = given_h {
+                o.given_u = Some(h.0);
+                o.given_frequency_hz = Some(h.1);
+                o.u_z = Some((h.0 - o.u) / o.u_sd);
+                o.frequency_z = o
+                    .frequency_hz
+                    .zip(o.frequency_sd_hz)
+                    .map(|(f, sd)| (h.1 - f) / sd);
+            }
+            if let Some(h) = used_h {
+                o.used_u = Some(h.0);
+                o.used_frequency_hz = Some(h.1);
+            }
+            o
+        })
+        .collect();
+    Some(c)
 }
 
 #[cfg(test)]

@@ -79,6 +79,28 @@ fn bristol_points_from_the_records_and_the_still_air_structure() {
     let s = structure_check(&[&still], &linear_section()).unwrap();
     assert!(s.worst_frequency_error < 0.02, "{}", s.summary);
     assert_eq!(s.modes.len(), 2);
+    // The README's measured onset (17.93 m/s, 2.46 Hz, subcritical) lies within its
+    // uncertainty of the given structure's Hopf point (17.957 m/s, 2.464 Hz): together with
+    // the decay it changes nothing (issue 42, round 28).
+    let onset = aeroelastic::branch::parse_onset_arg("17.93:2.46:sub").unwrap();
+    let with = diagnose::structure::with_onsets(Some(s.clone()), &linear_section(), &[onset], 0.01)
+        .unwrap();
+    assert_eq!(
+        with.used,
+        diagnose::structure::StructureUsed::Given,
+        "{}",
+        with.reason
+    );
+    assert_eq!(
+        with.used_structure(&linear_section().structure),
+        linear_section().structure
+    );
+    let o = &with.onsets[0];
+    assert!((o.given_u.unwrap() - 17.957).abs() < 1e-3, "{o:?}");
+    assert!(
+        o.u_z.unwrap().abs() < 1.0 && o.frequency_z.unwrap().abs() < 1.0,
+        "{o:?}"
+    );
 }
 
 #[test]

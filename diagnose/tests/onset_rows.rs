@@ -132,11 +132,22 @@ fn onset_of(h: &(f64, f64, String), sd: Option<f64>) -> MeasuredOnset {
 }
 
 /// The truth (the Bristol linear section with k₂α² + k₃α³), its diagram at `speeds`, and
-/// the structure given to the diagnosis with the truth's pitch frequency times `factor`
+/// the structure given to the diagnosis with the truth's uncoupled frequency of `dof` (`pitch` or `heave`) times `factor`
 /// (the nonlinear spring known): the given structure's Hopf speed is off by several %.
-fn misgiven_case(factor: f64, speeds: &[f64]) -> (MeasuredDiagram, (f64, f64, String), Section) {
+fn misgiven_dof_case(
+    dof: &str,
+    factor: f64,
+    speeds: &[f64],
+) -> (MeasuredDiagram, (f64, f64, String), Section) {
     let truth = with_pitch_terms(&linear_section(), &[(2, 800.0), (3, 6000.0)]);
-    let given = pitch_frequency_times(&truth, factor);
+    let given = if dof == "pitch" {
+        pitch_frequency_times(&truth, factor)
+    } else {
+        let mut st = truth.structure.clone();
+        st.k_h *= factor * factor;
+        st.c_h *= factor;
+        Section::new(st, truth.aero.clone(), truth.rho).unwrap()
+    };
     let (points, h) = measured_from(&truth, speeds, 0.02);
     (
         MeasuredDiagram {
@@ -148,23 +159,33 @@ fn misgiven_case(factor: f64, speeds: &[f64]) -> (MeasuredDiagram, (f64, f64, St
     )
 }
 
-/// What an onset row does to a rig whose given pitch frequency is 6 % high (Hopf +19 %) and
-/// whose measured cycles lie in the lower half of the subcritical range: it enters every
-/// diagram's report and the held-out score as w·ΔU/σ_U; a stiffness candidate keeps the given
-/// structure's Hopf point and pays for it; the verdict without the row keeps a Hopf speed more
-/// than 1 % off the truth's. (With the row the named model's Hopf is not yet within 1 %:
-/// DECISIONS, "Measured onsets … round 27".)
-fn onset_row_costs_a_wrong_hopf_speed(factor: f64, speeds: &[f64]) {
-    let (mut d, h, given) = misgiven_case(factor, speeds);
+/// Issue 42's acceptance on a generated rig whose given pitch frequency is off by `factor`
+/// (given Hopf +19 % at 1.06, −17 % at 0.94) and whose measured cycles lie in the lower
+/// part of the subcritical range: without the onset the named model keeps a Hopf speed more
+/// than 1 % off the truth's; with the truth's onset (speed, frequency, criticality) the
+/// onset corrects the structure first (`structure.used` = identified, `structure.gap` from
+/// the given to the truth's Hopf speed) and the named model's Hopf point lies within 1 %
+/// of the truth's with its criticality. Every onset residual is w·ΔU/σ_U of the diagram's
+/// first Hopf point.
+fn the_named_models_hopf_meets_the_onset(factor: f64, speeds: &[f64]) {
+    named_hopf_meets_the_onset("pitch", factor, speeds, true);
+}
+
+/// [`the_named_models_hopf_meets_the_onset`] with `dof`'s frequency off; `baseline`: also
+/// diagnose without the onset and require its named Hopf point more than 1 % off.
+fn named_hopf_meets_the_onset(dof: &str, factor: f64, speeds: &[f64], baseline: bool) {
+    let (mut d, h, given) = misgiven_dof_case(dof, factor, speeds);
     let u_given = given.hopf_points(8.0, 30.0, 400).unwrap()[0].u;
     assert!((u_given / h.0 - 1.0).abs() > 0.03, "{u_given} vs {}", h.0);
-    let without = run(&d, &given);
-    let (u0, _) = named_hopf(&without);
-    assert!(
-        (u0 / h.0 - 1.0).abs() > 0.01,
-        "without the onset the named model's Hopf {u0} is already within 1 % of {}",
-        h.0
-    );
+    let without = baseline.then(|| run(&d, &given));
+    if let Some(without) = &without {
+        let (u0, _) = named_hopf(without);
+        assert!(
+            (u0 / h.0 - 1.0).abs() > 0.01,
+            "without the onset the named model's Hopf {u0} is already within 1 % of {}",
+            h.0
+        );
+    }
     d.onsets.push(onset_of(&h, None));
     let with = run(&d, &given);
     let w = BifurcationOptions::default().amplitude_noise;
@@ -179,59 +200,75 @@ fn onset_row_costs_a_wrong_hopf_speed(factor: f64, speeds: &[f64]) {
         let held = &c.held_out_onsets[0];
         let z = w * held.d_u.unwrap() / (0.01 * h.0);
         assert!((held.z[0] - z).abs() < 1e-9, "{}: {:?}", c.label(), held.z);
-        let before = without
-            .candidates
-            .iter()
-            .find(|b| b.label() == c.label())
-            .unwrap();
-        // a stiffness term cannot move a Hopf point: a polynomial keeps the given structure's
-        if c.effect == diagnose::Effect::StructuralPolynomial
-            || c.effect == diagnose::Effect::StructuralCubic
-        {
-            assert!(
-                (held.predicted_u.unwrap() - u_given).abs() < 1e-6 * u_given,
-                "{}: {:?} vs {u_given}",
-                c.label(),
-                held.predicted_u
-            );
-        }
-        // a held-out onset worse than the candidate's RMS residual without it raises its score
-        if held.z[0].abs() > 1.2 * before.held_out.score {
-            assert!(
-                c.held_out.score > before.held_out.score,
-                "{}: {} → {}",
-                c.label(),
-                before.held_out.score,
-                c.held_out.score
-            );
-        }
     }
-    assert_eq!(with.onsets.len(), 1);
-    assert_eq!(with.nominal.onsets[0].criticality_right, Some(true));
-    eprintln!(
-        "factor {factor}: truth Hopf {:.3}; named without {:?} ({}), with {:?} ({})",
-        h.0,
-        named_hopf(&without),
-        without.verdict.name,
-        named_hopf(&with),
-        with.verdict.name
+    let st = with
+        .structure
+        .as_ref()
+        .expect("the onset's structure check");
+    assert_eq!(
+        st.used,
+        diagnose::structure::StructureUsed::Identified,
+        "{}",
+        st.reason
     );
+    let gap = st.gap.as_ref().expect("what the correction alone did");
+    assert!(
+        (gap.hopf_given.unwrap() / u_given - 1.0).abs() < 1e-3,
+        "{gap:?}"
+    );
+    assert!(
+        (gap.hopf_identified.unwrap() / h.0 - 1.0).abs() < 1e-3,
+        "{gap:?}"
+    );
+    let (u1, crit) = named_hopf(&with);
+    eprintln!(
+        "{dof} factor {factor}: truth Hopf {:.3} ({}); given {u_given:.3}; named without {:?}, \
+         with ({u1:.3}, {crit}) ({:?}: {}); gap {gap:?}",
+        h.0,
+        h.2,
+        without.as_ref().map(|w| (named_hopf(w), w.verdict.name)),
+        with.verdict.name,
+        with.verdict.explanation
+    );
+    assert!(
+        (u1 / h.0 - 1.0).abs() < 0.01,
+        "named model's Hopf {u1} vs the truth's {}",
+        h.0
+    );
+    assert_eq!(crit, h.2, "criticality");
+    assert_eq!(with.nominal.onsets[0].criticality_right, Some(true));
 }
 
-/// Two full bifurcation-level diagnoses (≈ 100 s on 2 cores): `#[ignore]`d to keep CI within
-/// its budget; the onset residuals and their held-out weighting run in CI as unit tests of
-/// `diagnose::bifurcation::fit` and `::mod`.
+/// Acceptance, given pitch frequency 6 % high (two full diagnoses, several minutes on the
+/// shared 2 cores): `#[ignore]`d; the structure correction itself runs in CI
+/// (`a_measured_onset_corrects_the_structure_and_one_within_its_uncertainty_does_not`).
 #[test]
 #[ignore]
-fn an_onset_row_costs_a_model_that_keeps_a_wrong_hopf_speed() {
-    onset_row_costs_a_wrong_hopf_speed(1.06, &[15.0, 15.3, 15.6, 15.9]);
+fn the_named_models_hopf_meets_an_onset_with_the_pitch_frequency_given_high() {
+    the_named_models_hopf_meets_the_onset(1.06, &[15.0, 15.3, 15.6, 15.9]);
 }
 
-/// Slow variant: the other sign, six speeds.
+/// Acceptance, given pitch frequency 6 % low, six speeds.
 #[test]
 #[ignore]
-fn an_onset_row_costs_a_wrong_hopf_speed_slow() {
-    onset_row_costs_a_wrong_hopf_speed(0.94, &[15.0, 15.3, 15.6, 15.9, 16.2, 16.5]);
+fn the_named_models_hopf_meets_an_onset_with_the_pitch_frequency_given_low() {
+    the_named_models_hopf_meets_the_onset(0.94, &[15.0, 15.3, 15.6, 15.9, 16.2, 16.5]);
+}
+
+/// Acceptance over further mis-given structures (pitch frequency ±3 %, heave frequency
+/// ±5 %), with the onset only (about 2 min each on the shared 2 cores).
+#[test]
+#[ignore]
+fn the_named_models_hopf_meets_an_onset_over_further_misgivings() {
+    let speeds = [15.0, 15.3, 15.6, 15.9];
+    for (dof, factor) in [
+        ("pitch", 1.03),
+        ("pitch", 0.97),
+        ("heave", 1.05),
+        ("heave", 0.95),
+    ] {
+        named_hopf_meets_the_onset(dof, factor, &speeds, false);
+    }
 }
 
 /// Absence rows on a supercritical rig (hardening cubic, cycles above the Hopf point only):
@@ -261,4 +298,114 @@ fn absence_rows_against_a_supercritical_rig() {
     assert!(r.verdict.contradicting.is_empty());
     // the nominal linear model is stable below its Hopf point: no contradiction either
     assert_eq!(r.nominal.contradicted_absences(), 0);
+}
+
+/// The truth's first Hopf point (speed, frequency) from the nominal scan.
+fn truth_hopf(s: &Section) -> (f64, f64) {
+    let h = s
+        .hopf_points(8.0, 30.0, 400)
+        .unwrap()
+        .into_iter()
+        .min_by(|a, b| a.u.total_cmp(&b.u))
+        .unwrap();
+    (h.u, h.omega / std::f64::consts::TAU)
+}
+
+/// Structure first with a measured onset (issue 42, round 28; fast, no candidate fitted):
+/// on the generated rig with the given pitch frequency ±6 % (given Hopf +19 % / −17 %), an
+/// onset of the truth corrects the linear structure so that the nominal Hopf point meets it
+/// — speed and frequency: k_h and k_α; speed alone: the stiffness the Hopf speed is most
+/// sensitive to (here k_α) — and an onset within its uncertainty changes nothing.
+#[test]
+fn a_measured_onset_corrects_the_structure_and_one_within_its_uncertainty_does_not() {
+    use diagnose::structure::{with_onsets, StructureUsed};
+    let truth = with_pitch_terms(&linear_section(), &[(2, 800.0), (3, 6000.0)]);
+    let (u_t, f_t) = truth_hopf(&truth);
+    for factor in [1.06, 0.94] {
+        let given = pitch_frequency_times(&truth, factor);
+        let (u_g, _) = truth_hopf(&given);
+        assert!((u_g / u_t - 1.0).abs() > 0.1, "{u_g} vs {u_t}");
+        for with_freq in [true, false] {
+            let onset = MeasuredOnset {
+                line: 0,
+                u: u_t,
+                u_sd: None,
+                frequency_hz: with_freq.then_some(f_t),
+                frequency_sd_hz: None,
+                criticality: Some(Criticality::Subcritical),
+            };
+            let c = with_onsets(None, &given, &[onset], 0.01).expect("a check");
+            assert_eq!(c.used, StructureUsed::Identified, "{}", c.reason);
+            let id = c.identified.as_ref().unwrap();
+            assert!(id.onsets_used && id.converged, "{id:?}");
+            let s = id.hopf_sensitivity.unwrap();
+            // the Hopf speed of this rig is most sensitive to the pitch spring
+            assert!(s[1].abs() > s[0].abs(), "{s:?}");
+            let held: Vec<bool> = id.parameters.iter().map(|p| p.held).collect();
+            assert_eq!(
+                held,
+                vec![!with_freq, false, true, true],
+                "{:?}",
+                id.parameters
+            );
+            let used = Section::new(
+                c.used_structure(&given.structure),
+                given.aero.clone(),
+                given.rho,
+            )
+            .unwrap();
+            let (u, f) = truth_hopf(&used);
+            assert!(
+                (u / u_t - 1.0).abs() < 1e-3,
+                "{factor} {with_freq}: {u} vs {u_t}"
+            );
+            if with_freq {
+                assert!((f / f_t - 1.0).abs() < 1e-3, "{f} vs {f_t}");
+            }
+            let o = &c.onsets[0];
+            assert!((o.given_u.unwrap() - u_g).abs() < 1e-6 * u_g);
+            assert!((o.used_u.unwrap() - u).abs() < 1e-6 * u);
+            // the identified pitch stiffness is the truth's within 2 % (the given c_α,
+            // also off by the factor, is held)
+            let ka = id.parameters[1].identified;
+            eprintln!(
+                "factor {factor} freq {with_freq}: k_h {:.3} → {:.3} (truth {:.3}), k_α {:.4} → \
+                 {ka:.4} (truth {:.4}); Hopf {u_g:.3} → {u:.3} (truth {u_t:.3}); sens {s:?}",
+                id.parameters[0].given,
+                id.parameters[0].identified,
+                truth.structure.k_h,
+                id.parameters[1].given,
+                truth.structure.k_alpha
+            );
+            assert!(
+                (ka / truth.structure.k_alpha - 1.0).abs() < 0.02,
+                "{ka} vs {}",
+                truth.structure.k_alpha
+            );
+            // a candidate that moves the Hopf point (10 % more heaving mass) is conformed
+            // to the onset as to a decay: its springs re-identified, its Hopf point the
+            // onset's again
+            let mut heavier = used.structure.clone();
+            heavier.mass *= 1.1;
+            let heavier = Section::new(heavier, used.aero.clone(), used.rho).unwrap();
+            let (u_heavy, _) = truth_hopf(&heavier);
+            assert!((u_heavy / u_t - 1.0).abs() > 0.01, "{u_heavy} vs {u_t}");
+            let conformed = diagnose::structure::conform_to_decays(&c, &used, heavier).unwrap();
+            let (u_c, _) = truth_hopf(&conformed);
+            assert!((u_c / u_t - 1.0).abs() < 1e-3, "conformed {u_c} vs {u_t}");
+            assert_eq!(conformed.structure.mass, used.structure.mass * 1.1);
+        }
+    }
+    // an onset within its uncertainty (0.5 % and 0.5 % off, σ = 1 %) changes nothing
+    let onset = MeasuredOnset {
+        line: 0,
+        u: u_t * 1.005,
+        u_sd: None,
+        frequency_hz: Some(f_t * 0.995),
+        frequency_sd_hz: None,
+        criticality: None,
+    };
+    let c = with_onsets(None, &truth, &[onset], 0.01).unwrap();
+    assert_eq!(c.used, StructureUsed::Given, "{}", c.reason);
+    assert_eq!(c.used_structure(&truth.structure), truth.structure);
 }

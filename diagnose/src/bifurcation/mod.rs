@@ -730,26 +730,6 @@ pub fn diagnose_diagram(
         row_us.iter().copied().fold(f64::INFINITY, f64::min),
         row_us.iter().copied().fold(f64::NEG_INFINITY, f64::max),
     ];
-    // Structure first: the candidates are fitted on the structure identified from the
-    // still-air decays when they differ from the given one beyond their uncertainty.
-    let mut structure = structure;
-    let given_section = section;
-    let identified_section;
-    let section: &Section = match structure.as_ref() {
-        Some(c) if c.used == StructureUsed::Identified => {
-            identified_section = Section::new(
-                c.used_structure(&section.structure),
-                section.aero.clone(),
-                section.rho,
-            )
-            .map_err(|e| Error::aeroelastic("the structure identified from the decays", e))?;
-            &identified_section
-        }
-        _ => section,
-    };
-    opts.branch
-        .check()
-        .map_err(|e| Error::aeroelastic("bifurcation options", e))?;
     for (name, v) in [
         ("amplitude_noise", opts.amplitude_noise),
         ("min_shrink", opts.min_shrink),
@@ -759,6 +739,30 @@ pub fn diagnose_diagram(
             return Err(Error::setting(name, v, "must lie in (0, 1)"));
         }
     }
+    // Structure first: the candidates are fitted on the structure identified from the
+    // still-air decays and the measured onsets (jointly) when they differ from the given
+    // one beyond their uncertainty.
+    let mut structure =
+        crate::structure::with_onsets(structure, section, onsets, opts.onset_uncertainty);
+    let given_section = section;
+    let identified_section;
+    let section: &Section = match structure.as_ref() {
+        Some(c) if c.used == StructureUsed::Identified => {
+            identified_section = Section::new(
+                c.used_structure(&section.structure),
+                section.aero.clone(),
+                section.rho,
+            )
+            .map_err(|e| {
+                Error::aeroelastic("the structure identified from the decays and onsets", e)
+            })?;
+            &identified_section
+        }
+        _ => section,
+    };
+    opts.branch
+        .check()
+        .map_err(|e| Error::aeroelastic("bifurcation options", e))?;
     let groups = speed_groups(
         measured
             .iter()
@@ -987,8 +991,16 @@ fn structure_sentence(c: Option<&StructureCheck>) -> String {
     };
     match (c.used, &c.gap) {
         (StructureUsed::Identified, Some(g)) => format!(
-            "; on the structure identified from the still-air decays (the correction alone \
-             moves the nominal score {:.3} → {:.3}{})",
+            "; on the structure identified from the {} (the correction alone moves the \
+             nominal score {:.3} → {:.3}{})",
+            match (
+                c.modes.is_empty(),
+                c.identified.as_ref().is_some_and(|i| i.onsets_used)
+            ) {
+                (true, _) => "measured onset",
+                (false, true) => "still-air decays and the measured onset",
+                (false, false) => "still-air decays",
+            },
             g.given,
             g.identified,
             match (g.hopf_given, g.hopf_identified) {
