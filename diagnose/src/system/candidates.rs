@@ -36,7 +36,7 @@ pub(crate) struct Moments {
     pub e: [f64; 2],
 }
 
-fn moments(run: &RunResidual, cols: &[Column]) -> Moments {
+pub(crate) fn moments(run: &RunResidual, cols: &[Column]) -> Moments {
     let p = cols.len();
     let n = run.len() as f64;
     let mut g = [vec![0.0; p * p], vec![0.0; p * p]];
@@ -276,7 +276,8 @@ pub(crate) trait SystemTerm: Sync {
 
 /// All variants of a candidate over the runs, its columns followed by the nuisance
 /// columns ([`nuisance_columns`]; `flags[j]`: run j's nuisance terms; no nuisance column
-/// that no run has).
+/// that no run has) and, when some run has a raw control signal, the control's gain and
+/// offset columns ([`super::control::columns`]).
 pub(crate) fn variants(
     term: &dyn SystemTerm,
     runs: &[RunResidual],
@@ -297,6 +298,11 @@ pub(crate) fn variants(
             names.push(format!("nuisance_{group}_dM_pitch_{q}"));
         }
     }
+    // a raw control signal: its gain and offset are fitted with every candidate
+    let control = runs.iter().any(super::control::raw);
+    if control {
+        names.extend(super::control::NAMES.iter().map(|s| s.to_string()));
+    }
     term.grids(runs)
         .into_iter()
         .map(|(grid, g)| Variant {
@@ -309,6 +315,9 @@ pub(crate) fn variants(
                     let mut cols = term.columns(&g, r, rho, chord);
                     let f = flags.get(j).copied().unwrap_or([[false; 2]; 2]);
                     cols.extend(nuisance_columns(r, f, dofs));
+                    if control {
+                        cols.extend(super::control::columns(r));
+                    }
                     moments(r, &cols)
                 })
                 .collect(),

@@ -126,6 +126,9 @@ pub struct RunResidual {
     pub noise_energy: [f64; 2],
     /// Savitzky–Golay half window \[samples\] and degree of the derivatives.
     pub sg: (usize, usize),
+    /// The controller's signal of a controlled record ([`super::control`]); a calibrated
+    /// force is already in `r`, a raw one is fitted by the level.
+    pub control: Option<super::control::RunControl>,
 }
 
 impl RunResidual {
@@ -418,7 +421,15 @@ pub fn prepare_run(
     let pad = (s.pad / dt).ceil() as usize;
     let force = forces_along(run_model.as_ref(), &flow, &q, &qd, dt, pad);
     let lag0 = vec![0.0; run_model.n_lag()];
-    let whole = residual_series(st, &q, &qd, &qdd, &force, dt, s)
+    let control = run_control(dataset, rec, &q, dt, s, (i0, i1))?;
+    // a calibrated control force acts on the heave DOF like the lift
+    let mut applied = force.clone();
+    if let Some(c) = rec.control.as_ref().filter(|c| c.calibrated) {
+        for (f, u) in applied[0].iter_mut().zip(&c.values) {
+            *f += u;
+        }
+    }
+    let whole = residual_series(st, &q, &qd, &qdd, &applied, dt, s)
         .map_err(|e| Error::identify(format!("free run `{id}`: residual smoothing"), e))?;
     let r = whole.map(|w| w[i0..i1].to_vec());
     let mut ss = [0.0; 2];
@@ -476,7 +487,57 @@ pub fn prepare_run(
         sigma,
         noise_energy,
         sg: (s.half_window, s.order),
+        control,
     })
+}
+
+/// The control signal of a controlled record prepared for the residual: S(u) over the
+/// kept samples `keep` and, with a heave target, the PD law reconstructed from it
+/// ([`super::control::pd_law`]).
+///
+/// # Errors
+/// [`Error::Data`] naming the data set and run when the signal or the target has another
+/// length than the record; wrapped identify errors from the differentiator.
+fn run_control(
+    dataset: &str,
+    rec: &Record,
+    q: &[Vec<f64>; 2],
+    dt: f64,
+    s: &ResidualSettings,
+    keep: (usize, usize),
+) -> Result<Option<super::control::RunControl>> {
+    let Some(c) = &rec.control else {
+        return Ok(None);
+    };
+    let id = rec.meta.id.as_str();
+    let n = q[0].len();
+    let (i0, i1) = keep;
+    for (what, len) in [
+        ("control signal", Some(c.values.len())),
+        ("h_target", c.h_target.as_ref().map(Vec::len)),
+    ] {
+        if let Some(len) = len.filter(|&l| l != n) {
+            return Err(Error::data(
+                dataset,
+                format!("free run `{id}`: the {what} has {len} samples, the motion {n}"),
+            ));
+        }
+    }
+    let su = smooth_as_acceleration(&c.values, dt, s.half_window, s.order)
+        .map_err(|e| Error::identify(format!("free run `{id}`: control signal smoothing"), e))?;
+    let pd = match &c.h_target {
+        Some(t) => {
+            let e: Vec<f64> = t.iter().zip(&q[0]).map(|(a, b)| a - b).collect();
+            let ed = sg(&e, dt, s, id, "h_target - h")?;
+            super::control::pd_law(&c.values[i0..i1], &e[i0..i1], &ed[i0..i1])
+        }
+        None => None,
+    };
+    Ok(Some(super::control::RunControl {
+        calibrated: c.calibrated,
+        column: su[i0..i1].to_vec(),
+        pd,
+    }))
 }
 
 /// Squared ℓ² norms ‖k_cj‖² of the residual operator's impulse responses from white
