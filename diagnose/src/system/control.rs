@@ -96,6 +96,12 @@ pub struct ControlRun {
     /// The feedback law reconstructed from `h_target`, when recorded.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub pd_law: Option<PdLaw>,
+    /// \[heave, pitch\]: the share of the DOF's residual energy (without the control) that
+    /// the signal removes with its own gain and offset fitted on this run and DOF alone, in
+    /// sample — an upper bound of what any calibration of the signal could explain there
+    /// (raw signal only).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub best_share: Option<[f64; 2]>,
 }
 
 /// What the controlled records of a free-response level contributed (`control` of a
@@ -372,6 +378,7 @@ pub(crate) fn apply_held_out(runs: &mut [RunResidual], folds: &[usize]) -> Optio
                 without: sq(without[j]),
                 with: sq(with[j]),
                 pd_law: r.control.as_ref().and_then(|c| c.pd),
+                best_share: raw(r).then(|| [0, 1].map(|d| best_share(r, d))),
             }
         })
         .collect::<Vec<_>>();
@@ -418,6 +425,18 @@ pub(crate) fn apply_held_out(runs: &mut [RunResidual], folds: &[usize]) -> Optio
         dof_check,
         simulation,
     })
+}
+
+/// The share of run `r`'s residual energy on DOF `dof` that its raw signal removes with
+/// a gain and offset fitted on that run and DOF alone (in sample; 0 when singular).
+fn best_share(r: &RunResidual, dof: usize) -> f64 {
+    let m = candidates::moments(r, &columns_on(r, dof));
+    let (g, b) = (&m.g[dof], &m.b[dof]);
+    let e = m.e[dof];
+    match candidates::solve(g, b) {
+        Some(th) if e > 0.0 => (th.iter().zip(b).map(|(t, y)| t * y).sum::<f64>() / e).max(0.0),
+        _ => 0.0,
+    }
 }
 
 /// A run's residual energy without its control force: a calibrated run's residual with
