@@ -178,18 +178,18 @@ fn bristol_still_air_decay_is_unaffected_by_the_control_columns() {
     .unwrap();
     let (a, b) = (&with.levels[0], &without.levels[0]);
     assert!(b.control.is_none());
-    let still_case = |l: &diagnose::LevelResult| {
-        l.cases
-            .iter()
-            .find(|c| c.wind_speed == 0.0)
-            .unwrap()
-            .before
-    };
+    let still_case =
+        |l: &diagnose::LevelResult| l.cases.iter().find(|c| c.wind_speed == 0.0).unwrap().before;
     assert_eq!(still_case(a), still_case(b));
     assert_eq!(a.structure, b.structure);
     // the records read as if free give the controlled level's `gap_without`
     let c = a.control.as_ref().unwrap();
-    assert!((b.before - c.gap_without).abs() < 1e-12, "{} {}", b.before, c.gap_without);
+    assert!(
+        (b.before - c.gap_without).abs() < 1e-12,
+        "{} {}",
+        b.before,
+        c.gap_without
+    );
 }
 
 #[test]

@@ -12,9 +12,9 @@
 //! N/m) is f_c itself and is part of the residual ([`super::residual::prepare_run`]). A raw
 //! signal u (`control_raw`) gives f_c = g·u + o with a gain g \[N/m per unit\] and an
 //! offset o \[N/m\], one pair for the data set, fitted by least squares on the training runs
-//! only: alone for the level's gap ([`apply_held_out`]: every run's residual is the one
+//! only: alone for the level's gap (`apply_held_out`: every run's residual is the one
 //! left by the (g, o) of the fold that holds it out) and jointly with each candidate's
-//! linear coefficients ([`columns`], appended to every candidate's columns like the
+//! linear coefficients (`candidates::control_columns`, appended to every candidate's columns like the
 //! apparent-mass nuisances). The interval of g is the jackknife over the folds.
 //!
 //! Which DOF the controller acts on is checked from the data: the same held-out fit on
@@ -22,36 +22,13 @@
 
 use serde::{Deserialize, Serialize};
 
-use super::candidates::{self, Column};
+use super::candidates::{
+    self, control_columns as columns, control_columns_on as columns_on, raw_control as raw, Column,
+    CONTROL_NAMES as NAMES,
+};
 use super::residual::RunResidual;
 
-/// The control signal of one prepared run.
-#[derive(Debug, Clone, PartialEq)]
-pub struct RunControl {
-    /// `true`: a calibrated force (already in the residual); `false`: a raw signal whose
-    /// gain and offset the level fits.
-    pub calibrated: bool,
-    /// The signal as it enters the residual, S(u) over the kept samples (raw units, or N/m
-    /// when calibrated).
-    pub column: Vec<f64>,
-    /// The feedback law reconstructed from the heave target, when the record has one.
-    pub pd: Option<PdLaw>,
-}
-
-/// A proportional-derivative law reconstructed from a controlled record:
-/// u = k_p·(h_target − h) + k_d·(ḣ_target − ḣ) + c, least squares over the kept samples
-/// (derivatives by the run's Savitzky–Golay differentiator).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
-pub struct PdLaw {
-    /// Proportional gain \[signal units per m\].
-    pub kp: f64,
-    /// Derivative gain \[signal units per m/s\].
-    pub kd: f64,
-    /// Constant \[signal units\].
-    pub offset: f64,
-    /// Share of the signal's variance the law reproduces, 1 − SSR/SST.
-    pub r2: f64,
-}
+pub use super::residual::{PdLaw, RunControl};
 
 /// A fitted coefficient with its 95 % interval.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
@@ -152,68 +129,6 @@ fn t975(df: usize) -> f64 {
         d if d <= 30 => T[d - 1],
         _ => 1.96,
     }
-}
-
-/// Whether run `r` has a raw (fitted) control signal.
-pub(crate) fn raw(r: &RunResidual) -> bool {
-    r.control.as_ref().is_some_and(|c| !c.calibrated)
-}
-
-/// Names of the control columns appended to every candidate when some run has a raw
-/// control signal ([`columns`]).
-pub(crate) const NAMES: [&str; 2] = ["control_gain_heave", "control_offset_heave"];
-
-/// The control columns of one run on DOF `dof` (0 heave, 1 pitch): S(u) and a constant,
-/// empty on a run without a raw signal.
-fn columns_on(r: &RunResidual, dof: usize) -> Vec<Column> {
-    let mut out = vec![[Vec::new(), Vec::new()], [Vec::new(), Vec::new()]];
-    if let Some(c) = r.control.as_ref().filter(|c| !c.calibrated) {
-        out[0][dof] = c.column.clone();
-        out[1][dof] = vec![1.0; c.column.len()];
-    }
-    out
-}
-
-/// The control columns of one run on the heave DOF ([`NAMES`]): S(u) and a constant on
-/// a run with a raw signal, empty otherwise.
-pub(crate) fn columns(r: &RunResidual) -> Vec<Column> {
-    columns_on(r, 0)
-}
-
-/// Reconstructs u = k_p·e + k_d·ė + c with e = h_target − h over the kept samples of a run
-/// (ė by the differentiator `d`); `None` when singular or flat.
-pub(crate) fn pd_law(u: &[f64], e: &[f64], e_dot: &[f64]) -> Option<PdLaw> {
-    let n = u.len();
-    if n < 4 || e.len() != n || e_dot.len() != n {
-        return None;
-    }
-    let x = |i: usize| [e[i], e_dot[i], 1.0];
-    let mut g = [0.0; 9];
-    let mut b = [0.0; 3];
-    for i in 0..n {
-        let xi = x(i);
-        for a in 0..3 {
-            b[a] += xi[a] * u[i];
-            for c in 0..3 {
-                g[a * 3 + c] += xi[a] * xi[c];
-            }
-        }
-    }
-    let th = candidates::solve(&g, &b)?;
-    let mean = u.iter().sum::<f64>() / n as f64;
-    let sst: f64 = u.iter().map(|v| (v - mean).powi(2)).sum();
-    let ssr: f64 = (0..n)
-        .map(|i| {
-            let xi = x(i);
-            (u[i] - th[0] * xi[0] - th[1] * xi[1] - th[2]).powi(2)
-        })
-        .sum();
-    (sst > 0.0).then(|| PdLaw {
-        kp: th[0],
-        kd: th[1],
-        offset: th[2],
-        r2: 1.0 - ssr / sst,
-    })
 }
 
 /// Held-out fit of the columns `cols[j]` (per run) over `folds`: per fold the least
@@ -458,6 +373,7 @@ fn calibrated_without(r: &RunResidual) -> [f64; 2] {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::system::residual::pd_law;
 
     #[test]
     fn pd_law_recovers_known_gains_and_reports_a_poor_fit() {

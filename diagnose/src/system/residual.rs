@@ -27,6 +27,8 @@ use identify::record::Record;
 use nalgebra::Matrix2;
 use realfft::num_complex::Complex64;
 
+use serde::{Deserialize, Serialize};
+
 use crate::{Error, Result};
 
 /// The aerodynamic model of a still-air run (U = 0): no aerodynamic force at all. Any
@@ -128,7 +130,7 @@ pub struct RunResidual {
     pub sg: (usize, usize),
     /// The controller's signal of a controlled record ([`super::control`]); a calibrated
     /// force is already in `r`, a raw one is fitted by the level.
-    pub control: Option<super::control::RunControl>,
+    pub control: Option<RunControl>,
 }
 
 impl RunResidual {
@@ -493,7 +495,7 @@ pub fn prepare_run(
 
 /// The control signal of a controlled record prepared for the residual: S(u) over the
 /// kept samples `keep` and, with a heave target, the PD law reconstructed from it
-/// ([`super::control::pd_law`]).
+/// ([`pd_law`]).
 ///
 /// # Errors
 /// [`Error::Data`] naming the data set and run when the signal or the target has another
@@ -505,7 +507,7 @@ fn run_control(
     dt: f64,
     s: &ResidualSettings,
     keep: (usize, usize),
-) -> Result<Option<super::control::RunControl>> {
+) -> Result<Option<RunControl>> {
     let Some(c) = &rec.control else {
         return Ok(None);
     };
@@ -529,11 +531,11 @@ fn run_control(
         Some(t) => {
             let e: Vec<f64> = t.iter().zip(&q[0]).map(|(a, b)| a - b).collect();
             let ed = sg(&e, dt, s, id, "h_target - h")?;
-            super::control::pd_law(&c.values[i0..i1], &e[i0..i1], &ed[i0..i1])
+            pd_law(&c.values[i0..i1], &e[i0..i1], &ed[i0..i1])
         }
         None => None,
     };
-    Ok(Some(super::control::RunControl {
+    Ok(Some(RunControl {
         calibrated: c.calibrated,
         column: su[i0..i1].to_vec(),
         pd,
@@ -583,6 +585,70 @@ fn noise_kernels(
         }
     }
     Ok(out)
+}
+
+/// The control signal of one prepared run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunControl {
+    /// `true`: a calibrated force (already in the residual); `false`: a raw signal whose
+    /// gain and offset the level fits.
+    pub calibrated: bool,
+    /// The signal as it enters the residual, S(u) over the kept samples (raw units, or N/m
+    /// when calibrated).
+    pub column: Vec<f64>,
+    /// The feedback law reconstructed from the heave target, when the record has one.
+    pub pd: Option<PdLaw>,
+}
+
+/// A proportional-derivative law reconstructed from a controlled record:
+/// u = k_p·(h_target − h) + k_d·(ḣ_target − ḣ) + c, least squares over the kept samples
+/// (derivatives by the run's Savitzky–Golay differentiator).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct PdLaw {
+    /// Proportional gain \[signal units per m\].
+    pub kp: f64,
+    /// Derivative gain \[signal units per m/s\].
+    pub kd: f64,
+    /// Constant \[signal units\].
+    pub offset: f64,
+    /// Share of the signal's variance the law reproduces, 1 − SSR/SST.
+    pub r2: f64,
+}
+
+/// Reconstructs u = k_p·e + k_d·ė + c with e = h_target − h over the kept samples of a run
+/// (ė by the differentiator `d`); `None` when singular or flat.
+pub(crate) fn pd_law(u: &[f64], e: &[f64], e_dot: &[f64]) -> Option<PdLaw> {
+    let n = u.len();
+    if n < 4 || e.len() != n || e_dot.len() != n {
+        return None;
+    }
+    let x = |i: usize| [e[i], e_dot[i], 1.0];
+    let mut g = [0.0; 9];
+    let mut b = [0.0; 3];
+    for i in 0..n {
+        let xi = x(i);
+        for a in 0..3 {
+            b[a] += xi[a] * u[i];
+            for c in 0..3 {
+                g[a * 3 + c] += xi[a] * xi[c];
+            }
+        }
+    }
+    let th = crate::numerics::ridge_solve(|i, j| g[i * 3 + j], &b, 1e-10)?;
+    let mean = u.iter().sum::<f64>() / n as f64;
+    let sst: f64 = u.iter().map(|v| (v - mean).powi(2)).sum();
+    let ssr: f64 = (0..n)
+        .map(|i| {
+            let xi = x(i);
+            (u[i] - th[0] * xi[0] - th[1] * xi[1] - th[2]).powi(2)
+        })
+        .sum();
+    (sst > 0.0).then(|| PdLaw {
+        kp: th[0],
+        kd: th[1],
+        offset: th[2],
+        r2: 1.0 - ssr / sst,
+    })
 }
 
 #[cfg(test)]

@@ -574,6 +574,9 @@ pub fn record_from_table(
     })
 }
 
+/// A column converter of [`record_from_table`]: (values, column name, unit map) → SI values.
+type Convert<'a> = &'a dyn Fn(Vec<f64>, &str, &dyn Fn(f64) -> f64) -> Result<Vec<f64>>;
+
 /// The control signal of a controlled record (DATA_FORMAT.md, "Controlled records") from
 /// its columns: `control_force` converted like lift (`force`), `control_raw` kept in its
 /// units, `h_target` converted like heave (`heave`) and kept only with a control column;
@@ -582,7 +585,7 @@ fn control_signal(
     h_target: Option<Vec<f64>>,
     raw: Option<Vec<f64>>,
     force: Option<Vec<f64>>,
-    conv: &dyn Fn(Vec<f64>, &str, &dyn Fn(f64) -> f64) -> Result<Vec<f64>>,
+    conv: Convert<'_>,
     heave: &dyn Fn(f64) -> f64,
     lift: &dyn Fn(f64) -> f64,
 ) -> Result<Option<crate::record::ControlSignal>> {
