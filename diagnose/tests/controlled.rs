@@ -188,7 +188,7 @@ fn campaign(dir: &std::path::Path, controlled: bool) -> Dataset {
         let r = &mut records[2 + k];
         r.h = h;
         r.alpha = a;
-        r.control = controlled.then(|| ControlSignal {
+        r.control = controlled.then_some(ControlSignal {
             calibrated: false,
             values: c,
             h_target: Some(ht),

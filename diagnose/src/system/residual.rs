@@ -625,10 +625,10 @@ pub(crate) fn pd_law(u: &[f64], e: &[f64], e_dot: &[f64]) -> Option<PdLaw> {
     let x = |i: usize| [e[i], e_dot[i], 1.0];
     let mut g = [0.0; 9];
     let mut b = [0.0; 3];
-    for i in 0..n {
+    for (i, &ui) in u.iter().enumerate() {
         let xi = x(i);
         for a in 0..3 {
-            b[a] += xi[a] * u[i];
+            b[a] += xi[a] * ui;
             for c in 0..3 {
                 g[a * 3 + c] += xi[a] * xi[c];
             }
