@@ -464,6 +464,7 @@ fn forced_set(
                 lift: Some(lift),
                 moment: Some(moment),
                 nowind: None,
+                control: None,
             })
         })
         .collect();

@@ -542,6 +542,12 @@ pub struct LevelResult {
     /// and after the correction alone.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub structure: Option<crate::structure::StructureCheck>,
+    /// Free-response level with controlled records (control-based continuation): the
+    /// controller's force as a measured input — its fitted gain and offset (raw signal),
+    /// the gap without and with it, per run, the DOF the data points at, and why the
+    /// controlled runs are not simulated ([`crate::system::control`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub control: Option<crate::system::control::ControlReport>,
 }
 
 /// Free runs against the range the forced campaign identified (`levels[].coverage`).

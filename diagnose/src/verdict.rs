@@ -560,6 +560,7 @@ mod tests {
             fold_scheme: None,
             coverage: None,
             structure: None,
+            control: None,
             interpolated_gap_statistic: None,
             model_level: None,
         }

@@ -113,6 +113,83 @@ fn bristol_free_response_against_the_rigs_linear_model() {
         matched += 1;
     }
     assert_eq!(matched, 9);
+
+    // issue 42 item 3: the nine LCO records were taken under feedback control; the
+    // controller's raw output enters the heave equation as g·u + o, fitted held out
+    let c = l.control.as_ref().expect("controlled records");
+    assert_eq!((c.signal.as_str(), c.dof.as_str()), ("raw", "heave"));
+    assert_eq!(c.runs.len(), 9);
+    assert!(c.runs.iter().all(|r| r.wind_speed > 0.0));
+    // the data show no heave force of the controller: the gain's interval holds zero
+    // (full records: 30 ± 677 N/m per unit), the held-out heave fit removes nothing, and
+    // even a gain and offset fitted on each run alone remove at most 18 % of a run's
+    // heave residual energy (full records; 2 of 9 runs above 10 %)
+    let g = c.gain.unwrap();
+    assert!(g.low < 0.0 && g.high > 0.0, "{g:?}");
+    let heave = c.dof_check.iter().find(|d| d.dof == "heave").unwrap();
+    assert!(heave.removed < 0.02, "{heave:?}");
+    for r in &c.runs {
+        let best = r.best_share.unwrap();
+        assert!(best[0] < 0.25, "{r:?}");
+    }
+    // so the gap stays where it was, within 1 %, and every LCO record keeps 0.7–0.9 of its
+    // heave and 1.0–1.2 of its pitch structural force
+    assert!(
+        (c.gap_with / c.gap_without - 1.0).abs() < 0.01,
+        "{} vs {}",
+        c.gap_with,
+        c.gap_without
+    );
+    assert!((l.before - c.gap_with).abs() < 1e-12);
+    // the feedback law cannot be rebuilt (a PD law on h_target − h reproduces 8–92 % of
+    // the signal's variance): the controlled runs are not simulated as if free — only the
+    // still-air decay has a simulated point, and the nine measured points are kept
+    assert!(c.runs.iter().any(|r| r.pd_law.unwrap().r2 < 0.5));
+    assert!(c.simulation.contains("not simulated"));
+    assert_eq!(bif.measured.len(), 10);
+    assert_eq!(bif.predicted_before.len(), 1);
+    assert_eq!(bif.predicted_before[0].wind_speed, 0.0);
+}
+
+/// The still-air decay has no control column: its residual, its gap and the structure
+/// check are those of the same diagnosis with the LCO records' control columns dropped.
+#[test]
+fn bristol_still_air_decay_is_unaffected_by_the_control_columns() {
+    let lco = read_dataset(&data("bristol-spring1")).unwrap();
+    let mut bare = lco.clone();
+    for r in &mut bare.records {
+        r.control = None;
+    }
+    let still = read_dataset(&data("bristol-spring1-still-air")).unwrap();
+    let opts = DiagnoseOptions::new(1);
+    let with = diagnose_free(
+        &merge_free(&[still.clone(), lco]).unwrap(),
+        &bristol_model(),
+        &opts,
+        "test",
+    )
+    .unwrap();
+    let without = diagnose_free(
+        &merge_free(&[still, bare]).unwrap(),
+        &bristol_model(),
+        &opts,
+        "test",
+    )
+    .unwrap();
+    let (a, b) = (&with.levels[0], &without.levels[0]);
+    assert!(b.control.is_none());
+    let still_case =
+        |l: &diagnose::LevelResult| l.cases.iter().find(|c| c.wind_speed == 0.0).unwrap().before;
+    assert_eq!(still_case(a), still_case(b));
+    assert_eq!(a.structure, b.structure);
+    // the records read as if free give the controlled level's `gap_without`
+    let c = a.control.as_ref().unwrap();
+    assert!(
+        (b.before - c.gap_without).abs() < 1e-12,
+        "{} {}",
+        b.before,
+        c.gap_without
+    );
 }
 
 #[test]

@@ -71,6 +71,27 @@ pub struct Record {
     pub moment: Option<Vec<f64>>,
     /// Still-air run of the same motion (raw balance forces), when the manifest names one.
     pub nowind: Option<Box<Record>>,
+    /// The feedback controller's signal of a controlled free-response record
+    /// (control-based continuation; DATA_FORMAT.md, "Controlled records"), when the case
+    /// file has a `control_raw` or `control_force` column.
+    pub control: Option<ControlSignal>,
+}
+
+/// The signal of a feedback controller acting on the heave DOF during a record (an
+/// electrodynamic shaker on the heave stage, as in control-based continuation): the force
+/// it applies is a measured input of the equations of motion, not part of the free response.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ControlSignal {
+    /// `true`: `values` is a calibrated force on the heave DOF \[N/m\], positive in lift's
+    /// sense (down, like h), from the `control_force` column. `false`: the controller's raw
+    /// output (`control_raw`, uncalibrated units); the force is g·u + o with a gain g
+    /// \[N/m per unit\] and offset o \[N/m\] the diagnosis fits.
+    pub calibrated: bool,
+    /// The signal, one value per sample of the record.
+    pub values: Vec<f64>,
+    /// The controller's heave target \[m\] (positive down, like h), when recorded
+    /// (`h_target`): with h and the signal it lets a feedback law be reconstructed.
+    pub h_target: Option<Vec<f64>>,
 }
 
 impl Record {

@@ -197,6 +197,7 @@ pub fn forced_record(
         lift: Some(lift),
         moment: Some(moment),
         nowind: None,
+        control: None,
     })
 }
 

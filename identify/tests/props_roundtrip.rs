@@ -198,6 +198,7 @@ fn record(
         lift: f.as_ref().map(|f| f.0.clone()),
         moment: f.map(|f| f.1),
         nowind: None,
+        control: None,
     })
 }
 

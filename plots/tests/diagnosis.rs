@@ -207,6 +207,7 @@ fn aero_level() -> LevelResult {
         fold_scheme: None,
         coverage: None,
         structure: None,
+        control: None,
     }
 }
 
@@ -315,6 +316,7 @@ fn structural_level() -> LevelResult {
         fold_scheme: None,
         coverage: None,
         structure: None,
+        control: None,
     }
 }
 

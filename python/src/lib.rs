@@ -210,6 +210,7 @@ fn dataset_from_columns(
             alpha: col(&alpha[k], "alpha")?,
             lift: opt(&lift[k], "lift")?,
             moment: opt(&moment[k], "moment")?,
+            ..CaseTable::default()
         };
         // Rows counted from 0 in the message (no header line in arrays).
         identify::dataset::check_sampling(&table.t, &label, 0).map_err(err)?;

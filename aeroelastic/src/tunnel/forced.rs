@@ -482,6 +482,7 @@ pub fn forced_record(
             lift: Some(ls),
             moment: Some(mss),
             nowind: None,
+            control: None,
         })
     });
     Ok((
@@ -495,6 +496,7 @@ pub fn forced_record(
             lift: Some(lift),
             moment: Some(moment),
             nowind: still,
+            control: None,
         },
         extra,
     ))

@@ -226,6 +226,7 @@ pub fn free_record(
             lift,
             moment,
             nowind: None,
+            control: None,
         },
         FreeRun {
             u,

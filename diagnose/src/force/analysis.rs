@@ -182,6 +182,7 @@ pub(crate) fn assemble(
         fold_scheme: None,
         coverage: None,
         structure: None,
+        control: None,
     }
 }
 

@@ -36,7 +36,7 @@ pub(crate) struct Moments {
     pub e: [f64; 2],
 }
 
-fn moments(run: &RunResidual, cols: &[Column]) -> Moments {
+pub(crate) fn moments(run: &RunResidual, cols: &[Column]) -> Moments {
     let p = cols.len();
     let n = run.len() as f64;
     let mut g = [vec![0.0; p * p], vec![0.0; p * p]];
@@ -276,7 +276,8 @@ pub(crate) trait SystemTerm: Sync {
 
 /// All variants of a candidate over the runs, its columns followed by the nuisance
 /// columns ([`nuisance_columns`]; `flags[j]`: run j's nuisance terms; no nuisance column
-/// that no run has).
+/// that no run has) and, when some run has a raw control signal, the control's gain and
+/// offset columns ([`control_columns`]).
 pub(crate) fn variants(
     term: &dyn SystemTerm,
     runs: &[RunResidual],
@@ -297,6 +298,11 @@ pub(crate) fn variants(
             names.push(format!("nuisance_{group}_dM_pitch_{q}"));
         }
     }
+    // a raw control signal: its gain and offset are fitted with every candidate
+    let control = runs.iter().any(raw_control);
+    if control {
+        names.extend(CONTROL_NAMES.iter().map(|s| s.to_string()));
+    }
     term.grids(runs)
         .into_iter()
         .map(|(grid, g)| Variant {
@@ -309,6 +315,9 @@ pub(crate) fn variants(
                     let mut cols = term.columns(&g, r, rho, chord);
                     let f = flags.get(j).copied().unwrap_or([[false; 2]; 2]);
                     cols.extend(nuisance_columns(r, f, dofs));
+                    if control {
+                        cols.extend(control_columns(r));
+                    }
                     moments(r, &cols)
                 })
                 .collect(),
@@ -327,6 +336,32 @@ pub(crate) fn run_columns(
 ) -> Vec<Column> {
     let g: Vec<f64> = grid.iter().map(|x| x.1).collect();
     term.columns(&g, run, rho, chord)
+}
+
+/// Whether run `r` has a raw (fitted) control signal.
+pub(crate) fn raw_control(r: &RunResidual) -> bool {
+    r.control.as_ref().is_some_and(|c| !c.calibrated)
+}
+
+/// Names of the control columns appended to every candidate when some run has a raw
+/// control signal ([`control_columns`]).
+pub(crate) const CONTROL_NAMES: [&str; 2] = ["control_gain_heave", "control_offset_heave"];
+
+/// The control columns of one run on DOF `dof` (0 heave, 1 pitch): S(u) and a constant,
+/// empty on a run without a raw signal.
+pub(crate) fn control_columns_on(r: &RunResidual, dof: usize) -> Vec<Column> {
+    let mut out = vec![[Vec::new(), Vec::new()], [Vec::new(), Vec::new()]];
+    if let Some(c) = r.control.as_ref().filter(|c| !c.calibrated) {
+        out[0][dof] = c.column.clone();
+        out[1][dof] = vec![1.0; c.column.len()];
+    }
+    out
+}
+
+/// The control columns of one run on the heave DOF ([`CONTROL_NAMES`]): S(u) and a constant on
+/// a run with a raw signal, empty otherwise.
+pub(crate) fn control_columns(r: &RunResidual) -> Vec<Column> {
+    control_columns_on(r, 0)
 }
 
 #[cfg(test)]

@@ -10,6 +10,7 @@ pub mod residual;
 
 mod analysis;
 pub(crate) mod candidates;
+pub mod control;
 pub mod coverage;
 pub(crate) mod simulate;
 
@@ -847,11 +848,13 @@ fn level_and_runs(
     // splits are those of the residual with it removed
     let raw_runs = p.runs.clone();
     let air_mass = still_air_mass(&mut p.runs);
+    let n = p.runs.len();
+    let folds = fold_of(n, opts.folds, opts.seed);
+    // controlled records: the control force as a known input, held out like the level
+    let control = control::apply_held_out(&mut p.runs, &folds);
     let runs = &p.runs;
-    let n = runs.len();
     let rho = free.manifest.section.air_density;
     let chord = model.chord();
-    let folds = fold_of(n, opts.folds, opts.seed);
     let before_runs: Vec<[f64; 2]> = runs.iter().map(|r| r.energy()).collect();
     let noise_runs: Vec<[f64; 2]> = runs.iter().map(|r| r.noise_energy).collect();
     let e_before = mean2(&before_runs);
@@ -1099,6 +1102,7 @@ fn level_and_runs(
         }),
         coverage,
         structure,
+        control,
     };
     Ok((level, p))
 }

@@ -27,6 +27,8 @@ use identify::record::Record;
 use nalgebra::Matrix2;
 use realfft::num_complex::Complex64;
 
+use serde::{Deserialize, Serialize};
+
 use crate::{Error, Result};
 
 /// The aerodynamic model of a still-air run (U = 0): no aerodynamic force at all. Any
@@ -126,6 +128,9 @@ pub struct RunResidual {
     pub noise_energy: [f64; 2],
     /// Savitzky–Golay half window \[samples\] and degree of the derivatives.
     pub sg: (usize, usize),
+    /// The controller's signal of a controlled record ([`super::control`]); a calibrated
+    /// force is already in `r`, a raw one is fitted by the level.
+    pub control: Option<RunControl>,
 }
 
 impl RunResidual {
@@ -418,7 +423,15 @@ pub fn prepare_run(
     let pad = (s.pad / dt).ceil() as usize;
     let force = forces_along(run_model.as_ref(), &flow, &q, &qd, dt, pad);
     let lag0 = vec![0.0; run_model.n_lag()];
-    let whole = residual_series(st, &q, &qd, &qdd, &force, dt, s)
+    let control = run_control(dataset, rec, &q, dt, s, (i0, i1))?;
+    // a calibrated control force acts on the heave DOF like the lift
+    let mut applied = force.clone();
+    if let Some(c) = rec.control.as_ref().filter(|c| c.calibrated) {
+        for (f, u) in applied[0].iter_mut().zip(&c.values) {
+            *f += u;
+        }
+    }
+    let whole = residual_series(st, &q, &qd, &qdd, &applied, dt, s)
         .map_err(|e| Error::identify(format!("free run `{id}`: residual smoothing"), e))?;
     let r = whole.map(|w| w[i0..i1].to_vec());
     let mut ss = [0.0; 2];
@@ -476,7 +489,57 @@ pub fn prepare_run(
         sigma,
         noise_energy,
         sg: (s.half_window, s.order),
+        control,
     })
+}
+
+/// The control signal of a controlled record prepared for the residual: S(u) over the
+/// kept samples `keep` and, with a heave target, the PD law reconstructed from it
+/// ([`pd_law`]).
+///
+/// # Errors
+/// [`Error::Data`] naming the data set and run when the signal or the target has another
+/// length than the record; wrapped identify errors from the differentiator.
+fn run_control(
+    dataset: &str,
+    rec: &Record,
+    q: &[Vec<f64>; 2],
+    dt: f64,
+    s: &ResidualSettings,
+    keep: (usize, usize),
+) -> Result<Option<RunControl>> {
+    let Some(c) = &rec.control else {
+        return Ok(None);
+    };
+    let id = rec.meta.id.as_str();
+    let n = q[0].len();
+    let (i0, i1) = keep;
+    for (what, len) in [
+        ("control signal", Some(c.values.len())),
+        ("h_target", c.h_target.as_ref().map(Vec::len)),
+    ] {
+        if let Some(len) = len.filter(|&l| l != n) {
+            return Err(Error::data(
+                dataset,
+                format!("free run `{id}`: the {what} has {len} samples, the motion {n}"),
+            ));
+        }
+    }
+    let su = smooth_as_acceleration(&c.values, dt, s.half_window, s.order)
+        .map_err(|e| Error::identify(format!("free run `{id}`: control signal smoothing"), e))?;
+    let pd = match &c.h_target {
+        Some(t) => {
+            let e: Vec<f64> = t.iter().zip(&q[0]).map(|(a, b)| a - b).collect();
+            let ed = sg(&e, dt, s, id, "h_target - h")?;
+            pd_law(&c.values[i0..i1], &e[i0..i1], &ed[i0..i1])
+        }
+        None => None,
+    };
+    Ok(Some(RunControl {
+        calibrated: c.calibrated,
+        column: su[i0..i1].to_vec(),
+        pd,
+    }))
 }
 
 /// Squared ℓ² norms ‖k_cj‖² of the residual operator's impulse responses from white
@@ -522,6 +585,70 @@ fn noise_kernels(
         }
     }
     Ok(out)
+}
+
+/// The control signal of one prepared run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunControl {
+    /// `true`: a calibrated force (already in the residual); `false`: a raw signal whose
+    /// gain and offset the level fits.
+    pub calibrated: bool,
+    /// The signal as it enters the residual, S(u) over the kept samples (raw units, or N/m
+    /// when calibrated).
+    pub column: Vec<f64>,
+    /// The feedback law reconstructed from the heave target, when the record has one.
+    pub pd: Option<PdLaw>,
+}
+
+/// A proportional-derivative law reconstructed from a controlled record:
+/// u = k_p·(h_target − h) + k_d·(ḣ_target − ḣ) + c, least squares over the kept samples
+/// (derivatives by the run's Savitzky–Golay differentiator).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
+pub struct PdLaw {
+    /// Proportional gain \[signal units per m\].
+    pub kp: f64,
+    /// Derivative gain \[signal units per m/s\].
+    pub kd: f64,
+    /// Constant \[signal units\].
+    pub offset: f64,
+    /// Share of the signal's variance the law reproduces, 1 − SSR/SST.
+    pub r2: f64,
+}
+
+/// Reconstructs u = k_p·e + k_d·ė + c with e = h_target − h over the kept samples of a run
+/// (ė by the differentiator `d`); `None` when singular or flat.
+pub(crate) fn pd_law(u: &[f64], e: &[f64], e_dot: &[f64]) -> Option<PdLaw> {
+    let n = u.len();
+    if n < 4 || e.len() != n || e_dot.len() != n {
+        return None;
+    }
+    let x = |i: usize| [e[i], e_dot[i], 1.0];
+    let mut g = [0.0; 9];
+    let mut b = [0.0; 3];
+    for (i, &ui) in u.iter().enumerate() {
+        let xi = x(i);
+        for a in 0..3 {
+            b[a] += xi[a] * ui;
+            for c in 0..3 {
+                g[a * 3 + c] += xi[a] * xi[c];
+            }
+        }
+    }
+    let th = crate::numerics::ridge_solve(|i, j| g[i * 3 + j], &b, 1e-10)?;
+    let mean = u.iter().sum::<f64>() / n as f64;
+    let sst: f64 = u.iter().map(|v| (v - mean).powi(2)).sum();
+    let ssr: f64 = (0..n)
+        .map(|i| {
+            let xi = x(i);
+            (u[i] - th[0] * xi[0] - th[1] * xi[1] - th[2]).powi(2)
+        })
+        .sum();
+    (sst > 0.0).then(|| PdLaw {
+        kp: th[0],
+        kd: th[1],
+        offset: th[2],
+        r2: 1.0 - ssr / sst,
+    })
 }
 
 #[cfg(test)]

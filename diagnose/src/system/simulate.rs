@@ -354,7 +354,8 @@ fn point(u: f64, o: &Observables) -> crate::report::BifurcationPoint {
 /// the response gap rms(α_sim − α_meas)/rms(α_meas) \[-\] (rms over runs), and — when the
 /// measured growth rates change sign over U — |flutter speed sim − measured| \[m/s\]
 /// ([`flutter_speed`]). Runs whose simulation is not possible (stiff law) or stops early
-/// (divergence) are left out of the comparison; an observable no run (or no bracketing
+/// (divergence) are left out of the comparison, and so are controlled records
+/// ([`super::control`]: only their measured point is kept); an observable no run (or no bracketing
 /// of the flutter speed) supports is left out of the list.
 pub(crate) fn compare(
     model: &Arc<dyn AeroModel>,
@@ -375,6 +376,12 @@ pub(crate) fn compare(
         let floor = 3.0 * r.sigma[1];
         let om = observables(a, r.dt, floor);
         meas_pts.push(point(r.u, &om));
+        // a controlled record is not a free response: its measured point is kept, but it
+        // is neither simulated as if free nor part of the measured growth rates
+        // (super::control: the feedback law could not be rebuilt)
+        if r.control.is_some() {
+            continue;
+        }
         rates[0].push((r.u, om.rate));
         let run_model = super::residual::run_model(model, r.u, r.k);
         let Some(sub) = stable_substeps(run_model.as_ref(), rho, r.u, r.dt, 64) else {

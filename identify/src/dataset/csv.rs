@@ -19,13 +19,31 @@ pub struct CaseTable {
     pub lift: Option<Vec<f64>>,
     /// `moment`, in `units.moment`, when the column exists.
     pub moment: Option<Vec<f64>>,
+    /// `h_target`, the feedback controller's heave target, in `units.heave`, when the
+    /// column exists (DATA_FORMAT.md, "Controlled records").
+    pub h_target: Option<Vec<f64>>,
+    /// `control_raw`, the controller's output in its own uncalibrated units, when the
+    /// column exists.
+    pub control_raw: Option<Vec<f64>>,
+    /// `control_force`, a calibrated control force on the heave DOF in `units.lift` (lift's
+    /// sign convention), when the column exists.
+    pub control_force: Option<Vec<f64>>,
 }
 
 /// Rows read before the columns are sized from their mean length.
 const SIZING_ROWS: usize = 64;
 
 /// Names of the recognised columns, in slot order.
-const NAMES: [&str; 5] = ["t", "h", "alpha", "lift", "moment"];
+const NAMES: [&str; 8] = [
+    "t",
+    "h",
+    "alpha",
+    "lift",
+    "moment",
+    "h_target",
+    "control_raw",
+    "control_force",
+];
 
 /// At most 40 characters of a field for a message (a hostile field may be a megabyte).
 fn excerpt(f: &str) -> std::borrow::Cow<'_, str> {
@@ -86,7 +104,8 @@ pub fn read_case_csv_stamped(
 /// Parses case-file text (`path` only names the file in errors).
 ///
 /// The first line is the header; columns are found by name (`t`, `h`, `alpha`, `lift`,
-/// `moment`; surrounding whitespace and double quotes in names are ignored) in any order;
+/// `moment`, and the controlled-record columns `h_target`, `control_raw`,
+/// `control_force`; surrounding whitespace and double quotes in names are ignored) in any order;
 /// other columns are ignored. Whitespace around fields is ignored. Blank lines are allowed
 /// only at the end of the file.
 ///
@@ -95,7 +114,8 @@ pub fn read_case_csv_stamped(
 /// missing required column (`t`, `h`, `alpha`, and `lift`, `moment` when
 /// `forces_required`); a repeated column name; a row whose field count differs from the
 /// header's; an empty field; a value that does not parse as a number or is not finite;
-/// a blank line followed by more rows; fewer than 3 rows.
+/// a blank line followed by more rows; fewer than 3 rows; both `control_raw` and
+/// `control_force` in one header (a record has one control signal).
 pub fn parse_case_csv(text: &str, path: &Path, forces_required: bool) -> Result<CaseTable> {
     parse_case_reader(text.as_bytes(), text.len() as u64, path, forces_required)
 }
@@ -162,7 +182,7 @@ fn parse_case_reader(
     let ncols = names.len();
     // slot[j] = index into NAMES of column j, or usize::MAX when ignored.
     let mut slot = vec![usize::MAX; ncols];
-    let mut found = [false; 5];
+    let mut found = [false; NAMES.len()];
     for (j, name) in names.iter().enumerate() {
         if let Some(k) = NAMES.iter().position(|n| n == name) {
             if found[k] {
@@ -176,6 +196,16 @@ fn parse_case_reader(
             found[k] = true;
             slot[j] = k;
         }
+    }
+    if found[6] && found[7] {
+        return Err(csv_err(
+            path,
+            1,
+            "control_force",
+            "both `control_raw` and `control_force` are given: a controlled record has one \
+             control signal, calibrated (`control_force`) or not (`control_raw`)"
+                .into(),
+        ));
     }
     let required = if forces_required { 5 } else { 3 };
     for k in 0..required {
@@ -193,7 +223,7 @@ fn parse_case_reader(
         }
     }
 
-    let mut cols: [Vec<f64>; 5] = Default::default();
+    let mut cols: [Vec<f64>; NAMES.len()] = Default::default();
     let mut blank_line: Option<usize> = None;
     let mut line_no = 1usize;
     let mut sized = false;
@@ -305,13 +335,16 @@ fn parse_case_reader(
             col.shrink_to_fit();
         }
     }
-    let [t, h, alpha, lift, moment] = cols;
+    let [t, h, alpha, lift, moment, h_target, control_raw, control_force] = cols;
     Ok(CaseTable {
         t,
         h,
         alpha,
         lift: found[3].then_some(lift),
         moment: found[4].then_some(moment),
+        h_target: found[5].then_some(h_target),
+        control_raw: found[6].then_some(control_raw),
+        control_force: found[7].then_some(control_force),
     })
 }
 
@@ -378,6 +411,21 @@ mod tests {
 
     fn msg(e: &Error) -> String {
         e.to_string()
+    }
+
+    #[test]
+    fn control_columns_are_read_and_only_one_control_signal_is_accepted() {
+        let text = "t,h,alpha,h_target,control_raw\n0,1,2,3,4\n1,1,2,3,5\n2,1,2,3,6\n";
+        let c = parse_case_csv(text, p(), false).unwrap();
+        assert_eq!(c.control_raw, Some(vec![4.0, 5.0, 6.0]));
+        assert_eq!(c.h_target, Some(vec![3.0; 3]));
+        assert_eq!(c.control_force, None);
+        let both = "t,h,alpha,control_force,control_raw\n0,1,2,3,4\n1,1,2,3,5\n2,1,2,3,6\n";
+        let e = parse_case_csv(both, p(), false).unwrap_err();
+        assert!(
+            matches!(&e, Error::Csv { line: 1, field, .. } if field == "control_force"),
+            "{e}"
+        );
     }
 
     #[test]

@@ -456,15 +456,19 @@ fn resolve_case_path(dir: &Path, case: &CaseSpec, key: &str, rel: &Path) -> Resu
 }
 
 /// Largest magnitude of a case-CSV value after conversion to SI per unit span, per column
-/// (name, bound, unit): 1 km of heave, 1000 rad of pitch, 1e12 N/m or N·m/m of force.
+/// (name, bound, unit): 1 km of heave (and heave target), 1000 rad of pitch, 1e12 N/m or
+/// N·m/m of force (a calibrated control force included), 1e12 raw controller units.
 /// Values beyond are refused as physically implausible (docs/DATA_FORMAT.md); they are
 /// far outside any wind-tunnel record and keep every cubic library term and its sum of
 /// squares finite.
-pub const MAX_ABS_SI: [(&str, f64, &str); 4] = [
+pub const MAX_ABS_SI: [(&str, f64, &str); 7] = [
     ("h", 1e3, "m"),
     ("alpha", 1e3, "rad"),
     ("lift", 1e12, "N/m"),
     ("moment", 1e12, "N*m/m"),
+    ("h_target", 1e3, "m"),
+    ("control_raw", 1e12, "(raw units)"),
+    ("control_force", 1e12, "N/m"),
 ];
 
 fn read_record(
@@ -559,7 +563,45 @@ pub fn record_from_table(
             .map(|v| conv(v, "moment", &|x| sm * u.moment.to_si(x, span)))
             .transpose()?,
         nowind: None,
+        control: control_signal(
+            table.h_target,
+            table.control_raw,
+            table.control_force,
+            &conv,
+            &|x| sh * u.heave.to_si(x),
+            &|x| sl * u.lift.to_si(x, span),
+        )?,
     })
+}
+
+/// A column converter of [`record_from_table`]: (values, column name, unit map) → SI values.
+type Convert<'a> = &'a dyn Fn(Vec<f64>, &str, &dyn Fn(f64) -> f64) -> Result<Vec<f64>>;
+
+/// The control signal of a controlled record (DATA_FORMAT.md, "Controlled records") from
+/// its columns: `control_force` converted like lift (`force`), `control_raw` kept in its
+/// units, `h_target` converted like heave (`heave`) and kept only with a control column;
+/// `None` without a control column.
+fn control_signal(
+    h_target: Option<Vec<f64>>,
+    raw: Option<Vec<f64>>,
+    force: Option<Vec<f64>>,
+    conv: Convert<'_>,
+    heave: &dyn Fn(f64) -> f64,
+    lift: &dyn Fn(f64) -> f64,
+) -> Result<Option<crate::record::ControlSignal>> {
+    let (calibrated, values) = match (raw, force) {
+        (Some(v), None) => (false, conv(v, "control_raw", &|x| x)?),
+        (None, Some(v)) => (true, conv(v, "control_force", lift)?),
+        // both: refused by the reader; a table built in code keeps the calibrated one
+        (Some(_), Some(v)) => (true, conv(v, "control_force", lift)?),
+        (None, None) => return Ok(None),
+    };
+    let h_target = h_target.map(|v| conv(v, "h_target", heave)).transpose()?;
+    Ok(Some(crate::record::ControlSignal {
+        calibrated,
+        values,
+        h_target,
+    }))
 }
 
 #[cfg(test)]

@@ -356,6 +356,7 @@ fn random_record(rng: &mut ChaCha8Rng, id: &str, kind: CaseKind, n: usize, force
         lift,
         moment,
         nowind: None,
+        control: None,
     }
 }
 
@@ -386,6 +387,15 @@ fn assert_records_close(a: &Record, b: &Record) {
     if let (Some(x), Some(y)) = (&a.nowind, &b.nowind) {
         assert_records_close(x, y);
     }
+    assert_eq!(a.control.is_some(), b.control.is_some());
+    if let (Some(x), Some(y)) = (&a.control, &b.control) {
+        assert_eq!(x.calibrated, y.calibrated);
+        rel_close(&x.values, &y.values, 1e-12);
+        assert_eq!(x.h_target.is_some(), y.h_target.is_some());
+        if let (Some(p), Some(q)) = (&x.h_target, &y.h_target) {
+            rel_close(p, q, 1e-12);
+        }
+    }
 }
 
 #[test]
@@ -400,6 +410,24 @@ fn dataset_round_trip_mixed_units_and_si() {
     forced.nowind = Some(Box::new(still));
     let mut free = random_record(&mut rng, "free.2", CaseKind::Free, 300, false);
     free.meta = m.case_meta(&m.cases[1]);
+    // a controlled record: a calibrated control force (converted like lift) and its target
+    // (converted like heave) survive the round trip in either units
+    free.control = Some(crate::record::ControlSignal {
+        calibrated: true,
+        values: free.h.iter().map(|h| 2.0 + 300.0 * h).collect(),
+        h_target: Some(free.h.iter().map(|h| 0.9 * h).collect()),
+    });
+    let mut raw = random_record(&mut rng, "free.2", CaseKind::Free, 300, false);
+    raw.control = Some(crate::record::ControlSignal {
+        calibrated: false,
+        values: raw.alpha.clone(),
+        h_target: None,
+    });
+    let raw_csv = super::write::case_csv_text(&m, &raw);
+    let raw_back = parse_case_csv(&raw_csv, Path::new("raw.csv"), false).unwrap();
+    // a raw signal is written in its own units, untouched by the manifest's
+    rel_close(&raw_back.control_raw.unwrap(), &raw.alpha, 1e-12);
+    assert!(raw_back.control_force.is_none() && raw_back.h_target.is_none());
     let records = vec![forced, free];
 
     let dir = tempfile::tempdir().unwrap();

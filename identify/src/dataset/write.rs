@@ -48,15 +48,26 @@ fn check_record(id: &str, r: &Record, what: &str, need_forces: bool) -> Result<(
             format!("{what}: {n} samples; at least 3 are needed"),
         ));
     }
-    let cols: [(&str, Option<&Vec<f64>>); 4] = [
+    let ctl = r.control.as_ref();
+    let cols: [(&str, Option<&Vec<f64>>); 6] = [
         ("h", Some(&r.h)),
         ("alpha", Some(&r.alpha)),
         ("lift", r.lift.as_ref()),
         ("moment", r.moment.as_ref()),
+        (
+            if ctl.is_some_and(|c| c.calibrated) {
+                "control_force"
+            } else {
+                "control_raw"
+            },
+            ctl.map(|c| &c.values),
+        ),
+        ("h_target", ctl.and_then(|c| c.h_target.as_ref())),
     ];
-    for (name, col) in cols {
+    // the control columns (the last two) are never required
+    for (k, (name, col)) in cols.into_iter().enumerate() {
         match col {
-            None if need_forces => {
+            None if need_forces && k < 4 => {
                 return Err(bad(
                     id,
                     name,
@@ -85,6 +96,12 @@ fn check_record(id: &str, r: &Record, what: &str, need_forces: bool) -> Result<(
     Ok(())
 }
 
+/// The CSV text of a record in the manifest's units (tests read it back).
+#[cfg(test)]
+pub(crate) fn case_csv_text(manifest: &Manifest, r: &Record) -> String {
+    case_csv(manifest, r)
+}
+
 /// The CSV text of a record in the manifest's units.
 fn case_csv(manifest: &Manifest, r: &Record) -> String {
     let u = &manifest.units;
@@ -98,6 +115,17 @@ fn case_csv(manifest: &Manifest, r: &Record) -> String {
     }
     if r.moment.is_some() {
         s.push_str(",moment");
+    }
+    let ctl = r.control.as_ref();
+    if let Some(c) = ctl {
+        s.push_str(if c.calibrated {
+            ",control_force"
+        } else {
+            ",control_raw"
+        });
+        if c.h_target.is_some() {
+            s.push_str(",h_target");
+        }
     }
     s.push('\n');
     for i in 0..r.len() {
@@ -113,6 +141,22 @@ fn case_csv(manifest: &Manifest, r: &Record) -> String {
         if let Some(m) = &r.moment {
             s.push(',');
             num(&mut s, c.moment.sign() * u.moment.from_si(m[i], span));
+        }
+        if let Some(k) = ctl {
+            s.push(',');
+            let v = k.values[i];
+            num(
+                &mut s,
+                if k.calibrated {
+                    c.lift.sign() * u.lift.from_si(v, span)
+                } else {
+                    v
+                },
+            );
+            if let Some(t) = &k.h_target {
+                s.push(',');
+                num(&mut s, c.heave.sign() * u.heave.from_si(t[i]));
+            }
         }
         s.push('\n');
     }

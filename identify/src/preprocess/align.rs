@@ -466,6 +466,7 @@ mod tests {
                         .collect(),
                 ),
                 nowind: None,
+                control: None,
             }
         };
         let wind = mk(n_w, 0.0, true, &mut rng);
@@ -518,6 +519,7 @@ mod tests {
             lift: Some(vec![0.0; 100]),
             moment: None,
             nowind: None,
+            control: None,
         };
         let e = subtract_nowind(&r, &r).unwrap_err();
         assert!(

@@ -52,6 +52,7 @@ fn record(id: &str, dur: f64, alpha: &Motion, h: &Motion, noise: (f64, f64), see
         lift: Some(ts.iter().map(|&t| 2.0 * alpha.at(t)).collect()),
         moment: Some(ts.iter().map(|&t| 0.1 * alpha.at(t)).collect()),
         nowind: None,
+        control: None,
     }
 }
 
