@@ -18,6 +18,8 @@ use std::collections::BTreeMap;
 
 use rayon::prelude::*;
 
+use num_complex::Complex64;
+
 use crate::eq19::{Eq19Values, LiftEq19, MomentEq19, EQ19_TERMS};
 use crate::identifiability::{self, BasisMode, CaseIdentifiability, RankOptions};
 use crate::library::Library;
@@ -35,10 +37,31 @@ mod settings;
 pub use result::*;
 pub use settings::*;
 
+/// What the later stages read of a case's identifiability (the whole analysis, with its
+/// singular values and dependencies as term lists, is several times larger).
+struct IdentSummary {
+    /// Numerical rank.
+    rank: usize,
+    /// The canonical basis as a column mask.
+    in_basis: Mask,
+    /// [`CaseIdentifiability::dependency_strings`].
+    dependencies: Vec<String>,
+}
+
+impl IdentSummary {
+    fn of(ident: &CaseIdentifiability) -> Self {
+        IdentSummary {
+            rank: ident.rank,
+            in_basis: bools_to_mask(&ident.in_basis),
+            dependencies: ident.dependency_strings(),
+        }
+    }
+}
+
 /// Per-case preparation result.
 struct CaseWork {
     factor: CaseFactor,
-    ident: CaseIdentifiability,
+    ident: IdentSummary,
     /// Key projections of (moment, lift); `None` without candidate tones.
     keys: [Option<KeyProjection>; 2],
     key_freqs: [Vec<f64>; 2],
@@ -217,17 +240,26 @@ fn prepare_case(
             message: e.to_string(),
         })?;
         let cols = fit.column_amplitudes_with(p, eval);
-        for (t, y) in [y_m, y_l].into_iter().enumerate() {
+        let selected = [y_m, y_l].map(|y| {
             let (_, all) = fit.amplitudes(y);
-            let key = metrics::select_key_frequencies(&tones, &all, s.k_key);
+            metrics::select_key_frequencies(&tones, &all, s.k_key)
+        });
+        // the column amplitudes at the union of both targets' key tones, held once
+        let mut union: Vec<usize> = selected.iter().flat_map(|k| k.index.clone()).collect();
+        union.sort_unstable();
+        union.dedup();
+        let shared: std::sync::Arc<[Complex64]> = cols
+            .iter()
+            .flat_map(|c| union.iter().map(|&i| c[i]))
+            .collect();
+        for (t, key) in selected.into_iter().enumerate() {
             key_freqs[t] = key.tones.iter().map(|t| t.freq).collect();
-            keys[t] = Some(KeyProjection {
-                columns: cols
-                    .iter()
-                    .map(|c| key.index.iter().map(|&i| c[i]).collect())
-                    .collect(),
-                measured: key.amplitudes,
-            });
+            let at = key
+                .index
+                .iter()
+                .map(|i| union.binary_search(i).unwrap_or(0))
+                .collect();
+            keys[t] = Some(KeyProjection::new(key.amplitudes, shared.clone(), p, at));
         }
     }
     let basis: Vec<usize> = (0..lib.len()).filter(|&j| ident.in_basis[j]).collect();
@@ -242,7 +274,7 @@ fn prepare_case(
     })?;
     Ok(CaseWork {
         factor,
-        ident,
+        ident: IdentSummary::of(&ident),
         keys,
         key_freqs,
         data,
@@ -730,8 +762,8 @@ impl<'c> Prepared<'c> {
         let bases: Vec<Mask> = group_list
             .iter()
             .map(|(_, m)| {
-                let idents: Vec<&CaseIdentifiability> = m.iter().map(|&i| &work[i].ident).collect();
-                bools_to_mask(&identifiability::group_basis(&idents))
+                // identifiability::group_basis on the masks: the columns in every case's basis
+                m.iter().fold(Mask::MAX, |b, &i| b & work[i].ident.in_basis)
             })
             .collect();
         let mut outcomes: Vec<Option<GroupOutcome>> = (0..tasks.len()).map(|_| None).collect();
@@ -816,7 +848,7 @@ impl<'c> Prepared<'c> {
                     k_alpha: c.k_alpha,
                     k_h: c.k_h,
                     rank: w.ident.rank,
-                    dependencies: w.ident.dependency_strings(),
+                    dependencies: w.ident.dependencies.clone(),
                     mean_pitch: w.centring.as_ref().map(|c| c.mean_pitch),
                     moment: force_result::<MomentEq19>(lib, c, w, 0, basis, &case_coefs[i][0]),
                     lift: force_result::<LiftEq19>(lib, c, w, 1, basis, &case_coefs[i][1]),
@@ -833,7 +865,7 @@ impl<'c> Prepared<'c> {
             library: LibraryInfo {
                 terms: names.clone(),
                 rank: work[min_case].ident.rank,
-                dependencies: work[min_case].ident.dependency_strings(),
+                dependencies: work[min_case].ident.dependencies.clone(),
                 rank_case: Some(cases[min_case].meta.id.clone()),
                 priority: self.order.iter().map(|&j| names[j].clone()).collect(),
             },

@@ -30,6 +30,66 @@ pub const FILL_BLOCK: usize = crate::library::EVAL_BLOCK;
 /// (128 × 32 × 32 × 8 B = 1 MB for the paper library with two targets).
 pub const STACK_BLOCKS: usize = 128;
 
+/// A p × p upper-triangular matrix held packed by columns (p(p + 1)/2 numbers, half of a
+/// dense matrix: the per-case factor is most of what an identification keeps per case).
+/// Indexing `(i, j)` gives entry i, j (0 below the diagonal).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Upper {
+    p: usize,
+    data: Vec<f64>,
+}
+
+static ZERO: f64 = 0.0;
+
+impl Upper {
+    /// The matrix with entry (i, j) = `f(i, j)` for i ≤ j (called column by column, row
+    /// by row inside a column; `f` may read entries already made only through its own
+    /// captures).
+    pub fn from_fn(p: usize, mut f: impl FnMut(usize, usize) -> f64) -> Self {
+        let mut data = Vec::with_capacity(p * (p + 1) / 2);
+        for j in 0..p {
+            for i in 0..=j {
+                data.push(f(i, j));
+            }
+        }
+        Upper { p, data }
+    }
+
+    /// Order p.
+    pub fn order(&self) -> usize {
+        self.p
+    }
+
+    /// Entry (min(i, j), max(i, j)): the matrix read as the upper triangle of a symmetric
+    /// one.
+    ///
+    /// # Panics
+    /// When an index is ≥ p (a programming error).
+    #[track_caller]
+    pub fn sym(&self, i: usize, j: usize) -> f64 {
+        let (a, b) = if i <= j { (i, j) } else { (j, i) };
+        self[(a, b)]
+    }
+
+    /// The dense p × p matrix (zeros below the diagonal).
+    pub fn to_mat(&self) -> Mat<f64> {
+        Mat::from_fn(self.p, self.p, |i, j| self[(i, j)])
+    }
+}
+
+impl std::ops::Index<(usize, usize)> for Upper {
+    type Output = f64;
+    #[track_caller]
+    fn index(&self, (i, j): (usize, usize)) -> &f64 {
+        assert!(i < self.p && j < self.p, "({i}, {j}) out of a {0} × {0} matrix", self.p);
+        if i > j {
+            &ZERO
+        } else {
+            &self.data[j * (j + 1) / 2 + i]
+        }
+    }
+}
+
 /// Reduced form of one target (one force coefficient) of a case.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TargetFactor {
@@ -66,12 +126,13 @@ pub struct CaseFactor {
     pub scales: Vec<f64>,
     /// Whether library column j is identically zero.
     pub zero_column: Vec<bool>,
-    /// p × p upper-triangular factor R of Θ_s in priority order.
-    pub r: Mat<f64>,
+    /// p × p upper-triangular factor R of Θ_s in priority order (packed).
+    pub r: Upper,
     /// One reduced target per target given to [`CaseFactor::new`].
     pub targets: Vec<TargetFactor>,
-    /// Gram matrix RᵀR = Θ_sᵀΘ_s (p × p, priority order, row-major).
-    pub gram: Vec<f64>,
+    /// Gram matrix RᵀR = Θ_sᵀΘ_s (p × p, priority order; symmetric, its upper triangle
+    /// packed: [`Upper::sym`]).
+    pub gram: Upper,
     /// Θ_sᵀ y = Rᵀ Qᵀy per target (priority order).
     pub gram_rhs: Vec<Vec<f64>>,
 }
@@ -293,7 +354,7 @@ impl CaseFactor {
         }
         drop(stack);
         crate::numerics::qr::householder_qr(&mut a, m, ncols, p);
-        let r = Mat::<f64>::from_fn(p, p, |i, j| if i <= j { a[j * m + i] } else { 0.0 });
+        let r = Upper::from_fn(p, |i, j| a[j * m + i]);
         let targets: Vec<TargetFactor> = (0..nt)
             .map(|t| {
                 let col = &a[(p + t) * m..(p + t + 1) * m];
@@ -306,14 +367,7 @@ impl CaseFactor {
                 }
             })
             .collect();
-        let mut gram = vec![0.0; p * p];
-        for i in 0..p {
-            for j in i..p {
-                let g: f64 = (0..=i).map(|k| r[(k, i)] * r[(k, j)]).sum();
-                gram[i * p + j] = g;
-                gram[j * p + i] = g;
-            }
-        }
+        let gram = Upper::from_fn(p, |i, j| (0..=i).map(|k| r[(k, i)] * r[(k, j)]).sum());
         let gram_rhs = targets
             .iter()
             .map(|t: &TargetFactor| {
@@ -392,13 +446,12 @@ impl CaseFactor {
     #[track_caller]
     pub fn fit_gram(&self, t: usize, support: &[usize], ridge: f64) -> Option<Vec<f64>> {
         let q = support.len();
-        let p = self.n_columns();
         let b = &self.gram_rhs[t];
         let k: Vec<usize> = support.iter().map(|&j| self.pos[j]).collect();
         let mut l = vec![0.0; q * q];
         for i in 0..q {
             for j in 0..=i {
-                l[i * q + j] = self.gram[k[i] * p + k[j]] + if i == j { ridge } else { 0.0 };
+                l[i * q + j] = self.gram.sym(k[i], k[j]) + if i == j { ridge } else { 0.0 };
             }
         }
         cholesky_in_place(&mut l, q, PivotFloor::RelativeToDiagonal(1e-13)).ok()?;
@@ -528,7 +581,7 @@ mod tests {
             );
             for b in 0..p {
                 let direct: f64 = (0..n).map(|i| col(a, i) * col(b, i)).sum();
-                close(f.gram[a * p + b], direct, 1.0, "gram");
+                close(f.gram.sym(a, b), direct, 1.0, "gram");
             }
             let direct: f64 = (0..n).map(|i| col(a, i) * y[i]).sum();
             close(f.gram_rhs[0][a], direct, ynorm, "gram_rhs");
