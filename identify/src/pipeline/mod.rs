@@ -632,6 +632,17 @@ impl<'c> Prepared<'c> {
         Ok(())
     }
 
+    /// Forgets every prepared case and frees its work (factors, projections: ≈ 12 kB a
+    /// case): the preparation is then as [`Prepared::start`] left it. For a caller done
+    /// with the group stage that still holds the preparation (e.g. while it writes the
+    /// result).
+    pub fn clear(&mut self) {
+        self.cases = &[];
+        self.work = Vec::new();
+        self.summaries = Vec::new();
+        self.ids = std::collections::HashSet::new();
+    }
+
     /// Number of cases prepared.
     pub fn len(&self) -> usize {
         self.summaries.len()
@@ -735,6 +746,42 @@ impl<'c> Prepared<'c> {
         }
         let cases: Vec<&CaseSummary> = subset.iter().map(|&i| &self.summaries[i]).collect();
         let work: Vec<&CaseWork> = subset.iter().map(|&i| &self.work[i]).collect();
+        self.identify_cases(&cases, work, kept, dataset_name, observer)
+    }
+
+    /// [`Prepared::identify_all`], freeing each case's work as soon as its result is made
+    /// (the per-case work and the result are never both held whole); the preparation is
+    /// then empty ([`Prepared::clear`]). For a caller that identifies once and writes the
+    /// result (`aeroform identify`).
+    ///
+    /// # Errors
+    /// As [`Prepared::identify`] (nothing is cleared then).
+    pub fn identify_all_and_clear(
+        &mut self,
+        dataset_name: &str,
+        observer: &dyn Fn(Progress),
+    ) -> Result<Identification> {
+        if self.is_empty() {
+            return self.identify(&[], dataset_name, observer);
+        }
+        let work = std::mem::take(&mut self.work);
+        let summaries = std::mem::take(&mut self.summaries);
+        self.clear();
+        let cases: Vec<&CaseSummary> = summaries.iter().collect();
+        self.identify_cases(&cases, work, [self.kept; 2], dataset_name, observer)
+    }
+
+    /// The group stage and the result of `cases` with their work `work` (owned: each case's
+    /// work is dropped once its result is made; or borrowed).
+    fn identify_cases<W: std::borrow::Borrow<CaseWork>>(
+        &self,
+        cases: &[&CaseSummary],
+        owned: Vec<W>,
+        kept: [Mask; 2],
+        dataset_name: &str,
+        observer: &dyn Fn(Progress),
+    ) -> Result<Identification> {
+        let work: Vec<&CaseWork> = owned.iter().map(|w| w.borrow()).collect();
         let (settings, lib, opts) = (&self.settings, &self.lib, &self.opts);
         let chosen = Chosen {
             reg: self.regressor,
@@ -804,14 +851,14 @@ impl<'c> Prepared<'c> {
         for (g, (name, members)) in group_list.iter().enumerate() {
             let mut forces = Vec::with_capacity(2);
             for target in 0..2 {
-                let o = outcomes[2 * g + target]
+                let mut o = outcomes[2 * g + target]
                     .take()
                     .ok_or_else(|| Error::Numerical {
                         context: format!("group `{name}`"),
                         message: "missing path result".to_string(),
                     })?;
                 for (k, &i) in members.iter().enumerate() {
-                    case_coefs[i][target] = o.coefficients[k].clone();
+                    case_coefs[i][target] = std::mem::take(&mut o.coefficients[k]);
                     case_group[i] = g;
                 }
                 forces.push(group_force(&o.path, &names));
@@ -835,11 +882,23 @@ impl<'c> Prepared<'c> {
                 lift,
             });
         }
+        let min_case = (0..total)
+            .min_by_key(|&i| (work[i].ident.rank, i))
+            .unwrap_or(0);
+        let library = LibraryInfo {
+            terms: names.clone(),
+            rank: work[min_case].ident.rank,
+            dependencies: work[min_case].ident.dependencies.clone(),
+            rank_case: Some(cases[min_case].meta.id.clone()),
+            priority: self.order.iter().map(|&j| names[j].clone()).collect(),
+        };
+        drop(work);
         let case_results: Vec<CaseResult> = cases
             .iter()
+            .zip(owned)
             .enumerate()
-            .map(|(i, c)| {
-                let w = work[i];
+            .map(|(i, (c, w))| {
+                let w: &CaseWork = w.borrow();
                 let basis = bases[case_group[i]];
                 CaseResult {
                     id: c.meta.id.clone(),
@@ -855,20 +914,11 @@ impl<'c> Prepared<'c> {
                 }
             })
             .collect();
-        let min_case = (0..total)
-            .min_by_key(|&i| (work[i].ident.rank, i))
-            .unwrap_or(0);
         Ok(Identification {
             format: FORMAT.to_string(),
             dataset: dataset_name.to_string(),
             settings: settings.clone(),
-            library: LibraryInfo {
-                terms: names.clone(),
-                rank: work[min_case].ident.rank,
-                dependencies: work[min_case].ident.dependencies.clone(),
-                rank_case: Some(cases[min_case].meta.id.clone()),
-                priority: self.order.iter().map(|&j| names[j].clone()).collect(),
-            },
+            library,
             cases: case_results,
             groups: group_results,
             ensemble: None,

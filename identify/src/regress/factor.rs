@@ -130,9 +130,6 @@ pub struct CaseFactor {
     pub r: Upper,
     /// One reduced target per target given to [`CaseFactor::new`].
     pub targets: Vec<TargetFactor>,
-    /// Gram matrix RᵀR = Θ_sᵀΘ_s (p × p, priority order; symmetric, its upper triangle
-    /// packed: [`Upper::sym`]).
-    pub gram: Upper,
     /// Θ_sᵀ y = Rᵀ Qᵀy per target (priority order).
     pub gram_rhs: Vec<Vec<f64>>,
 }
@@ -367,7 +364,6 @@ impl CaseFactor {
                 }
             })
             .collect();
-        let gram = Upper::from_fn(p, |i, j| (0..=i).map(|k| r[(k, i)] * r[(k, j)]).sum());
         let gram_rhs = targets
             .iter()
             .map(|t: &TargetFactor| {
@@ -384,7 +380,6 @@ impl CaseFactor {
             zero_column,
             r,
             targets,
-            gram,
             gram_rhs,
         })
     }
@@ -392,6 +387,19 @@ impl CaseFactor {
     /// Number of library columns p.
     pub fn n_columns(&self) -> usize {
         self.order.len()
+    }
+
+    /// Entry (a, b) of the Gram matrix RᵀR = Θ_sᵀΘ_s (priority positions; symmetric):
+    /// Σ_{k ≤ min(a, b)} R_ka R_kb, computed from R when asked (not held: it would double
+    /// the factor's memory), always in this order, so always the same number.
+    ///
+    /// # Panics
+    /// When a position is ≥ p (a programming error).
+    #[track_caller]
+    pub fn gram(&self, a: usize, b: usize) -> f64 {
+        let (i, j) = if a <= b { (a, b) } else { (b, a) };
+        let r = &self.r;
+        (0..=i).map(|k| r[(k, i)] * r[(k, j)]).sum()
     }
 
     /// Least-squares (or ridge, `ridge > 0`, on the column-normalised matrix) fit of target
@@ -451,7 +459,7 @@ impl CaseFactor {
         let mut l = vec![0.0; q * q];
         for i in 0..q {
             for j in 0..=i {
-                l[i * q + j] = self.gram.sym(k[i], k[j]) + if i == j { ridge } else { 0.0 };
+                l[i * q + j] = self.gram(k[i], k[j]) + if i == j { ridge } else { 0.0 };
             }
         }
         cholesky_in_place(&mut l, q, PivotFloor::RelativeToDiagonal(1e-13)).ok()?;
@@ -563,7 +571,7 @@ mod tests {
             }
         })
         .unwrap();
-        assert_eq!(f.gram, g.gram);
+        assert_eq!(f.r, g.r);
         assert_eq!(f.targets, g.targets);
         // relative to `scale` (1 for the Gram matrix of unit columns, ‖y‖ for Θ_sᵀy)
         let close = |a: f64, b: f64, scale: f64, what: &str| {
@@ -581,7 +589,7 @@ mod tests {
             );
             for b in 0..p {
                 let direct: f64 = (0..n).map(|i| col(a, i) * col(b, i)).sum();
-                close(f.gram.sym(a, b), direct, 1.0, "gram");
+                close(f.gram(a, b), direct, 1.0, "gram");
             }
             let direct: f64 = (0..n).map(|i| col(a, i) * y[i]).sum();
             close(f.gram_rhs[0][a], direct, ynorm, "gram_rhs");
