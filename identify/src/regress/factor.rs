@@ -81,7 +81,11 @@ impl std::ops::Index<(usize, usize)> for Upper {
     type Output = f64;
     #[track_caller]
     fn index(&self, (i, j): (usize, usize)) -> &f64 {
-        assert!(i < self.p && j < self.p, "({i}, {j}) out of a {0} × {0} matrix", self.p);
+        assert!(
+            i < self.p && j < self.p,
+            "({i}, {j}) out of a {0} × {0} matrix",
+            self.p
+        );
         if i > j {
             &ZERO
         } else {
@@ -606,6 +610,26 @@ mod tests {
             .sum();
         assert!((rss - direct).abs() <= 1e-9 * direct, "{rss} vs {direct}");
         close(f.targets[0].rss_perp, rss, rss, "rss_perp");
+    }
+
+    #[test]
+    fn packed_triangle_reads_as_the_dense_one() {
+        let u = Upper::from_fn(3, |i, j| (10 * i + j) as f64 + 1.0);
+        let d = u.to_mat();
+        for i in 0..3 {
+            for j in 0..3 {
+                let want = if i <= j {
+                    (10 * i + j) as f64 + 1.0
+                } else {
+                    0.0
+                };
+                assert_eq!(u[(i, j)], want);
+                assert_eq!(d[(i, j)], want);
+                assert_eq!(u.sym(i, j), u.sym(j, i));
+            }
+        }
+        assert_eq!(u.order(), 3);
+        assert!(std::panic::catch_unwind(|| u[(3, 0)]).is_err());
     }
 
     #[test]

@@ -172,7 +172,11 @@ impl KeyProjection {
     ) -> Self {
         let u = columns.len().checked_div(n_columns).unwrap_or(0);
         assert_eq!(columns.len(), u * n_columns, "p × u column amplitudes");
-        assert_eq!(tones.len(), measured.len(), "one tone per measured amplitude");
+        assert_eq!(
+            tones.len(),
+            measured.len(),
+            "one tone per measured amplitude"
+        );
         assert!(tones.iter().all(|&t| t < u), "tone position out of range");
         KeyProjection {
             measured,
@@ -209,7 +213,11 @@ impl KeyProjection {
     /// When `raw.len()` differs from the number of library columns (a programming error).
     #[track_caller]
     pub fn model(&self, raw: &[f64]) -> Vec<Complex64> {
-        assert_eq!(raw.len(), self.n_columns, "one coefficient per library column");
+        assert_eq!(
+            raw.len(),
+            self.n_columns,
+            "one coefficient per library column"
+        );
         let mut out = vec![Complex64::new(0.0, 0.0); self.measured.len()];
         for (j, x) in raw.iter().enumerate() {
             if *x != 0.0 {
@@ -459,6 +467,33 @@ fn noise_loss(case: &CaseProblem<'_>, key: Option<&KeyProjection>, raw: &[f64]) 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Two targets sharing the column amplitudes of the union of their tones: each
+    /// target's model is Σ_j ξ_j G_ji over its own tones, and the shared block is held once.
+    #[test]
+    fn key_projections_share_the_union_of_tones() {
+        let c = |re: f64, im: f64| Complex64::new(re, im);
+        // p = 2 columns × u = 3 tones
+        let cols: std::sync::Arc<[Complex64]> = vec![
+            c(1.0, 0.0),
+            c(0.0, 1.0),
+            c(2.0, 2.0),
+            c(-1.0, 0.5),
+            c(3.0, 0.0),
+            c(0.0, -4.0),
+        ]
+        .into();
+        let m = KeyProjection::new(vec![c(1.0, 0.0), c(0.0, 1.0)], cols.clone(), 2, vec![2, 0]);
+        let l = KeyProjection::new(vec![c(1.0, 1.0)], cols.clone(), 2, vec![1]);
+        assert_eq!(m.column(1), vec![c(0.0, -4.0), c(-1.0, 0.5)]);
+        assert_eq!(
+            m.model(&[2.0, 0.5]),
+            vec![c(4.0, 4.0) + c(0.0, -2.0), c(2.0, 0.0) + c(-0.5, 0.25)]
+        );
+        assert_eq!(l.model(&[0.0, -1.0]), vec![c(-3.0, 0.0)]);
+        assert_eq!(std::sync::Arc::strong_count(&cols), 3);
+        assert_eq!(m.n_columns(), 2);
+    }
 
     #[test]
     fn grid_is_log_spaced_and_inclusive() {

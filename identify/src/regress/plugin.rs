@@ -12,10 +12,11 @@
 //! settings' keys beside `kind`), its path parameter (name, unit, the grid it walks), the
 //! per-case data it needs prepared once (optional), the fits along its path for one group
 //! and target (handed out one point at a time, [`Regressor::walk_path`], and recomputed at
-//! the selected point, [`Regressor::coefficients_at`]). Every regressor's point is picked by
-//! Alg. 3 (the sparsest support under the loss limit, [`super::path::PathBuilder`]). What it shares with the others
-//! (in [`FitSettings`]): the threshold measure, the group-removal rule, the ridge λ and the
-//! iteration cap of the settings, the δ grid's count and range, the loss limit.
+//! the selected point, [`Regressor::coefficients_at`]). Every regressor's point is picked
+//! by Alg. 3 (the sparsest support under the loss limit, [`super::path::PathBuilder`]).
+//! What it shares with the others (in [`FitSettings`]): the threshold measure, the
+//! group-removal rule, the ridge λ and the iteration cap of the settings, the δ grid's
+//! count and range, the loss limit.
 
 use std::any::Any;
 use std::fmt;
@@ -350,7 +351,12 @@ pub trait Regressor: Sync {
     /// grid order, so that the driver never holds the whole path (per point and case a
     /// coefficient vector over the library: 50 × cases × p × 8 B). The default walks
     /// `fit_path` (which holds them all); a plug-in with large groups overrides it.
-    fn walk_path(&self, group: &GroupInput<'_>, grid: &[f64], sink: &mut dyn FnMut(Mask, &[Vec<f64>])) {
+    fn walk_path(
+        &self,
+        group: &GroupInput<'_>,
+        grid: &[f64],
+        sink: &mut dyn FnMut(Mask, &[Vec<f64>]),
+    ) {
         for (mask, coefs) in self.fit_path(group, grid) {
             sink(mask, &coefs);
         }
