@@ -229,7 +229,7 @@ mod tests {
     /// bounded to one entry gives the same path as the default memo.
     #[test]
     fn walked_and_recomputed_paths_equal_the_held_path() {
-        use crate::regress::plugin::{GroupInput, Regressor};
+        use crate::regress::plugin::GroupInput;
         use crate::regress::{CaseProblem, FitCache, GroupRule, Measure, Stlsq};
         let f = factors();
         let cases: Vec<CaseProblem<'_>> = f
