@@ -71,6 +71,16 @@ impl Upper {
         self[(a, b)]
     }
 
+    /// Column j down to the diagonal: entries (0, j) … (j, j).
+    ///
+    /// # Panics
+    /// When j ≥ p (a programming error).
+    #[track_caller]
+    pub fn col(&self, j: usize) -> &[f64] {
+        assert!(j < self.p, "column {j} of a {0} × {0} matrix", self.p);
+        &self.data[j * (j + 1) / 2..(j + 1) * (j + 2) / 2]
+    }
+
     /// The dense p × p matrix (zeros below the diagonal).
     pub fn to_mat(&self) -> Mat<f64> {
         Mat::from_fn(self.p, self.p, |i, j| self[(i, j)])
@@ -402,8 +412,9 @@ impl CaseFactor {
     #[track_caller]
     pub fn gram(&self, a: usize, b: usize) -> f64 {
         let (i, j) = if a <= b { (a, b) } else { (b, a) };
-        let r = &self.r;
-        (0..=i).map(|k| r[(k, i)] * r[(k, j)]).sum()
+        // R_ki R_kj for k = 0 … i, summed in that order (column slices: no index checks)
+        let (ci, cj) = (self.r.col(i), &self.r.col(j)[..=i]);
+        ci.iter().zip(cj).map(|(x, y)| x * y).sum()
     }
 
     /// Least-squares (or ridge, `ridge > 0`, on the column-normalised matrix) fit of target
@@ -431,9 +442,7 @@ impl CaseFactor {
         let q = cols.len();
         let mut a = vec![0.0; m * q];
         for (c, &(k, _)) in cols.iter().enumerate() {
-            for i in 0..=k {
-                a[c * m + i] = self.r[(i, k)];
-            }
+            a[c * m..c * m + k + 1].copy_from_slice(self.r.col(k));
         }
         let (x, rss_rows) = crate::numerics::qr::lstsq(&a, m, q, &tf.qty[..m], ridge);
         let tail: f64 = tf.qty[m..].iter().map(|v| v * v).sum();
@@ -488,8 +497,8 @@ impl CaseFactor {
         let mut r = tf.qty.iter().map(|v| -v).collect::<Vec<f64>>();
         for (&j, &c) in support.iter().zip(scaled) {
             let k = self.pos[j];
-            for (i, ri) in r.iter_mut().enumerate().take(k + 1) {
-                *ri += self.r[(i, k)] * c;
+            for (ri, rik) in r.iter_mut().zip(self.r.col(k)) {
+                *ri += rik * c;
             }
         }
         r.iter().map(|v| v * v).sum::<f64>() + tf.rss_perp
@@ -629,6 +638,7 @@ mod tests {
             }
         }
         assert_eq!(u.order(), 3);
+        assert_eq!(u.col(2), &[3.0, 13.0, 23.0]);
         assert!(std::panic::catch_unwind(|| u[(3, 0)]).is_err());
     }
 
