@@ -312,7 +312,7 @@ fn run_memoryless(args: &IdentifyArgs) -> anyhow::Result<Identification> {
     // with the number of cases; the per-case preparation runs with the reading
     let bar = IdentifyBar::new();
     let streamed = checked_stream(args, &path, &settings, &pre, &|p| bar.observe(p));
-    let streamed = match streamed {
+    let mut streamed = match streamed {
         Ok(s) => s,
         Err(e) => {
             bar.finish();
@@ -347,9 +347,11 @@ fn run_memoryless(args: &IdentifyArgs) -> anyhow::Result<Identification> {
     let (written, inputs) = outputs(args, &path);
     let _out = crate::outdir::SharedDir::begin(&args.out, &written, &inputs)?;
     let t_id = Instant::now();
+    // the per-case work is not needed past the group stage (the ensemble reads the cases
+    // again): freed case by case as the result is made
     let result = streamed
         .prepared
-        .identify_all(&streamed.manifest.name, &|p| bar.observe(p));
+        .identify_all_and_clear(&streamed.manifest.name, &|p| bar.observe(p));
     bar.finish();
     let mut result = result.context("identification")?;
     let identify_s = t_id.elapsed().as_secs_f64() + sec.prepare;

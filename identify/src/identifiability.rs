@@ -251,7 +251,7 @@ pub fn analyse_factor(
 ) -> Result<CaseIdentifiability> {
     let p = factor.n_columns();
     assert_eq!(p, lib.len(), "factor and library sizes differ");
-    let sv = singular_values(factor.r.as_ref()).map_err(|message| Error::Numerical {
+    let sv = singular_values(factor.r.to_mat().as_ref()).map_err(|message| Error::Numerical {
         context: format!("case `{case}`: SVD of the library"),
         message,
     })?;

@@ -35,6 +35,18 @@ pub fn create_dir_below(root: &Path, rel: &Path) -> Result<()> {
 /// [`Error::Io`] naming `path` when the folder is missing or unwritable, the disk is full,
 /// or the rename fails.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+    write_atomic_with(path, &mut |w| w.write_all(bytes))
+}
+
+/// [`write_atomic`] of what `write` writes into the temporary file (buffered), so that a
+/// large document is serialised straight to disk instead of into memory first.
+///
+/// # Errors
+/// As [`write_atomic`], and the error `write` returns (naming `path`).
+pub fn write_atomic_with(
+    path: &Path,
+    write: &mut dyn FnMut(&mut dyn Write) -> std::io::Result<()>,
+) -> Result<()> {
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
@@ -54,14 +66,16 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
                 .create_new(true)
                 .open(&tmp)
         };
-        let mut f = match create() {
+        let f = match create() {
             Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
                 std::fs::remove_file(&tmp)?;
                 create()?
             }
             other => other?,
         };
-        f.write_all(bytes)?;
+        let mut b = std::io::BufWriter::new(f);
+        write(&mut b)?;
+        let f = b.into_inner().map_err(|e| e.into_error())?;
         f.sync_all()?;
         drop(f);
         std::fs::rename(&tmp, path)

@@ -18,6 +18,8 @@ use std::collections::BTreeMap;
 
 use rayon::prelude::*;
 
+use num_complex::Complex64;
+
 use crate::eq19::{Eq19Values, LiftEq19, MomentEq19, EQ19_TERMS};
 use crate::identifiability::{self, BasisMode, CaseIdentifiability, RankOptions};
 use crate::library::Library;
@@ -35,10 +37,31 @@ mod settings;
 pub use result::*;
 pub use settings::*;
 
+/// What the later stages read of a case's identifiability (the whole analysis, with its
+/// singular values and dependencies as term lists, is several times larger).
+struct IdentSummary {
+    /// Numerical rank.
+    rank: usize,
+    /// The canonical basis as a column mask.
+    in_basis: Mask,
+    /// [`CaseIdentifiability::dependency_strings`].
+    dependencies: Vec<String>,
+}
+
+impl IdentSummary {
+    fn of(ident: &CaseIdentifiability) -> Self {
+        IdentSummary {
+            rank: ident.rank,
+            in_basis: bools_to_mask(&ident.in_basis),
+            dependencies: ident.dependency_strings(),
+        }
+    }
+}
+
 /// Per-case preparation result.
 struct CaseWork {
     factor: CaseFactor,
-    ident: CaseIdentifiability,
+    ident: IdentSummary,
     /// Key projections of (moment, lift); `None` without candidate tones.
     keys: [Option<KeyProjection>; 2],
     key_freqs: [Vec<f64>; 2],
@@ -217,17 +240,26 @@ fn prepare_case(
             message: e.to_string(),
         })?;
         let cols = fit.column_amplitudes_with(p, eval);
-        for (t, y) in [y_m, y_l].into_iter().enumerate() {
+        let selected = [y_m, y_l].map(|y| {
             let (_, all) = fit.amplitudes(y);
-            let key = metrics::select_key_frequencies(&tones, &all, s.k_key);
+            metrics::select_key_frequencies(&tones, &all, s.k_key)
+        });
+        // the column amplitudes at the union of both targets' key tones, held once
+        let mut union: Vec<usize> = selected.iter().flat_map(|k| k.index.clone()).collect();
+        union.sort_unstable();
+        union.dedup();
+        let shared: std::sync::Arc<[Complex64]> = cols
+            .iter()
+            .flat_map(|c| union.iter().map(|&i| c[i]))
+            .collect();
+        for (t, key) in selected.into_iter().enumerate() {
             key_freqs[t] = key.tones.iter().map(|t| t.freq).collect();
-            keys[t] = Some(KeyProjection {
-                columns: cols
-                    .iter()
-                    .map(|c| key.index.iter().map(|&i| c[i]).collect())
-                    .collect(),
-                measured: key.amplitudes,
-            });
+            let at = key
+                .index
+                .iter()
+                .map(|i| union.binary_search(i).unwrap_or(0))
+                .collect();
+            keys[t] = Some(KeyProjection::new(key.amplitudes, shared.clone(), p, at));
         }
     }
     let basis: Vec<usize> = (0..lib.len()).filter(|&j| ident.in_basis[j]).collect();
@@ -242,7 +274,7 @@ fn prepare_case(
     })?;
     Ok(CaseWork {
         factor,
-        ident,
+        ident: IdentSummary::of(&ident),
         keys,
         key_freqs,
         data,
@@ -600,6 +632,17 @@ impl<'c> Prepared<'c> {
         Ok(())
     }
 
+    /// Forgets every prepared case and frees its work (factors, projections: ≈ 12 kB a
+    /// case): the preparation is then as [`Prepared::start`] left it. For a caller done
+    /// with the group stage that still holds the preparation (e.g. while it writes the
+    /// result).
+    pub fn clear(&mut self) {
+        self.cases = &[];
+        self.work = Vec::new();
+        self.summaries = Vec::new();
+        self.ids = std::collections::HashSet::new();
+    }
+
     /// Number of cases prepared.
     pub fn len(&self) -> usize {
         self.summaries.len()
@@ -703,6 +746,42 @@ impl<'c> Prepared<'c> {
         }
         let cases: Vec<&CaseSummary> = subset.iter().map(|&i| &self.summaries[i]).collect();
         let work: Vec<&CaseWork> = subset.iter().map(|&i| &self.work[i]).collect();
+        self.identify_cases(&cases, work, kept, dataset_name, observer)
+    }
+
+    /// [`Prepared::identify_all`], freeing each case's work as soon as its result is made
+    /// (the per-case work and the result are never both held whole); the preparation is
+    /// then empty ([`Prepared::clear`]). For a caller that identifies once and writes the
+    /// result (`aeroform identify`).
+    ///
+    /// # Errors
+    /// As [`Prepared::identify`] (nothing is cleared then).
+    pub fn identify_all_and_clear(
+        &mut self,
+        dataset_name: &str,
+        observer: &dyn Fn(Progress),
+    ) -> Result<Identification> {
+        if self.is_empty() {
+            return self.identify(&[], dataset_name, observer);
+        }
+        let work = std::mem::take(&mut self.work);
+        let summaries = std::mem::take(&mut self.summaries);
+        self.clear();
+        let cases: Vec<&CaseSummary> = summaries.iter().collect();
+        self.identify_cases(&cases, work, [self.kept; 2], dataset_name, observer)
+    }
+
+    /// The group stage and the result of `cases` with their work `work` (owned: each case's
+    /// work is dropped once its result is made; or borrowed).
+    fn identify_cases<W: std::borrow::Borrow<CaseWork>>(
+        &self,
+        cases: &[&CaseSummary],
+        owned: Vec<W>,
+        kept: [Mask; 2],
+        dataset_name: &str,
+        observer: &dyn Fn(Progress),
+    ) -> Result<Identification> {
+        let work: Vec<&CaseWork> = owned.iter().map(|w| w.borrow()).collect();
         let (settings, lib, opts) = (&self.settings, &self.lib, &self.opts);
         let chosen = Chosen {
             reg: self.regressor,
@@ -730,8 +809,8 @@ impl<'c> Prepared<'c> {
         let bases: Vec<Mask> = group_list
             .iter()
             .map(|(_, m)| {
-                let idents: Vec<&CaseIdentifiability> = m.iter().map(|&i| &work[i].ident).collect();
-                bools_to_mask(&identifiability::group_basis(&idents))
+                // identifiability::group_basis on the masks: the columns in every case's basis
+                m.iter().fold(Mask::MAX, |b, &i| b & work[i].ident.in_basis)
             })
             .collect();
         let mut outcomes: Vec<Option<GroupOutcome>> = (0..tasks.len()).map(|_| None).collect();
@@ -772,14 +851,14 @@ impl<'c> Prepared<'c> {
         for (g, (name, members)) in group_list.iter().enumerate() {
             let mut forces = Vec::with_capacity(2);
             for target in 0..2 {
-                let o = outcomes[2 * g + target]
+                let mut o = outcomes[2 * g + target]
                     .take()
                     .ok_or_else(|| Error::Numerical {
                         context: format!("group `{name}`"),
                         message: "missing path result".to_string(),
                     })?;
                 for (k, &i) in members.iter().enumerate() {
-                    case_coefs[i][target] = o.coefficients[k].clone();
+                    case_coefs[i][target] = std::mem::take(&mut o.coefficients[k]);
                     case_group[i] = g;
                 }
                 forces.push(group_force(&o.path, &names));
@@ -803,11 +882,23 @@ impl<'c> Prepared<'c> {
                 lift,
             });
         }
+        let min_case = (0..total)
+            .min_by_key(|&i| (work[i].ident.rank, i))
+            .unwrap_or(0);
+        let library = LibraryInfo {
+            terms: names.clone(),
+            rank: work[min_case].ident.rank,
+            dependencies: work[min_case].ident.dependencies.clone(),
+            rank_case: Some(cases[min_case].meta.id.clone()),
+            priority: self.order.iter().map(|&j| names[j].clone()).collect(),
+        };
+        drop(work);
         let case_results: Vec<CaseResult> = cases
             .iter()
+            .zip(owned)
             .enumerate()
-            .map(|(i, c)| {
-                let w = work[i];
+            .map(|(i, (c, w))| {
+                let w: &CaseWork = w.borrow();
                 let basis = bases[case_group[i]];
                 CaseResult {
                     id: c.meta.id.clone(),
@@ -816,27 +907,18 @@ impl<'c> Prepared<'c> {
                     k_alpha: c.k_alpha,
                     k_h: c.k_h,
                     rank: w.ident.rank,
-                    dependencies: w.ident.dependency_strings(),
+                    dependencies: w.ident.dependencies.clone(),
                     mean_pitch: w.centring.as_ref().map(|c| c.mean_pitch),
                     moment: force_result::<MomentEq19>(lib, c, w, 0, basis, &case_coefs[i][0]),
                     lift: force_result::<LiftEq19>(lib, c, w, 1, basis, &case_coefs[i][1]),
                 }
             })
             .collect();
-        let min_case = (0..total)
-            .min_by_key(|&i| (work[i].ident.rank, i))
-            .unwrap_or(0);
         Ok(Identification {
             format: FORMAT.to_string(),
             dataset: dataset_name.to_string(),
             settings: settings.clone(),
-            library: LibraryInfo {
-                terms: names.clone(),
-                rank: work[min_case].ident.rank,
-                dependencies: work[min_case].ident.dependency_strings(),
-                rank_case: Some(cases[min_case].meta.id.clone()),
-                priority: self.order.iter().map(|&j| names[j].clone()).collect(),
-            },
+            library,
             cases: case_results,
             groups: group_results,
             ensemble: None,

@@ -256,11 +256,27 @@ impl Identification {
     /// # Errors
     /// [`Error::Io`] naming the path; [`Error::Json`] if serialisation fails.
     pub fn write(&self, path: &Path) -> Result<()> {
-        let text = serde_json::to_string_pretty(self).map_err(|e| Error::Json {
-            path: path.to_path_buf(),
-            message: e.to_string(),
-        })?;
-        crate::io::write_atomic(path, text.as_bytes())
+        // serialised straight into the temporary file (the text of a 50,000-case
+        // identification is 200 MB): the same bytes as `to_string_pretty`
+        let mut json_error = None;
+        let written = crate::io::write_atomic_with(path, &mut |w| {
+            serde_json::to_writer_pretty(w, self).map_err(|e| {
+                if e.is_io() {
+                    std::io::Error::from(e)
+                } else {
+                    let message = e.to_string();
+                    json_error = Some(message.clone());
+                    std::io::Error::other(message)
+                }
+            })
+        });
+        match (written, json_error) {
+            (Err(_), Some(message)) => Err(Error::Json {
+                path: path.to_path_buf(),
+                message,
+            }),
+            (r, _) => r,
+        }
     }
 
     /// Compact text table: per group and force the selected terms, then per case the Eq. 19

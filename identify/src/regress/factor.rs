@@ -30,6 +30,80 @@ pub const FILL_BLOCK: usize = crate::library::EVAL_BLOCK;
 /// (128 × 32 × 32 × 8 B = 1 MB for the paper library with two targets).
 pub const STACK_BLOCKS: usize = 128;
 
+/// A p × p upper-triangular matrix held packed by columns (p(p + 1)/2 numbers, half of a
+/// dense matrix: the per-case factor is most of what an identification keeps per case).
+/// Indexing `(i, j)` gives entry i, j (0 below the diagonal).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Upper {
+    p: usize,
+    data: Vec<f64>,
+}
+
+static ZERO: f64 = 0.0;
+
+impl Upper {
+    /// The matrix with entry (i, j) = `f(i, j)` for i ≤ j (called column by column, row
+    /// by row inside a column; `f` may read entries already made only through its own
+    /// captures).
+    pub fn from_fn(p: usize, mut f: impl FnMut(usize, usize) -> f64) -> Self {
+        let mut data = Vec::with_capacity(p * (p + 1) / 2);
+        for j in 0..p {
+            for i in 0..=j {
+                data.push(f(i, j));
+            }
+        }
+        Upper { p, data }
+    }
+
+    /// Order p.
+    pub fn order(&self) -> usize {
+        self.p
+    }
+
+    /// Entry (min(i, j), max(i, j)): the matrix read as the upper triangle of a symmetric
+    /// one.
+    ///
+    /// # Panics
+    /// When an index is ≥ p (a programming error).
+    #[track_caller]
+    pub fn sym(&self, i: usize, j: usize) -> f64 {
+        let (a, b) = if i <= j { (i, j) } else { (j, i) };
+        self[(a, b)]
+    }
+
+    /// Column j down to the diagonal: entries (0, j) … (j, j).
+    ///
+    /// # Panics
+    /// When j ≥ p (a programming error).
+    #[track_caller]
+    pub fn col(&self, j: usize) -> &[f64] {
+        assert!(j < self.p, "column {j} of a {0} × {0} matrix", self.p);
+        &self.data[j * (j + 1) / 2..(j + 1) * (j + 2) / 2]
+    }
+
+    /// The dense p × p matrix (zeros below the diagonal).
+    pub fn to_mat(&self) -> Mat<f64> {
+        Mat::from_fn(self.p, self.p, |i, j| self[(i, j)])
+    }
+}
+
+impl std::ops::Index<(usize, usize)> for Upper {
+    type Output = f64;
+    #[track_caller]
+    fn index(&self, (i, j): (usize, usize)) -> &f64 {
+        assert!(
+            i < self.p && j < self.p,
+            "({i}, {j}) out of a {0} × {0} matrix",
+            self.p
+        );
+        if i > j {
+            &ZERO
+        } else {
+            &self.data[j * (j + 1) / 2 + i]
+        }
+    }
+}
+
 /// Reduced form of one target (one force coefficient) of a case.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TargetFactor {
@@ -66,12 +140,10 @@ pub struct CaseFactor {
     pub scales: Vec<f64>,
     /// Whether library column j is identically zero.
     pub zero_column: Vec<bool>,
-    /// p × p upper-triangular factor R of Θ_s in priority order.
-    pub r: Mat<f64>,
+    /// p × p upper-triangular factor R of Θ_s in priority order (packed).
+    pub r: Upper,
     /// One reduced target per target given to [`CaseFactor::new`].
     pub targets: Vec<TargetFactor>,
-    /// Gram matrix RᵀR = Θ_sᵀΘ_s (p × p, priority order, row-major).
-    pub gram: Vec<f64>,
     /// Θ_sᵀ y = Rᵀ Qᵀy per target (priority order).
     pub gram_rhs: Vec<Vec<f64>>,
 }
@@ -293,7 +365,7 @@ impl CaseFactor {
         }
         drop(stack);
         crate::numerics::qr::householder_qr(&mut a, m, ncols, p);
-        let r = Mat::<f64>::from_fn(p, p, |i, j| if i <= j { a[j * m + i] } else { 0.0 });
+        let r = Upper::from_fn(p, |i, j| a[j * m + i]);
         let targets: Vec<TargetFactor> = (0..nt)
             .map(|t| {
                 let col = &a[(p + t) * m..(p + t + 1) * m];
@@ -306,14 +378,6 @@ impl CaseFactor {
                 }
             })
             .collect();
-        let mut gram = vec![0.0; p * p];
-        for i in 0..p {
-            for j in i..p {
-                let g: f64 = (0..=i).map(|k| r[(k, i)] * r[(k, j)]).sum();
-                gram[i * p + j] = g;
-                gram[j * p + i] = g;
-            }
-        }
         let gram_rhs = targets
             .iter()
             .map(|t: &TargetFactor| {
@@ -330,7 +394,6 @@ impl CaseFactor {
             zero_column,
             r,
             targets,
-            gram,
             gram_rhs,
         })
     }
@@ -338,6 +401,20 @@ impl CaseFactor {
     /// Number of library columns p.
     pub fn n_columns(&self) -> usize {
         self.order.len()
+    }
+
+    /// Entry (a, b) of the Gram matrix RᵀR = Θ_sᵀΘ_s (priority positions; symmetric):
+    /// Σ_{k ≤ min(a, b)} R_ka R_kb, computed from R when asked (not held: it would double
+    /// the factor's memory), always in this order, so always the same number.
+    ///
+    /// # Panics
+    /// When a position is ≥ p (a programming error).
+    #[track_caller]
+    pub fn gram(&self, a: usize, b: usize) -> f64 {
+        let (i, j) = if a <= b { (a, b) } else { (b, a) };
+        // R_ki R_kj for k = 0 … i, summed in that order (column slices: no index checks)
+        let (ci, cj) = (self.r.col(i), &self.r.col(j)[..=i]);
+        ci.iter().zip(cj).map(|(x, y)| x * y).sum()
     }
 
     /// Least-squares (or ridge, `ridge > 0`, on the column-normalised matrix) fit of target
@@ -365,9 +442,7 @@ impl CaseFactor {
         let q = cols.len();
         let mut a = vec![0.0; m * q];
         for (c, &(k, _)) in cols.iter().enumerate() {
-            for i in 0..=k {
-                a[c * m + i] = self.r[(i, k)];
-            }
+            a[c * m..c * m + k + 1].copy_from_slice(self.r.col(k));
         }
         let (x, rss_rows) = crate::numerics::qr::lstsq(&a, m, q, &tf.qty[..m], ridge);
         let tail: f64 = tf.qty[m..].iter().map(|v| v * v).sum();
@@ -392,13 +467,12 @@ impl CaseFactor {
     #[track_caller]
     pub fn fit_gram(&self, t: usize, support: &[usize], ridge: f64) -> Option<Vec<f64>> {
         let q = support.len();
-        let p = self.n_columns();
         let b = &self.gram_rhs[t];
         let k: Vec<usize> = support.iter().map(|&j| self.pos[j]).collect();
         let mut l = vec![0.0; q * q];
         for i in 0..q {
             for j in 0..=i {
-                l[i * q + j] = self.gram[k[i] * p + k[j]] + if i == j { ridge } else { 0.0 };
+                l[i * q + j] = self.gram(k[i], k[j]) + if i == j { ridge } else { 0.0 };
             }
         }
         cholesky_in_place(&mut l, q, PivotFloor::RelativeToDiagonal(1e-13)).ok()?;
@@ -423,8 +497,8 @@ impl CaseFactor {
         let mut r = tf.qty.iter().map(|v| -v).collect::<Vec<f64>>();
         for (&j, &c) in support.iter().zip(scaled) {
             let k = self.pos[j];
-            for (i, ri) in r.iter_mut().enumerate().take(k + 1) {
-                *ri += self.r[(i, k)] * c;
+            for (ri, rik) in r.iter_mut().zip(self.r.col(k)) {
+                *ri += rik * c;
             }
         }
         r.iter().map(|v| v * v).sum::<f64>() + tf.rss_perp
@@ -510,7 +584,7 @@ mod tests {
             }
         })
         .unwrap();
-        assert_eq!(f.gram, g.gram);
+        assert_eq!(f.r, g.r);
         assert_eq!(f.targets, g.targets);
         // relative to `scale` (1 for the Gram matrix of unit columns, ‖y‖ for Θ_sᵀy)
         let close = |a: f64, b: f64, scale: f64, what: &str| {
@@ -528,7 +602,7 @@ mod tests {
             );
             for b in 0..p {
                 let direct: f64 = (0..n).map(|i| col(a, i) * col(b, i)).sum();
-                close(f.gram[a * p + b], direct, 1.0, "gram");
+                close(f.gram(a, b), direct, 1.0, "gram");
             }
             let direct: f64 = (0..n).map(|i| col(a, i) * y[i]).sum();
             close(f.gram_rhs[0][a], direct, ynorm, "gram_rhs");
@@ -545,6 +619,27 @@ mod tests {
             .sum();
         assert!((rss - direct).abs() <= 1e-9 * direct, "{rss} vs {direct}");
         close(f.targets[0].rss_perp, rss, rss, "rss_perp");
+    }
+
+    #[test]
+    fn packed_triangle_reads_as_the_dense_one() {
+        let u = Upper::from_fn(3, |i, j| (10 * i + j) as f64 + 1.0);
+        let d = u.to_mat();
+        for i in 0..3 {
+            for j in 0..3 {
+                let want = if i <= j {
+                    (10 * i + j) as f64 + 1.0
+                } else {
+                    0.0
+                };
+                assert_eq!(u[(i, j)], want);
+                assert_eq!(d[(i, j)], want);
+                assert_eq!(u.sym(i, j), u.sym(j, i));
+            }
+        }
+        assert_eq!(u.order(), 3);
+        assert_eq!(u.col(2), &[3.0, 13.0, 23.0]);
+        assert!(std::panic::catch_unwind(|| u[(3, 0)]).is_err());
     }
 
     #[test]

@@ -286,15 +286,58 @@ pub struct SupportFits {
     pub raw: Vec<Vec<f64>>,
 }
 
-/// Memo of support fits of one group and target, keyed by (support, ridge used).
-#[derive(Debug, Default)]
+/// Bytes of support fits a [`FitCache`] holds before it forgets the least recently used
+/// ones (64 MiB: every support of a path for groups of up to a few thousand cases; for a
+/// 50,000-case group, the last few).
+pub const FIT_CACHE_BUDGET: usize = 64 << 20;
+
+/// Memo of support fits of one group and target, keyed by (support, ridge used, exact).
+///
+/// Bounded: it holds at most [`FIT_CACHE_BUDGET`] bytes of fits (estimated from the
+/// number of cases and support sizes; the most recent fit is always held) and forgets the
+/// least recently used beyond. A forgotten fit is computed again when asked for, to the
+/// same numbers (a fit is a function of the case, the support and the ridge alone), so
+/// the bound changes time, never results.
+#[derive(Debug)]
 pub struct FitCache {
-    map: HashMap<(Mask, u64), std::rc::Rc<SupportFits>>,
-    /// Number of distinct supports fitted.
+    map: HashMap<(Mask, u64), (std::rc::Rc<SupportFits>, u64, usize)>,
+    /// Estimated bytes held.
+    held: usize,
+    /// Use counter (recency of the entries).
+    tick: u64,
+    budget: usize,
+    /// Number of support fits computed (a forgotten one computed again counts again).
     pub n_fits: usize,
 }
 
+impl Default for FitCache {
+    fn default() -> Self {
+        FitCache::with_budget(FIT_CACHE_BUDGET)
+    }
+}
+
 impl FitCache {
+    /// An empty memo holding at most `budget` bytes of fits (at least the most recent).
+    pub fn with_budget(budget: usize) -> Self {
+        FitCache {
+            map: HashMap::new(),
+            held: 0,
+            tick: 0,
+            budget,
+            n_fits: 0,
+        }
+    }
+
+    /// Number of fits held.
+    pub fn len(&self) -> usize {
+        self.map.len()
+    }
+
+    /// True when no fit is held.
+    pub fn is_empty(&self) -> bool {
+        self.map.is_empty()
+    }
+
     /// Fits (or recalls) every case on `mask` with ridge λ. Uses the Gram/Cholesky solve
     /// and falls back to the QR solve per case when it is ill-conditioned; `exact = true`
     /// always uses the QR solve (final coefficients).
@@ -306,7 +349,9 @@ impl FitCache {
         exact: bool,
     ) -> std::rc::Rc<SupportFits> {
         let key = (mask, ridge.to_bits() ^ (exact as u64) << 63);
-        if let Some(f) = self.map.get(&key) {
+        self.tick += 1;
+        if let Some((f, used, _)) = self.map.get_mut(&key) {
+            *used = self.tick;
             return f.clone();
         }
         let support = mask_to_vec(mask);
@@ -328,15 +373,46 @@ impl FitCache {
             );
             scaled.push(x);
         }
+        // two vectors per case: header, data, allocator overhead
+        let bytes = cases.len() * 2 * (3 * 8 + 8 * support.len().max(1) + 16);
         let f = std::rc::Rc::new(SupportFits {
             support,
             scaled,
             raw,
         });
-        self.map.insert(key, f.clone());
+        while self.held + bytes > self.budget && !self.map.is_empty() {
+            let oldest = self
+                .map
+                .iter()
+                .min_by_key(|(_, (_, used, _))| *used)
+                .map(|(k, _)| *k);
+            if let Some((_, _, b)) = oldest.and_then(|k| self.map.remove(&k)) {
+                self.held -= b;
+            }
+        }
+        self.map.insert(key, (f.clone(), self.tick, bytes));
+        self.held += bytes;
         self.n_fits += 1;
         f
     }
+}
+
+/// Per case, the raw coefficients over the whole library (0 outside `mask`) of the plain
+/// least-squares fit on `mask` by the QR solve: the final coefficients [`fit_group`] gives
+/// for that support when unbiasing (or without ridge), the same numbers.
+pub fn exact_fit_over_library(cases: &[CaseProblem<'_>], mask: Mask) -> Vec<Vec<f64>> {
+    let support = mask_to_vec(mask);
+    cases
+        .iter()
+        .map(|c| {
+            let x = c.factor.fit(c.target, &support, 0.0).0;
+            let mut full = vec![0.0; c.factor.n_columns()];
+            for (&j, v) in support.iter().zip(&x) {
+                full[j] = v / c.factor.scales[j];
+            }
+            full
+        })
+        .collect()
 }
 
 /// Result of [`fit_group`]: one support shared by the cases, coefficients per case.

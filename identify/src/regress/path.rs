@@ -138,15 +138,75 @@ pub fn default_range(measure: Measure) -> (f64, f64) {
 
 /// Key-frequency data of one case and target: measured amplitudes and the amplitude of
 /// every (raw) library column at the key tones.
+///
+/// The column amplitudes are held once per case for the union of both targets' key tones
+/// (`columns`, shared between the moment's and the lift's projection) and each target
+/// reads its own tones through `tones`: p × u complex numbers per case instead of
+/// 2 × p × k in vectors per column.
 #[derive(Debug, Clone, PartialEq)]
 pub struct KeyProjection {
     /// Measured complex amplitudes A_i (k values).
     pub measured: Vec<Complex64>,
-    /// `columns[j][i]`: amplitude of library column j at key tone i.
-    pub columns: Vec<Vec<Complex64>>,
+    /// Column amplitudes at u tones, column j at `j·u .. (j + 1)·u`.
+    columns: std::sync::Arc<[Complex64]>,
+    /// Number of library columns p.
+    n_columns: usize,
+    /// Per key tone i, its position among the u tones of `columns`.
+    tones: Vec<usize>,
 }
 
 impl KeyProjection {
+    /// The projection of a target with measured amplitudes `measured` at its key tones,
+    /// whose column amplitudes are `columns` (p columns × u tones, column j at
+    /// `j·u .. (j + 1)·u`) at positions `tones` (one per measured amplitude).
+    ///
+    /// # Panics
+    /// When `columns` does not hold p × u numbers, `tones` and `measured` differ in length
+    /// or a position is ≥ u (programming errors).
+    #[track_caller]
+    pub fn new(
+        measured: Vec<Complex64>,
+        columns: std::sync::Arc<[Complex64]>,
+        n_columns: usize,
+        tones: Vec<usize>,
+    ) -> Self {
+        let u = columns.len().checked_div(n_columns).unwrap_or(0);
+        assert_eq!(columns.len(), u * n_columns, "p × u column amplitudes");
+        assert_eq!(
+            tones.len(),
+            measured.len(),
+            "one tone per measured amplitude"
+        );
+        assert!(tones.iter().all(|&t| t < u), "tone position out of range");
+        KeyProjection {
+            measured,
+            columns,
+            n_columns,
+            tones,
+        }
+    }
+
+    /// Number of library columns p.
+    pub fn n_columns(&self) -> usize {
+        self.n_columns
+    }
+
+    /// Amplitudes of library column j at the key tones (k values).
+    ///
+    /// # Panics
+    /// When j ≥ p (a programming error).
+    #[track_caller]
+    pub fn column(&self, j: usize) -> Vec<Complex64> {
+        assert!(j < self.n_columns, "column {j} out of range");
+        let row = self.row(j);
+        self.tones.iter().map(|&t| row[t]).collect()
+    }
+
+    fn row(&self, j: usize) -> &[Complex64] {
+        let u = self.columns.len() / self.n_columns.max(1);
+        &self.columns[j * u..(j + 1) * u]
+    }
+
     /// Model amplitudes Â_i = Σ_j ξ_j G_ji for raw coefficients over the library.
     ///
     /// # Panics
@@ -155,14 +215,15 @@ impl KeyProjection {
     pub fn model(&self, raw: &[f64]) -> Vec<Complex64> {
         assert_eq!(
             raw.len(),
-            self.columns.len(),
+            self.n_columns,
             "one coefficient per library column"
         );
         let mut out = vec![Complex64::new(0.0, 0.0); self.measured.len()];
-        for (x, g) in raw.iter().zip(&self.columns) {
+        for (j, x) in raw.iter().enumerate() {
             if *x != 0.0 {
-                for (o, gi) in out.iter_mut().zip(g) {
-                    *o += gi * x;
+                let row = self.row(j);
+                for (o, &t) in out.iter_mut().zip(&self.tones) {
+                    *o += row[t] * x;
                 }
             }
         }
@@ -186,9 +247,9 @@ pub struct PathSupport {
     pub loss: f64,
     /// Per-case loss.
     pub case_losses: Vec<f64>,
-    /// Per case, raw coefficients over the library.
-    #[serde(skip)]
-    pub coefficients: Vec<Vec<f64>>,
+    /// Index in the grid of the first δ that gave this support (its coefficients are the
+    /// fits there: [`super::plugin::Regressor::coefficients_at`]).
+    pub first: usize,
 }
 
 /// A whole δ path of one group and target.
@@ -236,7 +297,135 @@ fn case_loss(case: &CaseProblem<'_>, key: Option<&KeyProjection>, raw: &[f64]) -
     }
 }
 
-/// Builds the path summary from the per-δ supports and coefficients, and selects.
+/// The δ path built one grid point at a time (Alg. 3 in bounded memory): each point's
+/// per-case coefficients are scored when they arrive ([`PathBuilder::push`]) and dropped;
+/// what is kept is, per distinct support, its δ values, its per-case losses (8 B per case)
+/// and the grid index of its first appearance, and for the densest support so far the
+/// mean noise loss. [`PathBuilder::finish`] selects. The result equals that of scoring
+/// every point at once ([`summarise`]), bit for bit: the same per-case losses summed in
+/// the same order.
+pub struct PathBuilder<'g> {
+    deltas: &'g [f64],
+    cases: &'g [CaseProblem<'g>],
+    keys: &'g [Option<&'g KeyProjection>],
+    supports: Vec<PathSupport>,
+    masks: Vec<Mask>,
+    support_of: Vec<usize>,
+    /// (index in `supports`, number of terms, mean noise loss) of the densest support so
+    /// far: most terms, first along the path on ties.
+    dense: Option<(usize, usize, f64)>,
+}
+
+impl<'g> PathBuilder<'g> {
+    /// An empty path over the grid `deltas` of the group `cases` (one key projection per
+    /// case).
+    ///
+    /// # Panics
+    /// When `cases` and `keys` differ in length (a programming error).
+    #[track_caller]
+    pub fn new(
+        deltas: &'g [f64],
+        cases: &'g [CaseProblem<'g>],
+        keys: &'g [Option<&'g KeyProjection>],
+    ) -> Self {
+        assert_eq!(cases.len(), keys.len(), "one key projection per case");
+        PathBuilder {
+            deltas,
+            cases,
+            keys,
+            supports: Vec::new(),
+            masks: Vec::new(),
+            support_of: Vec::with_capacity(deltas.len()),
+            dense: None,
+        }
+    }
+
+    /// Takes the fit at the next grid point: its support `mask` and, per case, the raw
+    /// coefficients over the library (scored, then dropped).
+    ///
+    /// # Panics
+    /// When more points are pushed than the grid has, or `coefs` does not hold one vector
+    /// per case (programming errors).
+    #[track_caller]
+    pub fn push(&mut self, mask: Mask, coefs: &[Vec<f64>]) {
+        let at = self.support_of.len();
+        let d = self.deltas[at];
+        if let Some(i) = self.masks.iter().position(|&m| m == mask) {
+            self.supports[i].deltas.push(d);
+            self.support_of.push(i);
+            return;
+        }
+        assert_eq!(coefs.len(), self.cases.len(), "one fit per case");
+        let case_losses: Vec<f64> = self
+            .cases
+            .iter()
+            .zip(self.keys)
+            .zip(coefs)
+            .map(|((c, k), x)| case_loss(c, *k, x))
+            .collect();
+        let loss = case_losses.iter().sum::<f64>() / case_losses.len().max(1) as f64;
+        let index = self.supports.len();
+        let support = mask_to_vec(mask);
+        let n_terms = support.len();
+        if self.dense.is_none_or(|(_, n, _)| n_terms > n) {
+            let v: Vec<f64> = self
+                .cases
+                .iter()
+                .zip(self.keys)
+                .zip(coefs)
+                .map(|((c, k), x)| noise_loss(c, *k, x))
+                .collect();
+            let noise = v.iter().sum::<f64>() / v.len().max(1) as f64;
+            self.dense = Some((index, n_terms, noise));
+        }
+        self.masks.push(mask);
+        self.support_of.push(index);
+        self.supports.push(PathSupport {
+            support,
+            deltas: vec![d],
+            loss,
+            case_losses,
+            first: at,
+        });
+    }
+
+    /// The path and its selection (see the module documentation).
+    ///
+    /// # Panics
+    /// When fewer points were pushed than the grid has (a programming error).
+    #[track_caller]
+    pub fn finish(self, opts: &PathOptions) -> DeltaPath {
+        assert_eq!(self.support_of.len(), self.deltas.len(), "one fit per δ");
+        let supports = self.supports;
+        let (dense, loss_noise) = self.dense.map_or((0, 0.0), |(i, _, v)| (i, v));
+        let loss_dense = supports.get(dense).map(|s| s.loss).unwrap_or(0.0);
+        let limit =
+            loss_dense * (1.0 + opts.loss_rel) + opts.loss_abs + opts.loss_noise * loss_noise;
+        let selected = (0..supports.len())
+            .filter(|&i| supports[i].loss <= limit || i == dense)
+            .min_by(|&a, &b| {
+                supports[a]
+                    .support
+                    .len()
+                    .cmp(&supports[b].support.len())
+                    .then(supports[a].loss.total_cmp(&supports[b].loss))
+                    .then(a.cmp(&b))
+            })
+            .unwrap_or(dense);
+        DeltaPath {
+            deltas: self.deltas.to_vec(),
+            support_of: self.support_of,
+            supports,
+            loss_dense,
+            loss_noise,
+            limit,
+            selected,
+        }
+    }
+}
+
+/// Builds the path summary from the per-δ supports and coefficients, and selects
+/// ([`PathBuilder`] fed every point in order).
 ///
 /// # Panics
 /// When the inputs are inconsistent in length (programming errors).
@@ -249,77 +438,11 @@ pub fn summarise(
     opts: &PathOptions,
 ) -> DeltaPath {
     assert_eq!(deltas.len(), per_delta.len(), "one fit per δ");
-    assert_eq!(cases.len(), keys.len(), "one key projection per case");
-    let mut supports: Vec<PathSupport> = Vec::new();
-    let mut masks: Vec<Mask> = Vec::new();
-    let mut support_of = Vec::with_capacity(deltas.len());
-    for (&d, (mask, coefs)) in deltas.iter().zip(per_delta) {
-        if let Some(i) = masks.iter().position(|&m| m == mask) {
-            supports[i].deltas.push(d);
-            support_of.push(i);
-            continue;
-        }
-        let case_losses: Vec<f64> = cases
-            .iter()
-            .zip(keys)
-            .zip(&coefs)
-            .map(|((c, k), x)| case_loss(c, *k, x))
-            .collect();
-        let loss = case_losses.iter().sum::<f64>() / case_losses.len().max(1) as f64;
-        masks.push(mask);
-        support_of.push(supports.len());
-        supports.push(PathSupport {
-            support: mask_to_vec(mask),
-            deltas: vec![d],
-            loss,
-            case_losses,
-            coefficients: coefs,
-        });
+    let mut b = PathBuilder::new(deltas, cases, keys);
+    for (mask, coefs) in per_delta {
+        b.push(mask, &coefs);
     }
-    // densest: most terms, first along the path on ties
-    let dense = (0..supports.len())
-        .max_by(|&a, &b| {
-            supports[a]
-                .support
-                .len()
-                .cmp(&supports[b].support.len())
-                .then(b.cmp(&a))
-        })
-        .unwrap_or(0);
-    let loss_dense = supports.get(dense).map(|s| s.loss).unwrap_or(0.0);
-    let loss_noise = supports
-        .get(dense)
-        .map(|s| {
-            let v: Vec<f64> = cases
-                .iter()
-                .zip(keys)
-                .zip(&s.coefficients)
-                .map(|((c, k), x)| noise_loss(c, *k, x))
-                .collect();
-            v.iter().sum::<f64>() / v.len().max(1) as f64
-        })
-        .unwrap_or(0.0);
-    let limit = loss_dense * (1.0 + opts.loss_rel) + opts.loss_abs + opts.loss_noise * loss_noise;
-    let selected = (0..supports.len())
-        .filter(|&i| supports[i].loss <= limit || i == dense)
-        .min_by(|&a, &b| {
-            supports[a]
-                .support
-                .len()
-                .cmp(&supports[b].support.len())
-                .then(supports[a].loss.total_cmp(&supports[b].loss))
-                .then(a.cmp(&b))
-        })
-        .unwrap_or(dense);
-    DeltaPath {
-        deltas: deltas.to_vec(),
-        support_of,
-        supports,
-        loss_dense,
-        loss_noise,
-        limit,
-        selected,
-    }
+    b.finish(opts)
 }
 
 /// Noise loss of one case for the dense coefficients `raw` (0 without key frequencies).
@@ -344,6 +467,33 @@ fn noise_loss(case: &CaseProblem<'_>, key: Option<&KeyProjection>, raw: &[f64]) 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Two targets sharing the column amplitudes of the union of their tones: each
+    /// target's model is Σ_j ξ_j G_ji over its own tones, and the shared block is held once.
+    #[test]
+    fn key_projections_share_the_union_of_tones() {
+        let c = |re: f64, im: f64| Complex64::new(re, im);
+        // p = 2 columns × u = 3 tones
+        let cols: std::sync::Arc<[Complex64]> = vec![
+            c(1.0, 0.0),
+            c(0.0, 1.0),
+            c(2.0, 2.0),
+            c(-1.0, 0.5),
+            c(3.0, 0.0),
+            c(0.0, -4.0),
+        ]
+        .into();
+        let m = KeyProjection::new(vec![c(1.0, 0.0), c(0.0, 1.0)], cols.clone(), 2, vec![2, 0]);
+        let l = KeyProjection::new(vec![c(1.0, 1.0)], cols.clone(), 2, vec![1]);
+        assert_eq!(m.column(1), vec![c(0.0, -4.0), c(-1.0, 0.5)]);
+        assert_eq!(
+            m.model(&[2.0, 0.5]),
+            vec![c(4.0, 4.0) + c(0.0, -2.0), c(2.0, 0.0) + c(-0.5, 0.25)]
+        );
+        assert_eq!(l.model(&[0.0, -1.0]), vec![c(-3.0, 0.0)]);
+        assert_eq!(std::sync::Arc::strong_count(&cols), 3);
+        assert_eq!(m.n_columns(), 2);
+    }
 
     #[test]
     fn grid_is_log_spaced_and_inclusive() {

@@ -11,18 +11,20 @@
 //! the command's `--regressor-option NAME=VALUE`, Python's `regressor_options`, the
 //! settings' keys beside `kind`), its path parameter (name, unit, the grid it walks), the
 //! per-case data it needs prepared once (optional), the fits along its path for one group
-//! and target, and how a point of the path is picked (by default Alg. 3: the sparsest
-//! support under the loss limit, [`super::path::summarise`]). What it shares with the others
-//! (in [`FitSettings`]): the threshold measure, the group-removal rule, the ridge λ and the
-//! iteration cap of the settings, the δ grid's count and range, the loss limit.
+//! and target (handed out one point at a time, [`Regressor::walk_path`], and recomputed at
+//! the selected point, [`Regressor::coefficients_at`]). Every regressor's point is picked
+//! by Alg. 3 (the sparsest support under the loss limit, [`super::path::PathBuilder`]).
+//! What it shares with the others (in [`FitSettings`]): the threshold measure, the
+//! group-removal rule, the ridge λ and the iteration cap of the settings, the δ grid's
+//! count and range, the loss limit.
 
 use std::any::Any;
 use std::fmt;
 
 use serde::{Deserialize, Serialize};
 
-use super::path::{summarise, DeltaPath, KeyProjection, PathOptions};
-use super::{CaseProblem, GroupRule, Mask, Measure};
+use super::path::{DeltaPath, KeyProjection, PathBuilder, PathOptions};
+use super::{vec_to_mask, CaseProblem, GroupRule, Mask, Measure};
 use crate::library::Library;
 use crate::{Error, Result};
 
@@ -345,16 +347,32 @@ pub trait Regressor: Sync {
     }
     /// The fits of one group and target at every value of `grid`.
     fn fit_path(&self, group: &GroupInput<'_>, grid: &[f64]) -> PathFits;
-    /// Picks a point of the path: by default Alg. 3, the sparsest distinct support whose
-    /// loss is under the limit ([`summarise`]).
-    fn select(
+    /// The fits of [`Regressor::fit_path`] handed to `sink` one grid point at a time, in
+    /// grid order, so that the driver never holds the whole path (per point and case a
+    /// coefficient vector over the library: 50 × cases × p × 8 B). The default walks
+    /// `fit_path` (which holds them all); a plug-in with large groups overrides it.
+    fn walk_path(
         &self,
         group: &GroupInput<'_>,
         grid: &[f64],
-        fits: PathFits,
-        opts: &PathOptions,
-    ) -> DeltaPath {
-        summarise(grid, fits, group.cases, group.keys, opts)
+        sink: &mut dyn FnMut(Mask, &[Vec<f64>]),
+    ) {
+        for (mask, coefs) in self.fit_path(group, grid) {
+            sink(mask, &coefs);
+        }
+    }
+    /// Per case, the raw coefficients over the library of the fit at grid index `index`,
+    /// whose support is `mask`: exactly what [`Regressor::fit_path`] gives at that point
+    /// (the path keeps only supports and losses; the selected point's coefficients are
+    /// computed again). The default walks `fit_path` again and keeps that point.
+    fn coefficients_at(
+        &self,
+        group: &GroupInput<'_>,
+        grid: &[f64],
+        index: usize,
+        _mask: Mask,
+    ) -> Vec<Vec<f64>> {
+        self.fit_path(group, grid).swap_remove(index).1
     }
 }
 
@@ -541,17 +559,22 @@ impl<'de> Deserialize<'de> for RegressorChoice {
 }
 
 /// The path of one group and target under `reg`: its fits at every value of its path
-/// parameter, then its selection. Returns the path and, per case of the group, the raw
-/// coefficients of the selected support (the fits of the first path value giving it).
+/// parameter, scored one point at a time ([`Regressor::walk_path`] into a
+/// [`PathBuilder`]), then Alg. 3's selection (the sparsest distinct support under the
+/// loss limit). Returns the path and, per case of the group, the raw coefficients of the
+/// selected support (the fits of the first path value giving it,
+/// [`Regressor::coefficients_at`]).
 pub fn run_path(
     reg: &dyn Regressor,
     group: &GroupInput<'_>,
     opts: &PathOptions,
 ) -> (DeltaPath, Vec<Vec<f64>>) {
     let grid = reg.path_parameter(&group.shared).values(opts);
-    let fits = reg.fit_path(group, &grid);
-    let path = reg.select(group, &grid, fits, opts);
-    let coefficients = path.selected_support().coefficients.clone();
+    let mut builder = PathBuilder::new(&grid, group.cases, group.keys);
+    reg.walk_path(group, &grid, &mut |mask, coefs| builder.push(mask, coefs));
+    let path = builder.finish(opts);
+    let sel = path.selected_support();
+    let coefficients = reg.coefficients_at(group, &grid, sel.first, vec_to_mask(&sel.support));
     (path, coefficients)
 }
 

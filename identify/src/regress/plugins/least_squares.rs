@@ -4,7 +4,7 @@
 use crate::regress::plugin::{
     FitSettings, GroupInput, PathFits, PathGrid, PathParameter, Regressor,
 };
-use crate::regress::{self, FitCache};
+use crate::regress::{self, FitCache, Mask};
 
 /// Plain least squares (`--regressor least_squares`, alias `lsq`).
 #[derive(Debug, Clone, Copy)]
@@ -42,5 +42,16 @@ impl Regressor for LeastSquares {
         grid.iter()
             .map(|_| (group.basis, fit.coefficients.clone()))
             .collect()
+    }
+    /// Every point is the least-squares fit on the whole basis (`mask`): one QR solve per
+    /// case, the numbers of the path.
+    fn coefficients_at(
+        &self,
+        group: &GroupInput<'_>,
+        _grid: &[f64],
+        _index: usize,
+        mask: Mask,
+    ) -> Vec<Vec<f64>> {
+        regress::exact_fit_over_library(group.cases, mask)
     }
 }

@@ -173,6 +173,7 @@ impl schemars::JsonSchema for plugin::RegressorChoice {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::regress::path::PathOptions;
 
     #[test]
     fn names_and_aliases_are_unique_and_options_valid() {
@@ -194,5 +195,107 @@ mod tests {
         assert!(find("lsq").is_ok());
         let e = find("lasso").unwrap_err().to_string();
         assert!(e.contains("lasso") && e.contains("stlsq"), "{e}");
+    }
+
+    /// Four cases of y = 1.5 θ0 − 0.7 θ2 + noise on six random columns (seeded).
+    fn factors() -> Vec<crate::regress::CaseFactor> {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(28);
+        (0..4)
+            .map(|c| {
+                let (n, p) = (120, 6);
+                let theta = faer::Mat::<f64>::from_fn(n, p, |_, _| rng.random::<f64>() - 0.5);
+                let y: Vec<f64> = (0..n)
+                    .map(|i| {
+                        1.5 * theta[(i, 0)] - 0.7 * theta[(i, 2)]
+                            + 0.01 * (c as f64 + 1.0) * (rng.random::<f64>() - 0.5)
+                    })
+                    .collect();
+                let lift: Vec<f64> = y.iter().map(|v| -v).collect();
+                crate::regress::CaseFactor::new(
+                    "c",
+                    theta.as_ref(),
+                    &[0, 1, 2, 3, 4, 5],
+                    &[&y, &lift],
+                )
+                .unwrap()
+            })
+            .collect()
+    }
+
+    /// The path handed out point by point (`walk_path`) is the held path (`fit_path`), and
+    /// the coefficients recomputed at any point (`coefficients_at`) are that point's, bit
+    /// for bit, for the registered regressors that need no per-case data; the fit memo
+    /// bounded to one entry gives the same path as the default memo.
+    #[test]
+    fn walked_and_recomputed_paths_equal_the_held_path() {
+        use crate::regress::plugin::GroupInput;
+        use crate::regress::{CaseProblem, FitCache, GroupRule, Measure, Stlsq};
+        let f = factors();
+        let cases: Vec<CaseProblem<'_>> = f
+            .iter()
+            .map(|factor| CaseProblem { factor, target: 0 })
+            .collect();
+        let shared = default_shared();
+        for name in ["stlsq", "least_squares"] {
+            let (reg, options, _) = plugin::RegressorChoice::new(name)
+                .resolve(registry(), &shared)
+                .unwrap();
+            let group = GroupInput {
+                cases: &cases,
+                keys: &[None; 4],
+                data: &[None; 4],
+                target: 0,
+                basis: 0b11_1111,
+                kept: 0,
+                shared,
+                options: &options,
+            };
+            let grid = reg
+                .path_parameter(&shared)
+                .values(&PathOptions::for_measure(Measure::Contribution));
+            let held = reg.fit_path(&group, &grid);
+            assert_eq!(held.len(), grid.len());
+            let mut walked = Vec::new();
+            reg.walk_path(&group, &grid, &mut |m, c| walked.push((m, c.to_vec())));
+            assert_eq!(walked, held, "{name}");
+            for (i, (mask, coefs)) in held.iter().enumerate() {
+                assert_eq!(
+                    &reg.coefficients_at(&group, &grid, i, *mask),
+                    coefs,
+                    "{name} {i}"
+                );
+            }
+            if name == "stlsq" {
+                // the path reaches the law's support {0, 2}
+                assert!(held.iter().any(|(m, _)| *m == 0b101), "{held:?}");
+            }
+        }
+        // a memo holding one fit: every forgotten fit computed again, the same numbers
+        let stlsq = Stlsq {
+            threshold: 0.05,
+            measure: Measure::Contribution,
+            group_rule: GroupRule::Norm,
+            ridge: 0.0,
+            max_iter: 25,
+        };
+        let mut big = FitCache::default();
+        let mut tiny = FitCache::with_budget(0);
+        for d in [0.001, 0.05, 0.2, 0.05, 0.001] {
+            let s = Stlsq {
+                threshold: d,
+                ..stlsq
+            };
+            let a = crate::regress::fit_group(&cases, &s, 0b11_1111, 0, &mut big);
+            let b = crate::regress::fit_group(&cases, &s, 0b11_1111, 0, &mut tiny);
+            assert_eq!(a, b, "δ = {d}");
+            assert_eq!(tiny.len(), 1);
+        }
+        assert!(
+            tiny.n_fits > big.n_fits,
+            "{} vs {}",
+            tiny.n_fits,
+            big.n_fits
+        );
     }
 }

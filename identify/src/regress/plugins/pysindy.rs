@@ -89,25 +89,48 @@ impl Regressor for Pysindy {
         Ok(Some(Box::new(CasePaths(paths))))
     }
     fn fit_path(&self, group: &GroupInput<'_>, grid: &[f64]) -> PathFits {
-        (0..grid.len())
-            .map(|d| {
-                let coefs: Vec<Vec<f64>> = group
-                    .data
-                    .iter()
-                    .map(|w| {
-                        w.and_then(|p| p.downcast_ref::<CasePaths>())
-                            .map(|p| p.0[group.target][d].clone())
-                            .unwrap_or_default()
-                    })
-                    .collect();
-                let mask: Mask = coefs.iter().fold(0u64, |m, c| {
-                    m | c
-                        .iter()
-                        .enumerate()
-                        .fold(0u64, |a, (j, &x)| if x != 0.0 { a | 1 << j } else { a })
-                });
-                (mask, coefs)
-            })
-            .collect()
+        (0..grid.len()).map(|d| point(group, d)).collect()
     }
+    fn walk_path(
+        &self,
+        group: &GroupInput<'_>,
+        grid: &[f64],
+        sink: &mut dyn FnMut(Mask, &[Vec<f64>]),
+    ) {
+        for d in 0..grid.len() {
+            let (mask, coefs) = point(group, d);
+            sink(mask, &coefs);
+        }
+    }
+    /// The per-case paths are prepared once: the point is read from them.
+    fn coefficients_at(
+        &self,
+        group: &GroupInput<'_>,
+        _grid: &[f64],
+        index: usize,
+        _mask: Mask,
+    ) -> Vec<Vec<f64>> {
+        point(group, index).1
+    }
+}
+
+/// Path point `d` of a group: the union of the case supports and, per case, its raw
+/// coefficients (from the per-case paths of [`Regressor::prepare_case`]).
+fn point(group: &GroupInput<'_>, d: usize) -> (Mask, Vec<Vec<f64>>) {
+    let coefs: Vec<Vec<f64>> = group
+        .data
+        .iter()
+        .map(|w| {
+            w.and_then(|p| p.downcast_ref::<CasePaths>())
+                .map(|p| p.0[group.target][d].clone())
+                .unwrap_or_default()
+        })
+        .collect();
+    let mask: Mask = coefs.iter().fold(0u64, |m, c| {
+        m | c
+            .iter()
+            .enumerate()
+            .fold(0u64, |a, (j, &x)| if x != 0.0 { a | 1 << j } else { a })
+    });
+    (mask, coefs)
 }

@@ -39,14 +39,34 @@ impl Regressor for Stlsq {
         true
     }
     fn fit_path(&self, group: &GroupInput<'_>, grid: &[f64]) -> PathFits {
+        let mut out = Vec::with_capacity(grid.len());
+        self.walk_path(group, grid, &mut |mask, coefs| out.push((mask, coefs.to_vec())));
+        out
+    }
+    fn walk_path(
+        &self,
+        group: &GroupInput<'_>,
+        grid: &[f64],
+        sink: &mut dyn FnMut(Mask, &[Vec<f64>]),
+    ) {
         let template = template(&group.shared);
         let mut cache = FitCache::default();
-        grid.iter()
-            .map(|&d| {
-                let f = fit_at(group.cases, &template, d, group.basis, group.kept, &mut cache);
-                (vec_to_mask(&f.support), f.coefficients)
-            })
-            .collect()
+        for &d in grid {
+            let f = fit_at(group.cases, &template, d, group.basis, group.kept, &mut cache);
+            sink(vec_to_mask(&f.support), &f.coefficients);
+        }
+    }
+    /// The fit of a point is the least-squares refit on its final support (STLSQ
+    /// unbiases; [`regress::fit_group`]'s last step), a function of the support alone: one
+    /// QR solve per case on `mask`, the numbers of the path.
+    fn coefficients_at(
+        &self,
+        group: &GroupInput<'_>,
+        _grid: &[f64],
+        _index: usize,
+        mask: Mask,
+    ) -> Vec<Vec<f64>> {
+        regress::exact_fit_over_library(group.cases, mask)
     }
 }
 
