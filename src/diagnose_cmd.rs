@@ -352,6 +352,20 @@ fn blind_text(r: &BlindReport, secs: f64) -> String {
             .filter(|o| o.follow_up_correct() == Some(true))
             .count();
         let right_before = followed.iter().filter(|o| o.correct()).count();
+        // the effect visible once the runs are covered (its twin given the same tests)
+        let strong: Vec<_> = followed
+            .iter()
+            .filter(|o| {
+                o.follow_up
+                    .as_ref()
+                    .is_some_and(|f| f.gap_ratio >= STRONG_RATIO)
+                    || o.spec.truth == diagnose::blind::BlindEffect::None
+            })
+            .collect();
+        let strong_right = strong
+            .iter()
+            .filter(|o| o.follow_up_correct() == Some(true))
+            .count();
         let cases: usize = followed
             .iter()
             .filter_map(|o| o.follow_up.as_ref())
@@ -359,12 +373,15 @@ fn blind_text(r: &BlindReport, secs: f64) -> String {
             .sum();
         t.push_str(&format!(
             "\n## Follow-up of the `extrapolation` verdicts (recommended forced tests run on the truth)\n\n\
-             {} sets followed up ({} forced cases added in all): right after {} ({:.0} %), right before {}.\n",
+             {} sets followed up ({} forced cases added in all): right after {} ({:.0} %), right before {}; \
+             strong once covered (gap ratio ≥ {STRONG_RATIO} after the follow-up) or effect-free: {} of {} right.\n",
             followed.len(),
             cases,
             right,
             100.0 * right as f64 / followed.len() as f64,
-            right_before
+            right_before,
+            strong_right,
+            strong.len()
         ));
     }
     t.push_str(

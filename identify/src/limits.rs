@@ -87,9 +87,10 @@ pub const MAX_TEXT_FILE_BYTES: f64 = 67_108_864.0;
 /// Largest line of a case CSV \[bytes\] (a row of five numbers is under 120 bytes): a
 /// file without line breaks is refused at this length, not held whole.
 pub const MAX_CSV_LINE_BYTES: usize = 1 << 20;
-/// Largest number of `[[case]]` entries of a data set (ten times the paper's 448 cases ten
-/// times over).
-pub const MAX_DATASET_CASES: usize = 50_000;
+/// Largest number of `[[case]]` entries of a data set: `identify` keeps ≈ 19 kB per case
+/// (50,000 distinct files measured at 0.91–0.95 GB peak, docs/DECISIONS.md round 28), so
+/// 40,000 holds the 1-GB bound for any data set with a margin (≈ 0.78 GB).
+pub const MAX_DATASET_CASES: usize = 40_000;
 /// Largest number of rows (points) of a measured bifurcation table.
 pub const MAX_MEASURED_POINTS: usize = 100_000;
 
