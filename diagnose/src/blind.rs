@@ -365,7 +365,7 @@ pub fn follow_up_forced(
         return Err(Error::setting(
             "follow-up case",
             c.wind_speed,
-            &format!("case id `{}` is already in the forced set", c.id),
+            format!("case id `{}` is already in the forced set", c.id),
         ));
     }
     let sc = scenario;

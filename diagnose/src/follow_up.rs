@@ -12,9 +12,10 @@
 //!   rounded to 0.01 m/s,
 //! - the covered runs' pitch amplitudes rounded to 0.5° and the campaign's smallest
 //!   amplitude (two amplitudes at least, so that the new node's linear part is not carried
-//!   by one record),
-//! ranked by the held-out gap of the runs it covers over the level's noise level (the
-//! share of the unexplained gap the row can settle).
+//!   by one record).
+//!
+//! Rows are ranked by the held-out gap of the runs they cover over the level's noise level
+//! (the share of the unexplained gap a row can settle).
 
 use aeroelastic::tunnel::{CampaignPlan, Configuration, PlanRow, PLAN_FORMAT};
 use identify::dataset::Dataset;
