@@ -274,6 +274,16 @@ fn effect_seed(seed: u64, i: usize, free: bool) -> u64 {
     case_seed(seed ^ if free { 0xEFFE_C7F4 } else { 0xEFFE_C7F0 }, i)
 }
 
+/// The scenario's rig file and its mass matrix (what the injections are scaled by).
+fn rig_masses(sc: &BlindScenario) -> Result<(StructureFile, [[f64; 2]; 2])> {
+    let rig_file = StructureFile::parse(&sc.rig, "rig structure").map_err(ae("blind: rig"))?;
+    let mm = rig_file
+        .structure()
+        .map_err(ae("blind: rig"))?
+        .mass_matrix();
+    Ok((rig_file, [[mm[(0, 0)], mm[(0, 1)]], [mm[(1, 0)], mm[(1, 1)]]]))
+}
+
 /// Generates a blind set: `effect` at `strength` ∈ [0, 1] (log-uniform over
 /// [`parameter_range`]) in `form`, every random draw from `seed`, on `scenario`.
 ///
@@ -290,13 +300,7 @@ pub fn generate(
     if !(0.0..=1.0).contains(&strength) {
         return Err(Error::setting("strength", strength, "must be in [0, 1]"));
     }
-    let rig_file =
-        StructureFile::parse(&scenario.rig, "rig structure").map_err(ae("blind: rig"))?;
-    let mm = rig_file
-        .structure()
-        .map_err(ae("blind: rig"))?
-        .mass_matrix();
-    let rig = [[mm[(0, 0)], mm[(0, 1)]], [mm[(1, 0)], mm[(1, 1)]]];
+    let (_, rig) = rig_masses(scenario)?;
     let (inj, parameters) = injection(effect, strength, form, scenario, rig, seed);
     generate_injected(effect, &inj, parameters, strength, form, seed, scenario)
 }
@@ -369,12 +373,7 @@ pub fn follow_up_forced(
         ));
     }
     let sc = scenario;
-    let rig_file = StructureFile::parse(&sc.rig, "rig structure").map_err(ae("blind: rig"))?;
-    let mm = rig_file
-        .structure()
-        .map_err(ae("blind: rig"))?
-        .mass_matrix();
-    let rig = [[mm[(0, 0)], mm[(0, 1)]], [mm[(1, 0)], mm[(1, 1)]]];
+    let (rig_file, rig) = rig_masses(sc)?;
     let (inj, _) = injection(effect, strength, form, sc, rig, seed);
     let loaded = LoadedModel::parse(&sc.truth_model, "truth model", Path::new("."), None)
         .map_err(ae("blind: truth model"))?;
