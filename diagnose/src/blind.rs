@@ -281,7 +281,10 @@ fn rig_masses(sc: &BlindScenario) -> Result<(StructureFile, [[f64; 2]; 2])> {
         .structure()
         .map_err(ae("blind: rig"))?
         .mass_matrix();
-    Ok((rig_file, [[mm[(0, 0)], mm[(0, 1)]], [mm[(1, 0)], mm[(1, 1)]]]))
+    Ok((
+        rig_file,
+        [[mm[(0, 0)], mm[(0, 1)]], [mm[(1, 0)], mm[(1, 1)]]],
+    ))
 }
 
 /// Generates a blind set: `effect` at `strength` ∈ [0, 1] (log-uniform over
