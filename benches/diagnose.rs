@@ -11,8 +11,8 @@
 //!
 //! Run: `cargo bench --bench diagnose` (`-- bifurcation` for the second group only).
 
+use benchmark::blind::{generate, BlindEffect, BlindScenario};
 use criterion::{criterion_group, criterion_main, Criterion};
-use diagnose::blind::{generate, BlindEffect, BlindScenario};
 use diagnose::pipeline::{diagnose, DiagnoseOptions};
 
 fn bench(c: &mut Criterion) {

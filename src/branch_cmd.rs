@@ -12,7 +12,7 @@ use aeroelastic::branch::{
 use anyhow::Context;
 use clap::Args;
 
-use crate::flutter_cmd::load;
+use crate::models::load;
 
 /// Flags of `aeroform branch`.
 #[derive(Debug, Args)]

@@ -125,7 +125,7 @@ pub fn schemas() -> Vec<(&'static str, serde_json::Value)> {
             "bifurcation",
             schema_of::<diagnose::bifurcation::BifurcationDiagnosis>(),
         ),
-        ("blind", schema_of::<diagnose::bench::BlindReport>()),
+        ("blind", schema_of::<benchmark::bench::BlindReport>()),
         (
             "study-flutter",
             array_schema_of::<aeroelastic::documents::FlutterDoc>(

@@ -190,7 +190,7 @@ mod tests {
         let s = study::Context::context(r, "stage").unwrap_err();
         assert_eq!(code(&anyhow::Error::from(s)), 1);
         // a bad `--shard` (issue 27, row 17)
-        let shard = diagnose::sweep::parse_shard("3/2").unwrap_err();
+        let shard = benchmark::sweep::parse_shard("3/2").unwrap_err();
         assert_eq!(code(&anyhow::Error::from(shard)), 2);
     }
 

@@ -1,12 +1,13 @@
 //! `aeroform flutter`: linear flutter and divergence of a structure + aerodynamic model,
 //! V–g / V–f data written to `flutter.json`.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
-use aeroelastic::documents::{flutter_document, flutter_options, LoadedPair};
+use aeroelastic::documents::{flutter_document, flutter_options};
 use aeroelastic::flutter::FlutterMethod;
 use anyhow::Context;
 
+use crate::models::load;
 use crate::outdir::Input;
 use clap::{Args, ValueEnum};
 
@@ -37,42 +38,10 @@ pub struct FlutterArgs {
     pub ensemble: Option<usize>,
 }
 
-/// Members' laws of an identification.json model (`--ensemble N`) and the ensemble.
-pub fn ensemble_laws(
-    model: &Path,
-    chord: f64,
-    n: usize,
-) -> anyhow::Result<(
-    Vec<Result<aeroelastic::identified::IdentifiedLaw, String>>,
-    identify::ensemble::Ensemble,
-)> {
-    let id = identify::pipeline::Identification::read(model).with_context(|| {
-        format!(
-            "--ensemble needs an identification.json model ({})",
-            model.display()
-        )
-    })?;
-    let opts = aeroelastic::identified::IdentifiedOptions::new(chord);
-    let (laws, e) = aeroelastic::ensemble::member_laws(&id, &opts, Some(n))
-        .with_context(|| format!("{}: ensemble", model.display()))?;
-    Ok((laws, e.clone()))
-}
-
 #[derive(Debug, Clone, Copy, ValueEnum)]
 pub enum MethodArg {
     Pk,
     P,
-}
-
-/// Reads a structure file and a model file and builds the section (warnings of an
-/// identified model go to stderr).
-pub fn load(structure: &Path, model: &Path, chord: Option<f64>) -> anyhow::Result<LoadedPair> {
-    // The library's errors name the file and the field.
-    let pair = LoadedPair::load(structure, model, chord).context("structure and model files")?;
-    for w in pair.warnings() {
-        crate::ui::warning!("warning: {}: {w}", model.display());
-    }
-    Ok(pair)
 }
 
 /// Runs `aeroform flutter`.

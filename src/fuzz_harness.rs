@@ -425,7 +425,7 @@ pub fn aero_files(data: &[u8]) {
 
 /// Part-document harness (`aeroform merge`): the bytes read as a part file
 /// ([`identify::io::read_text`], JSON) and merged with itself as the only part
-/// ([`diagnose::sweep::merge`]); a merged document is a JSON object.
+/// ([`benchmark::sweep::merge`]); a merged document is a JSON object.
 ///
 /// # Panics
 /// Only if a reader or the merge panics, or a merge accepted gives no object.
@@ -439,7 +439,7 @@ pub fn part(data: &[u8]) {
     let Ok(v) = serde_json::from_str::<serde_json::Value>(&text) else {
         return;
     };
-    if let Ok(doc) = diagnose::sweep::merge(&[("fuzz.part.json".to_string(), v)]) {
+    if let Ok(doc) = benchmark::sweep::merge(&[("fuzz.part.json".to_string(), v)]) {
         assert!(doc.is_object(), "merged document is not an object");
     }
 }

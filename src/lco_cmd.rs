@@ -11,7 +11,7 @@ use aeroelastic::lco::{
 use anyhow::Context;
 use clap::Args;
 
-use crate::flutter_cmd::load;
+use crate::models::load;
 use aeroform::limits::{abs_at_most, parse_speeds, positive_at_most, MAX_PITCH_DEG, MAX_SPEED};
 
 /// Flags of `aeroform lco`.
@@ -149,7 +149,7 @@ pub fn run(args: &LcoArgs) -> anyhow::Result<()> {
             Some(u) => vec![u],
             None => sweep_speeds.clone(),
         };
-        let (laws, e) = crate::flutter_cmd::ensemble_laws(&args.model, l.section.aero.chord(), n)?;
+        let (laws, e) = crate::models::ensemble_laws(&args.model, l.section.aero.chord(), n)?;
         let le = aeroelastic::ensemble::lco_ensemble(
             &l.structure,
             &laws,

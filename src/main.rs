@@ -1,21 +1,11 @@
 //! aeroform command-line interface: parses flags, builds library objects, draws progress
 //! bars and writes files. No physics lives here.
 
-mod bifurcation_cmd;
-mod branch_cmd;
-mod diagnose_args;
-mod diagnose_cmd;
 mod exit;
-mod flutter_cmd;
-mod identify_cmd;
 mod interrupt;
-mod lco_cmd;
+mod models;
 mod outdir;
-mod plot_cmd;
 mod progress;
-mod run_cmd;
-mod sweep_cmd;
-mod tunnel_cmd;
 mod ui;
 
 use std::process::ExitCode;
@@ -50,31 +40,56 @@ fn parse_style(s: &str) -> Result<plots::FigureStyle, String> {
     plots::FigureStyle::parse(s)
 }
 
-#[derive(Debug, Subcommand)]
-enum Command {
+/// The command registry: one line per command, `Variant(module::Flags) => run`, its doc
+/// comment the command's help line. The macro declares the module (`src/<module>.rs`),
+/// the clap subcommand and the dispatch, so a new command is one file (its flags and a
+/// `run(&Flags) -> anyhow::Result<_>`) plus one line here (issue 40 item 2). A command's
+/// module may use the shared layers (`models`, `outdir`, `progress`, `ui`, `exit`,
+/// `interrupt`), never another command's module.
+macro_rules! commands {
+    ($( $(#[$meta:meta])* $variant:ident($module:ident :: $flags:ident) => $run:ident, )*) => {
+        $( mod $module; )*
+
+        #[derive(Debug, Subcommand)]
+        enum Command {
+            $( $(#[$meta])* $variant($module::$flags), )*
+        }
+
+        impl Command {
+            /// Runs the command (its result value, if any, is written by the command).
+            fn run(self) -> anyhow::Result<()> {
+                match self {
+                    $( Command::$variant(a) => $module::$run(&a).map(drop), )*
+                }
+            }
+        }
+    };
+}
+
+commands! {
     /// Run a study file end to end (default: the built-in quickstart study).
-    Run(run_cmd::RunArgs),
+    Run(run_cmd::RunArgs) => run,
     /// Identify the nonlinear aerodynamic force law (Eq. 19) of a data set folder.
-    Identify(identify_cmd::IdentifyArgs),
+    Identify(identify_cmd::IdentifyArgs) => run,
     /// Linear flutter and divergence of a structure with an aerodynamic model.
-    Flutter(flutter_cmd::FlutterArgs),
+    Flutter(flutter_cmd::FlutterArgs) => run,
     /// Limit-cycle oscillation at one speed or over a sweep (up and down).
-    Lco(lco_cmd::LcoArgs),
+    Lco(lco_cmd::LcoArgs) => run,
     /// LCO branches by continuation (stable and unstable, folds, Floquet stability).
-    Branch(branch_cmd::BranchArgs),
+    Branch(branch_cmd::BranchArgs) => run,
     /// Virtual wind tunnel: forced-motion or free-response data sets.
     #[command(subcommand)]
-    Tunnel(tunnel_cmd::TunnelCommand),
+    Tunnel(tunnel_cmd::TunnelCommand) => run,
     /// Redraw the figures and report of a study output folder from its result files.
-    Plot(plot_cmd::PlotArgs),
+    Plot(plot_cmd::PlotArgs) => run,
     /// Sim-to-real gap: where predictions and measurements differ, which unmodelled effect
     /// causes it, how far it shrinks (`--blind N`: the withheld-effect benchmark).
-    Diagnose(diagnose_cmd::DiagnoseArgs),
+    Diagnose(diagnose_cmd::DiagnoseArgs) => run,
     /// A large job (flutter/LCO map over μ, σ, x_α, r²; withheld-effect benchmark) from a
     /// JSON specification, whole or one shard (`--shard i/n`, e.g. a Slurm array task).
-    Sweep(sweep_cmd::SweepArgs),
+    Sweep(sweep_cmd::SweepArgs) => run,
     /// Merges the part documents of `--shard` runs into the document of the whole run.
-    Merge(sweep_cmd::MergeArgs),
+    Merge(merge_cmd::MergeArgs) => run,
 }
 
 fn main() -> ExitCode {
@@ -85,18 +100,7 @@ fn main() -> ExitCode {
     });
     plots::set_figure_style(cli.figure_style);
     interrupt::install();
-    let result = match cli.command {
-        Command::Run(a) => run_cmd::run(&a),
-        Command::Identify(a) => identify_cmd::run(&a).map(|_| ()),
-        Command::Flutter(a) => flutter_cmd::run(&a),
-        Command::Lco(a) => lco_cmd::run(&a),
-        Command::Branch(a) => branch_cmd::run(&a),
-        Command::Tunnel(c) => tunnel_cmd::run(&c),
-        Command::Plot(a) => plot_cmd::run(&a),
-        Command::Diagnose(a) => diagnose_cmd::run(&a),
-        Command::Sweep(a) => sweep_cmd::run(&a),
-        Command::Merge(a) => sweep_cmd::merge_run(&a),
-    };
+    let result = cli.command.run();
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {

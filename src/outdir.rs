@@ -895,6 +895,25 @@ pub fn check_complete(dir: &Path) -> anyhow::Result<()> {
     identify::io::check_complete_folder(dir).map_err(|e| Usage(e.to_string()).into())
 }
 
+/// Writes the document atomically into its folder, registered as a shared folder: an
+/// interrupt removes this process's temporary file, and temporary files of dead processes
+/// there are removed first (the kill campaign of tests/campaign.rs found `merge` leaving
+/// `.OUT.PID.tmp` after SIGINT).
+pub fn write_json(
+    path: &std::path::Path,
+    v: &serde_json::Value,
+    inputs: &[Input<'_>],
+) -> anyhow::Result<()> {
+    let dir = path
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(std::path::Path::new("."));
+    crate::outdir::refuse_symlink(path, "output file")?;
+    let _shared = crate::outdir::SharedDir::begin(dir, &[path], inputs)?;
+    identify::io::write_atomic(path, format!("{v:#}\n").as_bytes())?;
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -1,13 +1,12 @@
-//! `aeroform sweep SPEC.json [--shard i/n]` and `aeroform merge OUT PART...`: large jobs
-//! split into shards (e.g. a Slurm job array) and merged into the document of the unsplit
-//! run (`diagnose::sweep`; docs/PYTHON.md "Scale-out").
+//! `aeroform sweep SPEC.json [--shard i/n]`: large jobs split into shards (e.g. a Slurm job
+//! array), merged by `aeroform merge` (`merge_cmd`) into the document of the unsplit run
+//! (`benchmark::sweep`; docs/PYTHON.md "Scale-out").
 
 use std::path::PathBuf;
 
 use anyhow::Context;
+use benchmark::sweep::{parse_shard, SweepSpec};
 use clap::Args;
-use diagnose::sweep::{merge, parse_shard, SweepSpec};
-use identify::io::write_atomic;
 
 use crate::outdir::Input;
 use crate::progress::CountBar;
@@ -23,35 +22,6 @@ pub struct SweepArgs {
     /// Output file (default `sweep.json`, or `sweep.part-I-of-N.json` with `--shard`).
     #[arg(long)]
     pub out: Option<PathBuf>,
-}
-
-/// Flags of `aeroform merge`.
-#[derive(Debug, Args)]
-pub struct MergeArgs {
-    /// Output file: the document of the whole sweep.
-    pub out: PathBuf,
-    /// Part documents written by `--shard` runs (any order).
-    #[arg(required = true)]
-    pub parts: Vec<PathBuf>,
-}
-
-/// Writes the document atomically into its folder, registered as a shared folder: an
-/// interrupt removes this process's temporary file, and temporary files of dead processes
-/// there are removed first (the kill campaign of tests/campaign.rs found `merge` leaving
-/// `.OUT.PID.tmp` after SIGINT).
-fn write_json(
-    path: &std::path::Path,
-    v: &serde_json::Value,
-    inputs: &[Input<'_>],
-) -> anyhow::Result<()> {
-    let dir = path
-        .parent()
-        .filter(|d| !d.as_os_str().is_empty())
-        .unwrap_or(std::path::Path::new("."));
-    crate::outdir::refuse_symlink(path, "output file")?;
-    let _shared = crate::outdir::SharedDir::begin(dir, &[path], inputs)?;
-    write_atomic(path, format!("{v:#}\n").as_bytes())?;
-    Ok(())
 }
 
 /// Runs `aeroform sweep`.
@@ -76,40 +46,7 @@ pub fn run(args: &SweepArgs) -> anyhow::Result<()> {
             doc.with_context(spec_ctx)?
         }
     };
-    write_json(&out, &doc, &inputs)?;
+    crate::outdir::write_json(&out, &doc, &inputs)?;
     crate::ui::say!("{} items; wrote {}", spec.n_items(), out.display());
-    crate::ui::document(&doc)
-}
-
-/// Runs `aeroform merge`. An OUT that is one of the parts (the same file, by any path) is
-/// refused before anything is read or written.
-pub fn merge_run(args: &MergeArgs) -> anyhow::Result<()> {
-    let same = |a: &std::path::Path, b: &std::path::Path| match (a.canonicalize(), b.canonicalize())
-    {
-        (Ok(x), Ok(y)) => x == y,
-        _ => a == b,
-    };
-    if let Some(p) = args.parts.iter().find(|p| same(&args.out, p)) {
-        crate::exit::refuse!(
-            "merge: OUT {} is also one of the parts ({}); give a new file for the merged document",
-            args.out.display(),
-            p.display()
-        );
-    }
-    let parts = args
-        .parts
-        .iter()
-        .map(|p| {
-            let text =
-                identify::io::read_text(p).with_context(|| format!("reading {}", p.display()))?;
-            let v: serde_json::Value = serde_json::from_str(&text)
-                .with_context(|| format!("{}: not JSON", p.display()))?;
-            Ok((p.display().to_string(), v))
-        })
-        .collect::<anyhow::Result<Vec<_>>>()?;
-    let doc = merge(&parts)?;
-    let inputs: Vec<_> = args.parts.iter().map(|p| Input::new("PART", p)).collect();
-    write_json(&args.out, &doc, &inputs)?;
-    crate::ui::say!("merged {} parts; wrote {}", parts.len(), args.out.display());
     crate::ui::document(&doc)
 }

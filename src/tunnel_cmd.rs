@@ -7,7 +7,7 @@ use aeroelastic::tunnel::{self, ForcedOptions, FreeOptions, TunnelProgress};
 use anyhow::Context;
 use clap::{Args, Subcommand};
 
-use crate::flutter_cmd::load;
+use crate::models::load;
 use crate::outdir::{Input, OutDir};
 use crate::progress::CountBar;
 use aeroform::limits::{abs_at_most, parse_speeds, MAX_PITCH_DEG};
@@ -129,8 +129,8 @@ pub fn run(cmd: &TunnelCommand) -> anyhow::Result<()> {
 
 fn blind(a: &BlindArgs) -> anyhow::Result<()> {
     use aeroelastic::effects::Form;
-    use diagnose::blind::{generate, write_blind, BlindScenario};
-    let effect = diagnose::blind::BlindEffect::from_name(&a.effect)?;
+    use benchmark::blind::{generate, write_blind, BlindScenario};
+    let effect = benchmark::blind::BlindEffect::from_name(&a.effect)?;
     if !(0.0..=1.0).contains(&a.strength) {
         return Err(
             crate::exit::Usage(format!("--strength {}: must be in [0, 1]", a.strength)).into(),

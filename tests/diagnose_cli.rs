@@ -5,7 +5,7 @@
 use std::path::Path;
 
 use aeroelastic::effects::Form;
-use diagnose::blind::{generate, write_blind, BlindEffect, BlindScenario};
+use benchmark::blind::{generate, write_blind, BlindEffect, BlindScenario};
 use diagnose::Effect;
 
 mod common;

@@ -4,7 +4,7 @@
 
 use serde::{Deserialize, Serialize};
 
-pub use crate::catalogue::{Effect, Level};
+pub use crate::catalogue::{log_map, DrawContext, Effect, Level};
 use crate::Result;
 
 /// The outcome of a diagnosis.

@@ -1,4 +1,4 @@
-//! Sim-to-real gap: localisation, effect catalogue, attribution, blind benchmark
+//! Sim-to-real gap: localisation, effect catalogue, attribution, verdict
 //! (DESIGN.md §5).
 //!
 //! * [`effect`]: the catalogue names and verdicts; `catalogue`: one file per effect (its
@@ -10,27 +10,23 @@
 //! * [`bifurcation`]: the bifurcation level (a measured bifurcation diagram: Hopf, folds,
 //!   LCO branches, by continuation inside the fit);
 //! * [`verdict`]: from the levels' findings to one verdict;
-//! * [`blind`]: the withheld-effect data-set generator (the diagnosis never reads it);
-//! * [`mod@bench`]: the withheld-effect benchmark statistics;
-//! * [`physics`]: the drawn rigs and aerodynamic laws of the drawn-shapes benchmark's truths;
-//! * [`sweep`]: large jobs split into independent items (shards, Dask tasks) and merged.
+//! * [`follow_up`]: the forced tests that would settle an `extrapolation` (a campaign plan).
+//!
+//! The withheld-effect generator, the benchmarks and the sharded sweeps that run many
+//! diagnoses live in the `benchmark` crate above this one: the diagnosis never reads a
+//! truth.
 
-pub mod bench;
-pub mod bench_run;
 pub mod bifurcation;
-pub mod blind;
 mod catalogue;
 pub mod effect;
 pub mod error;
 pub mod follow_up;
 pub mod force;
 mod numerics;
-pub mod physics;
 pub mod pipeline;
 pub mod report;
 mod stats;
 pub mod structure;
-pub mod sweep;
 pub mod system;
 pub mod verdict;
 

@@ -35,6 +35,7 @@ __all__ = [
     "branch",
     "Branch",
     "diagnose",
+    "diagnose_branch",
     "sweep",
     "sweep_local",
     "parse_speeds",
@@ -558,3 +559,35 @@ def diagnose(
     ``diagnosis.json`` (verdict, gap, where, candidates, levels)."""
     fr = None if free is None else _as_dataset(free)._inner
     return json.loads(_core.diagnose(_as_dataset(forced)._inner, fr, seed))
+
+
+def diagnose_branch(
+    measured: PathLike,
+    model: PathLike,
+    *,
+    structure: Optional[PathLike] = None,
+    free: Iterable[PathLike] = (),
+    onsets: Iterable[str] = (),
+    no_lco: Iterable[str] = (),
+) -> Dict[str, Any]:
+    """Bifurcation-level diagnosis, as ``aeroform diagnose --measured-branch``: the sim's
+    bifurcation diagram (Hopf, folds, LCO branches) against a measured one, the catalogue's
+    candidates fitted by continuation and scored by leave-one-speed-out. ``measured``: a
+    CSV table of amplitudes (rows ``point``, ``onset``, ``none``; docs/DATA_FORMAT.md) or a
+    data-set folder of records; ``model``: the sim's aerodynamic model file; ``structure``:
+    a structure file, or ``None`` for the data sets' ``[structure]``; ``free``: further
+    data sets (still-air decays); ``onsets`` / ``no_lco``: rows as the command's
+    ``--onset U[:F][:sub|super][:sd=SD]`` and ``--no-lco U[:PITCH[:HEAVE]]``. The input
+    choices are the library's, the same as the command's. Returns the content of
+    ``bifurcation.json``."""
+    st = None if structure is None else os.fspath(structure)
+    return json.loads(
+        _core.diagnose_branch(
+            os.fspath(measured),
+            os.fspath(model),
+            st,
+            [os.fspath(f) for f in free],
+            [str(o) for o in onsets],
+            [str(a) for a in no_lco],
+        )
+    )

@@ -12,8 +12,8 @@ use aeroelastic::documents::{
     branch_csv, branch_document, flutter_document, lco_run_document, lco_sweep_document, LoadedPair,
 };
 use aeroelastic::flutter::FlutterMethod;
+use benchmark::sweep::SweepSpec;
 use diagnose::pipeline::DiagnoseOptions;
-use diagnose::sweep::SweepSpec;
 use identify::dataset::{record_from_table, CaseKind, CaseTable, Dataset, Manifest};
 use identify::pipeline::IdentifySettings;
 use identify::preprocess::{PreprocessOptions, VelocityMethod};
@@ -508,6 +508,46 @@ fn py_diagnose(
     .map_err(err)
 }
 
+/// Bifurcation-level diagnosis (`aeroform diagnose --measured-branch`): the same request
+/// and the same input choices as the command (`diagnose::bifurcation::inputs`): `measured`
+/// a CSV table or a data-set folder of records, `structure` a structure file or `None`
+/// (the data sets' `[structure]`), `free` further data sets (still-air decays), `onsets`
+/// and `no_lco` rows as the command's `--onset` / `--no-lco` values. Returns the
+/// `bifurcation.json` document.
+#[pyfunction]
+#[pyo3(signature = (measured, model, structure = None, free = Vec::new(), onsets = Vec::new(), no_lco = Vec::new()))]
+fn diagnose_branch(
+    py: Python<'_>,
+    measured: PathBuf,
+    model: PathBuf,
+    structure: Option<PathBuf>,
+    free: Vec<PathBuf>,
+    onsets: Vec<String>,
+    no_lco: Vec<String>,
+) -> PyResult<String> {
+    let version = format!("aeroform {} (python)", env!("CARGO_PKG_VERSION"));
+    py.detach(|| {
+        let prepared = diagnose::bifurcation::inputs::MeasuredBranchRequest {
+            measured: &measured,
+            model: &model,
+            structure: structure.as_deref(),
+            free: &free,
+            onsets: &onsets,
+            no_lco: &no_lco,
+        }
+        .prepare()
+        .map_err(|e| e.to_string())?;
+        let d = prepared
+            .diagnose(
+                &diagnose::bifurcation::BifurcationOptions::default(),
+                &version,
+            )
+            .map_err(|e| e.to_string())?;
+        serde_json::to_string(&d).map_err(|e| e.to_string())
+    })
+    .map_err(err)
+}
+
 fn spec(spec_json: &str) -> PyResult<SweepSpec> {
     SweepSpec::from_json(spec_json, "sweep spec").map_err(err)
 }
@@ -570,6 +610,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(lco, m)?)?;
     m.add_function(wrap_pyfunction!(branch, m)?)?;
     m.add_function(wrap_pyfunction!(py_diagnose, m)?)?;
+    m.add_function(wrap_pyfunction!(diagnose_branch, m)?)?;
     m.add_function(wrap_pyfunction!(limits, m)?)?;
     m.add_function(wrap_pyfunction!(regressors, m)?)?;
     m.add_function(wrap_pyfunction!(sweep_n_items, m)?)?;

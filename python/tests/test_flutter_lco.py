@@ -118,3 +118,16 @@ def test_lag_law_is_flown_like_any_model(tmp_path):
     py = aeroform.branch(str(S), str(lag), "3:6")
     assert max_difference(cli["hopf_points"], py["hopf_points"]) == 0.0
     assert py["branches"][0]["criticality"] == "supercritical"
+
+
+def test_diagnose_branch_makes_the_commands_input_choices():
+    """`aeroform.diagnose_branch` reads its inputs through the same library request as
+    `aeroform diagnose --measured-branch` (diagnose::bifurcation::inputs): the same
+    refusals, naming what is missing or wrong, before any fit runs."""
+    # a table carries no [structure]: one must be given
+    with pytest.raises(aeroform.AeroformError, match="no structure"):
+        aeroform.diagnose_branch(BMEAS, BM)
+    with pytest.raises(aeroform.AeroformError, match="--onset"):
+        aeroform.diagnose_branch(BMEAS, BM, structure=BS, onsets=["fast"])
+    with pytest.raises(aeroform.AeroformError, match="--no-lco"):
+        aeroform.diagnose_branch(BMEAS, BM, structure=BS, no_lco=["-3"])

@@ -22,9 +22,9 @@
 //! Units: U [m/s], pitch amplitudes \[rad\], heave amplitudes \[m\] (first harmonic, peak),
 //! frequencies \[Hz\].
 
-pub mod bench;
 pub mod candidates;
 mod fit;
+pub mod inputs;
 pub mod points;
 pub(crate) mod scales;
 

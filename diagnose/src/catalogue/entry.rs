@@ -70,7 +70,7 @@ pub(crate) trait Entry: Sync {
 
 /// What a draw of the withheld-effect generator knows beyond the effect's own parameter.
 #[derive(Debug, Clone, Copy)]
-pub(crate) struct DrawContext {
+pub struct DrawContext {
     /// The rig's mass matrix [[m, S], [S, I]] per unit span.
     pub rig: [[f64; 2]; 2],
     /// Section depth D \[m\] (the shedding length).
@@ -112,6 +112,6 @@ pub(crate) trait Draw: Sync {
 }
 
 /// Log-uniform map of s ∈ [0, 1] onto [lo, hi] (lo, hi of the same sign).
-pub(crate) fn log_map(s: f64, lo: f64, hi: f64) -> f64 {
+pub fn log_map(s: f64, lo: f64, hi: f64) -> f64 {
     lo * (hi / lo).powf(s)
 }

@@ -12,7 +12,8 @@
 
 mod entry;
 
-pub(crate) use entry::{log_map, DrawContext, Entry};
+pub(crate) use entry::Entry;
+pub use entry::{log_map, DrawContext};
 
 use aeroelastic::section::Section;
 use serde::{Deserialize, Serialize};
@@ -174,6 +175,30 @@ impl Effect {
             .into_iter()
             .filter(|e| e.entry().draw().is_some())
             .collect()
+    }
+
+    /// The parameter the withheld-effect generator draws for this effect in `form`: (name
+    /// with unit, value at strength 0, value at strength 1), log-uniform between them
+    /// ([`log_map`]); `None` for an effect the generator cannot inject.
+    pub fn draw_range(self, form: aeroelastic::effects::Form) -> Option<(&'static str, f64, f64)> {
+        self.entry().draw().map(|d| d.range(form))
+    }
+
+    /// The generator's injection of this effect at parameter value `p` (strength `s` ∈
+    /// [0, 1], from [`Effect::draw_range`]) and the parameters its truth records (name with
+    /// unit, value): the drawn one first when the effect records it, then the effect's own.
+    /// `None` for an effect the generator cannot inject.
+    pub fn draw_injection(
+        self,
+        p: f64,
+        s: f64,
+        form: aeroelastic::effects::Form,
+        cx: &DrawContext,
+    ) -> Option<(aeroelastic::effects::InjectedEffect, Vec<(String, f64)>)> {
+        let d = self.entry().draw()?;
+        let (e, more) = d.inject(p, s, form, cx);
+        let drawn = d.writes_drawn().then(|| (d.range(form).0.to_string(), p));
+        Some((e, drawn.into_iter().chain(more).collect()))
     }
 }
 

@@ -4,7 +4,7 @@
 //! at K ≈ 0.56–1.1, so the sim's tables are extrapolated for most runs.
 
 use aeroelastic::effects::Form;
-use diagnose::blind::{generate, BlindEffect, BlindScenario, BlindSet};
+use benchmark::blind::{generate, BlindEffect, BlindScenario, BlindSet};
 use diagnose::pipeline::{diagnose, DiagnoseOptions};
 use diagnose::report::Diagnosis;
 use diagnose::{Effect, Verdict};
@@ -184,7 +184,7 @@ fn the_recommended_forced_tests_cover_the_runs_and_settle_an_effect_free_set() {
         assert!(r.amplitudes_deg.len() >= 2, "{text}");
     }
     let cases = plan.cases();
-    let forced = diagnose::blind::follow_up_forced(
+    let forced = benchmark::blind::follow_up_forced(
         BlindEffect::None,
         0.0,
         Form::Primary,

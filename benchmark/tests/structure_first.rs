@@ -5,7 +5,7 @@
 //! name none.
 
 use aeroelastic::effects::{Form, InjectedEffect, Injection};
-use diagnose::blind::{generate, generate_injected, write_blind, BlindEffect, BlindScenario};
+use benchmark::blind::{generate, generate_injected, write_blind, BlindEffect, BlindScenario};
 use diagnose::pipeline::{diagnose, DiagnoseOptions};
 use diagnose::report::Diagnosis;
 use diagnose::{Effect, Verdict};
@@ -22,7 +22,7 @@ fn opts(seed: u64) -> DiagnoseOptions {
 }
 
 /// Generates, writes and reads back the set, then diagnoses what was read.
-fn through_files(set: &diagnose::blind::BlindSet, seed: u64) -> Diagnosis {
+fn through_files(set: &benchmark::blind::BlindSet, seed: u64) -> Diagnosis {
     let dir = tempfile::tempdir().unwrap();
     write_blind(dir.path(), set).unwrap();
     let forced = identify::dataset::read_dataset(&dir.path().join("forced")).unwrap();

@@ -8,10 +8,10 @@ use rayon::prelude::*;
 use crate::bench::FollowUpOutcome;
 use crate::bench::{draw_specs, summarize, BlindOutcome, BlindReport, BlindSpec};
 use crate::blind::{follow_up_forced, generate, BlindEffect, BlindScenario};
-use crate::effect::Verdict;
-use crate::pipeline::{diagnose, DiagnoseOptions};
-use crate::report::Diagnosis;
 use crate::{Error, Result};
+use diagnose::effect::Verdict;
+use diagnose::pipeline::{diagnose, DiagnoseOptions};
+use diagnose::report::Diagnosis;
 
 /// Settings of a benchmark run.
 #[derive(Debug, Clone)]
@@ -30,7 +30,7 @@ pub struct BlindOptions {
     /// scenario's campaign and noise then come from the shape.
     pub shapes: bool,
     /// Close the loop of every `extrapolation`: run the recommended forced tests
-    /// ([`crate::follow_up::plan`]) on the truth and diagnose the set again
+    /// ([`diagnose::follow_up::plan`]) on the truth and diagnose the set again
     /// ([`BlindOutcome::follow_up`]).
     pub follow_up: bool,
 }
@@ -101,7 +101,7 @@ pub fn run_one(spec: &BlindSpec, opts: &BlindOptions) -> Result<(BlindOutcome, D
         .candidates
         .iter()
         .filter(|c| Some(c.effect) == true_effect && c.failure.is_none())
-        .map(|c| crate::verdict::plain_shrink(c.before, c.after))
+        .map(|c| diagnose::verdict::plain_shrink(c.before, c.after))
         .fold(None, |a: Option<f64>, s| Some(a.map_or(s, |a| a.max(s))));
     let outcome = BlindOutcome {
         spec: spec.clone(),

@@ -7,14 +7,17 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 
 use aeroelastic::files::{LoadedModel, StructureFile};
 use anyhow::Context;
-use diagnose::bench::{acceptance_lines, confusion_markdown, BlindReport, STRONG_RATIO};
-use diagnose::bench_run::{run_blind, BlindOptions};
+use benchmark::bench::{acceptance_lines, confusion_markdown, BlindReport, STRONG_RATIO};
+use benchmark::bench_run::{run_blind, BlindOptions};
 use diagnose::pipeline::{diagnose, diagnose_free, merge_free, DiagnoseOptions};
 use diagnose::Diagnosis;
 use identify::dataset::read_dataset;
 use identify::io::write_atomic;
 
-pub use crate::diagnose_args::DiagnoseArgs;
+mod args;
+mod measured_branch;
+
+pub use args::DiagnoseArgs;
 use crate::progress::CountBar;
 
 /// Runs `aeroform diagnose`.
@@ -48,16 +51,16 @@ pub fn run(args: &DiagnoseArgs) -> anyhow::Result<()> {
             return blind_shard(n, args.seed, s, &out);
         }
         if args.branch_level {
-            let bench = diagnose::bifurcation::bench::BranchBenchOptions {
+            let bench = benchmark::branch_bench::BranchBenchOptions {
                 misgiven_structure: args.misgiven_structure,
                 hold_given: false,
             };
-            return crate::bifurcation_cmd::blind(n, args.seed, &bench, &out, args.force);
+            return measured_branch::blind(n, args.seed, &bench, &out, args.force);
         }
         return blind(n, args.seed, args.shapes, args.follow_up, &out, args.force);
     }
     if let Some(m) = &args.measured_branch {
-        return crate::bifurcation_cmd::run(args, m);
+        return measured_branch::run(args, m);
     }
     if args.model.is_some() && args.free.is_empty() {
         return Err(crate::exit::Usage(
@@ -267,10 +270,10 @@ fn blind(
     crate::ui::document(&report)
 }
 
-/// One shard of the benchmark as a part document (`diagnose::sweep`).
+/// One shard of the benchmark as a part document (`benchmark::sweep`).
 fn blind_shard(n: usize, seed: u64, shard: &str, out: &Path) -> anyhow::Result<()> {
-    let (i, k) = diagnose::sweep::parse_shard(shard)?;
-    let spec = diagnose::sweep::SweepSpec::Blind(diagnose::sweep::BlindSweep { n, seed });
+    let (i, k) = benchmark::sweep::parse_shard(shard)?;
+    let spec = benchmark::sweep::SweepSpec::Blind(benchmark::sweep::BlindSweep { n, seed });
     spec.validate("--blind")?;
     let path = out.join(format!("blind.part-{i}-of-{k}.json"));
     crate::outdir::refuse_symlink(out, "--out")?;
@@ -359,7 +362,7 @@ fn blind_text(r: &BlindReport, secs: f64) -> String {
                 o.follow_up
                     .as_ref()
                     .is_some_and(|f| f.gap_ratio >= STRONG_RATIO)
-                    || o.spec.truth == diagnose::blind::BlindEffect::None
+                    || o.spec.truth == benchmark::blind::BlindEffect::None
             })
             .collect();
         let strong_right = strong
@@ -395,7 +398,7 @@ fn blind_text(r: &BlindReport, secs: f64) -> String {
         .iter()
         .filter(|o| {
             o.error.is_none()
-                && (o.strong() || o.spec.truth == diagnose::blind::BlindEffect::None)
+                && (o.strong() || o.spec.truth == benchmark::blind::BlindEffect::None)
                 && !o.correct()
         })
         .map(|o| {

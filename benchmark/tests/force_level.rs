@@ -1,10 +1,10 @@
 //! Force level of the diagnosis on blind forced campaigns from the real generator
-//! (`diagnose::blind::generate`, base scenario: configurations D and G, pitch amplitudes
+//! (`benchmark::blind::generate`, base scenario: configurations D and G, pitch amplitudes
 //! 6–24°, U = 4–10 m/s, 512 Hz, 8 s, paper noise). Only the forced records are used; the
 //! generator's forms differ from the candidates' forms in `diagnose::force`.
 
 use aeroelastic::effects::Form;
-use diagnose::blind::{generate, BlindEffect, BlindScenario};
+use benchmark::blind::{generate, BlindEffect, BlindScenario};
 use diagnose::force::{force_level, force_level_profiled, ForceOptions};
 use diagnose::{Effect, LevelResult};
 use identify::dataset::Dataset;

@@ -1,10 +1,10 @@
-//! System level on blind data sets (`diagnose::blind::generate` on the default scenario:
+//! System level on blind data sets (`benchmark::blind::generate` on the default scenario:
 //! forced configurations D and G × 4 amplitudes × 5 speeds, free runs at 0.7–1.15 U_F,
 //! 12 s, α₀ = 4°, paper noise). The test data come from the blind generator only; the
 //! system level never sees the truth.
 
 use aeroelastic::effects::Form;
-use diagnose::blind::{generate, BlindEffect, BlindScenario, BlindSet};
+use benchmark::blind::{generate, BlindEffect, BlindScenario, BlindSet};
 use diagnose::report::LevelResult;
 use diagnose::system::{system_level, SystemOptions};
 use diagnose::Effect;

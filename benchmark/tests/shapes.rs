@@ -2,13 +2,13 @@
 //! --shapes`) that round 14 misdiagnosed, one per cause (docs/BLIND.md, DECISIONS "Diagnosis
 //! on the drawn campaign shapes").
 
-use diagnose::bench::{draw_specs, CampaignShape};
-use diagnose::bench_run::{run_one, BlindOptions};
-use diagnose::blind::{generate, BlindEffect};
+use benchmark::bench::{draw_specs, CampaignShape};
+use benchmark::bench_run::{run_one, BlindOptions};
+use benchmark::blind::{generate, BlindEffect};
 use diagnose::force::{force_level, ForceOptions};
 use diagnose::Verdict;
 
-fn spec(index: usize) -> diagnose::bench::BlindSpec {
+fn spec(index: usize) -> benchmark::bench::BlindSpec {
     let mut s = draw_specs(330, 2026)[index].clone();
     s.shape = Some(CampaignShape::draw(s.seed));
     s
@@ -111,8 +111,9 @@ fn kirchhoff_stall_columns_explain_a_separation_point_stall() {
 /// at the noise, and the sim built from it leaves the free runs unexplained by any effect.
 #[test]
 fn an_effective_angle_law_is_not_an_effect() {
-    let mut s =
-        diagnose::bench::draw_specs_from(330, 2026, &diagnose::bench::shapes_truths())[54].clone();
+    let mut s = benchmark::bench::draw_specs_from(330, 2026, &benchmark::bench::shapes_truths())
+        [54]
+    .clone();
     assert_eq!(s.truth, BlindEffect::None);
     s.shape = Some(CampaignShape::draw_with_physics(s.seed));
     let mut opts = BlindOptions::new(330, 2026);

@@ -304,7 +304,7 @@ fn a_change_at_rest_is_conformed_to_the_decays_and_gives_back_the_truths_structu
 #[test]
 #[ignore = "slow: 20 generated rigs at the bifurcation level (about 7 min)"]
 fn misgiven_structures_of_the_generated_benchmark_are_corrected() {
-    use diagnose::bifurcation::bench::{run_bench_with, BranchBenchOptions};
+    use benchmark::branch_bench::{run_bench_with, BranchBenchOptions};
     let opts = BranchBenchOptions {
         misgiven_structure: true,
         hold_given: false,
@@ -346,7 +346,7 @@ fn misgiven_structures_of_the_generated_benchmark_are_corrected() {
 #[test]
 #[ignore = "open (issue 42 item 5): fails, cause found, not fixed; see the doc comment"]
 fn a_still_air_decay_does_not_raise_the_free_response_levels_null() {
-    use diagnose::blind::{generate, BlindEffect, BlindScenario};
+    use benchmark::blind::{generate, BlindEffect, BlindScenario};
     use diagnose::system::{null_level, system_level, SystemOptions};
     // limit cycles above the flutter speed: runs whose signal stands far above the noise
     let plain = BlindScenario {

@@ -4,8 +4,8 @@
 //! output is quoted in the issue notes (`aeroform diagnose --blind 330 --seed 2026` gives the
 //! same sets).
 
-use diagnose::bench::{acceptance_lines, confusion_markdown, BlindReport};
-use diagnose::bench_run::{run_blind, BlindOptions};
+use benchmark::bench::{acceptance_lines, confusion_markdown, BlindReport};
+use benchmark::bench_run::{run_blind, BlindOptions};
 
 fn run(n: usize, seed: u64) -> BlindReport {
     let r = run_blind(&BlindOptions::new(n, seed), &|_| {});
@@ -69,7 +69,7 @@ fn blind_benchmark_full() {
 /// runs predate `aerodynamic_scale` in the verdict columns.)
 #[test]
 fn stored_benchmarks_read_and_summarise_to_themselves() {
-    use diagnose::bench::summarize;
+    use benchmark::bench::summarize;
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/blind");
     let name = "blind-330-shapes-physics-r21-seed2026.json";
     let text = std::fs::read_to_string(dir.join(name)).unwrap();

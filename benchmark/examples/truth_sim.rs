@@ -1,12 +1,12 @@
 //! Debug aid: the system level of one drawn-shapes blind set with the generator's truth
-//! law as the sim (no identification): `cargo run --release -p diagnose --example truth_sim -- INDEX [DIR [N SEED]]`
+//! law as the sim (no identification): `cargo run --release -p benchmark --example truth_sim -- INDEX [DIR [N SEED]]`
 //! (DIR: also write the set there, `-` for none; N, SEED: the benchmark, default 330 2026).
 
 use std::sync::Arc;
 
-use diagnose::bench::{draw_specs_from, shapes_truths, CampaignShape};
-use diagnose::bench_run::BlindOptions;
-use diagnose::blind::generate;
+use benchmark::bench::{draw_specs_from, shapes_truths, CampaignShape};
+use benchmark::bench_run::BlindOptions;
+use benchmark::blind::generate;
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -21,7 +21,7 @@ fn main() {
     let effect = spec.truth;
     let set = generate(effect, spec.strength, shape.form(), spec.seed, &scenario).expect("set");
     if let Some(dir) = args.get(1).filter(|d| d.as_str() != "-") {
-        diagnose::blind::write_blind(std::path::Path::new(dir), &set).expect("write");
+        benchmark::blind::write_blind(std::path::Path::new(dir), &set).expect("write");
         std::fs::write(
             std::path::Path::new(dir).join("truth.model.toml"),
             &scenario.truth_model,

@@ -13,7 +13,7 @@ use identify::numerics::{median_finite, split_seed};
 use serde::{Deserialize, Serialize};
 
 use crate::blind::BlindEffect;
-use crate::effect::{Effect, Verdict};
+use diagnose::effect::{Effect, Verdict};
 
 /// Least ratio true gap / noise-level gap of a *strong* set (the acceptance bar).
 pub const STRONG_RATIO: f64 = 3.0;
@@ -313,7 +313,7 @@ pub struct BlindOutcome {
     pub follow_up: Option<FollowUpOutcome>,
 }
 
-/// What the follow-up tests of one set gave ([`crate::follow_up::plan`] run on the truth).
+/// What the follow-up tests of one set gave ([`diagnose::follow_up::plan`] run on the truth).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct FollowUpOutcome {
     /// Forced cases added (rows × wind speeds × amplitudes of the plan).
@@ -643,7 +643,7 @@ fn summary_of(outcomes: &[BlindOutcome]) -> BlindSummary {
 pub fn confusion_markdown(rows: &[String], cols: &[String], m: &[Vec<usize>]) -> String {
     // a verdict name gets its short label; anything else (not a verdict) is shown as is
     let short = |s: &str| -> String {
-        crate::effect::Verdict::from_name(s)
+        diagnose::effect::Verdict::from_name(s)
             .map_or_else(|_| s.to_string(), |v| v.short_label().into())
     };
     let mut s = String::from("| truth \\ verdict |");

@@ -35,9 +35,9 @@ use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::catalogue::{log_map, DrawContext};
-use crate::effect::Effect;
 use crate::{Error, Result};
+use diagnose::effect::Effect;
+use diagnose::effect::{log_map, DrawContext};
 
 /// What a blind set holds.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, schemars::JsonSchema)]
@@ -215,7 +215,7 @@ pub fn parameter_range(effect: BlindEffect, form: Form) -> Option<(&'static str,
     match effect {
         BlindEffect::None => None,
         BlindEffect::Buffeting => Some(("intensity I_w [-]", 2e-4, 0.05)),
-        BlindEffect::Catalogue(e) => e.entry().draw().map(|d| d.range(form)),
+        BlindEffect::Catalogue(e) => e.draw_range(form),
     }
 }
 
@@ -242,18 +242,16 @@ fn injection(
             vec![(name.to_string(), p), ("length scale L [m]".into(), 0.1)],
         ),
         BlindEffect::Catalogue(c) => {
-            let Some(d) = c.entry().draw() else {
-                return (vec![], vec![]);
-            };
             let cx = DrawContext {
                 rig,
                 depth: sc.depth,
                 x_ea: X_EA,
                 seed,
             };
-            let (e, more) = d.inject(p, strength, form, &cx);
-            let drawn = d.writes_drawn().then(|| (name.to_string(), p));
-            (e, drawn.into_iter().chain(more).collect())
+            match c.draw_injection(p, strength, form, &cx) {
+                Some(drawn) => drawn,
+                None => return (vec![], vec![]),
+            }
         }
     };
     (vec![Injection { effect: e, form }], params)
@@ -349,7 +347,7 @@ pub fn generate_injected(
 }
 
 /// The forced records of a blind set's truth for further `cases` (a follow-up campaign,
-/// [`crate::follow_up::plan`]), appended to `forced` (the set's own forced records, whose
+/// [`diagnose::follow_up::plan`]), appended to `forced` (the set's own forced records, whose
 /// cases keep their records and noise): the same truth, injections and noise model as
 /// [`generate`] with the same arguments, the new cases' random draws seeded by their
 /// position after the set's own cases. Case ids already in `forced` are refused.
@@ -515,7 +513,7 @@ fn forced_set(
 
 fn extra_table(seed: u64) -> toml::Table {
     let mut t = toml::Table::new();
-    t.insert("generator".into(), "diagnose::blind".into());
+    t.insert("generator".into(), "benchmark::blind".into());
     t.insert("seed".into(), seed.to_string().into());
     t
 }

@@ -2,7 +2,7 @@
 //! determinism, twins, write/read round trip, cost.
 
 use aeroelastic::effects::Form;
-use diagnose::blind::{effect_size, generate, write_blind, BlindEffect, BlindScenario, BlindSet};
+use benchmark::blind::{effect_size, generate, write_blind, BlindEffect, BlindScenario, BlindSet};
 use diagnose::Effect;
 
 fn small() -> BlindScenario {

@@ -28,10 +28,13 @@ use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
 
-use super::candidates::ScaledAero;
-use super::{diagnose_branches, BifurcationOptions, StructureUsed};
-use crate::structure::structure_check_records;
-use crate::{Effect, Error, Result, Verdict};
+use crate::{Error, Result};
+use diagnose::bifurcation::candidates::ScaledAero;
+use diagnose::bifurcation::{
+    diagnose_branches, BifurcationDiagnosis, BifurcationOptions, StructureUsed,
+};
+use diagnose::structure::structure_check_records;
+use diagnose::{Effect, Verdict};
 
 /// Relative amplitude noise of the generated measured points.
 pub const AMPLITUDE_NOISE: f64 = 0.02;
@@ -492,7 +495,7 @@ pub fn run_set_diagnosis(
     index: usize,
     seed: u64,
     bench: &BranchBenchOptions,
-) -> Result<(BranchOutcome, super::BifurcationDiagnosis)> {
+) -> Result<(BranchOutcome, BifurcationDiagnosis)> {
     let set_seed = split_seed(seed, index as u64);
     let mut rng = ChaCha8Rng::seed_from_u64(set_seed);
     let truth = BranchTruth::ALL[rng.random_range(0..BranchTruth::ALL.len())];

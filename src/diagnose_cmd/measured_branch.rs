@@ -5,21 +5,11 @@
 
 use std::path::Path;
 
-use aeroelastic::branch::{
-    parse_absence_arg, parse_onset_arg, read_measured_diagram, MeasuredDiagram,
-};
-use aeroelastic::files::{LoadedModel, StructureFile};
-use aeroelastic::section::Section;
-use aeroelastic::structure::Structure;
-use anyhow::Context;
-use diagnose::bifurcation::{
-    diagnose_diagram, points_from_records, structure_check, BifurcationDiagnosis,
-    BifurcationOptions, BranchKind, Quantity,
-};
-use identify::dataset::{read_dataset, Dataset};
+use diagnose::bifurcation::inputs::MeasuredBranchRequest;
+use diagnose::bifurcation::{BifurcationDiagnosis, BifurcationOptions, BranchKind, Quantity};
 use identify::io::write_atomic;
 
-use crate::diagnose_args::DiagnoseArgs;
+use super::args::DiagnoseArgs;
 
 /// Runs the bifurcation-level diagnosis of `measured` (a CSV table or a data-set folder).
 pub fn run(args: &DiagnoseArgs, measured: &Path) -> anyhow::Result<()> {
@@ -32,93 +22,21 @@ pub fn run(args: &DiagnoseArgs, measured: &Path) -> anyhow::Result<()> {
     let Some(model_path) = &args.model else {
         crate::exit::refuse!("--measured-branch needs --model M (the sim's aerodynamic model)");
     };
-    // Every input is read and checked before the output folder is touched.
-    let records: Option<Dataset> = if measured.is_dir() {
-        Some(read_dataset(measured).with_context(|| format!("reading {}", measured.display()))?)
-    } else {
-        None
-    };
-    let free = args
-        .free
-        .iter()
-        .map(|f| read_dataset(f).with_context(|| format!("reading {}", f.display())))
-        .collect::<anyhow::Result<Vec<_>>>()?;
-    let (mut diagram, uses) = match &records {
-        Some(set) => {
-            let (points, uses) = points_from_records(set)
-                .with_context(|| format!("measured branch points of {}", measured.display()))?;
-            (
-                MeasuredDiagram {
-                    points,
-                    ..MeasuredDiagram::default()
-                },
-                uses,
-            )
-        }
-        None => (
-            read_measured_diagram(measured).context("measured bifurcation diagram")?,
-            Vec::new(),
-        ),
-    };
-    for o in &args.onset {
-        diagram.onsets.push(parse_onset_arg(o)?);
+    // Every input is read and checked before the output folder is touched; which reader
+    // the measured input needs and where the structure comes from are the library's
+    // choices (`diagnose::bifurcation::inputs`, shared with Python).
+    let prepared = MeasuredBranchRequest {
+        measured,
+        model: model_path,
+        structure: args.structure.as_deref(),
+        free: &args.free,
+        onsets: &args.onset,
+        no_lco: &args.no_lco,
     }
-    for a in &args.no_lco {
-        diagram.absences.push(parse_absence_arg(a)?);
+    .prepare()?;
+    for w in &prepared.model_warnings {
+        crate::ui::warning!("warning: {}: {w}", model_path.display());
     }
-    let manifest_of = || {
-        records
-            .iter()
-            .chain(&free)
-            .find(|d| d.manifest.structure.is_some())
-    };
-    let (structure, rho, chord, structure_name) = match &args.structure {
-        Some(s) => {
-            let sf = StructureFile::read(s).with_context(|| format!("reading {}", s.display()))?;
-            (
-                sf.structure()
-                    .with_context(|| format!("structure of {}", s.display()))?,
-                sf.air_density,
-                sf.chord,
-                s.display().to_string(),
-            )
-        }
-        None => {
-            let Some(set) = manifest_of() else {
-                crate::exit::refuse!(
-                    "no structure: give --structure S, or data sets whose manifest has a \
-                     [structure]"
-                );
-            };
-            let modal = set
-                .manifest
-                .structure
-                .as_ref()
-                .expect("found with a structure");
-            (
-                Structure::from_modal(modal).with_context(|| {
-                    format!("[structure] of {}", set.root.join("manifest").display())
-                })?,
-                set.manifest.section.air_density,
-                Some(set.manifest.section.chord),
-                format!("[structure] of {}", set.root.display()),
-            )
-        }
-    };
-    let loaded = LoadedModel::load(model_path, chord)
-        .with_context(|| format!("loading {}", model_path.display()))?;
-    let section = Section::new(structure, loaded.model.clone(), rho)
-        .context("the nominal section (structure, model, air density)")?;
-    let decays: Vec<&Dataset> = free.iter().chain(records.iter()).collect();
-    let check = structure_check(&decays, &section);
-    let mut inputs = vec![
-        format!("measured: {}", measured.display()),
-        format!("structure: {structure_name}"),
-        format!("model: {}", model_path.display()),
-    ];
-    inputs.extend(free.iter().map(|f| format!("free: {}", f.root.display())));
-    inputs.extend(args.onset.iter().map(|o| format!("onset: {o}")));
-    inputs.extend(args.no_lco.iter().map(|a| format!("no LCO: {a}")));
     let dir = crate::outdir::OutDir::begin(
         &out,
         "diagnose --measured-branch",
@@ -129,15 +47,7 @@ pub fn run(args: &DiagnoseArgs, measured: &Path) -> anyhow::Result<()> {
         "diagnose",
         "continuation of every candidate, leave-one-speed-out",
     );
-    let d = diagnose_diagram(
-        &diagram,
-        &section,
-        check,
-        uses,
-        &BifurcationOptions::default(),
-        inputs,
-        &crate::version(),
-    );
+    let d = prepared.diagnose(&BifurcationOptions::default(), &crate::version());
     spinner.finish();
     let d = d?;
     let mut text = serde_json::to_string_pretty(&d)?;
@@ -350,13 +260,11 @@ fn print(d: &BifurcationDiagnosis) {
 pub fn blind(
     n: usize,
     seed: u64,
-    bench: &diagnose::bifurcation::bench::BranchBenchOptions,
+    bench: &benchmark::branch_bench::BranchBenchOptions,
     out: &Path,
     force: bool,
 ) -> anyhow::Result<()> {
-    use diagnose::bifurcation::bench::{
-        run_bench_with, BranchOutcome, HOPF_TOLERANCE, STRONG_SCORE,
-    };
+    use benchmark::branch_bench::{run_bench_with, BranchOutcome, HOPF_TOLERANCE, STRONG_SCORE};
     let dir = crate::outdir::OutDir::begin(out, "diagnose --blind --branch-level", force, &[])?;
     let bar = crate::progress::CountBar::new("branch-level sets", n);
     let done = std::sync::atomic::AtomicUsize::new(0);

@@ -1,11 +1,11 @@
 //! Runs sets of the bifurcation-level benchmark and prints each outcome (a debugging aid):
-//! `cargo run --release -p diagnose --example branch_one -- SEED INDEX... [--misgiven]`
+//! `cargo run --release -p benchmark --example branch_one -- SEED INDEX... [--misgiven]`
 //! (`--misgiven`: the structure handed to the diagnosis has one DOF's frequency 3–8 % off,
 //! with still-air decays of the truth; `--hold-given`: the same, fitted on the given
 //! structure anyway; `A..B` runs indices A to B − 1; `--detail`: also the structure's
 //! reason and every candidate's held-out score, shrink and first Hopf point, on stderr).
 
-use diagnose::bifurcation::bench::{run_set_diagnosis, BranchBenchOptions};
+use benchmark::branch_bench::{run_set_diagnosis, BranchBenchOptions};
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();

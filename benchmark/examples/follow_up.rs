@@ -1,10 +1,10 @@
 //! The closed loop of issue 42 item 4 on sets of the drawn-shapes blind benchmark: each set
 //! is diagnosed, and when the verdict is `extrapolation` the recommended forced tests are
 //! run on the truth and the set diagnosed again. One line per set:
-//! `cargo run --release -p diagnose --example follow_up -- INDEX… [--n N] [--seed SEED]`.
+//! `cargo run --release -p benchmark --example follow_up -- INDEX… [--n N] [--seed SEED]`.
 
-use diagnose::bench::{draw_specs_from, shapes_truths, CampaignShape};
-use diagnose::bench_run::{run_one, BlindOptions};
+use benchmark::bench::{draw_specs_from, shapes_truths, CampaignShape};
+use benchmark::bench_run::{run_one, BlindOptions};
 
 fn main() {
     let mut args: Vec<String> = std::env::args().skip(1).collect();
@@ -56,8 +56,8 @@ fn main() {
                     right += usize::from(c);
                     right_before += usize::from(o.correct());
                     let f = o.follow_up.as_ref().expect("followed up");
-                    if f.gap_ratio >= diagnose::bench::STRONG_RATIO
-                        || o.spec.truth == diagnose::blind::BlindEffect::None
+                    if f.gap_ratio >= benchmark::bench::STRONG_RATIO
+                        || o.spec.truth == benchmark::blind::BlindEffect::None
                     {
                         strong += 1;
                         strong_right += usize::from(c);
@@ -70,6 +70,6 @@ fn main() {
     println!(
         "followed up {sets}: right after {right}, right before {right_before}; strong after the \
          follow-up (gap ratio ≥ {}) or effect-free: {strong_right} of {strong} right",
-        diagnose::bench::STRONG_RATIO
+        benchmark::bench::STRONG_RATIO
     );
 }

@@ -1,6 +1,7 @@
-//! The flags of `aeroform diagnose` ([`DiagnoseArgs`]): below both `diagnose_cmd` and
-//! `bifurcation_cmd`, which read them, so neither command imports the other's module for
-//! them (issue 40, docs/DECISIONS.md "No import circles, checked").
+//! The flags of `aeroform diagnose` ([`DiagnoseArgs`]): below both the command's entry
+//! (`diagnose_cmd`) and its measured-branch mode (`diagnose_cmd::measured_branch`), which
+//! read them, so neither imports the other for them (issue 40, docs/DECISIONS.md "No import
+//! circles, checked").
 
 use std::path::PathBuf;
 

@@ -1,9 +1,9 @@
 //! Diagnoses one set of the drawn-shapes blind benchmark and prints its diagnosis JSON
-//! (a debugging aid): `cargo run --release -p diagnose --example blind_one -- INDEX [N SEED]`
+//! (a debugging aid): `cargo run --release -p benchmark --example blind_one -- INDEX [N SEED]`
 //! (`list` for INDEX: every set's truth and strength).
 
-use diagnose::bench::{draw_specs_from, shapes_truths, CampaignShape};
-use diagnose::bench_run::{run_one, BlindOptions};
+use benchmark::bench::{draw_specs_from, shapes_truths, CampaignShape};
+use benchmark::bench_run::{run_one, BlindOptions};
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -15,7 +15,7 @@ fn main() {
     let plain = std::env::var("PLAIN").is_ok();
     opts.shapes = !plain;
     let specs = if plain {
-        diagnose::bench::draw_specs(n, seed)
+        benchmark::bench::draw_specs(n, seed)
     } else {
         draw_specs_from(n, seed, &shapes_truths())
     };
@@ -23,8 +23,8 @@ fn main() {
         for (i, s) in specs.iter().enumerate() {
             let shape = CampaignShape::draw_with_physics(s.seed);
             let law = shape.physics.as_ref().map(|p| match p.law {
-                diagnose::physics::DrawnLaw::Eq19 { .. } => "eq19",
-                diagnose::physics::DrawnLaw::EffectiveAngle { .. } => "effective_angle",
+                benchmark::physics::DrawnLaw::Eq19 { .. } => "eq19",
+                benchmark::physics::DrawnLaw::EffectiveAngle { .. } => "effective_angle",
             });
             println!(
                 "{i} {} {:.2} groups {} amplitudes {} law {}",
