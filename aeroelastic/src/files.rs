@@ -121,13 +121,7 @@ pub fn flattened_bad_key<T: serde::de::DeserializeOwned>(
 
 /// 1-based line of the top-level `key` in a TOML text (0 when not found).
 fn key_line(text: &str, key: &str) -> usize {
-    let Ok(t) = toml::de::DeTable::parse(text) else {
-        return 0;
-    };
-    t.get_ref()
-        .iter()
-        .find(|(k, _)| k.get_ref() == key)
-        .map_or(0, |(k, _)| text[..k.span().start].matches('\n').count() + 1)
+    identify::toml_lines::TomlLines::new(text).line_of(key)
 }
 
 /// A model or structure file's text, read by `identify::io::read_text` (regular files only,

@@ -31,6 +31,7 @@ pub mod record;
 pub mod regress;
 pub mod series;
 pub mod synthetic;
+pub mod toml_lines;
 pub mod workflow;
 
 pub use error::{Error, Result};

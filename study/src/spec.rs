@@ -7,7 +7,6 @@ use aeroelastic::files::{ModelFile, ModelKind};
 use aeroelastic::structure::{NondimStructure, Nonlinearities, PolyTerm, StructureSpec};
 use identify::pipeline::IdentifySettings;
 use serde::{Deserialize, Serialize};
-use toml::de::{DeTable, DeValue};
 
 /// A whole study.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -671,56 +670,6 @@ fn first_bad_string(t: &toml::Table, prefix: &str) -> Option<(String, String)> {
     })
 }
 
-/// Line index of a text and its span tree, to name the line of a dotted key.
-struct Lines<'a> {
-    starts: Vec<usize>,
-    spans: Option<toml::Spanned<DeTable<'a>>>,
-}
-
-impl<'a> Lines<'a> {
-    fn new(text: &'a str) -> Self {
-        let mut starts = vec![0];
-        starts.extend(text.match_indices('\n').map(|(i, _)| i + 1));
-        Lines {
-            starts,
-            spans: DeTable::parse(text).ok(),
-        }
-    }
-
-    fn line(&self, offset: usize) -> usize {
-        self.starts.partition_point(|&s| s <= offset).max(1)
-    }
-
-    /// Line of a dotted key path (`flutter.run[1].method`); the deepest existing prefix's
-    /// line when the full key is absent; 0 when nothing matches.
-    fn line_of(&self, key: &str) -> usize {
-        let Some(root) = &self.spans else { return 0 };
-        let mut table: Option<&DeTable<'_>> = Some(root.get_ref());
-        let mut line = 0;
-        for part in key.split('.') {
-            let (name, index) = match part.split_once('[') {
-                Some((n, rest)) => (n, rest.trim_end_matches(']').parse::<usize>().ok()),
-                None => (part, None),
-            };
-            let Some(t) = table else { break };
-            let Some(v) = t.get(name) else { break };
-            line = self.line(v.span().start);
-            let mut val: &DeValue<'_> = v.get_ref();
-            if let (Some(i), Some(arr)) = (index, val.as_array()) {
-                match arr.get(i) {
-                    Some(item) => {
-                        line = self.line(item.span().start);
-                        val = item.get_ref();
-                    }
-                    None => break,
-                }
-            }
-            table = val.as_table();
-        }
-        line
-    }
-}
-
 impl Study {
     /// Parses a study from TOML text.
     ///
@@ -729,7 +678,7 @@ impl Study {
     /// the wrong type or a value out of range.
     pub fn parse(text: &str, path: &Path, base: &Path) -> Result<Study, SpecError> {
         let display = path.display().to_string();
-        let lines = Lines::new(text);
+        let lines = identify::toml_lines::TomlLines::new(text);
         let spec: StudySpec = toml::from_str(text).map_err(|e| {
             let line = e.span().map(|s| lines.line(s.start)).unwrap_or(0);
             let msg = e.message().trim().to_string();

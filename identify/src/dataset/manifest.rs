@@ -538,7 +538,7 @@ pub fn is_valid_case_id(id: &str) -> bool {
 /// Parse context: the manifest text, its spans and the path for messages.
 struct Cx<'a> {
     path: &'a Path,
-    line_starts: Vec<usize>,
+    lines: crate::toml_lines::TomlLines<'static>,
     values: toml::Table,
     spans: Spanned<DeTable<'a>>,
 }
@@ -556,11 +556,9 @@ struct Node<'c, 'a> {
 
 impl<'a> Cx<'a> {
     fn new(text: &'a str, path: &'a Path) -> Result<Self> {
-        let mut line_starts = vec![0];
-        line_starts.extend(text.match_indices('\n').map(|(i, _)| i + 1));
         let mut cx = Cx {
             path,
-            line_starts,
+            lines: crate::toml_lines::TomlLines::unparsed(text),
             values: toml::Table::new(),
             spans: Spanned::new(0..0, DeTable::default()),
         };
@@ -585,7 +583,7 @@ impl<'a> Cx<'a> {
 
     /// 1-based line of a byte offset.
     fn line(&self, offset: usize) -> usize {
-        self.line_starts.partition_point(|&s| s <= offset).max(1)
+        self.lines.line(offset)
     }
 
     fn err(&self, line: usize, field: impl Into<String>, message: impl Into<String>) -> Error {
