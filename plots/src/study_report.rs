@@ -431,287 +431,345 @@ pub fn render_all_from(
     report.key_values("Study", &summary);
 
     if let Some(id) = &id {
-        let metas: Vec<CaseMeta> = read_json(&src.join(names::CASES))?;
-        // series figures
-        let mut series: Vec<CaseSeries> = vec![];
-        let sdir = src.join(names::SERIES);
-        let wanted: Vec<String> = if s.outputs.series_cases.is_empty() {
-            let mut v = vec![metas[0].id.clone()];
-            if metas.len() > 1 {
-                v.push(metas[metas.len() - 1].id.clone());
-            }
-            v
-        } else {
-            s.outputs.series_cases.clone()
-        };
-        for w in &wanted {
-            let path = sdir.join(format!("{w}.json"));
-            let x: CaseSeries = read_json(&path)?;
-            check_series(&x, &path)?;
-            series.push(x);
+        identification_section(&mut cv, &mut report, study, src, id)?;
+    }
+    let flutter_runs = flutter_section(&mut cv, &mut report, study, src)?;
+    lco_section(&mut cv, &mut report, study, src, &flutter_runs, reduced)?;
+
+    // ---- LCO branches by continuation
+    if s.branch.is_some() {
+        branch_section(&mut cv, &mut report, src, s.lco.is_some())?;
+    }
+
+    // ---- settings
+    report.section("Settings");
+    if let Some(id) = &id {
+        let v = serde_json::to_value(&id.settings)?;
+        let rows: Vec<(String, String)> = v
+            .as_object()
+            .map(|o| {
+                o.iter()
+                    .map(|(k, v)| (k.replace('_', " "), readable(v)))
+                    .collect()
+            })
+            .unwrap_or_default();
+        report.key_values("Identification settings", &rows);
+    }
+    report.pre(
+        format!("Study file as run ({})", names::STUDY),
+        study.text.clone(),
+    );
+
+    let entries: Vec<FigureEntry> = cv.drawn.iter().map(|d| d.entry.clone()).collect();
+    files_section(&mut report, out, &entries);
+    write_json(&out.join(names::FIGURE_LIST), &entries)?;
+    report
+        .write(&out.join(names::REPORT))
+        .context("writing report.html")?;
+    Ok(entries)
+}
+
+/// The identification's figures and tables of the study report (time series, spectra,
+/// force decomposition, library, δ fits and paths, heatmaps, mean angle, histogram,
+/// derivatives; coefficient and case tables).
+fn identification_section(
+    cv: &mut Canvas<'_>,
+    report: &mut Report,
+    study: &Study,
+    src: &Path,
+    id: &Identification,
+) -> Result<()> {
+    let s = &study.spec;
+    let metas: Vec<CaseMeta> = read_json(&src.join(names::CASES))?;
+    // series figures
+    let mut series: Vec<CaseSeries> = vec![];
+    let sdir = src.join(names::SERIES);
+    let wanted: Vec<String> = if s.outputs.series_cases.is_empty() {
+        let mut v = vec![metas[0].id.clone()];
+        if metas.len() > 1 {
+            v.push(metas[metas.len() - 1].id.clone());
         }
-        if cv.wants("time_series") {
-            for x in &series {
-                cv.draw(
-                    "time_series",
-                    &format!("time_series_{}", safe(&x.id)),
-                    format!(
-                        "Case {}: prescribed motion and measured forces (solid) with the identified model (dashed), first {} s.",
-                        x.id,
-                        x.t.last().copied().unwrap_or(0.0).round()
-                    ),
-                    &time_series_figure(x),
-                )?;
-            }
-        }
-        if cv.wants("spectrum") {
-            for x in &series {
-                for f in [Force::Moment, Force::Lift] {
-                    cv.draw(
-                        "spectrum",
-                        &format!("spectrum_{}_{}", safe(&x.id), f.name()),
-                        format!(
-                            "Case {}: amplitude spectrum of {} (Hann window), measured and identified model; the key frequencies of the Eq. 14 loss are marked.",
-                            x.id,
-                            f.symbol()
-                        ),
-                        &spectrum_figure(x, f),
-                    )?;
-                }
-            }
-        }
-        let paper: Option<PaperFigures> = src
-            .join(names::PAPER_FIGURES)
-            .exists()
-            .then(|| read_json(&src.join(names::PAPER_FIGURES)))
-            .transpose()?;
-        let paper = paper.unwrap_or_default();
-        if cv.wants("force_decomposition") {
-            for f in &paper.forces {
-                cv.draw(
-                    "force_decomposition",
-                    &format!("force_decomposition_{}", safe(&f.id)),
-                    format!(
-                        "Case {} (U = {} m/s): balance forces with wind (solid), of the still-air run of the same motion (inertia of the model and balance), and their difference, the aerodynamic force that is identified (dashed); first {} s (paper Figs. 4/5).",
-                        f.id,
-                        pretty_cell(&format!("{}", f.wind_speed)),
-                        f.t.last().copied().unwrap_or(0.0).round()
-                    ),
-                    &force_decomposition_figure(f),
-                )?;
-            }
-        }
-        if cv.wants("library") {
+        v
+    } else {
+        s.outputs.series_cases.clone()
+    };
+    for w in &wanted {
+        let path = sdir.join(format!("{w}.json"));
+        let x: CaseSeries = read_json(&path)?;
+        check_series(&x, &path)?;
+        series.push(x);
+    }
+    if cv.wants("time_series") {
+        for x in &series {
             cv.draw(
-                "library",
-                "library",
+                "time_series",
+                &format!("time_series_{}", safe(&x.id)),
                 format!(
-                    "The candidate library (paper Fig. 6): {} polynomial terms in α, Bα'/U, h/B and h'/U up to third order; per group and force, the selected terms, the identifiable ones and those that are linear combinations of others on the group's motion (numerical rank {}).",
-                    id.library.terms.len(),
-                    id.library.rank
+                    "Case {}: prescribed motion and measured forces (solid) with the identified model (dashed), first {} s.",
+                    x.id,
+                    x.t.last().copied().unwrap_or(0.0).round()
                 ),
-                &library_figure(id),
+                &time_series_figure(x),
             )?;
         }
-        if cv.wants("delta_fits") {
-            for d in &paper.delta_fits {
-                cv.draw(
-                    "delta_fits",
-                    &format!("delta_fits_{}_{}", safe(&d.group), d.force.name()),
-                    format!(
-                        "Group {}, case {}, {}: measured (solid) and least-squares fits (dashed) of the supports at a high δ ({} terms, R² {}), the selected δ ({} terms, R² {}) and a low δ ({} terms, R² {}) of the path (paper Figs. 7/8; coefficients in Table III below).",
-                        d.group,
-                        d.case,
-                        d.force.name(),
-                        d.fits[0].coefficients.len(),
-                        pretty_cell(&format!("{:.4}", d.fits[0].r2)),
-                        d.fits[1].coefficients.len(),
-                        pretty_cell(&format!("{:.4}", d.fits[1].r2)),
-                        d.fits[2].coefficients.len(),
-                        pretty_cell(&format!("{:.4}", d.fits[2].r2)),
-                    ),
-                    &delta_fits_figure(d),
-                )?;
-            }
-        }
-        if cv.wants("force_loops") {
-            for set in &paper.loops {
-                cv.draw(
-                    "force_loops",
-                    &format!(
-                        "force_loops_{}_{}",
-                        safe(&set.config),
-                        set.varied.replace(' ', "_")
-                    ),
-                    format!(
-                        "Configuration {}, {}: lift and moment coefficients against pitch over the last two forcing periods, across {} (paper Figs. {}).",
-                        set.config,
-                        set.fixed,
-                        set.varied,
-                        if set.varied == "wind speed" { "14" } else { "15" }
-                    ),
-                    &force_loops_figure(set),
-                )?;
-            }
-        }
-        if cv.wants("delta_path") {
-            let groups: Vec<String> = if s.outputs.delta_groups.is_empty() {
-                id.groups.iter().take(4).map(|g| g.name.clone()).collect()
-            } else {
-                s.outputs.delta_groups.clone()
-            };
-            for g in &groups {
-                for f in [Force::Moment, Force::Lift] {
-                    if let Some(fig) = delta_path_figure(id, g, f) {
-                        cv.draw(
-                            "delta_path",
-                            &format!("delta_path_{}_{}", safe(g), f.name()),
-                            format!(
-                                "Group {g}, {}: number of terms and key-frequency loss along the δ path (Alg. 3); the sparsest support under the loss limit is selected.",
-                                f.name()
-                            ),
-                            &fig,
-                        )?;
-                    }
-                }
-            }
-        }
-        if cv.wants("heatmap") {
+    }
+    if cv.wants("spectrum") {
+        for x in &series {
             for f in [Force::Moment, Force::Lift] {
-                for (config, fig) in heatmap_figures(id, &metas, f) {
+                cv.draw(
+                    "spectrum",
+                    &format!("spectrum_{}_{}", safe(&x.id), f.name()),
+                    format!(
+                        "Case {}: amplitude spectrum of {} (Hann window), measured and identified model; the key frequencies of the Eq. 14 loss are marked.",
+                        x.id,
+                        f.symbol()
+                    ),
+                    &spectrum_figure(x, f),
+                )?;
+            }
+        }
+    }
+    let paper: Option<PaperFigures> = src
+        .join(names::PAPER_FIGURES)
+        .exists()
+        .then(|| read_json(&src.join(names::PAPER_FIGURES)))
+        .transpose()?;
+    let paper = paper.unwrap_or_default();
+    if cv.wants("force_decomposition") {
+        for f in &paper.forces {
+            cv.draw(
+                "force_decomposition",
+                &format!("force_decomposition_{}", safe(&f.id)),
+                format!(
+                    "Case {} (U = {} m/s): balance forces with wind (solid), of the still-air run of the same motion (inertia of the model and balance), and their difference, the aerodynamic force that is identified (dashed); first {} s (paper Figs. 4/5).",
+                    f.id,
+                    pretty_cell(&format!("{}", f.wind_speed)),
+                    f.t.last().copied().unwrap_or(0.0).round()
+                ),
+                &force_decomposition_figure(f),
+            )?;
+        }
+    }
+    if cv.wants("library") {
+        cv.draw(
+            "library",
+            "library",
+            format!(
+                "The candidate library (paper Fig. 6): {} polynomial terms in α, Bα'/U, h/B and h'/U up to third order; per group and force, the selected terms, the identifiable ones and those that are linear combinations of others on the group's motion (numerical rank {}).",
+                id.library.terms.len(),
+                id.library.rank
+            ),
+            &library_figure(id),
+        )?;
+    }
+    if cv.wants("delta_fits") {
+        for d in &paper.delta_fits {
+            cv.draw(
+                "delta_fits",
+                &format!("delta_fits_{}_{}", safe(&d.group), d.force.name()),
+                format!(
+                    "Group {}, case {}, {}: measured (solid) and least-squares fits (dashed) of the supports at a high δ ({} terms, R² {}), the selected δ ({} terms, R² {}) and a low δ ({} terms, R² {}) of the path (paper Figs. 7/8; coefficients in Table III below).",
+                    d.group,
+                    d.case,
+                    d.force.name(),
+                    d.fits[0].coefficients.len(),
+                    pretty_cell(&format!("{:.4}", d.fits[0].r2)),
+                    d.fits[1].coefficients.len(),
+                    pretty_cell(&format!("{:.4}", d.fits[1].r2)),
+                    d.fits[2].coefficients.len(),
+                    pretty_cell(&format!("{:.4}", d.fits[2].r2)),
+                ),
+                &delta_fits_figure(d),
+            )?;
+        }
+    }
+    if cv.wants("force_loops") {
+        for set in &paper.loops {
+            cv.draw(
+                "force_loops",
+                &format!(
+                    "force_loops_{}_{}",
+                    safe(&set.config),
+                    set.varied.replace(' ', "_")
+                ),
+                format!(
+                    "Configuration {}, {}: lift and moment coefficients against pitch over the last two forcing periods, across {} (paper Figs. {}).",
+                    set.config,
+                    set.fixed,
+                    set.varied,
+                    if set.varied == "wind speed" { "14" } else { "15" }
+                ),
+                &force_loops_figure(set),
+            )?;
+        }
+    }
+    if cv.wants("delta_path") {
+        let groups: Vec<String> = if s.outputs.delta_groups.is_empty() {
+            id.groups.iter().take(4).map(|g| g.name.clone()).collect()
+        } else {
+            s.outputs.delta_groups.clone()
+        };
+        for g in &groups {
+            for f in [Force::Moment, Force::Lift] {
+                if let Some(fig) = delta_path_figure(id, g, f) {
                     cv.draw(
-                        "heatmap",
-                        &format!("heatmap_{}_{}", safe(&config), f.name()),
+                        "delta_path",
+                        &format!("delta_path_{}_{}", safe(g), f.name()),
                         format!(
-                            "Configuration {config}: Eq. 19 coefficients of {} over pitch amplitude × wind speed, one layer per coefficient; grey cells: term inactive.",
-                            f.symbol()
+                            "Group {g}, {}: number of terms and key-frequency loss along the δ path (Alg. 3); the sparsest support under the loss limit is selected.",
+                            f.name()
                         ),
                         &fig,
                     )?;
                 }
             }
         }
-        // the reference curves about the virtual truth's elastic axis, when there is one
-        let elastic_axis = if cv.wants("mean_angle") || cv.wants("derivatives") {
-            truth_axis(study)
-        } else {
-            0.0
-        };
-        if cv.wants("mean_angle") {
-            if let Some(fig) = mean_angle_figure(id, &metas, elastic_axis) {
+    }
+    if cv.wants("heatmap") {
+        for f in [Force::Moment, Force::Lift] {
+            for (config, fig) in heatmap_figures(id, &metas, f) {
                 cv.draw(
-                    "mean_angle",
-                    "mean_angle",
-                    format!("Identified flutter derivatives of the configurations forced about a mean angle of attack next to the same motion at zero mean (paper Fig. 28), with Theodorsen about a = {elastic_axis} (a zero-mean, small-amplitude reference)."),
+                    "heatmap",
+                    &format!("heatmap_{}_{}", safe(&config), f.name()),
+                    format!(
+                        "Configuration {config}: Eq. 19 coefficients of {} over pitch amplitude × wind speed, one layer per coefficient; grey cells: term inactive.",
+                        f.symbol()
+                    ),
                     &fig,
                 )?;
             }
         }
-        if cv.wants("histogram") {
+    }
+    // the reference curves about the virtual truth's elastic axis, when there is one
+    let elastic_axis = if cv.wants("mean_angle") || cv.wants("derivatives") {
+        truth_axis(study)
+    } else {
+        0.0
+    };
+    if cv.wants("mean_angle") {
+        if let Some(fig) = mean_angle_figure(id, &metas, elastic_axis) {
             cv.draw(
-                "histogram",
-                "histogram_quality",
-                "Misfit of every case, moment and lift: 1 − R² and |1 − MFWA| (Eq. 18).".into(),
-                &quality_histogram(id),
+                "mean_angle",
+                "mean_angle",
+                format!("Identified flutter derivatives of the configurations forced about a mean angle of attack next to the same motion at zero mean (paper Fig. 28), with Theodorsen about a = {elastic_axis} (a zero-mean, small-amplitude reference)."),
+                &fig,
             )?;
-        }
-        if cv.wants("derivatives") {
-            cv.draw(
-                "derivatives",
-                "derivatives",
-                format!("Identified flutter derivatives against reduced frequency (h-terms at K_h, α-terms at K_α) with the thin-plate Theodorsen derivatives about the truth's elastic axis a = {elastic_axis} (0 when the data do not say)."),
-                &derivative_figure(id, elastic_axis),
-            )?;
-        }
-
-        report.section("Identification");
-        let mut rows = vec![];
-        for g in &id.groups {
-            for (name, gf) in [("moment", &g.moment), ("lift", &g.lift)] {
-                rows.push(vec![
-                    g.name.clone(),
-                    name.to_string(),
-                    g.cases.len().to_string(),
-                    gf.support.len().to_string(),
-                    gf.support
-                        .iter()
-                        .map(|t| term_label(t))
-                        .collect::<Vec<_>>()
-                        .join(", "),
-                    format!("{:.3e}", gf.loss),
-                    format!("{:.3e}", gf.loss_limit),
-                ]);
-            }
-        }
-        report.table(
-            "Selected supports per group",
-            &[
-                "group",
-                "force",
-                "cases",
-                "terms",
-                "support",
-                "loss",
-                "loss limit",
-            ]
-            .map(String::from),
-            &rows,
-        );
-        for d in &paper.delta_fits {
-            table_iii(&mut report, d);
-        }
-        if src.join(names::TABLE_IV).exists() {
-            csv_file_table(
-                &mut report,
-                "Table IV: identified vs true coefficients over the noise realisations",
-                &src.join(names::TABLE_IV),
-                false,
-            );
-        }
-        if id.cases.len() <= 64 {
-            csv_file_columns(
-                &mut report,
-                &format!(
-                    "Eq. 19 flutter derivatives per case (N* and the other metrics in {})",
-                    names::DERIVATIVES
-                ),
-                &src.join(names::DERIVATIVES),
-                Some(
-                    &["case", "U_m_s", "amplitude_deg", "K_alpha", "K_h"]
-                        .into_iter()
-                        .map(String::from)
-                        .chain(names::derivative_columns(true))
-                        .chain(["R2_lift".into(), "R2_moment".into()])
-                        .collect::<Vec<String>>(),
-                ),
-                false, // the data set's wind speeds are in m/s
-            );
-        } else {
-            report.text(format!(
-                "{} cases: the per-case table is in {} and {}.",
-                id.cases.len(),
-                names::DERIVATIVES,
-                names::COEFFICIENTS
-            ));
-        }
-        for k in [
-            "time_series",
-            "spectrum",
-            "force_decomposition",
-            "library",
-            "delta_fits",
-            "force_loops",
-            "mean_angle",
-            "delta_path",
-            "histogram",
-            "heatmap",
-            "derivatives",
-        ] {
-            cv.embed(&mut report, k);
         }
     }
+    if cv.wants("histogram") {
+        cv.draw(
+            "histogram",
+            "histogram_quality",
+            "Misfit of every case, moment and lift: 1 − R² and |1 − MFWA| (Eq. 18).".into(),
+            &quality_histogram(id),
+        )?;
+    }
+    if cv.wants("derivatives") {
+        cv.draw(
+            "derivatives",
+            "derivatives",
+            format!("Identified flutter derivatives against reduced frequency (h-terms at K_h, α-terms at K_α) with the thin-plate Theodorsen derivatives about the truth's elastic axis a = {elastic_axis} (0 when the data do not say)."),
+            &derivative_figure(id, elastic_axis),
+        )?;
+    }
 
-    // ---- flutter
+    report.section("Identification");
+    let mut rows = vec![];
+    for g in &id.groups {
+        for (name, gf) in [("moment", &g.moment), ("lift", &g.lift)] {
+            rows.push(vec![
+                g.name.clone(),
+                name.to_string(),
+                g.cases.len().to_string(),
+                gf.support.len().to_string(),
+                gf.support
+                    .iter()
+                    .map(|t| term_label(t))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                format!("{:.3e}", gf.loss),
+                format!("{:.3e}", gf.loss_limit),
+            ]);
+        }
+    }
+    report.table(
+        "Selected supports per group",
+        &[
+            "group",
+            "force",
+            "cases",
+            "terms",
+            "support",
+            "loss",
+            "loss limit",
+        ]
+        .map(String::from),
+        &rows,
+    );
+    for d in &paper.delta_fits {
+        table_iii(report, d);
+    }
+    if src.join(names::TABLE_IV).exists() {
+        csv_file_table(
+            report,
+            "Table IV: identified vs true coefficients over the noise realisations",
+            &src.join(names::TABLE_IV),
+            false,
+        );
+    }
+    if id.cases.len() <= 64 {
+        csv_file_columns(
+            report,
+            &format!(
+                "Eq. 19 flutter derivatives per case (N* and the other metrics in {})",
+                names::DERIVATIVES
+            ),
+            &src.join(names::DERIVATIVES),
+            Some(
+                &["case", "U_m_s", "amplitude_deg", "K_alpha", "K_h"]
+                    .into_iter()
+                    .map(String::from)
+                    .chain(names::derivative_columns(true))
+                    .chain(["R2_lift".into(), "R2_moment".into()])
+                    .collect::<Vec<String>>(),
+            ),
+            false, // the data set's wind speeds are in m/s
+        );
+    } else {
+        report.text(format!(
+            "{} cases: the per-case table is in {} and {}.",
+            id.cases.len(),
+            names::DERIVATIVES,
+            names::COEFFICIENTS
+        ));
+    }
+    for k in [
+        "time_series",
+        "spectrum",
+        "force_decomposition",
+        "library",
+        "delta_fits",
+        "force_loops",
+        "mean_angle",
+        "delta_path",
+        "histogram",
+        "heatmap",
+        "derivatives",
+    ] {
+        cv.embed(report, k);
+    }
+    Ok(())
+}
+
+/// The flutter runs' V–g figures and tables of the study report; returns the runs (the LCO
+/// section's figure takes the identified model's flutter-speed interval from them).
+fn flutter_section(
+    cv: &mut Canvas<'_>,
+    report: &mut Report,
+    study: &Study,
+    src: &Path,
+) -> Result<Option<Vec<FlutterDoc>>> {
+    let s = &study.spec;
     let flutter_runs: Option<Vec<FlutterDoc>> = s
         .flutter
         .is_some()
@@ -794,11 +852,23 @@ pub fn render_all_from(
             .map(String::from),
             &rows,
         );
-        ensemble_flutter_table(&mut report, runs);
-        cv.embed(&mut report, "vg");
+        ensemble_flutter_table(report, runs);
+        cv.embed(report, "vg");
     }
+    Ok(flutter_runs)
+}
 
-    // ---- LCO
+/// The LCO runs' figures (sweeps, truth sweeps, phase portraits) and tables of the study
+/// report.
+fn lco_section(
+    cv: &mut Canvas<'_>,
+    report: &mut Report,
+    study: &Study,
+    src: &Path,
+    flutter_runs: &Option<Vec<FlutterDoc>>,
+    reduced: bool,
+) -> Result<()> {
+    let s = &study.spec;
     if let Some(l) = &s.lco {
         let stage: LcoDoc = read_json(&src.join(names::LCO))?;
         let empty = aeroelastic::lco::Hysteresis {
@@ -873,57 +943,26 @@ pub fn render_all_from(
         }
         report.section("Limit-cycle oscillations");
         csv_file_table(
-            &mut report,
+            report,
             "LCO runs",
             &src.join(names::LCO_AMPLITUDES),
             reduced,
         );
         if l.compare_truth {
-            round_trip_table(&mut report, src, reduced)?;
+            round_trip_table(report, src, reduced)?;
         }
         if stage.ensemble.is_some() {
             csv_file_table(
-                &mut report,
+                report,
                 "LCO amplitude intervals over the identification ensemble",
                 &src.join(names::LCO_INTERVALS),
                 reduced,
             );
         }
-        cv.embed(&mut report, "bifurcation");
-        cv.embed(&mut report, "phase");
+        cv.embed(report, "bifurcation");
+        cv.embed(report, "phase");
     }
-
-    // ---- LCO branches by continuation
-    if s.branch.is_some() {
-        branch_section(&mut cv, &mut report, src, s.lco.is_some())?;
-    }
-
-    // ---- settings
-    report.section("Settings");
-    if let Some(id) = &id {
-        let v = serde_json::to_value(&id.settings)?;
-        let rows: Vec<(String, String)> = v
-            .as_object()
-            .map(|o| {
-                o.iter()
-                    .map(|(k, v)| (k.replace('_', " "), readable(v)))
-                    .collect()
-            })
-            .unwrap_or_default();
-        report.key_values("Identification settings", &rows);
-    }
-    report.pre(
-        format!("Study file as run ({})", names::STUDY),
-        study.text.clone(),
-    );
-
-    let entries: Vec<FigureEntry> = cv.drawn.iter().map(|d| d.entry.clone()).collect();
-    files_section(&mut report, out, &entries);
-    write_json(&out.join(names::FIGURE_LIST), &entries)?;
-    report
-        .write(&out.join(names::REPORT))
-        .context("writing report.html")?;
-    Ok(entries)
+    Ok(())
 }
 
 /// Elastic axis a of the virtual truth, when the data come from one (0 otherwise).
