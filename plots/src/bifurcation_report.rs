@@ -36,15 +36,7 @@ fn layer(s: &DiagramSummary, dof: Dof) -> DiagramLayer {
             .branches
             .iter()
             .flat_map(|set| set.branches.iter())
-            .map(|b| BranchCurve {
-                u: b.points.iter().map(|p| p.u).collect(),
-                amplitude: b
-                    .points
-                    .iter()
-                    .map(|p| amp(p.amplitude1_alpha, p.amplitude1_h))
-                    .collect(),
-                stable: b.points.iter().map(|p| p.stable).collect(),
-            })
+            .map(|b| BranchCurve::of_branch(b, |p| amp(p.amplitude1_alpha, p.amplitude1_h)))
             .collect(),
         hopf: s.hopf.iter().map(|h| h.u).collect(),
         folds: s

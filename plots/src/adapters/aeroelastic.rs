@@ -243,11 +243,7 @@ pub fn branch_figure(
         branches: set
             .branches
             .iter()
-            .map(|b| BranchCurve {
-                u: b.points.iter().map(|p| p.u).collect(),
-                amplitude: b.points.iter().map(amp).collect(),
-                stable: b.points.iter().map(|p| p.stable).collect(),
-            })
+            .map(|b| BranchCurve::of_branch(b, amp))
             .collect(),
         hopf: set
             .hopf_points

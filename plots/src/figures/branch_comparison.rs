@@ -192,16 +192,7 @@ fn draw_panel<DB: DrawingBackend>(
     for (layer, color) in &layers {
         for b in &layer.branches {
             // plotters clips the lines to the plot area
-            for (stable, pts) in b.runs() {
-                let style = ShapeStyle::from(*color).stroke_width(3);
-                if stable {
-                    chart.draw_series(LineSeries::new(pts, style)).ctx(kind)?;
-                } else {
-                    chart
-                        .draw_series(DashedLineSeries::new(pts, 10, 7, style))
-                        .ctx(kind)?;
-                }
-            }
+            b.draw(&mut chart, *color, kind)?;
         }
     }
     let marks = p

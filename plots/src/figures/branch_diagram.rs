@@ -2,6 +2,7 @@
 //! solid, unstable dashed, Hopf points (▲ on the axis) and folds (◆) marked,
 //! time-integration sweep points and measured points on top.
 
+use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
@@ -25,6 +26,41 @@ pub struct BranchCurve {
 }
 
 impl BranchCurve {
+    /// A continued branch's curve, the amplitude of each orbit by `amplitude` (in the
+    /// figure's unit: first-harmonic or half peak-to-peak, pitch in degrees or heave in mm,
+    /// as the figure's axis says).
+    pub fn of_branch(
+        b: &aeroelastic::branch::Branch,
+        amplitude: impl Fn(&aeroelastic::branch::BranchPoint) -> f64,
+    ) -> Self {
+        BranchCurve {
+            u: b.points.iter().map(|p| p.u).collect(),
+            amplitude: b.points.iter().map(amplitude).collect(),
+            stable: b.points.iter().map(|p| p.stable).collect(),
+        }
+    }
+
+    /// Draws the curve on `chart` in `color`: stable runs solid, unstable runs dashed
+    /// (3 px; the one drawing of a branch in every figure that shows one).
+    pub(crate) fn draw<DB: DrawingBackend>(
+        &self,
+        chart: &mut ChartContext<'_, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>,
+        color: RGBColor,
+        kind: &'static str,
+    ) -> Result<()> {
+        for (stable, pts) in self.runs() {
+            let style = ShapeStyle::from(color).stroke_width(3);
+            if stable {
+                chart.draw_series(LineSeries::new(pts, style)).ctx(kind)?;
+            } else {
+                chart
+                    .draw_series(DashedLineSeries::new(pts, 10, 7, style))
+                    .ctx(kind)?;
+            }
+        }
+        Ok(())
+    }
+
     /// The curve split into runs of equal stability (finite points only), each as
     /// (stable, points); a run shares its end point with the next so that the curve is
     /// continuous.
@@ -202,16 +238,7 @@ impl Figure for BranchDiagramFigure {
             .draw()
             .ctx(kind)?;
         for b in &self.branches {
-            for (stable, pts) in b.runs() {
-                let style = ShapeStyle::from(C_BRANCH).stroke_width(3);
-                if stable {
-                    chart.draw_series(LineSeries::new(pts, style)).ctx(kind)?;
-                } else {
-                    chart
-                        .draw_series(DashedLineSeries::new(pts, 10, 7, style))
-                        .ctx(kind)?;
-                }
-            }
+            b.draw(&mut chart, C_BRANCH, kind)?;
         }
         let marks = self
             .sweep
