@@ -19,6 +19,7 @@ pub mod flutter;
 pub mod identified;
 pub mod integrate;
 pub mod lco;
+pub(crate) mod linalg;
 pub(crate) mod optim;
 pub mod reference;
 pub mod section;
