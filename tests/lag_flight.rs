@@ -599,7 +599,10 @@ fn orbit_at(points: &[(f64, f64, bool, f64)], u: f64, floor: f64) -> Option<(f64
 /// Neimark–Sacker point at 7.35 m/s (max |μ| 1.07–1.17 at 7.5–9 m/s), so `lco`'s runs
 /// there end `Unsettled` on a torus (pitch peaks 13.8–22.5° at 8 m/s), while the truth's
 /// orbit keeps |μ| 0.92–0.99, itself close to the same bifurcation (docs/DECISIONS.md,
-/// "Lag law: orbits right, their stability not").
+/// "Lag law: orbits right, their stability not"; round 29 measured that neither the
+/// instantaneous static Kirchhoff share, the fitted constants, nor training on the truth's
+/// own LCO removes it, while the pitch-rate share of the separation input moves the moduli:
+/// `pitch_rate_share_moves_the_floquet_moduli_toward_the_truths`).
 #[test]
 fn deep_stall_round_trip_at_six_speeds() {
     let dir = tempfile::tempdir().unwrap();
