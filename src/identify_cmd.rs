@@ -98,6 +98,17 @@ pub struct IdentifyArgs {
     /// the memoryless and the lag law on the others and score both on them.
     #[arg(long, value_name = "k=K|mean=DEG|amplitude=DEG")]
     pub hold_out: Option<String>,
+    /// With `--law lag`: `true` adds the instantaneous static Kirchhoff lift
+    /// α_e·κ(x₀(α_e)) to the lift support beside the lagged α_e·κ(x), `false` leaves it out
+    /// (default: the support of `identify::lag::LagFitOptions::default`).
+    #[arg(long, value_name = "true|false")]
+    pub lag_static_lift: Option<bool>,
+    /// With `--law lag`: pitch-rate share c of the law's effective angle,
+    /// α_e = α + ḣ/U + c·Bα̇/U, fixed (not fitted), in [−1, 1]; (½ − a)/2 is the
+    /// three-quarter-chord downwash of records whose moment is about a semichords aft of
+    /// mid-chord (0.5 about the quarter chord). Default 0.
+    #[arg(long, value_name = "C")]
+    pub lag_rate_share: Option<f64>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -501,7 +512,18 @@ fn run_lag(args: &IdentifyArgs) -> anyhow::Result<()> {
         );
     }
     let t_id = Instant::now();
-    let opts = LagFitOptions::default();
+    let mut opts = LagFitOptions::default();
+    if let Some(on) = args.lag_static_lift {
+        opts.lift_columns
+            .retain(|c| *c != identify::lag::LagColumn::KirchhoffStatic);
+        if on {
+            opts.lift_columns
+                .push(identify::lag::LagColumn::KirchhoffStatic);
+        }
+    }
+    if let Some(c) = args.lag_rate_share {
+        opts.rate_share = c;
+    }
     let result = match hold_out {
         Some(h) => identify::lag::held_out(&prepared.cases, h, &opts).map(|(f, _)| f),
         None => identify::lag::fit(&prepared.cases, &opts),
@@ -517,7 +539,7 @@ fn run_lag(args: &IdentifyArgs) -> anyhow::Result<()> {
         let series = prepared
             .cases
             .iter()
-            .map(identify::lag::LagSeries::new)
+            .map(|c| identify::lag::LagSeries::with_rate_share(c, opts.rate_share))
             .collect::<identify::Result<Vec<_>>>()
             .context("lag-law ensemble")?;
         let e = identify::lag::ensemble::bootstrap(&series, &fit, &opts, &es)

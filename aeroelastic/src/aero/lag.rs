@@ -30,7 +30,8 @@
 //!   has zero slope (x₀'(0) = 0), the lag state decouples and the response is the law's
 //!   attached-flow (quasi-steady) response; about a trim in stall it carries the lag.
 //!   The columns of the law are affine in (α_e, q) at fixed x, so ∂C/∂α_e and ∂C/∂q are
-//!   differences of the law's own evaluations, exact.
+//!   differences of the law's own evaluations, exact; a channel with the instantaneous
+//!   static column α_e·κ(x₀(α_e)) takes its ∂C/∂α_e by a central difference (1e-6 rad).
 //! - Circulation lag ([`LagLaw::circulation_lag`] on): two more lag states, the Jones
 //!   states about the trim w_i = z_i − α₀ (lag = [y, w₁, w₂], `n_lag` = 3), with
 //!   ẇ_i = (2U/B)·b_i·(α_e − α₀ − w_i), and the law takes the circulatory angle
@@ -133,9 +134,12 @@ impl LagAero {
     /// (α_e = α₀ + α + ḣ/U, q = Bα̇/U).
     #[inline]
     fn inputs(&self, u: f64, q: [f64; 2], qd: [f64; 2]) -> (f64, f64) {
+        let qq = self.chord * qd[1] / u;
         (
-            self.mean_angle.unwrap_or(0.0) + LagLaw::alpha_e(q[1], qd[0] / u),
-            self.chord * qd[1] / u,
+            self.mean_angle.unwrap_or(0.0)
+                + LagLaw::alpha_e(q[1], qd[0] / u)
+                + self.law.rate_share * qq,
+            qq,
         )
     }
 
@@ -232,16 +236,29 @@ impl AeroModel for LagAero {
             Complex64::new(1.0, 0.0)
         };
         // per unit ĥ: α̂_e = iω/U, q̂ = 0; per unit α̂: α̂_e = 1, q̂ = iωB/U (α̂_c = C_J α̂_e)
-        let inputs = [(cj * iw / u, Complex64::new(0.0, 0.0)), (cj, iw * b_c / u)];
+        let c = self.law.rate_share;
+        let inputs = [
+            (cj * iw / u, Complex64::new(0.0, 0.0)),
+            (cj * (1.0 + c * iw * b_c / u), iw * b_c / u),
+        ];
         let g = 2.0 * u / (b_c * self.law.tau1);
         let gain = g * self.x_static_slope(self.law.input(a0, 0.0)) / (iw + g);
         let ma = self.apparent_mass(flow);
         let scale = [flow.q_dyn() * b_c, flow.q_dyn() * b_c * b_c];
         let mut h = Matrix2::<Complex64>::zeros();
         for (i, ch) in [&self.law.lift, &self.law.moment].into_iter().enumerate() {
-            let c0 = ch.value(a0, 0.0, xb);
-            let c_a = ch.value(a0 + 1.0, 0.0, xb) - c0;
-            let c_q = ch.value(a0, 1.0, xb) - c0;
+            let xs = |a: f64| self.law.x_static(a);
+            let c0 = ch.value(a0, 0.0, xb, xs(a0));
+            // the columns are affine in α_e and q at fixed x, except the instantaneous
+            // static Kirchhoff lift α_e·κ(x₀(α_e)): its slope by a central difference
+            let c_a = if ch.uses_static() {
+                let d = 1e-6;
+                (ch.value(a0 + d, 0.0, xb, xs(a0 + d)) - ch.value(a0 - d, 0.0, xb, xs(a0 - d)))
+                    / (2.0 * d)
+            } else {
+                ch.value(a0 + 1.0, 0.0, xb, xs(a0)) - c0
+            };
+            let c_q = ch.value(a0, 1.0, xb, xs(a0)) - c0;
             let c_x = ch.d_dx(a0, 0.0, xb);
             for (j, &(ae, qq)) in inputs.iter().enumerate() {
                 let x_hat = gain * (ae - 0.5 * self.law.tau2 * qq);
@@ -298,11 +315,26 @@ mod tests {
                 k: [0.05, 1.5],
             },
             circulation_lag: false,
+            rate_share: 0.0,
         }
     }
 
     fn model() -> LagAero {
         LagAero::new(plate_law(), 0.25, Some(-0.3)).unwrap()
+    }
+
+    /// The example law with its circulation lag on, a pitch-rate share 0.4 of the effective
+    /// angle and part of its lift on the instantaneous static Kirchhoff column.
+    fn rate_static() -> LagAero {
+        let mut l = plate_law();
+        l.circulation_lag = true;
+        l.rate_share = 0.4;
+        l.lift.terms = vec![
+            (LagColumn::Kirchhoff, -5.0),
+            (LagColumn::KirchhoffStatic, -1.28),
+            (LagColumn::Q, -1.3 * std::f64::consts::PI),
+        ];
+        LagAero::new(l, 0.25, Some(-0.3)).unwrap()
     }
 
     /// The example law with its circulation lag on.
@@ -406,6 +438,8 @@ mod tests {
             model().with_mean_angle(0.22).unwrap(),
             lagged(),
             lagged().with_mean_angle(0.22).unwrap(),
+            rate_static(),
+            rate_static().with_mean_angle(0.22).unwrap(),
         ] {
             let flow = Flow { rho: RHO, u: 7.0 };
             for omega in [0.0, 3.0, 20.0, 80.0] {

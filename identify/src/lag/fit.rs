@@ -57,7 +57,8 @@ pub const COLLINEAR_CORRELATION: f64 = 0.9;
 pub struct LagFitOptions {
     /// Lift support (default 1, α_e·κ(x), Bα̇/U).
     pub lift_columns: Vec<LagColumn>,
-    /// Candidate moment columns of the sparse selection (default all six).
+    /// Candidate moment columns of the sparse selection (default the six lagged columns,
+    /// [`LagColumn::LAGGED`]).
     pub moment_columns: Vec<LagColumn>,
     /// Levenberg–Marquardt iterations per stage.
     pub max_iter: usize,
@@ -67,6 +68,12 @@ pub struct LagFitOptions {
     /// default on: fixed published constants, no parameter fitted).
     #[serde(default = "default_true")]
     pub circulation_lag: bool,
+    /// Pitch-rate share c of the effective angle α_e = α + ḣ/U + c·Bα̇/U
+    /// ([`LagLaw::rate_share`]), fixed, in \[−1, 1\]; default 0. (½ − a)/2 is the
+    /// three-quarter-chord downwash of records whose moment is about a semichords aft of
+    /// mid-chord.
+    #[serde(default)]
+    pub rate_share: f64,
 }
 
 fn default_true() -> bool {
@@ -77,10 +84,11 @@ impl Default for LagFitOptions {
     fn default() -> Self {
         LagFitOptions {
             lift_columns: vec![LagColumn::One, LagColumn::Kirchhoff, LagColumn::Q],
-            moment_columns: LagColumn::ALL.to_vec(),
+            moment_columns: LagColumn::LAGGED.to_vec(),
             max_iter: 40,
             path: PathOptions::for_measure(Measure::Contribution),
             circulation_lag: true,
+            rate_share: 0.0,
         }
     }
 }
@@ -89,8 +97,8 @@ impl LagFitOptions {
     /// Checks the options.
     ///
     /// # Errors
-    /// [`Error::InvalidOption`] for an empty or repeated column list, `max_iter` = 0 or bad
-    /// path options.
+    /// [`Error::InvalidOption`] for an empty or repeated column list, `max_iter` = 0, a
+    /// `rate_share` outside \[−1, 1\] or bad path options.
     pub fn validate(&self) -> Result<()> {
         for (name, cols) in [
             ("lift_columns", &self.lift_columns),
@@ -105,6 +113,12 @@ impl LagFitOptions {
                     message: "must list at least one column, each once".into(),
                 });
             }
+        }
+        if !(self.rate_share.is_finite() && self.rate_share.abs() <= 1.0) {
+            return Err(Error::InvalidOption {
+                name: "rate_share".into(),
+                message: format!("{}: must be in [-1, 1]", self.rate_share),
+            });
         }
         if self.max_iter == 0 {
             return Err(Error::InvalidOption {
@@ -229,6 +243,7 @@ pub(crate) fn law_of(theta: [f64; 4], circulation_lag: bool) -> LagLaw {
             k: [0.0, 0.0],
         },
         circulation_lag,
+        rate_share: 0.0,
     }
 }
 
@@ -253,6 +268,7 @@ struct Problem<'a> {
 
 /// One evaluation of the projected problem at θ.
 struct Eval {
+    theta: [f64; 4],
     cost: f64,
     residual: Vec<f64>,
     lift: Vec<f64>,
@@ -297,6 +313,7 @@ impl Problem<'_> {
     #[allow(clippy::needless_range_loop)] // parallel series indexed together
     fn stack(
         &self,
+        theta: [f64; 4],
         cols: &[LagColumn],
         xs: &[Vec<f64>],
         starts: &[usize],
@@ -310,12 +327,14 @@ impl Problem<'_> {
             .sum();
         let mut c: Vec<Vec<f64>> = cols.iter().map(|_| Vec::with_capacity(total)).collect();
         let mut y = Vec::with_capacity(total);
-        let law = law_of([1.0; 4], self.circ);
+        let law = law_of(theta, self.circ);
+        let inst = cols.contains(&LagColumn::KirchhoffStatic);
         for ((s, x), &st) in self.series.iter().zip(xs).zip(starts) {
             let a = s.angle(&law);
             for i in st..s.len() {
+                let xi = if inst { law.x_static(a[i]) } else { 1.0 };
                 for (cv, col) in c.iter_mut().zip(cols) {
-                    cv.push(col.value(a[i], s.q[i], x[i]));
+                    cv.push(col.value(a[i], s.q[i], x[i], xi));
                 }
                 y.push(if lift { s.c_lift[i] } else { s.c_moment[i] });
             }
@@ -335,7 +354,7 @@ impl Problem<'_> {
         let mut ss = [0.0; 2];
         let mut cost = 0.0;
         for (k, cols) in [&self.lift, &self.moment].into_iter().enumerate() {
-            let (c, y) = self.stack(cols, &xs, &starts, k == 0);
+            let (c, y) = self.stack(theta, cols, &xs, &starts, k == 0);
             let refs: Vec<&[f64]> = c.iter().map(|v| v.as_slice()).collect();
             let qr = ThinQr::new(&refs, 1e-10);
             let r = qr.residual(&y);
@@ -359,6 +378,7 @@ impl Problem<'_> {
         }
         let [lift, moment] = coefs;
         Ok(Eval {
+            theta,
             cost,
             residual,
             lift,
@@ -641,7 +661,8 @@ fn case_scores(p: &Problem<'_>, e: &Eval) -> Vec<LagCaseScore> {
         .zip(&e.xs)
         .zip(&e.starts)
         .map(|((s, x), &st)| {
-            let a = s.angle(&law_of([1.0; 4], p.circ));
+            let law = law_of(e.theta, p.circ);
+            let a = s.angle(&law);
             let mut r2 = [0.0; 2];
             for (k, (cols, coef)) in [(&p.lift, &e.lift), (&p.moment, &e.moment)]
                 .into_iter()
@@ -652,7 +673,7 @@ fn case_scores(p: &Problem<'_>, e: &Eval) -> Vec<LagCaseScore> {
                     .map(|i| {
                         cols.iter()
                             .zip(coef)
-                            .map(|(c, v)| v * c.value(a[i], s.q[i], x[i]))
+                            .map(|(c, v)| v * c.value(a[i], s.q[i], x[i], law.x_static(a[i])))
                             .sum()
                     })
                     .collect();
@@ -678,7 +699,7 @@ fn select_moment(
     e: &Eval,
     opts: &LagFitOptions,
 ) -> Result<(Vec<LagColumn>, MomentSelection)> {
-    let (cols, y) = p.stack(&opts.moment_columns, &e.xs, &e.starts, false);
+    let (cols, y) = p.stack(e.theta, &opts.moment_columns, &e.xs, &e.starts, false);
     let n = y.len();
     let ncol = cols.len();
     let theta = Mat::<f64>::from_fn(n, ncol, |i, j| cols[j][i]);
@@ -786,11 +807,15 @@ pub fn fit(cases: &[NondimCase], opts: &LagFitOptions) -> Result<LagFit> {
             message: "no case to fit the lag law on".into(),
         });
     }
-    let series: Vec<LagSeries> = cases.iter().map(LagSeries::new).collect::<Result<_>>()?;
+    let series: Vec<LagSeries> = cases
+        .iter()
+        .map(|c| LagSeries::with_rate_share(c, opts.rate_share))
+        .collect::<Result<_>>()?;
     fit_series(&series, opts)
 }
 
-/// [`fit`] on cases already in the lag law's variables.
+/// [`fit`] on cases already in the lag law's variables (built with
+/// [`LagSeries::with_rate_share`] at `opts.rate_share`, which the law records).
 ///
 /// # Errors
 /// As [`fit`].
@@ -924,6 +949,7 @@ pub fn fit_series(series: &[LagSeries], opts: &LagFitOptions) -> Result<LagFit> 
             k: [kmin, kmax],
         },
         circulation_lag: p.circ,
+        rate_share: opts.rate_share,
     };
     law.check()?;
     let report = LagReport {
@@ -970,7 +996,7 @@ pub struct LagPrediction {
 /// As [`LagSeries::new`] and [`LagSeries::simulate`]; [`Error::OutsideFittedRange`] naming
 /// the case when its mean effective angle lies outside the angles the law was fitted on.
 pub fn predict(law: &LagLaw, case: &NondimCase) -> Result<LagPrediction> {
-    let s = LagSeries::new(case)?;
+    let s = LagSeries::with_rate_share(case, law.rate_share)?;
     predict_series(law, &s)
 }
 
@@ -1047,6 +1073,7 @@ pub(crate) mod tests {
                 k: [0.0, 1.0],
             },
             circulation_lag: true,
+            rate_share: 0.0,
         }
     }
 

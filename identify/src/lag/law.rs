@@ -5,7 +5,9 @@
 //! Variables (DESIGN.md §2, Scanlan signs): α \[rad\] nose-up, q = Bα̇/U, ḣ/U (h down),
 //! semichord b = B/2, convective time s = tU/b.
 //!
-//! - Effective angle α_e = α + ḣ/U (a downward heave velocity raises the angle of attack).
+//! - Effective angle α_e = α + ḣ/U (a downward heave velocity raises the angle of attack),
+//!   plus c·Bα̇/U with a fixed pitch-rate share c ([`LagLaw::rate_share`], default 0;
+//!   (½ − a)/2 gives the three-quarter-chord downwash angle about an axis at a semichords).
 //! - Input of the lag equation u = α_e − τ₂·(b α̇/U) = α_e − τ₂·q/2: the separation responds
 //!   to the angle τ₂ convective times earlier (pitch rate only; the heave acceleration's
 //!   share b ḧ/U² is left out, forced records do not carry it cleanly).
@@ -17,8 +19,12 @@
 //! - Forces: C_L (down) and C_M (nose-up about the elastic axis) are each a linear
 //!   combination of the columns [`LagColumn`]: a constant, α_e, the Kirchhoff lift
 //!   α_e·((1 + √x)/2)², q, the separation deficit 1 − x and the Kirchhoff lift times it
-//!   (centre-of-pressure travel). The thin-aerofoil apparent mass (acceleration terms) is not
-//!   part of the law: flight adds it (`AeroModel::apparent_mass`).
+//!   (centre-of-pressure travel), and the Kirchhoff lift of the *instantaneous* static
+//!   separation α_e·κ(x₀(α_e)) (the share of the separated-flow lift that follows the angle
+//!   without lag, as the fully separated term (1 − f″)(1 + 3s)/(4(1 + s)), s = √f_st(α_E),
+//!   of Hansen, Gaunaa & Madsen 2004 does; not in the default support, see
+//!   `LagFitOptions::lift_columns`). The thin-aerofoil apparent mass (acceleration terms) is
+//!   not part of the law: flight adds it (`AeroModel::apparent_mass`).
 //! - Attached-flow circulation lag (switch [`LagLaw::circulation_lag`], off in a document
 //!   that does not name it): the circulation does not follow the angle at once (Wagner's
 //!   indicial lift). With the switch on, every angle the law uses — the columns' α_e and the
@@ -67,11 +73,28 @@ pub enum LagColumn {
     /// Kirchhoff lift times the separation deficit, α_e·((1 + √x)/2)²·(1 − x): the moment of
     /// a centre of pressure that travels aft with separation.
     KirchhoffSep,
+    /// Kirchhoff lift of the instantaneous static separation, α_e·κ(x₀(α_e)): no lag (the
+    /// law's angle α_e, or α_c with the circulation lag, in both places). In steady flow it
+    /// equals α_e·κ(x), so beside [`LagColumn::Kirchhoff`] the two coefficients split one
+    /// static lift slope into a lagged and an instantaneous share.
+    KirchhoffStatic,
 }
 
 impl LagColumn {
     /// Every column, in library order.
-    pub const ALL: [LagColumn; 6] = [
+    pub const ALL: [LagColumn; 7] = [
+        LagColumn::One,
+        LagColumn::AlphaE,
+        LagColumn::Kirchhoff,
+        LagColumn::Q,
+        LagColumn::Sep,
+        LagColumn::KirchhoffSep,
+        LagColumn::KirchhoffStatic,
+    ];
+
+    /// The six columns of the law as first written (the default moment candidates): every
+    /// column but [`LagColumn::KirchhoffStatic`].
+    pub const LAGGED: [LagColumn; 6] = [
         LagColumn::One,
         LagColumn::AlphaE,
         LagColumn::Kirchhoff,
@@ -89,14 +112,18 @@ impl LagColumn {
             LagColumn::Q => "Bα̇/U",
             LagColumn::Sep => "1−x",
             LagColumn::KirchhoffSep => "α_e·κ(x)·(1−x)",
+            LagColumn::KirchhoffStatic => "α_e·κ(x₀(α_e))",
         }
     }
 
-    /// The column's value at effective angle `alpha_e` \[rad\], q = Bα̇/U and separation
-    /// state `x` (clamped to \[0, 1\] inside the square root).
+    /// The column's value at effective angle `alpha_e` \[rad\], q = Bα̇/U, separation
+    /// state `x` and static separation `x_inst` = x₀(α_e) at the same angle (both clamped
+    /// to \[0, 1\] inside the square root; `x_inst` is read by
+    /// [`LagColumn::KirchhoffStatic`] only).
     #[inline]
-    pub fn value(self, alpha_e: f64, q: f64, x: f64) -> f64 {
+    pub fn value(self, alpha_e: f64, q: f64, x: f64, x_inst: f64) -> f64 {
         match self {
+            LagColumn::KirchhoffStatic => alpha_e * kirchhoff(x_inst),
             LagColumn::One => 1.0,
             LagColumn::AlphaE => alpha_e,
             LagColumn::Kirchhoff => alpha_e * kirchhoff(x),
@@ -106,11 +133,12 @@ impl LagColumn {
         }
     }
 
-    /// ∂(value)/∂x at (α_e, q, x) (for linearisations and output-error gradients).
+    /// ∂(value)/∂x at (α_e, q, x) (for linearisations and output-error gradients; the
+    /// static separation of [`LagColumn::KirchhoffStatic`] does not depend on x).
     #[inline]
     pub fn d_dx(self, alpha_e: f64, _q: f64, x: f64) -> f64 {
         match self {
-            LagColumn::One | LagColumn::AlphaE | LagColumn::Q => 0.0,
+            LagColumn::One | LagColumn::AlphaE | LagColumn::Q | LagColumn::KirchhoffStatic => 0.0,
             LagColumn::Kirchhoff => alpha_e * kirchhoff_dx(x),
             LagColumn::Sep => -1.0,
             LagColumn::KirchhoffSep => alpha_e * (kirchhoff_dx(x) * (1.0 - x) - kirchhoff(x)),
@@ -140,13 +168,22 @@ pub struct LagChannel {
 }
 
 impl LagChannel {
-    /// The channel's coefficient (C_L or C_M) at (α_e, q, x).
+    /// The channel's coefficient (C_L or C_M) at (α_e, q, x) with the static separation
+    /// `x_inst` = x₀(α_e) ([`LagColumn::value`]).
     #[inline]
-    pub fn value(&self, alpha_e: f64, q: f64, x: f64) -> f64 {
+    pub fn value(&self, alpha_e: f64, q: f64, x: f64, x_inst: f64) -> f64 {
         self.terms
             .iter()
-            .map(|(c, k)| k * c.value(alpha_e, q, x))
+            .map(|(c, k)| k * c.value(alpha_e, q, x, x_inst))
             .sum()
+    }
+
+    /// Whether the channel uses the instantaneous static separation x₀(α_e)
+    /// ([`LagColumn::KirchhoffStatic`]), i.e. is not affine in α_e at fixed x.
+    pub fn uses_static(&self) -> bool {
+        self.terms
+            .iter()
+            .any(|(c, _)| *c == LagColumn::KirchhoffStatic)
     }
 
     /// ∂(value)/∂x.
@@ -213,6 +250,11 @@ pub struct LagLaw {
     /// first written).
     #[serde(default)]
     pub circulation_lag: bool,
+    /// Pitch-rate share c of the effective angle, α_e = α + ḣ/U + c·Bα̇/U (c = (½ − a)/2
+    /// for the three-quarter-chord downwash about an elastic axis a semichords aft of
+    /// mid-chord); fixed, not fitted. Absent in a document = 0.
+    #[serde(default)]
+    pub rate_share: f64,
 }
 
 impl LagLaw {
@@ -235,6 +277,9 @@ impl LagLaw {
         }
         if !(self.alpha_star > 0.0 && self.alpha_star < std::f64::consts::FRAC_PI_2) {
             return bad("alpha_star", self.alpha_star, "in (0, π/2) rad");
+        }
+        if !(self.rate_share.is_finite() && self.rate_share.abs() <= 1.0) {
+            return bad("rate_share", self.rate_share, "in [-1, 1]");
         }
         if !(self.sharpness >= 1.0 && self.sharpness <= 50.0) {
             return bad("sharpness", self.sharpness, "in [1, 50]");
@@ -277,12 +322,14 @@ impl LagLaw {
         (self.x_static(self.input(alpha_e, q)) - x) / self.tau1
     }
 
-    /// (C_L, C_M) at (α_e, q, x).
+    /// (C_L, C_M) at (α_e, q, x) (the static separation of [`LagColumn::KirchhoffStatic`]
+    /// taken at α_e).
     #[inline]
     pub fn coefficients(&self, alpha_e: f64, q: f64, x: f64) -> [f64; 2] {
+        let xi = self.x_static(alpha_e);
         [
-            self.lift.value(alpha_e, q, x),
-            self.moment.value(alpha_e, q, x),
+            self.lift.value(alpha_e, q, x, xi),
+            self.moment.value(alpha_e, q, x, xi),
         ]
     }
 }
@@ -361,6 +408,7 @@ mod tests {
                 k: [0.05, 0.2],
             },
             circulation_lag: false,
+            rate_share: 0.0,
         }
     }
 
@@ -383,6 +431,31 @@ mod tests {
         v.as_object_mut().unwrap().remove("circulation_lag");
         let l: LagLaw = serde_json::from_value(v).unwrap();
         assert!(!l.circulation_lag);
+    }
+
+    #[test]
+    fn instantaneous_static_column_is_the_kirchhoff_lift_in_steady_flow() {
+        let mut l = law();
+        l.lift.terms = vec![(LagColumn::KirchhoffStatic, -6.0)];
+        for a in [0.0, 0.1, 0.25, 0.4] {
+            let x0 = l.x_static(a);
+            let steady = LagColumn::Kirchhoff.value(a, 0.0, x0, 1.0);
+            assert!((l.coefficients(a, 0.0, x0)[0] + 6.0 * steady).abs() < 1e-12);
+            // and it does not follow the lagged state
+            assert_eq!(
+                l.coefficients(a, 0.0, 0.0)[0],
+                l.coefficients(a, 0.0, 1.0)[0]
+            );
+        }
+        assert!(l.lift.uses_static() && !law().lift.uses_static());
+        // documents written before the rate share read as 0; out of range is refused
+        let mut v = serde_json::to_value(law()).unwrap();
+        v.as_object_mut().unwrap().remove("rate_share");
+        let r: LagLaw = serde_json::from_value(v).unwrap();
+        assert_eq!(r.rate_share, 0.0);
+        let mut l = law();
+        l.rate_share = 1.5;
+        assert!(l.check().unwrap_err().to_string().contains("rate_share"));
     }
 
     #[test]
@@ -409,7 +482,7 @@ mod tests {
     fn column_derivatives_match_differences() {
         for c in LagColumn::ALL {
             let (a, q, x) = (0.3, 0.05, 0.4);
-            let d = (c.value(a, q, x + 1e-6) - c.value(a, q, x - 1e-6)) / 2e-6;
+            let d = (c.value(a, q, x + 1e-6, 0.7) - c.value(a, q, x - 1e-6, 0.7)) / 2e-6;
             assert!((d - c.d_dx(a, q, x)).abs() < 1e-6, "{c:?}");
         }
     }

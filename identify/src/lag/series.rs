@@ -72,6 +72,15 @@ impl LagSeries {
     /// [`Error::InvalidData`] naming the case for fewer than 8 samples, a non-positive dt,
     /// chord or wind speed, series of unequal length or a non-finite value.
     pub fn new(case: &NondimCase) -> Result<LagSeries> {
+        Self::with_rate_share(case, 0.0)
+    }
+
+    /// [`LagSeries::new`] with the effective angle α_e = α + ḣ/U + c·Bα̇/U
+    /// ([`LagLaw::rate_share`] c).
+    ///
+    /// # Errors
+    /// As [`LagSeries::new`].
+    pub fn with_rate_share(case: &NondimCase, c: f64) -> Result<LagSeries> {
         let id = case.meta.id.clone();
         let bad = |field: &str, message: String| Error::InvalidData {
             case: id.clone(),
@@ -101,7 +110,8 @@ impl LagSeries {
         let alpha_e: Vec<f64> = case.x[0]
             .iter()
             .zip(&case.x[3])
-            .map(|(a, h)| a + h)
+            .zip(&case.x[1])
+            .map(|((a, h), q)| a + h + c * q)
             .collect();
         for (name, v) in [
             ("alpha_e", &alpha_e),
@@ -328,6 +338,7 @@ mod tests {
                 k: [0.0, 1.0],
             },
             circulation_lag: false,
+            rate_share: 0.0,
         }
     }
 
