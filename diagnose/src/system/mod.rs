@@ -482,20 +482,21 @@ fn wmean2(v: &[[f64; 2]], w: &[f64]) -> [f64; 2] {
     m
 }
 
-/// Each run's weight in the level's pooled energies (issue 42 item 5, round 29): the
-/// inverse of its own noise energy e2(E_noise,j), scaled to a mean of 1, so that a run
-/// counts by its information. The pooled gap² over the pooled noise² is then the mean of
-/// the runs' own before/noise energy ratios, and a run whose signal has sunk into its noise
-/// (a still-air decay, a run below the flutter speed; normalised noise energy ten times a
-/// limit cycle's) counts as one run with a ratio near 1 instead of setting both the null
-/// and the gap. Uniform weights when any run's noise energy is not positive and finite.
-fn run_weights(noise_runs: &[[f64; 2]]) -> Vec<f64> {
-    let inv: Vec<f64> = noise_runs.iter().map(|&e| 1.0 / e2(e)).collect();
-    if inv.iter().any(|w| !(w.is_finite() && *w > 0.0)) || inv.is_empty() {
-        return vec![1.0; noise_runs.len()];
-    }
-    let mean = inv.iter().sum::<f64>() / inv.len() as f64;
-    inv.iter().map(|w| w / mean).collect()
+/// Each run's weight in the level's pooled energies (issue 42 item 5, round 29): 1 for a
+/// run in the wind, 0 for a still-air run (U = 0) when some run is in the wind; 1 for
+/// every run otherwise. Still-air decays are judged by the structure check
+/// ([`crate::structure`]: frequencies, damping, backbone against the given structure) and
+/// inform the structural candidates' fits, but stay out of the flow effects' gap test: a
+/// decay sinks into its noise within the record, its normalised noise energy is about ten
+/// times a limit cycle's, and pooled by a plain mean it set both the null and the gap
+/// (null ×3.8, gap statistic 2.1 → 1.15 on the plate rig). Weighting every run by the
+/// inverse of its own noise energy was tried and moved covered effects to
+/// `extrapolation` on sets without any still-air run (docs/DECISIONS.md, round 29).
+pub(crate) fn run_weights(runs: &[RunResidual]) -> Vec<f64> {
+    let in_wind = runs.iter().any(|r| r.u > 0.0);
+    runs.iter()
+        .map(|r| if in_wind && r.u <= 0.0 { 0.0 } else { 1.0 })
+        .collect()
 }
 
 /// Fold of each run: leave one run out (`folds` = 0 or ≥ the number of runs), else a
@@ -818,10 +819,10 @@ fn score_candidate(
 /// [`AeroModel`], e.g. a truth model in tests).
 ///
 /// **Gap.** Per run and DOF the normalised energy mean((r_c/norm_c)²); the level's gap
-/// is sqrt of the weighted mean over runs and the plain mean over DOFs (the two channels
-/// weigh equally; each run by the inverse of its own noise energy, scaled to a mean of 1, so
-/// that the squared gap statistic is the mean of the runs' own before/noise ratios and a
-/// run sunk into its noise cannot set the null). Every run is
+/// is sqrt of the mean over the runs in the wind and over DOFs (the two channels weigh
+/// equally); still-air runs (U = 0) are fitted and reported but pooled only when no run is
+/// in the wind (they are judged by the structure check, see `LevelResult::structure`).
+/// Every run is
 /// held out once (the baseline has no parameter fitted on free data, so its held-out gap
 /// is its gap on all runs). Noise level: the same metric for an exact model, from the
 /// displacement noise σ̂ ([`identify::preprocess::noise_sigma`] of each run) through the
@@ -881,8 +882,8 @@ fn level_and_runs(
     let chord = model.chord();
     let before_runs: Vec<[f64; 2]> = runs.iter().map(|r| r.energy()).collect();
     let noise_runs: Vec<[f64; 2]> = runs.iter().map(|r| r.noise_energy).collect();
-    // each run counts by its information: weights 1/E_noise,j (mean 1)
-    let weights = run_weights(&noise_runs);
+    // still-air runs out of the pooled gap when runs in the wind exist
+    let weights = run_weights(runs);
     let e_before = wmean2(&before_runs, &weights);
     let e_noise = wmean2(&noise_runs, &weights);
     let before = comb(e_before);
