@@ -1793,8 +1793,8 @@ mod tests {
         let narrow = draws[0].clone();
         let modes = [(3.0, 0.01), (6.0, 0.02)];
         let mut not_decaying = 0;
-        for (what, rec) in std::iter::once(("white", &white))
-            .chain(draws.iter().map(|d| ("narrow-band", d)))
+        for (what, rec) in
+            std::iter::once(("white", &white)).chain(draws.iter().map(|d| ("narrow-band", d)))
         {
             let r = decay_row("c", "heave", rec, dt, &modes);
             let why = r.expect_err(what);
@@ -1815,9 +1815,8 @@ mod tests {
         assert!((r.linear_hz / (wd / TAU) - 1.0).abs() < 0.01, "{r:?}");
         // the check: no row from a noise-only record, and the summary says why
         // pitch channels: white noise of their own draws
-        let mut pitch_noise = || -> Vec<f64> {
-            (0..n).map(|_| 1e-5 * normal.sample(&mut rng)).collect()
-        };
+        let mut pitch_noise =
+            || -> Vec<f64> { (0..n).map(|_| 1e-5 * normal.sample(&mut rng)).collect() };
         let rec = |id: &str, h: Vec<f64>, alpha: Vec<f64>| Record {
             kind: identify::record::CaseKind::Free,
             meta: identify::record::CaseMeta {

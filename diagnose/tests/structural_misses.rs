@@ -38,7 +38,13 @@ fn a_hardening_pitch_cubic_is_named_when_the_given_pitch_frequency_is_5_percent_
         if let Some(s) = free.manifest.structure.as_mut() {
             s.freq_pitch *= f;
         }
-        let d = diagnose(&set.forced, Some(&free), &DiagnoseOptions::new(seed), "test").unwrap();
+        let d = diagnose(
+            &set.forced,
+            Some(&free),
+            &DiagnoseOptions::new(seed),
+            "test",
+        )
+        .unwrap();
         let sys = d.levels.last().unwrap();
         eprintln!(
             "f_alpha × {f}: verdict {:?} {:.3}; system gap {:.4} (statistic {:.2}); best {} \
