@@ -5,12 +5,13 @@
 //! pitch frequency 5 % too high: the foreign generator's set was called `none`
 //! (confidence 0.28). **Open (round 29): this test fails** and is ignored; run it with
 //! `cargo test --release -p diagnose --test structural_misses -- --ignored --nocapture`
-//! (about 2 min on 2 loaded cores). Measured at round 29 (seed 5, strength 0.8): with the
-//! right structure `structural_cubic` (0.849, k₃ 169 N m/rad³, excess shrink 94 %); with
-//! f_α given 5 % high `unexplained` (1.000): gap 0.1343 at 15.4× its null, every
-//! structural candidate's held-out statistic ≤ 0 — no candidate carries a linear stiffness
-//! correction, and with a forced campaign the level does not run on the structure the
-//! decays identify (docs/DECISIONS.md, round 29).
+//! (about 1–2 min). Measured at round 29 (seed 5, strength 0.8, still-air runs out of the
+//! pooled gap): with the right structure `structural_cubic` (0.908, k₃ 169 N m/rad³, gap
+//! statistic 3.96); with f_α given 5 % high `freeplay` (0.400, gap statistic 3.38). No
+//! candidate carries a linear stiffness correction, and with a forced campaign the level
+//! only compares the decays with the structure, with the air's apparent mass fitted on
+//! the same decays, so it cannot tell the right structure from the wrong one (the right one
+//! reads +6.8 %, the wrong one −2.7 %; docs/DECISIONS.md, round 29).
 
 use aeroelastic::effects::Form;
 use diagnose::blind::{generate, BlindEffect, BlindScenario};
