@@ -771,8 +771,8 @@ fn decay_row_at(
     let nyquist = 0.5 / dt;
     if !(f.is_finite() && f > 0.0) || f > NYQUIST_SHARE * nyquist {
         return Err(format!(
-            "its spectral peak ({f:.3} Hz) lies above {:.0} % of the Nyquist frequency \
-             ({nyquist:.3} Hz): not a mode",
+            "holds no mode: its spectral peak ({f:.3} Hz) lies above {:.0} % of the \
+             Nyquist frequency ({nyquist:.3} Hz)",
             100.0 * NYQUIST_SHARE
         ));
     }
@@ -793,8 +793,8 @@ fn decay_row_at(
         let stands_out = peak >= NOISE_PROMINENCE * noise_amp && peak > 0.0;
         if !stands_out {
             return Err(format!(
-                "no mode stands out of the noise (largest window amplitude {peak:.3e} is \
-                 {:.1}× the noise's, at least {NOISE_PROMINENCE} asked)",
+                "holds no mode: none stands out of the noise (largest window amplitude \
+                 {peak:.3e} is {:.1}× the noise's, at least {NOISE_PROMINENCE} asked)",
                 peak / noise_amp.max(f64::MIN_POSITIVE)
             ));
         }
@@ -805,7 +805,8 @@ fn decay_row_at(
         let good: Vec<(f64, f64, f64)> = win.iter().copied().filter(|w| w.1 > floor).collect();
         if good.len() < 4 {
             return Err(format!(
-                "{} window(s) of {periods} periods above the noise floor, fewer than 4",
+                "holds no mode: {} window(s) of {periods} periods above the noise floor, \
+                 fewer than 4",
                 good.len()
             ));
         }
@@ -822,7 +823,25 @@ fn decay_row_at(
     let a: Vec<f64> = good.iter().map(|w| w.1).collect();
     let la: Vec<f64> = a.iter().map(|v| v.ln()).collect();
     let (_, _, sse_lin) = line_fit(&t, &a);
-    let (rate, c, _) = line_fit(&t, &la);
+    let (rate, c, sse_log) = line_fit(&t, &la);
+    // A mode of a still-air record is a free decay: the windows' log amplitude must fall
+    // with time, by more than COVERAGE standard errors of the slope (window scatter,
+    // overlap-inflated). A stationary narrow-band record (sensor or rig noise through a
+    // filter, a steady pick-up) has windows that rise and fall at random: no mode.
+    let rate_se = {
+        let n = t.len() as f64;
+        let mt = t.iter().sum::<f64>() / n;
+        let stt: f64 = t.iter().map(|v| (v - mt).powi(2)).sum();
+        OVERLAP_INFLATION * (sse_log / (n - 2.0).max(1.0) / stt.max(f64::MIN_POSITIVE)).sqrt()
+    };
+    if !(rate < 0.0 && -rate > COVERAGE * rate_se) {
+        return Err(format!(
+            "holds no mode: its {} window(s) above the noise floor do not decay (log \
+             amplitude slope {rate:.3e} ± {rate_se:.3e} 1/s, a fall beyond {COVERAGE} \
+             standard errors asked)",
+            good.len()
+        ));
+    }
     let sse_exp: f64 = t
         .iter()
         .zip(&a)
@@ -1738,6 +1757,98 @@ mod tests {
         assert_eq!(k, Matrix2::zeros());
         assert!((c[(1, 1)] / 20.0 - 1.0).abs() < 1e-6, "{c}");
         assert_eq!((c[(0, 0)], c[(0, 1)], c[(1, 0)]), (0.0, 0.0, 0.0));
+    }
+
+    /// Issue 42 item 5 (e): a heave record holding only noise gives no mode, whether the
+    /// noise is white (its spectral peak anywhere up to the Nyquist frequency, 256 Hz at
+    /// 512 Hz) or narrow-band (white noise through a lightly damped resonator: a sharp
+    /// peak far above the third-difference noise, but stationary, not a decay); the
+    /// structure check then has no row and says the record holds no mode. A real decay at
+    /// the same rate with the same noise added is still read.
+    #[test]
+    fn a_noise_only_record_holds_no_mode_white_or_narrow_band() {
+        use rand::SeedableRng;
+        use rand_distr::{Distribution, Normal};
+        let dt = 1.0 / 512.0;
+        let n = 20 * 512;
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(2029);
+        let normal = Normal::new(0.0, 1.0).unwrap();
+        let white: Vec<f64> = (0..n).map(|_| 1e-5 * normal.sample(&mut rng)).collect();
+        // the resonator: x'' + 2ζω x' + ω² x = w(t), ζ = 0.02 at 6 Hz (semi-implicit Euler)
+        let (w0, z) = (TAU * 6.0, 0.02);
+        let mut resonator = || -> Vec<f64> {
+            let (mut x, mut v) = (0.0, 0.0);
+            (0..n + 2048)
+                .map(|_| {
+                    v += dt * (-2.0 * z * w0 * v - w0 * w0 * x + normal.sample(&mut rng));
+                    x += dt * v;
+                    x
+                })
+                .skip(2048)
+                .collect()
+        };
+        // eight draws: the windows' amplitudes are random, so some draws leave windows above
+        // the floor (then the decay test refuses them) and some do not
+        let draws: Vec<Vec<f64>> = (0..8).map(|_| resonator()).collect();
+        let narrow = draws[0].clone();
+        let modes = [(3.0, 0.01), (6.0, 0.02)];
+        let mut not_decaying = 0;
+        for (what, rec) in
+            std::iter::once(("white", &white)).chain(draws.iter().map(|d| ("narrow-band", d)))
+        {
+            let r = decay_row("c", "heave", rec, dt, &modes);
+            let why = r.expect_err(what);
+            eprintln!("{what}: {why}");
+            assert!(why.starts_with("holds no mode"), "{what}: {why}");
+            not_decaying += usize::from(why.contains("do not decay"));
+        }
+        assert!(not_decaying > 0, "no draw reached the decay test");
+        // the same resonator released from rest with the same white noise on top
+        let (wd, amp) = (w0 * (1.0 - z * z).sqrt(), 20.0 * narrow_rms(&narrow));
+        let decay: Vec<f64> = (0..n)
+            .map(|i| {
+                let t = i as f64 * dt;
+                amp * (-z * w0 * t).exp() * (wd * t).cos() + white[i]
+            })
+            .collect();
+        let r = decay_row("c", "heave", &decay, dt, &modes).expect("a decay is a mode");
+        assert!((r.linear_hz / (wd / TAU) - 1.0).abs() < 0.01, "{r:?}");
+        // the check: no row from a noise-only record, and the summary says why
+        // pitch channels: white noise of their own draws
+        let mut pitch_noise =
+            || -> Vec<f64> { (0..n).map(|_| 1e-5 * normal.sample(&mut rng)).collect() };
+        let rec = |id: &str, h: Vec<f64>, alpha: Vec<f64>| Record {
+            kind: identify::record::CaseKind::Free,
+            meta: identify::record::CaseMeta {
+                id: id.into(),
+                ..Default::default()
+            },
+            t0: 0.0,
+            dt,
+            h,
+            alpha,
+            lift: None,
+            moment: None,
+            nowind: None,
+            control: None,
+        };
+        let r1 = rec("white", white.clone(), pitch_noise());
+        let r2 = rec("narrow", narrow.clone(), pitch_noise());
+        let m = Matrix2::new(1.0, 0.0, 0.0, 1.0);
+        let k = Matrix2::new((TAU * 3.0).powi(2), 0.0, 0.0, (TAU * 6.0).powi(2));
+        let c = Matrix2::new(2.0 * 0.01 * TAU * 3.0, 0.0, 0.0, 2.0 * 0.02 * TAU * 6.0);
+        let check = check_against(&[&r1, &r2], &m, &k, &c, None).expect("refusals reported");
+        assert!(check.modes.is_empty(), "{:?}", check.modes);
+        assert!(
+            check.refused.iter().all(|w| w.contains("holds no mode")),
+            "{:?}",
+            check.refused
+        );
+        assert!(check.summary.contains("holds no mode"), "{}", check.summary);
+    }
+
+    fn narrow_rms(x: &[f64]) -> f64 {
+        (x.iter().map(|v| v * v).sum::<f64>() / x.len() as f64).sqrt()
     }
 
     #[test]

@@ -211,9 +211,11 @@ pub(crate) fn apply_held_out(runs: &mut [RunResidual], folds: &[usize]) -> Optio
     }
     let any_raw = runs.iter().any(raw);
     let comb = |e: [f64; 2]| (0.5 * (e[0] + e[1])).max(0.0).sqrt();
+    // pooled as the level pools its gap (still-air runs out when runs in the wind exist)
+    let weights = super::residual::run_weights(runs);
     let mean_e = |v: &[[f64; 2]]| -> [f64; 2] {
-        let m = v.len().max(1) as f64;
-        [0, 1].map(|c| v.iter().map(|e| e[c]).sum::<f64>() / m)
+        let m = weights.iter().sum::<f64>().max(f64::MIN_POSITIVE);
+        [0, 1].map(|c| v.iter().zip(&weights).map(|(e, w)| w * e[c]).sum::<f64>() / m)
     };
     let without: Vec<[f64; 2]> = runs.iter().map(calibrated_without).collect();
     let mut with: Vec<[f64; 2]> = runs.iter().map(|r| r.energy()).collect();

@@ -30,6 +30,7 @@ use crate::report::{CandidateScore, CaseGap, LevelResult};
 use crate::{Error, Result};
 use candidates::{SystemTerm, Variant};
 
+use residual::run_weights;
 pub use residual::{ResidualSettings, RunResidual};
 
 /// Options of [`system_level`].
@@ -467,12 +468,17 @@ pub fn system_level_of(
     Ok(level)
 }
 
-/// Mean over runs of per-DOF energies.
-fn mean2(v: &[[f64; 2]]) -> [f64; 2] {
+/// Weighted mean over runs of per-DOF energies (`w`: one weight per run, see
+/// [`run_weights`]).
+fn wmean2(v: &[[f64; 2]], w: &[f64]) -> [f64; 2] {
+    let sw: f64 = w.iter().sum();
     let mut m = [0.0; 2];
-    for e in v {
-        m[0] += e[0] / v.len() as f64;
-        m[1] += e[1] / v.len() as f64;
+    if sw <= 0.0 {
+        return m;
+    }
+    for (e, wj) in v.iter().zip(w) {
+        m[0] += wj * e[0] / sw;
+        m[1] += wj * e[1] / sw;
     }
     m
 }
@@ -797,7 +803,10 @@ fn score_candidate(
 /// [`AeroModel`], e.g. a truth model in tests).
 ///
 /// **Gap.** Per run and DOF the normalised energy mean((r_c/norm_c)²); the level's gap
-/// is sqrt of the mean over runs and DOFs (the two channels weigh equally). Every run is
+/// is sqrt of the mean over the runs in the wind and over DOFs (the two channels weigh
+/// equally); still-air runs (U = 0) are fitted and reported but pooled only when no run is
+/// in the wind (they are judged by the structure check, see `LevelResult::structure`).
+/// Every run is
 /// held out once (the baseline has no parameter fitted on free data, so its held-out gap
 /// is its gap on all runs). Noise level: the same metric for an exact model, from the
 /// displacement noise σ̂ ([`identify::preprocess::noise_sigma`] of each run) through the
@@ -857,13 +866,15 @@ fn level_and_runs(
     let chord = model.chord();
     let before_runs: Vec<[f64; 2]> = runs.iter().map(|r| r.energy()).collect();
     let noise_runs: Vec<[f64; 2]> = runs.iter().map(|r| r.noise_energy).collect();
-    let e_before = mean2(&before_runs);
-    let e_noise = mean2(&noise_runs);
+    // still-air runs out of the pooled gap when runs in the wind exist
+    let weights = run_weights(runs);
+    let e_before = wmean2(&before_runs, &weights);
+    let e_noise = wmean2(&noise_runs, &weights);
     let before = comb(e_before);
     let noise_level = comb(e_noise);
     let model_level = model_energy
         .filter(|e| e.len() == n)
-        .map(|e| comb(mean2(e)));
+        .map(|e| comb(wmean2(e, &weights)));
     let gap_statistic = before
         / noise_level
             .hypot(model_level.unwrap_or(0.0))
@@ -919,18 +930,24 @@ fn level_and_runs(
                 opts.gain_per_param,
             );
             let act: Vec<usize> = (0..n).filter(|&j| sc.active[j]).collect();
-            let m = act.len().max(1) as f64;
-            let eb = act.iter().map(|&j| e2(sc.before_runs[j])).sum::<f64>() / m;
-            let ea = act.iter().map(|&j| e2(sc.after_runs[j])).sum::<f64>() / m;
-            let en = act.iter().map(|&j| e2(noise_runs[j])).sum::<f64>() / m;
-            let em = act.iter().map(|&j| model_e[j]).sum::<f64>() / m;
+            // weighted means over the active runs (the level's run weights)
+            let m = act.iter().map(|&j| weights[j]).sum::<f64>();
+            let m = if m > 0.0 { m } else { 1.0 };
+            let wsum = |f: &dyn Fn(usize) -> f64| -> f64 {
+                act.iter().map(|&j| weights[j] * f(j)).sum::<f64>() / m
+            };
+            let eb = wsum(&|j| e2(sc.before_runs[j]));
+            let ea = wsum(&|j| e2(sc.after_runs[j]));
+            let en = wsum(&|j| e2(noise_runs[j]));
+            let em = wsum(&|j| model_e[j]);
             let (c_before, c_after) = (eb.max(0.0).sqrt(), ea.max(0.0).sqrt());
-            // energy removed, summed over the active runs and spread over every run, in
-            // units of the level's noise energy: comparable across candidates whatever
-            // runs they were scored on
+            // energy removed, summed (weighted) over the active runs and spread over every
+            // run, in units of the level's noise energy: comparable across candidates
+            // whatever runs they were scored on
             let en_all = noise_level * noise_level;
-            let statistic = if en_all > 0.0 && !act.is_empty() {
-                (eb - ea) * act.len() as f64 / n as f64 / en_all
+            let w_all: f64 = weights.iter().sum();
+            let statistic = if en_all > 0.0 && !act.is_empty() && w_all > 0.0 {
+                (eb - ea) * m / w_all / en_all
             } else {
                 0.0
             };

@@ -651,6 +651,23 @@ pub(crate) fn pd_law(u: &[f64], e: &[f64], e_dot: &[f64]) -> Option<PdLaw> {
     })
 }
 
+/// Each run's weight in the level's pooled energies (issue 42 item 5, round 29): 1 for a
+/// run in the wind, 0 for a still-air run (U = 0) when some run is in the wind; 1 for
+/// every run otherwise. Still-air decays are judged by the structure check
+/// (`crate::structure`: frequencies, damping, backbone against the given structure) and
+/// inform the structural candidates' fits, but stay out of the flow effects' gap test: a
+/// decay sinks into its noise within the record, its normalised noise energy is about ten
+/// times a limit cycle's, and pooled by a plain mean it set both the null and the gap
+/// (null ×3.8, gap statistic 2.1 → 1.15 on the plate rig). Weighting every run by the
+/// inverse of its own noise energy was tried and moved covered effects to
+/// `extrapolation` on sets without any still-air run (docs/DECISIONS.md, round 29).
+pub(crate) fn run_weights(runs: &[RunResidual]) -> Vec<f64> {
+    let in_wind = runs.iter().any(|r| r.u > 0.0);
+    runs.iter()
+        .map(|r| if in_wind && r.u <= 0.0 { 0.0 } else { 1.0 })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
