@@ -600,13 +600,22 @@ fn every_limit_exceeded_at_every_entry_point_is_refused() {
     let ds6 = w.dataset("freq_heave = 1.3\n", &format!("freq_heave = 1.3\n{extra}"));
     for k in 1..6 {
         let d = Path::new(&ds6);
-        std::fs::copy(d.join("cases/D-U6-A12.csv"), d.join(format!("cases/c{k}.csv"))).unwrap();
+        std::fs::copy(
+            d.join("cases/D-U6-A12.csv"),
+            d.join(format!("cases/c{k}.csv")),
+        )
+        .unwrap();
     }
     let members = (limits::MAX_ENSEMBLE_FITS / 6 + 1).to_string();
     run(
         &mut w,
         "MAX_ENSEMBLE_FITS",
-        vec!["identify".into(), ds6.clone(), "--ensemble".into(), members.clone()],
+        vec![
+            "identify".into(),
+            ds6.clone(),
+            "--ensemble".into(),
+            members.clone(),
+        ],
         "--ensemble",
     );
     run(

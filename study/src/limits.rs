@@ -5,8 +5,7 @@
 
 pub use identify::limits::{
     MAX_BLIND_SETS, MAX_CASES, MAX_DURATION, MAX_ENSEMBLE, MAX_ENSEMBLE_FITS, MAX_PERIODS,
-    MAX_PHASE_PERIODS,
-    MAX_PITCH_DEG, MAX_RATE, MAX_SAMPLES, MAX_SPEED, MAX_SPEEDS,
+    MAX_PHASE_PERIODS, MAX_PITCH_DEG, MAX_RATE, MAX_SAMPLES, MAX_SPEED, MAX_SPEEDS,
 };
 
 /// A request beyond a cap or a physically implausible number: the flag or dotted key, and
