@@ -123,10 +123,8 @@ fn carry_tree(src: &Path, dst: &Path, copy: bool) -> std::io::Result<()> {
         } else if t.is_dir() {
             std::fs::create_dir(&to)?;
             carry_tree(&e.path(), &to, rewritten)?;
-        } else if t.is_file() {
-            if rewritten || std::fs::hard_link(e.path(), &to).is_err() {
-                std::fs::copy(e.path(), &to)?;
-            }
+        } else if t.is_file() && (rewritten || std::fs::hard_link(e.path(), &to).is_err()) {
+            std::fs::copy(e.path(), &to)?;
         }
     }
     Ok(())
