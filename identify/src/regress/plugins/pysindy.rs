@@ -4,11 +4,11 @@
 //! terms do not apply (pysindy has none).
 //!
 //! The whole path of every case is computed once, when the case is prepared (the raw
-//! library matrix is evaluated there and not kept), and held compactly ([`CompactPath`]:
+//! library matrix is evaluated there and not kept), and held compactly ([`crate::regress::plugins::pysindy::CompactPath`]:
 //! each distinct fit once, its nonzero entries only, and per run of equal grid points the
 //! index of its fit) for the group stage, which hands it out one point at a time
-//! ([`Regressor::walk_path`]) and reads the selected point again
-//! ([`Regressor::coefficients_at`]). Decoding gives the dense vectors bit for bit.
+//! ([`crate::regress::plugin::Regressor::walk_path`]) and reads the selected point again
+//! ([`crate::regress::plugin::Regressor::coefficients_at`]). Decoding gives the dense vectors bit for bit.
 
 use crate::regress::adapter::{self, PysindyOptions};
 use crate::regress::plugin::{
