@@ -315,6 +315,18 @@ fn run_memoryless(args: &IdentifyArgs) -> anyhow::Result<Identification> {
             ))
             .into());
         }
+        // a regressor or ridge the bootstrap cannot re-fit: refused now, not after the fit
+        identify::ensemble::check_settings(&settings)
+            .map_err(|e| crate::exit::Usage(format!("`--ensemble`: {e}")))?;
+        // members × cases bounded before any case is read (the manifest alone)
+        let manifest = identify::dataset::open_dataset(
+            &args.dataset,
+            &ReadOptions {
+                flip_lift: args.flip_lift,
+            },
+        )
+        .with_context(|| format!("reading data set {}", args.dataset.display()))?;
+        aeroform::limits::ensemble_fits("--ensemble", n, manifest.cases.len() as u128)?;
     }
 
     let path = args.out.join("identification.json");

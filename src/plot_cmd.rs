@@ -95,9 +95,18 @@ pub fn run(args: &PlotArgs) -> anyhow::Result<()> {
     crate::ui::document(&figs)
 }
 
-/// Copies the files and folders of `src` into `dst` (which exists), without the folder
-/// markers (the staging folder has its own).
+/// Carries the files and folders of `src` into `dst` (which exists), without the folder
+/// markers (the staging folder has its own). What `plot` rewrites (the figure list, the
+/// report, the figures folder) is copied; every other regular file is hard-linked (no
+/// byte is copied: a sparse 2-GB file stays sparse and a large series costs no disk; a
+/// copy only where the file system refuses the link), and a symbolic link is carried as a
+/// link to the same target, not dropped (issue 39, row 5, round 29). Every writer of a
+/// study folder replaces a file by rename, so no write reaches a linked file in place.
 fn copy_tree(src: &Path, dst: &Path) -> std::io::Result<()> {
+    carry_tree(src, dst, false)
+}
+
+fn carry_tree(src: &Path, dst: &Path, copy: bool) -> std::io::Result<()> {
     for e in std::fs::read_dir(src)? {
         let e = e?;
         let name = e.file_name();
@@ -106,10 +115,15 @@ fn copy_tree(src: &Path, dst: &Path) -> std::io::Result<()> {
         }
         let to = dst.join(&name);
         let t = e.file_type()?;
-        if t.is_dir() {
+        let rewritten = copy
+            || [names::FIGURE_LIST, names::REPORT, names::FIGURES]
+                .contains(&name.to_str().unwrap_or(""));
+        if t.is_symlink() {
+            std::os::unix::fs::symlink(std::fs::read_link(e.path())?, &to)?;
+        } else if t.is_dir() {
             std::fs::create_dir(&to)?;
-            copy_tree(&e.path(), &to)?;
-        } else if t.is_file() {
+            carry_tree(&e.path(), &to, rewritten)?;
+        } else if t.is_file() && (rewritten || std::fs::hard_link(e.path(), &to).is_err()) {
             std::fs::copy(e.path(), &to)?;
         }
     }

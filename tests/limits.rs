@@ -439,14 +439,48 @@ fn every_limit_exceeded_at_every_entry_point_is_refused() {
     );
     run(&mut w, "MAX_BLIND_SETS", vec!["sweep".into(), sw], "n");
 
-    // MAX_CASES: 11 amplitudes × 9091 speeds = 100 001 cases
-    assert_eq!(11 * 9091, limits::MAX_CASES + 1);
+    // MAX_CASES: 2 amplitudes × (MAX_CASES / 2 + 1) speeds, one case above the cap; the
+    // refusal names the key and the limit (round 29: lowered to what `run` holds in 1 GB)
+    assert_eq!(limits::MAX_CASES % 2, 0);
+    let n = limits::MAX_CASES / 2 + 1;
+    assert!(n <= limits::MAX_SPEEDS);
     let s = w.study(
         QUICKSTART,
         "amplitudes_deg = [6.0, 12.0, 18.0, 24.0]\nspeeds = [4.0, 6.0, 8.0, 10.0]",
-        &format!("amplitudes_deg = [{}]\nspeeds = [{}]", list(11), list(9091)),
+        &format!("amplitudes_deg = [{}]\nspeeds = [{}]", list(2), list(n)),
     );
-    run(&mut w, "MAX_CASES", vec!["run".into(), s], "data.synthetic");
+    run(
+        &mut w,
+        "MAX_CASES",
+        vec!["run".into(), s.clone()],
+        "data.synthetic.speeds",
+    );
+    run(&mut w, "MAX_CASES", vec!["run".into(), s], "MAX_CASES");
+    let s = w.study(
+        QUICKSTART,
+        "[data.synthetic]",
+        &format!(
+            "[data.table_iv]\nrepeats = {}\nsigma = 0.5\nrate = 512.0\nduration = 0.1\n\
+             moment = [0.9, 0.1, -0.4, 0.03, 0.05, 0.3]\n\
+             lift = [0.1, 0.3, -0.1, 0.2, 0.5, 0.8]\n[unused]",
+            count(limits::MAX_CASES)
+        ),
+    );
+    let s = {
+        // the quickstart's [data.synthetic] body is left under an unused table: drop it
+        let text = std::fs::read_to_string(&s).unwrap();
+        let head = text.split("[unused]").next().unwrap().to_string();
+        let tail = text.split("[identify.settings]").nth(1).unwrap();
+        std::fs::write(&s, format!("{head}[identify.settings]{tail}")).unwrap();
+        s
+    };
+    run(
+        &mut w,
+        "MAX_CASES",
+        vec!["run".into(), s.clone()],
+        "data.table_iv.repeats",
+    );
+    run(&mut w, "MAX_CASES", vec!["run".into(), s], "MAX_CASES");
 
     // MAX_SAMPLES: 16 cases × 512 Hz × d s just above 25 M samples
     let d = (limits::MAX_SAMPLES / (16.0 * 512.0)).floor() + 1.0;
@@ -534,6 +568,62 @@ fn every_limit_exceeded_at_every_entry_point_is_refused() {
         &format!("[identify]\nensemble = {n}\n[identify.settings]"),
     );
     run(&mut w, "MAX_ENSEMBLE", vec!["run".into(), s], "ensemble");
+    // MAX_ENSEMBLE_FITS: members × cases; the quickstart's 16 cases, a data set of 6
+    let members = limits::MAX_ENSEMBLE_FITS / 16 + 1;
+    assert!(members <= limits::MAX_ENSEMBLE);
+    let s = w.study(
+        QUICKSTART,
+        "[identify.settings]",
+        &format!("[identify]\nensemble = {members}\n[identify.settings]"),
+    );
+    run(
+        &mut w,
+        "MAX_ENSEMBLE_FITS",
+        vec!["run".into(), s.clone()],
+        "identify.ensemble",
+    );
+    run(
+        &mut w,
+        "MAX_ENSEMBLE_FITS",
+        vec!["run".into(), s],
+        "MAX_ENSEMBLE_FITS",
+    );
+    let extra: String = (1..6)
+        .map(|k| {
+            format!(
+                "[[case]]\nid = \"D-U6-A12-{k}\"\nkind = \"forced\"\n\
+                 file = \"cases/c{k}.csv\"\nwind_speed = 6.0\nconfig = \"D\"\n\
+                 freq_pitch = 2.0\nfreq_heave = 1.3\n"
+            )
+        })
+        .collect();
+    let ds6 = w.dataset("freq_heave = 1.3\n", &format!("freq_heave = 1.3\n{extra}"));
+    for k in 1..6 {
+        let d = Path::new(&ds6);
+        std::fs::copy(
+            d.join("cases/D-U6-A12.csv"),
+            d.join(format!("cases/c{k}.csv")),
+        )
+        .unwrap();
+    }
+    let members = (limits::MAX_ENSEMBLE_FITS / 6 + 1).to_string();
+    run(
+        &mut w,
+        "MAX_ENSEMBLE_FITS",
+        vec![
+            "identify".into(),
+            ds6.clone(),
+            "--ensemble".into(),
+            members.clone(),
+        ],
+        "--ensemble",
+    );
+    run(
+        &mut w,
+        "MAX_ENSEMBLE_FITS",
+        vec!["identify".into(), ds6, "--ensemble".into(), members],
+        "MAX_ENSEMBLE_FITS",
+    );
     let n = count(limits::MAX_N_DELTA);
     run(
         &mut w,

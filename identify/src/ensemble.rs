@@ -342,8 +342,21 @@ pub fn bootstrap(
 /// Refuses an identification whose coefficients the bootstrap's least-squares re-fit
 /// would not reproduce: ridge, or a regressor that does not re-fit by least squares.
 fn check_refits(id: &Identification) -> Result<()> {
-    let refits = plugins::find(&id.settings.regressor.kind)?.refits_by_least_squares();
-    if !refits || id.settings.ridge != 0.0 {
+    check_settings(&id.settings)
+}
+
+/// Whether an identification under `settings` can have an ensemble: the bootstrap re-fits
+/// by least squares, so the regressor must re-fit by least squares on its support
+/// ([`crate::regress::plugin::Regressor::refits_by_least_squares`]) and the ridge must be
+/// 0. Callers check this before reading any data, so that `--ensemble` with `--regressor
+/// pysindy` is refused at once, not after the whole identification (issue 39, round 29).
+///
+/// # Errors
+/// [`Error::InvalidOption`] naming `ensemble` and the regressors that qualify; an unknown
+/// regressor as [`plugins::find`].
+pub fn check_settings(settings: &crate::pipeline::IdentifySettings) -> Result<()> {
+    let refits = plugins::find(&settings.regressor.kind)?.refits_by_least_squares();
+    if !refits || settings.ridge != 0.0 {
         let fit: Vec<&str> = plugins::registry()
             .iter()
             .filter(|r| r.refits_by_least_squares())

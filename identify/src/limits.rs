@@ -42,8 +42,11 @@ pub const MAX_SPEEDS: usize = 10_000;
 /// --blind`, a sweep specification's `blind` kind; ≈ 4 s each on 2 cores).
 pub const MAX_BLIND_SETS: usize = 10_000;
 /// Largest number of cases a study may generate (configurations × amplitudes × speeds,
-/// or Table IV repeats).
-pub const MAX_CASES: usize = 100_000;
+/// or Table IV repeats). `run` holds every case of its campaign (samples, per-case work,
+/// results): 10,000 cases of 240 samples took 690 MiB with `group_by = "none"` and
+/// 458 MiB with one group, 20,000 cases 750 MiB before failing; 8,000 holds the 1-GB bound
+/// with a margin (docs/DECISIONS.md, round 29; 100,000 before).
+pub const MAX_CASES: usize = 8_000;
 /// Largest number of samples a command may generate and hold (all cases and records
 /// together, still-air runs included): 25 M samples ≈ 1 GB of five f64 channels (the
 /// paper campaign holds 448 × 10 s × 512 Hz = 2.3 M).
@@ -59,6 +62,11 @@ pub const MAX_PHASE_PERIODS: f64 = 1000.0;
 /// Largest number of bootstrap members of an identification ensemble (each member is one
 /// identification, ≈ the nominal one's cost).
 pub const MAX_ENSEMBLE: usize = 10_000;
+/// Largest number of bootstrap members × cases of an identification ensemble: every
+/// member's coefficients of every case are held until the result is written (≈ 0.4 kB per
+/// member and case in `identify`, ≈ 2.4 kB in a study's `run`). `identify --ensemble 20`
+/// on 40,000 cases took 1.08 GB (docs/DECISIONS.md, round 29).
+pub const MAX_ENSEMBLE_FITS: usize = 50_000;
 /// Largest number of points of a sweep specification's flutter map (μ × σ × x_α × r²,
 /// multiplied with overflow checks).
 pub const MAX_GRID_POINTS: usize = 100_000;
@@ -125,13 +133,14 @@ pub const TABLE: &[Limit] = &[
     Limit { name: "MAX_FORCE_COEFFICIENT", max: MAX_FORCE_COEFFICIENT, unit: "-", set_by: "reached through a model (`tunnel forced`)" },
     Limit { name: "MAX_SPEEDS", max: MAX_SPEEDS as f64, unit: "-", set_by: "`--speeds`, `--sweep` (n of a:b:n or list length); study `n_speeds`, `speeds`; sweep speed lists; Python `speeds`, `sweep`" },
     Limit { name: "MAX_BLIND_SETS", max: MAX_BLIND_SETS as f64, unit: "-", set_by: "`diagnose --blind`; sweep `blind` `n`" },
-    Limit { name: "MAX_CASES", max: MAX_CASES as f64, unit: "-", set_by: "study campaign (configurations × amplitudes × speeds)" },
+    Limit { name: "MAX_CASES", max: MAX_CASES as f64, unit: "-", set_by: "study campaign (configurations × amplitudes × speeds; Table IV `repeats`)" },
     Limit { name: "MAX_SAMPLES", max: MAX_SAMPLES, unit: "-", set_by: "`tunnel --duration` × rate × records; study `duration` × `rate` × cases" },
     Limit { name: "MAX_DURATION", max: MAX_DURATION, unit: "s", set_by: "`tunnel --duration`; study `duration`" },
     Limit { name: "MAX_RATE", max: MAX_RATE, unit: "Hz", set_by: "study `rate`" },
     Limit { name: "MAX_PERIODS", max: MAX_PERIODS, unit: "pitch periods", set_by: "study `[lco] max_periods`" },
     Limit { name: "MAX_PHASE_PERIODS", max: MAX_PHASE_PERIODS, unit: "pitch periods", set_by: "study `[lco] phase_periods`" },
     Limit { name: "MAX_ENSEMBLE", max: MAX_ENSEMBLE as f64, unit: "-", set_by: "`identify --ensemble`; study `[identify] ensemble`; Python `ensemble`" },
+    Limit { name: "MAX_ENSEMBLE_FITS", max: MAX_ENSEMBLE_FITS as f64, unit: "-", set_by: "`identify --ensemble` × the manifest's `[[case]]` entries; study `[identify] ensemble` × campaign cases" },
     Limit { name: "MAX_GRID_POINTS", max: MAX_GRID_POINTS as f64, unit: "-", set_by: "sweep `flutter_map` grid" },
     Limit { name: "MAX_HARMONICS", max: MAX_HARMONICS as f64, unit: "-", set_by: "`branch --harmonics`; study `[branch] harmonics`; Python `harmonics`" },
     Limit { name: "MAX_STEPS_PER_PERIOD", max: MAX_STEPS_PER_PERIOD as f64, unit: "-", set_by: "`branch --steps-per-period`; study `[branch] steps_per_period`; Python `steps_per_period`" },

@@ -4,8 +4,8 @@
 //! binary exits with code 2 on it.
 
 pub use identify::limits::{
-    MAX_BLIND_SETS, MAX_CASES, MAX_DURATION, MAX_ENSEMBLE, MAX_PERIODS, MAX_PHASE_PERIODS,
-    MAX_PITCH_DEG, MAX_RATE, MAX_SAMPLES, MAX_SPEED, MAX_SPEEDS,
+    MAX_BLIND_SETS, MAX_CASES, MAX_DURATION, MAX_ENSEMBLE, MAX_ENSEMBLE_FITS, MAX_PERIODS,
+    MAX_PHASE_PERIODS, MAX_PITCH_DEG, MAX_RATE, MAX_SAMPLES, MAX_SPEED, MAX_SPEEDS,
 };
 
 /// A request beyond a cap or a physically implausible number: the flag or dotted key, and
@@ -57,6 +57,26 @@ pub fn abs_at_most(field: &str, x: f64, max: f64, unit: &str) -> Result<f64, Lim
 /// [`LimitError`] naming `field` with the count and the bound.
 pub fn count(field: &str, n: u128, max: usize) -> Result<usize, LimitError> {
     identify::limits::count_at_most(n, max).or_else(|m| err(field, m))
+}
+
+/// Members × cases of an identification ensemble ([`MAX_ENSEMBLE_FITS`]): every member's
+/// coefficients of every case are held until the result is written.
+///
+/// # Errors
+/// [`LimitError`] naming `field` with the members, the cases, their product and the cap.
+pub fn ensemble_fits(field: &str, members: usize, cases: u128) -> Result<(), LimitError> {
+    let n = members as u128 * cases;
+    if n > MAX_ENSEMBLE_FITS as u128 {
+        return err(
+            field,
+            format!(
+                "{members} members × {cases} cases = {n} member fits exceed the cap of \
+                 {MAX_ENSEMBLE_FITS} (the limits table's MAX_ENSEMBLE_FITS: every member's \
+                 coefficients of every case are held until the result is written)"
+            ),
+        );
+    }
+    Ok(())
 }
 
 /// Samples of a generated campaign, `records × duration × rate` (still-air runs count as

@@ -244,6 +244,12 @@ fn identify_stage(
     obs: &dyn Observer,
 ) -> Result<Identification> {
     let settings = study.spec.identify.clone().unwrap_or_default().settings;
+    if let Some(n) = study.spec.identify.as_ref().and_then(|i| i.ensemble) {
+        // a `[data] dataset`'s cases are known only now (the generated campaigns are
+        // checked with the study): before the identification, not after it
+        crate::limits::ensemble_fits("identify.ensemble", n, cases.cases.len() as u128)
+            .map_err(|e| Error::Usage(e.to_string()))?;
+    }
     let result =
         identify::pipeline::identify(&cases.cases, &settings, &cases.name, &|p| obs.identify(p));
     obs.identify_done();

@@ -963,7 +963,8 @@ impl Study {
                         "data.synthetic.speeds",
                         format!(
                             "{} configurations × {} amplitudes × {} speeds = {n_cases} cases \
-                             exceed the cap of {MAX_CASES}",
+                             exceed the cap of {MAX_CASES} (the limits table's MAX_CASES: \
+                             `run` holds every case)",
                             sy.config.len(),
                             sy.amplitudes_deg.len(),
                             sy.speeds.len()
@@ -1082,7 +1083,10 @@ impl Study {
                 if t.repeats > MAX_CASES {
                     return err(
                         "data.table_iv.repeats",
-                        format!("{} exceeds the cap of {MAX_CASES}", t.repeats),
+                        format!(
+                            "{} exceeds the cap of {MAX_CASES} (the limits table's MAX_CASES)",
+                            t.repeats
+                        ),
                     );
                 }
                 lim(samples(
@@ -1119,6 +1123,36 @@ impl Study {
                     "identify.ensemble",
                     format!("{n} members: expected 2 … {}", crate::limits::MAX_ENSEMBLE),
                 );
+            }
+            if let Err(e) = identify::ensemble::check_settings(&id.settings) {
+                return err("identify.ensemble", e.to_string());
+            }
+            // every member's coefficients of every case are held until the result is
+            // written: members × cases bounded (a `[data] dataset`'s cases are counted when
+            // it is read, `run::identify_stage`)
+            let cases = s.data.as_ref().and_then(|d| {
+                if let Some(sy) = &d.synthetic {
+                    Some(
+                        sy.config.len() as u128
+                            * sy.amplitudes_deg.len() as u128
+                            * sy.speeds.len() as u128,
+                    )
+                } else if let Some(t) = &d.table_iv {
+                    Some(t.repeats as u128)
+                } else {
+                    d.virtual_tunnel.as_ref().map(|v| {
+                        if v.campaign == aeroelastic::tunnel::CampaignName::Paper {
+                            448
+                        } else {
+                            64
+                        }
+                    })
+                }
+            });
+            if let Some(c) = cases {
+                if let Err(e) = crate::limits::ensemble_fits("identify.ensemble", n, c) {
+                    return err(&e.field, e.message);
+                }
             }
         }
         if !(id.ensemble_level > 0.0 && id.ensemble_level < 1.0) {
