@@ -745,6 +745,67 @@ fn every_limit_exceeded_at_every_entry_point_is_refused() {
         st(&["diagnose", "--measured-branch", &s]),
         "MAX_TEXT_FILE_BYTES",
     );
+    // MAX_RESULT_FILE_BYTES (round 29): aeroform's own identification.json is read back
+    // under its own cap: above MAX_TEXT_FILE_BYTES it is accepted (a large study no longer
+    // fails reading back what it wrote), one byte above the result cap it is refused
+    common::forced_set(w.dir, "flyable", "3", "2");
+    let id_dir = w.dir.join("id-out");
+    let (code, _, stderr) = common::aeroform_code_in(
+        w.dir,
+        &[
+            "--quiet",
+            "identify",
+            "flyable",
+            "--out",
+            id_dir.to_str().unwrap(),
+        ],
+    );
+    assert_eq!(code, 0, "{stderr}");
+    let id_json = id_dir.join("identification.json");
+    let mut text = std::fs::read_to_string(&id_json).unwrap();
+    text.push_str(&" ".repeat(limits::MAX_TEXT_FILE_BYTES as usize + 1 - text.len()));
+    let padded = w.dir.join("padded.identification.json");
+    std::fs::write(&padded, text).unwrap();
+    let rig = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/plate-rig.structure.toml");
+    let fl = w.dir.join("fl-out");
+    let (code, _, stderr) = common::aeroform_code_in(
+        w.dir,
+        &[
+            "flutter",
+            "--structure",
+            rig.to_str().unwrap(),
+            "--model",
+            padded.to_str().unwrap(),
+            "--chord",
+            "0.25",
+            "--out",
+            fl.to_str().unwrap(),
+        ],
+    );
+    assert_eq!(
+        code, 0,
+        "an identification.json above MAX_TEXT_FILE_BYTES: {stderr}"
+    );
+    let huge = w.file("json", "");
+    std::fs::OpenOptions::new()
+        .write(true)
+        .open(&huge)
+        .unwrap()
+        .set_len(limits::MAX_RESULT_FILE_BYTES as u64 + 1)
+        .unwrap();
+    w.refused(
+        "MAX_RESULT_FILE_BYTES",
+        &[
+            "flutter",
+            "--structure",
+            rig.to_str().unwrap(),
+            "--model",
+            &huge,
+            "--chord",
+            "0.25",
+        ],
+        "MAX_RESULT_FILE_BYTES",
+    );
     let ds = w.dataset("wind_speed = 6.0", "wind_speed = 6.0");
     let case = Path::new(&ds).join("cases/D-U6-A12.csv");
     let mut text = std::fs::read_to_string(&case).unwrap();

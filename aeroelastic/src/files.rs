@@ -128,7 +128,13 @@ fn key_line(text: &str, key: &str) -> usize {
 /// at most the limits table's `MAX_TEXT_FILE_BYTES`, UTF-8 errors by line and byte). A
 /// refusal of the reader is an input error ([`Error::Toml`] naming the file).
 fn read_text(path: &Path) -> Result<String> {
-    identify::io::read_text(path).map_err(|e| match identify::io::is_input_error(&e) {
+    identify::io::read_text(path).map_err(|e| read_error(path, e))
+}
+
+/// A reader's refusal of `path` as the crate's error: an input error ([`Error::Toml`]
+/// naming the file) or an I/O failure.
+fn read_error(path: &Path, e: std::io::Error) -> Error {
+    match identify::io::is_input_error(&e) {
         true => Error::Toml {
             source_name: path.display().to_string(),
             message: e.to_string(),
@@ -137,7 +143,7 @@ fn read_text(path: &Path) -> Result<String> {
             path: path.display().to_string(),
             message: e.to_string(),
         },
-    })
+    }
 }
 
 /// Prefixes the field of an [`Error::InvalidParameter`] with the file name.
@@ -613,9 +619,15 @@ impl LoadedModel {
     /// naming `file: field`; the errors of the model constructors, of
     /// [`IdentifiedLaw::read`] and of [`read_lag_law`].
     pub fn load(path: &Path, chord: Option<f64>) -> Result<Self> {
-        let text = read_text(path)?;
-        let is_json =
-            path.extension().is_some_and(|e| e == "json") || text.trim_start().starts_with('{');
+        // a `.json` file may be a large identification.json: read under the result cap
+        let by_extension = path.extension().is_some_and(|e| e == "json");
+        let text = if by_extension {
+            identify::io::read_text_capped_io(path, identify::limits::MAX_RESULT_FILE_BYTES as u64)
+                .map_err(|e| read_error(path, e))?
+        } else {
+            read_text(path)?
+        };
+        let is_json = by_extension || text.trim_start().starts_with('{');
         if is_json && is_lag_law(&text) {
             let doc = read_lag_law(path)?;
             let model = LagAero::new(doc.law, doc.chord, None).map_err(|e| lag_in(path, e))?;
@@ -626,6 +638,7 @@ impl LoadedModel {
             });
         }
         if is_json {
+            drop(text); // read again by the identification's own reader
             let chord = chord.ok_or_else(|| Error::Toml {
                 source_name: path.display().to_string(),
                 message: "an identification.json holds no chord: give it (--chord or `chord` in the structure file)".into(),

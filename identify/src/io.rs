@@ -290,12 +290,17 @@ pub fn read_text_capped(path: &Path, max_bytes: u64) -> Result<String> {
 pub fn read_text_capped_io(path: &Path, max_bytes: u64) -> std::io::Result<String> {
     use std::io::Read;
     let f = open_regular_io(path)?;
+    let limit = if max_bytes == crate::limits::MAX_RESULT_FILE_BYTES as u64 {
+        "MAX_RESULT_FILE_BYTES"
+    } else {
+        "MAX_TEXT_FILE_BYTES"
+    };
     let too_big = |n: u64| {
         input_error(
             std::io::ErrorKind::InvalidData,
             format!(
                 "{n} bytes or more; files of this kind are read up to {max_bytes} bytes \
-                 (the limits table's MAX_TEXT_FILE_BYTES)"
+                 (the limits table's {limit})"
             ),
         )
     };

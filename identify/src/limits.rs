@@ -92,6 +92,13 @@ pub const MAX_N_DELTA: usize = 100_000;
 /// the largest shipped one is 30 kB). Beyond it a file is refused before it is read, so a
 /// link to `/dev/zero` or a sparse file cannot exhaust memory (issue 39, row 5).
 pub const MAX_TEXT_FILE_BYTES: f64 = 67_108_864.0;
+/// Largest `identification.json` read back \[bytes\] (a study's report stage, `plot`,
+/// `--model identification.json` of `flutter`/`lco`/`branch`/`tunnel`): aeroform's own
+/// result document outgrows [`MAX_TEXT_FILE_BYTES`] in large campaigns (≈ 185 MB for the
+/// 8,000-case study cap with `group_by = "none"`, 130–200 MB for 40,000 data-set cases), so
+/// a study would fail after its identification, reading back what it wrote (round 29). 256
+/// MiB; a larger file is refused before it is read.
+pub const MAX_RESULT_FILE_BYTES: f64 = 268_435_456.0;
 /// Largest line of a case CSV \[bytes\] (a row of five numbers is under 120 bytes): a
 /// file without line breaks is refused at this length, not held whole.
 pub const MAX_CSV_LINE_BYTES: usize = 1 << 20;
@@ -149,6 +156,7 @@ pub const TABLE: &[Limit] = &[
     Limit { name: "MAX_NEWTON_ITERATIONS", max: MAX_NEWTON_ITERATIONS as f64, unit: "-", set_by: "Rust API `BranchOptions::max_newton`" },
     Limit { name: "MAX_N_DELTA", max: MAX_N_DELTA as f64, unit: "-", set_by: "`identify --n-delta`; study `[identify] n_delta`; Python `n_delta`" },
     Limit { name: "MAX_TEXT_FILE_BYTES", max: MAX_TEXT_FILE_BYTES, unit: "bytes", set_by: "the size of a manifest, study, model, structure, sweep, part or result document, measured table" },
+    Limit { name: "MAX_RESULT_FILE_BYTES", max: MAX_RESULT_FILE_BYTES, unit: "bytes", set_by: "the size of an identification.json read back (study report, `plot`, `--model`)" },
     Limit { name: "MAX_CSV_LINE_BYTES", max: MAX_CSV_LINE_BYTES as f64, unit: "bytes", set_by: "a line of a case CSV" },
     Limit { name: "MAX_DATASET_CASES", max: MAX_DATASET_CASES as f64, unit: "-", set_by: "manifest `[[case]]` entries" },
     Limit { name: "MAX_LABEL_CHARS", max: MAX_LABEL_CHARS as f64, unit: "characters", set_by: "manifest `name`, case `id` and `config`" },

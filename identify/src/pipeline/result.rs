@@ -237,7 +237,8 @@ impl Identification {
     /// [`Error::Io`] when the file cannot be read, [`Error::Json`] with serde's line and
     /// column when it is malformed or its `format` is not [`FORMAT`].
     pub fn read(path: &Path) -> Result<Self> {
-        let text = crate::io::read_text(path).map_err(|e| Error::io(path, e))?;
+        // aeroform's own result document: the result cap, not the input files' one
+        let text = crate::io::read_text_capped(path, crate::limits::MAX_RESULT_FILE_BYTES as u64)?;
         let id: Identification = serde_json::from_str(&text).map_err(|e| Error::Json {
             path: path.to_path_buf(),
             message: e.to_string(),
