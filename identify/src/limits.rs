@@ -147,7 +147,7 @@ pub const TABLE: &[Limit] = &[
     Limit { name: "MAX_PERIODS", max: MAX_PERIODS, unit: "pitch periods", set_by: "study `[lco] max_periods`" },
     Limit { name: "MAX_PHASE_PERIODS", max: MAX_PHASE_PERIODS, unit: "pitch periods", set_by: "study `[lco] phase_periods`" },
     Limit { name: "MAX_ENSEMBLE", max: MAX_ENSEMBLE as f64, unit: "-", set_by: "`identify --ensemble`; study `[identify] ensemble`; Python `ensemble`" },
-    Limit { name: "MAX_ENSEMBLE_FITS", max: MAX_ENSEMBLE_FITS as f64, unit: "-", set_by: "`identify --ensemble` × the manifest's `[[case]]` entries; study `[identify] ensemble` × campaign cases" },
+    Limit { name: "MAX_ENSEMBLE_FITS", max: MAX_ENSEMBLE_FITS as f64, unit: "-", set_by: "`identify --ensemble` × the manifest's `[[case]]` entries; study `[identify] ensemble` × campaign cases; Python `identify(ensemble=)` × cases" },
     Limit { name: "MAX_GRID_POINTS", max: MAX_GRID_POINTS as f64, unit: "-", set_by: "sweep `flutter_map` grid" },
     Limit { name: "MAX_HARMONICS", max: MAX_HARMONICS as f64, unit: "-", set_by: "`branch --harmonics`; study `[branch] harmonics`; Python `harmonics`" },
     Limit { name: "MAX_STEPS_PER_PERIOD", max: MAX_STEPS_PER_PERIOD as f64, unit: "-", set_by: "`branch --steps-per-period`; study `[branch] steps_per_period`; Python `steps_per_period`" },

@@ -280,6 +280,19 @@ fn py_identify(
     pre.check()
         .map_err(|e| err(format!("invalid preprocessing option: {e}")))?;
     let ds = &dataset.inner;
+    if let Some(n) = ensemble {
+        // as `aeroform identify --ensemble N` (tests/limits.rs): refused before any work
+        let cases = ds.manifest.cases.len();
+        let fits = n as u128 * cases as u128;
+        if fits > identify::limits::MAX_ENSEMBLE_FITS as u128 {
+            return Err(err(format!(
+                "ensemble = {n}: {n} members × {cases} cases = {fits} member fits exceed the \
+                 cap of {} (the limits table's MAX_ENSEMBLE_FITS: every member's coefficients \
+                 of every case are held until the result is written)",
+                identify::limits::MAX_ENSEMBLE_FITS
+            )));
+        }
+    }
     py.detach(|| {
         let prepared = prepare_dataset(ds, &pre).map_err(|e| format!("preprocessing: {e}"))?;
         if prepared.cases.is_empty() {

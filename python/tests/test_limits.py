@@ -43,6 +43,11 @@ def cases(dataset):
          lambda: aeroform.lco(S, M, sweep=[6.0, 7.0], alpha0_down=over("MAX_PITCH_DEG"))),
         ("MAX_ENSEMBLE", "ensemble",
          lambda: aeroform.identify(dataset, ensemble=int(over("MAX_ENSEMBLE")))),
+        # members × cases one above the cap: refused before any work, as `--ensemble`
+        ("MAX_ENSEMBLE_FITS", "ensemble",
+         lambda: aeroform.identify(dataset, ensemble=int(
+             LIMITS["MAX_ENSEMBLE_FITS"]["max"]
+             // len(aeroform.read_dataset(dataset).case_ids) + 1))),
         ("MAX_N_DELTA", "n_delta",
          lambda: aeroform.identify(dataset, n_delta=int(over("MAX_N_DELTA")))),
         ("MAX_HARMONICS", "harmonics",
