@@ -586,6 +586,19 @@ fn orbit_at(points: &[(f64, f64, bool, f64)], u: f64, floor: f64) -> Option<(f64
     })
 }
 
+/// The deep-stall round trip's pitch-only campaign: (K, mean pitch [deg], amplitude [deg]):
+/// 15° ± 8° and 0° ± 10°, 18°, 24° at K = 0.05, 0.1, 0.2, 0.4, 0.7 (20 cases).
+fn deep_stall_grid() -> Vec<(f64, f64, f64)> {
+    let mut grid = Vec::new();
+    for k in [0.05, 0.1, 0.2, 0.4, 0.7] {
+        grid.push((k, 15.0, 8.0));
+        for a in [10.0, 18.0, 24.0] {
+            grid.push((k, 0.0, a));
+        }
+    }
+    grid
+}
+
 /// The deep-stall round trip of the issue (about 4 s, in CI): truth → pitch-only campaign at
 /// K = 0.05, 0.1, 0.2, 0.4, 0.7 about 15° (± 8°) and, because the LCO about α = 0 passes
 /// through stall on both sides, about 0° with amplitudes 10°, 18°, 24° (20 cases) → lag law
@@ -606,13 +619,7 @@ fn orbit_at(points: &[(f64, f64, bool, f64)], u: f64, floor: f64) -> Option<(f64
 #[test]
 fn deep_stall_round_trip_at_six_speeds() {
     let dir = tempfile::tempdir().unwrap();
-    let mut grid = Vec::new();
-    for k in [0.05, 0.1, 0.2, 0.4, 0.7] {
-        grid.push((k, 15.0, 8.0));
-        for a in [10.0, 18.0, 24.0] {
-            grid.push((k, 0.0, a));
-        }
-    }
+    let grid = deep_stall_grid();
     let rows = deep_stall_round_trip(&grid, "6,6.5,7,7.5,8,9", dir.path());
     for r in &rows[..2] {
         assert!(r.1 == "Decay" && r.3 == "Decay", "{r:?}");
@@ -656,13 +663,7 @@ fn deep_stall_round_trip_at_six_speeds() {
 #[test]
 fn pitch_rate_share_moves_the_floquet_moduli_toward_the_truths() {
     let dir = tempfile::tempdir().unwrap();
-    let mut grid = Vec::new();
-    for k in [0.05, 0.1, 0.2, 0.4, 0.7] {
-        grid.push((k, 15.0, 8.0));
-        for a in [10.0, 18.0, 24.0] {
-            grid.push((k, 0.0, a));
-        }
-    }
+    let grid = deep_stall_grid();
     let opts = identify::lag::LagFitOptions {
         rate_share: 0.4,
         ..identify::lag::LagFitOptions::default()
