@@ -181,6 +181,25 @@ pub fn count_at_most(n: u128, max: usize) -> Result<usize, String> {
     }
 }
 
+/// Members × cases of an identification ensemble within [`MAX_ENSEMBLE_FITS`] (every
+/// member's coefficients of every case are held until the result is written): the one check
+/// of `identify --ensemble`, a study's `[identify] ensemble` and Python's `ensemble`.
+///
+/// # Errors
+/// The message (members, cases, their product and the cap), for the caller to name its
+/// field.
+pub fn ensemble_fits(members: usize, cases: u128) -> Result<(), String> {
+    let n = members as u128 * cases;
+    if n > MAX_ENSEMBLE_FITS as u128 {
+        return Err(format!(
+            "{members} members × {cases} cases = {n} member fits exceed the cap of \
+             {MAX_ENSEMBLE_FITS} (the limits table's MAX_ENSEMBLE_FITS: every member's \
+             coefficients of every case are held until the result is written)"
+        ));
+    }
+    Ok(())
+}
+
 /// A number for a message: exponent form outside [1e-4, 1e16) so that 1e300 stays short.
 pub fn show(x: f64) -> String {
     if x != 0.0 && x.is_finite() && !(1e-4..1e16).contains(&x.abs()) {

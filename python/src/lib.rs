@@ -282,16 +282,8 @@ fn py_identify(
     let ds = &dataset.inner;
     if let Some(n) = ensemble {
         // as `aeroform identify --ensemble N` (tests/limits.rs): refused before any work
-        let cases = ds.manifest.cases.len();
-        let fits = n as u128 * cases as u128;
-        if fits > identify::limits::MAX_ENSEMBLE_FITS as u128 {
-            return Err(err(format!(
-                "ensemble = {n}: {n} members × {cases} cases = {fits} member fits exceed the \
-                 cap of {} (the limits table's MAX_ENSEMBLE_FITS: every member's coefficients \
-                 of every case are held until the result is written)",
-                identify::limits::MAX_ENSEMBLE_FITS
-            )));
-        }
+        identify::limits::ensemble_fits(n, ds.manifest.cases.len() as u128)
+            .map_err(|m| err(format!("ensemble = {n}: {m}")))?;
     }
     py.detach(|| {
         let prepared = prepare_dataset(ds, &pre).map_err(|e| format!("preprocessing: {e}"))?;

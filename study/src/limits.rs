@@ -59,24 +59,13 @@ pub fn count(field: &str, n: u128, max: usize) -> Result<usize, LimitError> {
     identify::limits::count_at_most(n, max).or_else(|m| err(field, m))
 }
 
-/// Members × cases of an identification ensemble ([`MAX_ENSEMBLE_FITS`]): every member's
-/// coefficients of every case are held until the result is written.
+/// Members × cases of an identification ensemble ([`MAX_ENSEMBLE_FITS`]):
+/// `identify::limits::ensemble_fits` naming `field`.
 ///
 /// # Errors
 /// [`LimitError`] naming `field` with the members, the cases, their product and the cap.
 pub fn ensemble_fits(field: &str, members: usize, cases: u128) -> Result<(), LimitError> {
-    let n = members as u128 * cases;
-    if n > MAX_ENSEMBLE_FITS as u128 {
-        return err(
-            field,
-            format!(
-                "{members} members × {cases} cases = {n} member fits exceed the cap of \
-                 {MAX_ENSEMBLE_FITS} (the limits table's MAX_ENSEMBLE_FITS: every member's \
-                 coefficients of every case are held until the result is written)"
-            ),
-        );
-    }
-    Ok(())
+    identify::limits::ensemble_fits(members, cases).or_else(|m| err(field, m))
 }
 
 /// Samples of a generated campaign, `records × duration × rate` (still-air runs count as
