@@ -7,7 +7,7 @@ use std::path::PathBuf;
 
 use aeroelastic::branch::{
     measured_distances, read_measured_amplitudes, BranchEnd, BranchMethod, BranchOptions,
-    BranchProgress,
+    BranchProgress, Lens, LensBranch, SectionParameter,
 };
 use anyhow::Context;
 use clap::Args;
@@ -46,6 +46,19 @@ pub struct BranchArgs {
     /// Chord B [m] for an identification.json model.
     #[arg(long)]
     pub chord: Option<f64>,
+    /// Also continue the orbit at `--at-speed` in this parameter of the section, at that
+    /// fixed speed: `k_h`, `k_alpha`, `c_h`, `c_alpha`, `rho`, or a polynomial coefficient
+    /// `pitch_stiffness[P]`, `heave_stiffness[P]`, `pitch_damping[P]`, `heave_damping[P]`
+    /// (written to `branch_parameter.csv` and `branch.json`'s `parameter`).
+    #[arg(long, requires_all = ["parameter_range", "at_speed"])]
+    pub parameter: Option<String>,
+    /// Range `a:b` of `--parameter` (its own unit; it must hold the section's value).
+    #[arg(long, requires = "parameter")]
+    pub parameter_range: Option<String>,
+    /// Speed [m/s] of the orbit continued in `--parameter`: the stable orbit of the first
+    /// branch that has one there, else its unstable one.
+    #[arg(long, requires = "parameter")]
+    pub at_speed: Option<f64>,
     /// Output folder, written as a whole (created if missing; an earlier aeroform result
     /// there is replaced, never mixed with the new one).
     #[arg(long, default_value = "out")]
@@ -89,6 +102,46 @@ fn parse_range(s: &str) -> anyhow::Result<(f64, f64)> {
     Ok((a, b))
 }
 
+/// Parses `--parameter-range a:b` (finite, a < b; signs free: a coefficient may be
+/// negative).
+///
+/// # Errors
+/// [`crate::exit::Usage`] naming `--parameter-range`.
+fn parse_parameter_range(s: &str) -> anyhow::Result<[f64; 2]> {
+    let bad = || {
+        anyhow::Error::from(crate::exit::Usage(format!(
+            "--parameter-range `{s}`: expected `a:b` with finite a < b"
+        )))
+    };
+    let (a, b) = s.split_once(':').ok_or_else(bad)?;
+    let a: f64 = a.trim().parse().map_err(|_| bad())?;
+    let b: f64 = b.trim().parse().map_err(|_| bad())?;
+    if !(a.is_finite() && b.is_finite() && b > a) {
+        return Err(bad());
+    }
+    Ok([a, b])
+}
+
+/// The lens, its range and the speed of `--parameter`, checked before any computation.
+///
+/// # Errors
+/// [`crate::exit::Usage`] naming the flag.
+fn parameter_request(
+    args: &BranchArgs,
+) -> anyhow::Result<Option<(SectionParameter, [f64; 2], f64)>> {
+    let Some(name) = &args.parameter else {
+        return Ok(None);
+    };
+    let lens = SectionParameter::parse(name)
+        .map_err(|e| crate::exit::Usage(format!("--parameter: {e}")))?;
+    let range = parse_parameter_range(args.parameter_range.as_deref().unwrap_or(""))?;
+    let u = args.at_speed.unwrap_or(f64::NAN);
+    if !(u.is_finite() && u > 0.0) {
+        return Err(crate::exit::Usage(format!("--at-speed {u}: expected a speed > 0 [m/s]")).into());
+    }
+    Ok(Some((lens, range, u)))
+}
+
 fn stop_text(s: &BranchEnd) -> String {
     match s {
         BranchEnd::SpeedRange { u } => format!("left the speed range at U = {u:.4} m/s"),
@@ -107,6 +160,7 @@ pub fn run(args: &BranchArgs) -> anyhow::Result<()> {
     // before anything is computed (`OutDir::begin` checks it again)
     crate::outdir::refuse_overlap(&args.out, "--out", &args.inputs())?;
     let (u_min, u_max) = parse_range(&args.speeds)?;
+    let lens_request = parameter_request(args)?;
     let opts = BranchOptions {
         max_points: args.max_points,
         steps_per_period: args.steps_per_period,
@@ -210,13 +264,18 @@ pub fn run(args: &BranchArgs) -> anyhow::Result<()> {
             );
         }
     }
-    let json = aeroelastic::documents::branch_document(
+    let lens = match lens_request {
+        Some((lens, range, u)) => Some(continue_in_parameter(&l.section, &set, &lens, range, u, &opts)?),
+        None => None,
+    };
+    let mut doc = aeroelastic::documents::branch_document(
         &args.structure.display().to_string(),
         &args.model.display().to_string(),
         &set,
         &dist,
-    )
-    .to_value();
+    );
+    doc.parameter = lens.clone();
+    let json = doc.to_value();
     // staged, locked and moved into place as a whole (issue 27, row 6); taken once the
     // branches are computed, so that a refused input never touches the folder
     let dir = crate::outdir::OutDir::begin(&args.out, "branch", args.force, &args.inputs())?;
@@ -229,6 +288,12 @@ pub fn run(args: &BranchArgs) -> anyhow::Result<()> {
         &staged.join("branch.json"),
         format!("{json:#}\n").as_bytes(),
     )?;
+    if let Some(lb) = &lens {
+        identify::io::write_atomic(
+            &staged.join("branch_parameter.csv"),
+            aeroelastic::documents::lens_csv(lb).as_bytes(),
+        )?;
+    }
     let fig = plots::save(
         &plots::adapters::aeroelastic::branch_figure(&set, &dist, vec![]),
         &staged,
@@ -236,6 +301,14 @@ pub fn run(args: &BranchArgs) -> anyhow::Result<()> {
     )
     .context("bifurcation diagram")?;
     let png = fig.png.file_name().map(std::path::PathBuf::from);
+    if let Some(lb) = &lens {
+        plots::save(
+            &plots::adapters::aeroelastic::lens_figure(lb),
+            &staged,
+            "branch_parameter",
+        )
+        .context("diagram in the parameter")?;
+    }
     let out = dir.commit()?;
     crate::ui::say!(
         "wrote {}, {}, {}",
@@ -244,4 +317,69 @@ pub fn run(args: &BranchArgs) -> anyhow::Result<()> {
         png.map_or_else(|| out.clone(), |p| out.join(p)).display()
     );
     crate::ui::document(&json)
+}
+
+/// The orbit at `u` on the first branch of `set` that has one there (stable first),
+/// continued in `lens` over `range`; prints its folds and stability changes.
+///
+/// # Errors
+/// No branch has an orbit at `u` (the message gives the branches' speed ranges); the
+/// errors of [`aeroelastic::section::Section::continue_in`].
+fn continue_in_parameter(
+    section: &aeroelastic::section::Section,
+    set: &aeroelastic::branch::BranchSet,
+    lens: &SectionParameter,
+    range: [f64; 2],
+    u: f64,
+    opts: &BranchOptions,
+) -> anyhow::Result<LensBranch> {
+    let found = [true, false].into_iter().find_map(|stable| {
+        set.branches.iter().find_map(|b| {
+            section
+                .orbit_on_branch(b, u, stable, opts)
+                .ok()
+                .map(|p| (b, p))
+        })
+    });
+    let Some((b, p)) = found else {
+        let spans: Vec<String> = set
+            .branches
+            .iter()
+            .map(|b| {
+                let (lo, hi) = b
+                    .points
+                    .iter()
+                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), p| (l.min(p.u), h.max(p.u)));
+                format!("{lo:.4}…{hi:.4}")
+            })
+            .collect();
+        return Err(crate::exit::Usage(format!(
+            "--at-speed {u}: no branch has an orbit there (branches span U = {} m/s)",
+            spans.join(", ")
+        ))
+        .into());
+    };
+    let lb = section
+        .continue_in(lens, &b.hopf, &p, range, opts)
+        .with_context(|| format!("continuation in {} at U = {u} m/s", lens.name()))?;
+    crate::ui::say!(
+        "{} at U = {u:.4} m/s from {} ({} orbit, pitch amplitude {:.3}°): {} orbits over {:.6}…{:.6}",
+        lb.parameter,
+        lb.start_value,
+        if p.stable { "stable" } else { "unstable" },
+        p.amplitude_alpha.to_degrees(),
+        lb.points.len(),
+        lb.points.first().map_or(f64::NAN, |q| q.value),
+        lb.points.last().map_or(f64::NAN, |q| q.value)
+    );
+    for e in &lb.events {
+        crate::ui::say!(
+            "  {:?} at {} = {:.6}, pitch amplitude {:.3}°",
+            e.kind,
+            lb.parameter,
+            e.value,
+            e.amplitude_alpha.to_degrees()
+        );
+    }
+    Ok(lb)
 }

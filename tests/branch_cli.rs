@@ -367,3 +367,163 @@ fn malformed_onsets_and_absences_are_refused_by_name() {
     assert_eq!(code, 2, "{stderr}");
     assert!(stderr.contains("--measured-branch"), "{stderr}");
 }
+
+/// `--parameter`: the Bristol rig's stable orbit at 16 m/s continued in its pitch cubic.
+/// The start orbit is the U-branch's orbit at 16 m/s (same amplitude as `branch.csv`
+/// brackets); the continuation turns at two folds; the fold at the larger cubic is where
+/// the section built with that cubic has its fold in U at 16 m/s (checked by running
+/// `branch` again on that structure): the lens and the U-continuation agree.
+#[test]
+fn bristol_orbit_continued_in_its_pitch_cubic_turns_where_the_u_fold_sits() {
+    let dir = tmp();
+    let out = dir.path().join("lens");
+    let args = |structure: &str, out: &Path, extra: &[&str]| {
+        let mut v: Vec<String> = [
+            "branch",
+            "--structure",
+            structure,
+            "--model",
+            &scenario("bristol-spring1.model.toml"),
+            "--speeds",
+            "12:20",
+            "--out",
+            &s(out),
+        ]
+        .iter()
+        .map(|x| x.to_string())
+        .collect();
+        v.extend(extra.iter().map(|x| x.to_string()));
+        v
+    };
+    let a = args(
+        &scenario("bristol-spring1.structure.toml"),
+        &out,
+        &[
+            "--parameter",
+            "pitch_stiffness[3]",
+            "--parameter-range",
+            "0:10000",
+            "--at-speed",
+            "16",
+        ],
+    );
+    let (ok, stdout, stderr) = aeroform(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(ok, "{stdout}\n{stderr}");
+    for f in [
+        "branch_parameter.csv",
+        "branch_parameter.png",
+        "branch.json",
+    ] {
+        assert!(out.join(f).is_file(), "{f}");
+    }
+    let json: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("branch.json")).unwrap()).unwrap();
+    let p = &json["parameter"];
+    assert_eq!(p["parameter"], "structure.pitch_stiffness[3]");
+    assert_eq!(p["start_value"].as_f64().unwrap(), 5007.38);
+    let folds: Vec<f64> = p["events"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|e| e["kind"] == "fold")
+        .map(|e| e["value"].as_f64().unwrap())
+        .collect();
+    assert_eq!(folds.len(), 2, "{folds:?}");
+    let upper = folds.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    assert!(upper > 5007.38, "{folds:?}");
+    // the structure with that cubic: its U-fold at 16 m/s
+    let text = std::fs::read_to_string(scenario("bristol-spring1.structure.toml")).unwrap();
+    let st = dir.path().join("at_fold.structure.toml");
+    std::fs::write(
+        &st,
+        text.replace(
+            "{ power = 3, coefficient = 5007.38 }",
+            &format!("{{ power = 3, coefficient = {upper} }}"),
+        ),
+    )
+    .unwrap();
+    let out2 = dir.path().join("at_fold");
+    let a = args(&s(&st), &out2, &[]);
+    let (ok, stdout, stderr) = aeroform(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(ok, "{stdout}\n{stderr}");
+    let json2: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out2.join("branch.json")).unwrap()).unwrap();
+    let uf = json2["folds"][0]["U_m_s"].as_f64().unwrap();
+    println!("cubic fold at {upper:.3}: that structure's fold in U {uf:.5} m/s");
+    assert!((uf / 16.0 - 1.0).abs() < 1e-3, "fold in U {uf} vs 16");
+    assert!(
+        json2.get("parameter").is_none(),
+        "no parameter without the flag"
+    );
+}
+
+/// `--parameter` refusals: an unknown name and a range without the section's value are
+/// usage errors naming the flag or field; `--parameter` without `--at-speed` is refused
+/// by the parser. Nothing is written.
+#[test]
+fn parameter_flags_refuse_bad_input_by_name() {
+    let dir = tmp();
+    let base = |extra: &[&str]| {
+        let mut v = vec![
+            "branch".to_string(),
+            "--structure".into(),
+            scenario("bristol-spring1.structure.toml"),
+            "--model".into(),
+            scenario("bristol-spring1.model.toml"),
+            "--speeds".into(),
+            "12:20".into(),
+            "--out".into(),
+            s(&dir.path().join("o")),
+        ];
+        v.extend(extra.iter().map(|x| x.to_string()));
+        v
+    };
+    for (extra, needle) in [
+        (
+            vec![
+                "--parameter",
+                "k_beta",
+                "--parameter-range",
+                "0:1",
+                "--at-speed",
+                "16",
+            ],
+            "--parameter",
+        ),
+        (
+            vec![
+                "--parameter",
+                "k_alpha",
+                "--parameter-range",
+                "1:0",
+                "--at-speed",
+                "16",
+            ],
+            "--parameter-range",
+        ),
+        (
+            vec!["--parameter", "k_alpha", "--parameter-range", "0:1"],
+            "--at-speed",
+        ),
+        (
+            vec![
+                "--parameter",
+                "k_alpha",
+                "--parameter-range",
+                "0:1",
+                "--at-speed",
+                "16",
+            ],
+            "range",
+        ),
+    ] {
+        let a = base(&extra);
+        let (code, stdout, stderr) = common::aeroform_code_in(
+            dir.path(),
+            &a.iter().map(String::as_str).collect::<Vec<_>>(),
+        );
+        assert_ne!(code, 0, "{extra:?}: {stdout}");
+        assert!(stderr.contains(needle), "{extra:?}: {stderr}");
+        assert!(!dir.path().join("o").exists(), "{extra:?} wrote output");
+    }
+}

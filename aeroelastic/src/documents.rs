@@ -585,6 +585,10 @@ pub struct BranchDoc {
     /// Distances of measured amplitudes (`--measured`) to the predicted branches; empty
     /// without.
     pub measured: Vec<MeasuredDistance>,
+    /// The orbit at one speed continued in a parameter of the section (`--parameter`,
+    /// [`Section::continue_in`](crate::section::Section::continue_in)); absent without.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub parameter: Option<crate::branch::LensBranch>,
 }
 
 document_io!(BranchDoc, BRANCH_FORMAT, "branch.json");
@@ -628,7 +632,33 @@ pub fn branch_document(
         folds,
         branches: set.branches.clone(),
         measured: measured.to_vec(),
+        parameter: None,
     }
+}
+
+/// The `branch_parameter.csv` table of a branch continued in a parameter: one row per
+/// point, from the lower end, with columns `value` (the parameter, its own unit), `U_m_s`,
+/// `stable`, `amplitude_alpha_deg`, `amplitude_h_m` (half peak-to-peak), `omega_rad_s` and
+/// `max_floquet`.
+pub fn lens_csv(b: &crate::branch::LensBranch) -> String {
+    let mut s = String::from(
+        "value,U_m_s,stable,amplitude_alpha_deg,amplitude_h_m,omega_rad_s,max_floquet\n",
+    );
+    for p in &b.points {
+        let o = &p.orbit;
+        let _ = writeln!(
+            s,
+            "{},{},{},{},{},{},{}",
+            p.value,
+            o.u,
+            o.stable,
+            o.amplitude_alpha.to_degrees(),
+            o.amplitude_h,
+            o.omega,
+            o.max_floquet
+        );
+    }
+    s
 }
 
 /// The `branch.csv` table: one row per branch point with columns `U_m_s`, `stable`,

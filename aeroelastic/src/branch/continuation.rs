@@ -176,7 +176,7 @@ type Solved = (
 /// Tangent of the solution curve: null vector of the Jacobian of G, oriented along
 /// `prev`; also returns the factored [∂G/∂Y; prevᵀ] (the next point's chord matrix).
 /// `factored` is that matrix when already at hand.
-fn tangent(
+pub(super) fn tangent(
     jg: &DMatrix<f64>,
     prev: &DVector<f64>,
     factored: Option<nalgebra::LU<f64, Dyn, Dyn>>,
@@ -196,7 +196,7 @@ fn tangent(
 }
 
 /// Vertex of the parabola through three points (s_i, u_i); returns (s*, u*).
-fn parabola_vertex(s: [f64; 3], u: [f64; 3]) -> Option<(f64, f64)> {
+pub(super) fn parabola_vertex(s: [f64; 3], u: [f64; 3]) -> Option<(f64, f64)> {
     let d1 = (u[1] - u[0]) / (s[1] - s[0]);
     let d2 = (u[2] - u[1]) / (s[2] - s[1]);
     let a = (d2 - d1) / (s[2] - s[0]);
@@ -441,7 +441,7 @@ fn quadratic(s: [f64; 3], v: [f64; 3], x: f64) -> f64 {
 
 /// Kind of multiplier crossing between two points without a turning point, if the number
 /// of multipliers outside the unit circle changed.
-fn crossing(a: &BranchPoint, b: &BranchPoint) -> Option<EventKind> {
+pub(super) fn crossing(a: &BranchPoint, b: &BranchPoint) -> Option<EventKind> {
     let outside = |p: &BranchPoint| {
         p.multipliers
             .iter()

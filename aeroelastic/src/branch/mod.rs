@@ -30,7 +30,8 @@
 //! driver ([`Section::lco_branches`], [`Section::orbit_on_branch`]); `options.rs` the
 //! settings, `hopf.rs` the Hopf scan, `continuation.rs` the predictor–corrector,
 //! `shooting.rs`, `harmonic.rs` and `condensed.rs` the orbit discretisations, `orbit.rs` and
-//! `floquet.rs` an orbit's amplitudes and multipliers, `measured.rs` measured diagrams.
+//! `floquet.rs` an orbit's amplitudes and multipliers, `measured.rs` measured diagrams,
+//! `lens.rs` the continuation in a parameter other than U ([`Section::continue_in`]).
 
 use crate::section::Section;
 use crate::{Error, Result};
@@ -40,6 +41,7 @@ mod continuation;
 mod floquet;
 mod harmonic;
 mod hopf;
+mod lens;
 mod measured;
 mod options;
 mod orbit;
@@ -48,6 +50,7 @@ mod shooting;
 mod types;
 
 use continuation::{newton, problem};
+pub use lens::{Lens, LensBranch, LensEnd, LensEvent, LensPoint, SectionParameter};
 pub use measured::{
     measured_distances, parse_absence_arg, parse_measured_amplitudes, parse_measured_diagram,
     parse_onset_arg, predicted_at, read_measured_amplitudes, read_measured_diagram, Criticality,

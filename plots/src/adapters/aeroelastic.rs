@@ -213,6 +213,39 @@ pub fn phase_figure(
     }
 }
 
+/// The bifurcation diagram of an orbit continued in a parameter at a fixed speed
+/// (`aeroform branch --parameter`): pitch amplitude (half peak-to-peak) against the
+/// parameter, stable solid, unstable dashed, folds marked.
+pub fn lens_figure(b: &aeroelastic::branch::LensBranch) -> BranchDiagramFigure {
+    BranchDiagramFigure {
+        title: format!("LCO continued in {} at U = {:.3} m/s", b.parameter, b.u),
+        u_label: format!("{} [{}]", b.parameter, b.unit),
+        amplitude_label: "pitch amplitude (half peak-to-peak) [deg]".into(),
+        branches: vec![BranchCurve {
+            u: b.points.iter().map(|p| p.value).collect(),
+            amplitude: b
+                .points
+                .iter()
+                .map(|p| p.orbit.amplitude_alpha.to_degrees())
+                .collect(),
+            stable: b.points.iter().map(|p| p.orbit.stable).collect(),
+        }],
+        hopf: vec![],
+        folds: b
+            .events
+            .iter()
+            .filter(|e| e.kind == aeroelastic::branch::EventKind::Fold)
+            .map(|e| DiagramPoint {
+                u: e.value,
+                amplitude: e.amplitude_alpha.to_degrees(),
+                stable: false,
+            })
+            .collect(),
+        sweep: vec![],
+        measured: vec![],
+    }
+}
+
 /// The bifurcation diagram of `set`: stable branches solid, unstable dashed, Hopf points
 /// and folds marked, `sweep` (time-integration points, pitch amplitude \[deg\]) and the
 /// measured points of `dist` on top (first-harmonic amplitudes when measured points are
