@@ -88,7 +88,7 @@ impl SectionParameter {
     /// [`Error::InvalidParameter`] naming `parameter` for an unknown name or a power out of
     /// its range.
     pub fn parse(name: &str) -> Result<Self> {
-        let bad = |why: String| Error::param("parameter", f64::NAN, &why);
+        let bad = |why: String| Error::param("parameter", f64::NAN, why);
         let n = name.trim();
         let n = n.strip_prefix("structure.").unwrap_or(n);
         let simple = match n {
@@ -404,7 +404,7 @@ impl Section {
             return Err(Error::param(
                 "range",
                 lo,
-                &format!(
+                format!(
                     "[{lo}, {hi}] must be finite, increasing and hold the section's {} = {p0}",
                     lens.name()
                 ),
