@@ -319,12 +319,13 @@ pub fn run(args: &BranchArgs) -> anyhow::Result<()> {
     crate::ui::document(&json)
 }
 
-/// The orbit at `u` on the first branch of `set` that has one there (stable first),
-/// continued in `lens` over `range`; prints its folds and stability changes.
+/// The orbit at `u` continued in `lens` over `range`
+/// ([`aeroelastic::section::Section::continue_set_in`]); prints its folds and stability
+/// changes.
 ///
 /// # Errors
-/// No branch has an orbit at `u` (the message gives the branches' speed ranges); the
-/// errors of [`aeroelastic::section::Section::continue_in`].
+/// Those of `continue_set_in`: no branch has an orbit at `u` is a usage error of
+/// `--at-speed`.
 fn continue_in_parameter(
     section: &aeroelastic::section::Section,
     set: &aeroelastic::branch::BranchSet,
@@ -333,41 +334,19 @@ fn continue_in_parameter(
     u: f64,
     opts: &BranchOptions,
 ) -> anyhow::Result<LensBranch> {
-    let found = [true, false].into_iter().find_map(|stable| {
-        set.branches.iter().find_map(|b| {
-            section
-                .orbit_on_branch(b, u, stable, opts)
-                .ok()
-                .map(|p| (b, p))
-        })
-    });
-    let Some((b, p)) = found else {
-        let spans: Vec<String> = set
-            .branches
-            .iter()
-            .map(|b| {
-                let (lo, hi) = b
-                    .points
-                    .iter()
-                    .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), p| (l.min(p.u), h.max(p.u)));
-                format!("{lo:.4}…{hi:.4}")
-            })
-            .collect();
-        return Err(crate::exit::Usage(format!(
-            "--at-speed {u}: no branch has an orbit there (branches span U = {} m/s)",
-            spans.join(", ")
-        ))
-        .into());
+    let lb = match section.continue_set_in(set, lens, range, u, opts) {
+        Err(aeroelastic::Error::InvalidParameter { field, message, .. }) if field == "at_speed" => {
+            return Err(crate::exit::Usage(format!("--at-speed {u}: {message}")).into())
+        }
+        r => r.with_context(|| format!("continuation in {} at U = {u} m/s", lens.name()))?,
     };
-    let lb = section
-        .continue_in(lens, &b.hopf, &p, range, opts)
-        .with_context(|| format!("continuation in {} at U = {u} m/s", lens.name()))?;
+    let start = &lb.points[lb.start_index].orbit;
     crate::ui::say!(
         "{} at U = {u:.4} m/s from {} ({} orbit, pitch amplitude {:.3}°): {} orbits over {:.6}…{:.6}",
         lb.parameter,
         lb.start_value,
-        if p.stable { "stable" } else { "unstable" },
-        p.amplitude_alpha.to_degrees(),
+        if start.stable { "stable" } else { "unstable" },
+        start.amplitude_alpha.to_degrees(),
         lb.points.len(),
         lb.points.first().map_or(f64::NAN, |q| q.value),
         lb.points.last().map_or(f64::NAN, |q| q.value)

@@ -515,6 +515,9 @@ def branch(
     chord: Optional[float] = None,
     method: str = "shooting",
     harmonics: int = 5,
+    parameter: Optional[str] = None,
+    parameter_range: Optional[Tuple[float, float]] = None,
+    at_speed: Optional[float] = None,
 ) -> Branch:
     """LCO branches by continuation, as ``aeroform branch``: from every Hopf point of the
     linear flutter analysis in the speed range ``speeds`` (``"a:b"`` or ``(a, b)`` [m/s]),
@@ -522,8 +525,11 @@ def branch(
     ``"harmonic_balance"`` with ``harmonics`` harmonics), stability by Floquet multipliers,
     folds marked. ``measured``: a CSV of measured amplitudes
     (columns ``branch, wind_speed_m_s, heave_amp_m, pitch_amp_rad``) compared with the
-    branch of the same stability. Returns the content of ``branch.json`` as a
-    :class:`Branch` (``.csv``, ``.columns()``, ``.to_frame()``)."""
+    branch of the same stability. With ``parameter`` (``"k_alpha"``,
+    ``"pitch_stiffness[3]"``… as ``--parameter``), ``parameter_range = (a, b)`` and
+    ``at_speed`` [m/s], the orbit at that speed is also continued in the parameter, at that
+    fixed speed (``["parameter"]``, as ``branch.json``). Returns the content of
+    ``branch.json`` as a :class:`Branch` (``.csv``, ``.columns()``, ``.to_frame()``)."""
     if isinstance(speeds, str):
         parts = speeds.split(":")
         try:
@@ -542,7 +548,9 @@ def branch(
     with _Files(structure, model) as f:
         doc, csv = _core.branch(
             f.structure, f.model, lo, hi, meas, max_points, steps_per_period, chord,
-            method, harmonics,
+            method, harmonics, parameter,
+            None if parameter_range is None else tuple(float(x) for x in parameter_range),
+            at_speed,
         )
     out = Branch(json.loads(doc))
     out.csv = csv

@@ -424,9 +424,12 @@ fn lco(
 /// LCO branches by continuation (`aeroform branch`) from every Hopf point in
 /// `u_min … u_max` [m/s]: returns `(branch.json document, branch.csv text)`. `measured`
 /// is a CSV of measured amplitudes (columns `branch`, `wind_speed_m_s`, `heave_amp_m`,
-/// `pitch_amp_rad`) whose distances to the predicted branches are reported.
+/// `pitch_amp_rad`) whose distances to the predicted branches are reported. With
+/// `parameter` (a name of `aeroform branch --parameter`, e.g. `"pitch_stiffness[3]"`),
+/// `parameter_range = (a, b)` and `at_speed` [m/s], the orbit at that speed is also
+/// continued in the parameter (`branch.json`'s `parameter`, as the CLI).
 #[pyfunction]
-#[pyo3(signature = (structure, model, u_min, u_max, measured = None, max_points = 200, steps_per_period = 128, chord = None, method = "shooting", harmonics = 5))]
+#[pyo3(signature = (structure, model, u_min, u_max, measured = None, max_points = 200, steps_per_period = 128, chord = None, method = "shooting", harmonics = 5, parameter = None, parameter_range = None, at_speed = None))]
 #[allow(clippy::too_many_arguments)]
 fn branch(
     py: Python<'_>,
@@ -440,8 +443,24 @@ fn branch(
     chord: Option<f64>,
     method: &str,
     harmonics: usize,
+    parameter: Option<String>,
+    parameter_range: Option<(f64, f64)>,
+    at_speed: Option<f64>,
 ) -> PyResult<(String, String)> {
     let method: aeroelastic::branch::BranchMethod = method.parse().map_err(err)?;
+    let lens = match (&parameter, parameter_range, at_speed) {
+        (None, None, None) => None,
+        (Some(name), Some((a, b)), Some(u)) => Some((
+            aeroelastic::branch::SectionParameter::parse(name).map_err(err)?,
+            [a, b],
+            u,
+        )),
+        _ => {
+            return Err(err(
+                "parameter, parameter_range and at_speed go together: give all three or none",
+            ))
+        }
+    };
     py.detach(|| {
         let pair = LoadedPair::load(&structure, &model, chord).map_err(|e| e.to_string())?;
         let measured = match &measured {
@@ -464,12 +483,19 @@ fn branch(
             .as_deref()
             .map(|m| measured_distances(&set, m))
             .unwrap_or_default();
-        let doc = branch_document(
+        let mut doc = branch_document(
             &structure.display().to_string(),
             &model.display().to_string(),
             &set,
             &dist,
         );
+        if let Some((lens, range, u)) = &lens {
+            doc.parameter = Some(
+                pair.section
+                    .continue_set_in(&set, lens, *range, *u, &opts)
+                    .map_err(|e| format!("continuation in a parameter at U = {u} m/s: {e}"))?,
+            );
+        }
         Ok::<_, String>((doc.to_value().to_string(), branch_csv(&set)))
     })
     .map_err(err)

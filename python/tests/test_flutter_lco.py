@@ -131,3 +131,21 @@ def test_diagnose_branch_makes_the_commands_input_choices():
         aeroform.diagnose_branch(BMEAS, BM, structure=BS, onsets=["fast"])
     with pytest.raises(aeroform.AeroformError, match="--no-lco"):
         aeroform.diagnose_branch(BMEAS, BM, structure=BS, no_lco=["-3"])
+
+
+def test_branch_in_a_parameter_equals_the_cli(tmp_path):
+    run_cli("branch", "--structure", BS, "--model", BM, "--speeds", "12:20",
+            "--parameter", "pitch_stiffness[3]", "--parameter-range", "0:10000",
+            "--at-speed", "16", "--out", tmp_path)
+    cli = json.loads((tmp_path / "branch.json").read_text())
+    py = aeroform.branch(str(BS), str(BM), (12.0, 20.0), parameter="pitch_stiffness[3]",
+                         parameter_range=(0.0, 10000.0), at_speed=16.0)
+    assert max_difference(cli, py) == 0.0
+    p = py["parameter"]
+    assert p["start_value"] == 5007.38
+    assert sum(e["kind"] == "fold" for e in p["events"]) == 2
+    with pytest.raises(aeroform.AeroformError, match="all three"):
+        aeroform.branch(str(BS), str(BM), (12.0, 20.0), parameter="k_alpha")
+    with pytest.raises(aeroform.AeroformError, match="parameter"):
+        aeroform.branch(str(BS), str(BM), (12.0, 20.0), parameter="k_beta",
+                        parameter_range=(0.0, 1.0), at_speed=16.0)

@@ -22,7 +22,7 @@ use serde::{Deserialize, Serialize};
 use super::continuation::{branch_scales, crossing, newton, parabola_vertex, problem, tangent};
 use super::options::BranchOptions;
 use super::periodic::{Closure, PeriodicProblem};
-use super::types::{BranchPoint, EventKind, HopfPoint};
+use super::types::{BranchPoint, BranchSet, EventKind, HopfPoint};
 use crate::section::Section;
 use crate::structure::PolyTerm;
 use crate::{Error, Result};
@@ -279,6 +279,8 @@ pub struct LensBranch {
     pub u: f64,
     /// The parameter's value of the section the orbit came from.
     pub start_value: f64,
+    /// Index of the start orbit in `points`.
+    pub start_index: usize,
     /// The points: the decreasing direction's last point first, the start orbit, the
     /// increasing direction's last point last.
     pub points: Vec<LensPoint>,
@@ -472,10 +474,63 @@ impl Section {
             unit: lens.unit(),
             u: start.u,
             start_value: p0,
+            start_index: nd,
             points,
             events,
             stops: [stop_down, stop_up],
         })
+    }
+}
+
+impl Section {
+    /// The orbit at `u` [m/s] on the first branch of `set` (this section's branches in U)
+    /// that has one there — stable orbits first, then unstable — continued in `lens` over
+    /// `range` ([`Section::continue_in`]): what `aeroform branch --parameter` and Python's
+    /// `branch(parameter=…)` run.
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] naming `at_speed` when no branch has an orbit at `u`
+    /// (the message gives each branch's speed span); the errors of
+    /// [`Section::continue_in`].
+    pub fn continue_set_in(
+        &self,
+        set: &BranchSet,
+        lens: &dyn Lens,
+        range: [f64; 2],
+        u: f64,
+        opts: &BranchOptions,
+    ) -> Result<LensBranch> {
+        let found = [true, false].into_iter().find_map(|stable| {
+            set.branches.iter().find_map(|b| {
+                self.orbit_on_branch(b, u, stable, opts)
+                    .ok()
+                    .map(|p| (b, p))
+            })
+        });
+        let Some((b, p)) = found else {
+            let spans: Vec<String> = set
+                .branches
+                .iter()
+                .map(|b| {
+                    let (lo, hi) = b
+                        .points
+                        .iter()
+                        .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), p| {
+                            (l.min(p.u), h.max(p.u))
+                        });
+                    format!("{lo:.4}…{hi:.4}")
+                })
+                .collect();
+            return Err(Error::param(
+                "at_speed",
+                u,
+                format!(
+                    "no branch has an orbit at U = {u} m/s (the branches span U = {} m/s)",
+                    spans.join(", ")
+                ),
+            ));
+        };
+        self.continue_in(lens, &b.hopf, &p, range, opts)
     }
 }
 
