@@ -59,6 +59,17 @@ fn a_hardening_pitch_cubic_is_named_when_the_given_pitch_frequency_is_5_percent_
         );
         if let Some(s) = &sys.structure {
             eprintln!("  structure: {}", s.summary);
+            eprintln!("  reason: {}", s.reason);
+        }
+        for c in sys.candidates.iter().take(4) {
+            eprintln!(
+                "  {} stat {:.2} thr {:.2} sig {} {:?}",
+                c.effect.name(),
+                c.statistic,
+                c.threshold,
+                c.significant,
+                c.parameters
+            );
         }
         verdicts.push(d.verdict.effect);
     }
