@@ -76,7 +76,9 @@ pub(crate) fn moments(run: &RunResidual, cols: &[Column]) -> Moments {
 /// * group 1, still air: both DOFs of the runs at U = 0 (the air's apparent mass, which
 ///   no identified law predicts at U = 0);
 /// * group 2, the linear structure (issue 42 item 5, round 30): a stiffness correction
-///   Δk_d q_d in DOF d's own equation, pooled over every run, for the DOFs whose still-air
+///   Δk_d q_d in DOF d's own equation, pooled over the runs in the wind (in still air the
+///   free apparent mass of group 1 and a stiffness together would follow any backbone:
+///   Δk − ΔM ω(t)² tracks a cubic's A(t)² along a decay), for the DOFs whose still-air
 ///   mode the decays read off the given structure (see [`super`]'s `rest_check`): what a
 ///   nonlinear structural candidate removes beyond it is amplitude dependence, not the
 ///   given structure's linear error. One column per DOF, through the residual's smoothing

@@ -779,7 +779,9 @@ fn score_candidate(
             if aero {
                 [[false; 2]; 3]
             } else if structural {
-                [outside[j], [still; 2], stiffness]
+                // in the wind only: in still air the free apparent mass and a stiffness
+                // together follow any backbone (Δk − ΔM ω(t)² tracks a cubic's A(t)²)
+                [outside[j], [still; 2], stiffness.map(|k| k && !still)]
             } else {
                 [outside[j], [still; 2], [false; 2]]
             }
