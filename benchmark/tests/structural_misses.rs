@@ -134,7 +134,10 @@ fn a_hardening_pitch_cubic_is_named_when_the_given_pitch_frequency_is_5_percent_
         show(&format!("f_alpha × {f}"), &d);
         let sys = d.levels.last().unwrap();
         let s = sys.structure.as_ref().expect("a still-air decay is read");
-        let id = s.identified.as_ref().expect("the linear structure identified");
+        let id = s
+            .identified
+            .as_ref()
+            .expect("the linear structure identified");
         let pitch = id
             .modes
             .iter()
@@ -156,7 +159,10 @@ fn a_hardening_pitch_cubic_is_named_when_the_given_pitch_frequency_is_5_percent_
 #[test]
 fn a_sharp_pitch_friction_on_uncovered_free_runs_is_named_friction() {
     let d = diagnose_set(Effect::Friction, 0.85, 5, true);
-    assert!(uncovered_runs(&d) >= 5, "the free runs leave the forced range");
+    assert!(
+        uncovered_runs(&d) >= 5,
+        "the free runs leave the forced range"
+    );
     assert_eq!(d.verdict.effect, Verdict::Effect(Effect::Friction));
 }
 

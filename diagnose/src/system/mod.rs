@@ -399,8 +399,14 @@ pub fn system_level_of(
     };
     let linear_energy = jack_energy(&IdentifiedOptions::new(chord));
     let range = coverage::ForcedRange::new(&id, forced, chord);
-    let (mut level, _) =
-        level_and_runs(&model, free, opts, linear_energy.as_deref(), Some(&range), true)?;
+    let (mut level, _) = level_and_runs(
+        &model,
+        free,
+        opts,
+        linear_energy.as_deref(),
+        Some(&range),
+        true,
+    )?;
     let (linear_before, linear_statistic) = (level.before, level.gap_statistic);
     let mut tails: Option<(f64, f64)> = None;
     let mut tail_weights = Vec::new();
