@@ -543,6 +543,26 @@ pub fn structure_check_records(records: &[&Record], section: &Section) -> Option
     )
 }
 
+/// As [`structure_check`] against `given`'s stiffness and damping with the mass matrix
+/// `m` (per unit span: the structure's masses and the air's apparent mass at rest, e.g.
+/// the flat plate's, the system level's [`crate::system`] with a forced campaign), and
+/// the linear structure identified from the decays at that mass ([`identify_structure`]
+/// with `given`'s rest terms). `None` when there is no still-air record.
+pub fn structure_check_with_mass(
+    sets: &[&Dataset],
+    m: &Matrix2<f64>,
+    given: &Structure,
+) -> Option<StructureCheck> {
+    let recs: Vec<&Record> = sets.iter().flat_map(|s| s.records.iter()).collect();
+    check_against(
+        &recs,
+        m,
+        &given.stiffness_matrix(),
+        &given.damping_matrix(),
+        Some(given),
+    )
+}
+
 /// As [`structure_check`], against the modes of M q̈ + C q̇ + K q = 0 (mass, damping and
 /// stiffness matrices per unit span: the nominal structure, with the air's mass where it
 /// is known). No structure is identified (the matrices carry no structure to correct).

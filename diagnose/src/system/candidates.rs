@@ -66,22 +66,27 @@ pub(crate) fn moments(run: &RunResidual, cols: &[Column]) -> Moments {
     Moments { g, b, e }
 }
 
-/// Nuisance columns of one run (issue 29), two pooled groups of apparent-mass terms
-/// ΔM q̈, each as q̈_d in the heave and in the pitch equation for the DOFs d of the group:
+/// Nuisance columns of one run: two pooled groups of apparent-mass terms ΔM q̈ (issue 29),
+/// each as q̈_d in the heave and in the pitch equation for the DOFs d of the group, and a
+/// group of linear stiffness terms:
 /// * group 0, the extrapolation: the motion whose response K leaves its forced range
 ///   (the part of the law a campaign forced below the free runs' K cannot know: the K²
 ///   apparent-mass terms of H₄*, A₃*…, beyond the Theodorsen-shaped tails the sim
 ///   already continues with);
 /// * group 1, still air: both DOFs of the runs at U = 0 (the air's apparent mass, which
-///   no identified law predicts at U = 0).
+///   no identified law predicts at U = 0);
+/// * group 2, the linear structure (issue 42 item 5, round 30): a stiffness correction
+///   Δk_d q_d in DOF d's own equation, pooled over the runs in the wind (in still air the
+///   free apparent mass of group 1 and a stiffness together would follow any backbone:
+///   Δk − ΔM ω(t)² tracks a cubic's A(t)² along a decay), for the DOFs whose still-air
+///   mode the decays read off the given structure (see [`super`]'s `rest_check`): what a
+///   nonlinear structural candidate removes beyond it is amplitude dependence, not the
+///   given structure's linear error. One column per DOF, through the residual's smoothing
+///   ([`acc_term`], as the structure's own K q).
 ///
 /// `flags[g][d]`: the run has group g's term for DOF d (else its column is empty on this
 /// run); `dofs[g][d]`: some run has it (the column exists).
-pub(crate) fn nuisance_columns(
-    run: &RunResidual,
-    flags: [[bool; 2]; 2],
-    dofs: [[bool; 2]; 2],
-) -> Vec<Column> {
+pub(crate) fn nuisance_columns(run: &RunResidual, flags: Flags, dofs: Flags) -> Vec<Column> {
     let mut v = Vec::new();
     for g in 0..2 {
         for d in (0..2).filter(|&d| dofs[g][d]) {
@@ -94,8 +99,22 @@ pub(crate) fn nuisance_columns(
             v.push([Vec::new(), x]);
         }
     }
+    for d in (0..2).filter(|&d| dofs[2][d]) {
+        let x = if flags[2][d] {
+            acc_term(run, &run.q[d])
+        } else {
+            Vec::new()
+        };
+        let mut col: Column = [Vec::new(), Vec::new()];
+        col[d] = x;
+        v.push(col);
+    }
     v
 }
+
+/// Per-run nuisance flags `[group][dof]` of [`nuisance_columns`] (groups: extrapolation,
+/// still air, linear stiffness).
+pub(crate) type Flags = [[bool; 2]; 3];
 
 impl Variant {
     /// The variant restricted to the coefficients `idx` (a form of the candidate: pitch
@@ -283,9 +302,9 @@ pub(crate) fn variants(
     runs: &[RunResidual],
     rho: f64,
     chord: f64,
-    flags: &[[[bool; 2]; 2]],
+    flags: &[Flags],
 ) -> Vec<Variant> {
-    let dofs = [0, 1].map(|g| [0, 1].map(|d| flags.iter().any(|f| f[g][d])));
+    let dofs = [0, 1, 2].map(|g| [0, 1].map(|d| flags.iter().any(|f| f[g][d])));
     let mut names: Vec<String> = term
         .coefficient_names()
         .iter()
@@ -297,6 +316,9 @@ pub(crate) fn variants(
             names.push(format!("nuisance_{group}_dM_heave_{q}"));
             names.push(format!("nuisance_{group}_dM_pitch_{q}"));
         }
+    }
+    for d in (0..2).filter(|&d| dofs[2][d]) {
+        names.push(format!("nuisance_structure_dk_{}", ["h", "alpha"][d]));
     }
     // a raw control signal: its gain and offset are fitted with every candidate
     let control = runs.iter().any(raw_control);
@@ -313,7 +335,7 @@ pub(crate) fn variants(
                 .enumerate()
                 .map(|(j, r)| {
                     let mut cols = term.columns(&g, r, rho, chord);
-                    let f = flags.get(j).copied().unwrap_or([[false; 2]; 2]);
+                    let f = flags.get(j).copied().unwrap_or([[false; 2]; 3]);
                     cols.extend(nuisance_columns(r, f, dofs));
                     if control {
                         cols.extend(control_columns(r));
