@@ -219,6 +219,9 @@ impl<'a> Shifted<'a> {
     }
 }
 
+/// A held-out residual series: (case, channel, measured − predicted).
+type HeldOut = (usize, usize, Vec<f64>);
+
 /// Delays tried by the `time_delay` search \[s\] (coarse; refined by one parabola through
 /// the best one and its neighbours).
 pub const DELAY_GRID: [f64; 6] = [0.0, 1e-3, 3e-3, 8e-3, 0.02, 0.05];
@@ -259,7 +262,7 @@ fn time_delay(cx: &Context<'_>) -> Scored {
             }
         }
     }
-    let per_fold: Vec<(f64, Vec<(usize, usize, Vec<f64>)>)> = folds
+    let per_fold: Vec<(f64, Vec<HeldOut>)> = folds
         .par_iter()
         .zip(&vals)
         .zip(&best)
