@@ -61,9 +61,7 @@ pub fn diagnose(
     // preparation when both levels identify with the same settings)
     let campaign = Campaign::prepare(forced)?;
     let prepared = campaign.identification(&opts.force.identify)?;
-    let mut levels = vec![force_level_of(&campaign, &prepared, &opts.force)?.0];
-    let mut inputs = vec![forced.root.display().to_string()];
-    if let Some(free) = free {
+    let system_level = |free: &Dataset| -> Result<_> {
         let other;
         let sys_prepared = if opts.system.identify == opts.force.identify {
             &prepared
@@ -71,13 +69,21 @@ pub fn diagnose(
             other = campaign.identification(&opts.system.identify)?;
             &other
         };
-        levels.push(system_level_of(
-            &campaign,
-            sys_prepared,
-            forced,
-            free,
-            &opts.system,
-        )?);
+        system_level_of(&campaign, sys_prepared, forced, free, &opts.system)
+    };
+    // the two levels share the preparation and nothing else: side by side (the force
+    // level's longest candidate leaves a core idle otherwise); a force-level error is
+    // reported first, as when they ran one after the other
+    let (force, system) = rayon::join(
+        || force_level_of(&campaign, &prepared, &opts.force),
+        || free.map(system_level),
+    );
+    let mut levels = vec![force?.0];
+    let mut inputs = vec![forced.root.display().to_string()];
+    if let Some(free) = free {
+        if let Some(level) = system {
+            levels.push(level?);
+        }
         inputs.push(free.root.display().to_string());
     }
     let mut d = assemble(levels, &opts.rules, opts.seed, version, inputs);

@@ -10,7 +10,6 @@
 //! * Not at the bifurcation level (the section model has no delay states).
 //! * Generator: τ 0.1–20 ms.
 
-use std::collections::HashMap;
 use std::sync::Arc;
 
 use aeroelastic::effects::{Form, InjectedEffect};
@@ -188,6 +187,41 @@ fn delay_criterion(sh: &[CaseData], nodes: &[Node], f: &Fold, tau: f64, cache: &
     e
 }
 
+/// The cases delayed by one τ with their node factorisations: τ = 0 is the measured
+/// motion itself (the run's cases and shared cache, version 0 = `0.0f64.to_bits()`), any
+/// other τ a delayed copy ([`delayed_cases`]) with a cache of its own, dropped with it.
+struct Shifted<'a> {
+    tau: f64,
+    cases: std::borrow::Cow<'a, [CaseData]>,
+    own: NodeCache,
+}
+
+impl<'a> Shifted<'a> {
+    fn new(cases: &'a [CaseData], tau: f64) -> Self {
+        Shifted {
+            tau,
+            cases: if tau == 0.0 {
+                std::borrow::Cow::Borrowed(cases)
+            } else {
+                std::borrow::Cow::Owned(delayed_cases(cases, tau))
+            },
+            own: NodeCache::default(),
+        }
+    }
+
+    /// The node factorisations' cache: the run's for τ = 0, else this copy's own.
+    fn cache<'b>(&'b self, run: &'b NodeCache) -> &'b NodeCache {
+        if self.tau == 0.0 {
+            run
+        } else {
+            &self.own
+        }
+    }
+}
+
+/// A held-out residual series: (case, channel, measured − predicted).
+type HeldOut = (usize, usize, Vec<f64>);
+
 /// Delays tried by the `time_delay` search \[s\] (coarse; refined by one parabola through
 /// the best one and its neighbours).
 pub const DELAY_GRID: [f64; 6] = [0.0, 1e-3, 3e-3, 8e-3, 0.02, 0.05];
@@ -198,58 +232,98 @@ pub const DELAY_GRID: [f64; 6] = [0.0, 1e-3, 3e-3, 8e-3, 0.02, 0.05];
 /// delay is a phase ωτ that depends on U as well as K, which the pooled prediction over K
 /// cannot absorb), then scored on the held-out nodes. One shared parameter (τ).
 fn time_delay(cx: &Context<'_>) -> Scored {
-    let (cases, nodes, folds, cache) = (cx.cases, cx.nodes, cx.folds, cx.cache);
-    let mut res = vec![[Vec::new(), Vec::new()]; cases.len()];
-    let mut taus = Vec::new();
-    // delayed copies by τ, shared by the folds (the grid is the same in every fold)
-    let memo: std::sync::Mutex<HashMap<u64, Arc<Vec<CaseData>>>> = Default::default();
-    let delayed = |t: f64| -> Arc<Vec<CaseData>> {
-        if let Some(v) = memo.lock().ok().and_then(|m| m.get(&t.to_bits()).cloned()) {
-            return v;
+    use rayon::prelude::*;
+    let (cases, nodes, folds) = (cx.cases, cx.nodes, cx.folds);
+    // the grid is the same in every fold: one delayed copy per grid delay, its criterion in
+    // every fold, then the copy dropped unless it is a fold's best so far (the copies and
+    // their node factorisations are most of this candidate's memory)
+    let mut vals = vec![Vec::with_capacity(DELAY_GRID.len()); folds.len()];
+    let mut best: Vec<usize> = vec![0; folds.len()];
+    let mut kept: Vec<Option<Arc<Shifted<'_>>>> = DELAY_GRID.iter().map(|_| None).collect();
+    for (g, &t) in DELAY_GRID.iter().enumerate() {
+        let sh = Arc::new(Shifted::new(cases, t));
+        // fold after fold: the first fold fills the copy's node factorisations for the
+        // next (folds in parallel would build the same nodes twice)
+        let v: Vec<f64> = folds
+            .iter()
+            .map(|f| delay_criterion(&sh.cases, nodes, f, t, sh.cache(cx.cache)))
+            .collect();
+        for (fi, v) in v.into_iter().enumerate() {
+            // the first of equal minima, as `min_by` over the grid
+            if g == 0 || v < vals[fi][best[fi]] {
+                best[fi] = g;
+            }
+            vals[fi].push(v);
         }
-        let v = Arc::new(delayed_cases(cases, t));
-        if let Ok(mut m) = memo.lock() {
-            m.insert(t.to_bits(), v.clone());
+        kept[g] = Some(sh);
+        for (k, slot) in kept.iter_mut().enumerate() {
+            if !best.contains(&k) {
+                *slot = None;
+            }
         }
-        v
-    };
-    for f in folds {
-        let crit = |t: f64| delay_criterion(&delayed(t), nodes, f, t, cache);
-        let vals: Vec<f64> = DELAY_GRID.iter().map(|&t| crit(t)).collect();
-        let kb = (0..vals.len())
-            .min_by(|&a, &b| vals[a].total_cmp(&vals[b]))
-            .unwrap_or(0);
-        let (mut tau, mut best) = (DELAY_GRID[kb], vals[kb]);
-        // one parabola through the best grid point and its neighbours (unequal spacing)
-        if kb > 0 && kb + 1 < DELAY_GRID.len() {
-            let (x0, x1, x2) = (DELAY_GRID[kb - 1], DELAY_GRID[kb], DELAY_GRID[kb + 1]);
-            let (y0, y1, y2) = (vals[kb - 1], vals[kb], vals[kb + 1]);
-            let num = (x1 - x0).powi(2) * (y1 - y2) - (x1 - x2).powi(2) * (y1 - y0);
-            let den = (x1 - x0) * (y1 - y2) - (x1 - x2) * (y1 - y0);
-            if den.abs() > 0.0 {
-                let xv = x1 - 0.5 * num / den;
-                if xv > x0 && xv < x2 {
-                    let v = crit(xv);
-                    if v < best {
-                        best = v;
-                        tau = xv;
+    }
+    let per_fold: Vec<(f64, Vec<HeldOut>)> = folds
+        .par_iter()
+        .zip(&vals)
+        .zip(&best)
+        .map(|((f, vals), &kb)| {
+            let (mut tau, best) = (DELAY_GRID[kb], vals[kb]);
+            let mut sh = kept[kb].clone();
+            // one parabola through the best grid point and its neighbours (unequal spacing)
+            if kb > 0 && kb + 1 < DELAY_GRID.len() {
+                let (x0, x1, x2) = (DELAY_GRID[kb - 1], DELAY_GRID[kb], DELAY_GRID[kb + 1]);
+                let (y0, y1, y2) = (vals[kb - 1], vals[kb], vals[kb + 1]);
+                let num = (x1 - x0).powi(2) * (y1 - y2) - (x1 - x2).powi(2) * (y1 - y0);
+                let den = (x1 - x0) * (y1 - y2) - (x1 - x2) * (y1 - y0);
+                if den.abs() > 0.0 {
+                    let xv = x1 - 0.5 * num / den;
+                    if xv > x0 && xv < x2 {
+                        let refined = Arc::new(Shifted::new(cases, xv));
+                        let v =
+                            delay_criterion(&refined.cases, nodes, f, xv, refined.cache(cx.cache));
+                        if v < best {
+                            tau = xv;
+                            sh = Some(refined);
+                        }
                     }
                 }
             }
-        }
-        let _ = best;
+            let sh = sh.unwrap_or_else(|| Arc::new(Shifted::new(cases, tau)));
+            let fold = Fold {
+                index: f.index,
+                train: f.train.clone(),
+                test: f.test.clone(),
+                supports: f.supports.clone(),
+                shared: f.shared.clone(),
+                fits: law::node_fits(
+                    &sh.cases,
+                    nodes,
+                    &f.train,
+                    &f.supports,
+                    sh.cache(cx.cache),
+                    tau.to_bits(),
+                ),
+            };
+            let mut res = vec![[Vec::new(), Vec::new()]; cases.len()];
+            let mut out = Vec::new();
+            for c in 0..2 {
+                fold_residuals(&sh.cases, nodes, &fold, c, Aug::NONE, &mut res);
+                for &n in &f.test {
+                    for &i in &nodes[n].cases {
+                        out.push((i, c, std::mem::take(&mut res[i][c])));
+                    }
+                }
+            }
+            (tau, out)
+        })
+        .collect();
+    drop(kept);
+    let mut res = vec![[Vec::new(), Vec::new()]; cases.len()];
+    let mut taus = Vec::new();
+    for (tau, out) in per_fold {
         taus.push(tau);
-        let shifted = delayed(tau);
-        let fold = Fold {
-            index: f.index,
-            train: f.train.clone(),
-            test: f.test.clone(),
-            supports: f.supports.clone(),
-            shared: f.shared.clone(),
-            fits: law::node_fits(&shifted, nodes, &f.train, &f.supports, cache, tau.to_bits()),
-        };
-        for c in 0..2 {
-            fold_residuals(&shifted, nodes, &fold, c, Aug::NONE, &mut res);
+        for (i, c, r) in out {
+            res[i][c] = r;
         }
     }
     let tau = taus.iter().sum::<f64>() / taus.len().max(1) as f64;
