@@ -690,3 +690,34 @@ fn pitch_rate_share_moves_the_floquet_moduli_toward_the_truths() {
     eprintln!("onset: lag {u_lag:.4} m/s, truth {u_truth:.4} m/s");
     assert!(u_lag < 0.95 * u_truth, "{u_lag} vs {u_truth}");
 }
+
+/// TEMPORARY experiment harness (round 30): fits the deep-stall campaign with the
+/// `LagFitOptions` JSON in `LAG_OPTS` and writes the law to `LAG_OUT`.
+#[test]
+#[ignore = "experiment harness"]
+fn experiment_fit_from_env() {
+    let mut v = serde_json::to_value(identify::lag::LagFitOptions::default()).unwrap();
+    let patch: serde_json::Value =
+        serde_json::from_str(&std::env::var("LAG_OPTS").unwrap_or("{}".into())).unwrap();
+    for (k, x) in patch.as_object().unwrap() {
+        v[k] = x.clone();
+    }
+    let opts: identify::lag::LagFitOptions = serde_json::from_value(v).unwrap();
+    let out = PathBuf::from(std::env::var("LAG_OUT").unwrap());
+    std::fs::create_dir_all(&out).unwrap();
+    let cases = truth_cases(&deep_stall_grid());
+    let fit = identify::lag::fit(&cases, &opts).unwrap();
+    eprintln!(
+        "objective {:.6} τ₁ {:.3} τ₂ {:.3} α* {:.2}° m {:.2} c {}; lift {:?}; moment {:?}; notes {:?}",
+        fit.report.objective,
+        fit.law.tau1,
+        fit.law.tau2,
+        fit.law.alpha_star.to_degrees(),
+        fit.law.sharpness,
+        fit.law.rate_share,
+        fit.law.lift.terms,
+        fit.law.moment.terms,
+        fit.report.notes
+    );
+    fit_and_write(&deep_stall_grid(), &opts, &out);
+}

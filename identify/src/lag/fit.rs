@@ -74,7 +74,24 @@ pub struct LagFitOptions {
     /// mid-chord.
     #[serde(default)]
     pub rate_share: f64,
+    /// Pressure lag τ_p \[b/U\] of the separation input ([`LagLaw::pressure_lag`]), in
+    /// \[0, 100\]; 0 (default) = off. The start value when `fit_pressure_lag` is set.
+    #[serde(default)]
+    pub pressure_lag: f64,
+    /// Fit the rate share c by output error ([`fit`]: the objective profiled over c ∈
+    /// \[0, 1\], every other constant refitted at each c) instead of holding it at
+    /// `rate_share`.
+    #[serde(default)]
+    pub fit_rate_share: bool,
+    /// Fit the pressure lag τ_p by output error (the objective profiled over τ_p ∈
+    /// \[0, [`PROFILE_PRESSURE_LAG_MAX`]\]) instead of holding it at `pressure_lag`.
+    #[serde(default)]
+    pub fit_pressure_lag: bool,
 }
+
+/// Largest pressure lag τ_p \[b/U\] the profile of [`fit`] searches (Beddoes–Leishman's
+/// T_p is 1.5–2 convective times for aerofoils; three times that leaves room).
+pub const PROFILE_PRESSURE_LAG_MAX: f64 = 6.0;
 
 fn default_true() -> bool {
     true
@@ -89,11 +106,36 @@ impl Default for LagFitOptions {
             path: PathOptions::for_measure(Measure::Contribution),
             circulation_lag: true,
             rate_share: 0.0,
+            pressure_lag: 0.0,
+            fit_rate_share: false,
+            fit_pressure_lag: false,
         }
     }
 }
 
 impl LagFitOptions {
+    /// The same options with the Kirchhoff columns replaced by the separated-flow blend of
+    /// Hansen, Gaunaa & Madsen (2004): [`LagColumn::Kirchhoff`] → [`LagColumn::Blend`] and
+    /// [`LagColumn::KirchhoffSep`] → [`LagColumn::BlendSep`] in the lift support and the
+    /// moment candidates (a column already present is not repeated).
+    pub fn with_blend(mut self) -> Self {
+        for cols in [&mut self.lift_columns, &mut self.moment_columns] {
+            let mut out: Vec<LagColumn> = Vec::with_capacity(cols.len());
+            for c in cols.iter() {
+                let n = match c {
+                    LagColumn::Kirchhoff => LagColumn::Blend,
+                    LagColumn::KirchhoffSep => LagColumn::BlendSep,
+                    other => *other,
+                };
+                if !out.contains(&n) {
+                    out.push(n);
+                }
+            }
+            *cols = out;
+        }
+        self
+    }
+
     /// Checks the options.
     ///
     /// # Errors
@@ -118,6 +160,15 @@ impl LagFitOptions {
             return Err(Error::InvalidOption {
                 name: "rate_share".into(),
                 message: format!("{}: must be in [-1, 1]", self.rate_share),
+            });
+        }
+        if !(self.pressure_lag >= 0.0 && self.pressure_lag <= 100.0) {
+            return Err(Error::InvalidOption {
+                name: "pressure_lag".into(),
+                message: format!(
+                    "{}: must be in [0, 100] convective times",
+                    self.pressure_lag
+                ),
             });
         }
         if self.max_iter == 0 {
@@ -230,7 +281,7 @@ pub struct LagFit {
 }
 
 /// The law with θ and empty channels (the separation dynamics only).
-pub(crate) fn law_of(theta: [f64; 4], circulation_lag: bool) -> LagLaw {
+pub(crate) fn law_of(theta: [f64; 4], circulation_lag: bool, pressure_lag: f64) -> LagLaw {
     LagLaw {
         tau1: theta[0],
         tau2: theta[1],
@@ -244,6 +295,7 @@ pub(crate) fn law_of(theta: [f64; 4], circulation_lag: bool) -> LagLaw {
         },
         circulation_lag,
         rate_share: 0.0,
+        pressure_lag,
     }
 }
 
@@ -264,6 +316,8 @@ struct Problem<'a> {
     free: [bool; 4],
     /// The law's circulation lag.
     circ: bool,
+    /// The law's pressure lag τ_p (fixed in this problem).
+    tau_p: f64,
 }
 
 /// One evaluation of the projected problem at θ.
@@ -289,7 +343,7 @@ fn ss_about_mean(y: &[f64]) -> f64 {
 impl Problem<'_> {
     /// Separation states of every case (parallel, in case order).
     fn states(&self, theta: [f64; 4]) -> Result<(Vec<Vec<f64>>, Vec<usize>)> {
-        let law = law_of(theta, self.circ);
+        let law = law_of(theta, self.circ, self.tau_p);
         let out: Vec<Result<(Vec<f64>, usize)>> = self
             .series
             .par_iter()
@@ -327,8 +381,13 @@ impl Problem<'_> {
             .sum();
         let mut c: Vec<Vec<f64>> = cols.iter().map(|_| Vec::with_capacity(total)).collect();
         let mut y = Vec::with_capacity(total);
-        let law = law_of(theta, self.circ);
-        let inst = cols.contains(&LagColumn::KirchhoffStatic);
+        let law = law_of(theta, self.circ, self.tau_p);
+        let inst = cols.iter().any(|c| {
+            matches!(
+                c,
+                LagColumn::KirchhoffStatic | LagColumn::Blend | LagColumn::BlendSep
+            )
+        });
         for ((s, x), &st) in self.series.iter().zip(xs).zip(starts) {
             let a = s.angle(&law);
             for i in st..s.len() {
@@ -661,7 +720,7 @@ fn case_scores(p: &Problem<'_>, e: &Eval) -> Vec<LagCaseScore> {
         .zip(&e.xs)
         .zip(&e.starts)
         .map(|((s, x), &st)| {
-            let law = law_of(e.theta, p.circ);
+            let law = law_of(e.theta, p.circ, p.tau_p);
             let a = s.angle(&law);
             let mut r2 = [0.0; 2];
             for (k, (cols, coef)) in [(&p.lift, &e.lift), (&p.moment, &e.moment)]
@@ -807,11 +866,126 @@ pub fn fit(cases: &[NondimCase], opts: &LagFitOptions) -> Result<LagFit> {
             message: "no case to fit the lag law on".into(),
         });
     }
+    if opts.fit_rate_share || opts.fit_pressure_lag {
+        return fit_profiled(cases, opts);
+    }
+    fit_fixed(cases, opts)
+}
+
+/// [`fit`] at the options' fixed rate share and pressure lag.
+fn fit_fixed(cases: &[NondimCase], opts: &LagFitOptions) -> Result<LagFit> {
     let series: Vec<LagSeries> = cases
         .iter()
         .map(|c| LagSeries::with_rate_share(c, opts.rate_share))
         .collect::<Result<_>>()?;
     fit_series(&series, opts)
+}
+
+/// Golden-section minimum of `f` on \[lo, hi\] after a coarse grid of `grid` points (the
+/// bracket is the grid cell pair around the grid's best): (argmin, value). Non-finite
+/// values count as +∞.
+fn profile_min(lo: f64, hi: f64, grid: usize, f: &mut dyn FnMut(f64) -> f64) -> (f64, f64) {
+    let pts: Vec<f64> = (0..grid)
+        .map(|i| lo + (hi - lo) * i as f64 / (grid - 1) as f64)
+        .collect();
+    let vals: Vec<f64> = pts
+        .iter()
+        .map(|&p| {
+            let v = f(p);
+            if v.is_finite() {
+                v
+            } else {
+                f64::INFINITY
+            }
+        })
+        .collect();
+    let ib = (0..grid)
+        .min_by(|&i, &j| vals[i].total_cmp(&vals[j]))
+        .unwrap_or(0);
+    let (mut a, mut b) = (pts[ib.saturating_sub(1)], pts[(ib + 1).min(grid - 1)]);
+    let (mut best, mut best_v) = (pts[ib], vals[ib]);
+    let r = 0.5 * (5f64.sqrt() - 1.0);
+    let mut c = b - r * (b - a);
+    let mut d = a + r * (b - a);
+    let mut fc = f(c);
+    let mut fd = f(d);
+    for _ in 0..10 {
+        for (p, v) in [(c, fc), (d, fd)] {
+            if v.is_finite() && v < best_v {
+                best = p;
+                best_v = v;
+            }
+        }
+        if fc < fd || !fd.is_finite() {
+            b = d;
+            d = c;
+            fd = fc;
+            c = b - r * (b - a);
+            fc = f(c);
+        } else {
+            a = c;
+            c = d;
+            fc = fd;
+            d = a + r * (b - a);
+            fd = f(d);
+        }
+    }
+    for (p, v) in [(c, fc), (d, fd)] {
+        if v.is_finite() && v < best_v {
+            best = p;
+            best_v = v;
+        }
+    }
+    (best, best_v)
+}
+
+/// [`fit`] with the rate share and/or the pressure lag fitted by output error: the
+/// objective (1 − R²_L) + (1 − R²_M) of the fixed-constant fit, profiled over c ∈ \[0, 1\]
+/// and τ_p ∈ \[0, [`PROFILE_PRESSURE_LAG_MAX`]\] (every other constant and coefficient
+/// refitted at each point), minimised coordinate by coordinate (two rounds of an 11-point
+/// grid and a golden-section refinement). A point whose fit is refused counts as +∞.
+fn fit_profiled(cases: &[NondimCase], opts: &LagFitOptions) -> Result<LagFit> {
+    let fixed = |c: f64, tp: f64| {
+        let mut o = opts.clone();
+        o.fit_rate_share = false;
+        o.fit_pressure_lag = false;
+        o.rate_share = c;
+        o.pressure_lag = tp;
+        fit_fixed(cases, &o)
+    };
+    let (mut c, mut tp) = (opts.rate_share.clamp(0.0, 1.0), opts.pressure_lag);
+    let mut evaluations = 0usize;
+    for _round in 0..2 {
+        if opts.fit_rate_share {
+            let mut f = |v: f64| {
+                evaluations += 1;
+                fixed(v, tp).map_or(f64::INFINITY, |f| f.report.objective)
+            };
+            c = profile_min(0.0, 1.0, 11, &mut f).0;
+        }
+        if opts.fit_pressure_lag {
+            let mut f = |v: f64| {
+                evaluations += 1;
+                fixed(c, v).map_or(f64::INFINITY, |f| f.report.objective)
+            };
+            tp = profile_min(0.0, PROFILE_PRESSURE_LAG_MAX, 11, &mut f).0;
+        }
+        if !(opts.fit_rate_share && opts.fit_pressure_lag) {
+            break;
+        }
+    }
+    let mut out = fixed(c, tp)?;
+    out.report.notes.push(format!(
+        "fitted by output error (profile over {evaluations} fixed-constant fits): rate share \
+         c = {c:.3}{}, pressure lag τ_p = {tp:.3} b/U{}",
+        if opts.fit_rate_share { "" } else { " (fixed)" },
+        if opts.fit_pressure_lag {
+            ""
+        } else {
+            " (fixed)"
+        },
+    ));
+    Ok(out)
 }
 
 /// [`fit`] on cases already in the lag law's variables (built with
@@ -826,7 +1000,10 @@ pub fn fit_series(series: &[LagSeries], opts: &LagFitOptions) -> Result<LagFit> 
     // shortest lag the optimiser could run to)
     let mut x = Vec::new();
     for s in series.iter().filter(|s| !s.periodic) {
-        s.simulate(&law_of(clamp_theta(init), opts.circulation_lag), &mut x)?;
+        s.simulate(
+            &law_of(clamp_theta(init), opts.circulation_lag, opts.pressure_lag),
+            &mut x,
+        )?;
     }
     let mut p = Problem {
         series,
@@ -834,6 +1011,7 @@ pub fn fit_series(series: &[LagSeries], opts: &LagFitOptions) -> Result<LagFit> 
         moment: opts.moment_columns.clone(),
         free: [true; 4],
         circ: opts.circulation_lag,
+        tau_p: opts.pressure_lag,
     };
     // a few starts around the data's guess; the best by output error goes on
     let mut starts = vec![init];
@@ -950,6 +1128,7 @@ pub fn fit_series(series: &[LagSeries], opts: &LagFitOptions) -> Result<LagFit> 
         },
         circulation_lag: p.circ,
         rate_share: opts.rate_share,
+        pressure_lag: opts.pressure_lag,
     };
     law.check()?;
     let report = LagReport {
@@ -1074,6 +1253,7 @@ pub(crate) mod tests {
             },
             circulation_lag: true,
             rate_share: 0.0,
+            pressure_lag: 0.0,
         }
     }
 
