@@ -881,104 +881,171 @@ fn fit_fixed(cases: &[NondimCase], opts: &LagFitOptions) -> Result<LagFit> {
     fit_series(&series, opts)
 }
 
-/// Golden-section minimum of `f` on \[lo, hi\] after a coarse grid of `grid` points (the
-/// bracket is the grid cell pair around the grid's best): (argmin, value). Non-finite
+/// Nelder–Mead minimum of `f` over the box `lo`..`hi` (points clamped into it) from `x0`
+/// with initial steps `step`, at most `max_eval` evaluations: (argmin, value). Non-finite
 /// values count as +∞.
-fn profile_min(lo: f64, hi: f64, grid: usize, f: &mut dyn FnMut(f64) -> f64) -> (f64, f64) {
-    let pts: Vec<f64> = (0..grid)
-        .map(|i| lo + (hi - lo) * i as f64 / (grid - 1) as f64)
-        .collect();
-    let vals: Vec<f64> = pts
-        .iter()
-        .map(|&p| {
-            let v = f(p);
-            if v.is_finite() {
-                v
-            } else {
-                f64::INFINITY
-            }
-        })
-        .collect();
-    let ib = (0..grid)
-        .min_by(|&i, &j| vals[i].total_cmp(&vals[j]))
-        .unwrap_or(0);
-    let (mut a, mut b) = (pts[ib.saturating_sub(1)], pts[(ib + 1).min(grid - 1)]);
-    let (mut best, mut best_v) = (pts[ib], vals[ib]);
-    let r = 0.5 * (5f64.sqrt() - 1.0);
-    let mut c = b - r * (b - a);
-    let mut d = a + r * (b - a);
-    let mut fc = f(c);
-    let mut fd = f(d);
-    for _ in 0..10 {
-        for (p, v) in [(c, fc), (d, fd)] {
-            if v.is_finite() && v < best_v {
-                best = p;
-                best_v = v;
-            }
-        }
-        if fc < fd || !fd.is_finite() {
-            b = d;
-            d = c;
-            fd = fc;
-            c = b - r * (b - a);
-            fc = f(c);
+fn nelder_mead(
+    f: &mut dyn FnMut([f64; 2]) -> f64,
+    x0: [f64; 2],
+    step: [f64; 2],
+    lo: [f64; 2],
+    hi: [f64; 2],
+    max_eval: usize,
+) -> ([f64; 2], f64) {
+    let clamp = |p: [f64; 2]| [p[0].clamp(lo[0], hi[0]), p[1].clamp(lo[1], hi[1])];
+    let mut n_eval = 0usize;
+    let mut ev = |p: [f64; 2], n: &mut usize| {
+        *n += 1;
+        let v = f(p);
+        if v.is_finite() {
+            v
         } else {
-            a = c;
-            c = d;
-            fc = fd;
-            d = a + r * (b - a);
-            fd = f(d);
+            f64::INFINITY
         }
-    }
-    for (p, v) in [(c, fc), (d, fd)] {
-        if v.is_finite() && v < best_v {
-            best = p;
-            best_v = v;
-        }
-    }
-    (best, best_v)
-}
-
-/// [`fit`] with the rate share and/or the pressure lag fitted by output error: the
-/// objective (1 − R²_L) + (1 − R²_M) of the fixed-constant fit, profiled over c ∈ \[0, 1\]
-/// and τ_p ∈ \[0, [`PROFILE_PRESSURE_LAG_MAX`]\] (every other constant and coefficient
-/// refitted at each point), minimised coordinate by coordinate (two rounds of an 11-point
-/// grid and a golden-section refinement). A point whose fit is refused counts as +∞.
-fn fit_profiled(cases: &[NondimCase], opts: &LagFitOptions) -> Result<LagFit> {
-    let fixed = |c: f64, tp: f64| {
-        let mut o = opts.clone();
-        o.fit_rate_share = false;
-        o.fit_pressure_lag = false;
-        o.rate_share = c;
-        o.pressure_lag = tp;
-        fit_fixed(cases, &o)
     };
-    let (mut c, mut tp) = (opts.rate_share.clamp(0.0, 1.0), opts.pressure_lag);
-    let mut evaluations = 0usize;
-    for _round in 0..2 {
-        if opts.fit_rate_share {
-            let mut f = |v: f64| {
-                evaluations += 1;
-                fixed(v, tp).map_or(f64::INFINITY, |f| f.report.objective)
-            };
-            c = profile_min(0.0, 1.0, 11, &mut f).0;
+    let mut simplex: Vec<([f64; 2], f64)> = Vec::with_capacity(3);
+    for d in [[0.0, 0.0], [step[0], 0.0], [0.0, step[1]]] {
+        let mut p = clamp([x0[0] + d[0], x0[1] + d[1]]);
+        if p == x0 && d != [0.0, 0.0] {
+            // on the box edge: step the other way
+            p = clamp([x0[0] - d[0], x0[1] - d[1]]);
         }
-        if opts.fit_pressure_lag {
-            let mut f = |v: f64| {
-                evaluations += 1;
-                fixed(c, v).map_or(f64::INFINITY, |f| f.report.objective)
-            };
-            tp = profile_min(0.0, PROFILE_PRESSURE_LAG_MAX, 11, &mut f).0;
+        let v = ev(p, &mut n_eval);
+        simplex.push((p, v));
+    }
+    while n_eval < max_eval {
+        simplex.sort_by(|a, b| a.1.total_cmp(&b.1));
+        let (best, worst) = (simplex[0], simplex[2]);
+        let c = [
+            0.5 * (simplex[0].0[0] + simplex[1].0[0]),
+            0.5 * (simplex[0].0[1] + simplex[1].0[1]),
+        ];
+        let along = |t: f64| {
+            clamp([
+                c[0] + t * (worst.0[0] - c[0]),
+                c[1] + t * (worst.0[1] - c[1]),
+            ])
+        };
+        let r = along(-1.0);
+        let fr = ev(r, &mut n_eval);
+        if fr < best.1 {
+            let e = along(-2.0);
+            let fe = ev(e, &mut n_eval);
+            simplex[2] = if fe < fr { (e, fe) } else { (r, fr) };
+        } else if fr < simplex[1].1 {
+            simplex[2] = (r, fr);
+        } else {
+            let k = along(if fr < worst.1 { -0.5 } else { 0.5 });
+            let fk = ev(k, &mut n_eval);
+            if fk < worst.1.min(fr) {
+                simplex[2] = (k, fk);
+            } else {
+                // shrink toward the best point
+                for v in simplex.iter_mut().skip(1) {
+                    let p = clamp([
+                        best.0[0] + 0.5 * (v.0[0] - best.0[0]),
+                        best.0[1] + 0.5 * (v.0[1] - best.0[1]),
+                    ]);
+                    *v = (p, ev(p, &mut n_eval));
+                }
+            }
         }
-        if !(opts.fit_rate_share && opts.fit_pressure_lag) {
+        let size = simplex
+            .iter()
+            .map(|v| {
+                ((v.0[0] - simplex[0].0[0]) / step[0]).abs()
+                    + ((v.0[1] - simplex[0].0[1]) / step[1]).abs()
+            })
+            .fold(0.0, f64::max);
+        if size < 1e-2 {
             break;
         }
     }
-    let mut out = fixed(c, tp)?;
+    simplex.sort_by(|a, b| a.1.total_cmp(&b.1));
+    simplex[0]
+}
+
+/// Grid of the rate-share profile (c) and of the pressure-lag profile (τ_p \[b/U\]).
+const PROFILE_GRID: ([f64; 6], [f64; 8]) = (
+    [0.0, 0.2, 0.4, 0.6, 0.8, 1.0],
+    [0.0, 0.5, 1.0, 1.5, 2.0, 3.0, 4.0, PROFILE_PRESSURE_LAG_MAX],
+);
+
+/// [`fit`] with the rate share and/or the pressure lag fitted by output error: the
+/// objective (1 − R²_L) + (1 − R²_M) of the fixed-constant fit (every other constant and
+/// coefficient refitted at each point), profiled over c ∈ \[0, 1\] and τ_p ∈
+/// \[0, [`PROFILE_PRESSURE_LAG_MAX`]\]: the best point of a coarse grid
+/// ([`PROFILE_GRID`]; the two are correlated, so jointly), then Nelder–Mead from it (steps
+/// 0.1 and 0.25 b/U, at most 40 fits). A point whose fit is refused counts as +∞.
+fn fit_profiled(cases: &[NondimCase], opts: &LagFitOptions) -> Result<LagFit> {
+    let fixed = |p: [f64; 2]| {
+        let mut o = opts.clone();
+        o.fit_rate_share = false;
+        o.fit_pressure_lag = false;
+        o.rate_share = p[0];
+        o.pressure_lag = p[1];
+        fit_fixed(cases, &o)
+    };
+    let cs: Vec<f64> = if opts.fit_rate_share {
+        PROFILE_GRID.0.to_vec()
+    } else {
+        vec![opts.rate_share]
+    };
+    let ts: Vec<f64> = if opts.fit_pressure_lag {
+        PROFILE_GRID.1.to_vec()
+    } else {
+        vec![opts.pressure_lag]
+    };
+    let mut evaluations = 0usize;
+    let mut objective = |p: [f64; 2]| {
+        evaluations += 1;
+        fixed(p).map_or(f64::INFINITY, |f| f.report.objective)
+    };
+    let mut start = ([opts.rate_share, opts.pressure_lag], f64::INFINITY);
+    for &c in &cs {
+        for &t in &ts {
+            let v = objective([c, t]);
+            if v < start.1 {
+                start = ([c, t], v);
+            }
+        }
+    }
+    let lo = [
+        if opts.fit_rate_share {
+            0.0
+        } else {
+            opts.rate_share
+        },
+        if opts.fit_pressure_lag {
+            0.0
+        } else {
+            opts.pressure_lag
+        },
+    ];
+    let hi = [
+        if opts.fit_rate_share {
+            1.0
+        } else {
+            opts.rate_share
+        },
+        if opts.fit_pressure_lag {
+            PROFILE_PRESSURE_LAG_MAX
+        } else {
+            opts.pressure_lag
+        },
+    ];
+    let (p, _) = if start.1.is_finite() {
+        nelder_mead(&mut objective, start.0, [0.1, 0.25], lo, hi, 40)
+    } else {
+        start
+    };
+    let mut out = fixed(p)?;
     out.report.notes.push(format!(
-        "fitted by output error (profile over {evaluations} fixed-constant fits): rate share \
-         c = {c:.3}{}, pressure lag τ_p = {tp:.3} b/U{}",
+        "fitted by output error (objective profiled over {evaluations} fixed-constant fits): \
+         rate share c = {:.3}{}, pressure lag τ_p = {:.3} b/U{}",
+        p[0],
         if opts.fit_rate_share { "" } else { " (fixed)" },
+        p[1],
         if opts.fit_pressure_lag {
             ""
         } else {
