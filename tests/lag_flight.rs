@@ -691,37 +691,6 @@ fn pitch_rate_share_moves_the_floquet_moduli_toward_the_truths() {
     assert!(u_lag < 0.95 * u_truth, "{u_lag} vs {u_truth}");
 }
 
-/// TEMPORARY experiment harness (round 30): fits the deep-stall campaign with the
-/// `LagFitOptions` JSON in `LAG_OPTS` and writes the law to `LAG_OUT`.
-#[test]
-#[ignore = "experiment harness"]
-fn experiment_fit_from_env() {
-    let mut v = serde_json::to_value(identify::lag::LagFitOptions::default()).unwrap();
-    let patch: serde_json::Value =
-        serde_json::from_str(&std::env::var("LAG_OPTS").unwrap_or("{}".into())).unwrap();
-    for (k, x) in patch.as_object().unwrap() {
-        v[k] = x.clone();
-    }
-    let opts: identify::lag::LagFitOptions = serde_json::from_value(v).unwrap();
-    let out = PathBuf::from(std::env::var("LAG_OUT").unwrap());
-    std::fs::create_dir_all(&out).unwrap();
-    let cases = truth_cases(&deep_stall_grid());
-    let fit = identify::lag::fit(&cases, &opts).unwrap();
-    eprintln!(
-        "objective {:.6} τ₁ {:.3} τ₂ {:.3} α* {:.2}° m {:.2} c {}; lift {:?}; moment {:?}; notes {:?}",
-        fit.report.objective,
-        fit.law.tau1,
-        fit.law.tau2,
-        fit.law.alpha_star.to_degrees(),
-        fit.law.sharpness,
-        fit.law.rate_share,
-        fit.law.lift.terms,
-        fit.law.moment.terms,
-        fit.report.notes
-    );
-    fit_and_write(&deep_stall_grid(), &opts, &out);
-}
-
 /// Fits the deep-stall campaign with `opts`, flies the law on the rig and checks issue 41's
 /// round-trip acceptance against the truth: onset (flutter) within 2 %; at 7, 7.5, 8, 8.5,
 /// 9 m/s the law's periodic orbit (`branch`) within 5 % of the truth's and stable wherever
@@ -809,4 +778,22 @@ fn fitted_rate_share_and_pressure_lag_meet_the_round_trip_acceptance() {
     };
     let law = assert_round_trip_acceptance(&opts, dir.path());
     eprintln!("c {} τ_p {}", law.rate_share, law.pressure_lag);
+}
+
+/// The fast variant (in CI, about 15 s): the same campaign and acceptance with c and τ_p
+/// held at the values the profile of the slow test found on this campaign (c = 0.339,
+/// τ_p = 1.666 b/U, against the truth's (½ − a)/2 = 0.4 and τ_p = 1.7), every other constant
+/// fitted. Measured: τ₂ → 0, onset 6.6563 vs 6.6410 m/s (+0.23 %), orbits −2.9, −0.8, +0.4,
+/// +1.4, +2.3 % at 7–9 m/s with |μ| 0.659, 0.902, 0.951, 0.933, 0.898 (truth 0.706, 0.923,
+/// 0.986, 0.988, 0.966), and `lco` settles on them.
+#[test]
+fn pressure_lag_and_rate_share_at_the_fitted_values_meet_the_round_trip_acceptance() {
+    let dir = tempfile::tempdir().unwrap();
+    let opts = identify::lag::LagFitOptions {
+        rate_share: 0.339,
+        pressure_lag: 1.666,
+        ..identify::lag::LagFitOptions::default()
+    };
+    let law = assert_round_trip_acceptance(&opts, dir.path());
+    assert!(law.tau2 < 0.1, "τ₂ {}: the lag replaces the lead", law.tau2);
 }

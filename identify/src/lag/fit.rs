@@ -1296,6 +1296,25 @@ pub fn predict_series(law: &LagLaw, s: &LagSeries) -> Result<LagPrediction> {
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
+
+    #[test]
+    fn nelder_mead_finds_a_tilted_valley_inside_the_box() {
+        // a correlated valley like the (c, τ_p) profile's, minimum at (0.35, 1.7)
+        let mut f = |p: [f64; 2]| {
+            let (u, v) = (p[0] - 0.35, p[1] - 1.7);
+            (u - 0.25 * v).powi(2) * 40.0 + 0.05 * v * v
+        };
+        let (p, v) = nelder_mead(&mut f, [0.4, 1.5], [0.1, 0.25], [0.0, 0.0], [1.0, 6.0], 200);
+        assert!(
+            (p[0] - 0.35).abs() < 0.02 && (p[1] - 1.7).abs() < 0.1,
+            "{p:?}"
+        );
+        assert!(v < 1e-3);
+        // the box holds: a minimum outside it ends on the edge
+        let mut g = |p: [f64; 2]| (p[0] + 0.5).powi(2) + (p[1] - 1.0).powi(2);
+        let (p, _) = nelder_mead(&mut g, [0.3, 2.0], [0.1, 0.25], [0.0, 0.0], [1.0, 6.0], 200);
+        assert!(p[0] < 0.02 && (p[1] - 1.0).abs() < 0.05, "{p:?}");
+    }
     use crate::record::{CaseMeta, Forcing};
 
     pub(crate) fn truth() -> LagLaw {
