@@ -13,6 +13,9 @@
 //!   share b ḧ/U² is left out, forced records do not carry it cleanly).
 //! - Separation state x ∈ [0, 1] (1 = attached): τ₁ dx/ds + x = x₀(u), i.e.
 //!   ẋ = (U/(b τ₁))·(x₀(u) − x) in physical time.
+//! - Pressure lag ([`LagLaw::pressure_lag`] τ_p > 0, off by default): the separation follows
+//!   the filtered input u_f, τ_p du_f/ds + u_f = u, instead of u (Beddoes–Leishman's
+//!   leading-edge pressure lag; with it the fitted τ₂ tends to 0).
 //! - Static separation curve x₀(α) = 1 / (1 + |α/α*|^{2m}) (α* the angle of half
 //!   separation, m ≥ 1 its sharpness): x₀(0) = 1 with zero slope, so the law's
 //!   linearisation about α = 0 is attached flow.
@@ -23,7 +26,9 @@
 //!   separation α_e·κ(x₀(α_e)) (the share of the separated-flow lift that follows the angle
 //!   without lag, as the fully separated term (1 − f″)(1 + 3s)/(4(1 + s)), s = √f_st(α_E),
 //!   of Hansen, Gaunaa & Madsen 2004 does; not in the default support, see
-//!   `LagFitOptions::lift_columns`). The thin-aerofoil apparent mass (acceleration terms) is
+//!   `LagFitOptions::lift_columns`), and the separated-flow blend of Hansen, Gaunaa & Madsen
+//!   ([`LagColumn::Blend`], [`LagColumn::BlendSep`], also not in the default support). The
+//!   thin-aerofoil apparent mass (acceleration terms) is
 //!   not part of the law: flight adds it (`AeroModel::apparent_mass`).
 //! - Attached-flow circulation lag (switch [`LagLaw::circulation_lag`], off in a document
 //!   that does not name it): the circulation does not follow the angle at once (Wagner's
