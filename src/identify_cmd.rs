@@ -109,6 +109,25 @@ pub struct IdentifyArgs {
     /// mid-chord (0.5 about the quarter chord). Default 0.
     #[arg(long, value_name = "C")]
     pub lag_rate_share: Option<f64>,
+    /// With `--law lag`: `true` replaces the Kirchhoff lift α_e·κ(x) by the separated-flow
+    /// blend of Hansen, Gaunaa & Madsen (2004), α_e·(x + (1 − x)(1 + 3s)/(4(1 + s))),
+    /// s = √x₀(α_e), in the lift support and in the moment candidates (with its
+    /// centre-of-pressure column); equal to the Kirchhoff lift in steady flow. Default false.
+    #[arg(long, value_name = "true|false")]
+    pub lag_blend: Option<bool>,
+    /// With `--law lag`: pressure lag τ_p [convective times b/U] of the separation input
+    /// (Beddoes–Leishman's leading-edge pressure lag), fixed, in [0, 100]; 0 = off
+    /// (default). The start value with `--lag-fit-pressure-lag true`.
+    #[arg(long, value_name = "TAU")]
+    pub lag_pressure_lag: Option<f64>,
+    /// With `--law lag`: `true` fits the rate share c by output error (the objective
+    /// profiled over c in [0, 1]) instead of holding it at `--lag-rate-share`.
+    #[arg(long, value_name = "true|false")]
+    pub lag_fit_rate_share: Option<bool>,
+    /// With `--law lag`: `true` fits the pressure lag τ_p by output error (profiled over
+    /// [0, 6] b/U) instead of holding it at `--lag-pressure-lag`.
+    #[arg(long, value_name = "true|false")]
+    pub lag_fit_pressure_lag: Option<bool>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -536,6 +555,14 @@ fn run_lag(args: &IdentifyArgs) -> anyhow::Result<()> {
     if let Some(c) = args.lag_rate_share {
         opts.rate_share = c;
     }
+    if args.lag_blend == Some(true) {
+        opts = opts.with_blend();
+    }
+    if let Some(t) = args.lag_pressure_lag {
+        opts.pressure_lag = t;
+    }
+    opts.fit_rate_share = args.lag_fit_rate_share.unwrap_or(false);
+    opts.fit_pressure_lag = args.lag_fit_pressure_lag.unwrap_or(false);
     let result = match hold_out {
         Some(h) => identify::lag::held_out(&prepared.cases, h, &opts).map(|(f, _)| f),
         None => identify::lag::fit(&prepared.cases, &opts),

@@ -690,3 +690,110 @@ fn pitch_rate_share_moves_the_floquet_moduli_toward_the_truths() {
     eprintln!("onset: lag {u_lag:.4} m/s, truth {u_truth:.4} m/s");
     assert!(u_lag < 0.95 * u_truth, "{u_lag} vs {u_truth}");
 }
+
+/// Fits the deep-stall campaign with `opts`, flies the law on the rig and checks issue 41's
+/// round-trip acceptance against the truth: onset (flutter) within 2 %; at 7, 7.5, 8, 8.5,
+/// 9 m/s the law's periodic orbit (`branch`) within 5 % of the truth's and stable wherever
+/// the truth's is; `lco` settles (`Lco`, within 5 % of the truth's `lco`) at 7, 7.5, 8 and
+/// 9 m/s, and both decay at 6 and 6.5 m/s. Returns the fitted law.
+fn assert_round_trip_acceptance(
+    opts: &identify::lag::LagFitOptions,
+    dir: &Path,
+) -> identify::lag::LagLaw {
+    let fit = identify::lag::fit(&truth_cases(&deep_stall_grid()), opts).unwrap();
+    eprintln!("notes: {:?}", fit.report.notes);
+    fit_and_write(&deep_stall_grid(), opts, dir);
+    let model = s(&dir.join("lag.model.toml"));
+    let u_lag = flutter_speed(&model, &dir.join("f-lag"));
+    let u_truth = flutter_speed(&scenario("plate-stall.model.toml"), &dir.join("f-truth"));
+    eprintln!(
+        "onset: lag {u_lag:.4} m/s, truth {u_truth:.4} m/s ({:+.2} %)",
+        100.0 * (u_lag / u_truth - 1.0)
+    );
+    let law = branch_points(&model, "6:9.5", &dir.join("b-lag"));
+    let truth = branch_points(
+        &scenario("plate-stall.model.toml"),
+        "6:9.5",
+        &dir.join("b-truth"),
+    );
+    let mut fails = Vec::new();
+    if (u_lag - u_truth).abs() >= 0.02 * u_truth {
+        fails.push(format!("onset {u_lag} vs {u_truth}"));
+    }
+    for u in [7.0, 7.5, 8.0, 8.5, 9.0] {
+        let l = orbit_at(&law, u, 3.0).unwrap_or_else(|| panic!("no law orbit at {u}"));
+        let t = orbit_at(&truth, u, 3.0).unwrap_or_else(|| panic!("no truth orbit at {u}"));
+        eprintln!(
+            "U = {u}: orbit truth {:.2}° (|μ| {:.3}), law {:.2}° (|μ| {:.3}): {:+.1} %",
+            t.0,
+            t.2,
+            l.0,
+            l.2,
+            100.0 * (l.0 / t.0 - 1.0)
+        );
+        if (l.0 - t.0).abs() >= 0.05 * t.0 {
+            fails.push(format!("orbit at {u}: {l:?} vs {t:?}"));
+        }
+        if t.1 && !(l.1 && l.2 < 1.0) {
+            fails.push(format!("unstable orbit at {u}: {l:?} (truth {t:?})"));
+        }
+    }
+    let speeds = "6,6.5,7,7.5,8,9";
+    let lco_l = lco_sweep(&model, speeds, &dir.join("l-lag"));
+    let lco_t = lco_sweep(
+        &scenario("plate-stall.model.toml"),
+        speeds,
+        &dir.join("l-truth"),
+    );
+    for (l, t) in lco_l.iter().zip(&lco_t) {
+        eprintln!(
+            "lco U = {}: truth {} {:.2}°, lag {} {:.2}°",
+            l.0,
+            t.1,
+            t.2.to_degrees(),
+            l.1,
+            l.2.to_degrees()
+        );
+        if t.1 != l.1 || (t.1 == "Lco" && (l.2 - t.2).abs() >= 0.05 * t.2) {
+            fails.push(format!("lco at {}: {l:?} vs {t:?}", l.0));
+        }
+    }
+    assert!(fails.is_empty(), "{fails:#?}");
+    fit.law
+}
+
+/// Issue 41's round-trip acceptance (first bullet) with the rate share c and the pressure
+/// lag τ_p *fitted* by output error on the 20 forced cases (`fit_rate_share`,
+/// `fit_pressure_lag`: the objective profiled over (c, τ_p), docs/DECISIONS.md, "issue 41
+/// round 30"): slow (about 2 min), the fast variant below flies the law at the constants
+/// this profile found.
+#[test]
+#[ignore = "slow: the (c, τ_p) profile refits the law about 90 times (about 2 min)"]
+fn fitted_rate_share_and_pressure_lag_meet_the_round_trip_acceptance() {
+    let dir = tempfile::tempdir().unwrap();
+    let opts = identify::lag::LagFitOptions {
+        fit_rate_share: true,
+        fit_pressure_lag: true,
+        ..identify::lag::LagFitOptions::default()
+    };
+    let law = assert_round_trip_acceptance(&opts, dir.path());
+    eprintln!("c {} τ_p {}", law.rate_share, law.pressure_lag);
+}
+
+/// The fast variant (in CI, about 15 s): the same campaign and acceptance with c and τ_p
+/// held at the values the profile of the slow test found on this campaign (c = 0.339,
+/// τ_p = 1.666 b/U, against the truth's (½ − a)/2 = 0.4 and τ_p = 1.7), every other constant
+/// fitted. Measured: τ₂ → 0, onset 6.6563 vs 6.6410 m/s (+0.23 %), orbits −2.9, −0.8, +0.4,
+/// +1.4, +2.3 % at 7–9 m/s with |μ| 0.659, 0.902, 0.951, 0.933, 0.898 (truth 0.706, 0.923,
+/// 0.986, 0.988, 0.966), and `lco` settles on them.
+#[test]
+fn pressure_lag_and_rate_share_at_the_fitted_values_meet_the_round_trip_acceptance() {
+    let dir = tempfile::tempdir().unwrap();
+    let opts = identify::lag::LagFitOptions {
+        rate_share: 0.339,
+        pressure_lag: 1.666,
+        ..identify::lag::LagFitOptions::default()
+    };
+    let law = assert_round_trip_acceptance(&opts, dir.path());
+    assert!(law.tau2 < 0.1, "τ₂ {}: the lag replaces the lead", law.tau2);
+}

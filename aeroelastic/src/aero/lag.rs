@@ -40,6 +40,11 @@
 //!   equilibrium. In the frequency response α̂_e becomes C_J(iω)·α̂_e with
 //!   C_J(p) = 1 − Σ A_i·p/(p + g_i), g_i = 2U b_i/B: R. T. Jones' approximation of
 //!   Theodorsen's function, exactly the linearised state equation.
+//! - Pressure lag ([`LagLaw::pressure_lag`] τ_p > 0): one more state, last in `lag`, the
+//!   filtered separation input about the trim v = u_f − α₀ with
+//!   v̇ = (2U/(Bτ_p))·(u − α₀ − v), u = α_c − τ₂q/2 the law's input; the separation then
+//!   follows x₀(α₀ + v). In the frequency response û becomes û·g_p/(iω + g_p),
+//!   g_p = 2U/(Bτ_p).
 
 use nalgebra::Matrix2;
 use num_complex::Complex64;
@@ -174,11 +179,9 @@ impl AeroModel for LagAero {
         self.chord
     }
     fn n_lag(&self) -> usize {
-        if self.law.circulation_lag {
-            3
-        } else {
-            1
-        }
+        let jones = if self.law.circulation_lag { 2 } else { 0 };
+        let pressure = usize::from(self.law.pressure_lag > 0.0);
+        1 + jones + pressure
     }
     fn apparent_mass(&self, flow: &Flow) -> Matrix2<f64> {
         match self.elastic_axis {
@@ -202,7 +205,9 @@ impl AeroModel for LagAero {
         ]
     }
     /// ẏ = −(2U/B)·x_rate(α_c, q, x̄ − y) \[1/s\] and, with the circulation lag,
-    /// ẇ_i = (2U/B)·b_i·(α_e − α₀ − w_i) \[rad/s\]; zero at U ≤ 0 (frozen states).
+    /// ẇ_i = (2U/B)·b_i·(α_e − α₀ − w_i) \[rad/s\]; with the pressure lag
+    /// ẏ = −(2U/B)·(x₀(α₀ + v) − x)/τ₁ and v̇ = (2U/(Bτ_p))·(u − α₀ − v) (module docs); zero
+    /// at U ≤ 0 (frozen states).
     fn lag_rates(&self, flow: &Flow, q: [f64; 2], qd: [f64; 2], lag: &[f64], out: &mut [f64]) {
         if flow.u <= 0.0 {
             out.iter_mut().for_each(|v| *v = 0.0);
@@ -211,7 +216,16 @@ impl AeroModel for LagAero {
         let (ae, qq) = self.inputs(flow.u, q, qd);
         let g = 2.0 * flow.u / self.chord;
         let ac = self.angle(ae, lag);
-        out[0] = -g * self.law.x_rate(ac, qq, self.x_bar - lag[0]);
+        let x = self.x_bar - lag[0];
+        if self.law.pressure_lag > 0.0 {
+            let a0 = self.mean_angle.unwrap_or(0.0);
+            let iv = out.len() - 1;
+            let v = lag[iv];
+            out[0] = -g * self.law.x_rate_filtered(a0 + v, x);
+            out[iv] = g / self.law.pressure_lag * (self.law.input(ac, qq) - a0 - v);
+        } else {
+            out[0] = -g * self.law.x_rate(ac, qq, x);
+        }
         if self.law.circulation_lag {
             let a0 = self.mean_angle.unwrap_or(0.0);
             let r = circulation_rates(ae, [a0 + lag[1], a0 + lag[2]]);
@@ -242,7 +256,11 @@ impl AeroModel for LagAero {
             (cj * (1.0 + c * iw * b_c / u), iw * b_c / u),
         ];
         let g = 2.0 * u / (b_c * self.law.tau1);
-        let gain = g * self.x_static_slope(self.law.input(a0, 0.0)) / (iw + g);
+        let mut gain = g * self.x_static_slope(self.law.input(a0, 0.0)) / (iw + g);
+        if self.law.pressure_lag > 0.0 {
+            let gp = 2.0 * u / (b_c * self.law.pressure_lag);
+            gain *= gp / (iw + gp);
+        }
         let ma = self.apparent_mass(flow);
         let scale = [flow.q_dyn() * b_c, flow.q_dyn() * b_c * b_c];
         let mut h = Matrix2::<Complex64>::zeros();
@@ -259,7 +277,7 @@ impl AeroModel for LagAero {
                 ch.value(a0 + 1.0, 0.0, xb, xs(a0)) - c0
             };
             let c_q = ch.value(a0, 1.0, xb, xs(a0)) - c0;
-            let c_x = ch.d_dx(a0, 0.0, xb);
+            let c_x = ch.d_dx(a0, 0.0, xb, xs(a0));
             for (j, &(ae, qq)) in inputs.iter().enumerate() {
                 let x_hat = gain * (ae - 0.5 * self.law.tau2 * qq);
                 h[(i, j)] =
@@ -271,12 +289,14 @@ impl AeroModel for LagAero {
     fn elastic_axis(&self) -> Option<f64> {
         self.elastic_axis
     }
-    /// Ten separation lags plus the input lead, 10(τ₁ + τ₂)·b/U \[s\] (the Jones states
+    /// Ten separation lags plus the input lead and the pressure lag, 10(τ₁ + τ₂ + τ_p)·b/U
+    /// \[s\] (the Jones states
     /// are linear and weak, A₁ = 0.165 on the slow one: not counted, as for the stall
     /// truth).
     fn settle_time(&self, flow: &Flow) -> f64 {
         if flow.u > 0.0 {
-            10.0 * (self.law.tau1 + self.law.tau2) * 0.5 * self.chord / flow.u
+            10.0 * (self.law.tau1 + self.law.tau2 + self.law.pressure_lag) * 0.5 * self.chord
+                / flow.u
         } else {
             0.0
         }
@@ -316,6 +336,7 @@ mod tests {
             },
             circulation_lag: false,
             rate_share: 0.0,
+            pressure_lag: 0.0,
         }
     }
 
@@ -333,6 +354,25 @@ mod tests {
             (LagColumn::Kirchhoff, -5.0),
             (LagColumn::KirchhoffStatic, -1.28),
             (LagColumn::Q, -1.3 * std::f64::consts::PI),
+        ];
+        LagAero::new(l, 0.25, Some(-0.3)).unwrap()
+    }
+
+    /// The example law with its circulation lag, a rate share 0.4, a pressure lag τ_p = 1.7
+    /// and the separated-flow blend columns in both channels.
+    fn pressure_blend() -> LagAero {
+        let mut l = plate_law();
+        l.circulation_lag = true;
+        l.rate_share = 0.4;
+        l.pressure_lag = 1.7;
+        l.lift.terms = vec![
+            (LagColumn::Blend, -2.0 * std::f64::consts::PI),
+            (LagColumn::Q, -0.5 * std::f64::consts::PI),
+        ];
+        l.moment.terms = vec![
+            (LagColumn::Blend, 0.2 * std::f64::consts::PI),
+            (LagColumn::BlendSep, -0.5 * std::f64::consts::PI),
+            (LagColumn::Q, -0.2 * std::f64::consts::PI),
         ];
         LagAero::new(l, 0.25, Some(-0.3)).unwrap()
     }
@@ -440,6 +480,8 @@ mod tests {
             lagged().with_mean_angle(0.22).unwrap(),
             rate_static(),
             rate_static().with_mean_angle(0.22).unwrap(),
+            pressure_blend(),
+            pressure_blend().with_mean_angle(0.22).unwrap(),
         ] {
             let flow = Flow { rho: RHO, u: 7.0 };
             for omega in [0.0, 3.0, 20.0, 80.0] {
@@ -476,7 +518,7 @@ mod tests {
         // ∂L/∂y = −½ρU²B ∂C_L/∂x
         let xb = law.x_static(a0);
         let p = 0.5 * RHO * 25.0 * 0.25;
-        let want_d = -p * law.lift.d_dx(a0, 0.0, xb);
+        let want_d = -p * law.lift.d_dx(a0, 0.0, xb, law.x_static(a0));
         assert!((lin.d[(0, 0)] - want_d).abs() < 1e-6 * want_d.abs());
     }
 

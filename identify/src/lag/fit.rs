@@ -74,7 +74,24 @@ pub struct LagFitOptions {
     /// mid-chord.
     #[serde(default)]
     pub rate_share: f64,
+    /// Pressure lag τ_p \[b/U\] of the separation input ([`LagLaw::pressure_lag`]), in
+    /// \[0, 100\]; 0 (default) = off. The start value when `fit_pressure_lag` is set.
+    #[serde(default)]
+    pub pressure_lag: f64,
+    /// Fit the rate share c by output error ([`fit`]: the objective profiled over c ∈
+    /// \[0, 1\], every other constant refitted at each c) instead of holding it at
+    /// `rate_share`.
+    #[serde(default)]
+    pub fit_rate_share: bool,
+    /// Fit the pressure lag τ_p by output error (the objective profiled over τ_p ∈
+    /// \[0, [`PROFILE_PRESSURE_LAG_MAX`]\]) instead of holding it at `pressure_lag`.
+    #[serde(default)]
+    pub fit_pressure_lag: bool,
 }
+
+/// Largest pressure lag τ_p \[b/U\] the profile of [`fit`] searches (Beddoes–Leishman's
+/// T_p is 1.5–2 convective times for aerofoils; three times that leaves room).
+pub const PROFILE_PRESSURE_LAG_MAX: f64 = 6.0;
 
 fn default_true() -> bool {
     true
@@ -89,11 +106,36 @@ impl Default for LagFitOptions {
             path: PathOptions::for_measure(Measure::Contribution),
             circulation_lag: true,
             rate_share: 0.0,
+            pressure_lag: 0.0,
+            fit_rate_share: false,
+            fit_pressure_lag: false,
         }
     }
 }
 
 impl LagFitOptions {
+    /// The same options with the Kirchhoff columns replaced by the separated-flow blend of
+    /// Hansen, Gaunaa & Madsen (2004): [`LagColumn::Kirchhoff`] → [`LagColumn::Blend`] and
+    /// [`LagColumn::KirchhoffSep`] → [`LagColumn::BlendSep`] in the lift support and the
+    /// moment candidates (a column already present is not repeated).
+    pub fn with_blend(mut self) -> Self {
+        for cols in [&mut self.lift_columns, &mut self.moment_columns] {
+            let mut out: Vec<LagColumn> = Vec::with_capacity(cols.len());
+            for c in cols.iter() {
+                let n = match c {
+                    LagColumn::Kirchhoff => LagColumn::Blend,
+                    LagColumn::KirchhoffSep => LagColumn::BlendSep,
+                    other => *other,
+                };
+                if !out.contains(&n) {
+                    out.push(n);
+                }
+            }
+            *cols = out;
+        }
+        self
+    }
+
     /// Checks the options.
     ///
     /// # Errors
@@ -118,6 +160,15 @@ impl LagFitOptions {
             return Err(Error::InvalidOption {
                 name: "rate_share".into(),
                 message: format!("{}: must be in [-1, 1]", self.rate_share),
+            });
+        }
+        if !(self.pressure_lag >= 0.0 && self.pressure_lag <= 100.0) {
+            return Err(Error::InvalidOption {
+                name: "pressure_lag".into(),
+                message: format!(
+                    "{}: must be in [0, 100] convective times",
+                    self.pressure_lag
+                ),
             });
         }
         if self.max_iter == 0 {
@@ -230,7 +281,7 @@ pub struct LagFit {
 }
 
 /// The law with θ and empty channels (the separation dynamics only).
-pub(crate) fn law_of(theta: [f64; 4], circulation_lag: bool) -> LagLaw {
+pub(crate) fn law_of(theta: [f64; 4], circulation_lag: bool, pressure_lag: f64) -> LagLaw {
     LagLaw {
         tau1: theta[0],
         tau2: theta[1],
@@ -244,6 +295,7 @@ pub(crate) fn law_of(theta: [f64; 4], circulation_lag: bool) -> LagLaw {
         },
         circulation_lag,
         rate_share: 0.0,
+        pressure_lag,
     }
 }
 
@@ -264,6 +316,8 @@ struct Problem<'a> {
     free: [bool; 4],
     /// The law's circulation lag.
     circ: bool,
+    /// The law's pressure lag τ_p (fixed in this problem).
+    tau_p: f64,
 }
 
 /// One evaluation of the projected problem at θ.
@@ -289,7 +343,7 @@ fn ss_about_mean(y: &[f64]) -> f64 {
 impl Problem<'_> {
     /// Separation states of every case (parallel, in case order).
     fn states(&self, theta: [f64; 4]) -> Result<(Vec<Vec<f64>>, Vec<usize>)> {
-        let law = law_of(theta, self.circ);
+        let law = law_of(theta, self.circ, self.tau_p);
         let out: Vec<Result<(Vec<f64>, usize)>> = self
             .series
             .par_iter()
@@ -327,8 +381,13 @@ impl Problem<'_> {
             .sum();
         let mut c: Vec<Vec<f64>> = cols.iter().map(|_| Vec::with_capacity(total)).collect();
         let mut y = Vec::with_capacity(total);
-        let law = law_of(theta, self.circ);
-        let inst = cols.contains(&LagColumn::KirchhoffStatic);
+        let law = law_of(theta, self.circ, self.tau_p);
+        let inst = cols.iter().any(|c| {
+            matches!(
+                c,
+                LagColumn::KirchhoffStatic | LagColumn::Blend | LagColumn::BlendSep
+            )
+        });
         for ((s, x), &st) in self.series.iter().zip(xs).zip(starts) {
             let a = s.angle(&law);
             for i in st..s.len() {
@@ -661,7 +720,7 @@ fn case_scores(p: &Problem<'_>, e: &Eval) -> Vec<LagCaseScore> {
         .zip(&e.xs)
         .zip(&e.starts)
         .map(|((s, x), &st)| {
-            let law = law_of(e.theta, p.circ);
+            let law = law_of(e.theta, p.circ, p.tau_p);
             let a = s.angle(&law);
             let mut r2 = [0.0; 2];
             for (k, (cols, coef)) in [(&p.lift, &e.lift), (&p.moment, &e.moment)]
@@ -807,11 +866,193 @@ pub fn fit(cases: &[NondimCase], opts: &LagFitOptions) -> Result<LagFit> {
             message: "no case to fit the lag law on".into(),
         });
     }
+    if opts.fit_rate_share || opts.fit_pressure_lag {
+        return fit_profiled(cases, opts);
+    }
+    fit_fixed(cases, opts)
+}
+
+/// [`fit`] at the options' fixed rate share and pressure lag.
+fn fit_fixed(cases: &[NondimCase], opts: &LagFitOptions) -> Result<LagFit> {
     let series: Vec<LagSeries> = cases
         .iter()
         .map(|c| LagSeries::with_rate_share(c, opts.rate_share))
         .collect::<Result<_>>()?;
     fit_series(&series, opts)
+}
+
+/// Nelder–Mead minimum of `f` over the box `lo`..`hi` (points clamped into it) from `x0`
+/// with initial steps `step`, at most `max_eval` evaluations: (argmin, value). Non-finite
+/// values count as +∞.
+fn nelder_mead(
+    f: &mut dyn FnMut([f64; 2]) -> f64,
+    x0: [f64; 2],
+    step: [f64; 2],
+    lo: [f64; 2],
+    hi: [f64; 2],
+    max_eval: usize,
+) -> ([f64; 2], f64) {
+    let clamp = |p: [f64; 2]| [p[0].clamp(lo[0], hi[0]), p[1].clamp(lo[1], hi[1])];
+    let mut n_eval = 0usize;
+    let mut ev = |p: [f64; 2], n: &mut usize| {
+        *n += 1;
+        let v = f(p);
+        if v.is_finite() {
+            v
+        } else {
+            f64::INFINITY
+        }
+    };
+    let mut simplex: Vec<([f64; 2], f64)> = Vec::with_capacity(3);
+    for d in [[0.0, 0.0], [step[0], 0.0], [0.0, step[1]]] {
+        let mut p = clamp([x0[0] + d[0], x0[1] + d[1]]);
+        if p == x0 && d != [0.0, 0.0] {
+            // on the box edge: step the other way
+            p = clamp([x0[0] - d[0], x0[1] - d[1]]);
+        }
+        let v = ev(p, &mut n_eval);
+        simplex.push((p, v));
+    }
+    while n_eval < max_eval {
+        simplex.sort_by(|a, b| a.1.total_cmp(&b.1));
+        let (best, worst) = (simplex[0], simplex[2]);
+        let c = [
+            0.5 * (simplex[0].0[0] + simplex[1].0[0]),
+            0.5 * (simplex[0].0[1] + simplex[1].0[1]),
+        ];
+        let along = |t: f64| {
+            clamp([
+                c[0] + t * (worst.0[0] - c[0]),
+                c[1] + t * (worst.0[1] - c[1]),
+            ])
+        };
+        let r = along(-1.0);
+        let fr = ev(r, &mut n_eval);
+        if fr < best.1 {
+            let e = along(-2.0);
+            let fe = ev(e, &mut n_eval);
+            simplex[2] = if fe < fr { (e, fe) } else { (r, fr) };
+        } else if fr < simplex[1].1 {
+            simplex[2] = (r, fr);
+        } else {
+            let k = along(if fr < worst.1 { -0.5 } else { 0.5 });
+            let fk = ev(k, &mut n_eval);
+            if fk < worst.1.min(fr) {
+                simplex[2] = (k, fk);
+            } else {
+                // shrink toward the best point
+                for v in simplex.iter_mut().skip(1) {
+                    let p = clamp([
+                        best.0[0] + 0.5 * (v.0[0] - best.0[0]),
+                        best.0[1] + 0.5 * (v.0[1] - best.0[1]),
+                    ]);
+                    *v = (p, ev(p, &mut n_eval));
+                }
+            }
+        }
+        let size = simplex
+            .iter()
+            .map(|v| {
+                ((v.0[0] - simplex[0].0[0]) / step[0]).abs()
+                    + ((v.0[1] - simplex[0].0[1]) / step[1]).abs()
+            })
+            .fold(0.0, f64::max);
+        if size < 1e-2 {
+            break;
+        }
+    }
+    simplex.sort_by(|a, b| a.1.total_cmp(&b.1));
+    simplex[0]
+}
+
+/// Grid of the rate-share profile (c) and of the pressure-lag profile (τ_p \[b/U\]).
+const PROFILE_GRID: ([f64; 6], [f64; 8]) = (
+    [0.0, 0.2, 0.4, 0.6, 0.8, 1.0],
+    [0.0, 0.5, 1.0, 1.5, 2.0, 3.0, 4.0, PROFILE_PRESSURE_LAG_MAX],
+);
+
+/// [`fit`] with the rate share and/or the pressure lag fitted by output error: the
+/// objective (1 − R²_L) + (1 − R²_M) of the fixed-constant fit (every other constant and
+/// coefficient refitted at each point), profiled over c ∈ \[0, 1\] and τ_p ∈
+/// \[0, [`PROFILE_PRESSURE_LAG_MAX`]\]: the best point of a coarse grid
+/// ([`PROFILE_GRID`]; the two are correlated, so jointly), then Nelder–Mead from it (steps
+/// 0.1 and 0.25 b/U, at most 40 fits). A point whose fit is refused counts as +∞.
+fn fit_profiled(cases: &[NondimCase], opts: &LagFitOptions) -> Result<LagFit> {
+    let fixed = |p: [f64; 2]| {
+        let mut o = opts.clone();
+        o.fit_rate_share = false;
+        o.fit_pressure_lag = false;
+        o.rate_share = p[0];
+        o.pressure_lag = p[1];
+        fit_fixed(cases, &o)
+    };
+    let cs: Vec<f64> = if opts.fit_rate_share {
+        PROFILE_GRID.0.to_vec()
+    } else {
+        vec![opts.rate_share]
+    };
+    let ts: Vec<f64> = if opts.fit_pressure_lag {
+        PROFILE_GRID.1.to_vec()
+    } else {
+        vec![opts.pressure_lag]
+    };
+    let mut evaluations = 0usize;
+    let mut objective = |p: [f64; 2]| {
+        evaluations += 1;
+        fixed(p).map_or(f64::INFINITY, |f| f.report.objective)
+    };
+    let mut start = ([opts.rate_share, opts.pressure_lag], f64::INFINITY);
+    for &c in &cs {
+        for &t in &ts {
+            let v = objective([c, t]);
+            if v < start.1 {
+                start = ([c, t], v);
+            }
+        }
+    }
+    let lo = [
+        if opts.fit_rate_share {
+            0.0
+        } else {
+            opts.rate_share
+        },
+        if opts.fit_pressure_lag {
+            0.0
+        } else {
+            opts.pressure_lag
+        },
+    ];
+    let hi = [
+        if opts.fit_rate_share {
+            1.0
+        } else {
+            opts.rate_share
+        },
+        if opts.fit_pressure_lag {
+            PROFILE_PRESSURE_LAG_MAX
+        } else {
+            opts.pressure_lag
+        },
+    ];
+    let (p, _) = if start.1.is_finite() {
+        nelder_mead(&mut objective, start.0, [0.1, 0.25], lo, hi, 40)
+    } else {
+        start
+    };
+    let mut out = fixed(p)?;
+    out.report.notes.push(format!(
+        "fitted by output error (objective profiled over {evaluations} fixed-constant fits): \
+         rate share c = {:.3}{}, pressure lag τ_p = {:.3} b/U{}",
+        p[0],
+        if opts.fit_rate_share { "" } else { " (fixed)" },
+        p[1],
+        if opts.fit_pressure_lag {
+            ""
+        } else {
+            " (fixed)"
+        },
+    ));
+    Ok(out)
 }
 
 /// [`fit`] on cases already in the lag law's variables (built with
@@ -826,7 +1067,10 @@ pub fn fit_series(series: &[LagSeries], opts: &LagFitOptions) -> Result<LagFit> 
     // shortest lag the optimiser could run to)
     let mut x = Vec::new();
     for s in series.iter().filter(|s| !s.periodic) {
-        s.simulate(&law_of(clamp_theta(init), opts.circulation_lag), &mut x)?;
+        s.simulate(
+            &law_of(clamp_theta(init), opts.circulation_lag, opts.pressure_lag),
+            &mut x,
+        )?;
     }
     let mut p = Problem {
         series,
@@ -834,6 +1078,7 @@ pub fn fit_series(series: &[LagSeries], opts: &LagFitOptions) -> Result<LagFit> 
         moment: opts.moment_columns.clone(),
         free: [true; 4],
         circ: opts.circulation_lag,
+        tau_p: opts.pressure_lag,
     };
     // a few starts around the data's guess; the best by output error goes on
     let mut starts = vec![init];
@@ -950,6 +1195,7 @@ pub fn fit_series(series: &[LagSeries], opts: &LagFitOptions) -> Result<LagFit> 
         },
         circulation_lag: p.circ,
         rate_share: opts.rate_share,
+        pressure_lag: opts.pressure_lag,
     };
     law.check()?;
     let report = LagReport {
@@ -1050,6 +1296,25 @@ pub fn predict_series(law: &LagLaw, s: &LagSeries) -> Result<LagPrediction> {
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
+
+    #[test]
+    fn nelder_mead_finds_a_tilted_valley_inside_the_box() {
+        // a correlated valley like the (c, τ_p) profile's, minimum at (0.35, 1.7)
+        let mut f = |p: [f64; 2]| {
+            let (u, v) = (p[0] - 0.35, p[1] - 1.7);
+            (u - 0.25 * v).powi(2) * 40.0 + 0.05 * v * v
+        };
+        let (p, v) = nelder_mead(&mut f, [0.4, 1.5], [0.1, 0.25], [0.0, 0.0], [1.0, 6.0], 200);
+        assert!(
+            (p[0] - 0.35).abs() < 0.02 && (p[1] - 1.7).abs() < 0.1,
+            "{p:?}"
+        );
+        assert!(v < 1e-3);
+        // the box holds: a minimum outside it ends on the edge
+        let mut g = |p: [f64; 2]| (p[0] + 0.5).powi(2) + (p[1] - 1.0).powi(2);
+        let (p, _) = nelder_mead(&mut g, [0.3, 2.0], [0.1, 0.25], [0.0, 0.0], [1.0, 6.0], 200);
+        assert!(p[0] < 0.02 && (p[1] - 1.0).abs() < 0.05, "{p:?}");
+    }
     use crate::record::{CaseMeta, Forcing};
 
     pub(crate) fn truth() -> LagLaw {
@@ -1074,6 +1339,7 @@ pub(crate) mod tests {
             },
             circulation_lag: true,
             rate_share: 0.0,
+            pressure_lag: 0.0,
         }
     }
 

@@ -13,6 +13,9 @@
 //!   share b ḧ/U² is left out, forced records do not carry it cleanly).
 //! - Separation state x ∈ [0, 1] (1 = attached): τ₁ dx/ds + x = x₀(u), i.e.
 //!   ẋ = (U/(b τ₁))·(x₀(u) − x) in physical time.
+//! - Pressure lag ([`LagLaw::pressure_lag`] τ_p > 0, off by default): the separation follows
+//!   the filtered input u_f, τ_p du_f/ds + u_f = u, instead of u (Beddoes–Leishman's
+//!   leading-edge pressure lag; with it the fitted τ₂ tends to 0).
 //! - Static separation curve x₀(α) = 1 / (1 + |α/α*|^{2m}) (α* the angle of half
 //!   separation, m ≥ 1 its sharpness): x₀(0) = 1 with zero slope, so the law's
 //!   linearisation about α = 0 is attached flow.
@@ -23,7 +26,9 @@
 //!   separation α_e·κ(x₀(α_e)) (the share of the separated-flow lift that follows the angle
 //!   without lag, as the fully separated term (1 − f″)(1 + 3s)/(4(1 + s)), s = √f_st(α_E),
 //!   of Hansen, Gaunaa & Madsen 2004 does; not in the default support, see
-//!   `LagFitOptions::lift_columns`). The thin-aerofoil apparent mass (acceleration terms) is
+//!   `LagFitOptions::lift_columns`), and the separated-flow blend of Hansen, Gaunaa & Madsen
+//!   ([`LagColumn::Blend`], [`LagColumn::BlendSep`], also not in the default support). The
+//!   thin-aerofoil apparent mass (acceleration terms) is
 //!   not part of the law: flight adds it (`AeroModel::apparent_mass`).
 //! - Attached-flow circulation lag (switch [`LagLaw::circulation_lag`], off in a document
 //!   that does not name it): the circulation does not follow the angle at once (Wagner's
@@ -78,11 +83,20 @@ pub enum LagColumn {
     /// equals α_e·κ(x), so beside [`LagColumn::Kirchhoff`] the two coefficients split one
     /// static lift slope into a lagged and an instantaneous share.
     KirchhoffStatic,
+    /// Lift of the separated-flow blend of Hansen, Gaunaa & Madsen (2004, Risø-R-1354):
+    /// α_e·(x + (1 − x)·(1 + 3s)/(4(1 + s))), s = √x₀(α_e): the attached lift weighted by the
+    /// lagged separation x plus the fully separated lift, whose share follows the
+    /// *instantaneous* static separation, weighted by 1 − x. In steady flow (x = x₀ = s²) it
+    /// equals the Kirchhoff lift α_e·κ(x). Not in the default support (`--lag-blend`).
+    Blend,
+    /// The blend lift times the separation deficit, α_e·b(x, s)·(1 − x): the moment of a
+    /// centre of pressure that travels aft with separation, on the blend lift.
+    BlendSep,
 }
 
 impl LagColumn {
     /// Every column, in library order.
-    pub const ALL: [LagColumn; 7] = [
+    pub const ALL: [LagColumn; 9] = [
         LagColumn::One,
         LagColumn::AlphaE,
         LagColumn::Kirchhoff,
@@ -90,6 +104,8 @@ impl LagColumn {
         LagColumn::Sep,
         LagColumn::KirchhoffSep,
         LagColumn::KirchhoffStatic,
+        LagColumn::Blend,
+        LagColumn::BlendSep,
     ];
 
     /// The six columns of the law as first written (the default moment candidates): every
@@ -113,13 +129,15 @@ impl LagColumn {
             LagColumn::Sep => "1−x",
             LagColumn::KirchhoffSep => "α_e·κ(x)·(1−x)",
             LagColumn::KirchhoffStatic => "α_e·κ(x₀(α_e))",
+            LagColumn::Blend => "α_e·β(x,x₀(α_e))",
+            LagColumn::BlendSep => "α_e·β(x,x₀(α_e))·(1−x)",
         }
     }
 
     /// The column's value at effective angle `alpha_e` \[rad\], q = Bα̇/U, separation
     /// state `x` and static separation `x_inst` = x₀(α_e) at the same angle (both clamped
     /// to \[0, 1\] inside the square root; `x_inst` is read by
-    /// [`LagColumn::KirchhoffStatic`] only).
+    /// [`LagColumn::KirchhoffStatic`], [`LagColumn::Blend`] and [`LagColumn::BlendSep`]).
     #[inline]
     pub fn value(self, alpha_e: f64, q: f64, x: f64, x_inst: f64) -> f64 {
         match self {
@@ -130,11 +148,29 @@ impl LagColumn {
             LagColumn::Q => q,
             LagColumn::Sep => 1.0 - x,
             LagColumn::KirchhoffSep => alpha_e * kirchhoff(x) * (1.0 - x),
+            LagColumn::Blend => alpha_e * blend(x, x_inst),
+            LagColumn::BlendSep => alpha_e * blend(x, x_inst) * (1.0 - x.clamp(0.0, 1.0)),
         }
     }
 
     /// ∂(value)/∂x at (α_e, q, x) (for linearisations and output-error gradients; the
-    /// static separation of [`LagColumn::KirchhoffStatic`] does not depend on x).
+    /// static separation x₀(α_e) of [`LagColumn::KirchhoffStatic`] and of the blend columns
+    /// does not depend on x; the blend columns' derivative is taken at x_inst = x₀(α_e) =
+    /// `x_inst`).
+    #[inline]
+    pub fn d_dx_at(self, alpha_e: f64, q: f64, x: f64, x_inst: f64) -> f64 {
+        match self {
+            LagColumn::Blend => alpha_e * (1.0 - blend_share(x_inst)),
+            LagColumn::BlendSep => {
+                let xc = x.clamp(0.0, 1.0);
+                alpha_e * ((1.0 - blend_share(x_inst)) * (1.0 - xc) - blend(xc, x_inst))
+            }
+            _ => self.d_dx(alpha_e, q, x),
+        }
+    }
+
+    /// ∂(value)/∂x at (α_e, q, x) for the columns that do not read x₀(α_e) (the blend
+    /// columns are taken at x_inst = 1, attached: use [`LagColumn::d_dx_at`] for them).
     #[inline]
     pub fn d_dx(self, alpha_e: f64, _q: f64, x: f64) -> f64 {
         match self {
@@ -142,6 +178,7 @@ impl LagColumn {
             LagColumn::Kirchhoff => alpha_e * kirchhoff_dx(x),
             LagColumn::Sep => -1.0,
             LagColumn::KirchhoffSep => alpha_e * (kirchhoff_dx(x) * (1.0 - x) - kirchhoff(x)),
+            LagColumn::Blend | LagColumn::BlendSep => self.d_dx_at(alpha_e, _q, x, 1.0),
         }
     }
 }
@@ -151,6 +188,24 @@ impl LagColumn {
 pub fn kirchhoff(x: f64) -> f64 {
     let s = x.clamp(0.0, 1.0).sqrt();
     0.25 * (1.0 + s) * (1.0 + s)
+}
+
+/// Share (1 + 3s)/(4(1 + s)) of the attached lift that remains at full separation in the
+/// blend of Hansen, Gaunaa & Madsen (2004), s = √x_inst (x_inst clamped to \[0, 1\]): ¼ at
+/// x_inst = 0, ½ at x_inst = 1.
+#[inline]
+pub fn blend_share(x_inst: f64) -> f64 {
+    let s = x_inst.clamp(0.0, 1.0).sqrt();
+    (1.0 + 3.0 * s) / (4.0 * (1.0 + s))
+}
+
+/// Blend factor β(x, x_inst) = x + (1 − x)·(1 + 3s)/(4(1 + s)), s = √x_inst, x clamped to
+/// \[0, 1\] (Hansen, Gaunaa & Madsen 2004): equal to the Kirchhoff factor κ(x) when
+/// x = x_inst (steady flow).
+#[inline]
+pub fn blend(x: f64, x_inst: f64) -> f64 {
+    let x = x.clamp(0.0, 1.0);
+    x + (1.0 - x) * blend_share(x_inst)
 }
 
 /// dκ/dx = (1 + √x)/(4√x), with √x floored at 1e-3 (finite at full separation).
@@ -181,17 +236,20 @@ impl LagChannel {
     /// Whether the channel uses the instantaneous static separation x₀(α_e)
     /// ([`LagColumn::KirchhoffStatic`]), i.e. is not affine in α_e at fixed x.
     pub fn uses_static(&self) -> bool {
-        self.terms
-            .iter()
-            .any(|(c, _)| *c == LagColumn::KirchhoffStatic)
+        self.terms.iter().any(|(c, _)| {
+            matches!(
+                c,
+                LagColumn::KirchhoffStatic | LagColumn::Blend | LagColumn::BlendSep
+            )
+        })
     }
 
-    /// ∂(value)/∂x.
+    /// ∂(value)/∂x at the static separation `x_inst` = x₀(α_e) ([`LagColumn::d_dx_at`]).
     #[inline]
-    pub fn d_dx(&self, alpha_e: f64, q: f64, x: f64) -> f64 {
+    pub fn d_dx(&self, alpha_e: f64, q: f64, x: f64, x_inst: f64) -> f64 {
         self.terms
             .iter()
-            .map(|(c, k)| k * c.d_dx(alpha_e, q, x))
+            .map(|(c, k)| k * c.d_dx_at(alpha_e, q, x, x_inst))
             .sum()
     }
 }
@@ -255,6 +313,13 @@ pub struct LagLaw {
     /// mid-chord); fixed, not fitted. Absent in a document = 0.
     #[serde(default)]
     pub rate_share: f64,
+    /// Pressure lag τ_p \[convective times b/U\] of the separation input, in \[0, 100\]
+    /// (0 = off): with τ_p > 0 the separation responds to the filtered input u_f,
+    /// τ_p du_f/ds + u_f = u, u = α_c − τ₂·q/2, i.e. τ₁ dx/ds + x = x₀(u_f) (the leading-edge
+    /// pressure response of Beddoes–Leishman's T_p, Leishman & Beddoes 1989; Hansen, Gaunaa
+    /// & Madsen 2004). The columns keep the unfiltered angle. Absent in a document = 0.
+    #[serde(default)]
+    pub pressure_lag: f64,
 }
 
 impl LagLaw {
@@ -277,6 +342,13 @@ impl LagLaw {
         }
         if !(self.alpha_star > 0.0 && self.alpha_star < std::f64::consts::FRAC_PI_2) {
             return bad("alpha_star", self.alpha_star, "in (0, π/2) rad");
+        }
+        if !(self.pressure_lag >= 0.0 && self.pressure_lag <= 100.0) {
+            return bad(
+                "pressure_lag",
+                self.pressure_lag,
+                "in [0, 100] convective times",
+            );
         }
         if !(self.rate_share.is_finite() && self.rate_share.abs() <= 1.0) {
             return bad("rate_share", self.rate_share, "in [-1, 1]");
@@ -316,10 +388,19 @@ impl LagLaw {
         alpha_e - 0.5 * self.tau2 * q
     }
 
-    /// dx/ds in convective time s = tU/b: (x₀(u) − x)/τ₁. Multiply by 2U/B for d/dt.
+    /// dx/ds in convective time s = tU/b without a pressure lag: (x₀(u) − x)/τ₁, u the
+    /// input at (α_e, q). Multiply by 2U/B for d/dt. With a pressure lag the separation
+    /// follows the filtered input ([`LagLaw::x_rate_filtered`]).
     #[inline]
     pub fn x_rate(&self, alpha_e: f64, q: f64, x: f64) -> f64 {
         (self.x_static(self.input(alpha_e, q)) - x) / self.tau1
+    }
+
+    /// dx/ds in convective time at the filtered separation input `u_f` \[rad\]:
+    /// (x₀(u_f) − x)/τ₁ (module docs of [`LagLaw::pressure_lag`]).
+    #[inline]
+    pub fn x_rate_filtered(&self, u_f: f64, x: f64) -> f64 {
+        (self.x_static(u_f) - x) / self.tau1
     }
 
     /// (C_L, C_M) at (α_e, q, x) (the static separation of [`LagColumn::KirchhoffStatic`]
@@ -409,6 +490,7 @@ mod tests {
             },
             circulation_lag: false,
             rate_share: 0.0,
+            pressure_lag: 0.0,
         }
     }
 
@@ -453,6 +535,19 @@ mod tests {
         v.as_object_mut().unwrap().remove("rate_share");
         let r: LagLaw = serde_json::from_value(v).unwrap();
         assert_eq!(r.rate_share, 0.0);
+        let mut v = serde_json::to_value(law()).unwrap();
+        v.as_object_mut().unwrap().remove("pressure_lag");
+        let r: LagLaw = serde_json::from_value(v).unwrap();
+        assert_eq!(r.pressure_lag, 0.0);
+        let mut l = law();
+        l.pressure_lag = -0.1;
+        assert!(l.check().unwrap_err().to_string().contains("pressure_lag"));
+        // the blend is Kirchhoff's factor in steady flow, ¼ + … at full separation
+        for x in [0.0, 0.2, 0.5, 1.0] {
+            assert!((blend(x, x) - kirchhoff(x)).abs() < 1e-12, "{x}");
+        }
+        assert!((blend(0.0, 0.0) - 0.25).abs() < 1e-12);
+        assert_eq!(blend(1.0, 0.3), 1.0);
         let mut l = law();
         l.rate_share = 1.5;
         assert!(l.check().unwrap_err().to_string().contains("rate_share"));
@@ -483,7 +578,7 @@ mod tests {
         for c in LagColumn::ALL {
             let (a, q, x) = (0.3, 0.05, 0.4);
             let d = (c.value(a, q, x + 1e-6, 0.7) - c.value(a, q, x - 1e-6, 0.7)) / 2e-6;
-            assert!((d - c.d_dx(a, q, x)).abs() < 1e-6, "{c:?}");
+            assert!((d - c.d_dx_at(a, q, x, 0.7)).abs() < 1e-6, "{c:?}");
         }
     }
 

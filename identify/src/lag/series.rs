@@ -209,12 +209,26 @@ impl LagSeries {
     /// [`SETTLE_TIMES`]·τ₁ it needs to settle.
     pub fn simulate(&self, law: &LagLaw, x: &mut Vec<f64>) -> Result<usize> {
         let n = self.len();
-        let f: Vec<f64> = self
+        let u: Vec<f64> = self
             .angle(law)
             .iter()
             .zip(&self.q)
-            .map(|(&a, &q)| law.x_static(law.input(a, q)))
+            .map(|(&a, &q)| law.input(a, q))
             .collect();
+        // the pressure lag filters the input first (periodic like x, or from its first value)
+        let u = if law.pressure_lag > 0.0 {
+            let mut uf = vec![0.0; n];
+            let per = if self.periodic {
+                self.period_samples
+            } else {
+                None
+            };
+            first_order(&u, self.ds / law.pressure_lag, per, u[0], &mut uf);
+            uf
+        } else {
+            u
+        };
+        let f: Vec<f64> = u.iter().map(|&v| law.x_static(v)).collect();
         x.clear();
         x.resize(n, 0.0);
         let h = self.ds / law.tau1;
@@ -227,7 +241,7 @@ impl LagSeries {
             return Ok(0);
         }
         first_order(&f, h, None, f[0], x);
-        let drop = (SETTLE_TIMES * law.tau1 / self.ds).ceil();
+        let drop = (SETTLE_TIMES * (law.tau1 + law.pressure_lag) / self.ds).ceil();
         let need = self.period_samples.unwrap_or(0.5 * n as f64).max(1.0);
         let left = n as f64 - drop;
         if left < need {
@@ -339,6 +353,7 @@ mod tests {
             },
             circulation_lag: false,
             rate_share: 0.0,
+            pressure_lag: 0.0,
         }
     }
 
