@@ -8,7 +8,7 @@
 
 use aeroelastic::files::{ModelFile, ModelKind};
 
-use super::{
+use super::types::{
     DataSpec, FlutterSpec, LcoSpec, StudyModel, StudySpec, StudyStructure, SyntheticSpec,
     TableIvSpec, VirtualSpec, FIGURE_KINDS, STRUCTURE_KEYS,
 };
@@ -368,7 +368,7 @@ fn table_iv(t: &TableIvSpec) -> Check {
 
 /// `[identify]`: the settings, the ensemble (members × cases within
 /// `MAX_ENSEMBLE_FITS`, where the cases are known from the file) and its level.
-fn identify(id: &super::IdentifySpec, data: Option<&DataSpec>) -> Check {
+fn identify(id: &super::types::IdentifySpec, data: Option<&DataSpec>) -> Check {
     if let Err(e) = id.settings.validate() {
         return err("identify.settings", e.to_string());
     }
@@ -503,7 +503,7 @@ fn flutter(f: &FlutterSpec, has_data: bool, has_virtual: bool, no_file: bool) ->
 }
 
 /// `[branch]`: the speed interval, the point, step and harmonic counts within their caps.
-fn branch(b: &super::BranchSpec) -> Check {
+fn branch(b: &super::types::BranchSpec) -> Check {
     let [a, c] = b.speeds;
     lim(positive_at_most("branch.speeds[0]", a, MAX_SPEED, "m/s"))?;
     lim(positive_at_most("branch.speeds[1]", c, MAX_SPEED, "m/s"))?;
@@ -613,7 +613,7 @@ fn lco(l: &LcoSpec, has_virtual: bool) -> Check {
 
 /// `[outputs]` (series cases named once each, known figure kinds) and the preprocessing's
 /// window, which is checked last as it always was.
-fn outputs(s: &StudySpec, id: &super::IdentifySpec) -> Check {
+fn outputs(s: &StudySpec, id: &super::types::IdentifySpec) -> Check {
     for (i, c) in s.outputs.series_cases.iter().enumerate() {
         if !identify::dataset::is_valid_case_id(c) {
             return err(
