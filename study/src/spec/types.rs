@@ -353,7 +353,7 @@ impl Default for PreprocessSpec {
 /// [`NondimStructure`] (with its defaults: `semi_chord`, `omega_alpha`, `rho` = 1;
 /// `x_alpha`, `zeta_h`, `zeta_alpha` = 0) plus the study's relative pitch cubic.
 ///
-/// Unknown keys are rejected by [`Study::parse`] (naming `structure.KEY` and its line).
+/// Unknown keys are rejected by [`Study::parse`](super::Study::parse) (naming `structure.KEY` and its line).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct StudyStructure {
     /// The linear structure (keys `mu`, `r_alpha2`, `sigma`, …, flat in `[structure]`).
