@@ -87,19 +87,23 @@ impl BranchArgs {
 /// [`crate::exit::Usage`] (exit code 2) naming `--speeds`; a speed above the limits table's
 /// `MAX_SPEED` is a [`aeroform::limits::LimitError`] (also exit code 2).
 fn parse_range(s: &str) -> anyhow::Result<(f64, f64)> {
-    let bad = || {
-        anyhow::Error::from(crate::exit::Usage(format!(
-            "--speeds `{s}`: expected `a:b` with 0 < a < b [m/s]"
-        )))
-    };
-    let (a, b) = s.split_once(':').ok_or_else(bad)?;
-    let a: f64 = a.trim().parse().map_err(|_| bad())?;
-    let b: f64 = b.trim().parse().map_err(|_| bad())?;
-    if !(a.is_finite() && b.is_finite() && a > 0.0 && b > a) {
-        return Err(bad());
-    }
+    let (a, b) = split_pair(s)
+        .filter(|&(a, b)| a > 0.0 && b > a)
+        .ok_or_else(|| {
+            crate::exit::Usage(format!(
+                "--speeds `{s}`: expected `a:b` with 0 < a < b [m/s]"
+            ))
+        })?;
     aeroform::limits::positive_at_most("--speeds", b, aeroform::limits::MAX_SPEED, "m/s")?;
     Ok((a, b))
+}
+
+/// `a:b` as two finite numbers, or `None`.
+fn split_pair(s: &str) -> Option<(f64, f64)> {
+    let (a, b) = s.split_once(':')?;
+    let a: f64 = a.trim().parse().ok()?;
+    let b: f64 = b.trim().parse().ok()?;
+    (a.is_finite() && b.is_finite()).then_some((a, b))
 }
 
 /// Parses `--parameter-range a:b` (finite, a < b; signs free: a coefficient may be
@@ -108,17 +112,11 @@ fn parse_range(s: &str) -> anyhow::Result<(f64, f64)> {
 /// # Errors
 /// [`crate::exit::Usage`] naming `--parameter-range`.
 fn parse_parameter_range(s: &str) -> anyhow::Result<[f64; 2]> {
-    let bad = || {
-        anyhow::Error::from(crate::exit::Usage(format!(
+    let (a, b) = split_pair(s).filter(|&(a, b)| b > a).ok_or_else(|| {
+        crate::exit::Usage(format!(
             "--parameter-range `{s}`: expected `a:b` with finite a < b"
-        )))
-    };
-    let (a, b) = s.split_once(':').ok_or_else(bad)?;
-    let a: f64 = a.trim().parse().map_err(|_| bad())?;
-    let b: f64 = b.trim().parse().map_err(|_| bad())?;
-    if !(a.is_finite() && b.is_finite() && b > a) {
-        return Err(bad());
-    }
+        ))
+    })?;
     Ok([a, b])
 }
 
