@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-mod common;
+use crate::common;
 use common::aeroform;
 
 const MANIFEST: &str = r#"format = "aeroform-dataset/1"

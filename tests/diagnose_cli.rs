@@ -8,7 +8,7 @@ use aeroelastic::effects::Form;
 use benchmark::blind::{generate, write_blind, BlindEffect, BlindScenario};
 use diagnose::Effect;
 
-mod common;
+use crate::common;
 use common::aeroform;
 
 fn write_set(dir: &Path, effect: BlindEffect, strength: f64, seed: u64) {

@@ -2,7 +2,7 @@
 //! the one of the whole set held in memory, a file changed before it is read again is an
 //! error, and peak memory does not grow with the number of cases.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 

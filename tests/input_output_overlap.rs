@@ -9,7 +9,7 @@
 //! every file of every input byte-identical afterwards. Outputs beside the inputs are
 //! accepted (the control).
 
-mod common;
+use crate::common;
 use common::aeroform_code_in;
 
 use std::collections::BTreeMap;

@@ -5,7 +5,7 @@
 
 use std::path::Path;
 
-mod common;
+use crate::common;
 use common::aeroform_in as aeroform;
 
 /// Runs `args` with `--json` (stdout must be exactly one JSON document, returned) and with

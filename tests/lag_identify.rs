@@ -2,7 +2,7 @@
 //! held-out prediction of a reduced frequency against the memoryless law, the CLI's
 //! `--law lag` document and its refusals (nothing written).
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

@@ -6,7 +6,7 @@
 //! folder, no writer writing through a symbolic link or over its own specification, and no
 //! case drawn twice.
 
-mod common;
+use crate::common;
 use common::aeroform_code_in;
 
 use std::path::{Path, PathBuf};

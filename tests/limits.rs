@@ -5,7 +5,7 @@
 //! with exit code 2, a message naming the flag, key or field, and no output folder.
 //! A limit added to the table without an entry point here fails the coverage check.
 
-mod common;
+use crate::common;
 
 use identify::limits::{self, TABLE};
 use std::collections::BTreeSet;

@@ -1,7 +1,7 @@
 //! `aeroform merge` refuses an OUT that is one of its parts (issue 27, row 11): the part is
 //! left as it was.
 
-mod common;
+use crate::common;
 use common::aeroform;
 
 #[test]

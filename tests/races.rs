@@ -2,7 +2,7 @@
 //! computed from different contents. Each was reproduced from outside; each test fails on
 //! commit 19253bd.
 
-mod common;
+use crate::common;
 use common::aeroform_code_in;
 
 use std::path::Path;

@@ -6,7 +6,7 @@
 //! type and written back, nothing is lost or changed).
 //!
 //! Regenerate the schemas after changing a document type:
-//! `AEROFORM_BLESS=1 cargo test --release --test schemas`, then commit `docs/schemas/`.
+//! `AEROFORM_BLESS=1 cargo test --release --test e2e schemas::`, then commit `docs/schemas/`.
 
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
@@ -22,7 +22,7 @@ use serde::Serialize;
 use serde_json::Value;
 
 const REGENERATE: &str =
-    "regenerate them with `AEROFORM_BLESS=1 cargo test --release --test schemas` and commit docs/schemas/";
+    "regenerate them with `AEROFORM_BLESS=1 cargo test --release --test e2e schemas::` and commit docs/schemas/";
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))

@@ -4,7 +4,7 @@
 //! without bound, an error quotes at most a short excerpt, values beyond the limits table are
 //! refused by row and column (exit code 2), and nothing is written.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 use std::process::{Command, Stdio};

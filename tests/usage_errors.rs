@@ -4,7 +4,7 @@
 //! forced` refuses an absurd model coefficient (naming the file and field) and a model
 //! whose forces blow up (naming the case, channel and time) before writing anything.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

@@ -4,7 +4,7 @@
 //! Each property runs a modest number of cases by default (a few seconds in the test
 //! profile); the `*_many` variants are `#[ignore]`d and run more.
 
-mod props_common;
+use crate::props_common;
 
 use identify::pipeline::{Identification, IdentifySettings};
 use identify::synthetic::{PolynomialLaw, Sampling};

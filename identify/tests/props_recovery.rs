@@ -2,7 +2,7 @@
 //! nonlinear Paper30 terms, random coefficients) sampled at high signal-to-noise ratio are
 //! recovered with exactly the right support by the default identification.
 
-mod props_common;
+use crate::props_common;
 
 use std::sync::OnceLock;
 

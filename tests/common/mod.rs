@@ -1,4 +1,5 @@
-//! Helpers shared by the end-to-end tests (each test file that uses them says `mod common;`).
+//! Helpers shared by the end-to-end tests (declared once in tests/main.rs; a file that
+//! uses them says `use crate::common;`).
 
 #![allow(dead_code)] // each test binary uses a subset
 
