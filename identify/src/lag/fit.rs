@@ -531,9 +531,11 @@ impl Problem<'_> {
     /// derivative of r = P⊥y (Golub & Pereyra 1973), ∂r/∂θ_j = −P⊥·dA_j·β − A(AᵀA)⁻¹·dA_jᵀ·r
     /// over the columns the QR kept, scaled by 1/√SS of the channel.
     ///
+    /// When AᵀA of the kept columns is numerically singular (nearly dependent columns) the
+    /// second term is left out (Kaufman's approximation).
+    ///
     /// # Errors
-    /// [`Error::Numerical`] when AᵀA of the kept columns is singular (it is not, by the
-    /// QR's rank test, unless rounding) or a derivative is not finite.
+    /// [`Error::Numerical`] when a derivative is not finite.
     #[allow(clippy::needless_range_loop)] // parallel series indexed together
     fn jacobian(&self, base: &Eval) -> Result<Vec<Vec<f64>>> {
         let theta = base.theta;
@@ -626,17 +628,20 @@ impl Problem<'_> {
                             gram[b * m + a] = d;
                         }
                     }
-                    cholesky_solve(
+                    // kept columns nearly dependent (the QR keeps a column down to 10⁻¹⁰ of
+                    // its norm, the Gram squares that): the second term is dropped there
+                    // (Kaufman's approximation, still a descent direction for LM)
+                    if cholesky_solve(
                         &mut gram,
                         m,
                         &mut g,
                         1,
                         PivotFloor::RelativeToLargestDiagonal(1e-15),
                     )
-                    .map_err(|_| Error::Numerical {
-                        context: "lag law Jacobian".into(),
-                        message: "singular Gram matrix of the kept columns".into(),
-                    })?;
+                    .is_err()
+                    {
+                        g.fill(0.0);
+                    }
                 }
                 let col = &mut jac[j][offset..offset + n];
                 for i in 0..n {
