@@ -574,65 +574,90 @@ impl Problem<'_> {
                 .iter()
                 .map(|v| v / scale)
                 .collect();
-            let inst = cols.iter().any(|c| reads_static(c));
+            let inst = cols.iter().any(reads_static);
             let p = cols.len();
-            for j in 0..NT {
-                if !free[j] {
-                    continue;
-                }
-                // v = dA_j β and w = dA_jᵀ r, sample by sample
-                let mut v = vec![0.0; n];
-                let mut w = vec![0.0; p];
-                let mut row = 0;
-                for (k, s) in self.series.iter().enumerate() {
+            let js: Vec<usize> = (0..NT).filter(|&j| free[j]).collect();
+            // per case (parallel): v_j = dA_j β on its rows and its share of w_j = dA_jᵀ r;
+            // the columns' partial derivatives once per sample for every j
+            let mut row0 = Vec::with_capacity(self.series.len());
+            let mut acc_rows = 0;
+            for (s, &st) in self.series.iter().zip(&base.starts) {
+                row0.push(acc_rows);
+                acc_rows += s.len() - st.min(s.len());
+            }
+            let parts: Vec<(Vec<Vec<f64>>, Vec<Vec<f64>>)> = (0..self.series.len())
+                .into_par_iter()
+                .map(|k| {
+                    let s = &self.series[k];
                     let a = self.angle(k, &theta);
                     let x = &base.xs[k];
-                    let dx = &dxs[k][j];
-                    for i in base.starts[k]..s.len() {
-                        let da = if j == 4 { self.d_angle_dc[k][i] } else { 0.0 };
-                        let (xi, dxi) = if inst {
-                            let pa = x_static_partials(&law, a[i]);
-                            let d = match j {
+                    let st = base.starts[k];
+                    let len = s.len() - st.min(s.len());
+                    let mut v: Vec<Vec<f64>> = js.iter().map(|_| vec![0.0; len]).collect();
+                    let mut w: Vec<Vec<f64>> = js.iter().map(|_| vec![0.0; p]).collect();
+                    let mut pd = vec![[0.0; 3]; p];
+                    for (row, i) in (st..s.len()).enumerate() {
+                        let (xi, pa) = if inst {
+                            (law.x_static(a[i]), x_static_partials(&law, a[i]))
+                        } else {
+                            (1.0, [0.0; 3])
+                        };
+                        for (l, col) in cols.iter().enumerate() {
+                            pd[l] = column_partials(*col, a[i], s.q[i], x[i], xi);
+                        }
+                        let ri = r[row0[k] + row];
+                        for (t, &j) in js.iter().enumerate() {
+                            let da = if j == 4 { self.d_angle_dc[k][i] } else { 0.0 };
+                            let dxi = match j {
                                 2 => pa[1],
                                 3 => pa[2],
                                 4 => pa[0] * da,
                                 _ => 0.0,
                             };
-                            (law.x_static(a[i]), d)
-                        } else {
-                            (1.0, 0.0)
-                        };
-                        let dxv = if dx.is_empty() { 0.0 } else { dx[i] };
-                        let mut acc = 0.0;
-                        for (l, col) in cols.iter().enumerate() {
-                            let pd = column_partials(*col, a[i], s.q[i], x[i], xi);
-                            let d = pd[0] * dxv + pd[1] * da + pd[2] * dxi;
-                            acc += coef[l] * d;
-                            w[l] += d * r[row];
+                            let dx = &dxs[k][j];
+                            let dxv = if dx.is_empty() { 0.0 } else { dx[i] };
+                            let mut acc = 0.0;
+                            for l in 0..p {
+                                let d = pd[l][0] * dxv + pd[l][1] * da + pd[l][2] * dxi;
+                                acc += coef[l] * d;
+                                w[t][l] += d * ri;
+                            }
+                            v[t][row] = acc;
                         }
-                        v[row] = acc;
-                        row += 1;
+                    }
+                    (v, w)
+                })
+                .collect();
+            // (AᵀA)⁻¹ over the kept columns, once for every j
+            let kept = qr.kept();
+            let m = kept.len();
+            let mut gram = vec![0.0; m * m];
+            for a in 0..m {
+                for b in 0..=a {
+                    let d = crate::numerics::qr::dot(&stack[kept[a]], &stack[kept[b]]);
+                    gram[a * m + b] = d;
+                    gram[b * m + a] = d;
+                }
+            }
+            for (t, &j) in js.iter().enumerate() {
+                let mut v = Vec::with_capacity(n);
+                let mut w = vec![0.0; p];
+                for (vk, wk) in &parts {
+                    v.extend_from_slice(&vk[t]);
+                    for (a, b) in w.iter_mut().zip(&wk[t]) {
+                        *a += b;
                     }
                 }
                 // ∂r = −P⊥ v − A (AᵀA)⁻¹ w, over the kept columns
                 let pv = qr.residual(&v);
-                let kept = qr.kept();
-                let m = kept.len();
                 let mut g: Vec<f64> = kept.iter().map(|&l| w[l]).collect();
                 if m > 0 {
-                    let mut gram = vec![0.0; m * m];
-                    for a in 0..m {
-                        for b in 0..=a {
-                            let d = crate::numerics::qr::dot(&stack[kept[a]], &stack[kept[b]]);
-                            gram[a * m + b] = d;
-                            gram[b * m + a] = d;
-                        }
-                    }
+                    let mut gm = gram.clone();
                     // kept columns nearly dependent (the QR keeps a column down to 10⁻¹⁰ of
                     // its norm, the Gram squares that): the second term is dropped there
                     // (Kaufman's approximation, still a descent direction for LM)
                     if cholesky_solve(
-                        &mut gram,
+                        &mut gm,
                         m,
                         &mut g,
                         1,
@@ -646,8 +671,8 @@ impl Problem<'_> {
                 let col = &mut jac[j][offset..offset + n];
                 for i in 0..n {
                     let mut ag = 0.0;
-                    for (t, &l) in kept.iter().enumerate() {
-                        ag += stack[l][i] * g[t];
+                    for (t2, &l) in kept.iter().enumerate() {
+                        ag += stack[l][i] * g[t2];
                     }
                     col[i] = -(pv[i] + ag) * scale;
                 }
