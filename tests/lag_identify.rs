@@ -351,7 +351,7 @@ fn bad_records_are_refused_by_case_and_nothing_is_written() {
         true,
     );
     let out = tmp.path().join("out");
-    let (code, _, err) = common::aeroform_code_in(
+    let (code, stdout, err) = common::aeroform_code_in(
         tmp.path(),
         &[
             "identify",
@@ -362,7 +362,7 @@ fn bad_records_are_refused_by_case_and_nothing_is_written() {
             out.to_str().unwrap(),
         ],
     );
-    assert_eq!(code, 2, "{err}");
+    assert_eq!(code, 2, "{stdout}\n{err}");
     assert!(
         err.contains("too short for the separation state to settle") && err.contains("brief"),
         "{err}"
