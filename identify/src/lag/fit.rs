@@ -1660,7 +1660,10 @@ pub(crate) mod tests {
         let norm = crate::numerics::qr::dot(&fd, &fd).sqrt();
         let diff: Vec<f64> = fd.iter().zip(&jac[5]).map(|(x, y)| x - y).collect();
         let err = crate::numerics::qr::dot(&diff, &diff).sqrt();
-        assert!(norm > 1e-6 && err < 1e-3 * norm, "τ_p = 0: {err:e} of {norm:e}");
+        assert!(
+            norm > 1e-6 && err < 1e-3 * norm,
+            "τ_p = 0: {err:e} of {norm:e}"
+        );
     }
 
     #[test]

@@ -232,13 +232,7 @@ impl LagSeries {
         // the pressure lag filters the input first (periodic like x, or from its first value)
         let uf = (law.pressure_lag > 0.0).then(|| {
             let mut uf = vec![0.0; u.len()];
-            first_order(
-                &u,
-                self.ds / law.pressure_lag,
-                self.period(),
-                u[0],
-                &mut uf,
-            );
+            first_order(&u, self.ds / law.pressure_lag, self.period(), u[0], &mut uf);
             uf
         });
         (u, uf)
