@@ -14,10 +14,18 @@
 //!    clamped to \[¼, 1\], x = (2√κ − 1)²; (α*, m) on a grid minimising Σ(x − x₀(α_e))²;
 //!    (τ₁, τ₂) by linear least squares of the lag equation
 //!    x − x₀(α_e) = −τ₁ dx/ds − τ₂ (q/2) x₀′(α_e).
-//! 2. Output error: Levenberg–Marquardt on θ (forward-difference Jacobian of the projected
-//!    residual, box bounds by clamping) minimising
+//! 2. Output error: Levenberg–Marquardt on θ (box bounds by clamping) minimising
 //!    Σ r_L²/SS_L + Σ r_M²/SS_M = (1 − R²_L) + (1 − R²_M) over all training samples,
-//!    first with the full moment support, then again on the selected one.
+//!    first with the full moment support, then again on the selected one. The Jacobian of
+//!    the projected residual comes from forward sensitivities: ∂x/∂θ (and ∂u_f/∂θ of the
+//!    pressure-lag state) integrated with the same exponential step as x, so it is the
+//!    exact derivative of the discrete simulation, then the variable-projection derivative
+//!    of Golub & Pereyra. With [`LagFitOptions::fit_rate_share`] /
+//!    [`LagFitOptions::fit_pressure_lag`] the rate share c ∈ [`RATE_SHARE_BOUNDS`] and the
+//!    pressure lag τ_p ∈ \[0, [`PROFILE_PRESSURE_LAG_MAX`]\] join θ in the same
+//!    Levenberg–Marquardt, from three start pairs spread over their box (the objective has a
+//!    tilted valley in (c, τ_p)); the best stage-one optimum goes on. A fit whose stage-one
+//!    optimum sits on an open bound (τ₁ or α*) is refused there, without the second stage.
 //! 3. Report ([`LagReport`]): per-case R², θ with units and Gauss–Newton standard errors and
 //!    correlations from (JᵀJ)⁻¹ at the optimum.
 
@@ -78,19 +86,19 @@ pub struct LagFitOptions {
     /// \[0, 100\]; 0 (default) = off. The start value when `fit_pressure_lag` is set.
     #[serde(default)]
     pub pressure_lag: f64,
-    /// Fit the rate share c by output error ([`fit`]: the objective profiled over c ∈
-    /// \[0, 1\], every other constant refitted at each c) instead of holding it at
-    /// `rate_share`.
+    /// Fit the rate share c by output error ([`fit`]: c ∈ [`RATE_SHARE_BOUNDS`] a parameter
+    /// of the Levenberg–Marquardt beside θ) instead of holding it at `rate_share`.
     #[serde(default)]
     pub fit_rate_share: bool,
-    /// Fit the pressure lag τ_p by output error (the objective profiled over τ_p ∈
-    /// \[0, [`PROFILE_PRESSURE_LAG_MAX`]\]) instead of holding it at `pressure_lag`.
+    /// Fit the pressure lag τ_p by output error (τ_p ∈ \[0,
+    /// [`PROFILE_PRESSURE_LAG_MAX`]\] a parameter of the Levenberg–Marquardt beside θ)
+    /// instead of holding it at `pressure_lag`.
     #[serde(default)]
     pub fit_pressure_lag: bool,
 }
 
-/// Largest pressure lag τ_p \[b/U\] the profile of [`fit`] searches (Beddoes–Leishman's
-/// T_p is 1.5–2 convective times for aerofoils; three times that leaves room).
+/// Largest pressure lag τ_p \[b/U\] a fit of τ_p may reach (Beddoes–Leishman's T_p is
+/// 1.5–2 convective times for aerofoils; three times that leaves room); a closed bound.
 pub const PROFILE_PRESSURE_LAG_MAX: f64 = 6.0;
 
 fn default_true() -> bool {
