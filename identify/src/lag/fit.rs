@@ -355,6 +355,10 @@ struct Problem<'a> {
     circ: bool,
 }
 
+/// One case's share of the Jacobian of a channel: per free θ_j, dA_j·β on the case's rows,
+/// and its part of dA_jᵀ·r.
+type CaseParts = (Vec<Vec<f64>>, Vec<Vec<f64>>);
+
 /// One evaluation of the projected problem at θ.
 struct Eval {
     theta: [f64; NT],
@@ -593,7 +597,7 @@ impl Problem<'_> {
                 row0.push(acc_rows);
                 acc_rows += s.len() - st.min(s.len());
             }
-            let parts: Vec<(Vec<Vec<f64>>, Vec<Vec<f64>>)> = (0..self.series.len())
+            let parts: Vec<CaseParts> = (0..self.series.len())
                 .into_par_iter()
                 .map(|k| {
                     let s = &self.series[k];

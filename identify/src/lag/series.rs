@@ -378,9 +378,7 @@ impl LagSeries {
                 }
             }
             None => {
-                for j in 0..N_THETA {
-                    duf[j] = du[j].clone();
-                }
+                duf.clone_from(&du);
                 if free[5] {
                     // τ_p → 0⁺: the filter's tangent tends to −du/ds; taken at a lag of
                     // 10⁻⁶ convective steps (the discrete limit to rounding)
