@@ -1,6 +1,8 @@
 //! Criterion benchmark of the lag-law identification (`identify::lag::fit`, issue 41) on a
 //! 50-case campaign, beside the memoryless identification (`identify::pipeline::identify`,
-//! default settings) of the same cases.
+//! default settings) of the same cases: the default law (fixed rate share 0, no pressure
+//! lag) and the optioned law of the stall-flutter round trip (rate share c and pressure lag
+//! τ_p fitted, `LagFitOptions::fit_rate_share` + `fit_pressure_lag`).
 //!
 //! Campaign: the project's stall truth (`aeroelastic::aero::DynamicStallAero::thin_plate`,
 //! B = 0.25 m, a = −0.3, U = 10 m/s) pitching about a 15° mean: 10 reduced frequencies
@@ -100,23 +102,40 @@ fn bench(c: &mut Criterion) {
     let t = Instant::now();
     identify(&cases, &settings, "bench", &|_| {}).unwrap();
     let mem_s = t.elapsed().as_secs_f64();
-    let mean = |g: &dyn Fn(&identify::lag::fit::LagCaseScore) -> f64| {
-        f.report.cases.iter().map(g).sum::<f64>() / f.report.cases.len() as f64
+    let optioned = LagFitOptions {
+        fit_rate_share: true,
+        fit_pressure_lag: true,
+        ..LagFitOptions::default()
     };
-    eprintln!(
-        "one pass: lag law {lag_s:.3} s ({} LM iterations; τ₁ {:.3} τ₂ {:.3} α* {:.2}° m {:.2}; mean R² lift {:.4} moment {:.4}), memoryless {mem_s:.3} s",
-        f.report.iterations,
-        f.law.tau1,
-        f.law.tau2,
-        f.law.alpha_star.to_degrees(),
-        f.law.sharpness,
-        mean(&|c| c.r2_lift),
-        mean(&|c| c.r2_moment)
-    );
+    let t = Instant::now();
+    let fo = fit(&cases, &optioned).unwrap();
+    let opt_s = t.elapsed().as_secs_f64();
+    let line = |name: &str, s: f64, f: &identify::lag::LagFit| {
+        let n = f.report.cases.len() as f64;
+        eprintln!(
+            "one pass: {name} {s:.3} s ({} LM iterations; τ₁ {:.3} τ₂ {:.3} α* {:.2}° m {:.2} c {:.3} τ_p {:.3}; mean R² lift {:.4} moment {:.4}; objective {:.5})",
+            f.report.iterations,
+            f.law.tau1,
+            f.law.tau2,
+            f.law.alpha_star.to_degrees(),
+            f.law.sharpness,
+            f.law.rate_share,
+            f.law.pressure_lag,
+            f.report.cases.iter().map(|c| c.r2_lift).sum::<f64>() / n,
+            f.report.cases.iter().map(|c| c.r2_moment).sum::<f64>() / n,
+            f.report.objective,
+        );
+    };
+    line("lag law", lag_s, &f);
+    line("lag law with fitted c and τ_p", opt_s, &fo);
+    eprintln!("one pass: memoryless {mem_s:.3} s");
     let mut g = c.benchmark_group("lag_identify");
     g.sample_size(10);
     g.bench_function("lag law, 50 cases x 2048 samples", |b| {
         b.iter(|| fit(&cases, &opts).unwrap())
+    });
+    g.bench_function("lag law fitted c and tau_p, 50 cases x 2048 samples", |b| {
+        b.iter(|| fit(&cases, &optioned).unwrap())
     });
     g.bench_function("memoryless, 50 cases x 2048 samples", |b| {
         b.iter(|| identify(&cases, &settings, "bench", &|_| {}).unwrap())

@@ -208,26 +208,51 @@ impl LagSeries {
     /// than one forcing period (half the record without a known period) after the
     /// [`SETTLE_TIMES`]·τ₁ it needs to settle.
     pub fn simulate(&self, law: &LagLaw, x: &mut Vec<f64>) -> Result<usize> {
-        let n = self.len();
-        let u: Vec<f64> = self
-            .angle(law)
+        self.simulate_angle(law, self.angle(law), x)
+    }
+
+    /// The forcing period in samples when the record is periodic (the periodic steady state
+    /// is used), else `None`.
+    fn period(&self) -> Option<f64> {
+        if self.periodic {
+            self.period_samples
+        } else {
+            None
+        }
+    }
+
+    /// The separation input u = angle − τ₂·q/2 at every sample, and the filtered input u_f
+    /// (module docs of [`LagLaw::pressure_lag`]; `None` without a pressure lag).
+    fn inputs(&self, law: &LagLaw, angle: &[f64]) -> (Vec<f64>, Option<Vec<f64>>) {
+        let u: Vec<f64> = angle
             .iter()
             .zip(&self.q)
             .map(|(&a, &q)| law.input(a, q))
             .collect();
         // the pressure lag filters the input first (periodic like x, or from its first value)
-        let u = if law.pressure_lag > 0.0 {
-            let mut uf = vec![0.0; n];
-            let per = if self.periodic {
-                self.period_samples
-            } else {
-                None
-            };
-            first_order(&u, self.ds / law.pressure_lag, per, u[0], &mut uf);
+        let uf = (law.pressure_lag > 0.0).then(|| {
+            let mut uf = vec![0.0; u.len()];
+            first_order(&u, self.ds / law.pressure_lag, self.period(), u[0], &mut uf);
             uf
-        } else {
-            u
-        };
+        });
+        (u, uf)
+    }
+
+    /// [`LagSeries::simulate`] driven by `angle` (one value per sample \[rad\]) instead of
+    /// [`LagSeries::angle`] (the output-error fit moves the rate share c, which moves the
+    /// angle).
+    ///
+    /// # Errors
+    /// As [`LagSeries::simulate`].
+    pub(crate) fn simulate_angle(
+        &self,
+        law: &LagLaw,
+        angle: &[f64],
+        x: &mut Vec<f64>,
+    ) -> Result<usize> {
+        let n = self.len();
+        let (u, uf) = self.inputs(law, angle);
+        let u = uf.unwrap_or(u);
         let f: Vec<f64> = u.iter().map(|&v| law.x_static(v)).collect();
         x.clear();
         x.resize(n, 0.0);
@@ -278,6 +303,148 @@ impl LagSeries {
     }
 }
 
+/// Index of each nonlinear constant in the sensitivity arrays of
+/// [`LagSeries::sensitivities`]: θ = (τ₁, τ₂, α*, m, c, τ_p).
+pub(crate) const N_THETA: usize = 6;
+
+impl LagSeries {
+    /// ∂(angle)/∂c of the law's angle with respect to the rate share c (α_e = α + ḣ/U + c·q
+    /// is affine in c): q itself, or with the circulation lag the Jones response of q
+    /// (α_c is linear in α_e, its states started like [`LagSeries::with_rate_share`]'s),
+    /// so that angle(c) = angle(c₀) + (c − c₀)·∂(angle)/∂c.
+    pub(crate) fn rate_share_tangent(&self, circulation_lag: bool) -> Vec<f64> {
+        if !circulation_lag {
+            return self.q.clone();
+        }
+        let n = self.len();
+        let mean_q = self.q.iter().sum::<f64>() / n as f64;
+        let mut z = [vec![0.0; n], vec![0.0; n]];
+        for (zi, (_, b)) in z.iter_mut().zip(CIRCULATION_LAGS) {
+            first_order(&self.q, self.ds * b, self.period(), mean_q, zi);
+        }
+        (0..n)
+            .map(|i| circulatory_angle(self.q[i], [z[0][i], z[1][i]]))
+            .collect()
+    }
+
+    /// Forward sensitivities ∂x/∂θ_j of the separation state that
+    /// [`LagSeries::simulate_angle`] computed into `x` (same `law` and `angle`), for every
+    /// j with `free[j]` (an empty vector otherwise), θ = (τ₁, τ₂, α*, m, c, τ_p):
+    /// the tangent of the discrete integration (the same exponential step differentiated,
+    /// including its dependence on h = Δs/τ and the periodic start), so each is the exact
+    /// derivative of the simulated x, not of the continuous state. `d_angle_dc` is
+    /// [`LagSeries::rate_share_tangent`] (read only when c is free). The clamp of the
+    /// periodic state to \[0, 1\] (rounding only) is not differentiated.
+    pub(crate) fn sensitivities(
+        &self,
+        law: &LagLaw,
+        angle: &[f64],
+        d_angle_dc: &[f64],
+        free: [bool; N_THETA],
+        x: &[f64],
+    ) -> [Vec<f64>; N_THETA] {
+        let n = self.len();
+        let per = self.period();
+        let (u, uf) = self.inputs(law, angle);
+        // tangents of the separation input u (before the pressure lag) per parameter
+        let du: [Option<Vec<f64>>; N_THETA] = [
+            None,
+            free[1].then(|| self.q.iter().map(|q| -0.5 * q).collect()),
+            None,
+            None,
+            free[4].then(|| d_angle_dc.to_vec()),
+            None,
+        ];
+        // tangents of the filtered input u_f (what x₀ reads)
+        let mut duf: [Option<Vec<f64>>; N_THETA] = Default::default();
+        match &uf {
+            Some(ufv) => {
+                let hp = self.ds / law.pressure_lag;
+                for j in 0..N_THETA {
+                    if !free[j] {
+                        continue;
+                    }
+                    if let Some(d) = &du[j] {
+                        let mut out = vec![0.0; n];
+                        first_order_tangent(&u, ufv, Some(d), hp, 0.0, per, d[0], &mut out);
+                        duf[j] = Some(out);
+                    }
+                }
+                if free[5] {
+                    let mut out = vec![0.0; n];
+                    let dh = -hp / law.pressure_lag;
+                    first_order_tangent(&u, ufv, None, hp, dh, per, 0.0, &mut out);
+                    duf[5] = Some(out);
+                }
+            }
+            None => {
+                duf.clone_from(&du);
+                if free[5] {
+                    // τ_p → 0⁺: the filter's tangent tends to −du/ds; taken at a lag of
+                    // 10⁻⁶ convective steps (the discrete limit to rounding)
+                    let tp = 1e-6 * self.ds;
+                    let hp = self.ds / tp;
+                    let mut ufv = vec![0.0; n];
+                    first_order(&u, hp, per, u[0], &mut ufv);
+                    let mut out = vec![0.0; n];
+                    first_order_tangent(&u, &ufv, None, hp, -hp / tp, per, 0.0, &mut out);
+                    duf[5] = Some(out);
+                }
+            }
+        }
+        let ue = uf.as_deref().unwrap_or(&u);
+        // f = x₀(u_f) and its tangents
+        let f: Vec<f64> = ue.iter().map(|&v| law.x_static(v)).collect();
+        let mut df: [Option<Vec<f64>>; N_THETA] = Default::default();
+        let parts: Vec<[f64; 3]> = ue.iter().map(|&v| x_static_partials(law, v)).collect();
+        for j in 1..N_THETA {
+            if !free[j] {
+                continue;
+            }
+            df[j] = Some(match j {
+                2 => parts.iter().map(|p| p[1]).collect(),
+                3 => parts.iter().map(|p| p[2]).collect(),
+                _ => match &duf[j] {
+                    Some(d) => parts.iter().zip(d).map(|(p, d)| p[0] * d).collect(),
+                    None => vec![0.0; n],
+                },
+            });
+        }
+        let h = self.ds / law.tau1;
+        let mut out: [Vec<f64>; N_THETA] = Default::default();
+        for j in 0..N_THETA {
+            if !free[j] {
+                continue;
+            }
+            let mut dx = vec![0.0; n];
+            let dh = if j == 0 { -h / law.tau1 } else { 0.0 };
+            let d = df[j].as_deref();
+            first_order_tangent(&f, x, d, h, dh, per, d.map_or(0.0, |d| d[0]), &mut dx);
+            out[j] = dx;
+        }
+        out
+    }
+}
+
+/// (∂x₀/∂u, ∂x₀/∂α*, ∂x₀/∂m) of the static separation curve x₀(u) = 1/(1 + |u/α*|^{2m})
+/// ([`LagLaw::x_static`]) at `u` \[rad\]: with P = |u/α*|^{2m},
+/// ∂x₀/∂u = −x₀²·2mP/u, ∂x₀/∂α* = x₀²·2mP/α*, ∂x₀/∂m = −x₀²·2P·ln|u/α*| (all 0 at u = 0).
+pub(crate) fn x_static_partials(law: &LagLaw, u: f64) -> [f64; 3] {
+    let r = (u / law.alpha_star).abs();
+    if r == 0.0 {
+        return [0.0; 3];
+    }
+    let p = r.powf(2.0 * law.sharpness);
+    let x0 = 1.0 / (1.0 + p);
+    let x2 = x0 * x0;
+    let m2 = 2.0 * law.sharpness;
+    [
+        -x2 * m2 * p / u,
+        x2 * m2 * p / law.alpha_star,
+        -x2 * 2.0 * p * r.ln(),
+    ]
+}
+
 /// The first-order lag τ dx/ds + x = f sampled at every sample of `f` into `x` (resized
 /// by the caller to f's length), h = Δs/τ, by the first-order-hold exponential step (module
 /// docs). With `period` (samples) x starts on the periodic solution
@@ -307,6 +474,69 @@ fn first_order(f: &[f64], h: f64, period: Option<f64>, start: f64, x: &mut [f64]
     }
     for i in 1..n {
         x[i] = step(x[i - 1], f[i - 1], f[i]);
+    }
+}
+
+/// Tangent of [`first_order`]: `dx` (same length as `f`) ← the derivative of its output
+/// `x` (already computed from `f`, h, `period`) for an input change `df` (`None` = 0), a
+/// change `dh` of h = Δs/τ and a change `dstart` of the start (read without a period): the
+/// same recursion differentiated, x_{n+1} = E·x_n + (1 − E)·f_n + (f_{n+1} − f_n)·c₁ with
+/// E = e^{−h}, c₁ = 1 − (1 − E)/h, dE = −E·dh, dc₁ = ((1 − E) − E·h)/h²·dh, and the periodic
+/// start x(0)* = x_p(T)/(1 − e^{−hT}) differentiated through x_p and the fractional step.
+#[allow(clippy::too_many_arguments)]
+fn first_order_tangent(
+    f: &[f64],
+    x: &[f64],
+    df: Option<&[f64]>,
+    h: f64,
+    dh: f64,
+    period: Option<f64>,
+    dstart: f64,
+    dx: &mut [f64],
+) {
+    let n = f.len();
+    let e = (-h).exp();
+    let c0 = 1.0 - e;
+    let c1 = 1.0 - c0 / h;
+    let de = -e * dh;
+    let dc0 = e * dh;
+    let dc1 = (c0 - e * h) / (h * h) * dh;
+    let dfi = |i: usize| df.map_or(0.0, |d| d[i]);
+    let step = |xn: f64, f0: f64, f1: f64| e * xn + c0 * f0 + (f1 - f0) * c1;
+    let dstep = |xn: f64, dxn: f64, f0: f64, f1: f64, df0: f64, df1: f64| {
+        e * dxn + de * xn + c0 * df0 + dc0 * f0 + (df1 - df0) * c1 + (f1 - f0) * dc1
+    };
+    dx[0] = dstart;
+    if let Some(p) = period {
+        let whole = p.floor() as usize;
+        let frac = p - whole as f64;
+        let (mut xp, mut dxp) = (0.0, 0.0);
+        for i in 0..whole.min(n.saturating_sub(1)) {
+            dxp = dstep(xp, dxp, f[i], f[i + 1], dfi(i), dfi(i + 1));
+            xp = step(xp, f[i], f[i + 1]);
+        }
+        if frac > 0.0 && whole + 1 < n {
+            let hf = h * frac;
+            let dhf = dh * frac;
+            let ef = (-hf).exp();
+            let c0f = 1.0 - ef;
+            let c1f = 1.0 - c0f / hf;
+            let f1 = f[whole] + frac * (f[whole + 1] - f[whole]);
+            let df1 = dfi(whole) + frac * (dfi(whole + 1) - dfi(whole));
+            let dxn = ef * dxp - ef * dhf * xp
+                + c0f * dfi(whole)
+                + ef * dhf * f[whole]
+                + (df1 - dfi(whole)) * c1f
+                + (f1 - f[whole]) * (c0f - ef * hf) / (hf * hf) * dhf;
+            xp = ef * xp + (1.0 - ef) * f[whole] + (f1 - f[whole]) * (1.0 - (1.0 - ef) / hf);
+            dxp = dxn;
+        }
+        let et = (-h * p).exp();
+        let den = 1.0 - et;
+        dx[0] = dxp / den - xp * p * et * dh / (den * den);
+    }
+    for i in 1..n {
+        dx[i] = dstep(x[i - 1], dx[i - 1], f[i - 1], f[i], dfi(i - 1), dfi(i));
     }
 }
 
