@@ -595,6 +595,10 @@ pub(crate) struct FitResult {
     pub predicted: Predicted,
 }
 
+/// Relative cost gain below which a fit leaves the sensitivities' Jacobian for forward
+/// differences.
+const SENSITIVITY_GAIN: f64 = 1e-3;
+
 /// Levenberg–Marquardt on `obj` from `x0` (whose prediction `p0` may be at hand). Each
 /// iteration takes the objective's Jacobian from sensitivities when it gives one, forward
 /// differences (step 1e-2 in θ) otherwise; an iteration whose sensitivity step finds no
@@ -627,14 +631,16 @@ pub(crate) fn levenberg_marquardt(
         j
     };
     let mut iter = 0;
-    let mut force_differences = false;
+    // Sensitivities while they make progress, then differences to the end (the stop rule
+    // of the difference fit: no step, or one of relative gain ≤ 1e-6).
+    let mut sensitivities = obj.jacobian.is_some();
     while iter < max_iter {
-        let analytic = if force_differences {
-            None
-        } else {
+        let analytic = if sensitivities {
             obj.jacobian
                 .and_then(|jf| jf(&x, &p))
                 .filter(|j| j.nrows() == r.len() && j.ncols() == n)
+        } else {
+            None
         };
         let from_sensitivities = analytic.is_some();
         let j = analytic.unwrap_or_else(|| differences(&x, &r));
@@ -642,8 +648,7 @@ pub(crate) fn levenberg_marquardt(
         let jtj = j.transpose() * &j;
         let g = j.transpose() * &rv;
         let lambda0 = lambda;
-        let mut improved = false;
-        let mut moved = false;
+        let mut gain = None;
         for _ in 0..8 {
             let mut a = jtj.clone();
             for k in 0..n {
@@ -658,27 +663,27 @@ pub(crate) fn levenberg_marquardt(
             let rn = (obj.residuals)(&pn);
             let cn = cost(&rn);
             if cn.is_finite() && cn < c {
-                let rel = (c - cn) / c.max(1e-300);
+                gain = Some((c - cn) / c.max(1e-300));
                 x = xn;
                 p = pn;
                 r = rn;
                 c = cn;
                 lambda = (lambda / 3.0).max(1e-7);
-                improved = rel > 1e-6;
-                moved = true;
                 break;
             }
             lambda *= 4.0;
         }
-        if !moved && from_sensitivities {
-            // the sensitivities' direction found nothing: the same iteration by differences
-            lambda = lambda0;
-            force_differences = true;
-            continue;
+        if from_sensitivities && gain.is_none_or(|g| g <= SENSITIVITY_GAIN) {
+            // the sensitivities no longer pay: differences from here on (the same iteration
+            // again when this one found no step)
+            sensitivities = false;
+            if gain.is_none() {
+                lambda = lambda0;
+                continue;
+            }
         }
-        force_differences = false;
         iter += 1;
-        if !improved {
+        if gain.is_none_or(|g| g <= 1e-6) && !from_sensitivities {
             break;
         }
     }

@@ -74,6 +74,28 @@ pub struct BifurcationOptions {
     /// uncertainty (DECISIONS, "Issue 42 item 2, round 27").
     #[serde(default = "default_onset_uncertainty")]
     pub onset_uncertainty: f64,
+    /// Where each Levenberg–Marquardt iteration takes its Jacobian (default
+    /// `differences`; DECISIONS, "Issue 43 item 2, round 31": the sensitivities' fits end
+    /// at other, higher optima on the Bristol records).
+    #[serde(default)]
+    pub jacobian: FitJacobian,
+}
+
+/// The Jacobian of the bifurcation-level fits.
+#[derive(
+    Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum FitJacobian {
+    /// Forward differences of whole diagrams, step 1e-2 in θ: one continuation per
+    /// parameter and iteration.
+    #[default]
+    Differences,
+    /// From the sensitivities of the predicted orbits at the measured points
+    /// (dY/dθ = −[G_Y; c]⁻¹[G_θ; 0], [`aeroelastic::branch::OrbitSensitivity`]) while they
+    /// gain more than 0.1 % of the cost per iteration, then differences to the same stop
+    /// rule.
+    Sensitivities,
 }
 
 fn default_onset_uncertainty() -> f64 {
@@ -91,6 +113,7 @@ impl Default for BifurcationOptions {
             min_shrink: 0.3,
             max_iterations: 30,
             onset_uncertainty: default_onset_uncertainty(),
+            jacobian: FitJacobian::default(),
         }
     }
 }
@@ -1074,7 +1097,10 @@ fn fit_candidate(
         let obj = Objective {
             predict: &predicted,
             residuals: &res,
-            jacobian: Some(&jac),
+            jacobian: match opts.jacobian {
+                FitJacobian::Differences => None,
+                FitJacobian::Sensitivities => Some(&jac),
+            },
         };
         levenberg_marquardt(&obj, x0, p0, iterations)
     };
@@ -1105,13 +1131,15 @@ fn fit_candidate(
     ranked.sort_by(|a, b| a.0.total_cmp(&b.0));
     // Levenberg–Marquardt from the best few starts (the landscape has several basins:
     // a fold can form from softening or from an even term), the best end kept.
+    // (in parallel; the first of equal ends wins, as in start order)
+    ranked.truncate(START_POINTS);
     let full = ranked
-        .iter_mut()
-        .take(START_POINTS)
-        .map(|(_, s, p)| lm(all, s, p.take(), opts.max_iterations))
+        .into_par_iter()
+        .map(|(_, s, p)| lm(all, &s, p, opts.max_iterations))
+        .collect::<Vec<_>>()
+        .into_iter()
         .min_by(|a, b| a.cost.total_cmp(&b.cost))
         .expect("at least one start");
-    drop(ranked);
     // Even terms jointly to the sign convention (first even term ≥ 0): the diagram is the
     // same (q → −q symmetry of the linear section).
     let even: Vec<usize> = (0..n).filter(|&k| c.parameters[k].even).collect();
@@ -1126,25 +1154,31 @@ fn fit_candidate(
     let mut held_onsets = vec![None; diagram_in.onsets.len()];
     let mut held_absences = vec![None; diagram_in.absences.len()];
     let mut fold_values = vec![Vec::new(); n];
-    for &g in groups {
-        let keep = |u: f64| !same_speed(u, g);
-        let train_points: Vec<&MeasuredAmplitude> =
-            all.points.iter().copied().filter(|m| keep(m.u)).collect();
-        let train_onsets: Vec<&MeasuredOnset> =
-            all.onsets.iter().copied().filter(|m| keep(m.u)).collect();
-        let train_absences: Vec<&MeasuredAbsence> =
-            all.absences.iter().copied().filter(|m| keep(m.u)).collect();
-        let train = Rows {
-            points: &train_points,
-            onsets: &train_onsets,
-            absences: &train_absences,
-        };
-        let r = lm(
-            &train,
-            &full.theta,
-            Some(full.predicted.clone()),
-            opts.max_iterations / 2,
-        );
+    // The folds' fits are independent: in parallel, their results taken in speed order.
+    let fold_fits: Vec<_> = groups
+        .par_iter()
+        .map(|&g| {
+            let keep = |u: f64| !same_speed(u, g);
+            let train_points: Vec<&MeasuredAmplitude> =
+                all.points.iter().copied().filter(|m| keep(m.u)).collect();
+            let train_onsets: Vec<&MeasuredOnset> =
+                all.onsets.iter().copied().filter(|m| keep(m.u)).collect();
+            let train_absences: Vec<&MeasuredAbsence> =
+                all.absences.iter().copied().filter(|m| keep(m.u)).collect();
+            let train = Rows {
+                points: &train_points,
+                onsets: &train_onsets,
+                absences: &train_absences,
+            };
+            lm(
+                &train,
+                &full.theta,
+                Some(full.predicted.clone()),
+                opts.max_iterations / 2,
+            )
+        })
+        .collect();
+    for (&g, r) in groups.iter().zip(fold_fits) {
         let mut v = c.values(&r.theta);
         flip(&mut v);
         for (k, v) in v.into_iter().enumerate() {
