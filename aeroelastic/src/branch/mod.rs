@@ -60,8 +60,8 @@ pub use measured::{
     MeasuredAbsence, MeasuredAmplitude, MeasuredDiagram, MeasuredDistance, MeasuredOnset,
 };
 pub use options::{BranchMethod, BranchOptions};
-pub use sensitivity::{OrbitSensitivity, SensitivityAt};
 use periodic::Closure;
+pub use sensitivity::{OrbitSensitivity, SensitivityAt};
 pub use types::{
     Branch, BranchEnd, BranchEvent, BranchPoint, BranchProgress, BranchSet, EventKind, HopfPoint,
     OrbitValues,

@@ -9,9 +9,9 @@
 use nalgebra::{DMatrix, DVector};
 
 use super::continuation::{newton, problem};
+use super::options::BranchOptions;
 use super::periodic::{Closure, PeriodicProblem};
 use super::types::{Branch, OrbitValues};
-use super::options::BranchOptions;
 use crate::section::Section;
 use crate::{Error, Result};
 
@@ -145,9 +145,9 @@ impl Section {
             for i in 0..m - 1 {
                 rhs[i] = -(gk[i] - g0[i]) / delta;
             }
-            let dy = lu.solve(&rhs).ok_or_else(|| {
-                Error::numerical("orbit_sensitivity", "singular closed Jacobian")
-            })?;
+            let dy = lu
+                .solve(&rhs)
+                .ok_or_else(|| Error::numerical("orbit_sensitivity", "singular closed Jacobian"))?;
             // The orbit's quantities are smooth functions of Y: their derivative along dY
             // by a small difference (relative step 1e-6 of Y).
             let nd = dy.amax();
@@ -260,10 +260,22 @@ mod tests {
              df {:.6e} {fd_f:.6e}",
             s.amplitude1_alpha, s.amplitude1_h, s.frequency_hz
         );
-        assert!(s.amplitude1_alpha < 0.0, "a harder quintic shrinks the cycle");
-        assert!((s.amplitude1_alpha - fd_a).abs() < 1e-5 * fd_a.abs(), "{s:?} vs {fd_a}");
-        assert!((s.amplitude1_h - fd_h).abs() < 1e-5 * fd_h.abs(), "{s:?} vs {fd_h}");
-        assert!((s.frequency_hz - fd_f).abs() < 1e-4 * fd_f.abs(), "{s:?} vs {fd_f}");
+        assert!(
+            s.amplitude1_alpha < 0.0,
+            "a harder quintic shrinks the cycle"
+        );
+        assert!(
+            (s.amplitude1_alpha - fd_a).abs() < 1e-5 * fd_a.abs(),
+            "{s:?} vs {fd_a}"
+        );
+        assert!(
+            (s.amplitude1_h - fd_h).abs() < 1e-5 * fd_h.abs(),
+            "{s:?} vs {fd_h}"
+        );
+        assert!(
+            (s.frequency_hz - fd_f).abs() < 1e-4 * fd_f.abs(),
+            "{s:?} vs {fd_f}"
+        );
         assert_eq!(s.u, 0.0, "U held fixed");
         // fixed amplitude at the fold's neighbour: U moves, the amplitude does not
         let sa = s0
@@ -293,9 +305,13 @@ mod tests {
             let f = (a - w[0].amplitude1_alpha) / (w[1].amplitude1_alpha - w[0].amplitude1_alpha);
             w[0].u + f * (w[1].u - w[0].u)
         };
-        let fd_u = (speed_at(&section(20.0 * 1.001)) - speed_at(&section(20.0 * 0.999))) / (2.0 * d);
+        let fd_u =
+            (speed_at(&section(20.0 * 1.001)) - speed_at(&section(20.0 * 0.999))) / (2.0 * d);
         println!("dU/dk5 at fixed amplitude: sensitivity {du:.6e} difference {fd_u:.6e}");
-        assert!(du > 0.0, "a harder quintic needs more speed for the same cycle");
+        assert!(
+            du > 0.0,
+            "a harder quintic needs more speed for the same cycle"
+        );
         // the difference interpolates the branches linearly between points
         assert!((du - fd_u).abs() < 2e-3 * fd_u.abs(), "{du} vs {fd_u}");
     }

@@ -486,7 +486,9 @@ pub(crate) fn residual_jacobian(
         let d: Option<(Vec<OrbitValues>, bool)> = match p.set.as_ref() {
             None => None,
             Some(set) => match covering(set, m) {
-                Some((bi, i)) => Some((sens(bi, SensitivityAt::Speed { index: i, u: m.u })?, false)),
+                Some((bi, i)) => {
+                    Some((sens(bi, SensitivityAt::Speed { index: i, u: m.u })?, false))
+                }
                 None => match nearest(set, m, s) {
                     Some((bi, i)) => Some((sens(bi, SensitivityAt::Amplitude { index: i })?, true)),
                     None => None,
@@ -496,7 +498,11 @@ pub(crate) fn residual_jacobian(
         let zero = vec![OrbitValues::default(); n];
         let (d, speed) = d.unwrap_or((zero, false));
         if let Some(a) = m.amplitude_alpha {
-            rows_out.push(d.iter().map(|v| v.amplitude1_alpha / s.n_alpha(a)).collect());
+            rows_out.push(
+                d.iter()
+                    .map(|v| v.amplitude1_alpha / s.n_alpha(a))
+                    .collect(),
+            );
         }
         if let Some(h) = m.amplitude_h {
             rows_out.push(d.iter().map(|v| v.amplitude1_h / s.n_h(h)).collect());
@@ -525,10 +531,18 @@ pub(crate) fn residual_jacobian(
         for o in rows.onsets {
             let w = s.noise;
             let sd_u = o.u_sd.unwrap_or(s.onset_sd * o.u);
-            rows_out.push(dh.iter().map(|d| d.map_or(0.0, |d| w * d.0 / sd_u)).collect());
+            rows_out.push(
+                dh.iter()
+                    .map(|d| d.map_or(0.0, |d| w * d.0 / sd_u))
+                    .collect(),
+            );
             if let Some(f) = o.frequency_hz {
                 let sd_f = o.frequency_sd_hz.unwrap_or(s.onset_sd * f);
-                rows_out.push(dh.iter().map(|d| d.map_or(0.0, |d| w * d.1 / sd_f)).collect());
+                rows_out.push(
+                    dh.iter()
+                        .map(|d| d.map_or(0.0, |d| w * d.1 / sd_f))
+                        .collect(),
+                );
             }
             if o.criticality.is_some() {
                 rows_out.push(vec![0.0; n]);

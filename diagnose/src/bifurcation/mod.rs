@@ -1092,8 +1092,7 @@ fn fit_candidate(
     // Jacobian from its orbits' sensitivities.
     let lm = |rows: &Rows, x0: &[f64], p0: Option<Predicted>, iterations: usize| {
         let res = |p: &Predicted| all_residuals(p, rows, setting);
-        let jac =
-            |th: &[f64], p: &Predicted| residual_jacobian(&section_at, th, p, rows, setting);
+        let jac = |th: &[f64], p: &Predicted| residual_jacobian(&section_at, th, p, rows, setting);
         let obj = Objective {
             predict: &predicted,
             residuals: &res,
@@ -1125,7 +1124,10 @@ fn fit_candidate(
             let mut costs: Vec<f64> = ranked.iter().map(|r| r.0).collect();
             costs.sort_by(f64::total_cmp);
             let cut = costs[START_POINTS - 1];
-            ranked.iter_mut().filter(|r| r.0 > cut).for_each(|r| r.2 = None);
+            ranked
+                .iter_mut()
+                .filter(|r| r.0 > cut)
+                .for_each(|r| r.2 = None);
         }
     }
     ranked.sort_by(|a, b| a.0.total_cmp(&b.0));
