@@ -585,6 +585,9 @@ pub(crate) fn residual_jacobian(
     j.iter().all(|v| v.is_finite()).then_some(j)
 }
 
+/// ∂r/∂θ at θ from its prediction (`None`: not available there).
+pub(crate) type JacobianFn<'a> = dyn Fn(&[f64], &Predicted) -> Option<DMatrix<f64>> + 'a;
+
 /// What a least-squares fit minimises: the prediction at θ (one diagram), the residuals of
 /// a prediction, and optionally their Jacobian from the prediction's sensitivities
 /// ([`residual_jacobian`]; `None` from it, or no function: forward differences of whole
@@ -595,7 +598,7 @@ pub(crate) struct Objective<'a> {
     /// Its residuals.
     pub residuals: &'a dyn Fn(&Predicted) -> Vec<f64>,
     /// ∂r/∂θ at θ from its prediction.
-    pub jacobian: Option<&'a dyn Fn(&[f64], &Predicted) -> Option<DMatrix<f64>>>,
+    pub jacobian: Option<&'a JacobianFn<'a>>,
 }
 
 /// Result of one fit.
