@@ -75,8 +75,8 @@ pub struct BifurcationOptions {
     #[serde(default = "default_onset_uncertainty")]
     pub onset_uncertainty: f64,
     /// Where each Levenberg–Marquardt iteration takes its Jacobian (default
-    /// `differences`; DECISIONS, "Issue 43 item 2, round 31": the sensitivities' fits end
-    /// at other, higher optima on the Bristol records).
+    /// `differences`; DECISIONS, "Bifurcation-level fits by derivatives (issue 43 item 2, round
+    /// 31)": the sensitivities' fits end at other, higher optima on the Bristol records).
     #[serde(default)]
     pub jacobian: FitJacobian,
 }
