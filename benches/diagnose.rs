@@ -7,7 +7,10 @@
 //! The second group times the bifurcation-level diagnosis of the Bristol rig
 //! (`diagnose::bifurcation::diagnose_branches`: the linear model against the nine measured
 //! LCO points, every catalogue candidate fitted with its held-out folds), which
-//! `diagnose/tests/bifurcation.rs` checks for correctness only.
+//! `diagnose/tests/bifurcation.rs` checks for correctness only; `bristol_9_points` with the
+//! default difference Jacobians, `bristol_9_points_sensitivities` with the orbits'
+//! sensitivities (`FitJacobian::Sensitivities`, DECISIONS "Bifurcation-level fits by derivatives (issue
+//! 43 item 2, round 31)").
 //!
 //! Run: `cargo bench --bench diagnose` (`-- bifurcation` for the second group only).
 
@@ -64,6 +67,24 @@ fn bench_bifurcation(c: &mut Criterion) {
                 None,
                 vec![],
                 &opts,
+                vec![],
+                "bench",
+            )
+            .unwrap()
+        })
+    });
+    let sens = diagnose::bifurcation::BifurcationOptions {
+        jacobian: diagnose::bifurcation::FitJacobian::Sensitivities,
+        ..diagnose::bifurcation::BifurcationOptions::default()
+    };
+    g.bench_function("bristol_9_points_sensitivities", |b| {
+        b.iter(|| {
+            diagnose::bifurcation::diagnose_branches(
+                &points,
+                &section,
+                None,
+                vec![],
+                &sens,
                 vec![],
                 "bench",
             )

@@ -1040,6 +1040,17 @@ impl PeriodicProblem for CondensedBalance<'_> {
     fn scaled(&self, p: &BranchPoint) -> Result<DVector<f64>> {
         stored_unknowns(p, self.unknowns())
     }
+
+    fn first_harmonics(&self, y: &DVector<f64>) -> Option<super::types::OrbitValues> {
+        let (x, omega, u) = self.unscale(y);
+        let w = self.w;
+        Some(super::types::OrbitValues {
+            u,
+            amplitude1_alpha: self.cplx(&x[w..], self.k1).norm(),
+            amplitude1_h: self.cplx(&x[..w], self.k1).norm(),
+            frequency_hz: omega / TAU,
+        })
+    }
 }
 
 #[cfg(test)]

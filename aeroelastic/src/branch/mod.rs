@@ -31,7 +31,9 @@
 //! settings, `hopf.rs` the Hopf scan, `continuation.rs` the predictor–corrector,
 //! `shooting.rs`, `harmonic.rs` and `condensed.rs` the orbit discretisations, `orbit.rs` and
 //! `floquet.rs` an orbit's amplitudes and multipliers, `measured.rs` measured diagrams,
-//! `lens.rs` the continuation in a parameter other than U ([`Section::continue_in`]).
+//! `lens.rs` the continuation in a parameter other than U ([`Section::continue_in`]),
+//! `sensitivity.rs` an orbit's derivatives with respect to the section's parameters
+//! ([`Section::orbit_sensitivity`]).
 
 use crate::section::Section;
 use crate::{Error, Result};
@@ -46,6 +48,7 @@ mod measured;
 mod options;
 mod orbit;
 mod periodic;
+mod sensitivity;
 mod shooting;
 mod types;
 
@@ -58,8 +61,10 @@ pub use measured::{
 };
 pub use options::{BranchMethod, BranchOptions};
 use periodic::Closure;
+pub use sensitivity::{OrbitSensitivity, SensitivityAt};
 pub use types::{
     Branch, BranchEnd, BranchEvent, BranchPoint, BranchProgress, BranchSet, EventKind, HopfPoint,
+    OrbitValues,
 };
 
 /// Largest number of harmonics of the harmonic balance (the limits table's entry).

@@ -45,6 +45,12 @@ pub(super) trait PeriodicProblem {
     fn start(&self, hopf: &HopfPoint, a: f64) -> DVector<f64>;
     /// Scaled unknowns of a point of a branch of this problem.
     fn scaled(&self, p: &BranchPoint) -> Result<DVector<f64>>;
+    /// The quantities a measured point is compared with (U, first-harmonic amplitudes,
+    /// frequency) at `y` without the multipliers, when the discretisation holds them
+    /// directly; `None`: take them from [`PeriodicProblem::point`].
+    fn first_harmonics(&self, _y: &DVector<f64>) -> Option<super::types::OrbitValues> {
+        None
+    }
 }
 
 /// The scaled unknowns a harmonic-balance point stored, when they belong to a problem of `m`

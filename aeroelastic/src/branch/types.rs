@@ -160,3 +160,16 @@ pub struct BranchProgress {
     /// Its pitch amplitude \[rad\].
     pub amplitude_alpha: f64,
 }
+
+/// The quantities of an orbit a measured point is compared with.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct OrbitValues {
+    /// Speed U [m/s].
+    pub u: f64,
+    /// First-harmonic pitch amplitude \[rad\].
+    pub amplitude1_alpha: f64,
+    /// First-harmonic heave amplitude \[m\] (positive down).
+    pub amplitude1_h: f64,
+    /// Frequency \[Hz\].
+    pub frequency_hz: f64,
+}

@@ -3,8 +3,11 @@
 //!
 //! Every evaluation continues the periodic orbits of the changed section from its Hopf
 //! points ([`Section::lco_branches`], condensed harmonic balance where it applies) and
-//! compares them with the measured points. The fit minimises, by Levenberg–Marquardt with
-//! forward-difference Jacobians from the best point of a coarse start grid, the residuals
+//! compares them with the measured points. The fit minimises, by Levenberg–Marquardt from
+//! the best points of a coarse start grid, the residuals below; the Jacobian of each
+//! iteration comes from the sensitivities of the predicted orbits at the measured points
+//! ([`residual_jacobian`]: one corrected orbit per point instead of one diagram per
+//! parameter), forward differences of whole diagrams where they are not available
 //!
 //! - per measured point and measured DOF d: (a_pred − a_meas) / max(a_meas, s_d/4), s_d the
 //!   RMS measured amplitude of that DOF (relative errors: a measured amplitude scatters by
@@ -33,7 +36,8 @@
 //! leaves uncovered counts with predicted amplitude 0), on held-out speeds only.
 
 use aeroelastic::branch::{
-    BranchOptions, BranchSet, MeasuredAbsence, MeasuredAmplitude, MeasuredOnset,
+    BranchOptions, BranchSet, MeasuredAbsence, MeasuredAmplitude, MeasuredOnset, OrbitValues,
+    SensitivityAt,
 };
 use aeroelastic::section::Section;
 use nalgebra::{DMatrix, DVector};
@@ -376,6 +380,227 @@ fn cost(r: &[f64]) -> f64 {
     r.iter().map(|v| v * v).sum()
 }
 
+/// The branch and segment of `set` whose orbit [`aeroelastic::branch::predicted_at`] takes
+/// for the measured point `m` (the same choice: the segment of that stability covering
+/// `m.u` whose amplitude is closest to the measured one, the first on a tie).
+fn covering(set: &BranchSet, m: &MeasuredAmplitude) -> Option<(usize, usize)> {
+    let mut best: Option<(f64, (usize, usize))> = None;
+    for (bi, b) in set.branches.iter().enumerate() {
+        for (i, w) in b.points.windows(2).enumerate() {
+            if w[0].stable != m.stable || w[1].stable != m.stable {
+                continue;
+            }
+            if (w[0].u - m.u) * (w[1].u - m.u) > 0.0 || w[0].u == w[1].u {
+                continue;
+            }
+            let f = (m.u - w[0].u) / (w[1].u - w[0].u);
+            let lerp = |a: f64, b: f64| a * (1.0 - f) + b * f;
+            let a = lerp(w[0].amplitude1_alpha, w[1].amplitude1_alpha);
+            let h = lerp(w[0].amplitude1_h, w[1].amplitude1_h);
+            let miss = match (m.amplitude_alpha, m.amplitude_h) {
+                (Some(ma), _) => (a - ma).abs(),
+                (None, Some(mh)) => (h - mh).abs(),
+                (None, None) => 0.0,
+            };
+            if best.is_none_or(|(bm, _)| miss < bm) {
+                best = Some((miss, (bi, i)));
+            }
+        }
+    }
+    best.map(|b| b.1)
+}
+
+/// The branch point [`residuals`] takes for an uncovered measured point: the nearest orbit
+/// of the same stability in the scaled (U, amplitude) plane (the first on a tie).
+fn nearest(set: &BranchSet, m: &MeasuredAmplitude, s: &Setting) -> Option<(usize, usize)> {
+    let mut best: Option<(f64, (usize, usize))> = None;
+    for (bi, b) in set.branches.iter().enumerate() {
+        for (i, p) in b.points.iter().enumerate() {
+            if p.stable != m.stable {
+                continue;
+            }
+            let mut d = ((p.u - m.u) / s.s_u).powi(2);
+            if let Some(a) = m.amplitude_alpha {
+                d += ((p.amplitude1_alpha - a) / s.n_alpha(a)).powi(2);
+            }
+            if let Some(h) = m.amplitude_h {
+                d += ((p.amplitude1_h - h) / s.n_h(h)).powi(2);
+            }
+            if best.is_none_or(|(bd, _)| d < bd) {
+                best = Some((d, (bi, i)));
+            }
+        }
+    }
+    best.map(|b| b.1)
+}
+
+/// Step in θ of the perturbed sections whose residual G(Y; θ + h) gives ∂G/∂θ (G is linear
+/// in every stiffness and damping coefficient, so the step only has to stay above
+/// rounding).
+const SENSITIVITY_STEP: f64 = 1e-3;
+
+/// The Jacobian ∂r/∂θ of [`all_residuals`] of `rows` at `theta`, whose prediction is `p`,
+/// from orbit sensitivities ([`Section::orbit_sensitivity`]: dY/dθ = −[G_Y; c]⁻¹[G_θ; 0] at
+/// each measured point's orbit, no continuation of a perturbed section), row for row in
+/// the layout of [`all_residuals`]:
+///
+/// - a point its branch covers: the orbit at the measured speed (U fixed), d(pred)/dθ over
+///   the residual's divisor, 0 for the speed residual;
+/// - an uncovered point: the nearest orbit at its own pitch-amplitude unknown (U free),
+///   so that the speed residual carries dU/dθ (how a fold moves);
+/// - a point no orbit of its stability approaches, a criticality: 0 (piecewise constant);
+/// - an onset's speed and frequency: a forward difference of the first Hopf point of the
+///   perturbed sections (an eigenvalue scan, no continuation);
+/// - an absence row: the derivative of the stable cycle it counts, 0 when none counts.
+///
+/// `section_at` builds the candidate's section at θ. `None` (the caller then takes forward
+/// differences of whole diagrams) for a linear section (its neutral family is no
+/// diagram), a section that cannot be built, or a sensitivity that fails.
+pub(crate) fn residual_jacobian(
+    section_at: &dyn Fn(&[f64]) -> Option<Section>,
+    theta: &[f64],
+    p: &Predicted,
+    rows: &Rows,
+    s: &Setting,
+) -> Option<DMatrix<f64>> {
+    if p.linear {
+        return None;
+    }
+    let n = theta.len();
+    let base = section_at(theta)?;
+    let perturbed: Vec<(Section, f64)> = (0..n)
+        .map(|k| {
+            let mut t = theta.to_vec();
+            t[k] += SENSITIVITY_STEP;
+            section_at(&t).map(|sec| (sec, SENSITIVITY_STEP))
+        })
+        .collect::<Option<_>>()?;
+    let sens = |bi: usize, at: SensitivityAt| -> Option<Vec<OrbitValues>> {
+        let set = p.set.as_ref()?;
+        base.orbit_sensitivity(&set.branches[bi], at, &perturbed, s.branch)
+            .ok()
+            .map(|o| o.derivatives)
+    };
+    let mut rows_out: Vec<Vec<f64>> = Vec::new();
+    for m in rows.points {
+        let d: Option<(Vec<OrbitValues>, bool)> = match p.set.as_ref() {
+            None => None,
+            Some(set) => match covering(set, m) {
+                Some((bi, i)) => {
+                    Some((sens(bi, SensitivityAt::Speed { index: i, u: m.u })?, false))
+                }
+                None => match nearest(set, m, s) {
+                    Some((bi, i)) => Some((sens(bi, SensitivityAt::Amplitude { index: i })?, true)),
+                    None => None,
+                },
+            },
+        };
+        let zero = vec![OrbitValues::default(); n];
+        let (d, speed) = d.unwrap_or((zero, false));
+        if let Some(a) = m.amplitude_alpha {
+            rows_out.push(
+                d.iter()
+                    .map(|v| v.amplitude1_alpha / s.n_alpha(a))
+                    .collect(),
+            );
+        }
+        if let Some(h) = m.amplitude_h {
+            rows_out.push(d.iter().map(|v| v.amplitude1_h / s.n_h(h)).collect());
+        }
+        if let Some(f) = m.frequency_hz {
+            rows_out.push(d.iter().map(|v| v.frequency_hz / f).collect());
+        }
+        rows_out.push(
+            d.iter()
+                .map(|v| if speed { v.u / s.s_u } else { 0.0 })
+                .collect(),
+        );
+    }
+    if !rows.onsets.is_empty() {
+        let h0 = first_hopf(p).cloned();
+        let dh: Vec<Option<(f64, f64)>> = perturbed
+            .iter()
+            .map(|(sec, d)| {
+                let h0 = h0.as_ref()?;
+                let h = hopf_scan(sec, s, false)
+                    .into_iter()
+                    .min_by(|a, b| a.u.total_cmp(&b.u))?;
+                Some(((h.u - h0.u) / d, (h.frequency_hz - h0.frequency_hz) / d))
+            })
+            .collect();
+        for o in rows.onsets {
+            let w = s.noise;
+            let sd_u = o.u_sd.unwrap_or(s.onset_sd * o.u);
+            rows_out.push(
+                dh.iter()
+                    .map(|d| d.map_or(0.0, |d| w * d.0 / sd_u))
+                    .collect(),
+            );
+            if let Some(f) = o.frequency_hz {
+                let sd_f = o.frequency_sd_hz.unwrap_or(s.onset_sd * f);
+                rows_out.push(
+                    dh.iter()
+                        .map(|d| d.map_or(0.0, |d| w * d.1 / sd_f))
+                        .collect(),
+                );
+            }
+            if o.criticality.is_some() {
+                rows_out.push(vec![0.0; n]);
+            }
+        }
+    }
+    for a in rows.absences {
+        let f = absence_finding(p, a);
+        let counted = f.predicts_lco && f.lco.is_some();
+        let d = match (counted, p.set.as_ref()) {
+            (true, Some(set)) => {
+                let probe = MeasuredAmplitude {
+                    line: 0,
+                    stable: true,
+                    u: a.u,
+                    amplitude_h: Some(0.0),
+                    amplitude_alpha: Some(0.0),
+                    frequency_hz: None,
+                };
+                match covering(set, &probe) {
+                    Some((bi, i)) => sens(bi, SensitivityAt::Speed { index: i, u: a.u })?,
+                    None => vec![OrbitValues::default(); n],
+                }
+            }
+            _ => vec![OrbitValues::default(); n],
+        };
+        for (k, scale) in [(0, s.s_alpha), (1, s.s_h)] {
+            if !s.dofs[k] {
+                continue;
+            }
+            rows_out.push(
+                d.iter()
+                    .map(|v| [v.amplitude1_alpha, v.amplitude1_h][k] / scale)
+                    .collect(),
+            );
+        }
+    }
+    let m = rows_out.len();
+    let j = DMatrix::from_fn(m, n, |i, k| rows_out[i][k]);
+    j.iter().all(|v| v.is_finite()).then_some(j)
+}
+
+/// ∂r/∂θ at θ from its prediction (`None`: not available there).
+pub(crate) type JacobianFn<'a> = dyn Fn(&[f64], &Predicted) -> Option<DMatrix<f64>> + 'a;
+
+/// What a least-squares fit minimises: the prediction at θ (one diagram), the residuals of
+/// a prediction, and optionally their Jacobian from the prediction's sensitivities
+/// ([`residual_jacobian`]; `None` from it, or no function: forward differences of whole
+/// predictions, step 1e-2 in θ).
+pub(crate) struct Objective<'a> {
+    /// The prediction at θ.
+    pub predict: &'a dyn Fn(&[f64]) -> Predicted,
+    /// Its residuals.
+    pub residuals: &'a dyn Fn(&Predicted) -> Vec<f64>,
+    /// ∂r/∂θ at θ from its prediction.
+    pub jacobian: Option<&'a JacobianFn<'a>>,
+}
+
 /// Result of one fit.
 #[derive(Debug, Clone)]
 pub(crate) struct FitResult {
@@ -383,35 +608,64 @@ pub(crate) struct FitResult {
     pub theta: Vec<f64>,
     /// Sum of squared residuals at `theta`.
     pub cost: f64,
+    /// The prediction at `theta`.
+    pub predicted: Predicted,
 }
 
-/// Levenberg–Marquardt on `f` from `x0` (forward differences, step 1e-2 in θ).
+/// Relative cost gain below which a fit leaves the sensitivities' Jacobian for forward
+/// differences.
+const SENSITIVITY_GAIN: f64 = 1e-3;
+
+/// Levenberg–Marquardt on `obj` from `x0` (whose prediction `p0` may be at hand). Each
+/// iteration takes the objective's Jacobian from sensitivities when it gives one, forward
+/// differences (step 1e-2 in θ) otherwise; an iteration whose sensitivity step finds no
+/// lower cost is taken again with the differences before the fit stops, so that it ends
+/// where the difference-Jacobian fit would have stopped.
 pub(crate) fn levenberg_marquardt(
-    f: &dyn Fn(&[f64]) -> Vec<f64>,
+    obj: &Objective,
     x0: &[f64],
+    p0: Option<Predicted>,
     max_iter: usize,
 ) -> FitResult {
     let n = x0.len();
     let mut x = x0.to_vec();
-    let mut r = f(&x);
+    let mut p = p0.unwrap_or_else(|| (obj.predict)(&x));
+    let mut r = (obj.residuals)(&p);
     let mut c = cost(&r);
     let mut lambda = 1e-2;
     let h = 1e-2;
-    for _ in 0..max_iter {
+    let differences = |x: &[f64], r: &[f64]| {
         let m = r.len();
         let mut j = DMatrix::<f64>::zeros(m, n);
         for k in 0..n {
-            let mut xp = x.clone();
+            let mut xp = x.to_vec();
             xp[k] += h;
-            let rp = f(&xp);
+            let rp = (obj.residuals)(&(obj.predict)(&xp));
             for i in 0..m {
                 j[(i, k)] = (rp[i] - r[i]) / h;
             }
         }
+        j
+    };
+    let mut iter = 0;
+    // Sensitivities while they make progress, then differences to the end (the stop rule
+    // of the difference fit: no step, or one of relative gain ≤ 1e-6).
+    let mut sensitivities = obj.jacobian.is_some();
+    while iter < max_iter {
+        let analytic = if sensitivities {
+            obj.jacobian
+                .and_then(|jf| jf(&x, &p))
+                .filter(|j| j.nrows() == r.len() && j.ncols() == n)
+        } else {
+            None
+        };
+        let from_sensitivities = analytic.is_some();
+        let j = analytic.unwrap_or_else(|| differences(&x, &r));
         let rv = DVector::from_column_slice(&r);
         let jtj = j.transpose() * &j;
         let g = j.transpose() * &rv;
-        let mut improved = false;
+        let lambda0 = lambda;
+        let mut gain = None;
         for _ in 0..8 {
             let mut a = jtj.clone();
             for k in 0..n {
@@ -422,24 +676,39 @@ pub(crate) fn levenberg_marquardt(
                 continue;
             };
             let xn: Vec<f64> = x.iter().zip(step.iter()).map(|(a, b)| a + b).collect();
-            let rn = f(&xn);
+            let pn = (obj.predict)(&xn);
+            let rn = (obj.residuals)(&pn);
             let cn = cost(&rn);
             if cn.is_finite() && cn < c {
-                let rel = (c - cn) / c.max(1e-300);
+                gain = Some((c - cn) / c.max(1e-300));
                 x = xn;
+                p = pn;
                 r = rn;
                 c = cn;
                 lambda = (lambda / 3.0).max(1e-7);
-                improved = rel > 1e-6;
                 break;
             }
             lambda *= 4.0;
         }
-        if !improved {
+        if from_sensitivities && gain.is_none_or(|g| g <= SENSITIVITY_GAIN) {
+            // the sensitivities no longer pay: differences from here on (the same iteration
+            // again when this one found no step)
+            sensitivities = false;
+            if gain.is_none() {
+                lambda = lambda0;
+                continue;
+            }
+        }
+        iter += 1;
+        if gain.is_none_or(|g| g <= 1e-6) && !from_sensitivities {
             break;
         }
     }
-    FitResult { theta: x, cost: c }
+    FitResult {
+        theta: x,
+        cost: c,
+        predicted: p,
+    }
 }
 
 /// Start points of a fit with `n` scaled parameters: every combination of a few values

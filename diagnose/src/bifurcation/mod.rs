@@ -41,7 +41,7 @@ use crate::{Effect, Error, Level, Result, Verdict};
 use candidates::{BranchCandidate, ParameterSpec, Scales};
 use fit::{
     absence_finding, absence_residuals, all_residuals, first_hopf, hopf_scan, levenberg_marquardt,
-    onset_residuals, predict, start_grid, Predicted, Rows, Setting,
+    onset_residuals, predict, residual_jacobian, start_grid, Objective, Predicted, Rows, Setting,
 };
 pub use points::{points_from_records, structure_check, RecordRole, RecordUse, StructureCheck};
 
@@ -74,6 +74,28 @@ pub struct BifurcationOptions {
     /// uncertainty (DECISIONS, "Issue 42 item 2, round 27").
     #[serde(default = "default_onset_uncertainty")]
     pub onset_uncertainty: f64,
+    /// Where each Levenberg–Marquardt iteration takes its Jacobian (default
+    /// `differences`; DECISIONS, "Bifurcation-level fits by derivatives (issue 43 item 2, round
+    /// 31)": the sensitivities' fits end at other, higher optima on the Bristol records).
+    #[serde(default)]
+    pub jacobian: FitJacobian,
+}
+
+/// The Jacobian of the bifurcation-level fits.
+#[derive(
+    Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum FitJacobian {
+    /// Forward differences of whole diagrams, step 1e-2 in θ: one continuation per
+    /// parameter and iteration.
+    #[default]
+    Differences,
+    /// From the sensitivities of the predicted orbits at the measured points
+    /// (dY/dθ = −[G_Y; c]⁻¹[G_θ; 0], [`aeroelastic::branch::OrbitSensitivity`]) while they
+    /// gain more than 0.1 % of the cost per iteration, then differences to the same stop
+    /// rule.
+    Sensitivities,
 }
 
 fn default_onset_uncertainty() -> f64 {
@@ -91,6 +113,7 @@ impl Default for BifurcationOptions {
             min_shrink: 0.3,
             max_iterations: 30,
             onset_uncertainty: default_onset_uncertainty(),
+            jacobian: FitJacobian::default(),
         }
     }
 }
@@ -1064,11 +1087,25 @@ fn fit_candidate(
         let s = c.apply(section, theta).ok();
         predict(s.as_ref(), setting, need_hopf)
     };
-    let eval = |theta: &[f64], rows: &Rows| -> Vec<f64> {
-        all_residuals(&predicted(theta), rows, setting)
+    let section_at = |theta: &[f64]| c.apply(section, theta).ok();
+    // Levenberg–Marquardt on the rows `rows`: residuals of a prediction and their
+    // Jacobian from its orbits' sensitivities.
+    let lm = |rows: &Rows, x0: &[f64], p0: Option<Predicted>, iterations: usize| {
+        let res = |p: &Predicted| all_residuals(p, rows, setting);
+        let jac = |th: &[f64], p: &Predicted| residual_jacobian(&section_at, th, p, rows, setting);
+        let obj = Objective {
+            predict: &predicted,
+            residuals: &res,
+            jacobian: match opts.jacobian {
+                FitJacobian::Differences => None,
+                FitJacobian::Sensitivities => Some(&jac),
+            },
+        };
+        levenberg_marquardt(&obj, x0, p0, iterations)
     };
     let n = c.parameters.len();
-    // Start: the best point of the grid (and the origin's neighbourhood).
+    // Start: the best point of the grid (and the origin's neighbourhood); the predictions
+    // of the best few are kept for their fits.
     let cost = |r: &[f64]| r.iter().map(|v| v * v).sum::<f64>();
     let mut starts = start_grid(n);
     starts.push(vec![0.0; n]);
@@ -1076,18 +1113,33 @@ fn fit_candidate(
         p.resize(n, 0.0);
         starts.push(p);
     }
-    let mut ranked: Vec<(f64, Vec<f64>)> = starts
-        .iter()
-        .map(|s| (cost(&eval(s, all)), s.clone()))
-        .collect();
+    let mut ranked: Vec<(f64, Vec<f64>, Option<Predicted>)> = Vec::with_capacity(starts.len());
+    for st in &starts {
+        let p = predicted(st);
+        let cst = cost(&all_residuals(&p, all, setting));
+        // kept while fewer than START_POINTS earlier starts are at least as good
+        let better = ranked.iter().filter(|(k, _, _)| *k <= cst).count();
+        ranked.push((cst, st.clone(), (better < START_POINTS).then_some(p)));
+        if ranked.iter().filter(|r| r.2.is_some()).count() > 2 * START_POINTS {
+            let mut costs: Vec<f64> = ranked.iter().map(|r| r.0).collect();
+            costs.sort_by(f64::total_cmp);
+            let cut = costs[START_POINTS - 1];
+            ranked
+                .iter_mut()
+                .filter(|r| r.0 > cut)
+                .for_each(|r| r.2 = None);
+        }
+    }
     ranked.sort_by(|a, b| a.0.total_cmp(&b.0));
     // Levenberg–Marquardt from the best few starts (the landscape has several basins:
     // a fold can form from softening or from an even term), the best end kept.
-    let f_all = |th: &[f64]| eval(th, all);
+    // (in parallel; the first of equal ends wins, as in start order)
+    ranked.truncate(START_POINTS);
     let full = ranked
-        .iter()
-        .take(START_POINTS)
-        .map(|(_, s)| levenberg_marquardt(&f_all, s, opts.max_iterations))
+        .into_par_iter()
+        .map(|(_, s, p)| lm(all, &s, p, opts.max_iterations))
+        .collect::<Vec<_>>()
+        .into_iter()
         .min_by(|a, b| a.cost.total_cmp(&b.cost))
         .expect("at least one start");
     // Even terms jointly to the sign convention (first even term ≥ 0): the diagram is the
@@ -1104,21 +1156,31 @@ fn fit_candidate(
     let mut held_onsets = vec![None; diagram_in.onsets.len()];
     let mut held_absences = vec![None; diagram_in.absences.len()];
     let mut fold_values = vec![Vec::new(); n];
-    for &g in groups {
-        let keep = |u: f64| !same_speed(u, g);
-        let train_points: Vec<&MeasuredAmplitude> =
-            all.points.iter().copied().filter(|m| keep(m.u)).collect();
-        let train_onsets: Vec<&MeasuredOnset> =
-            all.onsets.iter().copied().filter(|m| keep(m.u)).collect();
-        let train_absences: Vec<&MeasuredAbsence> =
-            all.absences.iter().copied().filter(|m| keep(m.u)).collect();
-        let train = Rows {
-            points: &train_points,
-            onsets: &train_onsets,
-            absences: &train_absences,
-        };
-        let f_train = |th: &[f64]| eval(th, &train);
-        let r = levenberg_marquardt(&f_train, &full.theta, opts.max_iterations / 2);
+    // The folds' fits are independent: in parallel, their results taken in speed order.
+    let fold_fits: Vec<_> = groups
+        .par_iter()
+        .map(|&g| {
+            let keep = |u: f64| !same_speed(u, g);
+            let train_points: Vec<&MeasuredAmplitude> =
+                all.points.iter().copied().filter(|m| keep(m.u)).collect();
+            let train_onsets: Vec<&MeasuredOnset> =
+                all.onsets.iter().copied().filter(|m| keep(m.u)).collect();
+            let train_absences: Vec<&MeasuredAbsence> =
+                all.absences.iter().copied().filter(|m| keep(m.u)).collect();
+            let train = Rows {
+                points: &train_points,
+                onsets: &train_onsets,
+                absences: &train_absences,
+            };
+            lm(
+                &train,
+                &full.theta,
+                Some(full.predicted.clone()),
+                opts.max_iterations / 2,
+            )
+        })
+        .collect();
+    for (&g, r) in groups.iter().zip(fold_fits) {
         let mut v = c.values(&r.theta);
         flip(&mut v);
         for (k, v) in v.into_iter().enumerate() {
@@ -1129,7 +1191,7 @@ fn fit_candidate(
             .filter(|m| same_speed(m.u, g))
             .cloned()
             .collect();
-        let p = predicted(&r.theta);
+        let p = r.predicted;
         let d = match &p.set {
             Some(set) => measured_distances(set, &test),
             None => summary(None, &test, setting).points,
@@ -1199,10 +1261,10 @@ fn fit_candidate(
     } else {
         resolution
     };
-    let p_all = predicted(&full.theta);
+    let p_all = &full.predicted;
     let fit = with_rows(
         summary(p_all.set.clone(), measured, setting),
-        &p_all,
+        p_all,
         diagram_in,
         setting,
     );
