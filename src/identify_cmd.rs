@@ -120,12 +120,13 @@ pub struct IdentifyArgs {
     /// (default). The start value with `--lag-fit-pressure-lag true`.
     #[arg(long, value_name = "TAU")]
     pub lag_pressure_lag: Option<f64>,
-    /// With `--law lag`: `true` fits the rate share c by output error (the objective
-    /// profiled over c in [0, 1]) instead of holding it at `--lag-rate-share`.
+    /// With `--law lag`: `true` fits the rate share c by output error (a parameter of the
+    /// Levenberg–Marquardt fit, bounded to [0, 1]) instead of holding it at `--lag-rate-share`.
     #[arg(long, value_name = "true|false")]
     pub lag_fit_rate_share: Option<bool>,
-    /// With `--law lag`: `true` fits the pressure lag τ_p by output error (profiled over
-    /// [0, 6] b/U) instead of holding it at `--lag-pressure-lag`.
+    /// With `--law lag`: `true` fits the pressure lag τ_p by output error (a parameter of
+    /// the Levenberg–Marquardt fit, bounded to [0, 6] b/U) instead of holding it at
+    /// `--lag-pressure-lag`.
     #[arg(long, value_name = "true|false")]
     pub lag_fit_pressure_lag: Option<bool>,
 }
