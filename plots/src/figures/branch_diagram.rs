@@ -179,12 +179,14 @@ impl Figure for BranchDiagramFigure {
                 true,
             ));
         }
-        legend.push(LegendEntry::marker(
-            "Hopf point",
-            MarkerShape::TriangleUp,
-            HIGHLIGHT,
-            true,
-        ));
+        if !self.hopf.is_empty() {
+            legend.push(LegendEntry::marker(
+                "Hopf point",
+                MarkerShape::TriangleUp,
+                HIGHLIGHT,
+                true,
+            ));
+        }
         if !self.folds.is_empty() {
             legend.push(LegendEntry::marker(
                 "fold of cycles",
@@ -328,6 +330,15 @@ mod tests {
         };
         let svg = crate::render::render_svg_text(&stable_only).unwrap();
         assert!(svg.contains("stable LCO") && !svg.contains("unstable LCO"));
+        assert!(svg.contains("Hopf point"));
+        // a diagram without a Hopf point (a parameter continuation between two folds): no
+        // legend entry for one
+        let no_hopf = BranchDiagramFigure {
+            hopf: vec![],
+            ..f.clone()
+        };
+        let svg = crate::render::render_svg_text(&no_hopf).unwrap();
+        assert!(!svg.contains("Hopf point") && svg.contains("fold of cycles"));
         let e = crate::render::render_svg_text(&BranchDiagramFigure::default()).unwrap_err();
         assert!(e.to_string().contains("branches"), "{e}");
     }
