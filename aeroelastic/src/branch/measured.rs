@@ -496,14 +496,15 @@ pub struct MeasuredDistance {
     pub speed_gap: Option<f64>,
 }
 
-/// The predicted orbit at a measured point's speed on the branches of `set`: the
-/// segment of the same stability that covers `m.u` and whose first-harmonic amplitude is
-/// closest to the measured one (pitch when measured, else heave), linearly interpolated
-/// in U. Returns (pitch \[rad\], heave \[m\], frequency \[Hz\]).
-pub fn predicted_at(set: &BranchSet, m: &MeasuredAmplitude) -> Option<(f64, f64, f64)> {
-    let mut best: Option<(f64, (f64, f64, f64))> = None;
-    for b in &set.branches {
-        for w in b.points.windows(2) {
+/// The segment of `set` that [`predicted_at`] interpolates for the measured point `m`:
+/// (branch index, index of the segment's first point). Among the segments of the same
+/// stability that cover `m.u`, the one whose interpolated first-harmonic amplitude is
+/// closest to the measured one (pitch when measured, else heave); the first on a tie.
+/// `None` when no segment covers `m.u`.
+pub fn covering_segment(set: &BranchSet, m: &MeasuredAmplitude) -> Option<(usize, usize)> {
+    let mut best: Option<(f64, (usize, usize))> = None;
+    for (bi, b) in set.branches.iter().enumerate() {
+        for (i, w) in b.points.windows(2).enumerate() {
             if w[0].stable != m.stable || w[1].stable != m.stable {
                 continue;
             }
@@ -514,18 +515,33 @@ pub fn predicted_at(set: &BranchSet, m: &MeasuredAmplitude) -> Option<(f64, f64,
             let lerp = |a: f64, b: f64| a * (1.0 - f) + b * f;
             let a = lerp(w[0].amplitude1_alpha, w[1].amplitude1_alpha);
             let h = lerp(w[0].amplitude1_h, w[1].amplitude1_h);
-            let hz = lerp(w[0].omega, w[1].omega) / std::f64::consts::TAU;
             let miss = match (m.amplitude_alpha, m.amplitude_h) {
                 (Some(ma), _) => (a - ma).abs(),
                 (None, Some(mh)) => (h - mh).abs(),
                 (None, None) => 0.0,
             };
             if best.is_none_or(|(bm, _)| miss < bm) {
-                best = Some((miss, (a, h, hz)));
+                best = Some((miss, (bi, i)));
             }
         }
     }
     best.map(|b| b.1)
+}
+
+/// The predicted orbit at a measured point's speed on the branches of `set`: the
+/// segment of the same stability that covers `m.u` and whose first-harmonic amplitude is
+/// closest to the measured one (pitch when measured, else heave; [`covering_segment`]),
+/// linearly interpolated in U. Returns (pitch \[rad\], heave \[m\], frequency \[Hz\]).
+pub fn predicted_at(set: &BranchSet, m: &MeasuredAmplitude) -> Option<(f64, f64, f64)> {
+    let (bi, i) = covering_segment(set, m)?;
+    let w = &set.branches[bi].points[i..i + 2];
+    let f = (m.u - w[0].u) / (w[1].u - w[0].u);
+    let lerp = |a: f64, b: f64| a * (1.0 - f) + b * f;
+    Some((
+        lerp(w[0].amplitude1_alpha, w[1].amplitude1_alpha),
+        lerp(w[0].amplitude1_h, w[1].amplitude1_h),
+        lerp(w[0].omega, w[1].omega) / std::f64::consts::TAU,
+    ))
 }
 
 /// Distances of measured points to the predicted branches of the same stability

@@ -330,31 +330,15 @@ pub(crate) fn residuals(
             Some((a, h, f)) => (a, h, f, 0.0),
             None => {
                 // nearest orbit of the same stability in the scaled plane
-                let mut best: Option<(f64, (f64, f64, f64, f64))> = None;
-                for b in set.iter().flat_map(|s| s.branches.iter()) {
-                    for p in b.points.iter().filter(|p| p.stable == m.stable) {
-                        let mut d = ((p.u - m.u) / s.s_u).powi(2);
-                        if let Some(a) = m.amplitude_alpha {
-                            d += ((p.amplitude1_alpha - a) / s.n_alpha(a)).powi(2);
-                        }
-                        if let Some(h) = m.amplitude_h {
-                            d += ((p.amplitude1_h - h) / s.n_h(h)).powi(2);
-                        }
-                        if best.is_none_or(|(bd, _)| d < bd) {
-                            best = Some((
-                                d,
-                                (
-                                    p.amplitude1_alpha,
-                                    p.amplitude1_h,
-                                    p.omega / std::f64::consts::TAU,
-                                    p.u - m.u,
-                                ),
-                            ));
-                        }
-                    }
-                }
-                match best {
-                    Some((_, v)) => v,
+                match set
+                    .and_then(|set| nearest(set, m, s).map(|(bi, i)| &set.branches[bi].points[i]))
+                {
+                    Some(p) => (
+                        p.amplitude1_alpha,
+                        p.amplitude1_h,
+                        p.omega / std::f64::consts::TAU,
+                        p.u - m.u,
+                    ),
                     // no orbit of this stability at all: predicted 0 at the far end of the
                     // range
                     None => (0.0, 0.0, f64::NAN, s.range[1] - s.range[0]),
@@ -378,36 +362,6 @@ pub(crate) fn residuals(
 
 fn cost(r: &[f64]) -> f64 {
     r.iter().map(|v| v * v).sum()
-}
-
-/// The branch and segment of `set` whose orbit [`aeroelastic::branch::predicted_at`] takes
-/// for the measured point `m` (the same choice: the segment of that stability covering
-/// `m.u` whose amplitude is closest to the measured one, the first on a tie).
-fn covering(set: &BranchSet, m: &MeasuredAmplitude) -> Option<(usize, usize)> {
-    let mut best: Option<(f64, (usize, usize))> = None;
-    for (bi, b) in set.branches.iter().enumerate() {
-        for (i, w) in b.points.windows(2).enumerate() {
-            if w[0].stable != m.stable || w[1].stable != m.stable {
-                continue;
-            }
-            if (w[0].u - m.u) * (w[1].u - m.u) > 0.0 || w[0].u == w[1].u {
-                continue;
-            }
-            let f = (m.u - w[0].u) / (w[1].u - w[0].u);
-            let lerp = |a: f64, b: f64| a * (1.0 - f) + b * f;
-            let a = lerp(w[0].amplitude1_alpha, w[1].amplitude1_alpha);
-            let h = lerp(w[0].amplitude1_h, w[1].amplitude1_h);
-            let miss = match (m.amplitude_alpha, m.amplitude_h) {
-                (Some(ma), _) => (a - ma).abs(),
-                (None, Some(mh)) => (h - mh).abs(),
-                (None, None) => 0.0,
-            };
-            if best.is_none_or(|(bm, _)| miss < bm) {
-                best = Some((miss, (bi, i)));
-            }
-        }
-    }
-    best.map(|b| b.1)
 }
 
 /// The branch point [`residuals`] takes for an uncovered measured point: the nearest orbit
@@ -485,7 +439,7 @@ pub(crate) fn residual_jacobian(
     for m in rows.points {
         let d: Option<(Vec<OrbitValues>, bool)> = match p.set.as_ref() {
             None => None,
-            Some(set) => match covering(set, m) {
+            Some(set) => match aeroelastic::branch::covering_segment(set, m) {
                 Some((bi, i)) => {
                     Some((sens(bi, SensitivityAt::Speed { index: i, u: m.u })?, false))
                 }
@@ -562,7 +516,7 @@ pub(crate) fn residual_jacobian(
                     amplitude_alpha: Some(0.0),
                     frequency_hz: None,
                 };
-                match covering(set, &probe) {
+                match aeroelastic::branch::covering_segment(set, &probe) {
                     Some((bi, i)) => sens(bi, SensitivityAt::Speed { index: i, u: a.u })?,
                     None => vec![OrbitValues::default(); n],
                 }
