@@ -1100,9 +1100,9 @@ fn decay_row_at(
 /// of the mode shows a dry-friction envelope: one mode has one damping). Unknowns: with two modes'
 /// frequencies both stiffnesses, with one the stiffness of the DOF that dominates that
 /// mode (the larger share of the given mode's kinetic energy, M_ii φ_i²), the other held;
-/// dampers alike from the measured damping ratios that differ from the given modes' beyond
-/// [`COVERAGE`] standard uncertainties (one that agrees is a residual, not a freed damper).
-/// Gauss–Newton on the residuals divided
+/// dampers alike from the measured damping ratios; a damper whose identified interval
+/// holds its given value is then held at it and the rest identified again (kept when that
+/// fit converges: [`identify_with`]). Gauss–Newton on the residuals divided
 /// by their standard uncertainties (stiffness as log k, dampers scaled by the given
 /// critical damping), from the given structure; intervals from the inverse of JᵀJ at the
 /// solution (± [`COVERAGE`] standard uncertainties). `None` when M is singular or a mode
@@ -1145,7 +1145,48 @@ fn identify_at_rest(
 /// both; a speed alone, the one the Hopf speed is most sensitive to (largest
 /// |∂ln U_H/∂ln k|). `free` (k_h, k_α, c_h, c_α) overrides the free set (a candidate
 /// conformed with the level's set).
+///
+/// Without `free`, a freed damper whose identified interval (± [`COVERAGE`] standard
+/// uncertainties) holds its given value is held at the given value and the others are
+/// identified again; that fit is kept when it converges. A damping ratio is a coarse datum
+/// (a second mode's can be ± 35 %), and solving two of them exactly moves both dampers by
+/// their noise through the modes' coupling: generated set 11 of seed 2027 (ζ₂ 0.0269 ±
+/// 0.0095 against 0.0320 given) made c_α 0.0020 for a truth of 0.0096. A damper the data
+/// do not contradict is not moved by them.
 fn identify_with(
+    rows: &[ModeCheck],
+    m: &Matrix2<f64>,
+    given: &Structure,
+    ke: &Matrix2<f64>,
+    ce: &Matrix2<f64>,
+    onsets: Option<&OnsetFit>,
+    free: Option<[bool; 4]>,
+) -> Option<StructureIdentification> {
+    let full = identify_free_set(rows, m, given, ke, ce, onsets, free)?;
+    if free.is_some() {
+        return Some(full);
+    }
+    let mut set = [0, 1, 2, 3].map(|i| full.parameters.get(i).is_some_and(|p| !p.held));
+    let mut changed = false;
+    for (i, p) in full.parameters.iter().enumerate().skip(2) {
+        let covers = p.interval[0] <= p.given && p.given <= p.interval[1];
+        if set[i] && covers {
+            set[i] = false;
+            changed = true;
+        }
+    }
+    if !changed {
+        return Some(full);
+    }
+    match identify_free_set(rows, m, given, ke, ce, onsets, Some(set)) {
+        Some(reduced) if reduced.converged => Some(reduced),
+        _ => Some(full),
+    }
+}
+
+/// [`identify_with`] with the free set as given or chosen by the data, without the second
+/// pass that holds uncontradicted dampers.
+fn identify_free_set(
     rows: &[ModeCheck],
     m: &Matrix2<f64>,
     given: &Structure,
@@ -1243,20 +1284,9 @@ fn identify_with(
             return None;
         }
     }
-    // A damper is freed by a mode whose damping ratio differs from the given one beyond
-    // COVERAGE standard uncertainties; one that agrees stays a residual of the fit. Damping
-    // ratios are coarse (a second mode's ± 35 %): solving two of them exactly moves the
-    // dampers by their noise through the modes' coupling (generated set 11 of seed 2027:
-    // ζ₂ 0.0269 ± 0.0095 against 0.0320 given, −0.5 σ, made c_α 0.0020 for a truth of
-    // 0.0096). Frequencies are precise to 0.1 %, so both stiffnesses stay free.
     let z_modes: Vec<usize> = modes
         .iter()
-        .filter(|md| {
-            md.2.is_some_and(|zr| match (zr.linear_zeta, zr.linear_zeta_sd) {
-                (Some(z), Some(sd)) => ((z - eig[md.0].1) / sd.max(1e-6)).abs() > COVERAGE,
-                _ => false,
-            })
-        })
+        .filter(|md| md.2.is_some())
         .map(|md| md.0)
         .collect();
     let mut c_set = [false; 2];
