@@ -153,13 +153,15 @@ pub struct StructureParameter {
     pub unit: String,
     /// Given value.
     pub given: f64,
-    /// Identified value (the given one when held).
+    /// Identified value; when held, the given one (a spring) or the given damping ratio
+    /// at the identified spring (a damper: c × √(k/k_given)).
     pub identified: f64,
     /// Interval of ± [`COVERAGE`] standard uncertainties, propagated from the measured
     /// modes' uncertainties through the linearised mode equations (stiffnesses: on
-    /// log k); the given value twice when held.
+    /// log k); the held value twice when held.
     pub interval: [f64; 2],
-    /// Held at the given value (no measured mode informs it).
+    /// Held (no measured mode informs it, or, a damper, the data do not contradict its
+    /// given damping ratio).
     pub held: bool,
 }
 
@@ -1100,9 +1102,10 @@ fn decay_row_at(
 /// of the mode shows a dry-friction envelope: one mode has one damping). Unknowns: with two modes'
 /// frequencies both stiffnesses, with one the stiffness of the DOF that dominates that
 /// mode (the larger share of the given mode's kinetic energy, M_ii φ_i²), the other held;
-/// dampers alike from the measured damping ratios; a damper whose identified interval
-/// holds its given value is then held at it and the rest identified again (kept when that
-/// fit converges: [`identify_with`]). Gauss–Newton on the residuals divided
+/// dampers alike from the measured damping ratios; a held damper keeps its DOF's given
+/// damping ratio (c ∝ √k when its spring is corrected), and a freed damper whose identified
+/// interval holds that value is then held and the rest identified again (kept when that fit
+/// converges: [`identify_with`]). Gauss–Newton on the residuals divided
 /// by their standard uncertainties (stiffness as log k, dampers scaled by the given
 /// critical damping), from the given structure; intervals from the inverse of JᵀJ at the
 /// solution (± [`COVERAGE`] standard uncertainties). `None` when M is singular or a mode
@@ -1147,8 +1150,8 @@ fn identify_at_rest(
 /// conformed with the level's set).
 ///
 /// Without `free`, a freed damper whose identified interval (± [`COVERAGE`] standard
-/// uncertainties) holds its given value is held at the given value and the others are
-/// identified again; that fit is kept when it converges. A damping ratio is a coarse datum
+/// uncertainties) holds its held value (the given damping ratio at the identified spring)
+/// is held and the others are identified again; that fit is kept when it converges. A damping ratio is a coarse datum
 /// (a second mode's can be ± 35 %), and solving two of them exactly moves both dampers by
 /// their noise through the modes' coupling: generated set 11 of seed 2027 (ζ₂ 0.0269 ±
 /// 0.0095 against 0.0320 given) made c_α 0.0020 for a truth of 0.0096. A damper the data
@@ -1169,7 +1172,10 @@ fn identify_with(
     let mut set = [0, 1, 2, 3].map(|i| full.parameters.get(i).is_some_and(|p| !p.held));
     let mut changed = false;
     for (i, p) in full.parameters.iter().enumerate().skip(2) {
-        let covers = p.interval[0] <= p.given && p.given <= p.interval[1];
+        // held, the damper would keep the given damping ratio at the identified spring
+        let spring = &full.parameters[i - 2];
+        let held = p.given * (spring.identified / spring.given).sqrt();
+        let covers = p.interval[0] <= held && held <= p.interval[1];
         if set[i] && covers {
             set[i] = false;
             changed = true;
@@ -1312,6 +1318,12 @@ fn identify_free_set(
         let mut c = cg;
         for (i, &d) in k_free.iter().enumerate() {
             k[d] = kg[d] * p[i].exp();
+        }
+        // a held damper keeps its DOF's given damping ratio ζ = c / (2√(k m)): a
+        // corrected spring carries its damper along (the structure is specified by its
+        // frequencies and damping ratios, DATA_FORMAT's structure file)
+        for d in 0..2 {
+            c[d] = cg[d] * (k[d] / kg[d]).sqrt();
         }
         for (i, &d) in c_free.iter().enumerate() {
             c[d] = cg[d] + c_scale[d] * p[k_free.len() + i];
@@ -1485,7 +1497,7 @@ fn identify_free_set(
                 let half = COVERAGE * c_scale[d] * sd_p[k_free.len() + i];
                 [c[d] - half, c[d] + half]
             }
-            None => [cg[d], cg[d]],
+            None => [c[d], c[d]],
         };
         parameters.push(StructureParameter {
             name: name.into(),
