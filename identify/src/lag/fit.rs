@@ -680,13 +680,17 @@ impl Problem<'_> {
                         g.fill(0.0);
                     }
                 }
-                let col = &mut jac[j][offset..offset + n];
-                for i in 0..n {
-                    let mut ag = 0.0;
-                    for (t2, &l) in kept.iter().enumerate() {
-                        ag += stack[l][i] * g[t2];
+                // A·g column by column: every row's sum still from 0.0 over the kept columns
+                // in order (the same value as the row-wise sum), in long unit-stride loops
+                let mut ag = vec![0.0; n];
+                for (t2, &l) in kept.iter().enumerate() {
+                    for (acc, a) in ag.iter_mut().zip(&stack[l][..n]) {
+                        *acc += a * g[t2];
                     }
-                    col[i] = -(pv[i] + ag) * scale;
+                }
+                let col = &mut jac[j][offset..offset + n];
+                for ((c, p), a) in col.iter_mut().zip(&pv[..n]).zip(&ag) {
+                    *c = -(p + a) * scale;
                 }
             }
             offset += n;
