@@ -292,13 +292,20 @@ pub(crate) struct ChannelLaw {
 /// Extra (augmentation) columns of case `i`, channel `c`.
 pub(crate) type Extra<'a> = &'a (dyn Fn(usize, usize) -> Vec<Vec<f64>> + Sync);
 
+/// Columns `pick(i, c, subset)` of case `i`, channel `c`: the set's columns at the indices
+/// `subset`, in its order (what `cols(i, c)` picked at them gives).
+pub(crate) type Pick<'a> = &'a (dyn Fn(usize, usize, &[usize]) -> Vec<Vec<f64>> + Sync);
+
 /// An augmentation column set: a cache key naming it (unique within a run), the set's
-/// columns of case `i`, channel `c`, and the indices used (None: all).
+/// columns of case `i`, channel `c`, and the indices used (None: all). `pick`, when given,
+/// builds the used columns of a subset directly (a pool of stored columns: without it every
+/// held-out prediction copies the whole pool to keep three columns of it).
 #[derive(Clone, Copy)]
 pub(crate) struct Aug<'a> {
     pub key: &'a str,
     pub cols: Extra<'a>,
     pub subset: Option<&'a [usize]>,
+    pub pick: Option<Pick<'a>>,
 }
 
 impl Aug<'_> {
@@ -307,29 +314,41 @@ impl Aug<'_> {
         key: "",
         cols: &|_, _| Vec::new(),
         subset: None,
+        pick: None,
     };
 
     /// The used columns of case `i`, channel `c`.
     pub fn columns(&self, i: usize, c: usize) -> Vec<Vec<f64>> {
-        let all = (self.cols)(i, c);
-        match self.subset {
-            None => all,
-            Some(s) => s.iter().map(|&j| all[j].clone()).collect(),
+        match (self.subset, self.pick) {
+            (None, _) => (self.cols)(i, c),
+            (Some(s), Some(pick)) => pick(i, c, s),
+            (Some(s), None) => {
+                let all = (self.cols)(i, c);
+                s.iter().map(|&j| all[j].clone()).collect()
+            }
         }
     }
 
     /// Per-node statistics of the whole set on training node `f`, channel `c`.
     pub fn gram(&self, nodes: &[Node], f: &NodeFit, c: usize) -> Arc<NodeGram> {
+        // case by case appended to the stacked columns (one case's set held at a time,
+        // not every case's before stacking)
         let stacked = || {
-            let per_case: Vec<Vec<Vec<f64>>> = nodes[f.node]
-                .cases
-                .iter()
-                .map(|&i| (self.cols)(i, c))
-                .collect();
-            let m = per_case.first().map_or(0, |v| v.len());
-            (0..m)
-                .map(|j| per_case.iter().flat_map(|v| v[j].iter().copied()).collect())
-                .collect()
+            let node_cases = &nodes[f.node].cases;
+            let mut out: Vec<Vec<f64>> = Vec::new();
+            for (k, &i) in node_cases.iter().enumerate() {
+                let v = (self.cols)(i, c);
+                if k == 0 {
+                    out = v
+                        .iter()
+                        .map(|col| Vec::with_capacity(col.len() * node_cases.len()))
+                        .collect();
+                }
+                for (o, col) in out.iter_mut().zip(&v) {
+                    o.extend_from_slice(col);
+                }
+            }
+            out
         };
         f.ch[c].gram(&format!("{}#{c}", self.key), &stacked)
     }
@@ -356,6 +375,7 @@ pub(crate) fn fit_channel(
         key: &key,
         cols: &cols,
         subset: None,
+        pick: None,
     };
     // without augmentation the shared terms' statistics are a part of the node's cached
     // section-term statistics
@@ -746,6 +766,37 @@ mod tests {
             }
         }
         assert!(gram_matrix(&[]).is_empty());
+    }
+
+    #[test]
+    fn picked_columns_are_the_subset_of_all_columns() {
+        let table: Vec<Vec<Vec<f64>>> = (0..3)
+            .map(|i| (0..5).map(|j| vec![(i * 10 + j) as f64 + 0.5; 4]).collect())
+            .collect();
+        let all = |i: usize, _c: usize| table[i].clone();
+        let pick =
+            |i: usize, _c: usize, s: &[usize]| s.iter().map(|&j| table[i][j].clone()).collect();
+        let set = [3usize, 0];
+        let plain = Aug {
+            key: "t",
+            cols: &all,
+            subset: Some(&set),
+            pick: None,
+        };
+        let picked = Aug {
+            pick: Some(&pick),
+            ..plain
+        };
+        for i in 0..3 {
+            assert_eq!(picked.columns(i, 1), plain.columns(i, 1));
+            assert_eq!(picked.columns(i, 0), vec![table[i][3].clone(), table[i][0].clone()]);
+        }
+        // without a subset the pick is not used: every column
+        let whole = Aug {
+            subset: None,
+            ..picked
+        };
+        assert_eq!(whole.columns(2, 0), table[2]);
     }
 
     #[test]
