@@ -43,7 +43,7 @@ use crate::regress::{CaseFactor, CaseProblem, Measure, Stlsq};
 use crate::{Error, Result};
 
 use super::law::{kirchhoff_dx, FittedRange, LagChannel, LagColumn, LagLaw};
-use super::series::{x_static_partials, LagSeries, N_THETA};
+use super::series::{x_static_with_partials, LagSeries, N_THETA};
 
 /// Bounds of θ = (τ₁ \[b/U\], τ₂ \[b/U\], α* \[rad\], m): τ₁ ∈ (0.05, 100], τ₂ ∈ \[0, 100\],
 /// α* ∈ (0.02, 1.2), m ∈ \[1, 20\]. A fit ending on an open bound is refused.
@@ -623,7 +623,7 @@ impl Problem<'_> {
                     let mut pd = vec![[0.0; 3]; p];
                     for (row, i) in (st..s.len()).enumerate() {
                         let (xi, pa) = if inst {
-                            (law.x_static(a[i]), x_static_partials(&law, a[i]))
+                            x_static_with_partials(&law, a[i])
                         } else {
                             (1.0, [0.0; 3])
                         };
