@@ -69,7 +69,7 @@ const WEIGHT_CACHE_MAX: usize = 32;
 /// The weights of [`savitzky_golay_derivative`] for (`half_window`, `order`), computed once
 /// per process and shared (they depend on nothing else; the free-response diagnosis
 /// differentiates hundreds of series with the same window, and computing the 2·half_window
-/// end weights was a third of each call, DECISIONS round 32). `None` when a window's normal
+/// end weights was two thirds of each call, DECISIONS round 32). `None` when a window's normal
 /// equations are singular.
 fn window_weights(half_window: usize, order: usize) -> Option<Arc<WindowWeights>> {
     static CACHE: OnceLock<Mutex<HashMap<(usize, usize), Arc<WindowWeights>>>> = OnceLock::new();
