@@ -789,7 +789,10 @@ mod tests {
         };
         for i in 0..3 {
             assert_eq!(picked.columns(i, 1), plain.columns(i, 1));
-            assert_eq!(picked.columns(i, 0), vec![table[i][3].clone(), table[i][0].clone()]);
+            assert_eq!(
+                picked.columns(i, 0),
+                vec![table[i][3].clone(), table[i][0].clone()]
+            );
         }
         // without a subset the pick is not used: every column
         let whole = Aug {

@@ -328,7 +328,11 @@ impl FreeKinematics {
             .iter()
             .filter(|r| r.kind == CaseKind::Free)
             .count();
-        FreeKinematics((0..n).map(|_| residual::KinematicsSlot::default()).collect())
+        FreeKinematics(
+            (0..n)
+                .map(|_| residual::KinematicsSlot::default())
+                .collect(),
+        )
     }
 }
 
@@ -459,17 +463,15 @@ pub fn system_level_of(
             tail_weights = tails_law.tables.tails.clone();
             let tm: Arc<dyn AeroModel> = Arc::new(tails_law.model().clone());
             let tails_energy = jack_energy(&tails_opts);
-            if let Ok((tl, _)) =
-                level_and_runs(
-                    &tm,
-                    free,
-                    opts,
-                    tails_energy.as_deref(),
-                    Some(&range),
-                    true,
-                    Some(&kin),
-                )
-            {
+            if let Ok((tl, _)) = level_and_runs(
+                &tm,
+                free,
+                opts,
+                tails_energy.as_deref(),
+                Some(&range),
+                true,
+                Some(&kin),
+            ) {
                 if tl.before.is_finite() {
                     tails = Some((
                         tl.before,

@@ -499,7 +499,9 @@ pub(crate) fn prepare_run_with(
         })
     };
     let kin = match kin {
-        Some(slot) => slot.get_or_compute((s.half_window, s.order, i0, i1, dt.to_bits()), compute)?,
+        Some(slot) => {
+            slot.get_or_compute((s.half_window, s.order, i0, i1, dt.to_bits()), compute)?
+        }
         None => Arc::new(compute()?),
     };
     let (qd, qdd, freq) = (kin.qd.clone(), kin.qdd.clone(), kin.freq);

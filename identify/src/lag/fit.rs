@@ -651,7 +651,9 @@ impl Problem<'_> {
                             v[t][row] = acc;
                         }
                     }
-                    let w: Vec<Vec<f64>> = (0..js.len()).map(|t| w[t * p..(t + 1) * p].to_vec()).collect();
+                    let w: Vec<Vec<f64>> = (0..js.len())
+                        .map(|t| w[t * p..(t + 1) * p].to_vec())
+                        .collect();
                     (v, w)
                 })
                 .collect();

@@ -62,6 +62,9 @@ struct WindowWeights {
     ends: Vec<Vec<f64>>,
 }
 
+/// The weights of every (half window, degree) computed so far ([`window_weights`]).
+type WeightCache = Mutex<HashMap<(usize, usize), Arc<WindowWeights>>>;
+
 /// Most windows kept by [`window_weights`] (a run uses one or two; beyond this the weights
 /// are computed and not kept, so the cache stays bounded).
 const WEIGHT_CACHE_MAX: usize = 32;
@@ -72,7 +75,7 @@ const WEIGHT_CACHE_MAX: usize = 32;
 /// end weights was two thirds of each call, DECISIONS round 32). `None` when a window's normal
 /// equations are singular.
 fn window_weights(half_window: usize, order: usize) -> Option<Arc<WindowWeights>> {
-    static CACHE: OnceLock<Mutex<HashMap<(usize, usize), Arc<WindowWeights>>>> = OnceLock::new();
+    static CACHE: OnceLock<WeightCache> = OnceLock::new();
     let cache = CACHE.get_or_init(|| Mutex::new(HashMap::new()));
     if let Some(w) = cache
         .lock()
