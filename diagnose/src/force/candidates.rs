@@ -92,6 +92,7 @@ pub(crate) fn shared(
         key: cx.key,
         cols: &extra,
         subset: None,
+        pick: None,
     };
     let mut betas: Vec<Vec<f64>> = vec![Vec::new(); 2];
     for f in folds {
@@ -147,6 +148,7 @@ fn pool_stats(
         key: &key,
         cols: &cols,
         subset: None,
+        pick: None,
     };
     let mut g: Vec<Vec<f64>> = Vec::new();
     let mut b: Vec<f64> = Vec::new();
@@ -227,10 +229,13 @@ pub(crate) fn sparse<P: PoolColumn>(
     let mut n_params = 0usize;
     let mut chosen_names: Vec<(String, f64)> = Vec::new();
     let all = |i: usize, _c: usize| cols[i].clone();
+    // the selected columns of a case copied from the stored pool (not the whole pool)
+    let pick = |i: usize, _c: usize, s: &[usize]| s.iter().map(|&j| cols[i][j].clone()).collect();
     let pool_aug = Aug {
         key: cx.key,
         cols: &all,
         subset: None,
+        pick: Some(&pick),
     };
     for f in folds {
         for c in 0..2 {

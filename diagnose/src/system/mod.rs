@@ -260,6 +260,18 @@ pub fn model_energy(
     free: &Dataset,
     opts: &SystemOptions,
 ) -> Option<Vec<[f64; 2]>> {
+    model_energy_with(ids, law_opts, free, opts, None)
+}
+
+/// [`model_energy`] with the runs' model-independent preparation shared through `kin`
+/// (see [`prepare_free`]); the same values.
+fn model_energy_with(
+    ids: &[identify::pipeline::Identification],
+    law_opts: &IdentifiedOptions,
+    free: &Dataset,
+    opts: &SystemOptions,
+    kin: Option<&FreeKinematics>,
+) -> Option<Vec<[f64; 2]>> {
     use rayon::prelude::*;
     if ids.len() < 2 {
         return None;
@@ -269,7 +281,7 @@ pub fn model_energy(
         .map(|id| {
             let law = IdentifiedLaw::from_identification(id, law_opts).ok()?;
             let model: Arc<dyn AeroModel> = Arc::new(law.model().clone());
-            prepare_free(free, &model, opts).ok().map(|p| p.runs)
+            prepare_free(free, &model, opts, kin).ok().map(|p| p.runs)
         })
         .collect::<Option<_>>()?;
     let kf = runs.len() as f64;
@@ -302,10 +314,36 @@ pub(crate) struct FreeRuns {
     pub structure: Structure,
 }
 
+/// The model-independent part of every free run's preparation ([`residual::KinematicsSlot`],
+/// one per free record of one free data set), shared by [`prepare_free`] across the
+/// aerodynamic models one system level prepares the runs for.
+#[derive(Debug, Default)]
+pub(crate) struct FreeKinematics(Vec<residual::KinematicsSlot>);
+
+impl FreeKinematics {
+    /// Empty slots for the free runs of `free`.
+    fn new(free: &Dataset) -> Self {
+        let n = free
+            .records
+            .iter()
+            .filter(|r| r.kind == CaseKind::Free)
+            .count();
+        FreeKinematics(
+            (0..n)
+                .map(|_| residual::KinematicsSlot::default())
+                .collect(),
+        )
+    }
+}
+
+/// The free runs of `free` prepared for `model`. `kin`: one [`residual::KinematicsSlot`] per
+/// free run of `free` (in the order of its free records), shared by the preparations of
+/// the same data set for other models (see [`FreeKinematics`]); `None` computes them here.
 pub(crate) fn prepare_free(
     free: &Dataset,
     model: &Arc<dyn AeroModel>,
     opts: &SystemOptions,
+    kin: Option<&FreeKinematics>,
 ) -> Result<FreeRuns> {
     let name = free.manifest.name.as_str();
     let spec = opts.structure.or(free.manifest.structure).ok_or_else(|| {
@@ -339,7 +377,8 @@ pub(crate) fn prepare_free(
     let rho = free.manifest.section.air_density;
     let runs = recs
         .iter()
-        .map(|r| {
+        .enumerate()
+        .map(|(j, r)| {
             let hw = (opts.sg_half_window_s / r.dt).round().max(2.0) as usize;
             let s = ResidualSettings {
                 half_window: hw,
@@ -347,7 +386,8 @@ pub(crate) fn prepare_free(
                 warmup: opts.warmup,
                 pad: opts.pad,
             };
-            residual::prepare_run(name, r, model, rho, &structure, &s)
+            let slot = kin.and_then(|k| k.0.get(j));
+            residual::prepare_run_with(name, r, model, rho, &structure, &s, slot)
         })
         .collect::<Result<Vec<_>>>()?;
     Ok(FreeRuns { runs, structure })
@@ -393,9 +433,11 @@ pub fn system_level_of(
     let (id, law, jack) = sim_identification(campaign, prepared, forced)?;
     let model: Arc<dyn AeroModel> = Arc::new(law.model().clone());
     let chord = forced.manifest.section.chord;
+    // every model below prepares the same free runs: their derivatives once
+    let kin = FreeKinematics::new(free);
     let jack_energy = |law_opts: &IdentifiedOptions| {
         jack.as_ref()
-            .and_then(|ids| model_energy(ids, law_opts, free, opts))
+            .and_then(|ids| model_energy_with(ids, law_opts, free, opts, Some(&kin)))
     };
     let linear_energy = jack_energy(&IdentifiedOptions::new(chord));
     let range = coverage::ForcedRange::new(&id, forced, chord);
@@ -406,6 +448,7 @@ pub fn system_level_of(
         linear_energy.as_deref(),
         Some(&range),
         true,
+        Some(&kin),
     )?;
     let (linear_before, linear_statistic) = (level.before, level.gap_statistic);
     let mut tails: Option<(f64, f64)> = None;
@@ -420,9 +463,15 @@ pub fn system_level_of(
             tail_weights = tails_law.tables.tails.clone();
             let tm: Arc<dyn AeroModel> = Arc::new(tails_law.model().clone());
             let tails_energy = jack_energy(&tails_opts);
-            if let Ok((tl, _)) =
-                level_and_runs(&tm, free, opts, tails_energy.as_deref(), Some(&range), true)
-            {
+            if let Ok((tl, _)) = level_and_runs(
+                &tm,
+                free,
+                opts,
+                tails_energy.as_deref(),
+                Some(&range),
+                true,
+                Some(&kin),
+            ) {
                 if tl.before.is_finite() {
                     tails = Some((
                         tl.before,
@@ -969,7 +1018,7 @@ pub fn system_level_with_model(
     free: &Dataset,
     opts: &SystemOptions,
 ) -> Result<LevelResult> {
-    level_and_runs(model, free, opts, None, None, false).map(|(level, _)| level)
+    level_and_runs(model, free, opts, None, None, false, None).map(|(level, _)| level)
 }
 
 /// The gap test's null level of a level: sqrt(noise_level² + model_level²).
@@ -983,7 +1032,9 @@ pub fn null_level(level: &LevelResult) -> f64 {
 /// given structure with the flat plate's apparent mass ([`rest_check`]) and, where they
 /// differ, every structural candidate and its baseline fit a linear stiffness nuisance
 /// (with a forced campaign; the `--model` path identifies the structure instead,
-/// [`crate::pipeline::diagnose_free`]).
+/// [`crate::pipeline::diagnose_free`]). `kin`: the free runs' model-independent preparation
+/// shared with other models' levels ([`prepare_free`]).
+#[allow(clippy::too_many_arguments)] // one level's inputs, passed through
 fn level_and_runs(
     model: &Arc<dyn AeroModel>,
     free: &Dataset,
@@ -991,9 +1042,10 @@ fn level_and_runs(
     model_energy: Option<&[[f64; 2]]>,
     range: Option<&coverage::ForcedRange>,
     rest: bool,
+    kin: Option<&FreeKinematics>,
 ) -> Result<(LevelResult, FreeRuns)> {
     opts.check()?;
-    let mut p = prepare_free(free, model, opts)?;
+    let mut p = prepare_free(free, model, opts, kin)?;
     // candidates fit the still air's apparent mass jointly (a nuisance); the gap and its
     // splits are those of the residual with it removed
     let raw_runs = p.runs.clone();

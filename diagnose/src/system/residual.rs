@@ -18,7 +18,7 @@
 //! (2·half-window samples each side, where the asymmetric end windows are less
 //! accurate) are trimmed.
 
-use std::sync::Arc;
+use std::sync::{Arc, Mutex, OnceLock};
 
 use aeroelastic::aero::{linearize, AeroModel, Flow};
 use aeroelastic::structure::Structure;
@@ -237,9 +237,7 @@ pub fn forces_along(
 ) -> [Vec<f64>; 2] {
     let n = q[0].len();
     let nfft = (n + 2 * pad).next_power_of_two();
-    let mut planner = realfft::RealFftPlanner::<f64>::new();
-    let fwd = planner.plan_fft_forward(nfft);
-    let inv = planner.plan_fft_inverse(nfft);
+    let (fwd, inv) = fft_plans(nfft);
     let mut spec: [Vec<Complex64>; 2] = [fwd.make_output_vec(), fwd.make_output_vec()];
     for j in 0..2 {
         let mut buf = fwd.make_input_vec();
@@ -309,6 +307,28 @@ pub fn forces_along(
     out
 }
 
+/// Forward and inverse real FFTs of length `nfft`, planned once per process and length and
+/// shared ([`forces_along`] runs a few hundred times per diagnosis on a few lengths;
+/// planning computes the twiddle factors, a sine and cosine each, and was a quarter of its
+/// time, DECISIONS round 32). The planner picks the algorithm from the length alone, so a
+/// shared plan is the plan a fresh planner makes: the same transform, bit for bit.
+fn fft_plans(
+    nfft: usize,
+) -> (
+    Arc<dyn realfft::RealToComplex<f64>>,
+    Arc<dyn realfft::ComplexToReal<f64>>,
+) {
+    static PLANNER: OnceLock<Mutex<realfft::RealFftPlanner<f64>>> = OnceLock::new();
+    let planner = PLANNER.get_or_init(|| Mutex::new(realfft::RealFftPlanner::new()));
+    match planner.lock() {
+        Ok(mut p) => (p.plan_fft_forward(nfft), p.plan_fft_inverse(nfft)),
+        Err(_) => {
+            let mut p = realfft::RealFftPlanner::new();
+            (p.plan_fft_forward(nfft), p.plan_fft_inverse(nfft))
+        }
+    }
+}
+
 fn sg(x: &[f64], dt: f64, s: &ResidualSettings, id: &str, what: &str) -> Result<Vec<f64>> {
     savitzky_golay_derivative(x, dt, s.half_window, s.order)
         .map_err(|e| Error::identify(format!("free run `{id}`: derivative of {what}"), e))
@@ -371,6 +391,68 @@ pub fn prepare_run(
     st: &Structure,
     s: &ResidualSettings,
 ) -> Result<RunResidual> {
+    prepare_run_with(dataset, rec, model, rho, st, s, None)
+}
+
+/// What [`prepare_run`] computes from the measured motion alone, whatever the model: the
+/// Savitzky–Golay velocity and acceleration (whole run), the dominant pitch frequency
+/// \[Hz\] of the kept samples and the displacement noise estimates σ̂ (h \[m\], α \[rad\]).
+#[derive(Debug)]
+pub(crate) struct RunKinematics {
+    qd: [Vec<f64>; 2],
+    qdd: [Vec<f64>; 2],
+    freq: f64,
+    sigma: [f64; 2],
+}
+
+/// What a [`RunKinematics`] was computed with: (half window, degree, i0, i1, dt bits).
+type KinematicsKey = (usize, usize, usize, usize, u64);
+
+/// One free run's [`RunKinematics`], computed by the first preparation of the run that
+/// needs them and shared by every later one with the same settings (one free-response
+/// diagnosis prepares each run once per aerodynamic model: the sim's law with two table
+/// extrapolations and each of their jackknife laws, twelve times on issue 43's job,
+/// DECISIONS round 32). The values are those a fresh computation gives, bit for bit.
+#[derive(Debug, Default)]
+pub(crate) struct KinematicsSlot(Mutex<Option<(KinematicsKey, Arc<RunKinematics>)>>);
+
+impl KinematicsSlot {
+    /// The kinematics for `key`: the stored ones when computed with the same key, else
+    /// `compute()` (stored on success; the slot's lock is held meanwhile, so a preparation
+    /// of the same run on another thread waits for them instead of computing them again).
+    fn get_or_compute(
+        &self,
+        key: KinematicsKey,
+        compute: impl FnOnce() -> Result<RunKinematics>,
+    ) -> Result<Arc<RunKinematics>> {
+        let Ok(mut slot) = self.0.lock() else {
+            return compute().map(Arc::new);
+        };
+        if let Some((k, kin)) = slot.as_ref() {
+            if *k == key {
+                return Ok(kin.clone());
+            }
+        }
+        let kin = Arc::new(compute()?);
+        *slot = Some((key, kin.clone()));
+        Ok(kin)
+    }
+}
+
+/// [`prepare_run`] with the run's model-independent part taken from (or stored in) `kin`
+/// when given (see [`KinematicsSlot`]); the result is the same with or without it.
+///
+/// # Errors
+/// As [`prepare_run`].
+pub(crate) fn prepare_run_with(
+    dataset: &str,
+    rec: &Record,
+    model: &Arc<dyn AeroModel>,
+    rho: f64,
+    st: &Structure,
+    s: &ResidualSettings,
+    kin: Option<&KinematicsSlot>,
+) -> Result<RunResidual> {
     let id = rec.meta.id.as_str();
     let n = rec.len();
     let dt = rec.dt;
@@ -403,12 +485,26 @@ pub fn prepare_run(
         ));
     }
     let q = [rec.h.clone(), rec.alpha.clone()];
-    let qd = [sg(&q[0], dt, s, id, "h")?, sg(&q[1], dt, s, id, "alpha")?];
-    let qdd = [
-        sg(&qd[0], dt, s, id, "h_dot")?,
-        sg(&qd[1], dt, s, id, "alpha_dot")?,
-    ];
-    let freq = dominant_frequency(&q[1][i0..i1], dt);
+    let compute = || -> Result<RunKinematics> {
+        let qd = [sg(&q[0], dt, s, id, "h")?, sg(&q[1], dt, s, id, "alpha")?];
+        let qdd = [
+            sg(&qd[0], dt, s, id, "h_dot")?,
+            sg(&qd[1], dt, s, id, "alpha_dot")?,
+        ];
+        Ok(RunKinematics {
+            freq: dominant_frequency(&q[1][i0..i1], dt),
+            sigma: [noise_sigma(&q[0]), noise_sigma(&q[1])],
+            qd,
+            qdd,
+        })
+    };
+    let kin = match kin {
+        Some(slot) => {
+            slot.get_or_compute((s.half_window, s.order, i0, i1, dt.to_bits()), compute)?
+        }
+        None => Arc::new(compute()?),
+    };
+    let (qd, qdd, freq) = (kin.qd.clone(), kin.qdd.clone(), kin.freq);
     let b = model.chord();
     // still air (U = 0): K = Bω/U is infinite and the run has no aerodynamic force
     let k = if u == 0.0 {
@@ -466,7 +562,7 @@ pub fn prepare_run(
             ));
         }
     }
-    let sigma = [noise_sigma(&q[0]), noise_sigma(&q[1])];
+    let sigma = kin.sigma;
     let kernels = noise_kernels(run_model.as_ref(), &flow, st, s, dt, id)?;
     let noise_energy = [0, 1].map(|c| {
         (sigma[0].powi(2) * kernels[c][0] + sigma[1].powi(2) * kernels[c][1]) / norm[c].powi(2)

@@ -43,7 +43,7 @@ use crate::regress::{CaseFactor, CaseProblem, Measure, Stlsq};
 use crate::{Error, Result};
 
 use super::law::{kirchhoff_dx, FittedRange, LagChannel, LagColumn, LagLaw};
-use super::series::{x_static_partials, LagSeries, N_THETA};
+use super::series::{x_static_with_partials, LagSeries, N_THETA};
 
 /// Bounds of θ = (τ₁ \[b/U\], τ₂ \[b/U\], α* \[rad\], m): τ₁ ∈ (0.05, 100], τ₂ ∈ \[0, 100\],
 /// α* ∈ (0.02, 1.2), m ∈ \[1, 20\]. A fit ending on an open bound is refused.
@@ -606,37 +606,54 @@ impl Problem<'_> {
                     let st = base.starts[k];
                     let len = s.len() - st.min(s.len());
                     let mut v: Vec<Vec<f64>> = js.iter().map(|_| vec![0.0; len]).collect();
-                    let mut w: Vec<Vec<f64>> = js.iter().map(|_| vec![0.0; p]).collect();
+                    // w_j flat (j-major), the rows' tangents and the residual as slices: the
+                    // same sums in the same order as indexing them, without the bounds checks
+                    let mut w = vec![0.0; js.len() * p];
+                    let dxk: Vec<Option<&[f64]>> = js
+                        .iter()
+                        .map(|&j| Some(dxs[k][j].as_slice()).filter(|d| !d.is_empty()))
+                        .collect();
+                    let dadc: &[f64] = if js.contains(&4) {
+                        &self.d_angle_dc[k]
+                    } else {
+                        &[]
+                    };
+                    let rk = &r[row0[k]..row0[k] + len];
+                    let coef = &coef[..p.min(coef.len())];
                     let mut pd = vec![[0.0; 3]; p];
                     for (row, i) in (st..s.len()).enumerate() {
                         let (xi, pa) = if inst {
-                            (law.x_static(a[i]), x_static_partials(&law, a[i]))
+                            x_static_with_partials(&law, a[i])
                         } else {
                             (1.0, [0.0; 3])
                         };
-                        for (l, col) in cols.iter().enumerate() {
-                            pd[l] = column_partials(*col, a[i], s.q[i], x[i], xi);
+                        for (pdl, col) in pd.iter_mut().zip(cols) {
+                            *pdl = column_partials(*col, a[i], s.q[i], x[i], xi);
                         }
-                        let ri = r[row0[k] + row];
-                        for (t, &j) in js.iter().enumerate() {
-                            let da = if j == 4 { self.d_angle_dc[k][i] } else { 0.0 };
+                        let ri = rk[row];
+                        for (t, (&j, dx)) in js.iter().zip(&dxk).enumerate() {
+                            let da = if j == 4 { dadc[i] } else { 0.0 };
                             let dxi = match j {
                                 2 => pa[1],
                                 3 => pa[2],
                                 4 => pa[0] * da,
                                 _ => 0.0,
                             };
-                            let dx = &dxs[k][j];
-                            let dxv = if dx.is_empty() { 0.0 } else { dx[i] };
+                            let dxv = dx.map_or(0.0, |d| d[i]);
                             let mut acc = 0.0;
-                            for l in 0..p {
-                                let d = pd[l][0] * dxv + pd[l][1] * da + pd[l][2] * dxi;
-                                acc += coef[l] * d;
-                                w[t][l] += d * ri;
+                            for ((pl, &cl), wl) in
+                                pd.iter().zip(coef).zip(&mut w[t * p..(t + 1) * p])
+                            {
+                                let d = pl[0] * dxv + pl[1] * da + pl[2] * dxi;
+                                acc += cl * d;
+                                *wl += d * ri;
                             }
                             v[t][row] = acc;
                         }
                     }
+                    let w: Vec<Vec<f64>> = (0..js.len())
+                        .map(|t| w[t * p..(t + 1) * p].to_vec())
+                        .collect();
                     (v, w)
                 })
                 .collect();
@@ -680,13 +697,17 @@ impl Problem<'_> {
                         g.fill(0.0);
                     }
                 }
-                let col = &mut jac[j][offset..offset + n];
-                for i in 0..n {
-                    let mut ag = 0.0;
-                    for (t2, &l) in kept.iter().enumerate() {
-                        ag += stack[l][i] * g[t2];
+                // A·g column by column: every row's sum still from 0.0 over the kept columns
+                // in order (the same value as the row-wise sum), in long unit-stride loops
+                let mut ag = vec![0.0; n];
+                for (t2, &l) in kept.iter().enumerate() {
+                    for (acc, a) in ag.iter_mut().zip(&stack[l][..n]) {
+                        *acc += a * g[t2];
                     }
-                    col[i] = -(pv[i] + ag) * scale;
+                }
+                let col = &mut jac[j][offset..offset + n];
+                for ((c, p), a) in col.iter_mut().zip(&pv[..n]).zip(&ag) {
+                    *c = -(p + a) * scale;
                 }
             }
             offset += n;

@@ -394,9 +394,10 @@ impl LagSeries {
         }
         let ue = uf.as_deref().unwrap_or(&u);
         // f = x₀(u_f) and its tangents
-        let f: Vec<f64> = ue.iter().map(|&v| law.x_static(v)).collect();
+        // one power per sample for both (the same operations as `law.x_static`)
+        let (f, parts): (Vec<f64>, Vec<[f64; 3]>) =
+            ue.iter().map(|&v| x_static_with_partials(law, v)).unzip();
         let mut df: [Option<Vec<f64>>; N_THETA] = Default::default();
-        let parts: Vec<[f64; 3]> = ue.iter().map(|&v| x_static_partials(law, v)).collect();
         for j in 1..N_THETA {
             if !free[j] {
                 continue;
@@ -426,23 +427,27 @@ impl LagSeries {
     }
 }
 
-/// (∂x₀/∂u, ∂x₀/∂α*, ∂x₀/∂m) of the static separation curve x₀(u) = 1/(1 + |u/α*|^{2m})
-/// ([`LagLaw::x_static`]) at `u` \[rad\]: with P = |u/α*|^{2m},
-/// ∂x₀/∂u = −x₀²·2mP/u, ∂x₀/∂α* = x₀²·2mP/α*, ∂x₀/∂m = −x₀²·2P·ln|u/α*| (all 0 at u = 0).
-pub(crate) fn x_static_partials(law: &LagLaw, u: f64) -> [f64; 3] {
+/// The static separation curve x₀(u) = 1/(1 + |u/α*|^{2m}) ([`LagLaw::x_static`], by the
+/// same operations, so bit for bit its value) and its partials (∂x₀/∂u, ∂x₀/∂α*, ∂x₀/∂m) at
+/// `u` \[rad\], from one power P = |u/α*|^{2m}: ∂x₀/∂u = −x₀²·2mP/u,
+/// ∂x₀/∂α* = x₀²·2mP/α*, ∂x₀/∂m = −x₀²·2P·ln|u/α*| (x₀ = 1 and all partials 0 at u = 0).
+pub(crate) fn x_static_with_partials(law: &LagLaw, u: f64) -> (f64, [f64; 3]) {
     let r = (u / law.alpha_star).abs();
-    if r == 0.0 {
-        return [0.0; 3];
-    }
     let p = r.powf(2.0 * law.sharpness);
     let x0 = 1.0 / (1.0 + p);
+    if r == 0.0 {
+        return (x0, [0.0; 3]);
+    }
     let x2 = x0 * x0;
     let m2 = 2.0 * law.sharpness;
-    [
-        -x2 * m2 * p / u,
-        x2 * m2 * p / law.alpha_star,
-        -x2 * 2.0 * p * r.ln(),
-    ]
+    (
+        x0,
+        [
+            -x2 * m2 * p / u,
+            x2 * m2 * p / law.alpha_star,
+            -x2 * 2.0 * p * r.ln(),
+        ],
+    )
 }
 
 /// The first-order lag τ dx/ds + x = f sampled at every sample of `f` into `x` (resized
@@ -565,6 +570,39 @@ fn periodic_misfit(v: &[f64], p: f64) -> f64 {
 
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn static_curve_and_partials_from_one_power_are_the_separate_ones_bit_for_bit() {
+        let law = crate::lag::fit::tests::truth();
+        for k in -40..=40 {
+            let u = f64::from(k) * 0.013;
+            let (x0, p) = x_static_with_partials(&law, u);
+            assert_eq!(x0.to_bits(), law.x_static(u).to_bits(), "u {u}");
+            let r = (u / law.alpha_star).abs();
+            if r == 0.0 {
+                assert_eq!(p, [0.0; 3]);
+                continue;
+            }
+            // the partials against central differences of x₀ in u, α*, m
+            let h = 1e-6;
+            let at = |u: f64, a: f64, m: f64| {
+                let mut l = law.clone();
+                l.alpha_star = a;
+                l.sharpness = m;
+                l.x_static(u)
+            };
+            let (a, m) = (law.alpha_star, law.sharpness);
+            let fd = [
+                (at(u + h, a, m) - at(u - h, a, m)) / (2.0 * h),
+                (at(u, a + h, m) - at(u, a - h, m)) / (2.0 * h),
+                (at(u, a, m + h) - at(u, a, m - h)) / (2.0 * h),
+            ];
+            for (d, f) in p.iter().zip(fd) {
+                assert!((d - f).abs() <= 1e-6 * (1.0 + f.abs()), "u {u}: {d} vs {f}");
+            }
+        }
+    }
+
     use super::*;
     use crate::lag::{FittedRange, LagChannel};
     use crate::record::{CaseMeta, Forcing};

@@ -1,5 +1,8 @@
 //! Savitzky–Golay smoothing differentiator with asymmetric end windows.
 
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex, OnceLock};
+
 use crate::numerics::{cholesky_solve, PivotFloor};
 use crate::{Error, Result};
 
@@ -48,6 +51,54 @@ fn derivative_weights(len: usize, c: usize, order: usize) -> Option<Vec<f64>> {
             })
             .collect(),
     )
+}
+
+/// The weights of one window (`2·half_window + 1` samples, polynomial degree `order`):
+/// the centred window's, and for every position `c` of an end sample the off-centre ones
+/// (`ends[c]`, derivative at position `c`; `ends[m]` is unused and empty).
+#[derive(Debug)]
+struct WindowWeights {
+    centre: Vec<f64>,
+    ends: Vec<Vec<f64>>,
+}
+
+/// The weights of every (half window, degree) computed so far ([`window_weights`]).
+type WeightCache = Mutex<HashMap<(usize, usize), Arc<WindowWeights>>>;
+
+/// Most windows kept by [`window_weights`] (a run uses one or two; beyond this the weights
+/// are computed and not kept, so the cache stays bounded).
+const WEIGHT_CACHE_MAX: usize = 32;
+
+/// The weights of [`savitzky_golay_derivative`] for (`half_window`, `order`), computed once
+/// per process and shared (they depend on nothing else; the free-response diagnosis
+/// differentiates hundreds of series with the same window, and computing the 2·half_window
+/// end weights was two thirds of each call, DECISIONS round 32). `None` when a window's normal
+/// equations are singular.
+fn window_weights(half_window: usize, order: usize) -> Option<Arc<WindowWeights>> {
+    static CACHE: OnceLock<WeightCache> = OnceLock::new();
+    let cache = CACHE.get_or_init(|| Mutex::new(HashMap::new()));
+    if let Some(w) = cache
+        .lock()
+        .ok()
+        .and_then(|c| c.get(&(half_window, order)).cloned())
+    {
+        return Some(w);
+    }
+    let len = 2 * half_window + 1;
+    let m = half_window;
+    let centre = derivative_weights(len, m, order)?;
+    let mut ends = vec![Vec::new(); len];
+    for c in 0..m {
+        ends[c] = derivative_weights(len, c, order)?;
+        ends[len - 1 - c] = derivative_weights(len, len - 1 - c, order)?;
+    }
+    let w = Arc::new(WindowWeights { centre, ends });
+    if let Ok(mut c) = cache.lock() {
+        if c.len() < WEIGHT_CACHE_MAX {
+            c.entry((half_window, order)).or_insert_with(|| w.clone());
+        }
+    }
+    Some(w)
 }
 
 /// Outputs computed side by side in the interior of [`savitzky_golay_derivative`].
@@ -113,7 +164,8 @@ pub fn savitzky_golay_derivative(
     };
     let m = half_window;
     let mut out = vec![0.0; n];
-    let centre = derivative_weights(len, m, order).ok_or_else(numerical)?;
+    let wts = window_weights(half_window, order).ok_or_else(numerical)?;
+    let centre = &wts.centre;
     // interior: LANES outputs at a time, each its own sum in the window's order from −0.0
     // (the start of `Iterator::sum` for f64), so every output is bit for bit the sequential
     // sum below, with LANES independent additions in flight instead of one
@@ -132,13 +184,16 @@ pub fn savitzky_golay_derivative(
         i += LANES;
     }
     for i in i..n - m {
-        out[i] = window_sum(&centre, &x[i - m..=i + m]) / dt;
+        out[i] = window_sum(centre, &x[i - m..=i + m]) / dt;
     }
     for c in 0..m {
-        let wts = derivative_weights(len, c, order).ok_or_else(numerical)?;
-        out[c] = wts.iter().zip(&x[..len]).map(|(a, b)| a * b).sum::<f64>() / dt;
-        let wts_r = derivative_weights(len, len - 1 - c, order).ok_or_else(numerical)?;
-        out[n - 1 - c] = wts_r
+        out[c] = wts.ends[c]
+            .iter()
+            .zip(&x[..len])
+            .map(|(a, b)| a * b)
+            .sum::<f64>()
+            / dt;
+        out[n - 1 - c] = wts.ends[len - 1 - c]
             .iter()
             .zip(&x[n - len..])
             .map(|(a, b)| a * b)
@@ -183,6 +238,25 @@ mod tests {
                 }
             }
         }
+    }
+    #[test]
+    fn cached_window_weights_are_the_direct_ones_bit_for_bit() {
+        for (hw, order) in [(3usize, 2usize), (12, 4), (40, 3)] {
+            let len = 2 * hw + 1;
+            // first call computes, second comes from the cache: both the direct weights
+            for _ in 0..2 {
+                let w = window_weights(hw, order).unwrap();
+                let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                let direct = |c: usize| bits(&derivative_weights(len, c, order).unwrap());
+                assert_eq!(bits(&w.centre), direct(hw));
+                for c in (0..hw).chain(hw + 1..len) {
+                    assert_eq!(bits(&w.ends[c]), direct(c), "hw {hw} position {c}");
+                }
+                assert!(w.ends[hw].is_empty());
+            }
+        }
+        // a singular window (order ≥ samples) is refused, not cached as weights
+        assert!(window_weights(1, 3).is_none());
     }
     use rand_chacha::ChaCha8Rng;
     use rand_distr::{Distribution, Normal};
