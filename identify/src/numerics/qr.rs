@@ -180,6 +180,41 @@ pub struct ThinQr {
     n_cols: usize,
 }
 
+/// x ← H_{m−1} ⋯ H₀ x (`reverse`: H₀ ⋯ H_{m−1} x) for the reflectors (v_k, f_k) of a
+/// [`ThinQr`], reflector k acting on x\[k..\]. Runtime-dispatched to an AVX2 build like
+/// [`householder_qr`]: the same IEEE operations in the same order (Rust never contracts
+/// `a * b + c` into a fused multiply-add), so bit for bit the portable result.
+fn apply_reflectors(reflectors: &[(Vec<f64>, f64)], x: &mut [f64], reverse: bool) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU supports AVX2 (checked just above).
+            return unsafe { apply_reflectors_avx2(reflectors, x, reverse) };
+        }
+    }
+    apply_reflectors_body(reflectors, x, reverse);
+}
+
+/// [`apply_reflectors_body`] compiled with AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn apply_reflectors_avx2(reflectors: &[(Vec<f64>, f64)], x: &mut [f64], reverse: bool) {
+    apply_reflectors_body(reflectors, x, reverse);
+}
+
+#[inline(always)]
+fn apply_reflectors_body(reflectors: &[(Vec<f64>, f64)], x: &mut [f64], reverse: bool) {
+    if reverse {
+        for (k, (v, f)) in reflectors.iter().enumerate().rev() {
+            reflect(v, *f, &mut x[k..]);
+        }
+    } else {
+        for (k, (v, f)) in reflectors.iter().enumerate() {
+            reflect(v, *f, &mut x[k..]);
+        }
+    }
+}
+
 impl ThinQr {
     /// Factorises the columns `cols` (all of one length n), dropping dependent ones (see
     /// the type). A non-finite column is dropped too.
@@ -232,9 +267,7 @@ impl ThinQr {
     /// x ← Qᵀ x (full length: the first `kept().len()` entries are the coordinates on the
     /// kept columns' span, the rest the orthogonal part).
     fn apply_qt(&self, x: &mut [f64]) {
-        for (k, (v, f)) in self.reflectors.iter().enumerate() {
-            reflect(v, *f, &mut x[k..]);
-        }
+        apply_reflectors(&self.reflectors, x, false);
     }
 
     /// y − Q Qᵀ y: the residual of the least-squares fit of `y` on the columns.
@@ -245,9 +278,7 @@ impl ThinQr {
         let mut z = y.to_vec();
         self.apply_qt(&mut z);
         z[..self.reflectors.len()].fill(0.0);
-        for (k, (v, f)) in self.reflectors.iter().enumerate().rev() {
-            reflect(v, *f, &mut z[k..]);
-        }
+        apply_reflectors(&self.reflectors, &mut z, true);
         z
     }
 
