@@ -549,7 +549,10 @@ fn fundamental_and_harmonic(
         let (s1, c1) = (TAU * f * t).sin_cos();
         let u = (t - tc) / tc.max(f64::MIN_POSITIVE);
         row[..4].copy_from_slice(&[c1, s1, u * c1, u * s1]);
-        for (k, g) in std::iter::once(n * f).chain(others.iter().copied()).enumerate() {
+        for (k, g) in std::iter::once(n * f)
+            .chain(others.iter().copied())
+            .enumerate()
+        {
             let (sg, cg) = (TAU * g * t).sin_cos();
             row[4 + 2 * k] = cg;
             row[5 + 2 * k] = sg;
