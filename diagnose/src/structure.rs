@@ -1108,7 +1108,7 @@ fn decay_row_at(
 /// dampers alike from the measured damping ratios; a held damper keeps its DOF's given
 /// damping ratio (c ∝ √k when its spring is corrected), and a freed damper whose identified
 /// interval holds that value is then held and the rest identified again (kept when that fit
-/// converges: [`identify_with`]). Gauss–Newton on the residuals divided
+/// converges). Gauss–Newton on the residuals divided
 /// by their standard uncertainties (stiffness as log k, dampers scaled by the given
 /// critical damping), from the given structure; intervals from the inverse of JᵀJ at the
 /// solution (± [`COVERAGE`] standard uncertainties). `None` when M is singular or a mode
