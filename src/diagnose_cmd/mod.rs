@@ -20,8 +20,27 @@ mod measured_branch;
 pub use args::DiagnoseArgs;
 use crate::progress::CountBar;
 
+/// Keeps freed memory in the process for the diagnosis (glibc only): its levels allocate and
+/// free columns of tens of thousands of samples in loops, and glibc's default thresholds
+/// (128 kB, dynamic) hand each back to the kernel, which faults the same pages in again. With
+/// allocations up to 32 MB (glibc's largest mmap threshold) served from the heap and the heap
+/// top trimmed only beyond 1 GB, job 1 of `scripts/profile` spends 0.30–0.34 s instead of
+/// 0.52–0.55 s in the kernel, peak 351 → 359–367 MB, output identical (issue 43 row 1,
+/// docs/DECISIONS.md round 32). Not set for `identify`, whose bounded-memory bars are
+/// measured with the defaults.
+fn keep_freed_memory() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    // SAFETY: mallopt only sets two allocator parameters; it is called before any thread of
+    // this command allocates and returns 0 (ignored: the defaults stay) when refused.
+    unsafe {
+        libc::mallopt(libc::M_MMAP_THRESHOLD, 32 << 20);
+        libc::mallopt(libc::M_TRIM_THRESHOLD, 1 << 30);
+    }
+}
+
 /// Runs `aeroform diagnose`.
 pub fn run(args: &DiagnoseArgs) -> anyhow::Result<()> {
+    keep_freed_memory();
     // clap's `requires = "blind"` is void when a data set is given: `--blind` conflicts
     // with it, and clap drops a requirement that conflicts with a present argument
     if args.blind.is_none() {
