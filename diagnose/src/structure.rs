@@ -471,10 +471,11 @@ pub const HARMONIC_FREQUENCY_TOLERANCE: f64 = 0.03;
 /// mode's n-th power along the decay. A nonlinear restoring force (k₂α², k₃α³) makes a
 /// decaying mode of amplitude A(t) carry components at n f of amplitude ∝ Aⁿ, so
 /// ln H = n ln A + const in every window; a second mode decays at its own rate
-/// ζ₂ω₂, i.e. with slope ζ₂ω₂/(ζ₁ω₁) against ln A. Windows of four periods of `f`, half
-/// overlapping; each fits sinusoids at the window's refined f_w and at n f_w by least
-/// squares ([`fundamental_and_harmonic`]); windows whose harmonic amplitude is below three times the noise's window
-/// amplitude are left out; the slope must lie within [`COVERAGE`] standard errors (overlap
+/// ζ₂ω₂, i.e. with slope ζ₂ω₂/(ζ₁ω₁) against ln A. Windows of eight periods of `f`, half
+/// overlapping; each fits sinusoids at the window's refined f_w and at n f_w, and at each
+/// of `others` (the record's other peaks) the window resolves, by least squares
+/// ([`fundamental_and_harmonic`]); windows whose harmonic amplitude is below three times
+/// the noise's window amplitude are left out; the slope must lie within [`COVERAGE`] standard errors (overlap
 /// inflated) of n, or within 15 % of n (the harmonic's amplitude is Aⁿ only to leading
 /// order). Fewer than four usable windows: `None` (not shown to be a harmonic).
 fn superharmonic_order(x: &[f64], dt: f64, f: f64, f2: f64, others: &[f64]) -> Option<u32> {
