@@ -1155,9 +1155,9 @@ fn identify_at_rest(
 ///
 /// Without `free`, a freed damper whose identified interval (± [`COVERAGE`] standard
 /// uncertainties) holds its held value (the given damping ratio at the identified spring)
-/// is held and the others are identified again; that fit is kept when it converges. A damping ratio is a coarse datum
-/// (a second mode's can be ± 35 %), and solving two of them exactly moves both dampers by
-/// their noise through the modes' coupling: generated set 11 of seed 2027 (ζ₂ 0.0269 ±
+/// is held and the others are identified again; that fit is kept when it converges. A
+/// damping ratio is a coarse datum (a second mode's can be ± 35 %), and solving two of them
+/// exactly moves both dampers by their noise through the modes' coupling: generated set 11 of seed 2027 (ζ₂ 0.0269 ±
 /// 0.0095 against 0.0320 given) made c_α 0.0020 for a truth of 0.0096. A damper the data
 /// do not contradict is not moved by them.
 fn identify_with(
@@ -1178,7 +1178,7 @@ fn identify_with(
     for (i, p) in full.parameters.iter().enumerate().skip(2) {
         // held, the damper would keep the given damping ratio at the identified spring
         let spring = &full.parameters[i - 2];
-        let held = p.given * (spring.identified / spring.given).sqrt();
+        let held = held_damper(p.given, spring.identified, spring.given);
         let covers = p.interval[0] <= held && held <= p.interval[1];
         if set[i] && covers {
             set[i] = false;
@@ -1192,6 +1192,12 @@ fn identify_with(
         Some(reduced) if reduced.converged => Some(reduced),
         _ => Some(full),
     }
+}
+
+/// A held damper: the given coefficient `c_given` at the given damping ratio of a spring
+/// moved from `k_given` to `k` (ζ = c / (2√(k m)), so c × √(k/k_given)).
+fn held_damper(c_given: f64, k: f64, k_given: f64) -> f64 {
+    c_given * (k / k_given).sqrt()
 }
 
 /// [`identify_with`] with the free set as given or chosen by the data, without the second
@@ -1327,7 +1333,7 @@ fn identify_free_set(
         // corrected spring carries its damper along (the structure is specified by its
         // frequencies and damping ratios, DATA_FORMAT's structure file)
         for d in 0..2 {
-            c[d] = cg[d] * (k[d] / kg[d]).sqrt();
+            c[d] = held_damper(cg[d], k[d], kg[d]);
         }
         for (i, &d) in c_free.iter().enumerate() {
             c[d] = cg[d] + c_scale[d] * p[k_free.len() + i];
