@@ -3,7 +3,8 @@
 //! (`--misgiven`: the structure handed to the diagnosis has one DOF's frequency 3–8 % off,
 //! with still-air decays of the truth; `--hold-given`: the same, fitted on the given
 //! structure anyway; `A..B` runs indices A to B − 1; `--detail`: also the structure's
-//! reason and every candidate's held-out score, shrink and first Hopf point, on stderr).
+//! reason and every candidate's held-out score, shrink and first Hopf point, on stderr;
+//! `--sensitivities`: the fits' smooth objective and its derivatives).
 
 use benchmark::branch_bench::{run_set_diagnosis, BranchBenchOptions};
 
@@ -15,6 +16,11 @@ fn main() {
             .iter()
             .any(|a| a == "--misgiven" || a == "--hold-given"),
         hold_given: args.iter().any(|a| a == "--hold-given"),
+        jacobian: if args.iter().any(|a| a == "--sensitivities") {
+            diagnose::bifurcation::FitJacobian::Sensitivities
+        } else {
+            diagnose::bifurcation::FitJacobian::Differences
+        },
     };
     let mut idx = Vec::new();
     for a in args.iter().skip(1) {

@@ -178,6 +178,11 @@ pub struct BranchBenchOptions {
     /// anyway (the behaviour before the structure was used: the acceptance's baseline).
     #[serde(default)]
     pub hold_given: bool,
+    /// The fits' objective and Jacobian (`differences` by default; `sensitivities`: the
+    /// smooth objective fitted by its derivatives, DECISIONS "The smooth bifurcation-level
+    /// objective, round 33").
+    #[serde(default)]
+    pub jacobian: diagnose::bifurcation::FitJacobian,
 }
 
 /// Relative Hopf-speed tolerance of the structure-first acceptance (issue 42).
@@ -522,7 +527,10 @@ pub fn run_set_diagnosis(
             continue;
         };
         let t0 = std::time::Instant::now();
-        let opts = BifurcationOptions::default();
+        let opts = BifurcationOptions {
+            jacobian: bench.jacobian,
+            ..BifurcationOptions::default()
+        };
         // a separate stream: the truth and its diagram do not depend on the option
         let (given, misgiven, check) = if bench.misgiven_structure {
             let mut r2 = ChaCha8Rng::seed_from_u64(split_seed(set_seed, 1));

@@ -308,6 +308,7 @@ fn misgiven_structures_of_the_generated_benchmark_are_corrected() {
     let opts = BranchBenchOptions {
         misgiven_structure: true,
         hold_given: false,
+        ..BranchBenchOptions::default()
     };
     let r = run_bench_with(20, 2026, &opts, &|o| {
         eprintln!(

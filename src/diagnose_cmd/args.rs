@@ -7,6 +7,24 @@ use std::path::PathBuf;
 
 use clap::Args;
 
+/// How the bifurcation-level candidates are fitted (`--fit`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum FitArg {
+    /// Forward differences of whole diagrams.
+    Differences,
+    /// The smooth objective and its orbit sensitivities.
+    Sensitivities,
+}
+
+impl From<FitArg> for diagnose::bifurcation::FitJacobian {
+    fn from(f: FitArg) -> Self {
+        match f {
+            FitArg::Differences => Self::Differences,
+            FitArg::Sensitivities => Self::Sensitivities,
+        }
+    }
+}
+
 /// Flags of `aeroform diagnose`.
 #[derive(Debug, Args)]
 pub struct DiagnoseArgs {
@@ -90,6 +108,14 @@ pub struct DiagnoseArgs {
     /// of the truth, so that the structure is identified from them first (issue 42).
     #[arg(long, requires = "branch_level")]
     pub misgiven_structure: bool,
+    /// At the bifurcation level (`--measured-branch`, `--blind N --branch-level`): how the
+    /// candidates are fitted. `differences`: forward differences of whole diagrams, points
+    /// interpolated between continuation points (the default); `sensitivities`: each
+    /// point's orbit corrected at its own speed, fitted by the orbits' derivatives (about
+    /// 0.4 of the time; lower optima, which can change the named variant: DECISIONS, "The
+    /// smooth bifurcation-level objective, round 33").
+    #[arg(long, value_enum, default_value_t = FitArg::Differences)]
+    pub fit: FitArg,
     /// With `--blind`: close the loop of every `extrapolation` (issue 42 item 4): run the
     /// recommended forced tests (the plan `diagnose` writes as `follow_up.campaign.toml`)
     /// on the set's truth and diagnose the set again; blind.json records the second verdict

@@ -47,7 +47,11 @@ pub fn run(args: &DiagnoseArgs, measured: &Path) -> anyhow::Result<()> {
         "diagnose",
         "continuation of every candidate, leave-one-speed-out",
     );
-    let d = prepared.diagnose(&BifurcationOptions::default(), &crate::version());
+    let opts = BifurcationOptions {
+        jacobian: args.fit.into(),
+        ..BifurcationOptions::default()
+    };
+    let d = prepared.diagnose(&opts, &crate::version());
     spinner.finish();
     let d = d?;
     let mut text = serde_json::to_string_pretty(&d)?;

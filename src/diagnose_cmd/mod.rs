@@ -73,6 +73,7 @@ pub fn run(args: &DiagnoseArgs) -> anyhow::Result<()> {
             let bench = benchmark::branch_bench::BranchBenchOptions {
                 misgiven_structure: args.misgiven_structure,
                 hold_given: false,
+                jacobian: args.fit.into(),
             };
             return measured_branch::blind(n, args.seed, &bench, &out, args.force);
         }

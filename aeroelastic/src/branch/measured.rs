@@ -494,6 +494,12 @@ pub struct MeasuredDistance {
     /// (0 when a segment covers the speed); `None` (`null`) when no predicted orbit has
     /// that stability (it was written `null` before, as the non-finite distance).
     pub speed_gap: Option<f64>,
+    /// For a point no segment covers, set by the bifurcation-level diagnosis: the nearest
+    /// predicted orbit of the same stability in its scaled plane of speed and amplitudes,
+    /// `[u` [m/s], first-harmonic pitch \[rad\], heave \[m\]`]` (the orbit its score
+    /// compares the point with); absent otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub nearest: Option<[f64; 3]>,
 }
 
 /// The segment of `set` that [`predicted_at`] interpolates for the measured point `m`:
@@ -575,6 +581,7 @@ pub fn measured_distances(
                 } else {
                     Some(gap).filter(|g| g.is_finite())
                 },
+                nearest: None,
             }
         })
         .collect()

@@ -75,38 +75,7 @@ impl Section {
         let sh = problem(self, opts, &branch.scales, &branch.hopf);
         let sh = sh.as_ref();
         let m = sh.unknowns();
-        let missing = || {
-            Error::numerical(
-                "orbit_sensitivity",
-                format!(
-                    "{at:?} names no segment or point of the branch from the Hopf point at \
-                     {:.4} m/s ({} points)",
-                    branch.hopf.u,
-                    branch.points.len()
-                ),
-            )
-        };
-        let (y0, closure) = match at {
-            SensitivityAt::Speed { index, u } => {
-                let (a, b) = (
-                    branch.points.get(index).ok_or_else(missing)?,
-                    branch.points.get(index + 1).ok_or_else(missing)?,
-                );
-                let f = if a.u == b.u {
-                    0.0
-                } else {
-                    (u - a.u) / (b.u - a.u)
-                };
-                let y = sh.scaled(a)? * (1.0 - f) + sh.scaled(b)? * f;
-                (y, Closure::Speed(u / sh.scales()[m - 1]))
-            }
-            SensitivityAt::Amplitude { index } => {
-                let p = branch.points.get(index).ok_or_else(missing)?;
-                let y = sh.scaled(p)?;
-                let a = y[sh.amplitude_index()];
-                (y, Closure::Alpha(a))
-            }
-        };
+        let (y0, closure) = start(sh, branch, at)?;
         let (y, _, _, _) = newton(sh, y0, &closure, None, opts.newton_tol, 3 * opts.max_newton)?;
         // ∂G/∂Y at the solution itself (Newton's may be its last refresh's)
         let g0 = sh.g(&y)?;
@@ -170,6 +139,69 @@ impl Section {
             derivatives,
         })
     }
+
+    /// The orbit of `branch` (continued on this section with `opts`) at `at`, corrected by
+    /// Newton: the smooth prediction of a measured point (at its own speed, or at a branch
+    /// point's pitch amplitude with U free), where [`predicted_at`](super::predicted_at)
+    /// interpolates linearly between continuation points. The orbit
+    /// [`Section::orbit_sensitivity`] differentiates, without the derivatives.
+    ///
+    /// # Errors
+    /// As [`Section::orbit_sensitivity`] for the closure and Newton.
+    pub fn orbit_at(
+        &self,
+        branch: &Branch,
+        at: SensitivityAt,
+        opts: &BranchOptions,
+    ) -> Result<OrbitValues> {
+        let sh = problem(self, opts, &branch.scales, &branch.hopf);
+        let sh = sh.as_ref();
+        let (y0, closure) = start(sh, branch, at)?;
+        let (y, jg, _, _) = newton(sh, y0, &closure, None, opts.newton_tol, 3 * opts.max_newton)?;
+        values(sh, &y, &jg)
+    }
+}
+
+/// The initial guess and closure of the orbit `at` names on `branch` (module
+/// documentation of [`SensitivityAt`]).
+fn start(
+    sh: &dyn PeriodicProblem,
+    branch: &Branch,
+    at: SensitivityAt,
+) -> Result<(DVector<f64>, Closure<'static>)> {
+    let m = sh.unknowns();
+    let missing = || {
+        Error::numerical(
+            "orbit_sensitivity",
+            format!(
+                "{at:?} names no segment or point of the branch from the Hopf point at \
+                     {:.4} m/s ({} points)",
+                branch.hopf.u,
+                branch.points.len()
+            ),
+        )
+    };
+    Ok(match at {
+        SensitivityAt::Speed { index, u } => {
+            let (a, b) = (
+                branch.points.get(index).ok_or_else(missing)?,
+                branch.points.get(index + 1).ok_or_else(missing)?,
+            );
+            let f = if a.u == b.u {
+                0.0
+            } else {
+                (u - a.u) / (b.u - a.u)
+            };
+            let y = sh.scaled(a)? * (1.0 - f) + sh.scaled(b)? * f;
+            (y, Closure::Speed(u / sh.scales()[m - 1]))
+        }
+        SensitivityAt::Amplitude { index } => {
+            let p = branch.points.get(index).ok_or_else(missing)?;
+            let y = sh.scaled(p)?;
+            let a = y[sh.amplitude_index()];
+            (y, Closure::Alpha(a))
+        }
+    })
 }
 
 /// (a − b)/over, quantity by quantity.
@@ -214,6 +246,38 @@ mod tests {
             k5 * k - 20.0 * k,
         );
         s
+    }
+
+    /// The orbit a measured point is compared with under the smooth objective: corrected
+    /// at the point's own speed, it is the orbit `orbit_on_branch` finds there and the one
+    /// `orbit_sensitivity` differentiates, where the linear interpolation between the two
+    /// continuation points misses it.
+    #[test]
+    fn orbit_at_is_the_corrected_orbit_not_the_interpolation() {
+        let opts = BranchOptions {
+            method: BranchMethod::HarmonicBalance,
+            ..BranchOptions::default()
+        };
+        let s0 = section(20.0);
+        let set = s0.lco_branches(1.0, 3.0, &opts, &no_obs).unwrap();
+        let b = &set.branches[0];
+        let i = b.events[0].index + 3;
+        let u = 0.5 * (b.points[i].u + b.points[i + 1].u);
+        let at = SensitivityAt::Speed { index: i, u };
+        let v = s0.orbit_at(b, at, &opts).unwrap();
+        let o = s0.orbit_on_branch(b, u, true, &opts).unwrap();
+        let sens = s0.orbit_sensitivity(b, at, &[], &opts).unwrap();
+        let lerp = 0.5 * (b.points[i].amplitude1_alpha + b.points[i + 1].amplitude1_alpha);
+        let (e_at, e_lerp) = (
+            (v.amplitude1_alpha - o.amplitude1_alpha).abs(),
+            (lerp - o.amplitude1_alpha).abs(),
+        );
+        println!("|orbit_at − orbit_on_branch| {e_at:.3e}, |interpolation − it| {e_lerp:.3e}");
+        assert_eq!(v.u, u);
+        assert!(e_at < 1e-8 * o.amplitude1_alpha, "{v:?} vs {o:?}");
+        assert!((v.frequency_hz - o.omega / std::f64::consts::TAU).abs() < 1e-8);
+        assert_eq!(v, sens.orbit);
+        assert!(e_lerp > 100.0 * e_at, "{e_lerp} vs {e_at}");
     }
 
     /// The derivative of the orbit at a fixed speed with respect to the quintic equals the

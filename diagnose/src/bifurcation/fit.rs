@@ -65,6 +65,10 @@ pub(crate) struct Setting<'a> {
     /// Smallest and largest speed of the onset and absence rows [m/s] (`[∞, −∞]` without
     /// any): they widen the measured extent.
     pub row_speeds: [f64; 2],
+    /// The measured amplitude points whose orbits a prediction corrects at their own speed
+    /// ([`Predicted::corrected`]); empty: predictions interpolate between continuation
+    /// points.
+    pub points: &'a [MeasuredAmplitude],
 }
 
 impl Setting<'_> {
@@ -118,6 +122,57 @@ pub(crate) struct Predicted {
     pub hopf: Vec<HopfAt>,
     /// A linear section (no limit cycle: its "branch" is the neutral family).
     pub linear: bool,
+    /// Per point of [`Setting::points`], the orbit of its covering segment corrected by
+    /// Newton at the point's own speed (pitch \[rad\], heave \[m\], frequency \[Hz\];
+    /// `None`: no segment of its stability covers its speed); empty when the setting holds
+    /// no points. Smooth in the section's parameters, where the interpolation between
+    /// continuation points jumps as the points move.
+    pub corrected: Vec<Option<(f64, f64, f64)>>,
+}
+
+impl Predicted {
+    /// The predicted orbit at measured point `m` (pitch \[rad\], heave \[m\], frequency
+    /// \[Hz\]): the corrected orbit when `m` is one of the setting's points, else the
+    /// linear interpolation of its covering segment ([`aeroelastic::branch::predicted_at`]).
+    pub fn at(&self, m: &MeasuredAmplitude, s: &Setting) -> Option<(f64, f64, f64)> {
+        let set = self.set.as_ref()?;
+        if !self.corrected.is_empty() {
+            if let Some(k) = s.points.iter().position(|q| same_point(q, m)) {
+                return self.corrected[k];
+            }
+        }
+        aeroelastic::branch::predicted_at(set, m)
+    }
+}
+
+/// Whether two measured points are the same row (speed, stability, amplitudes).
+fn same_point(a: &MeasuredAmplitude, b: &MeasuredAmplitude) -> bool {
+    std::ptr::eq(a, b)
+        || (a.u.to_bits() == b.u.to_bits()
+            && a.stable == b.stable
+            && a.amplitude_alpha.map(f64::to_bits) == b.amplitude_alpha.map(f64::to_bits)
+            && a.amplitude_h.map(f64::to_bits) == b.amplitude_h.map(f64::to_bits))
+}
+
+/// The orbit of `set` (continued on `section`) at measured point `m`: its covering
+/// segment's ([`aeroelastic::branch::covering_segment`]) orbit corrected by Newton at
+/// `m.u` ([`Section::orbit_at`]); the segment's linear interpolation when Newton fails;
+/// `None` when no segment of `m`'s stability covers its speed.
+fn corrected_at(
+    section: &Section,
+    set: &BranchSet,
+    m: &MeasuredAmplitude,
+    opts: &BranchOptions,
+) -> Option<(f64, f64, f64)> {
+    let (bi, i) = aeroelastic::branch::covering_segment(set, m)?;
+    match section.orbit_at(
+        &set.branches[bi],
+        SensitivityAt::Speed { index: i, u: m.u },
+        opts,
+    ) {
+        Ok(v) => Some((v.amplitude1_alpha, v.amplitude1_h, v.frequency_hz)),
+        Err(_) => aeroelastic::branch::predicted_at(set, m),
+    }
 }
 
 /// The diagram of `section` and its Hopf points; when the continuation gives no branches
@@ -147,7 +202,20 @@ pub(crate) fn predict(section: Option<&Section>, s: &Setting, hopf_anyway: bool)
         None if hopf_anyway => hopf_scan(section, s, linear),
         None => Vec::new(),
     };
-    Predicted { set, hopf, linear }
+    let corrected = match &set {
+        Some(set) if !linear => s
+            .points
+            .iter()
+            .map(|m| corrected_at(section, set, m, s.branch))
+            .collect(),
+        _ => Vec::new(),
+    };
+    Predicted {
+        set,
+        hopf,
+        linear,
+        corrected,
+    }
 }
 
 /// The Hopf points of `section` by the eigenvalue scan alone (criticality unknown unless
@@ -306,7 +374,7 @@ impl Rows<'_> {
 /// Every residual of `rows` against `p`: the points' ([`residuals`]), then the onsets',
 /// then the absences'.
 pub(crate) fn all_residuals(p: &Predicted, rows: &Rows, s: &Setting) -> Vec<f64> {
-    let mut r = residuals(p.set.as_ref(), rows.points, s);
+    let mut r = residuals(p, rows.points, s);
     for o in rows.onsets {
         r.extend(onset_residuals(p, o, s));
     }
@@ -316,16 +384,14 @@ pub(crate) fn all_residuals(p: &Predicted, rows: &Rows, s: &Setting) -> Vec<f64>
     r
 }
 
-/// Residuals of the measured points `pts` against `set` (layout per point: pitch if
-/// measured, heave if measured, frequency if measured, speed).
-pub(crate) fn residuals(
-    set: Option<&BranchSet>,
-    pts: &[&MeasuredAmplitude],
-    s: &Setting,
-) -> Vec<f64> {
+/// Residuals of the measured points `pts` against the prediction `p` (a covered point's
+/// orbit from [`Predicted::at`]; layout per point: pitch if measured, heave if measured,
+/// frequency if measured, speed).
+pub(crate) fn residuals(p: &Predicted, pts: &[&MeasuredAmplitude], s: &Setting) -> Vec<f64> {
+    let set = p.set.as_ref();
     let mut r = Vec::with_capacity(3 * pts.len());
     for m in pts {
-        let covered = set.and_then(|set| aeroelastic::branch::predicted_at(set, m));
+        let covered = p.at(m, s);
         let (pa, ph, pf, du) = match covered {
             Some((a, h, f)) => (a, h, f, 0.0),
             None => {
@@ -366,7 +432,11 @@ fn cost(r: &[f64]) -> f64 {
 
 /// The branch point [`residuals`] takes for an uncovered measured point: the nearest orbit
 /// of the same stability in the scaled (U, amplitude) plane (the first on a tie).
-fn nearest(set: &BranchSet, m: &MeasuredAmplitude, s: &Setting) -> Option<(usize, usize)> {
+pub(crate) fn nearest(
+    set: &BranchSet,
+    m: &MeasuredAmplitude,
+    s: &Setting,
+) -> Option<(usize, usize)> {
     let mut best: Option<(f64, (usize, usize))> = None;
     for (bi, b) in set.branches.iter().enumerate() {
         for (i, p) in b.points.iter().enumerate() {
@@ -566,15 +636,11 @@ pub(crate) struct FitResult {
     pub predicted: Predicted,
 }
 
-/// Relative cost gain below which a fit leaves the sensitivities' Jacobian for forward
-/// differences.
-const SENSITIVITY_GAIN: f64 = 1e-3;
-
-/// Levenberg–Marquardt on `obj` from `x0` (whose prediction `p0` may be at hand). Each
-/// iteration takes the objective's Jacobian from sensitivities when it gives one, forward
-/// differences (step 1e-2 in θ) otherwise; an iteration whose sensitivity step finds no
-/// lower cost is taken again with the differences before the fit stops, so that it ends
-/// where the difference-Jacobian fit would have stopped.
+/// Levenberg–Marquardt on `obj` from `x0` (whose prediction `p0` may be at hand), at most
+/// `max_iter` iterations. Each iteration takes the objective's Jacobian from sensitivities
+/// when it gives one, forward differences (step 1e-2 in θ) otherwise, and tries up to
+/// eight damped steps (λ × 4 after each that does not lower the cost); the fit stops when
+/// an iteration finds no lower cost or gains at most 1e-6 of it, or the slope is zero.
 pub(crate) fn levenberg_marquardt(
     obj: &Objective,
     x0: &[f64],
@@ -602,23 +668,20 @@ pub(crate) fn levenberg_marquardt(
         j
     };
     let mut iter = 0;
-    // Sensitivities while they make progress, then differences to the end (the stop rule
-    // of the difference fit: no step, or one of relative gain ≤ 1e-6).
-    let mut sensitivities = obj.jacobian.is_some();
     while iter < max_iter {
-        let analytic = if sensitivities {
-            obj.jacobian
-                .and_then(|jf| jf(&x, &p))
-                .filter(|j| j.nrows() == r.len() && j.ncols() == n)
-        } else {
-            None
-        };
-        let from_sensitivities = analytic.is_some();
+        let analytic = obj
+            .jacobian
+            .and_then(|jf| jf(&x, &p))
+            .filter(|j| j.nrows() == r.len() && j.ncols() == n);
         let j = analytic.unwrap_or_else(|| differences(&x, &r));
         let rv = DVector::from_column_slice(&r);
         let jtj = j.transpose() * &j;
         let g = j.transpose() * &rv;
-        let lambda0 = lambda;
+        if g.iter().all(|v| *v == 0.0) {
+            // no slope: every step is zero and gives the same prediction, so no trial can
+            // lower the cost (the fit ends where the eight trials would have left it)
+            break;
+        }
         let mut gain = None;
         for _ in 0..8 {
             let mut a = jtj.clone();
@@ -644,17 +707,8 @@ pub(crate) fn levenberg_marquardt(
             }
             lambda *= 4.0;
         }
-        if from_sensitivities && gain.is_none_or(|g| g <= SENSITIVITY_GAIN) {
-            // the sensitivities no longer pay: differences from here on (the same iteration
-            // again when this one found no step)
-            sensitivities = false;
-            if gain.is_none() {
-                lambda = lambda0;
-                continue;
-            }
-        }
         iter += 1;
-        if gain.is_none_or(|g| g <= 1e-6) && !from_sensitivities {
+        if gain.is_none_or(|g| g <= 1e-6) {
             break;
         }
     }
@@ -757,6 +811,7 @@ mod tests {
             }],
             set: Some(set),
             linear: false,
+            corrected: Vec::new(),
         }
     }
 
@@ -771,6 +826,7 @@ mod tests {
             onset_sd: 0.01,
             dofs: [true, false],
             row_speeds: [f64::INFINITY, f64::NEG_INFINITY],
+            points: &[],
         }
     }
 

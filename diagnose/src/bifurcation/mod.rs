@@ -51,6 +51,14 @@ pub const FORMAT: &str = "aeroform-bifurcation-diagnosis/1";
 /// Starts of the grid from which a fit on all points runs Levenberg–Marquardt.
 const START_POINTS: usize = 12;
 
+/// With [`FitJacobian::Sensitivities`], the iterations every one of the
+/// [`START_POINTS`] starts takes before only the best [`STAGE_KEEP`] go on (DECISIONS,
+/// "The smooth bifurcation-level objective, round 33").
+const STAGE_ITERATIONS: usize = 4;
+
+/// The starts that go on after [`STAGE_ITERATIONS`].
+const STAGE_KEEP: usize = 3;
+
 /// Upper end of the continuation range as a multiple of the higher of the largest measured
 /// speed and the nominal Hopf speed.
 const HOPF_REACH: f64 = 2.0;
@@ -74,9 +82,9 @@ pub struct BifurcationOptions {
     /// uncertainty (DECISIONS, "Issue 42 item 2, round 27").
     #[serde(default = "default_onset_uncertainty")]
     pub onset_uncertainty: f64,
-    /// Where each Levenberg–Marquardt iteration takes its Jacobian (default
-    /// `differences`; DECISIONS, "Bifurcation-level fits by derivatives (issue 43 item 2, round
-    /// 31)": the sensitivities' fits end at other, higher optima on the Bristol records).
+    /// The objective and Jacobian of the fits (default `differences`; DECISIONS, "The
+    /// smooth bifurcation-level objective, round 33": `sensitivities` takes 0.4 of the
+    /// time and finds lower optima, which changes the Bristol verdict's variant).
     #[serde(default)]
     pub jacobian: FitJacobian,
 }
@@ -88,13 +96,16 @@ pub struct BifurcationOptions {
 #[serde(rename_all = "snake_case")]
 pub enum FitJacobian {
     /// Forward differences of whole diagrams, step 1e-2 in θ: one continuation per
-    /// parameter and iteration.
+    /// parameter and iteration; a covered point's prediction interpolates linearly between
+    /// continuation points, an uncovered point scores as predicted 0.
     #[default]
     Differences,
-    /// From the sensitivities of the predicted orbits at the measured points
-    /// (dY/dθ = −[G_Y; c]⁻¹[G_θ; 0], [`aeroelastic::branch::OrbitSensitivity`]) while they
-    /// gain more than 0.1 % of the cost per iteration, then differences to the same stop
-    /// rule.
+    /// The smooth objective, fitted by its derivatives: a covered point's orbit corrected
+    /// by Newton at its own speed ([`aeroelastic::branch::Section::orbit_at`]), an
+    /// uncovered point scored against its nearest orbit (speed gap over s_u in quadrature,
+    /// at most as predicted 0); the Jacobian from the sensitivities of those orbits
+    /// (dY/dθ = −[G_Y; c]⁻¹[G_θ; 0], [`aeroelastic::branch::OrbitSensitivity`]; differences
+    /// where they fail); every grid start runs four iterations, the best three go on.
     Sensitivities,
 }
 
@@ -535,16 +546,32 @@ fn errors(d: &[MeasuredDistance], extra: &[f64], s: &Setting) -> Errors {
     Errors { rows, score }
 }
 
-/// Normalised errors of predictions `d`: relative amplitude errors (uncovered: predicted
-/// 0) and relative frequency errors of covered points.
+/// Normalised errors of predictions `d`: relative amplitude errors and relative frequency
+/// errors of covered points. An uncovered point's amplitude counts as predicted 0 with
+/// [`FitJacobian::Differences`]; with [`FitJacobian::Sensitivities`] (the smooth
+/// objective: the setting holds the points) as the nearer of its nearest orbit
+/// (`nearest`: the relative amplitude error and the speed gap over s_u combined in
+/// quadrature) and predicted 0, so that the score does not jump when a fold crosses the
+/// point's speed.
 fn normalised(d: &[MeasuredDistance], s: &Setting) -> Vec<f64> {
+    let near_score = !s.points.is_empty();
     let mut z = Vec::new();
     for x in d {
+        let uncovered = |pred: Option<f64>, m: f64, n: f64, k: usize| -> f64 {
+            match (pred, x.nearest) {
+                (Some(p), _) => (p - m) / n,
+                (None, Some(o)) if near_score => {
+                    let du = (o[0] - x.measured.u) / s.s_u;
+                    ((o[k] - m) / n).hypot(du).min(m.abs() / n)
+                }
+                (None, _) => -m / n,
+            }
+        };
         if let Some(m) = x.measured.amplitude_alpha {
-            z.push((x.predicted_alpha.unwrap_or(0.0) - m) / s.n_alpha(m));
+            z.push(uncovered(x.predicted_alpha, m, s.n_alpha(m), 1));
         }
         if let Some(m) = x.measured.amplitude_h {
-            z.push((x.predicted_h.unwrap_or(0.0) - m) / s.n_h(m));
+            z.push(uncovered(x.predicted_h, m, s.n_h(m), 2));
         }
         if let (Some(m), Some(p)) = (x.measured.frequency_hz, x.predicted_frequency_hz) {
             z.push((p - m) / m);
@@ -553,22 +580,76 @@ fn normalised(d: &[MeasuredDistance], s: &Setting) -> Vec<f64> {
     z
 }
 
-fn summary(set: Option<BranchSet>, measured: &[MeasuredAmplitude], s: &Setting) -> DiagramSummary {
-    let points = match &set {
-        Some(set) => measured_distances(set, measured),
-        None => measured
-            .iter()
-            .map(|m| MeasuredDistance {
-                measured: m.clone(),
-                predicted_alpha: None,
-                predicted_h: None,
-                predicted_frequency_hz: None,
-                d_alpha: None,
-                d_h: None,
-                speed_gap: None,
-            })
-            .collect(),
+/// Distances of the measured points to the prediction `p` ([`Predicted::at`]: the orbit
+/// corrected at each point's speed, else interpolated), as
+/// [`aeroelastic::branch::measured_distances`] takes them; an uncovered point also gets
+/// its nearest orbit of the same stability in the scaled plane (`nearest`, what its
+/// score compares it with: [`normalised`]).
+fn distances(p: &Predicted, measured: &[MeasuredAmplitude], s: &Setting) -> Vec<MeasuredDistance> {
+    let Some(set) = p.set.as_ref() else {
+        return measured_distances_none(measured);
     };
+    let mut d = if p.corrected.is_empty() {
+        measured_distances(set, measured)
+    } else {
+        measured
+            .iter()
+            .map(|m| {
+                let best = p.at(m, s);
+                let gap = set
+                    .branches
+                    .iter()
+                    .flat_map(|b| b.points.iter())
+                    .filter(|q| q.stable == m.stable)
+                    .map(|q| (q.u - m.u).abs())
+                    .fold(f64::INFINITY, f64::min);
+                let diff = |p: Option<f64>, q: Option<f64>| Some(p? - q?);
+                MeasuredDistance {
+                    measured: m.clone(),
+                    predicted_alpha: best.map(|b| b.0),
+                    predicted_h: best.map(|b| b.1),
+                    predicted_frequency_hz: best.map(|b| b.2),
+                    d_alpha: diff(best.map(|b| b.0), m.amplitude_alpha),
+                    d_h: diff(best.map(|b| b.1), m.amplitude_h),
+                    speed_gap: if best.is_some() {
+                        Some(0.0)
+                    } else {
+                        Some(gap).filter(|g| g.is_finite())
+                    },
+                    nearest: None,
+                }
+            })
+            .collect()
+    };
+    for x in d.iter_mut().filter(|x| x.predicted_alpha.is_none()) {
+        x.nearest = fit::nearest(set, &x.measured, s).map(|(bi, i)| {
+            let q = &set.branches[bi].points[i];
+            [q.u, q.amplitude1_alpha, q.amplitude1_h]
+        });
+    }
+    d
+}
+
+/// The measured points without a prediction.
+fn measured_distances_none(measured: &[MeasuredAmplitude]) -> Vec<MeasuredDistance> {
+    measured
+        .iter()
+        .map(|m| MeasuredDistance {
+            measured: m.clone(),
+            predicted_alpha: None,
+            predicted_h: None,
+            predicted_frequency_hz: None,
+            d_alpha: None,
+            d_h: None,
+            speed_gap: None,
+            nearest: None,
+        })
+        .collect()
+}
+
+fn summary(p: &Predicted, measured: &[MeasuredAmplitude], s: &Setting) -> DiagramSummary {
+    let set = p.set.clone();
+    let points = distances(p, measured, s);
     let extent = Extent::of(measured).map(|e| e.widen(s.row_speeds));
     let outside_speeds = |u: f64| extent.is_some_and(|e| e.outside_speeds(u));
     let outside = |u: f64, a: f64, h: f64| extent.is_some_and(|e| e.outside(u, a, h));
@@ -854,6 +935,11 @@ pub fn diagnose_diagram(
             measured.iter().any(|m| m.amplitude_h.is_some()),
         ],
         row_speeds,
+        // the smooth objective: orbits corrected at the measured speeds
+        points: match opts.jacobian {
+            FitJacobian::Differences => &[],
+            FitJacobian::Sensitivities => measured,
+        },
     };
     let hopf_nominal = section
         .hopf_points(probe.range[0], probe.range[1], branch.n_scan)
@@ -882,7 +968,7 @@ pub fn diagnose_diagram(
     // neutral orbits at the Hopf speed, not a diagram; only its Hopf points are reported.
     let nominal_of = |section: &Section| {
         if section.structure.is_linear() && section.aero.is_linear() {
-            let mut s = summary(None, measured, &setting);
+            let mut s = summary(&Predicted::default(), measured, &setting);
             let hopf = hopf_scan(section, &setting, true);
             s.hopf = hopf
                 .iter()
@@ -898,16 +984,12 @@ pub fn diagnose_diagram(
                 set: None,
                 hopf,
                 linear: true,
+                corrected: Vec::new(),
             };
             with_rows(s, &p, diagram_in, &setting)
         } else {
             let p = predict(Some(section), &setting, all_rows.need_hopf());
-            with_rows(
-                summary(p.set.clone(), measured, &setting),
-                &p,
-                diagram_in,
-                &setting,
-            )
+            with_rows(summary(&p, measured, &setting), &p, diagram_in, &setting)
         }
     };
     let nominal = nominal_of(section);
@@ -1135,13 +1217,35 @@ fn fit_candidate(
     // a fold can form from softening or from an even term), the best end kept.
     // (in parallel; the first of equal ends wins, as in start order)
     ranked.truncate(START_POINTS);
-    let full = ranked
-        .into_par_iter()
-        .map(|(_, s, p)| lm(all, &s, p, opts.max_iterations))
-        .collect::<Vec<_>>()
-        .into_iter()
-        .min_by(|a, b| a.cost.total_cmp(&b.cost))
-        .expect("at least one start");
+    let full = match opts.jacobian {
+        // with sensitivities every start takes a few iterations, the best few go on
+        FitJacobian::Sensitivities => {
+            let mut first: Vec<_> = ranked
+                .into_par_iter()
+                .map(|(_, s, p)| lm(all, &s, p, STAGE_ITERATIONS))
+                .collect();
+            // stable sort: the first of equal costs stays first
+            first.sort_by(|a, b| a.cost.total_cmp(&b.cost));
+            first.truncate(STAGE_KEEP);
+            first
+                .into_par_iter()
+                .map(|r| {
+                    let rest = opts.max_iterations.saturating_sub(STAGE_ITERATIONS);
+                    lm(all, &r.theta, Some(r.predicted), rest)
+                })
+                .collect::<Vec<_>>()
+                .into_iter()
+                .min_by(|a, b| a.cost.total_cmp(&b.cost))
+                .expect("at least one start")
+        }
+        FitJacobian::Differences => ranked
+            .into_par_iter()
+            .map(|(_, s, p)| lm(all, &s, p, opts.max_iterations))
+            .collect::<Vec<_>>()
+            .into_iter()
+            .min_by(|a, b| a.cost.total_cmp(&b.cost))
+            .expect("at least one start"),
+    };
     // Even terms jointly to the sign convention (first even term ≥ 0): the diagram is the
     // same (q → −q symmetry of the linear section).
     let even: Vec<usize> = (0..n).filter(|&k| c.parameters[k].even).collect();
@@ -1192,10 +1296,7 @@ fn fit_candidate(
             .cloned()
             .collect();
         let p = r.predicted;
-        let d = match &p.set {
-            Some(set) => measured_distances(set, &test),
-            None => summary(None, &test, setting).points,
-        };
+        let d = distances(&p, &test, setting);
         let mut it = d.into_iter();
         for (i, m) in measured.iter().enumerate() {
             if same_speed(m.u, g) {
@@ -1263,7 +1364,7 @@ fn fit_candidate(
     };
     let p_all = &full.predicted;
     let fit = with_rows(
-        summary(p_all.set.clone(), measured, setting),
+        summary(p_all, measured, setting),
         p_all,
         diagram_in,
         setting,
@@ -1426,6 +1527,58 @@ mod extent_tests {
             amplitude_alpha: a,
             frequency_hz: None,
         }
+    }
+
+    /// An uncovered point scores as predicted 0 with the difference fits; under the smooth
+    /// objective as its nearest orbit with the speed gap over s_u in quadrature, which
+    /// tends to the covered error as the fold reaches the point and never exceeds the
+    /// predicted-0 error.
+    #[test]
+    fn an_uncovered_point_scores_by_its_nearest_orbit_under_the_smooth_objective() {
+        let opts = BranchOptions::default();
+        let m = point(17.3, Some(0.08));
+        let pts = [m.clone()];
+        let differences = Setting {
+            branch: &opts,
+            range: [10.0, 30.0],
+            s_alpha: 0.05,
+            s_h: 0.015,
+            s_u: 0.3,
+            noise: 0.05,
+            onset_sd: 0.01,
+            dofs: [true, false],
+            row_speeds: [f64::INFINITY, f64::NEG_INFINITY],
+            points: &[],
+        };
+        let smooth = Setting {
+            points: &pts,
+            ..differences
+        };
+        let at = |gap: f64, a: f64| MeasuredDistance {
+            measured: m.clone(),
+            predicted_alpha: None,
+            predicted_h: None,
+            predicted_frequency_hz: None,
+            d_alpha: None,
+            d_h: None,
+            speed_gap: Some(gap),
+            nearest: Some([17.3 - gap, a, 0.0]),
+        };
+        assert_eq!(normalised(&[at(0.02, 0.079)], &differences), vec![-1.0]);
+        let z = normalised(&[at(0.02, 0.079)], &smooth)[0];
+        let expect = (0.001f64 / 0.08).hypot(0.02 / 0.3);
+        assert!((z - expect).abs() < 1e-12, "{z} vs {expect}");
+        // the fold at the point: the amplitude error alone
+        let z0 = normalised(&[at(0.0, 0.079)], &smooth)[0];
+        assert!((z0 - 0.001 / 0.08).abs() < 1e-12, "{z0}");
+        // far from it: no worse than predicting nothing
+        assert_eq!(normalised(&[at(3.0, 0.079)], &smooth), vec![1.0]);
+        // no orbit of its stability at all: predicted 0 under both
+        let none = MeasuredDistance {
+            nearest: None,
+            ..at(0.0, 0.0)
+        };
+        assert_eq!(normalised(std::slice::from_ref(&none), &smooth), vec![-1.0]);
     }
 
     /// The measured extent: speeds [min, max], the largest amplitude of each measured DOF; a
