@@ -8,9 +8,9 @@
 //! (`diagnose::bifurcation::diagnose_branches`: the linear model against the nine measured
 //! LCO points, every catalogue candidate fitted with its held-out folds), which
 //! `diagnose/tests/bifurcation.rs` checks for correctness only; `bristol_9_points` with the
-//! default difference Jacobians, `bristol_9_points_sensitivities` with the orbits'
-//! sensitivities (`FitJacobian::Sensitivities`, DECISIONS "Bifurcation-level fits by derivatives (issue
-//! 43 item 2, round 31)").
+//! default difference Jacobians, `bristol_9_points_sensitivities` with the smooth objective
+//! fitted by the orbits' sensitivities (`FitJacobian::Sensitivities`, DECISIONS "The smooth
+//! bifurcation-level objective, round 33").
 //!
 //! Run: `cargo bench --bench diagnose` (`-- bifurcation` for the second group only).
 
