@@ -4,10 +4,13 @@
 //! Every evaluation continues the periodic orbits of the changed section from its Hopf
 //! points ([`Section::lco_branches`], condensed harmonic balance where it applies) and
 //! compares them with the measured points. The fit minimises, by Levenberg–Marquardt from
-//! the best points of a coarse start grid, the residuals below; the Jacobian of each
-//! iteration comes from the sensitivities of the predicted orbits at the measured points
+//! the best points of a coarse start grid, the residuals below. With the default
+//! `differences` the Jacobian is a forward difference of whole diagrams and a covered
+//! point's prediction interpolates between continuation points; with `sensitivities` (the
+//! smooth objective) each covered point's orbit is corrected at its own speed
+//! ([`Predicted::corrected`]) and the Jacobian comes from those orbits' sensitivities
 //! ([`residual_jacobian`]: one corrected orbit per point instead of one diagram per
-//! parameter), forward differences of whole diagrams where they are not available
+//! parameter; differences where they are not available).
 //!
 //! - per measured point and measured DOF d: (a_pred − a_meas) / max(a_meas, s_d/4), s_d the
 //!   RMS measured amplitude of that DOF (relative errors: a measured amplitude scatters by

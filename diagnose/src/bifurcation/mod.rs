@@ -101,7 +101,7 @@ pub enum FitJacobian {
     #[default]
     Differences,
     /// The smooth objective, fitted by its derivatives: a covered point's orbit corrected
-    /// by Newton at its own speed ([`aeroelastic::branch::Section::orbit_at`]), an
+    /// by Newton at its own speed ([`aeroelastic::section::Section::orbit_at`]), an
     /// uncovered point scored against its nearest orbit (speed gap over s_u in quadrature,
     /// at most as predicted 0); the Jacobian from the sensitivities of those orbits
     /// (dY/dθ = −[G_Y; c]⁻¹[G_θ; 0], [`aeroelastic::branch::OrbitSensitivity`]; differences
