@@ -105,7 +105,16 @@ fn householder_qr_body(a: &mut [f64], n: usize, ncols: usize, nref: usize) -> Ve
         };
         diag[k] = alpha;
         if f > 0.0 {
-            for j in 0..(ncols - k - 1) {
+            // two columns per pass over v (one load of v for both dot products); each
+            // column gets exactly the operations of `reflect`
+            let rest = ncols - k - 1;
+            let mut j = 0;
+            while j + 2 <= rest {
+                let (a, b) = right[j * n..(j + 2) * n].split_at_mut(n);
+                reflect2(v, f, &mut a[k..], &mut b[k..]);
+                j += 2;
+            }
+            if j < rest {
                 reflect(v, f, &mut right[j * n + k..(j + 1) * n]);
             }
         }
@@ -139,6 +148,49 @@ fn reflect(v: &[f64], f: f64, c: &mut [f64]) {
     for (y, x) in c.iter_mut().zip(v) {
         *y -= s * x;
     }
+}
+
+/// [`reflect`] on two columns `c` and `d` at once: the same operations on each (its own
+/// [`dot`], then c ← c − s v), so bit for bit two calls of [`reflect`].
+#[inline(always)]
+fn reflect2(v: &[f64], f: f64, c: &mut [f64], d: &mut [f64]) {
+    let (sc, sd) = dot2(v, c, d);
+    let (sc, sd) = (sc * f, sd * f);
+    for ((y, z), x) in c.iter_mut().zip(d.iter_mut()).zip(v) {
+        *y -= sc * x;
+        *z -= sd * x;
+    }
+}
+
+/// ([`dot`]`(x, y)`, [`dot`]`(x, z)`) in one pass over `x` (all three of one length), each
+/// summed exactly as [`dot`] sums it.
+#[inline(always)]
+fn dot2(x: &[f64], y: &[f64], z: &[f64]) -> (f64, f64) {
+    let len = x.len().min(y.len()).min(z.len());
+    let (x, y, z) = (&x[..len], &y[..len], &z[..len]);
+    let mut ay = [0.0f64; 16];
+    let mut az = [0.0f64; 16];
+    for ((a, b), c) in x
+        .chunks_exact(16)
+        .zip(y.chunks_exact(16))
+        .zip(z.chunks_exact(16))
+    {
+        for k in 0..16 {
+            ay[k] += a[k] * b[k];
+            az[k] += a[k] * c[k];
+        }
+    }
+    let rem = len / 16 * 16;
+    let (mut sy, mut sz) = (0.0, 0.0);
+    for k in 0..4 {
+        sy += (ay[k] + ay[k + 4]) + (ay[k + 8] + ay[k + 12]);
+        sz += (az[k] + az[k + 4]) + (az[k + 8] + az[k + 12]);
+    }
+    for i in rem..len {
+        sy += x[i] * y[i];
+        sz += x[i] * z[i];
+    }
+    (sy, sz)
 }
 
 /// Dot product x·y over the shorter length, with sixteen accumulators (lets the compiler keep several vector

@@ -18,6 +18,7 @@
 
 use faer::{Mat, MatMut, MatRef};
 
+use crate::numerics::scratch::Scratch;
 use crate::numerics::{cholesky_in_place, cholesky_solve_in_place, PivotFloor};
 use crate::{Error, Result};
 
@@ -225,7 +226,7 @@ impl CaseFactor {
         let bs = ROW_BLOCK.max(2 * ncols);
         // rows per call of `fill`: a multiple of the factorisation block
         let chunk = bs * (FILL_BLOCK / bs).max(1);
-        let mut block = vec![0.0; chunk * p];
+        let mut block = Scratch::zeroed(chunk * p);
         // Calls `visit(r0, rows, block)` with Θ's rows r0..r0+rows, column j at
         // block[j*rows..(j+1)*rows].
         let mut blocks = |visit: &mut dyn FnMut(usize, usize, &[f64])| {
@@ -243,11 +244,39 @@ impl CaseFactor {
         // first row at which a column's value or its running sum of squares is not finite
         let mut first_bad: Vec<Option<usize>> = vec![None; p];
         blocks(&mut |r0, rows, buf| {
-            for (j, s) in sums.iter_mut().enumerate() {
-                for (i, v) in buf[j * rows..(j + 1) * rows].iter().enumerate() {
+            // Four columns at a time, row by row: four independent chains of additions
+            // (each column's sum still runs in row order, so the same numbers), the
+            // finiteness checked once per block and the block replayed only for a column
+            // that became non-finite in it.
+            let before = sums.clone();
+            let mut j = 0;
+            while j + 4 <= p {
+                let c = |k: usize| &buf[(j + k) * rows..(j + k + 1) * rows];
+                let (c0, c1, c2, c3) = (c(0), c(1), c(2), c(3));
+                let mut acc = [sums[j], sums[j + 1], sums[j + 2], sums[j + 3]];
+                for i in 0..rows {
+                    acc[0] += c0[i] * c0[i];
+                    acc[1] += c1[i] * c1[i];
+                    acc[2] += c2[i] * c2[i];
+                    acc[3] += c3[i] * c3[i];
+                }
+                sums[j..j + 4].copy_from_slice(&acc);
+                j += 4;
+            }
+            for (jj, s) in sums.iter_mut().enumerate().skip(j) {
+                for v in &buf[jj * rows..(jj + 1) * rows] {
                     *s += v * v;
-                    if first_bad[j].is_none() && !s.is_finite() {
-                        first_bad[j] = Some(r0 + i);
+                }
+            }
+            for (jj, s) in sums.iter().enumerate() {
+                if first_bad[jj].is_none() && !s.is_finite() {
+                    let mut t = before[jj];
+                    for (i, v) in buf[jj * rows..(jj + 1) * rows].iter().enumerate() {
+                        t += v * v;
+                        if !t.is_finite() {
+                            first_bad[jj] = Some(r0 + i);
+                            break;
+                        }
                     }
                 }
             }
@@ -322,11 +351,13 @@ impl CaseFactor {
                     .copy_from_slice(&y[r0 + i0..r0 + i0 + rows]);
             }
         };
-        let sm = STACK_BLOCKS * ncols;
-        let mut stack = vec![0.0; sm * ncols];
+        // the stack holds at most STACK_BLOCKS triangles; a shorter record needs (and
+        // zeroes) only the rows of its own blocks (its stack is never reduced in place)
+        let sm = STACK_BLOCKS.min(nblocks.max(1)) * ncols;
+        let mut stack = Scratch::zeroed(sm * ncols);
         let mut stacked = 0usize;
-        let mut buf = vec![0.0; bs * ncols];
-        let mut tail = vec![0.0; rem * ncols];
+        let mut buf = Scratch::zeroed(bs * ncols);
+        let mut tail = Scratch::zeroed(rem * ncols);
         blocks(&mut |r0, rows, src| {
             let mut i0 = 0;
             while i0 + bs <= rows {
@@ -354,7 +385,7 @@ impl CaseFactor {
             }
         });
         let m = stacked * ncols + rem;
-        let mut a = vec![0.0; m * ncols];
+        let mut a = Scratch::zeroed(m * ncols);
         for c in 0..ncols {
             for b in 0..stacked {
                 for i in 0..=c {
