@@ -235,7 +235,8 @@ fn parse_case_reader(
         last_len = buf.len() as u64;
         let line = crate::io::utf8_text(&buf, line_no, line_start).map_err(not_utf8)?;
         let line = line.strip_suffix('\r').unwrap_or(line);
-        if line.trim().is_empty() {
+        // (a line that starts with a byte that cannot begin white space is not blank)
+        if line.as_bytes().first().is_none_or(|&b| may_be_space(b)) && line.trim().is_empty() {
             blank_line.get_or_insert(line_no);
             continue;
         }
@@ -274,7 +275,7 @@ fn parse_case_reader(
             }
         }
         let mut count = 0usize;
-        for (j, field) in crate::csv_fields::fields(line).enumerate() {
+        for (j, field) in LineFields::of(line).enumerate() {
             count = j + 1;
             if j >= ncols {
                 continue;
@@ -283,7 +284,7 @@ fn parse_case_reader(
             if k == usize::MAX {
                 continue;
             }
-            // already trimmed by `csv_fields::fields`
+            // already trimmed
             let f: &str = &field;
             if f.is_empty() {
                 return Err(csv_err(path, line_no, NAMES[k], "empty field".into()));
@@ -348,6 +349,60 @@ fn parse_case_reader(
     })
 }
 
+/// Whether a line or field starting (or ending) with byte `b` may start (end) with white
+/// space as `str::trim` sees it: an ASCII white-space byte or any byte of a multi-byte
+/// character (some are Unicode white space).
+#[inline]
+fn may_be_space(b: u8) -> bool {
+    b >= 0x80 || matches!(b, b'\t' | b'\n' | 0x0B | 0x0C | b'\r' | b' ')
+}
+
+/// The fields of one line, trimmed, as [`crate::csv_fields::fields`] gives them; a line
+/// holding no double quote (the case files' rows of numbers) is split here without the
+/// per-field Unicode trim when a field neither starts nor ends with a possible white-space
+/// byte.
+enum LineFields<'a> {
+    Plain(Option<&'a str>),
+    Quoted(crate::csv_fields::Fields<'a>),
+}
+
+impl<'a> LineFields<'a> {
+    fn of(line: &'a str) -> Self {
+        if line.as_bytes().contains(&b'"') {
+            LineFields::Quoted(crate::csv_fields::fields(line))
+        } else {
+            LineFields::Plain(Some(line))
+        }
+    }
+}
+
+impl<'a> Iterator for LineFields<'a> {
+    type Item = std::borrow::Cow<'a, str>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        let rest = match self {
+            LineFields::Quoted(it) => return it.next(),
+            LineFields::Plain(rest) => rest,
+        };
+        let r = (*rest)?;
+        let field = match r.as_bytes().iter().position(|&b| b == b',') {
+            Some(i) => {
+                *rest = Some(&r[i + 1..]);
+                &r[..i]
+            }
+            None => {
+                *rest = None;
+                r
+            }
+        };
+        let b = field.as_bytes();
+        Some(std::borrow::Cow::Borrowed(match (b.first(), b.last()) {
+            (Some(&x), Some(&y)) if !may_be_space(x) && !may_be_space(y) => field,
+            _ => field.trim(),
+        }))
+    }
+}
+
 /// Checks that time stamps are strictly increasing and uniformly spaced, and returns
 /// `(t0, dt)`: the least-squares intercept and slope of `t` against the 0-based row index
 /// (`dt = Σ(i−ī)(tᵢ−t̄) / Σ(i−ī)²`, `t0 = t̄ − dt·ī`).
@@ -407,6 +462,27 @@ mod tests {
 
     fn p() -> &'static Path {
         Path::new("cases/x.csv")
+    }
+
+    /// The case reader's own splitter gives the fields of the workspace's one splitter on
+    /// lines with ASCII and Unicode white space, empty fields and quotes.
+    #[test]
+    fn line_fields_are_those_of_csv_fields() {
+        for line in [
+            "",
+            ",",
+            "1,2.5,-3e-4",
+            " 1 ,\t2\t, 3",
+            "\u{a0}1.5,2\u{2003},\u{85}3\u{85}",
+            "\x0b4\x0c,5\r",
+            "1,,3,",
+            "a,\"b,c\" , \"d\"\"e\"",
+            "é,ü , ß",
+        ] {
+            let ours: Vec<String> = LineFields::of(line).map(|f| f.into_owned()).collect();
+            let theirs = crate::csv_fields::split_line(line);
+            assert_eq!(ours, theirs, "{line:?}");
+        }
     }
 
     fn msg(e: &Error) -> String {
