@@ -384,9 +384,11 @@ impl HarmonicProjector {
         let mut htv = Mat::<f64>::zeros(m, p);
         let mut hts: Vec<Mat<f64>> = signals.iter().map(|_| Mat::zeros(m, 1)).collect();
         let block = HARMONIC_BLOCK.min(self.n);
-        let mut hb = Scratch::zeroed(block * m);
+        // every value of the basis and signal buffers is written before it is read (the
+        // matrix buffer is zeroed: it is the caller's `fill` that writes it)
+        let mut hb = Scratch::overwritten(block * m);
         let mut tb = Scratch::zeroed(block * p);
-        let mut sb = Scratch::zeroed(if signals.is_empty() { 0 } else { block });
+        let mut sb = Scratch::overwritten(if signals.is_empty() { 0 } else { block });
         let mut r0 = 0;
         while r0 < self.n {
             let rows = block.min(self.n - r0);

@@ -28,21 +28,37 @@ impl Scratch {
     /// `len` zeros: the smallest pooled buffer that holds them, else the largest grown,
     /// else a new one.
     pub fn zeroed(len: usize) -> Self {
-        let mut v = POOL
-            .try_with(|p| {
-                let mut p = p.borrow_mut();
-                let fit = (0..p.len())
-                    .filter(|&i| p[i].capacity() >= len)
-                    .min_by_key(|&i| p[i].capacity())
-                    .or_else(|| (0..p.len()).max_by_key(|&i| p[i].capacity()));
-                fit.map(|i| p.swap_remove(i))
-            })
-            .ok()
-            .flatten()
-            .unwrap_or_default();
+        let mut v = Self::take(len);
         v.clear();
         v.resize(len, 0.0);
         Scratch { v }
+    }
+
+    /// `len` values to be overwritten: as [`Scratch::zeroed`] but the values a reused
+    /// buffer held are left in place (no zeroing pass); only for a caller that writes
+    /// every value before it reads any (otherwise it would read an earlier user's numbers).
+    pub fn overwritten(len: usize) -> Self {
+        let mut v = Self::take(len);
+        if v.len() >= len {
+            v.truncate(len);
+        } else {
+            v.resize(len, 0.0);
+        }
+        Scratch { v }
+    }
+
+    fn take(len: usize) -> Vec<f64> {
+        POOL.try_with(|p| {
+            let mut p = p.borrow_mut();
+            let fit = (0..p.len())
+                .filter(|&i| p[i].capacity() >= len)
+                .min_by_key(|&i| p[i].capacity())
+                .or_else(|| (0..p.len()).max_by_key(|&i| p[i].capacity()));
+            fit.map(|i| p.swap_remove(i))
+        })
+        .ok()
+        .flatten()
+        .unwrap_or_default()
     }
 }
 
@@ -101,6 +117,10 @@ mod tests {
         let c = Scratch::zeroed(500);
         assert_ne!(c.as_ptr(), b.as_ptr());
         assert!(c.iter().all(|&v| v == 0.0));
+        // an overwritten buffer has the asked length (its values are unspecified)
+        let d = Scratch::overwritten(700);
+        assert_eq!(d.len(), 700);
+        drop(d);
         // an oversized one is not kept
         drop(Scratch::zeroed(POOL_MAX_VALUES + 1));
         assert!(Scratch::zeroed(10).len() == 10);

@@ -222,7 +222,8 @@ fn prepare_case(
     // longer one evaluated block by block each time. Every entry is a function of its
     // own row, so both give the same numbers.
     let held = (n <= HOLD_THETA_ROWS).then(|| {
-        let mut t = crate::numerics::scratch::Scratch::zeroed(n * p);
+        // `evaluate` writes every value
+        let mut t = crate::numerics::scratch::Scratch::overwritten(n * p);
         evaluate(0, faer::MatMut::from_column_major_slice_mut(&mut t, n, p));
         t
     });
@@ -244,7 +245,10 @@ fn prepare_case(
         Some([a, b]) => (a, b),
         None => (&case.c_moment, &case.c_lift),
     };
-    let factor = CaseFactor::from_row_blocks(id, n, p, order, &[y_m, y_l], eval)?;
+    let factor = match &held {
+        Some(t) => CaseFactor::from_columns(id, t, n, p, order, &[y_m, y_l])?,
+        None => CaseFactor::from_row_blocks(id, n, p, order, &[y_m, y_l], eval)?,
+    };
     let ident = identifiability::analyse_factor(
         id,
         lib,
