@@ -14,7 +14,7 @@ use crate::ensemble::{bootstrap_subset, Ensemble, EnsembleSettings};
 use crate::io::FileStamp;
 use crate::pipeline::{Identification, IdentifySettings, Prepared, Progress};
 use crate::preprocess::{prepare_with_report, PrepareReport, PreprocessOptions};
-use crate::record::{CaseKind, NondimCase, Record};
+use crate::record::{CaseKind, NondimCase};
 use crate::Result;
 
 /// Forced cases of a data set ready for [`crate::pipeline::identify`], with the
@@ -143,7 +143,8 @@ pub fn prepare_streaming(
     let mut seconds = StageSeconds::default();
     let indices: Vec<usize> = (0..manifest.cases.len()).collect();
     for chunk in indices.chunks(crate::pipeline::batch_size()) {
-        type Read = (usize, Record, CaseStamps, Option<NondimCase>, [f64; 2]);
+        // (the record is dropped once preprocessed: only its sample count is kept)
+        type Read = (usize, usize, CaseStamps, Option<NondimCase>, [f64; 2]);
         let done: Vec<Result<Read>> = chunk
             .par_iter()
             .map(|&i| {
@@ -160,9 +161,11 @@ pub fn prepare_streaming(
                     ),
                     CaseKind::Free => None,
                 };
+                let samples = SampleCount::of(&record);
+                drop(record);
                 Ok((
                     i,
-                    record,
+                    samples,
                     stamps,
                     nondim,
                     [read_s, t.elapsed().as_secs_f64()],
@@ -171,8 +174,8 @@ pub fn prepare_streaming(
             .collect();
         let mut batch = Vec::with_capacity(chunk.len());
         for r in done {
-            let (i, record, stamps, nondim, [read_s, pre_s]) = r?;
-            samples.add(dir, &manifest.cases[i], &record)?;
+            let (i, n_samples, stamps, nondim, [read_s, pre_s]) = r?;
+            samples.add_samples(dir, &manifest.cases[i], n_samples)?;
             seconds.read += read_s;
             seconds.preprocess += pre_s;
             if let Some(c) = nondim {
@@ -190,6 +193,9 @@ pub fn prepare_streaming(
             });
         }
     }
+    // the per-case scratch buffers of every thread are not needed by the group stage
+    rayon::broadcast(|_| crate::numerics::scratch::release());
+    crate::numerics::scratch::release();
     stamp.check(dir)?;
     Ok(StreamedDataset {
         root: dir.to_path_buf(),

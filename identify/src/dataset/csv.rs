@@ -289,14 +289,17 @@ fn parse_case_reader(
             if f.is_empty() {
                 return Err(csv_err(path, line_no, NAMES[k], "empty field".into()));
             }
-            let x: f64 = f.parse().map_err(|_| {
-                csv_err(
-                    path,
-                    line_no,
-                    NAMES[k],
-                    format!("cannot parse `{}` as a number", excerpt(f)),
-                )
-            })?;
+            let x: f64 = match plain_decimal(f) {
+                Some(x) => x,
+                None => f.parse().map_err(|_| {
+                    csv_err(
+                        path,
+                        line_no,
+                        NAMES[k],
+                        format!("cannot parse `{}` as a number", excerpt(f)),
+                    )
+                })?,
+            };
             if !x.is_finite() {
                 return Err(csv_err(
                     path,
@@ -347,6 +350,52 @@ fn parse_case_reader(
         control_raw: found[6].then_some(control_raw),
         control_force: found[7].then_some(control_force),
     })
+}
+
+/// Exact powers of ten 10⁰ … 10²² (every one is a double).
+const POW10: [f64; 23] = [
+    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
+    1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
+];
+
+/// The value of a field of the form `-?digits(.digits)?` with at most 19 digits whose
+/// integer w (the digits without the point) is at most 2⁵³ and whose fraction has at most
+/// 22 digits: w / 10^d by one IEEE division of two exact doubles (Clinger's fast path, the
+/// first step of `str::parse::<f64>` too), so the correctly rounded value `parse` gives.
+/// `None` for anything else (exponents, more digits, signs other than one leading minus,
+/// `inf`, …): the caller then parses with `str::parse`.
+fn plain_decimal(f: &str) -> Option<f64> {
+    let b = f.as_bytes();
+    let (neg, b) = match b.first()? {
+        b'-' => (true, &b[1..]),
+        _ => (false, b),
+    };
+    let mut w: u64 = 0;
+    let mut digits = 0usize;
+    let mut frac: Option<usize> = None;
+    for &c in b {
+        match c {
+            b'0'..=b'9' => {
+                digits += 1;
+                if digits > 19 {
+                    return None;
+                }
+                w = w * 10 + u64::from(c - b'0');
+                if let Some(d) = frac.as_mut() {
+                    *d += 1;
+                }
+            }
+            b'.' if frac.is_none() => frac = Some(0),
+            _ => return None,
+        }
+    }
+    // at least one digit before and (with a point) after the point
+    let d = frac.unwrap_or(0);
+    if digits == 0 || digits == d || frac == Some(0) || w > 1 << 53 || d > 22 {
+        return None;
+    }
+    let v = w as f64 / POW10[d];
+    Some(if neg { -v } else { v })
 }
 
 /// Whether a line or field starting (or ending) with byte `b` may start (end) with white
@@ -462,6 +511,63 @@ mod tests {
 
     fn p() -> &'static Path {
         Path::new("cases/x.csv")
+    }
+
+    /// The fast path of plain decimals gives `str::parse`'s value, bit for bit, and leaves
+    /// every other form to it.
+    #[test]
+    fn plain_decimals_parse_as_std_does() {
+        let mut state = 0x9E37_79B9_7F4A_7C15u64; // fixed seed
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        let mut fast = 0;
+        for _ in 0..200_000 {
+            let r = next();
+            let x = f64::from_bits(r);
+            let y = (r % 1_000_000_007) as f64 * 10f64.powi((r >> 40) as i32 % 12 - 8);
+            for v in [x, y, -y, y / 3.0] {
+                if !v.is_finite() {
+                    continue;
+                }
+                for text in [format!("{v}"), format!("{v:.3}"), format!("{v:.17}")] {
+                    let ours = plain_decimal(&text);
+                    let std: f64 = text.parse().unwrap();
+                    if let Some(o) = ours {
+                        fast += 1;
+                        assert_eq!(o.to_bits(), std.to_bits(), "{text}");
+                    }
+                }
+            }
+        }
+        assert!(fast > 100_000, "the fast path was taken {fast} times only");
+        for (text, want) in [
+            ("0", Some(0.0)),
+            ("-0", Some(-0.0)),
+            ("0.001953125", Some(0.001953125)),
+            ("-0.1348876953125", Some(-0.1348876953125)),
+            ("1.", None),
+            (".5", None),
+            ("+1", None),
+            ("1e5", None),
+            ("--1", None),
+            ("1.2.3", None),
+            ("", None),
+            ("-", None),
+            ("inf", None),
+            ("12345678901234567890", None),
+            ("9007199254740993", None),
+            ("0.10300633734501427", None),
+        ] {
+            assert_eq!(
+                plain_decimal(text).map(f64::to_bits),
+                want.map(f64::to_bits),
+                "{text}"
+            );
+        }
     }
 
     /// The case reader's own splitter gives the fields of the workspace's one splitter on

@@ -62,6 +62,25 @@ impl Scratch {
     }
 }
 
+/// Frees the calling thread's pooled buffers (what a long-lived thread calls when its
+/// per-case work is done, so the pool does not add to the memory of what follows).
+pub fn release() {
+    let _ = POOL.try_with(|p| {
+        if let Ok(mut p) = p.try_borrow_mut() {
+            *p = Vec::new();
+        }
+    });
+}
+
+/// Values held in the calling thread's pool (for tests and measurements).
+pub fn pooled_values() -> usize {
+    POOL.try_with(|p| {
+        p.try_borrow()
+            .map_or(0, |p| p.iter().map(Vec::capacity).sum())
+    })
+    .unwrap_or(0)
+}
+
 impl std::ops::Deref for Scratch {
     type Target = [f64];
     fn deref(&self) -> &[f64] {
@@ -124,5 +143,9 @@ mod tests {
         // an oversized one is not kept
         drop(Scratch::zeroed(POOL_MAX_VALUES + 1));
         assert!(Scratch::zeroed(10).len() == 10);
+        drop((b, c));
+        assert!(pooled_values() >= 1000);
+        release();
+        assert_eq!(pooled_values(), 0);
     }
 }
