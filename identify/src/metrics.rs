@@ -446,7 +446,7 @@ impl HarmonicProjector {
         signals: &[&[f64]],
         p: usize,
         fill: impl FnMut(usize, MatMut<'_, f64>),
-    ) -> (Vec<(f64, Vec<Complex64>)>, Vec<Vec<Complex64>>) {
+    ) -> (Vec<SignalAmplitudes>, Vec<Vec<Complex64>>) {
         for v in signals {
             assert_eq!(v.len(), self.n, "harmonic fit: signal length differs");
         }
@@ -490,6 +490,10 @@ impl HarmonicProjector {
             .collect()
     }
 }
+
+/// The mean and the complex amplitudes (one per frequency) of a signal, as
+/// [`HarmonicProjector::amplitudes`] returns them.
+pub type SignalAmplitudes = (f64, Vec<Complex64>);
 
 fn to_amplitudes(x: &[f64]) -> Vec<Complex64> {
     (0..(x.len() - 1) / 2)

@@ -194,7 +194,7 @@ pub fn prepare_streaming(
         // (docs/DECISIONS.md, round 33: kept for the whole pass they cost ≈ 40 % more peak
         // memory at the group stage; given back after every batch ≈ 0.15 s more CPU)
         batches += 1;
-        if batches % RELEASE_BATCHES == 0 {
+        if batches.is_multiple_of(RELEASE_BATCHES) {
             rayon::broadcast(|_| crate::numerics::scratch::release());
         }
         seconds.prepare += t.elapsed().as_secs_f64();

@@ -105,6 +105,10 @@ impl std::ops::Index<(usize, usize)> for Upper {
     }
 }
 
+/// What the factorisation does with Θ's rows r0..r0 + rows: `(r0, rows, src, ld)`, column j
+/// at `src[j·ld .. j·ld + rows]`.
+type BlockVisitor<'a> = dyn FnMut(usize, usize, &[f64], usize) + 'a;
+
 /// Reduced form of one target (one force coefficient) of a case.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TargetFactor {
@@ -266,7 +270,7 @@ impl CaseFactor {
         let mut block = Scratch::zeroed(if held.is_some() { 0 } else { chunk * p });
         // Calls `visit(r0, rows, src, ld)` with Θ's rows r0..r0+rows, column j at
         // src[j*ld..j*ld + rows] (the block buffer, or the held matrix in place).
-        let mut blocks = |visit: &mut dyn FnMut(usize, usize, &[f64], usize)| {
+        let mut blocks = |visit: &mut BlockVisitor<'_>| {
             let mut r0 = 0;
             while r0 < n {
                 let rows = chunk.min(n - r0);
