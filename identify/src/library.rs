@@ -356,7 +356,8 @@ impl Library {
         );
         assert_eq!(out.ncols(), self.terms.len(), "one output column per term");
         // powers 1..3 of each variable on the block: pw[(3·v + p − 1)·rows + i]
-        let mut pw = vec![0.0; 12 * rows];
+        // every power is written before it is read
+        let mut pw = crate::numerics::scratch::Scratch::overwritten(12 * rows);
         for (v, xv) in x.iter().enumerate() {
             let src = &xv[r0..r0 + rows];
             let (p1, rest) = pw[3 * v * rows..(3 * v + 3) * rows].split_at_mut(rows);

@@ -14,7 +14,7 @@ use crate::ensemble::{bootstrap_subset, Ensemble, EnsembleSettings};
 use crate::io::FileStamp;
 use crate::pipeline::{Identification, IdentifySettings, Prepared, Progress};
 use crate::preprocess::{prepare_with_report, PrepareReport, PreprocessOptions};
-use crate::record::{CaseKind, NondimCase, Record};
+use crate::record::{CaseKind, NondimCase};
 use crate::Result;
 
 /// Forced cases of a data set ready for [`crate::pipeline::identify`], with the
@@ -58,6 +58,10 @@ pub fn prepare_dataset(dataset: &Dataset, opts: &PreprocessOptions) -> Result<Pr
     }
     Ok(PreparedDataset { cases, reports })
 }
+
+/// Batches of [`prepare_streaming`] between two releases of the threads' scratch buffers
+/// ([`crate::numerics::scratch::release`]).
+const RELEASE_BATCHES: usize = 4;
 
 /// Where a forced case of a streamed data set came from: its index among the manifest's
 /// cases and the stamps of its files when they were read (to read it again unchanged).
@@ -142,8 +146,10 @@ pub fn prepare_streaming(
     let mut sources = Vec::with_capacity(total);
     let mut seconds = StageSeconds::default();
     let indices: Vec<usize> = (0..manifest.cases.len()).collect();
+    let mut batches = 0usize;
     for chunk in indices.chunks(crate::pipeline::batch_size()) {
-        type Read = (usize, Record, CaseStamps, Option<NondimCase>, [f64; 2]);
+        // (the record is dropped once preprocessed: only its sample count is kept)
+        type Read = (usize, usize, CaseStamps, Option<NondimCase>, [f64; 2]);
         let done: Vec<Result<Read>> = chunk
             .par_iter()
             .map(|&i| {
@@ -160,9 +166,11 @@ pub fn prepare_streaming(
                     ),
                     CaseKind::Free => None,
                 };
+                let samples = SampleCount::of(&record);
+                drop(record);
                 Ok((
                     i,
-                    record,
+                    samples,
                     stamps,
                     nondim,
                     [read_s, t.elapsed().as_secs_f64()],
@@ -171,8 +179,8 @@ pub fn prepare_streaming(
             .collect();
         let mut batch = Vec::with_capacity(chunk.len());
         for r in done {
-            let (i, record, stamps, nondim, [read_s, pre_s]) = r?;
-            samples.add(dir, &manifest.cases[i], &record)?;
+            let (i, n_samples, stamps, nondim, [read_s, pre_s]) = r?;
+            samples.add_samples(dir, &manifest.cases[i], n_samples)?;
             seconds.read += read_s;
             seconds.preprocess += pre_s;
             if let Some(c) = nondim {
@@ -182,6 +190,13 @@ pub fn prepare_streaming(
         }
         let t = Instant::now();
         prepared.push(&batch)?;
+        // per-case scratch buffers are reused for RELEASE_BATCHES batches, then given back
+        // (docs/DECISIONS.md, round 33: kept for the whole pass they cost ≈ 40 % more peak
+        // memory at the group stage; given back after every batch ≈ 0.15 s more CPU)
+        batches += 1;
+        if batches.is_multiple_of(RELEASE_BATCHES) {
+            rayon::broadcast(|_| crate::numerics::scratch::release());
+        }
         seconds.prepare += t.elapsed().as_secs_f64();
         if !batch.is_empty() {
             observer(Progress::Cases {
@@ -190,6 +205,9 @@ pub fn prepare_streaming(
             });
         }
     }
+    // the per-case scratch buffers of every thread are not needed by the group stage
+    rayon::broadcast(|_| crate::numerics::scratch::release());
+    crate::numerics::scratch::release();
     stamp.check(dir)?;
     Ok(StreamedDataset {
         root: dir.to_path_buf(),

@@ -235,7 +235,8 @@ fn parse_case_reader(
         last_len = buf.len() as u64;
         let line = crate::io::utf8_text(&buf, line_no, line_start).map_err(not_utf8)?;
         let line = line.strip_suffix('\r').unwrap_or(line);
-        if line.trim().is_empty() {
+        // (a line that starts with a byte that cannot begin white space is not blank)
+        if line.as_bytes().first().is_none_or(|&b| may_be_space(b)) && line.trim().is_empty() {
             blank_line.get_or_insert(line_no);
             continue;
         }
@@ -274,7 +275,7 @@ fn parse_case_reader(
             }
         }
         let mut count = 0usize;
-        for (j, field) in crate::csv_fields::fields(line).enumerate() {
+        for (j, field) in LineFields::of(line).enumerate() {
             count = j + 1;
             if j >= ncols {
                 continue;
@@ -283,19 +284,22 @@ fn parse_case_reader(
             if k == usize::MAX {
                 continue;
             }
-            // already trimmed by `csv_fields::fields`
+            // already trimmed
             let f: &str = &field;
             if f.is_empty() {
                 return Err(csv_err(path, line_no, NAMES[k], "empty field".into()));
             }
-            let x: f64 = f.parse().map_err(|_| {
-                csv_err(
-                    path,
-                    line_no,
-                    NAMES[k],
-                    format!("cannot parse `{}` as a number", excerpt(f)),
-                )
-            })?;
+            let x: f64 = match plain_decimal(f) {
+                Some(x) => x,
+                None => f.parse().map_err(|_| {
+                    csv_err(
+                        path,
+                        line_no,
+                        NAMES[k],
+                        format!("cannot parse `{}` as a number", excerpt(f)),
+                    )
+                })?,
+            };
             if !x.is_finite() {
                 return Err(csv_err(
                     path,
@@ -346,6 +350,106 @@ fn parse_case_reader(
         control_raw: found[6].then_some(control_raw),
         control_force: found[7].then_some(control_force),
     })
+}
+
+/// Exact powers of ten 10⁰ … 10²² (every one is a double).
+const POW10: [f64; 23] = [
+    1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
+    1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
+];
+
+/// The value of a field of the form `-?digits(.digits)?` with at most 19 digits whose
+/// integer w (the digits without the point) is at most 2⁵³ and whose fraction has at most
+/// 22 digits: w / 10^d by one IEEE division of two exact doubles (Clinger's fast path, the
+/// first step of `str::parse::<f64>` too), so the correctly rounded value `parse` gives.
+/// `None` for anything else (exponents, more digits, signs other than one leading minus,
+/// `inf`, …): the caller then parses with `str::parse`.
+fn plain_decimal(f: &str) -> Option<f64> {
+    let b = f.as_bytes();
+    let (neg, b) = match b.first()? {
+        b'-' => (true, &b[1..]),
+        _ => (false, b),
+    };
+    let mut w: u64 = 0;
+    let mut digits = 0usize;
+    let mut frac: Option<usize> = None;
+    for &c in b {
+        match c {
+            b'0'..=b'9' => {
+                digits += 1;
+                if digits > 19 {
+                    return None;
+                }
+                w = w * 10 + u64::from(c - b'0');
+                if let Some(d) = frac.as_mut() {
+                    *d += 1;
+                }
+            }
+            b'.' if frac.is_none() => frac = Some(0),
+            _ => return None,
+        }
+    }
+    // at least one digit before and (with a point) after the point
+    let d = frac.unwrap_or(0);
+    if digits == 0 || digits == d || frac == Some(0) || w > 1 << 53 || d > 22 {
+        return None;
+    }
+    let v = w as f64 / POW10[d];
+    Some(if neg { -v } else { v })
+}
+
+/// Whether a line or field starting (or ending) with byte `b` may start (end) with white
+/// space as `str::trim` sees it: an ASCII white-space byte or any byte of a multi-byte
+/// character (some are Unicode white space).
+#[inline]
+fn may_be_space(b: u8) -> bool {
+    b >= 0x80 || matches!(b, b'\t' | b'\n' | 0x0B | 0x0C | b'\r' | b' ')
+}
+
+/// The fields of one line, trimmed, as [`crate::csv_fields::fields`] gives them; a line
+/// holding no double quote (the case files' rows of numbers) is split here without the
+/// per-field Unicode trim when a field neither starts nor ends with a possible white-space
+/// byte.
+enum LineFields<'a> {
+    Plain(Option<&'a str>),
+    Quoted(crate::csv_fields::Fields<'a>),
+}
+
+impl<'a> LineFields<'a> {
+    fn of(line: &'a str) -> Self {
+        if line.as_bytes().contains(&b'"') {
+            LineFields::Quoted(crate::csv_fields::fields(line))
+        } else {
+            LineFields::Plain(Some(line))
+        }
+    }
+}
+
+impl<'a> Iterator for LineFields<'a> {
+    type Item = std::borrow::Cow<'a, str>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        let rest = match self {
+            LineFields::Quoted(it) => return it.next(),
+            LineFields::Plain(rest) => rest,
+        };
+        let r = (*rest)?;
+        let field = match r.as_bytes().iter().position(|&b| b == b',') {
+            Some(i) => {
+                *rest = Some(&r[i + 1..]);
+                &r[..i]
+            }
+            None => {
+                *rest = None;
+                r
+            }
+        };
+        let b = field.as_bytes();
+        Some(std::borrow::Cow::Borrowed(match (b.first(), b.last()) {
+            (Some(&x), Some(&y)) if !may_be_space(x) && !may_be_space(y) => field,
+            _ => field.trim(),
+        }))
+    }
 }
 
 /// Checks that time stamps are strictly increasing and uniformly spaced, and returns
@@ -407,6 +511,84 @@ mod tests {
 
     fn p() -> &'static Path {
         Path::new("cases/x.csv")
+    }
+
+    /// The fast path of plain decimals gives `str::parse`'s value, bit for bit, and leaves
+    /// every other form to it.
+    #[test]
+    fn plain_decimals_parse_as_std_does() {
+        let mut state = 0x9E37_79B9_7F4A_7C15u64; // fixed seed
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        let mut fast = 0;
+        for _ in 0..200_000 {
+            let r = next();
+            let x = f64::from_bits(r);
+            let y = (r % 1_000_000_007) as f64 * 10f64.powi((r >> 40) as i32 % 12 - 8);
+            for v in [x, y, -y, y / 3.0] {
+                if !v.is_finite() {
+                    continue;
+                }
+                for text in [format!("{v}"), format!("{v:.3}"), format!("{v:.17}")] {
+                    let ours = plain_decimal(&text);
+                    let std: f64 = text.parse().unwrap();
+                    if let Some(o) = ours {
+                        fast += 1;
+                        assert_eq!(o.to_bits(), std.to_bits(), "{text}");
+                    }
+                }
+            }
+        }
+        assert!(fast > 100_000, "the fast path was taken {fast} times only");
+        for (text, want) in [
+            ("0", Some(0.0)),
+            ("-0", Some(-0.0)),
+            ("0.001953125", Some(0.001953125)),
+            ("-0.1348876953125", Some(-0.1348876953125)),
+            ("1.", None),
+            (".5", None),
+            ("+1", None),
+            ("1e5", None),
+            ("--1", None),
+            ("1.2.3", None),
+            ("", None),
+            ("-", None),
+            ("inf", None),
+            ("12345678901234567890", None),
+            ("9007199254740993", None),
+            ("0.10300633734501427", None),
+        ] {
+            assert_eq!(
+                plain_decimal(text).map(f64::to_bits),
+                want.map(f64::to_bits),
+                "{text}"
+            );
+        }
+    }
+
+    /// The case reader's own splitter gives the fields of the workspace's one splitter on
+    /// lines with ASCII and Unicode white space, empty fields and quotes.
+    #[test]
+    fn line_fields_are_those_of_csv_fields() {
+        for line in [
+            "",
+            ",",
+            "1,2.5,-3e-4",
+            " 1 ,\t2\t, 3",
+            "\u{a0}1.5,2\u{2003},\u{85}3\u{85}",
+            "\x0b4\x0c,5\r",
+            "1,,3,",
+            "a,\"b,c\" , \"d\"\"e\"",
+            "é,ü , ß",
+        ] {
+            let ours: Vec<String> = LineFields::of(line).map(|f| f.into_owned()).collect();
+            let theirs = crate::csv_fields::split_line(line);
+            assert_eq!(ours, theirs, "{line:?}");
+        }
     }
 
     fn msg(e: &Error) -> String {

@@ -178,7 +178,22 @@ impl SampleCount {
     /// [`crate::Error::Manifest`] naming the manifest and the case at which the total
     /// exceeds `MAX_SAMPLES`.
     pub fn add(&mut self, dir: &Path, case: &CaseSpec, record: &Record) -> Result<()> {
-        self.0 += record.len() + record.nowind.as_ref().map_or(0, |s| s.len());
+        self.add_samples(dir, case, Self::of(record))
+    }
+
+    /// The samples [`SampleCount::add`] counts for `record` (its own and its still-air
+    /// record's).
+    pub fn of(record: &Record) -> usize {
+        record.len() + record.nowind.as_ref().map_or(0, |s| s.len())
+    }
+
+    /// [`SampleCount::add`] for a record of `samples` samples ([`SampleCount::of`]), counted
+    /// once the record itself is gone.
+    ///
+    /// # Errors
+    /// As [`SampleCount::add`].
+    pub fn add_samples(&mut self, dir: &Path, case: &CaseSpec, samples: usize) -> Result<()> {
+        self.0 += samples;
         if self.0 as f64 > crate::limits::MAX_SAMPLES {
             return Err(crate::Error::Manifest {
                 path: manifest_path(dir),

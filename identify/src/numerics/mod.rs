@@ -1,6 +1,6 @@
 //! Small numeric kernels shared by every crate of the workspace (it sits in `identify`, the
 //! lowest one): dense symmetric positive-definite solves by Cholesky factorisation, the
-//! Householder QR ([`qr`]), interpolation ([`interp`]), the median and the median absolute
+//! Householder QR ([`qr`]), reused scratch buffers ([`scratch`]), interpolation ([`interp`]), the median and the median absolute
 //! deviation, and the SplitMix64 seed mixer.
 //!
 //! Each kernel has one implementation and one failure signal: a solve that meets a
@@ -8,6 +8,7 @@
 
 pub mod interp;
 pub mod qr;
+pub mod scratch;
 
 /// Golden-section maximisation of a unimodal `f` on `[a, b]`: the midpoint of the final
 /// bracket, narrowed until it is at most `tol` wide (one evaluation of `f` per step,

@@ -159,6 +159,11 @@ struct Chosen<'a> {
     options: &'a Options,
 }
 
+/// Records up to this many rows have their library matrix evaluated once per case and
+/// held while the case is prepared ([`prepare_case`]); longer ones are evaluated block by
+/// block on each pass (bounded memory).
+const HOLD_THETA_ROWS: usize = 4 * crate::library::EVAL_BLOCK;
+
 fn prepare_case(
     case: &NondimCase,
     lib: &Library,
@@ -169,8 +174,8 @@ fn prepare_case(
 ) -> Result<CaseWork> {
     check_case(case)?;
     let id = &case.meta.id;
-    // Θ is evaluated block by block (never held whole: n × p × 8 B would be 6× the raw
-    // data): twice for the factorisation, once for the key-frequency projection.
+    // Θ is read three times: twice for the factorisation, once for the key-frequency
+    // projection (held for short records, else evaluated block by block: below).
     let n = case.len();
     let p = lib.len();
     let shifted;
@@ -204,7 +209,7 @@ fn prepare_case(
         _ => (&case.x, None),
     };
     let col_means = centring.as_ref().map(|c| c.columns.as_slice());
-    let eval = |r0: usize, mut out: faer::MatMut<'_, f64>| {
+    let evaluate = |r0: usize, mut out: faer::MatMut<'_, f64>| {
         lib.evaluate_rows(x, r0, out.as_mut());
         if let Some(m) = col_means {
             for (j, mj) in m.iter().enumerate() {
@@ -212,11 +217,38 @@ fn prepare_case(
             }
         }
     };
+    // Θ is read three times (column norms, factorisation, key projections): a record of
+    // at most HOLD_THETA_ROWS rows has it evaluated once and held (≤ 4 MB at p = 30), a
+    // longer one evaluated block by block each time. Every entry is a function of its
+    // own row, so both give the same numbers.
+    let held = (n <= HOLD_THETA_ROWS).then(|| {
+        // `evaluate` writes every value
+        let mut t = crate::numerics::scratch::Scratch::overwritten(n * p);
+        evaluate(0, faer::MatMut::from_column_major_slice_mut(&mut t, n, p));
+        t
+    });
+    let eval = |r0: usize, mut out: faer::MatMut<'_, f64>| match &held {
+        Some(t) => {
+            let rows = out.nrows();
+            for j in 0..p {
+                let src = &t[j * n + r0..j * n + r0 + rows];
+                out.as_mut()
+                    .col_mut(j)
+                    .iter_mut()
+                    .zip(src)
+                    .for_each(|(o, v)| *o = *v);
+            }
+        }
+        None => evaluate(r0, out),
+    };
     let (y_m, y_l): (&[f64], &[f64]) = match &centred_targets {
         Some([a, b]) => (a, b),
         None => (&case.c_moment, &case.c_lift),
     };
-    let factor = CaseFactor::from_row_blocks(id, n, p, order, &[y_m, y_l], eval)?;
+    let factor = match &held {
+        Some(t) => CaseFactor::from_columns(id, t, n, p, order, &[y_m, y_l])?,
+        None => CaseFactor::from_row_blocks(id, n, p, order, &[y_m, y_l], eval)?,
+    };
     let ident = identifiability::analyse_factor(
         id,
         lib,
@@ -239,11 +271,10 @@ fn prepare_case(
             context: format!("case `{id}`: key frequencies"),
             message: e.to_string(),
         })?;
-        let cols = fit.column_amplitudes_with(p, eval);
-        let selected = [y_m, y_l].map(|y| {
-            let (_, all) = fit.amplitudes(y);
-            metrics::select_key_frequencies(&tones, &all, s.k_key)
-        });
+        // one pass: the basis of each block serves both targets and every column
+        let (targets, cols) = fit.amplitudes_and_columns_with(&[y_m, y_l], p, eval);
+        let selected =
+            [0, 1].map(|t| metrics::select_key_frequencies(&tones, &targets[t].1, s.k_key));
         // the column amplitudes at the union of both targets' key tones, held once
         let mut union: Vec<usize> = selected.iter().flat_map(|k| k.index.clone()).collect();
         union.sort_unstable();

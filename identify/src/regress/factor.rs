@@ -18,6 +18,7 @@
 
 use faer::{Mat, MatMut, MatRef};
 
+use crate::numerics::scratch::Scratch;
 use crate::numerics::{cholesky_in_place, cholesky_solve_in_place, PivotFloor};
 use crate::{Error, Result};
 
@@ -103,6 +104,10 @@ impl std::ops::Index<(usize, usize)> for Upper {
         }
     }
 }
+
+/// What the factorisation does with Θ's rows r0..r0 + rows: `(r0, rows, src, ld)`, column j
+/// at `src[j·ld .. j·ld + rows]`.
+type BlockVisitor<'a> = dyn FnMut(usize, usize, &[f64], usize) + 'a;
 
 /// Reduced form of one target (one force coefficient) of a case.
 #[derive(Debug, Clone, PartialEq)]
@@ -199,6 +204,43 @@ impl CaseFactor {
         p: usize,
         order: &[usize],
         targets: &[&[f64]],
+        fill: impl FnMut(usize, MatMut<'_, f64>),
+    ) -> Result<Self> {
+        Self::factorise(case, n, p, order, targets, None, fill)
+    }
+
+    /// [`CaseFactor::new`] for an n × p library matrix Θ held column-major in `theta`
+    /// (column j at `theta[j·n .. (j + 1)·n]`), read in place: the numbers of
+    /// [`CaseFactor::from_row_blocks`] without its block buffer and copies.
+    ///
+    /// # Errors
+    /// As [`CaseFactor::new`].
+    ///
+    /// # Panics
+    /// As [`CaseFactor::new`], and when `theta.len() != n·p`.
+    #[track_caller]
+    pub fn from_columns(
+        case: &str,
+        theta: &[f64],
+        n: usize,
+        p: usize,
+        order: &[usize],
+        targets: &[&[f64]],
+    ) -> Result<Self> {
+        assert_eq!(theta.len(), n * p, "matrix storage does not match shape");
+        Self::factorise(case, n, p, order, targets, Some(theta), |_, _| {})
+    }
+
+    /// The factorisation behind [`CaseFactor::from_row_blocks`] (`held` = None) and
+    /// [`CaseFactor::from_columns`] (Θ in `held`; `fill` unused).
+    #[track_caller]
+    fn factorise(
+        case: &str,
+        n: usize,
+        p: usize,
+        order: &[usize],
+        targets: &[&[f64]],
+        held: Option<&[f64]>,
         mut fill: impl FnMut(usize, MatMut<'_, f64>),
     ) -> Result<Self> {
         assert_eq!(order.len(), p, "priority order must cover every column");
@@ -225,16 +267,21 @@ impl CaseFactor {
         let bs = ROW_BLOCK.max(2 * ncols);
         // rows per call of `fill`: a multiple of the factorisation block
         let chunk = bs * (FILL_BLOCK / bs).max(1);
-        let mut block = vec![0.0; chunk * p];
-        // Calls `visit(r0, rows, block)` with Θ's rows r0..r0+rows, column j at
-        // block[j*rows..(j+1)*rows].
-        let mut blocks = |visit: &mut dyn FnMut(usize, usize, &[f64])| {
+        let mut block = Scratch::zeroed(if held.is_some() { 0 } else { chunk * p });
+        // Calls `visit(r0, rows, src, ld)` with Θ's rows r0..r0+rows, column j at
+        // src[j*ld..j*ld + rows] (the block buffer, or the held matrix in place).
+        let mut blocks = |visit: &mut BlockVisitor<'_>| {
             let mut r0 = 0;
             while r0 < n {
                 let rows = chunk.min(n - r0);
-                let buf = &mut block[..rows * p];
-                fill(r0, MatMut::from_column_major_slice_mut(buf, rows, p));
-                visit(r0, rows, buf);
+                match held {
+                    Some(t) => visit(r0, rows, &t[r0..], n),
+                    None => {
+                        let buf = &mut block[..rows * p];
+                        fill(r0, MatMut::from_column_major_slice_mut(buf, rows, p));
+                        visit(r0, rows, buf, rows);
+                    }
+                }
                 r0 += rows;
             }
         };
@@ -242,12 +289,40 @@ impl CaseFactor {
         let mut sums = vec![0.0; p];
         // first row at which a column's value or its running sum of squares is not finite
         let mut first_bad: Vec<Option<usize>> = vec![None; p];
-        blocks(&mut |r0, rows, buf| {
-            for (j, s) in sums.iter_mut().enumerate() {
-                for (i, v) in buf[j * rows..(j + 1) * rows].iter().enumerate() {
+        blocks(&mut |r0, rows, buf, ld| {
+            // Four columns at a time, row by row: four independent chains of additions
+            // (each column's sum still runs in row order, so the same numbers), the
+            // finiteness checked once per block and the block replayed only for a column
+            // that became non-finite in it.
+            let before = sums.clone();
+            let mut j = 0;
+            while j + 4 <= p {
+                let c = |k: usize| &buf[(j + k) * ld..(j + k) * ld + rows];
+                let (c0, c1, c2, c3) = (c(0), c(1), c(2), c(3));
+                let mut acc = [sums[j], sums[j + 1], sums[j + 2], sums[j + 3]];
+                for i in 0..rows {
+                    acc[0] += c0[i] * c0[i];
+                    acc[1] += c1[i] * c1[i];
+                    acc[2] += c2[i] * c2[i];
+                    acc[3] += c3[i] * c3[i];
+                }
+                sums[j..j + 4].copy_from_slice(&acc);
+                j += 4;
+            }
+            for (jj, s) in sums.iter_mut().enumerate().skip(j) {
+                for v in &buf[jj * ld..jj * ld + rows] {
                     *s += v * v;
-                    if first_bad[j].is_none() && !s.is_finite() {
-                        first_bad[j] = Some(r0 + i);
+                }
+            }
+            for (jj, s) in sums.iter().enumerate() {
+                if first_bad[jj].is_none() && !s.is_finite() {
+                    let mut t = before[jj];
+                    for (i, v) in buf[jj * ld..jj * ld + rows].iter().enumerate() {
+                        t += v * v;
+                        if !t.is_finite() {
+                            first_bad[jj] = Some(r0 + i);
+                            break;
+                        }
                     }
                 }
             }
@@ -307,12 +382,12 @@ impl CaseFactor {
                     ld: usize,
                     off: usize,
                     src: &[f64],
-                    src_rows: usize,
+                    src_ld: usize,
                     r0: usize,
                     i0: usize,
                     rows: usize| {
             for (k, &j) in order.iter().enumerate() {
-                let col = &src[j * src_rows + i0..j * src_rows + i0 + rows];
+                let col = &src[j * src_ld + i0..j * src_ld + i0 + rows];
                 for (d, v) in dst[k * ld + off..k * ld + off + rows].iter_mut().zip(col) {
                     *d = v * inv[j];
                 }
@@ -322,15 +397,18 @@ impl CaseFactor {
                     .copy_from_slice(&y[r0 + i0..r0 + i0 + rows]);
             }
         };
-        let sm = STACK_BLOCKS * ncols;
-        let mut stack = vec![0.0; sm * ncols];
+        // the stack holds at most STACK_BLOCKS triangles; a shorter record needs (and
+        // zeroes) only the rows of its own blocks (its stack is never reduced in place)
+        let sm = STACK_BLOCKS.min(nblocks.max(1)) * ncols;
+        let mut stack = Scratch::zeroed(sm * ncols);
         let mut stacked = 0usize;
-        let mut buf = vec![0.0; bs * ncols];
-        let mut tail = vec![0.0; rem * ncols];
-        blocks(&mut |r0, rows, src| {
+        // `copy` writes every value of these
+        let mut buf = Scratch::overwritten(bs * ncols);
+        let mut tail = Scratch::overwritten(rem * ncols);
+        blocks(&mut |r0, rows, src, src_ld| {
             let mut i0 = 0;
             while i0 + bs <= rows {
-                copy(&mut buf, bs, 0, src, rows, r0, i0, bs);
+                copy(&mut buf, bs, 0, src, src_ld, r0, i0, bs);
                 crate::numerics::qr::householder_qr(&mut buf, bs, ncols, ncols);
                 if stacked == STACK_BLOCKS {
                     crate::numerics::qr::householder_qr(&mut stack, sm, ncols, ncols);
@@ -350,11 +428,11 @@ impl CaseFactor {
             }
             if i0 < rows {
                 // the last rows of the record (fewer than a block)
-                copy(&mut tail, rem, 0, src, rows, r0, i0, rows - i0);
+                copy(&mut tail, rem, 0, src, src_ld, r0, i0, rows - i0);
             }
         });
         let m = stacked * ncols + rem;
-        let mut a = vec![0.0; m * ncols];
+        let mut a = Scratch::zeroed(m * ncols);
         for c in 0..ncols {
             for b in 0..stacked {
                 for i in 0..=c {
@@ -554,7 +632,7 @@ mod tests {
     /// A record longer than `STACK_BLOCKS` factorisation blocks (the stack is reduced
     /// twice) with a remainder of rows: the Gram matrix, Θ_sᵀy, r⊥² and the least-squares
     /// fit agree with direct accumulation over the rows to 1e-12 relative, and blocks
-    /// given by `fill` equal the whole-matrix constructor.
+    /// given by `fill` and the held matrix read in place equal the whole-matrix constructor.
     #[test]
     fn stack_reduction_matches_direct_normal_equations() {
         let n = 2 * STACK_BLOCKS * ROW_BLOCK + 3 * ROW_BLOCK + 77;
@@ -586,6 +664,15 @@ mod tests {
         .unwrap();
         assert_eq!(f.r, g.r);
         assert_eq!(f.targets, g.targets);
+        // the held matrix read in place: the same numbers to the bit
+        let held: Vec<f64> = (0..p)
+            .flat_map(|j| (0..n).map(move |i| (i, j)))
+            .map(|(i, j)| theta[(i, j)])
+            .collect();
+        let h = CaseFactor::from_columns("c", &held, n, p, &order, &[&y]).unwrap();
+        assert_eq!(f.r, h.r);
+        assert_eq!(f.targets, h.targets);
+        assert_eq!(f.scales, h.scales);
         // relative to `scale` (1 for the Gram matrix of unit columns, ‖y‖ for Θ_sᵀy)
         let close = |a: f64, b: f64, scale: f64, what: &str| {
             assert!((a - b).abs() <= 1e-12 * scale, "{what}: {a} vs {b}");
