@@ -559,32 +559,42 @@ pub fn measured_distances(
 ) -> Vec<MeasuredDistance> {
     measured
         .iter()
-        .map(|m| {
-            let gap = set
-                .branches
-                .iter()
-                .flat_map(|b| b.points.iter())
-                .filter(|p| p.stable == m.stable)
-                .map(|p| (p.u - m.u).abs())
-                .fold(f64::INFINITY, f64::min);
-            let best = predicted_at(set, m);
-            let diff = |p: Option<f64>, q: Option<f64>| Some(p? - q?);
-            MeasuredDistance {
-                measured: m.clone(),
-                predicted_alpha: best.map(|b| b.0),
-                predicted_h: best.map(|b| b.1),
-                predicted_frequency_hz: best.map(|b| b.2),
-                d_alpha: diff(best.map(|b| b.0), m.amplitude_alpha),
-                d_h: diff(best.map(|b| b.1), m.amplitude_h),
-                speed_gap: if best.is_some() {
-                    Some(0.0)
-                } else {
-                    Some(gap).filter(|g| g.is_finite())
-                },
-                nearest: None,
-            }
-        })
+        .map(|m| measured_distance(set, m, predicted_at(set, m)))
         .collect()
+}
+
+/// The distance of measured point `m` to the branches of `set` given its predicted orbit
+/// `best` (first-harmonic pitch \[rad\], heave \[m\], frequency \[Hz\]; `None`: no segment
+/// of its stability covers its speed, and `speed_gap` is then the distance in speed to the
+/// nearest orbit of that stability). [`measured_distances`] takes `best` from
+/// [`predicted_at`]; a caller that corrects the orbit at the measured speed passes its own.
+pub fn measured_distance(
+    set: &BranchSet,
+    m: &MeasuredAmplitude,
+    best: Option<(f64, f64, f64)>,
+) -> MeasuredDistance {
+    let gap = set
+        .branches
+        .iter()
+        .flat_map(|b| b.points.iter())
+        .filter(|p| p.stable == m.stable)
+        .map(|p| (p.u - m.u).abs())
+        .fold(f64::INFINITY, f64::min);
+    let diff = |p: Option<f64>, q: Option<f64>| Some(p? - q?);
+    MeasuredDistance {
+        measured: m.clone(),
+        predicted_alpha: best.map(|b| b.0),
+        predicted_h: best.map(|b| b.1),
+        predicted_frequency_hz: best.map(|b| b.2),
+        d_alpha: diff(best.map(|b| b.0), m.amplitude_alpha),
+        d_h: diff(best.map(|b| b.1), m.amplitude_h),
+        speed_gap: if best.is_some() {
+            Some(0.0)
+        } else {
+            Some(gap).filter(|g| g.is_finite())
+        },
+        nearest: None,
+    }
 }
 
 #[cfg(test)]

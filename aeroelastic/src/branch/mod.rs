@@ -55,10 +55,10 @@ mod types;
 use continuation::{newton, problem};
 pub use lens::{Lens, LensBranch, LensEnd, LensEvent, LensPoint, SectionParameter};
 pub use measured::{
-    covering_segment, measured_distances, parse_absence_arg, parse_measured_amplitudes,
-    parse_measured_diagram, parse_onset_arg, predicted_at, read_measured_amplitudes,
-    read_measured_diagram, Criticality, MeasuredAbsence, MeasuredAmplitude, MeasuredDiagram,
-    MeasuredDistance, MeasuredOnset,
+    covering_segment, measured_distance, measured_distances, parse_absence_arg,
+    parse_measured_amplitudes, parse_measured_diagram, parse_onset_arg, predicted_at,
+    read_measured_amplitudes, read_measured_diagram, Criticality, MeasuredAbsence,
+    MeasuredAmplitude, MeasuredDiagram, MeasuredDistance, MeasuredOnset,
 };
 pub use options::{BranchMethod, BranchOptions};
 use periodic::Closure;

@@ -29,8 +29,8 @@ pub mod points;
 pub(crate) mod scales;
 
 use aeroelastic::branch::{
-    measured_distances, BranchMethod, BranchOptions, BranchSet, EventKind, MeasuredAbsence,
-    MeasuredAmplitude, MeasuredDiagram, MeasuredDistance, MeasuredOnset,
+    measured_distance, measured_distances, BranchMethod, BranchOptions, BranchSet, EventKind,
+    MeasuredAbsence, MeasuredAmplitude, MeasuredDiagram, MeasuredDistance, MeasuredOnset,
 };
 use aeroelastic::section::Section;
 use rayon::prelude::*;
@@ -589,36 +589,12 @@ fn distances(p: &Predicted, measured: &[MeasuredAmplitude], s: &Setting) -> Vec<
     let Some(set) = p.set.as_ref() else {
         return measured_distances_none(measured);
     };
-    let mut d = if p.corrected.is_empty() {
+    let mut d: Vec<MeasuredDistance> = if p.corrected.is_empty() {
         measured_distances(set, measured)
     } else {
         measured
             .iter()
-            .map(|m| {
-                let best = p.at(m, s);
-                let gap = set
-                    .branches
-                    .iter()
-                    .flat_map(|b| b.points.iter())
-                    .filter(|q| q.stable == m.stable)
-                    .map(|q| (q.u - m.u).abs())
-                    .fold(f64::INFINITY, f64::min);
-                let diff = |p: Option<f64>, q: Option<f64>| Some(p? - q?);
-                MeasuredDistance {
-                    measured: m.clone(),
-                    predicted_alpha: best.map(|b| b.0),
-                    predicted_h: best.map(|b| b.1),
-                    predicted_frequency_hz: best.map(|b| b.2),
-                    d_alpha: diff(best.map(|b| b.0), m.amplitude_alpha),
-                    d_h: diff(best.map(|b| b.1), m.amplitude_h),
-                    speed_gap: if best.is_some() {
-                        Some(0.0)
-                    } else {
-                        Some(gap).filter(|g| g.is_finite())
-                    },
-                    nearest: None,
-                }
-            })
+            .map(|m| measured_distance(set, m, p.at(m, s)))
             .collect()
     };
     for x in d.iter_mut().filter(|x| x.predicted_alpha.is_none()) {
