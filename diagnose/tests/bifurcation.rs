@@ -103,22 +103,28 @@ fn bristol_points_from_the_records_and_the_still_air_structure() {
     );
 }
 
-#[test]
-fn bristol_bifurcation_diagram_against_the_linear_model() {
-    let t = std::time::Instant::now();
+/// The Bristol diagnosis of the nine record points against the linear model, with the
+/// still-air decay's structure check.
+fn bristol(opts: &BifurcationOptions) -> BifurcationDiagnosis {
     let still = read_dataset(&data("bristol-spring1-still-air")).unwrap();
     let section = linear_section();
     let structure = structure_check(&[&still], &section);
-    let d = diagnose_branches(
+    diagnose_branches(
         &record_points(),
         &section,
         structure,
         vec![],
-        &BifurcationOptions::default(),
+        opts,
         vec![],
         "test",
     )
-    .unwrap();
+    .unwrap()
+}
+
+#[test]
+fn bristol_bifurcation_diagram_against_the_linear_model() {
+    let t = std::time::Instant::now();
+    let d = bristol(&BifurcationOptions::default());
     let secs = t.elapsed().as_secs_f64();
     // The linear model has no LCO: every point uncovered, score 1.
     assert!((d.nominal.errors.score - 1.0).abs() < 1e-9);
@@ -177,23 +183,10 @@ fn bristol_bifurcation_diagram_against_the_linear_model() {
 /// under 55 % of the difference fits' continuations (6,620; measured 2,940).
 #[test]
 fn bristol_with_the_smooth_objective_and_its_sensitivities() {
-    let still = read_dataset(&data("bristol-spring1-still-air")).unwrap();
-    let section = linear_section();
-    let structure = structure_check(&[&still], &section);
-    let opts = BifurcationOptions {
+    let d = bristol(&BifurcationOptions {
         jacobian: diagnose::bifurcation::FitJacobian::Sensitivities,
         ..BifurcationOptions::default()
-    };
-    let d = diagnose_branches(
-        &record_points(),
-        &section,
-        structure,
-        vec![],
-        &opts,
-        vec![],
-        "test",
-    )
-    .unwrap();
+    });
     assert_eq!(
         d.verdict.effect,
         Some(Effect::StructuralPolynomial),

@@ -753,6 +753,24 @@ pub(crate) fn start_grid(n: usize) -> Vec<Vec<f64>> {
     out
 }
 
+/// The setting of the unit tests: range 10–30 m/s, pitch scale 0.05 rad, heave 0.015 m,
+/// speed 0.3 m/s, pitch measured only, no points (the difference fits' objective).
+#[cfg(test)]
+pub(crate) fn test_setting(opts: &BranchOptions) -> Setting<'_> {
+    Setting {
+        branch: opts,
+        range: [10.0, 30.0],
+        s_alpha: 0.05,
+        s_h: 0.015,
+        s_u: 0.3,
+        noise: 0.05,
+        onset_sd: 0.01,
+        dofs: [true, false],
+        row_speeds: [f64::INFINITY, f64::NEG_INFINITY],
+        points: &[],
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -819,18 +837,7 @@ mod tests {
     }
 
     fn setting(opts: &BranchOptions) -> Setting<'_> {
-        Setting {
-            branch: opts,
-            range: [10.0, 30.0],
-            s_alpha: 0.05,
-            s_h: 0.015,
-            s_u: 0.3,
-            noise: 0.05,
-            onset_sd: 0.01,
-            dofs: [true, false],
-            row_speeds: [f64::INFINITY, f64::NEG_INFINITY],
-            points: &[],
-        }
+        test_setting(opts)
     }
 
     /// An onset row: one stated uncertainty of speed or frequency costs the amplitude

@@ -1514,18 +1514,7 @@ mod extent_tests {
         let opts = BranchOptions::default();
         let m = point(17.3, Some(0.08));
         let pts = [m.clone()];
-        let differences = Setting {
-            branch: &opts,
-            range: [10.0, 30.0],
-            s_alpha: 0.05,
-            s_h: 0.015,
-            s_u: 0.3,
-            noise: 0.05,
-            onset_sd: 0.01,
-            dofs: [true, false],
-            row_speeds: [f64::INFINITY, f64::NEG_INFINITY],
-            points: &[],
-        };
+        let differences = fit::test_setting(&opts);
         let smooth = Setting {
             points: &pts,
             ..differences
