@@ -51,17 +51,21 @@ fn main() {
                         }
                     }
                     eprintln!(
-                        "  nominal score {:.4} hopf {:?}",
+                        "  nominal score {:.4} decays {:?} (noise {:?}, cycles {:?}) hopf {:?}",
                         d.nominal.errors.score,
+                        d.nominal_decay_misfit,
+                        d.decay_noise,
+                        d.decay_cycles,
                         d.nominal.hopf.first().map(|h| (h.u, h.criticality.clone()))
                     );
                     for c in &d.candidates {
                         eprintln!(
-                            "  {:40} held-out {:.4} ± {:.4} shrink {:+.3} hopf {:?} values {:?}",
+                            "  {:40} held-out {:.4} ± {:.4} shrink {:+.3} decays {:?} hopf {:?} values {:?}",
                             c.label(),
                             c.held_out.score,
                             c.score_se,
                             c.shrink,
+                            c.decay_misfit,
                             c.fit.hopf.first().map(|h| (h.u, h.criticality.clone())),
                             c.parameters.iter().map(|p| p.value).collect::<Vec<_>>()
                         );

@@ -336,6 +336,12 @@ pub struct StructureCheck {
     /// onset rows; [`with_onsets`]).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub onsets: Vec<OnsetIdentification>,
+    /// The still-air records (U = 0) the check read, as given (not written: the
+    /// bifurcation level simulates each candidate's still-air release against them,
+    /// `CandidateResult::decay_misfit`).
+    #[serde(skip)]
+    #[schemars(skip)]
+    pub decay_records: Vec<std::sync::Arc<Record>>,
 }
 
 fn given_used() -> StructureUsed {
@@ -864,6 +870,11 @@ fn check_against(
         reason,
         gap: None,
         onsets: Vec::new(),
+        decay_records: records
+            .iter()
+            .filter(|r| r.meta.wind_speed <= 0.0)
+            .map(|r| std::sync::Arc::new((*r).clone()))
+            .collect(),
     })
 }
 
@@ -1770,6 +1781,7 @@ pub fn with_onsets(
         reason: String::new(),
         gap: None,
         onsets: Vec::new(),
+        decay_records: Vec::new(),
     });
     let m = section.total_mass(0.0);
     let (ke, ce) = rest_linearisation(st);

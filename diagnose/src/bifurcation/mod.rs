@@ -23,6 +23,7 @@
 //! frequencies \[Hz\].
 
 pub mod candidates;
+mod decays;
 mod fit;
 pub mod inputs;
 pub mod points;
@@ -58,6 +59,19 @@ const STAGE_ITERATIONS: usize = 4;
 
 /// The starts that go on after [`STAGE_ITERATIONS`].
 const STAGE_KEEP: usize = 3;
+
+/// What the decays' misfits are compared against ([`verdict`]).
+#[derive(Debug, Clone, Copy, Default)]
+struct DecayTest {
+    /// Misfit the sensor noise alone leaves.
+    noise: f64,
+    /// Residual-energy ratio beyond which a miss is significant.
+    ratio_bar: f64,
+}
+
+/// Decay misfit below which a candidate's still-air releases count as reproducing the
+/// measured decays (half the records' normalised energy left: [`CandidateResult::decay_misfit`]).
+const DECAY_REPRODUCED: f64 = 0.5;
 
 /// Upper end of the continuation range as a multiple of the higher of the largest measured
 /// speed and the nominal Hopf speed.
@@ -399,6 +413,12 @@ pub struct CandidateResult {
     pub shrink: f64,
     /// Continuations run for this candidate.
     pub evaluations: usize,
+    /// Normalised error of the fit's own still-air releases, simulated from each still-air
+    /// record's initial state, against those records (0 perfect, ≈ 1 a release that misses
+    /// the record; heave and pitch over the normalisation scales): absent without decays
+    /// (DECISIONS, "The decays as time series, round 34").
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub decay_misfit: Option<f64>,
     /// Scaled parameters of the fit on all points.
     #[serde(skip)]
     #[schemars(skip)]
@@ -428,6 +448,11 @@ pub struct BranchVerdict {
     /// predicts an LCO where none was observed (absent without such candidates).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub contradicting: Vec<String>,
+    /// Candidates within one standard error of the best passed over because their own
+    /// still-air releases miss the measured decays by more than the sensor noise explains,
+    /// beyond the best reproducing candidate's miss (absent without such candidates).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub decays_contradicting: Vec<String>,
     /// Held-out shrink of the named candidate.
     pub shrink: Option<f64>,
     /// Why, in words.
@@ -468,6 +493,20 @@ pub struct BifurcationDiagnosis {
     pub structure: Option<StructureCheck>,
     /// The nominal model's diagram (nothing fitted: its errors are held-out errors).
     pub nominal: DiagramSummary,
+    /// The nominal model's still-air releases against the measured decays (as
+    /// [`CandidateResult::decay_misfit`]); absent without decays.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub nominal_decay_misfit: Option<f64>,
+    /// The decay misfit the records' sensor noise alone leaves (a perfect model's); a
+    /// candidate within one standard error is passed over when its misfit² exceeds the best
+    /// reproducing one's by more than this squared. Absent without decays.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub decay_noise: Option<f64>,
+    /// Oscillation cycles the decays show above their noise (the degrees of freedom of the
+    /// misfits' energy ratio; its one-sided 95 % point is exp(3.29/√cycles)). Absent without
+    /// decays.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub decay_cycles: Option<f64>,
     /// Candidates, best held-out score first.
     pub candidates: Vec<CandidateResult>,
     /// Effects of the catalogue not fitted at this level, and why.
@@ -1035,9 +1074,33 @@ pub fn diagnose_diagram(
             done[i] = Some(r?);
         }
     }
+    // Each fit's own still-air releases against the measured decays.
+    let decay_records = structure
+        .as_ref()
+        .map(|c| &c.decay_records)
+        .filter(|r| !r.is_empty());
+    let nominal_decay_misfit =
+        decay_records.and_then(|recs| decays::decay_misfit(section, recs, [s_h, s_alpha]));
+    let decay_noise =
+        decay_records.and_then(|recs| decays::decay_noise_floor(recs, [s_h, s_alpha]));
+    if let Some(recs) = decay_records {
+        done.par_iter_mut().enumerate().for_each(|(i, c)| {
+            if let Some(c) = c.as_mut() {
+                c.decay_misfit = cat[i]
+                    .apply(section, &c.theta)
+                    .ok()
+                    .and_then(|sec| decays::decay_misfit(&sec, recs, [s_h, s_alpha]));
+            }
+        });
+    }
     let mut candidates: Vec<CandidateResult> = done.into_iter().flatten().collect();
     candidates.sort_by(|a, b| a.held_out.score.total_cmp(&b.held_out.score));
-    let mut verdict = verdict(&candidates, nominal_score, opts);
+    let decay_cycles = decay_records.map(|r| decays::decay_cycles(r, [s_h, s_alpha]));
+    let decay_test = DecayTest {
+        noise: decay_noise.unwrap_or(0.0),
+        ratio_bar: decay_cycles.map_or(f64::INFINITY, decays::energy_ratio_bar),
+    };
+    let mut verdict = verdict(&candidates, nominal_score, decay_test, opts);
     verdict
         .explanation
         .push_str(&structure_sentence(structure.as_ref()));
@@ -1058,6 +1121,9 @@ pub fn diagnose_diagram(
         speed_range: range,
         structure,
         nominal,
+        nominal_decay_misfit,
+        decay_noise,
+        decay_cycles,
         candidates,
         not_fitted: not_fitted(),
         verdict,
@@ -1375,13 +1441,19 @@ fn fit_candidate(
         held_out,
         score_se,
         evaluations: evals.load(std::sync::atomic::Ordering::Relaxed),
+        decay_misfit: None,
         theta: full.theta,
     })
 }
 
 /// The one-standard-error rule over `ranked` (best held-out score first) and the naming
 /// rule.
-fn verdict(ranked: &[CandidateResult], nominal: f64, opts: &BifurcationOptions) -> BranchVerdict {
+fn verdict(
+    ranked: &[CandidateResult],
+    nominal: f64,
+    decay_test: DecayTest,
+    opts: &BifurcationOptions,
+) -> BranchVerdict {
     if nominal <= 2.0 * opts.amplitude_noise {
         return BranchVerdict {
             effect: None,
@@ -1389,6 +1461,7 @@ fn verdict(ranked: &[CandidateResult], nominal: f64, opts: &BifurcationOptions) 
             candidate: None,
             richer: Vec::new(),
             contradicting: Vec::new(),
+            decays_contradicting: Vec::new(),
             shrink: None,
             explanation: format!(
                 "the nominal model's error at the measured points ({nominal:.3} of the RMS \
@@ -1404,6 +1477,7 @@ fn verdict(ranked: &[CandidateResult], nominal: f64, opts: &BifurcationOptions) 
             candidate: None,
             richer: Vec::new(),
             contradicting: Vec::new(),
+            decays_contradicting: Vec::new(),
             shrink: None,
             explanation: "no candidate could be fitted".into(),
         };
@@ -1428,9 +1502,36 @@ fn verdict(ranked: &[CandidateResult], nominal: f64, opts: &BifurcationOptions) 
     } else {
         Vec::new()
     };
-    let (idx, chosen) = within
+    let pool: Vec<(usize, &CandidateResult)> = within
         .into_iter()
         .filter(|(_, c)| !consistent || c.fit.contradicted_absences() == 0)
+        .collect();
+    // Within one standard error, when one candidate's own still-air releases reproduce the
+    // measured decays (misfit below DECAY_REPRODUCED), a candidate whose releases miss them
+    // significantly more is passed over: its residual energy exceeds the best one's by the
+    // one-sided 95 % point of their ratio (F with the decays' cycles as degrees of freedom)
+    // and by more than the sensor noise explains. The decays are data its parameters were
+    // not fitted on (DECISIONS, "The decays as time series, round 34").
+    let decays_contradicting: Vec<String> = match pool
+        .iter()
+        .filter_map(|(_, c)| c.decay_misfit)
+        .min_by(f64::total_cmp)
+    {
+        Some(e_min) if e_min < DECAY_REPRODUCED => pool
+            .iter()
+            .filter(|(_, c)| {
+                c.decay_misfit.is_some_and(|e| {
+                    e * e > e_min * e_min * decay_test.ratio_bar
+                        && e * e - e_min * e_min > decay_test.noise * decay_test.noise
+                })
+            })
+            .map(|(_, c)| c.label())
+            .collect(),
+        _ => Vec::new(),
+    };
+    let (idx, chosen) = pool
+        .into_iter()
+        .filter(|(_, c)| !decays_contradicting.contains(&c.label()))
         .min_by(|(_, a), (_, b)| {
             a.parameters
                 .len()
@@ -1442,7 +1543,7 @@ fn verdict(ranked: &[CandidateResult], nominal: f64, opts: &BifurcationOptions) 
     let richer: Vec<String> = ranked[..idx]
         .iter()
         .map(|c| c.label())
-        .filter(|l| !contradicting.contains(l))
+        .filter(|l| !contradicting.contains(l) && !decays_contradicting.contains(l))
         .collect();
     if chosen.shrink >= opts.min_shrink {
         let passed = if contradicting.is_empty() {
@@ -1453,12 +1554,22 @@ fn verdict(ranked: &[CandidateResult], nominal: f64, opts: &BifurcationOptions) 
                 contradicting.join(", ")
             )
         };
+        let passed = if decays_contradicting.is_empty() {
+            passed
+        } else {
+            format!(
+                "{passed}; passed over as their own still-air releases miss the measured \
+                 decays beyond the sensor noise more than the best one's: {}",
+                decays_contradicting.join(", ")
+            )
+        };
         BranchVerdict {
             effect: Some(chosen.effect),
             name: Verdict::Effect(chosen.effect),
             candidate: Some(idx),
             richer,
             contradicting,
+            decays_contradicting,
             shrink: Some(chosen.shrink),
             explanation: format!(
                 "{} removes {:.1} % of the nominal held-out error ({:.3} → {:.3} of the RMS \
@@ -1478,6 +1589,7 @@ fn verdict(ranked: &[CandidateResult], nominal: f64, opts: &BifurcationOptions) 
             candidate: None,
             richer: Vec::new(),
             contradicting: Vec::new(),
+            decays_contradicting: Vec::new(),
             shrink: Some(best.shrink),
             explanation: format!(
                 "the nominal error ({nominal:.3}) is significant but the best candidate, {}, \
@@ -1633,8 +1745,58 @@ mod extent_tests {
             score_se: 0.02,
             shrink: 1.0 - score / 1.0,
             evaluations: 1,
+            decay_misfit: None,
             theta: Vec::new(),
         }
+    }
+
+    /// Within one standard error, a candidate whose own still-air releases miss the decays
+    /// beyond the noise more than the best reproducing one's is passed over; when no
+    /// candidate reproduces them (misfit ≥ 0.5) or the misses differ within the noise, the
+    /// simplest is named.
+    #[test]
+    fn the_ranking_passes_over_a_candidate_the_decays_contradict() {
+        let opts = BifurcationOptions::default();
+        let with = |effect, n: usize, score, e: Option<f64>| {
+            let mut c = candidate(effect, n, score, false);
+            c.variant = format!("{n} parameters");
+            c.decay_misfit = e;
+            c
+        };
+        let test = |noise: f64, nu: f64| DecayTest {
+            noise,
+            ratio_bar: decays::energy_ratio_bar(nu),
+        };
+        let ranked = vec![
+            with(Effect::Friction, 2, 0.150, Some(0.08)),
+            with(Effect::Friction, 1, 0.160, Some(0.12)),
+            with(Effect::AddedMass, 2, 0.5, Some(0.01)),
+        ];
+        // energy ratio 2.25 against the bar 1.44 of 80 cycles
+        let v = verdict(&ranked, 1.0, test(0.02, 80.0), &opts);
+        assert_eq!(v.candidate, Some(0), "{v:?}");
+        assert_eq!(v.decays_contradicting, vec![ranked[1].label()]);
+        // the same ratio in 8 cycles (bar 3.2) is no evidence: the simplest
+        let v = verdict(&ranked, 1.0, test(0.02, 8.0), &opts);
+        assert_eq!(v.candidate, Some(1), "{v:?}");
+        assert!(v.decays_contradicting.is_empty());
+        // the misses differ within the noise: the simplest
+        let v = verdict(&ranked, 1.0, test(0.1, 80.0), &opts);
+        assert_eq!(v.candidate, Some(1), "{v:?}");
+        // no candidate within the error reproduces the decays: the simplest
+        let far = vec![
+            with(Effect::Friction, 2, 0.150, Some(0.8)),
+            with(Effect::Friction, 1, 0.160, Some(1.2)),
+        ];
+        let v = verdict(&far, 1.0, test(0.02, 80.0), &opts);
+        assert_eq!(v.candidate, Some(1), "{v:?}");
+        // a candidate without a misfit (no usable decay) is not passed over
+        let none = vec![
+            with(Effect::Friction, 2, 0.150, Some(0.08)),
+            with(Effect::Friction, 1, 0.160, None),
+        ];
+        let v = verdict(&none, 1.0, test(0.02, 80.0), &opts);
+        assert_eq!(v.candidate, Some(1), "{v:?}");
     }
 
     /// Within one standard error, the simplest candidate is named unless its fit predicts an
@@ -1649,7 +1811,7 @@ mod extent_tests {
             candidate(Effect::AddedMass, 2, 0.165, false),
             candidate(Effect::Friction, 1, 0.5, false),
         ];
-        let v = verdict(&ranked, 1.0, &opts);
+        let v = verdict(&ranked, 1.0, DecayTest::default(), &opts);
         assert_eq!(v.effect, Some(Effect::AddedMass), "{v:?}");
         assert_eq!(v.contradicting, vec![ranked[1].label()]);
         assert_eq!(v.richer, vec![ranked[0].label()]);
@@ -1657,7 +1819,7 @@ mod extent_tests {
         // without the absence row's contradiction: the simplest within the error
         let mut plain = ranked.clone();
         plain[1].fit.absences[0].predicts_lco = false;
-        let v = verdict(&plain, 1.0, &opts);
+        let v = verdict(&plain, 1.0, DecayTest::default(), &opts);
         assert_eq!(v.effect, Some(Effect::StructuralCubic), "{v:?}");
         assert!(v.contradicting.is_empty());
         // every candidate within the error contradicts: the plain rule
@@ -1665,7 +1827,7 @@ mod extent_tests {
         for c in &mut all[..3] {
             c.fit.absences[0].predicts_lco = true;
         }
-        let v = verdict(&all, 1.0, &opts);
+        let v = verdict(&all, 1.0, DecayTest::default(), &opts);
         assert_eq!(v.effect, Some(Effect::StructuralCubic), "{v:?}");
         assert!(v.contradicting.is_empty());
     }
