@@ -80,7 +80,9 @@ fn record_sums(section: &Section, rec: &Record, scale: [f64; 2]) -> Option<(f64,
         r += eh * eh + ea * ea;
         s += (rec.h[i] / scale[0]).powi(2) + (rec.alpha[i] / scale[1]).powi(2);
     }
-    (r.is_finite() && s.is_finite()).then_some((r, s))
+    // a release that grows without bound within the record overflows the sum: a full miss
+    s.is_finite()
+        .then_some((if r.is_finite() { r } else { f64::INFINITY }, s))
 }
 
 /// Normalised error of `section`'s simulated still-air releases against `records` (module
