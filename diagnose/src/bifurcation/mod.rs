@@ -416,7 +416,8 @@ pub struct CandidateResult {
     /// Normalised error of the fit's own still-air releases, simulated from each still-air
     /// record's initial state, against those records (0 perfect, ≈ 1 a release that misses
     /// the record; heave and pitch over the normalisation scales): absent without decays
-    /// (DECISIONS, "The decays as time series, round 34").
+    /// (DECISIONS, "The decays as time series, round 34"). A release that grows without
+    /// bound within a record is a full miss, `f64::INFINITY`, written as `null` in JSON.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub decay_misfit: Option<f64>,
     /// Scaled parameters of the fit on all points.
