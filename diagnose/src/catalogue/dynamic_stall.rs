@@ -17,7 +17,9 @@ use aeroelastic::effects::{Form, InjectedEffect};
 
 use super::entry::{Draw, DrawContext, Entry};
 use super::Level;
-use crate::force::candidates::{noise_energy, sparse, Context, ForceFit, PoolColumn, Scored};
+use crate::force::candidates::{
+    noise_energy, sparse, Context, Early, EarlyContext, ForceFit, PoolColumn, Scored, Split,
+};
 use crate::force::data::CaseData;
 
 /// Largest number of terms of the selection (2 → 3 raised the held-out excess shrink of
@@ -46,19 +48,29 @@ impl Entry for DynamicStall {
 }
 
 impl ForceFit for DynamicStall {
-    /// Two forms, the one with the lower held-out energy kept (the choice counts one
-    /// parameter in both): the dead-zone pool on top of the section's law ([`sparse`]),
-    /// and the law with memory instead of it ([`lag_form`]).
+    /// The dead-zone pool on top of the section's law ([`sparse`]); the choice between
+    /// the two forms counts one parameter.
     fn fit(&self, cx: &Context<'_>) -> Scored {
-        // the two forms are independent: side by side (the lag law's fit is the longest
-        // task of the force level)
-        let (mut pooled, lag) = rayon::join(|| sparse(cx, &pool(), STALL_TERMS, 2), || lag_form(cx));
+        let mut pooled = sparse(cx, &pool(), STALL_TERMS, 2);
         pooled.n_params += 1;
+        pooled
+    }
+
+    /// The law with memory instead of the section's law ([`lag_form`]): it needs the
+    /// folds' splits only, and its one serial fit is the force level's longest task, so it
+    /// starts first.
+    fn early(&self, ex: &EarlyContext<'_>) -> Option<Early> {
+        Some(lag_form(ex))
+    }
+
+    /// Of the two forms, the one with the lower held-out energy (the pool when the lag law
+    /// refused a fold); the choice counts one parameter in both.
+    fn choose(&self, cases: &[CaseData], pooled: Scored, lag: Early) -> Scored {
         let Ok(mut lag) = lag else {
             return pooled;
         };
         lag.n_params += 1;
-        if noise_energy(cx.cases, &lag.residuals) < noise_energy(cx.cases, &pooled.residuals) {
+        if noise_energy(cases, &lag.residuals) < noise_energy(cases, &pooled.residuals) {
             lag
         } else {
             pooled
@@ -77,8 +89,8 @@ impl ForceFit for DynamicStall {
 /// # Errors
 /// The first fold whose fit or prediction the lag law refuses (too short, not periodic,
 /// a held-out mean angle outside the training range), as its message.
-fn lag_form(cx: &Context<'_>) -> Result<Scored, String> {
-    let (cases, nodes, folds) = (cx.cases, cx.nodes, cx.folds);
+fn lag_form(ex: &EarlyContext<'_>) -> Early {
+    let (cases, nodes, folds) = (ex.cases, ex.nodes, ex.splits);
     let opts = identify::lag::LagFitOptions::default();
     let mut res = vec![[Vec::new(), Vec::new()]; cases.len()];
     let mut parameters = Vec::new();
@@ -118,7 +130,7 @@ struct FoldLag {
 fn lag_fold(
     cases: &[CaseData],
     nodes: &[crate::force::data::Node],
-    f: &crate::force::folds::Fold,
+    f: &Split,
     opts: &identify::lag::LagFitOptions,
 ) -> Result<FoldLag, String> {
     let train: Vec<identify::record::NondimCase> = f

@@ -51,12 +51,46 @@ pub(crate) struct Context<'a> {
     pub key: &'a str,
 }
 
+/// One fold's split of the nodes: its index, training and held-out nodes (indices into
+/// the level's nodes), what a form fitted without the folds' factorisations needs.
+pub(crate) struct Split {
+    pub index: usize,
+    pub train: Vec<usize>,
+    pub test: Vec<usize>,
+}
+
+/// What an effect's early form sees ([`ForceFit::early`]): the prepared cases and nodes
+/// and the folds' splits, known before any fold is identified.
+pub(crate) struct EarlyContext<'a> {
+    pub cases: &'a [CaseData],
+    pub nodes: &'a [Node],
+    pub splits: &'a [Split],
+}
+
+/// An effect's early form: its scored held-out result, or the reason it was refused.
+pub(crate) type Early = Result<Scored, String>;
+
 /// An effect's fit at the force level: its held-out residuals and fitted parameters.
 pub(crate) trait ForceFit: Sync {
     /// Fits the augmentation per fold on the training nodes and returns the held-out
     /// residuals of every case (`Scored::residuals`), the parameter counts and the
     /// parameters (mean over folds, or per fold).
     fn fit(&self, cx: &Context<'_>) -> Scored;
+
+    /// A second form of the effect that needs only the folds' splits of the nodes, not
+    /// their identifications or factorisations: the force level starts it first, beside
+    /// the folds, the baseline and every [`ForceFit::fit`] (a long serial fit started last
+    /// would leave a core idle at the end), and hands it with the effect's `fit` to
+    /// [`ForceFit::choose`]. `None` (the default): the effect has no such form.
+    fn early(&self, _ex: &EarlyContext<'_>) -> Option<Early> {
+        None
+    }
+
+    /// The effect's result from its [`ForceFit::fit`] (`fitted`) and its early form
+    /// (`early`, when [`ForceFit::early`] gave one). Default: `fitted`.
+    fn choose(&self, _cases: &[CaseData], fitted: Scored, _early: Early) -> Scored {
+        fitted
+    }
 }
 
 /// A scored candidate: its held-out residuals and fitted parameters.
@@ -220,9 +254,10 @@ pub(crate) fn sparse<P: PoolColumn>(
     max_terms: usize,
     hyper: usize,
 ) -> Scored {
+    use rayon::prelude::*;
     let (cases, nodes, folds) = (cx.cases, cx.nodes, cx.folds);
     let cols: Vec<Vec<Vec<f64>>> = cases
-        .iter()
+        .par_iter()
         .map(|c| pool.iter().map(|p| p.column(c)).collect())
         .collect();
     let mut res = vec![[Vec::new(), Vec::new()]; cases.len()];
@@ -237,6 +272,7 @@ pub(crate) fn sparse<P: PoolColumn>(
         subset: None,
         pick: Some(&pick),
     };
+    warm_grams(cases, nodes, folds, pool_aug);
     for f in folds {
         for c in 0..2 {
             let ps = pool_stats(cases, nodes, &f.fits, &f.shared[c], c, pool_aug);
@@ -285,6 +321,39 @@ pub(crate) fn sparse<P: PoolColumn>(
         parameters: chosen_names,
         failure: None,
     }
+}
+
+/// Computes, in parallel and each once, the per-node statistics ([`law::NodeGram`]) of
+/// `aug`'s whole set after each fold's shared columns, on every training node and channel
+/// of every fold, into the node factorisations' caches: what [`pool_stats`] and the folds'
+/// fits then read (they are the same values computed on first use, serially). A
+/// (node factorisation, column set) pair that several folds share is computed once.
+fn warm_grams(cases: &[CaseData], nodes: &[Node], folds: &[Fold], aug: Aug<'_>) {
+    use rayon::prelude::*;
+    let mut seen = std::collections::HashSet::new();
+    let mut tasks: Vec<(usize, usize, usize)> = Vec::new();
+    for (k, f) in folds.iter().enumerate() {
+        for c in 0..2 {
+            let key = law::shared_key(&f.shared[c], aug.key);
+            for (m, fit) in f.fits.iter().enumerate() {
+                if seen.insert((std::sync::Arc::as_ptr(&fit.ch[c]) as usize, key.clone())) {
+                    tasks.push((k, c, m));
+                }
+            }
+        }
+    }
+    tasks.par_iter().for_each(|&(k, c, m)| {
+        let f = &folds[k];
+        let key = law::shared_key(&f.shared[c], aug.key);
+        let cols = law::with_shared(cases, &f.shared[c], aug);
+        let all = Aug {
+            key: &key,
+            cols: &cols,
+            subset: None,
+            pick: None,
+        };
+        all.gram(nodes, &f.fits[m], c);
+    });
 }
 
 /// Noise-unit energy Σ (r/σ̂)² of held-out residuals `res` (`[case][channel]`) over cases

@@ -73,9 +73,9 @@ impl NodeChan {
         let mut absorbed = Vec::with_capacity(z.len());
         let mut a = Vec::with_capacity(z.len());
         for c in z {
-            let r = self.qr.residual(&c);
+            let (r, ac) = self.qr.residual_and_solve(&c);
             absorbed.push(dot(&r, &r) <= 1e-12 * dot(&c, &c));
-            a.push(self.qr.solve(&c));
+            a.push(ac);
             zt.push(r);
         }
         let g = gram_matrix(&zt);
@@ -234,8 +234,7 @@ pub(crate) fn build_chan(cases: &[CaseData], node: &Node, sup: &[Term], c: usize
             .sum::<f64>()
             .max(1e-300)
         * node.cases.len() as f64;
-    let res_y = qr.residual(&y);
-    let a_y = qr.solve(&y);
+    let (res_y, a_y) = qr.residual_and_solve(&y);
     NodeChan {
         w_mean: mean(&w),
         qr,

@@ -550,8 +550,10 @@ pub fn force_level(forced: &Dataset, opts: &ForceOptions) -> Result<LevelResult>
 /// `prepare` (preprocessing, harmonic fits: [`Campaign::prepare`]), `prepare
 /// identification` ([`Campaign::identification`]), `folds` (fold identifications and node
 /// factorisations), `baseline` (held-out residuals without augmentation), one
-/// `candidate:<name>` per scored candidate (measured inside its own task: candidates run
-/// in parallel, so these overlap) and `assemble` (gap, where, signatures, spectra).
+/// `candidate:<name>` per scored candidate and one `candidate:<name> (early form)` per
+/// candidate with an early form (each measured inside its own task: candidates and early
+/// forms run in parallel, beside the folds, so these overlap) and `assemble` (gap, where,
+/// signatures, spectra).
 ///
 /// # Errors
 /// As [`force_level`].
@@ -656,18 +658,50 @@ pub fn force_level_of(
             None => p,
         });
     }
-    let cache = NodeCache::default();
-    let folds: Vec<Fold> = (0..scheme.folds)
-        .map(|k| build_fold(k, &fold_of, cases, nodes, prepared, name, &cache).map(|(f, _)| f))
-        .collect::<Result<_>>()?;
-    lap("folds", &mut prof);
-    let before = held_out_residuals(cases, nodes, &folds, Aug::NONE);
-    lap("baseline", &mut prof);
-    let timed = score_all(cases, nodes, &folds, &before, opts, &cache);
-    lap("candidates (wall)", &mut prof);
+    // the candidates' early forms (they need the folds' splits only) beside everything
+    // else: started first, so that their long serial fits do not end the level alone
+    let splits: Vec<candidates::Split> = (0..scheme.folds)
+        .map(|k| candidates::Split {
+            index: k,
+            train: (0..nodes.len()).filter(|&n| fold_of[n] != k).collect(),
+            test: (0..nodes.len()).filter(|&n| fold_of[n] == k).collect(),
+        })
+        .collect();
+    let ex = candidates::EarlyContext {
+        cases,
+        nodes,
+        splits: &splits,
+    };
+    let (early, rest) = rayon::join(
+        || early_all(&ex, opts),
+        || -> Result<_> {
+            let cache = NodeCache::default();
+            let folds: Vec<Fold> = (0..scheme.folds)
+                .map(|k| {
+                    build_fold(k, &fold_of, cases, nodes, prepared, name, &cache).map(|(f, _)| f)
+                })
+                .collect::<Result<_>>()?;
+            lap("folds", &mut prof);
+            let before = held_out_residuals(cases, nodes, &folds, Aug::NONE);
+            lap("baseline", &mut prof);
+            let timed = score_all(cases, nodes, &folds, &before, opts, &cache);
+            lap("candidates (wall)", &mut prof);
+            Ok((before, timed))
+        },
+    );
+    let (before, timed) = rest?;
+    let mut early = early;
     let mut scored = Vec::with_capacity(timed.len());
-    for (e, s, t) in timed {
+    for (e, mut s, t) in timed {
         prof.push((format!("candidate:{}", e.name()), t));
+        if let (Some(k), Some(fit)) = (
+            early.iter().position(|(x, _, _)| *x == e),
+            e.entry().force(),
+        ) {
+            let (_, form, te) = early.swap_remove(k);
+            prof.push((format!("candidate:{} (early form)", e.name()), te));
+            s = fit.choose(cases, s, form);
+        }
         scored.push((e, s));
     }
     let thresholds = analysis::Thresholds {
@@ -689,6 +723,27 @@ pub fn force_effects() -> Vec<Effect> {
     Effect::ALL
         .into_iter()
         .filter(|e| e.entry().force().is_some())
+        .collect()
+}
+
+/// The early forms ([`candidates::ForceFit::early`]) of the effects of `opts.candidates`
+/// that have one, in parallel: (effect, form, seconds spent in its own task).
+fn early_all(
+    ex: &candidates::EarlyContext<'_>,
+    opts: &ForceOptions,
+) -> Vec<(Effect, candidates::Early, f64)> {
+    use rayon::prelude::*;
+    let fits: Vec<(Effect, &dyn candidates::ForceFit)> = opts
+        .candidates
+        .iter()
+        .filter_map(|&e| Some((e, e.entry().force()?)))
+        .collect();
+    fits.par_iter()
+        .filter_map(|&(e, fit)| {
+            let t0 = std::time::Instant::now();
+            let form = fit.early(ex)?;
+            Some((e, form, t0.elapsed().as_secs_f64()))
+        })
         .collect()
 }
 

@@ -505,8 +505,8 @@ impl Problem<'_> {
             let (c, y) = self.stack(theta, cols, &xs, &starts, k == 0);
             let refs: Vec<&[f64]> = c.iter().map(|v| v.as_slice()).collect();
             let qr = ThinQr::new(&refs, 1e-10);
-            let r = qr.residual(&y);
-            coefs[k] = qr.solve(&y);
+            let (r, coef) = qr.residual_and_solve(&y);
+            coefs[k] = coef;
             ss[k] = ss_about_mean(&y);
             let scale = if ss[k] > 0.0 { 1.0 / ss[k].sqrt() } else { 1.0 };
             for v in r {

@@ -304,12 +304,16 @@ pub struct ThinQr {
 }
 
 /// x ← H_{m−1} ⋯ H₀ x (`reverse`: H₀ ⋯ H_{m−1} x) for the reflectors (v_k, f_k) of a
-/// [`ThinQr`], reflector k acting on x\[k..\]. Runtime-dispatched to an AVX2 build like
-/// [`householder_qr`]: the same IEEE operations in the same order (Rust never contracts
-/// `a * b + c` into a fused multiply-add), so bit for bit the portable result.
+/// [`ThinQr`], reflector k acting on x\[k..\]. Runtime-dispatched to an AVX-512F or an AVX2
+/// build like [`householder_qr`]: the same IEEE operations in the same order (Rust never
+/// contracts `a * b + c` into a fused multiply-add), so bit for bit the portable result.
 fn apply_reflectors(reflectors: &[(Vec<f64>, f64)], x: &mut [f64], reverse: bool) {
     #[cfg(target_arch = "x86_64")]
     {
+        if std::arch::is_x86_feature_detected!("avx512f") {
+            // SAFETY: the CPU supports AVX-512F (checked just above).
+            return unsafe { apply_reflectors_avx512(reflectors, x, reverse) };
+        }
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the CPU supports AVX2 (checked just above).
             return unsafe { apply_reflectors_avx2(reflectors, x, reverse) };
@@ -322,6 +326,14 @@ fn apply_reflectors(reflectors: &[(Vec<f64>, f64)], x: &mut [f64], reverse: bool
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn apply_reflectors_avx2(reflectors: &[(Vec<f64>, f64)], x: &mut [f64], reverse: bool) {
+    apply_reflectors_body(reflectors, x, reverse);
+}
+
+/// [`apply_reflectors_body`] compiled with AVX-512F (the sixteen partial sums of a dot
+/// product in two registers).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+unsafe fn apply_reflectors_avx512(reflectors: &[(Vec<f64>, f64)], x: &mut [f64], reverse: bool) {
     apply_reflectors_body(reflectors, x, reverse);
 }
 
@@ -369,11 +381,15 @@ impl ThinQr {
             if !(norm0.is_finite() && norm0 > 0.0 && tail_norm > rel_tol * norm0) {
                 continue;
             }
-            let mut v = x[m..].to_vec();
+            // R's column above the diagonal, then the reflector in place of x (its rows
+            // m.. moved to the front: no second copy of the column)
+            let mut col = x[..m].to_vec();
+            x.copy_within(m.., 0);
+            x.truncate(n - m);
+            let mut v = x;
             let Some((alpha, f)) = make_reflector(&mut v) else {
                 continue;
             };
-            let mut col = x[..m].to_vec();
             col.push(alpha);
             qr.r.push(col);
             qr.reflectors.push((v, f));
@@ -412,6 +428,26 @@ impl ThinQr {
     pub fn solve(&self, y: &[f64]) -> Vec<f64> {
         let mut z = y.to_vec();
         self.apply_qt(&mut z);
+        self.coefficients(&z)
+    }
+
+    /// ([`ThinQr::residual`], [`ThinQr::solve`]) of `y` from one application of Qᵀ (both
+    /// start from Qᵀy): bit for bit the two calls' values, for two thirds of their work.
+    ///
+    /// # Panics
+    /// When `y` is not of the columns' length (a programming error).
+    pub fn residual_and_solve(&self, y: &[f64]) -> (Vec<f64>, Vec<f64>) {
+        let mut z = y.to_vec();
+        self.apply_qt(&mut z);
+        let coefficients = self.coefficients(&z);
+        z[..self.reflectors.len()].fill(0.0);
+        apply_reflectors(&self.reflectors, &mut z, true);
+        (z, coefficients)
+    }
+
+    /// The coefficients on the input columns (0 for dropped ones) from z = Qᵀy, by back
+    /// substitution in R.
+    fn coefficients(&self, z: &[f64]) -> Vec<f64> {
         let m = self.kept.len();
         let mut x = vec![0.0; m];
         for k in (0..m).rev() {
@@ -596,5 +632,40 @@ mod tests {
         let xa: Vec<f64> = (0..n).map(|i| 0.3 * a[i] - 2.0 * b[i]).collect();
         let ra = qr.r_times(&[0.3, -2.0, 0.0]);
         assert!((dot(&ra, &ra) - dot(&xa, &xa)).abs() < 1e-10 * dot(&xa, &xa));
+    }
+
+    #[test]
+    fn residual_and_solve_is_the_two_calls_and_dispatch_is_portable_bit_for_bit() {
+        // long uneven columns (not a multiple of sixteen), one of them nearly dependent
+        let n = 1037;
+        let cols: Vec<Vec<f64>> = (0..5)
+            .map(|j| {
+                (0..n)
+                    .map(|i| ((i * (j + 2)) as f64 * 0.013 + j as f64).sin() + 0.1 * j as f64)
+                    .collect()
+            })
+            .collect();
+        let mut cols = cols;
+        cols[3] = cols[0]
+            .iter()
+            .zip(&cols[1])
+            .map(|(a, b)| a - 0.5 * b + 1e-7 * a * a)
+            .collect();
+        let refs: Vec<&[f64]> = cols.iter().map(|c| c.as_slice()).collect();
+        let qr = ThinQr::new(&refs, 1e-10);
+        let y: Vec<f64> = (0..n).map(|i| ((i * i) as f64 * 0.003).cos()).collect();
+        let (r, x) = qr.residual_and_solve(&y);
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&r), bits(&qr.residual(&y)));
+        assert_eq!(bits(&x), bits(&qr.solve(&y)));
+        // the dispatched reflectors (AVX-512F or AVX2 where the CPU has them) against the
+        // portable loop, both directions
+        for reverse in [false, true] {
+            let mut a = y.clone();
+            let mut b = y.clone();
+            apply_reflectors(&qr.reflectors, &mut a, reverse);
+            apply_reflectors_body(&qr.reflectors, &mut b, reverse);
+            assert_eq!(bits(&a), bits(&b), "reverse = {reverse}");
+        }
     }
 }
