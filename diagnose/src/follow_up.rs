@@ -29,8 +29,14 @@
 //! row that settles it ([`settle_row`]): the configuration of the most discriminating
 //! measured case, at its speeds and amplitudes with dᵢ ≥ ½ max d, repeated (`repeats`) the
 //! fewest times that bring the predicted pooled gap statistic of the forced level, with
-//! the coverage rows' cases included, to its threshold (at most [`MAX_REPEATS`]); the row
-//! is left out when that budget cannot reach it.
+//! the coverage rows' cases included, to its threshold (at most [`MAX_REPEATS`] repeats and
+//! no more records than the campaign already has: the follow-up at most doubles the tunnel
+//! time). When the measured speeds cannot reach it, one speed above the most
+//! discriminating case's (+10 % steps, at most [`MAX_SPEED_FACTOR`]×) with the
+//! configuration's forcing frequencies scaled by the same factor, so that the records sit
+//! at the same reduced frequencies (the same law node, inside the identified range) at a
+//! higher dynamic pressure, at the predicted d̂(U), flagged in the row's reason; the row is
+//! left out when neither reaches it.
 
 use aeroelastic::tunnel::{CampaignPlan, Configuration, PlanRow, PLAN_FORMAT};
 use identify::dataset::Dataset;
@@ -41,6 +47,12 @@ use crate::report::{Coverage, Diagnosis, LevelResult};
 /// Largest number of repeats of one condition the settling row asks for (a tunnel budget:
 /// eight records of one condition per configuration and speed).
 pub const MAX_REPEATS: usize = 8;
+
+/// Highest speed the settling row may ask for, as a multiple of its most discriminating
+/// case's speed
+/// (tried in steps of 10 %; beyond the measured speeds the discrimination is the fitted
+/// law's extrapolation, and the row says so).
+pub const MAX_SPEED_FACTOR: f64 = 1.5;
 
 /// The force level's measured discrimination: the consistent candidate's name, the
 /// level's gap threshold, and per forced case (configuration, U \[m/s\], pitch amplitude
@@ -153,17 +165,60 @@ fn settle_row(
             .map(|u| 1.0 + ev.predict(*u).unwrap_or(0.0))
             .sum::<f64>();
     let den0 = (ev.cases.len() + other_cases.len()) as f64;
-    let (gn, gd) = (grid.iter().sum::<f64>(), grid.len() as f64);
     let target = ev.threshold * ev.threshold;
-    let (m, stat2) = (1..=MAX_REPEATS)
-        .map(|m| (m, (num0 + m as f64 * gn) / (den0 + m as f64 * gd)))
-        .find(|(_, s)| *s >= target)?;
-    let cfg = declared(forced, &top.0)?;
+    let budget = ev.cases.len();
+    // the fewest repeats of a grid (its cases' predicted before²/noise²) that reach the
+    // target within the budget
+    let reach = |grid: &[f64]| -> Option<(usize, f64)> {
+        let (gn, gd) = (grid.iter().sum::<f64>(), grid.len() as f64);
+        (1..=MAX_REPEATS)
+            .take_while(|m| m * grid.len() <= budget.max(grid.len()))
+            .map(|m| (m, (num0 + m as f64 * gn) / (den0 + m as f64 * gd)))
+            .find(|(_, s)| *s >= target)
+    };
+    let (speeds, grid, m, stat2, above) = match reach(&grid) {
+        Some((m, s2)) => (speeds, grid, m, s2, None),
+        None => {
+            // one speed above the most discriminating case's, its forcing frequencies
+            // scaled by the same factor: the same reduced frequencies K = B·2πf/U (the
+            // same law node, inside the identified range) at a higher q, the
+            // discrimination predicted by the fitted law
+            ev.law?;
+            (1..=5)
+                .map(|k| ((top.1 * (1.0 + 0.1 * k as f64)) * 100.0).round() / 100.0)
+                .filter(|u| *u <= MAX_SPEED_FACTOR * top.1 + 1e-9)
+                .find_map(|u| {
+                    let g: Vec<f64> = amps
+                        .iter()
+                        .map(|_| 1.0 + ev.predict(u).unwrap_or(0.0))
+                        .collect();
+                    reach(&g).map(|(m, s2)| (vec![u], g, m, s2, Some(u)))
+                })?
+        }
+    };
+    let (gn, gd) = (grid.iter().sum::<f64>(), grid.len() as f64);
+    let mut cfg = declared(forced, &top.0)?;
     let disc = m as f64 * (gn - gd);
+    let at = match above {
+        None => String::new(),
+        Some(u) => {
+            let scale = u / top.1;
+            cfg.freq_pitch *= scale;
+            cfg.freq_heave *= scale;
+            format!(
+                "; at {u} m/s with the configuration's frequencies ×{scale:.3} (the same K as \
+                 at {} m/s), above the measured speed (predicted d = {:.2} from the fitted law \
+                 d ∝ U^{:.2}): check that the tunnel and the rig reach it",
+                top.1,
+                ev.predict(u).unwrap_or(f64::NAN),
+                ev.law.map_or(f64::NAN, |l| l.1)
+            )
+        }
+    };
     let reason = format!(
         "settles `{}` (significant at the force level, gap not): measured discrimination \
          d = {:.2} × noise energy at U = {} m/s, A = {}°; {m} repeats bring the predicted \
-         forced-level gap statistic to {:.2} (threshold {:.2})",
+         forced-level gap statistic to {:.2} (threshold {:.2}){at}",
         ev.candidate,
         top.4,
         top.1,
