@@ -104,28 +104,36 @@ fn evidence(diag: &Diagnosis) -> Option<Evidence> {
     let mut speeds: Vec<f64> = cases.iter().filter(|c| c.4 > 0.0).map(|c| c.1).collect();
     speeds.sort_by(f64::total_cmp);
     speeds.dedup();
-    let law = (speeds.len() >= 3).then(|| {
-        let n = pts.len() as f64;
-        let mx = pts.iter().map(|p| p.0).sum::<f64>() / n;
-        let my = pts.iter().map(|p| p.1).sum::<f64>() / n;
-        let sxx: f64 = pts.iter().map(|p| (p.0 - mx) * (p.0 - mx)).sum();
-        let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
-        let p = if sxx > 0.0 { sxy / sxx } else { 0.0 };
-        ((my - p * mx).exp(), p)
-    });
+    let law = (speeds.len() >= 3).then(|| power_law(&pts)).flatten();
     Some(Evidence {
         candidate: best.effect.name().to_string(),
         threshold: l.gap_threshold,
         cases,
-        law: law.filter(|(a, p)| a.is_finite() && p.is_finite()),
+        law,
     })
+}
+
+/// Least-squares line through (ln U, ln d) points: (a, p) of d = a·Uᵖ, `None` when not
+/// finite or no points.
+fn power_law(pts: &[(f64, f64)]) -> Option<(f64, f64)> {
+    if pts.is_empty() {
+        return None;
+    }
+    let n = pts.len() as f64;
+    let mx = pts.iter().map(|p| p.0).sum::<f64>() / n;
+    let my = pts.iter().map(|p| p.1).sum::<f64>() / n;
+    let sxx: f64 = pts.iter().map(|p| (p.0 - mx) * (p.0 - mx)).sum();
+    let sxy: f64 = pts.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    let p = if sxx > 0.0 { sxy / sxx } else { 0.0 };
+    let a = (my - p * mx).exp();
+    (a.is_finite() && p.is_finite()).then_some((a, p))
 }
 
 /// The row that settles the force level's candidate (module docs), with its predicted
 /// pooled gap statistic; `other_cases` are the coverage rows' (U) cases.
 fn settle_row(
     ev: &Evidence,
-    forced: &Dataset,
+    declared: impl Fn(&str) -> Option<Configuration>,
     other_cases: &[f64],
     duration: Option<f64>,
 ) -> Option<(PlanRow, f64)> {
@@ -197,7 +205,7 @@ fn settle_row(
         }
     };
     let (gn, gd) = (grid.iter().sum::<f64>(), grid.len() as f64);
-    let mut cfg = declared(forced, &top.0)?;
+    let mut cfg = declared(&top.0)?;
     let disc = m as f64 * (gn - gd);
     let at = match above {
         None => String::new(),
@@ -428,7 +436,7 @@ pub fn plan(diag: &Diagnosis, forced: &Dataset) -> Option<CampaignPlan> {
                         .flat_map(move |u| r.amplitudes_deg.iter().map(move |_| *u))
                 })
                 .collect();
-            settle_row(e, forced, &other, duration)
+            settle_row(e, |n| declared(forced, n), &other, duration)
         }
         _ => None,
     };
@@ -476,6 +484,91 @@ pub fn plan(diag: &Diagnosis, forced: &Dataset) -> Option<CampaignPlan> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn config(name: &str) -> Option<Configuration> {
+        Some(Configuration {
+            name: name.to_string(),
+            freq_pitch: 2.0,
+            freq_heave: 1.3,
+            amplitude_ratio: 0.0,
+            mean_pitch_deg: 0.0,
+        })
+    }
+
+    /// Evidence of one configuration at 4…10 m/s × two amplitudes with d = d10·(U/10)⁴.
+    fn evidence_of(d10: f64, threshold: f64) -> Evidence {
+        let cases: Vec<(String, f64, f64, f64, f64)> = [4.0, 6.0, 8.0, 10.0]
+            .iter()
+            .flat_map(|&u| {
+                [2.0, 6.0].map(|a| {
+                    let d = d10 * (u / 10.0f64).powi(4);
+                    ("C".to_string(), u, a, 1.0 + d, d)
+                })
+            })
+            .collect();
+        let pts: Vec<(f64, f64)> = cases.iter().map(|c| (c.1.ln(), c.4.ln())).collect();
+        Evidence {
+            candidate: "vortex_shedding".into(),
+            threshold,
+            law: power_law(&pts),
+            cases,
+        }
+    }
+
+    #[test]
+    fn the_power_law_reads_the_exponent_from_the_cases() {
+        let ev = evidence_of(3.0, 1.8);
+        let (a, p) = ev.law.unwrap();
+        assert!((p - 4.0).abs() < 1e-9, "{p}");
+        assert!((a * 10f64.powf(p) - 3.0).abs() < 1e-9);
+        assert!((ev.predict(12.0).unwrap() - 3.0 * 1.2f64.powi(4)).abs() < 1e-9);
+        assert_eq!(power_law(&[]), None);
+    }
+
+    #[test]
+    fn the_settling_row_repeats_the_most_discriminating_conditions() {
+        // measured d = 8 at 10 m/s: repeats of the measured speed reach a threshold of 2.5
+        let ev = evidence_of(8.0, 2.5);
+        let (row, stat) = settle_row(&ev, config, &[], Some(8.0)).unwrap();
+        assert_eq!(row.wind_speeds, vec![10.0], "{row:?}");
+        assert_eq!(row.amplitudes_deg, vec![2.0, 6.0]);
+        assert!(stat >= 2.5, "{stat}");
+        assert!(m > 1, "{m}");
+        let m = row.repeats.unwrap();
+        // the fewest: one repeat fewer does not reach it
+        let num0: f64 = ev.cases.iter().map(|c| c.3).sum();
+        let den0 = ev.cases.len() as f64;
+        let fewer = (num0 + (m - 1) as f64 * 2.0 * 9.0) / (den0 + (m - 1) as f64 * 2.0);
+        assert!(fewer < 2.5 * 2.5, "{m} {fewer}");
+        assert_eq!(row.configuration.freq_pitch, 2.0);
+        assert_eq!(row.record_duration_s, Some(8.0));
+        assert!(row.covers.is_empty());
+    }
+
+    #[test]
+    fn above_the_measured_speed_the_frequencies_keep_the_reduced_frequency() {
+        // d = 3 at 10 m/s cannot bring the pooled statistic to 2.2 at the measured speeds
+        let ev = evidence_of(3.0, 2.2);
+        let (row, stat) = settle_row(&ev, config, &[], None).unwrap();
+        let u = row.wind_speeds[0];
+        assert!(u > 10.0 && u <= MAX_SPEED_FACTOR * 10.0 + 1e-9, "{row:?}");
+        assert!(stat >= 2.2);
+        // same K = B·2πf/U as the measured node at 10 m/s
+        assert!((row.configuration.freq_pitch / u - 2.0 / 10.0).abs() < 1e-12);
+        assert!((row.configuration.freq_heave / u - 1.3 / 10.0).abs() < 1e-12);
+        assert!(row.reason.unwrap().contains("check that the tunnel"));
+        // nothing within the budget: no row
+        assert!(settle_row(&evidence_of(0.05, 2.2), config, &[], None).is_none());
+        // coverage cases at low speed dilute the pooled statistic: more repeats or a higher
+        // speed
+        let (diluted, _) = settle_row(&evidence_of(8.0, 2.5), config, &[2.0; 6], None).unwrap();
+        let (alone, _) = settle_row(&evidence_of(8.0, 2.5), config, &[], None).unwrap();
+        assert!(
+            diluted.wind_speeds[0] > alone.wind_speeds[0]
+                || diluted.repeats.unwrap() > alone.repeats.unwrap(),
+            "{diluted:?} {alone:?}"
+        );
+    }
 
     #[test]
     fn close_speeds_merge_and_far_ones_stay() {
