@@ -533,8 +533,8 @@ mod tests {
         assert_eq!(row.wind_speeds, vec![10.0], "{row:?}");
         assert_eq!(row.amplitudes_deg, vec![2.0, 6.0]);
         assert!(stat >= 2.5, "{stat}");
-        assert!(m > 1, "{m}");
         let m = row.repeats.unwrap();
+        assert!(m > 1, "{m}");
         // the fewest: one repeat fewer does not reach it
         let num0: f64 = ev.cases.iter().map(|c| c.3).sum();
         let den0 = ev.cases.len() as f64;
