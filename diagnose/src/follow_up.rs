@@ -26,7 +26,7 @@
 //! runs they cover over the level's noise level, as before.
 //!
 //! When the force level's gap is not significant but that candidate is, the plan adds a
-//! row that settles it ([`settle_row`]): the configuration of the most discriminating
+//! row that settles it (`settle_row`): the configuration of the most discriminating
 //! measured case, at its speeds and amplitudes with dᵢ ≥ ½ max d, repeated (`repeats`) the
 //! fewest times that bring the predicted pooled gap statistic of the forced level, with
 //! the coverage rows' cases included, to its threshold (at most [`MAX_REPEATS`] repeats and
