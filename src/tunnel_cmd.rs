@@ -72,9 +72,9 @@ pub struct ForcedArgs {
     /// Also record still-air runs (inertial forces of the 0.82 kg plate) with random offsets.
     #[arg(long)]
     pub still_air: bool,
-    /// Record duration [s].
-    #[arg(long, default_value_t = 10.0)]
-    pub duration: f64,
+    /// Record duration [s] (default: the campaign file's `record_duration_s`, else 10).
+    #[arg(long)]
+    pub duration: Option<f64>,
     /// Chord B [m] for an identification.json model.
     #[arg(long)]
     pub chord: Option<f64>,
@@ -174,24 +174,27 @@ fn manifest_json(dir: &std::path::Path) -> anyhow::Result<serde_json::Value> {
 }
 
 fn forced(a: &ForcedArgs) -> anyhow::Result<()> {
-    let cases = match &a.campaign_file {
+    let (cases, planned) = match &a.campaign_file {
         Some(path) => {
             let text = identify::io::read_text(path)
                 .with_context(|| format!("--campaign-file {}", path.display()))?;
-            aeroelastic::tunnel::CampaignPlan::parse(&text, &path.display().to_string())
-                .context("--campaign-file")?
-                .cases()
+            let plan =
+                aeroelastic::tunnel::CampaignPlan::parse(&text, &path.display().to_string())
+                    .context("--campaign-file")?;
+            let d = plan.record_duration().context("--campaign-file")?;
+            (plan.cases(), d)
         }
-        None => a.campaign.campaign().context("--campaign")?.cases(),
+        None => (a.campaign.campaign().context("--campaign")?.cases(), None),
     };
+    let duration = a.duration.or(planned).unwrap_or(10.0);
     let mut opts = ForcedOptions::paper(a.seed);
     if a.still_air {
         opts = opts.with_paper_still_air();
     }
     let records = cases.len() * if a.still_air { 2 } else { 1 };
-    aeroform::limits::samples("--duration", "rate", records, a.duration, opts.rate)?;
+    aeroform::limits::samples("--duration", "rate", records, duration, opts.rate)?;
     let m = LoadedModel::load(&a.model, a.chord).context("model file")?;
-    opts.duration = a.duration;
+    opts.duration = duration;
     opts.section.chord = m.model.chord();
     let mut inputs = vec![Input::new("--model", &a.model)];
     if let Some(p) = &a.campaign_file {

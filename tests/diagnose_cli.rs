@@ -187,4 +187,49 @@ fn diagnose_reports_coverage_and_extrapolation() {
         tmp.path().join("bad-out").to_str().unwrap(),
     ]);
     assert!(!ok && stderr.contains("wind_speeds[0]"), "{stderr}");
+    // every row states the record length it assumes; without --duration the tunnel
+    // records at it (round 34)
+    assert!(plan.rows.iter().all(|r| r.record_duration_s.is_some()));
+    let mut short = plan.clone();
+    for r in &mut short.rows {
+        r.record_duration_s = Some(0.5);
+    }
+    let short_file = tmp.path().join("short.campaign.toml");
+    std::fs::write(&short_file, short.to_toml().unwrap()).unwrap();
+    let short_out = tmp.path().join("short-out");
+    let (ok, stdout, stderr) = aeroform(&[
+        "tunnel",
+        "forced",
+        "--model",
+        "scenarios/plate-truth.model.toml",
+        "--campaign-file",
+        short_file.to_str().unwrap(),
+        "--out",
+        short_out.to_str().unwrap(),
+    ]);
+    assert!(ok, "{stdout}\n{stderr}");
+    let set = identify::dataset::read_dataset(&short_out).unwrap();
+    let r = &set.records[0];
+    assert!(
+        (r.h.len() as f64 * r.dt - 0.5).abs() < 2.0 * r.dt,
+        "{} samples at {}",
+        r.h.len(),
+        r.dt
+    );
+    // a row asking for no records is refused naming the field
+    let mut zero = plan.clone();
+    zero.rows[0].repeats = Some(0);
+    let zero_file = tmp.path().join("zero.campaign.toml");
+    std::fs::write(&zero_file, toml::to_string(&zero).unwrap()).unwrap();
+    let (ok, _, stderr) = aeroform(&[
+        "tunnel",
+        "forced",
+        "--model",
+        "scenarios/plate-truth.model.toml",
+        "--campaign-file",
+        zero_file.to_str().unwrap(),
+        "--out",
+        tmp.path().join("zero-out").to_str().unwrap(),
+    ]);
+    assert!(!ok && stderr.contains("rows[0].repeats"), "{stderr}");
 }

@@ -178,11 +178,21 @@ fn the_recommended_forced_tests_cover_the_runs_and_settle_an_effect_free_set() {
             r.id
         );
     }
-    // ranks are 1..n in order of the covered runs' gap
+    // ranks are 1..n; the coverage rows carry two amplitudes at least; every row says the
+    // record length it assumes (the campaign's own)
     for (i, r) in plan.rows.iter().enumerate() {
         assert_eq!(r.rank, i + 1);
-        assert!(r.amplitudes_deg.len() >= 2, "{text}");
+        if !r.covers.is_empty() {
+            assert!(r.amplitudes_deg.len() >= 2, "{text}");
+        }
+        assert_eq!(
+            r.record_duration_s,
+            Some(scenario.forced_duration),
+            "{text}"
+        );
     }
+    // with no effect, no force-level candidate to settle: no repeated row
+    assert!(plan.rows.iter().all(|r| r.repeats.is_none()), "{text}");
     let cases = plan.cases();
     let forced = benchmark::blind::follow_up_forced(
         BlindEffect::None,

@@ -477,12 +477,15 @@ fn follow_up_section(report: &mut Report, plan: &aeroelastic::tunnel::CampaignPl
                 short(c.mean_pitch_deg),
                 list(&r.wind_speeds),
                 list(&r.amplitudes_deg),
+                r.repeats.unwrap_or(1).to_string(),
+                r.record_duration_s.map_or("-".into(), short),
+                r.discrimination.map_or("-".into(), short),
                 r.reason.clone().unwrap_or_default(),
             ]
         })
         .collect();
     report.table(
-        "Recommended forced tests (follow_up.campaign.toml; run with `aeroform tunnel forced --campaign-file`): each row's configuration at every listed wind speed and pitch amplitude, ranked by the held-out gap of the free runs it covers",
+        "Recommended forced tests (follow_up.campaign.toml; run with `aeroform tunnel forced --campaign-file`): each row's configuration at every listed wind speed and pitch amplitude, each case recorded `records` times for `T` seconds; ranked by the predicted discrimination between the force level's consistent candidate and the baseline over the noise (else by the held-out gap of the free runs a row covers)",
         &[
             "rank",
             "configuration",
@@ -492,6 +495,9 @@ fn follow_up_section(report: &mut Report, plan: &aeroelastic::tunnel::CampaignPl
             "ᾱ [deg]",
             "U [m/s]",
             "α amplitude [deg]",
+            "records",
+            "T [s]",
+            "discrimination",
             "why",
         ]
         .map(String::from),

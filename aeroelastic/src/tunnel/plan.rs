@@ -32,6 +32,23 @@ pub struct PlanRow {
     /// Why it has its rank (e.g. the held-out gap of those runs over the noise level).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reason: Option<String>,
+    /// Records per case, each a fresh record of `record_duration_s` (absent: one record,
+    /// ids `{config}-U{U}-A{A}`; present: ids `{config}-U{U}-A{A}-R{k}`, k = 1…repeats),
+    /// in [1, 100]. Repeats of one condition add its evidence like one record `repeats`
+    /// times as long.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub repeats: Option<usize>,
+    /// Length of each record the row assumes \[s\], in (0, 3600] (absent: the tunnel's
+    /// `--duration`); `aeroform tunnel forced --campaign-file` records at it when
+    /// `--duration` is not given.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub record_duration_s: Option<f64>,
+    /// Predicted discrimination of the row \[-\]: the held-out residual energy by which
+    /// the force level's consistent candidate and the baseline differ at the row's records,
+    /// over the noise energy of one record, summed over the row's records (absent: not
+    /// predicted, e.g. no significant force-level candidate).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub discrimination: Option<f64>,
 }
 
 /// A campaign plan (module docs).
@@ -138,6 +155,24 @@ impl CampaignPlan {
                     ));
                 }
             }
+            if let Some(m) = r.repeats {
+                if !(1..=100).contains(&m) {
+                    return Err(bad(
+                        format!("rows[{i}].repeats"),
+                        m as f64,
+                        "must be in [1, 100]",
+                    ));
+                }
+            }
+            if let Some(d) = r.record_duration_s {
+                if !(d.is_finite() && d > 0.0 && d <= 3600.0) {
+                    return Err(bad(
+                        format!("rows[{i}].record_duration_s"),
+                        d,
+                        "must be in (0, 3600] s",
+                    ));
+                }
+            }
             if r.wind_speeds.is_empty() || r.amplitudes_deg.is_empty() {
                 return Err(bad(
                     format!("rows[{i}]"),
@@ -145,7 +180,12 @@ impl CampaignPlan {
                     "needs at least one wind speed and one amplitude",
                 ));
             }
-            n = n.saturating_add(r.wind_speeds.len().saturating_mul(r.amplitudes_deg.len()));
+            n = n.saturating_add(
+                r.wind_speeds
+                    .len()
+                    .saturating_mul(r.amplitudes_deg.len())
+                    .saturating_mul(r.repeats.unwrap_or(1)),
+            );
             if n > MAX_CASES {
                 return Err(bad(
                     "rows".into(),
@@ -171,19 +211,56 @@ impl CampaignPlan {
     }
 
     /// The plan's cases, row by row, each row as [`Campaign::cases`] of its one
-    /// configuration (ids `{config}-U{U}-A{A}`).
+    /// configuration (ids `{config}-U{U}-A{A}`), each case `repeats` times with ids
+    /// `{config}-U{U}-A{A}-R{k}` when the row has `repeats`.
     pub fn cases(&self) -> Vec<ForcedCase> {
         self.rows
             .iter()
             .flat_map(|r| {
-                Campaign {
+                let grid = Campaign {
                     configurations: vec![r.configuration.clone()],
                     amplitudes_deg: r.amplitudes_deg.clone(),
                     wind_speeds: r.wind_speeds.clone(),
                 }
-                .cases()
+                .cases();
+                match r.repeats {
+                    None => grid,
+                    Some(m) => grid
+                        .into_iter()
+                        .flat_map(|c| {
+                            (1..=m).map(move |k| ForcedCase {
+                                id: format!("{}-R{k}", c.id),
+                                ..c.clone()
+                            })
+                        })
+                        .collect(),
+                }
             })
             .collect()
+    }
+
+    /// The record length the rows ask for \[s\], when every row that gives one gives the
+    /// same (`None` when no row gives one).
+    ///
+    /// # Errors
+    /// [`Error::InvalidParameter`] naming `rows[i].record_duration_s` when two rows ask for
+    /// different lengths (record such a plan row by row).
+    pub fn record_duration(&self) -> Result<Option<f64>> {
+        let mut out: Option<f64> = None;
+        for (i, r) in self.rows.iter().enumerate() {
+            match (out, r.record_duration_s) {
+                (Some(a), Some(b)) if a != b => {
+                    return Err(Error::InvalidParameter {
+                        field: format!("rows[{i}].record_duration_s"),
+                        value: b,
+                        message: format!("differs from an earlier row's {a} s"),
+                    })
+                }
+                (None, Some(b)) => out = Some(b),
+                _ => {}
+            }
+        }
+        Ok(out)
     }
 
     /// The plan as TOML text (what [`CampaignPlan::parse`] reads back).
@@ -219,6 +296,9 @@ mod tests {
                 amplitudes_deg: vec![1.0, 3.0],
                 covers: vec!["free-2".into()],
                 reason: None,
+                repeats: None,
+                record_duration_s: None,
+                discrimination: None,
             }],
         }
     }
@@ -234,6 +314,37 @@ mod tests {
             ids,
             ["F-U1.44-A1", "F-U1.44-A3", "F-U2.25-A1", "F-U2.25-A3"]
         );
+    }
+
+    #[test]
+    fn repeats_give_distinct_ids_and_count_against_the_limit() {
+        let mut p = plan();
+        p.rows[0].repeats = Some(2);
+        p.rows[0].record_duration_s = Some(8.0);
+        let text = p.to_toml().unwrap();
+        let q = CampaignPlan::parse(&text, "plan.toml").unwrap();
+        assert_eq!(p, q);
+        let ids: Vec<String> = q.cases().into_iter().map(|c| c.id).collect();
+        assert_eq!(ids.len(), 8);
+        assert_eq!(ids[0], "F-U1.44-A1-R1");
+        assert_eq!(ids[1], "F-U1.44-A1-R2");
+        assert_eq!(q.record_duration().unwrap(), Some(8.0));
+        // an old plan (no repeats, no duration) still reads
+        let old = "format = \"aeroform-campaign/1\"\n[[rows]]\nrank = 1\nwind_speeds = [2.0]\n\
+                   amplitudes_deg = [1.0]\n[rows.configuration]\nname = \"F\"\n\
+                   freq_pitch = 1.3\nfreq_heave = 1.1\namplitude_ratio = 0.0\n\
+                   mean_pitch_deg = 0.0\n";
+        let o = CampaignPlan::parse(old, "old").unwrap();
+        assert_eq!(o.cases()[0].id, "F-U2-A1");
+        assert_eq!(o.record_duration().unwrap(), None);
+        let mut p = plan();
+        p.rows[0].repeats = Some(0);
+        let e = p.check("plan.toml").unwrap_err().to_string();
+        assert!(e.contains("rows[0].repeats"), "{e}");
+        let mut p = plan();
+        p.rows[0].record_duration_s = Some(-1.0);
+        let e = p.check("plan.toml").unwrap_err().to_string();
+        assert!(e.contains("rows[0].record_duration_s"), "{e}");
     }
 
     #[test]
