@@ -32,7 +32,7 @@ const SUBSTEPS: usize = 4;
 /// [`START_SAMPLES`] samples of `x` (sample interval `dt` \[s\]); `None` when too short or
 /// not finite.
 fn start_of(x: &[f64], dt: f64) -> Option<(f64, f64)> {
-    if x.len() < START_SAMPLES || !(dt > 0.0) {
+    if x.len() < START_SAMPLES || dt.is_nan() || dt <= 0.0 {
         return None;
     }
     let mut a = Matrix3::zeros();
