@@ -70,7 +70,8 @@ struct DecayTest {
 }
 
 /// Decay misfit below which a candidate's still-air releases count as reproducing the
-/// measured decays (half the records' normalised energy left: [`CandidateResult::decay_misfit`]).
+/// measured decays (a quarter of the records' normalised energy left, the misfit being its
+/// square root: [`CandidateResult::decay_misfit`]).
 const DECAY_REPRODUCED: f64 = 0.5;
 
 /// Upper end of the continuation range as a multiple of the higher of the largest measured
@@ -450,8 +451,9 @@ pub struct BranchVerdict {
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub contradicting: Vec<String>,
     /// Candidates within one standard error of the best passed over because their own
-    /// still-air releases miss the measured decays by more than the sensor noise explains,
-    /// beyond the best reproducing candidate's miss (absent without such candidates).
+    /// still-air releases miss the measured decays significantly more than the best
+    /// reproducing candidate's: residual energy beyond its one-sided 95 % ratio bar
+    /// (`decay_cycles`) and beyond the sensor noise's (absent without such candidates).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub decays_contradicting: Vec<String>,
     /// Held-out shrink of the named candidate.
@@ -499,8 +501,9 @@ pub struct BifurcationDiagnosis {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub nominal_decay_misfit: Option<f64>,
     /// The decay misfit the records' sensor noise alone leaves (a perfect model's); a
-    /// candidate within one standard error is passed over when its misfit² exceeds the best
-    /// reproducing one's by more than this squared. Absent without decays.
+    /// candidate within one standard error is passed over only when its misfit² exceeds the
+    /// best reproducing one's by more than this squared (and by the ratio bar of
+    /// `decay_cycles`). Absent without decays.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub decay_noise: Option<f64>,
     /// Oscillation cycles the decays show above their noise (the degrees of freedom of the
