@@ -414,7 +414,7 @@ fn measure(
 }
 
 /// A first Hopf point: speed \[m/s\] and criticality.
-type HopfOf = (f64, String);
+pub type HopfOf = (f64, String);
 
 /// The structure handed to the diagnosis when it is mis-given, and how.
 fn misgive(nominal: &Section, rng: &mut ChaCha8Rng) -> Result<(Section, Misgiven)> {
@@ -501,6 +501,93 @@ pub fn run_set_diagnosis(
     seed: u64,
     bench: &BranchBenchOptions,
 ) -> Result<(BranchOutcome, BifurcationDiagnosis)> {
+    let set = draw_set(index, seed, bench)?;
+    let t0 = std::time::Instant::now();
+    let opts = BifurcationOptions {
+        jacobian: bench.jacobian,
+        ..BifurcationOptions::default()
+    };
+    let d = diagnose_branches(
+        &set.points,
+        &set.given,
+        set.check.clone(),
+        vec![],
+        &opts,
+        vec![],
+        "bench",
+    )?;
+    let named_hopf = match d.verdict.candidate {
+        Some(i) => d.candidates[i].fit.hopf.first(),
+        None => d.nominal.hopf.first(),
+    }
+    .map(|h| (h.u, h.criticality.clone()));
+    let structure_used = d
+        .structure
+        .as_ref()
+        .map_or(StructureUsed::Given, |c| c.used);
+    let nominal_score = d.nominal.errors.score;
+    let correct = match set.truth_kind.expected() {
+        None => d.verdict.effect.is_none() && d.verdict.name == Verdict::None,
+        Some(e) => d.verdict.effect == Some(e),
+    };
+    let outcome = BranchOutcome {
+        index,
+        seed: set.seed,
+        truth: set.truth_kind,
+        strength: set.strength,
+        heave_only: set.heave_only,
+        points: set.points.len(),
+        nominal_score,
+        strong: nominal_score >= STRONG_SCORE,
+        verdict: d.verdict.name,
+        correct,
+        shrink: d.verdict.shrink,
+        seconds: t0.elapsed().as_secs_f64(),
+        misgiven: set.misgiven,
+        structure_used,
+        truth_hopf: set.truth_hopf,
+        named_hopf,
+    };
+    Ok((outcome, d))
+}
+
+/// One drawn set of the benchmark, before its diagnosis: the truth, its measured diagram
+/// and what the diagnosis is handed (for inspection and probes).
+#[derive(Debug, Clone)]
+pub struct DrawnSet {
+    /// The set's seed (split from the master seed).
+    pub seed: u64,
+    /// The withheld truth's kind.
+    pub truth_kind: BranchTruth,
+    /// Its strength ∈ [0, 1].
+    pub strength: f64,
+    /// Heave amplitudes only.
+    pub heave_only: bool,
+    /// The truth's section.
+    pub truth: Section,
+    /// The nominal section (the truth without its withheld effect).
+    pub nominal: Section,
+    /// The section handed to the diagnosis (the nominal one, or mis-given).
+    pub given: Section,
+    /// How the structure was mis-given, when it was.
+    pub misgiven: Option<Misgiven>,
+    /// The truth's still-air decays (with a mis-given structure only).
+    pub decays: Vec<Record>,
+    /// The decays' check against the given structure (with a mis-given structure only).
+    pub check: Option<diagnose::structure::StructureCheck>,
+    /// The measured diagram.
+    pub points: Vec<MeasuredAmplitude>,
+    /// The truth's first Hopf point.
+    pub truth_hopf: Option<HopfOf>,
+}
+
+/// Draws set `index` of the benchmark with master seed `seed` and options `bench`: the
+/// truth, its measured diagram and, with a mis-given structure, the given section, the
+/// truth's decays and their check.
+///
+/// # Errors
+/// As [`run_set_with`].
+pub fn draw_set(index: usize, seed: u64, bench: &BranchBenchOptions) -> Result<DrawnSet> {
     let set_seed = split_seed(seed, index as u64);
     let mut rng = ChaCha8Rng::seed_from_u64(set_seed);
     let truth = BranchTruth::ALL[rng.random_range(0..BranchTruth::ALL.len())];
@@ -526,13 +613,8 @@ pub fn run_set_diagnosis(
             ));
             continue;
         };
-        let t0 = std::time::Instant::now();
-        let opts = BifurcationOptions {
-            jacobian: bench.jacobian,
-            ..BifurcationOptions::default()
-        };
         // a separate stream: the truth and its diagram do not depend on the option
-        let (given, misgiven, check) = if bench.misgiven_structure {
+        let (given, misgiven, decays, check) = if bench.misgiven_structure {
             let mut r2 = ChaCha8Rng::seed_from_u64(split_seed(set_seed, 1));
             let (given, how) = misgive(&nominal, &mut r2)?;
             let decays = still_air_decays(&t, a_ref, split_seed(set_seed, 2))?;
@@ -546,44 +628,24 @@ pub fn run_set_diagnosis(
                         .into();
                 }
             }
-            (given, Some(how), check)
+            (given, Some(how), decays, check)
         } else {
-            (nominal.clone(), None, None)
+            (nominal.clone(), None, Vec::new(), None)
         };
-        let d = diagnose_branches(&points, &given, check, vec![], &opts, vec![], "bench")?;
-        let named_hopf = match d.verdict.candidate {
-            Some(i) => d.candidates[i].fit.hopf.first(),
-            None => d.nominal.hopf.first(),
-        }
-        .map(|h| (h.u, h.criticality.clone()));
-        let structure_used = d
-            .structure
-            .as_ref()
-            .map_or(StructureUsed::Given, |c| c.used);
-        let nominal_score = d.nominal.errors.score;
-        let correct = match truth.expected() {
-            None => d.verdict.effect.is_none() && d.verdict.name == Verdict::None,
-            Some(e) => d.verdict.effect == Some(e),
-        };
-        let outcome = BranchOutcome {
-            index,
+        return Ok(DrawnSet {
             seed: set_seed,
-            truth,
+            truth_kind: truth,
             strength,
             heave_only,
-            points: points.len(),
-            nominal_score,
-            strong: nominal_score >= STRONG_SCORE,
-            verdict: d.verdict.name,
-            correct,
-            shrink: d.verdict.shrink,
-            seconds: t0.elapsed().as_secs_f64(),
+            truth: t,
+            nominal,
+            given,
             misgiven,
-            structure_used,
+            decays,
+            check,
+            points,
             truth_hopf,
-            named_hopf,
-        };
-        return Ok((outcome, d));
+        });
     }
     Err(Error::data(
         "bifurcation benchmark",

@@ -453,3 +453,78 @@ fn a_still_air_decay_does_not_raise_the_free_response_levels_null() {
         stats[1]
     );
 }
+
+/// A pitch mode damped out within a few periods (a regularised friction's slope at rest,
+/// ζ ≈ 0.17 as on generated set 7 of seed 2027) leaves no window of the decays to read: it
+/// is read from the releases by output error where they contradict the held spring
+/// (DECISIONS, "A heavily damped mode read from the release, round 35"). Pitch given 4 %
+/// low: k_α identified within 1 % of the truth's (held at the given value, −8 %, before)
+/// and the Hopf speed's error at least halved; heave given 5 % low with the pitch right: the releases do
+/// not contradict the given pitch spring, the mode stays unread with a note, and k_α keeps
+/// its given (true) value, although a linear fit to the friction's decay alone would move
+/// it.
+#[test]
+fn a_heavily_damped_pitch_mode_is_read_from_the_releases() {
+    let base = truth();
+    let mut st = base.structure.clone();
+    let a_ref = 0.05;
+    st.nonlinear.friction = Some(Friction {
+        heave_force: 0.0,
+        pitch_moment: 0.028 * st.k_alpha * a_ref,
+        heave_smoothing: None,
+        pitch_smoothing: Some(0.1 * st.omega_alpha() * a_ref),
+    });
+    let t = Section::new(st, base.aero.clone(), base.rho).unwrap();
+    let sets = decays(&t);
+    let refs: Vec<&Dataset> = sets.iter().collect();
+    // the nominal model knows no friction: the given sections are the truth's without it
+    let mut plain = t.structure.clone();
+    plain.nonlinear.friction = None;
+    let plain = Section::new(plain, t.aero.clone(), t.rho).unwrap();
+    for (dof, factor, read) in [("pitch", 0.96, true), ("heave", 0.95, false)] {
+        let given = misgiven(&plain, dof, factor);
+        let check = structure_check(&refs, &given).expect("still-air decays");
+        let row = check.modes.iter().find(|r| r.given_mode == 1);
+        if read {
+            let row =
+                row.unwrap_or_else(|| panic!("the pitch mode is not read: {}", check.summary));
+            assert!(row.signature.contains("output error"), "{}", row.signature);
+            assert!(row.linear_zeta.is_none(), "{:?}", row.linear_zeta);
+        } else {
+            assert!(row.is_none(), "{}", check.summary);
+            assert!(
+                check
+                    .refused
+                    .iter()
+                    .any(|w| w.contains("do not contradict")),
+                "{:?}",
+                check.refused
+            );
+        }
+        let mut used = check.used_structure(&given.structure);
+        let err = used.k_alpha / t.structure.k_alpha - 1.0;
+        // the structure's part of the Hopf speed: the identified springs and dampers with
+        // the truth's friction (the candidate that would name it)
+        used.nonlinear.friction = t.structure.nonlinear.friction.clone();
+        let id = Section::new(used, t.aero.clone(), t.rho).unwrap();
+        let (u_t, u_g, u_id) = (first_hopf(&t), first_hopf(&given), first_hopf(&id));
+        eprintln!(
+            "{dof} × {factor}: k_α {:+.3} %, Hopf truth {u_t:.3} given {u_g:.3} identified \
+             {u_id:.3} m/s",
+            100.0 * err,
+        );
+        // read: the linear fit's bias against the friction's decay (−0.7 %) against the
+        // −7.8 % held before; not read: the given value
+        assert!(
+            err.abs() < if read { 0.01 } else { 1e-3 },
+            "{dof}: k_α off by {err}"
+        );
+        // the correction moves the Hopf speed towards the truth's (read: −5.5 % given,
+        // +1.2 % identified here, the k_α bias through a Hopf speed that moves 1.7 % per
+        // 1 % of k_α; the end-to-end figure is the generated set's, DECISIONS)
+        assert!(
+            (u_id / u_t - 1.0).abs() < 0.5 * (u_g / u_t - 1.0).abs(),
+            "{dof}: {u_id} vs {u_t} (given {u_g})"
+        );
+    }
+}
