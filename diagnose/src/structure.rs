@@ -353,24 +353,33 @@ fn given_used() -> StructureUsed {
     StructureUsed::Given
 }
 
+impl StructureIdentification {
+    /// `st` with k_h, k_α, c_h, c_α set to their identified values (everything else,
+    /// nonlinear terms included, kept).
+    pub fn applied_to(&self, st: &Structure) -> Structure {
+        let mut s = st.clone();
+        for p in &self.parameters {
+            match p.name.as_str() {
+                "k_h" => s.k_h = p.identified,
+                "k_alpha" => s.k_alpha = p.identified,
+                "c_h" => s.c_h = p.identified,
+                "c_alpha" => s.c_alpha = p.identified,
+                _ => {}
+            }
+        }
+        s
+    }
+}
+
 impl StructureCheck {
     /// The structure the level uses: `given` with k_h, k_α, c_h, c_α of the identification
     /// when [`StructureCheck::used`] is `identified`, else `given` unchanged (nonlinear
     /// terms always kept).
     pub fn used_structure(&self, given: &Structure) -> Structure {
-        let mut s = given.clone();
-        if let (StructureUsed::Identified, Some(id)) = (self.used, &self.identified) {
-            for p in &id.parameters {
-                match p.name.as_str() {
-                    "k_h" => s.k_h = p.identified,
-                    "k_alpha" => s.k_alpha = p.identified,
-                    "c_h" => s.c_h = p.identified,
-                    "c_alpha" => s.c_alpha = p.identified,
-                    _ => {}
-                }
-            }
+        match (self.used, &self.identified) {
+            (StructureUsed::Identified, Some(id)) => id.applied_to(given),
+            _ => given.clone(),
         }
-        s
     }
 }
 
@@ -933,20 +942,7 @@ fn release_rows(
 ) -> (Vec<ModeCheck>, Option<String>) {
     let start = identify_at_rest(rows, m, st)
         .filter(|id| id.converged)
-        .map(|id| {
-            let mut s = st.clone();
-            for p in &id.parameters {
-                match p.name.as_str() {
-                    "k_h" => s.k_h = p.identified,
-                    "k_alpha" => s.k_alpha = p.identified,
-                    "c_h" => s.c_h = p.identified,
-                    "c_alpha" => s.c_alpha = p.identified,
-                    _ => {}
-                }
-            }
-            s
-        })
-        .unwrap_or_else(|| st.clone());
+        .map_or_else(|| st.clone(), |id| id.applied_to(st));
     let Ok(start) = Section::new(start, sec.aero.clone(), sec.rho) else {
         return (Vec::new(), None);
     };
@@ -1915,16 +1911,7 @@ pub fn conform_to_decays(
                  the measured still-air modes",
             )
         })?;
-    let mut s = st.clone();
-    for p in &id.parameters {
-        match p.name.as_str() {
-            "k_h" => s.k_h = p.identified,
-            "k_alpha" => s.k_alpha = p.identified,
-            "c_h" => s.c_h = p.identified,
-            "c_alpha" => s.c_alpha = p.identified,
-            _ => {}
-        }
-    }
+    let s = id.applied_to(st);
     Section::new(s, section.aero.clone(), section.rho).map_err(|e| {
         crate::Error::data(
             "still-air decays",
