@@ -505,7 +505,7 @@ fn a_heavily_damped_pitch_mode_is_read_from_the_releases() {
         let err = used.k_alpha / t.structure.k_alpha - 1.0;
         // the structure's part of the Hopf speed: the identified springs and dampers with
         // the truth's friction (the candidate that would name it)
-        used.nonlinear.friction = t.structure.nonlinear.friction.clone();
+        used.nonlinear.friction = t.structure.nonlinear.friction;
         let id = Section::new(used, t.aero.clone(), t.rho).unwrap();
         let (u_t, u_g, u_id) = (first_hopf(&t), first_hopf(&given), first_hopf(&id));
         eprintln!(
