@@ -8,7 +8,7 @@
 //! mode; a mode damped out within four windows of four periods in windows of two; a mode
 //! no window reads at all (damped out within a few periods) from the releases themselves
 //! by output error, its frequency only, its spring freed only where the releases
-//! contradict the held one ([`release`]).
+//! contradict the held one (the private module `release`).
 //!
 //! When the decays differ from the given structure, the linear structure is identified
 //! from them ([`identify_structure`]) and, at the bifurcation level, every candidate's
