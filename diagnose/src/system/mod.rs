@@ -806,10 +806,9 @@ fn within_one_se(simple: &[[f64; 2]], best: &[[f64; 2]], active: &[bool], allowa
 ///
 /// Coverage rule (issue 29): an aerodynamic candidate is fitted and scored on the runs
 /// inside the forced range only (`uncovered[j]` false); a structural one on every run,
-/// fitted jointly with the pooled nuisances ([`candidates::nuisance_columns`]: the
-/// apparent mass and aerodynamic damping of the motion outside its forced K range, the
-/// still air's apparent mass) and scored against them alone, so that what it removes is
-/// what the law's extrapolation and the air's mass cannot.
+/// fitted jointly with the pooled apparent-mass nuisances ([`candidates::nuisance_columns`]:
+/// the motion outside its forced K range, the still air) and scored against them alone, so
+/// that what it removes is what the law's extrapolation and the air's mass cannot.
 #[allow(clippy::too_many_arguments)]
 fn score_candidate(
     effect: Effect,
@@ -879,10 +878,9 @@ fn score_candidate(
             }
         } else {
             format!(
-                "scored against the sim with an apparent-mass and aerodynamic-damping \
-                 correction of the motion outside its forced K range fitted alongside \
-                 (run(s) {}): what the candidate removes beyond it is what the law's \
-                 extrapolation cannot produce",
+                "scored against the sim with an apparent-mass correction of the motion \
+                 outside its forced K range fitted alongside (run(s) {}): what the candidate \
+                 removes beyond it is what the law's extrapolation cannot produce",
                 profiled.join(", ")
             )
         });
