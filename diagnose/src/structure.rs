@@ -750,6 +750,7 @@ fn check_against(
     // A given still-air mode that is no record's dominant one (e.g. a pitch mode damped
     // out within a few periods, whose release the heave mode then dominates) is read as
     // the second mode of the records that show it: the row of smallest uncertainty.
+    let mut second_read = Vec::new();
     for j in 0..modes_given.len() {
         if rows.iter().any(|r| r.given_mode == j) {
             continue;
@@ -769,6 +770,52 @@ fn check_against(
         if let Some(mut r) = best {
             r.signature.push_str(" (second mode of the record)");
             rows.push(r);
+            second_read.push(j);
+        }
+    }
+    let at_rest: Vec<&Record> = records
+        .iter()
+        .copied()
+        .filter(|r| r.meta.wind_speed <= 0.0)
+        .collect();
+    // A mode read only as a record's second spectral peak is a weak reading (±0.3 % of
+    // its frequency and more, a second mode's window scatter): its spring is moved by it
+    // only where the releases contradict the spring held at the value the other modes
+    // give (generated set 4 of seed 2026: k_α +2.1 % from a second mode of ±0.0043 Hz for
+    // a truth given right; DECISIONS, round 35). Otherwise the mode stays unread.
+    if let (Some(sec), Some(st)) = (release, given) {
+        let (ke, ce) = rest_linearisation(st);
+        let eig_given = eigen_of(
+            m,
+            &(st.stiffness_matrix() + ke),
+            &(st.damping_matrix() + ce),
+        );
+        for &j in &second_read {
+            let Some(e) = eig_given.get(j) else {
+                continue;
+            };
+            let known: Vec<ModeCheck> =
+                rows.iter().filter(|r| r.given_mode != j).cloned().collect();
+            if known.is_empty() {
+                continue;
+            }
+            let mut held = [false; 2];
+            held[dominant_dof(m, e)] = true;
+            let lowest = modes_given.first().map_or(1.0, |g| g.0);
+            let Some(test) = release_test(&at_rest, sec, st, m, &known, lowest, held) else {
+                continue;
+            };
+            if !test.contradicted {
+                rows.retain(|r| r.given_mode != j);
+                refused.push(format!(
+                    "mode {} read only as a record's second mode: the releases (output \
+                     error) do not contradict the given spring (misfit {:.3} held, {:.3} \
+                     freed), so it is not used",
+                    j + 1,
+                    test.held.misfit,
+                    test.free.misfit
+                ));
+            }
         }
     }
     // A given mode still unread (damped out within a few periods: no window holds it) is
@@ -776,12 +823,10 @@ fn check_against(
     if let (Some(sec), Some(st)) = (release, given) {
         if !rows.is_empty()
             && (0..modes_given.len()).any(|j| !rows.iter().any(|r| r.given_mode == j))
-        {
-            let at_rest: Vec<&Record> = records
+            && !refused
                 .iter()
-                .copied()
-                .filter(|r| r.meta.wind_speed <= 0.0)
-                .collect();
+                .any(|w| w.contains("read only as a record's second mode"))
+        {
             let (new, note) = release_rows(&at_rest, sec, st, m, &rows, &modes_given);
             rows.extend(new);
             refused.extend(note);
@@ -913,39 +958,39 @@ fn check_against(
     })
 }
 
-/// Rows for the given modes that no window of any record reads, from the linear springs
-/// and dampers fitted to the still-air releases by output error ([`release::fit_release`]):
-/// started from the structure the rows read so far identify (the given one when that
-/// fails), the section `sec` (masses, apparent mass at rest and nonlinear terms of the
-/// given structure `st`, mass matrix `m` at rest) is released from each record's own start
-/// and its linear parameters fitted to all records, once all four free and once with the
-/// spring of each unread mode's dominant DOF held. The held fit is kept unless the
-/// releases contradict it: its residual energy above the free fit's by more than the
-/// one-sided 95 % point of their ratio (F with the decays' cycles as degrees of freedom)
-/// and by more than the sensor noise's. The kept structure's mode j (with `st`'s rest
-/// terms, [`rest_linearisation`]) gives the row's frequency, its standard uncertainty by
-/// the delta method from the free fit's covariance; no linear damping ratio. When the
-/// held fit is kept there is no row (the mode stays unread, its spring held as before)
-/// and the note says why.
-///
-/// A mode damped out within a few periods (a friction's slope at rest, generated set 7 of
-/// seed 2027: ζ 0.165) leaves no window to read, but it is in the first periods of every
-/// release that excites it (DECISIONS, "A heavily damped mode read from the release,
-/// round 35"). Empty when the fit fails.
-fn release_rows(
+/// The releases' verdict on held springs ([`release_test`]).
+struct ReleaseTest {
+    /// All four linear parameters fitted.
+    free: release::ReleaseFit,
+    /// The same with the springs held at their start values.
+    held: release::ReleaseFit,
+    /// The held fit's residual energy exceeds the free one's beyond the F bar and the
+    /// noise.
+    contradicted: bool,
+}
+
+/// Fits the linear springs and dampers of `sec` to the still-air `records` by output
+/// error ([`release::fit_release`]) twice — all four free, and with the springs of
+/// `held_springs` (heave, pitch) held — started from the structure the rows `known`
+/// identify (`st` when that fails), with the masses, apparent mass at rest and nonlinear
+/// terms of the given structure `st`. The held springs are contradicted when the held
+/// fit's residual energy exceeds the free one's by more than the one-sided 95 % point of
+/// their ratio (F with the decays' cycles as degrees of freedom, as the bifurcation
+/// level's decay test) and by more than the sensor noise's energy. `None` when a fit
+/// fails.
+fn release_test(
     records: &[&Record],
     sec: &Section,
     st: &Structure,
     m: &Matrix2<f64>,
-    rows: &[ModeCheck],
-    modes_given: &[(f64, f64)],
-) -> (Vec<ModeCheck>, Option<String>) {
-    let start = identify_at_rest(rows, m, st)
+    known: &[ModeCheck],
+    lowest_hz: f64,
+    held_springs: [bool; 2],
+) -> Option<ReleaseTest> {
+    let start = identify_at_rest(known, m, st)
         .filter(|id| id.converged)
         .map_or_else(|| st.clone(), |id| id.applied_to(st));
-    let Ok(start) = Section::new(start, sec.aero.clone(), sec.rho) else {
-        return (Vec::new(), None);
-    };
+    let start = Section::new(start, sec.aero.clone(), sec.rho).ok()?;
     let rms = |f: &dyn Fn(&Record) -> &[f64]| {
         records
             .iter()
@@ -956,63 +1001,81 @@ fn release_rows(
             .fold(0.0, f64::max)
     };
     let scale = [rms(&|r: &Record| &r.h), rms(&|r: &Record| &r.alpha)];
-    let lowest = modes_given.first().map_or(1.0, |g| g.0);
-    let window = 3.0 / lowest;
-    let Some(free_fit) = release::fit_release(&start, records, scale, window, [false; 4]) else {
-        return (Vec::new(), None);
-    };
-    let (ke, ce) = rest_linearisation(st);
-    // The spring of each unread mode's dominant DOF is read only when the releases say
-    // so: held at its start value, the releases' residual energy must exceed the free
-    // fit's by more than the one-sided 95 % point of their ratio (the decays' cycles as
-    // degrees of freedom, as the bifurcation level's decay test) and by more than the
-    // sensor noise's. A linear fit to a non-viscous decay (a friction's saturation) moves
-    // the frequency by its bias (0.3–0.7 % on generated friction sets) as readily as by a
-    // real stiffness error; only a contradiction of the held spring is evidence.
-    let eig0 = eigen_of(
-        m,
-        &(Matrix2::new(start.structure.k_h, 0.0, 0.0, start.structure.k_alpha) + ke),
-        &(Matrix2::new(start.structure.c_h, 0.0, 0.0, start.structure.c_alpha) + ce),
-    );
-    let mut held = [false; 4];
-    for (j, e) in eig0.iter().enumerate() {
-        if rows.iter().any(|r| r.given_mode == j) {
-            continue;
-        }
-        let pitch = m[(1, 1)] * e.2[1] * e.2[1] > m[(0, 0)] * e.2[0] * e.2[0];
-        held[usize::from(pitch)] = true;
-    }
-    // the reading's uncertainty is the free fit's whichever values are kept (a held
-    // spring has no variance of its own, but the mode is read no better for it)
-    let covariance = free_fit.covariance;
+    let window = 3.0 / lowest_hz;
+    let free = release::fit_release(&start, records, scale, window, [false; 4])?;
+    let hold = [held_springs[0], held_springs[1], false, false];
+    let held = release::fit_release(&start, records, scale, window, hold)?;
     let nu = release::decay_cycles(records, scale);
     let noise = release::decay_noise_floor(records, scale).unwrap_or(0.0);
-    let (fit, spring) = match release::fit_release(&start, records, scale, window, held) {
-        Some(held_fit) => {
-            let (eh, ef) = (held_fit.misfit.powi(2), free_fit.misfit.powi(2));
-            if eh > ef * release::energy_ratio_bar(nu) && eh - ef > noise * noise {
-                let why = format!(
-                    "its spring freed: held, the releases' misfit is {:.3} against {:.3}",
-                    held_fit.misfit, free_fit.misfit
-                );
-                (free_fit, why)
-            } else {
-                // no evidence against the held spring: the mode stays unread (a row
-                // would free its spring in every candidate's conformation, and move
-                // those fits by the fit's bias alone: generated set 5 of seed 2027)
-                let note = format!(
-                    "releases (output error): the modes no window reads do not contradict \
-                     the given springs (misfit {:.3} held, {:.3} freed)",
-                    held_fit.misfit, free_fit.misfit
-                );
-                return (Vec::new(), Some(note));
-            }
+    let (eh, ef) = (held.misfit.powi(2), free.misfit.powi(2));
+    let contradicted = eh > ef * release::energy_ratio_bar(nu) && eh - ef > noise * noise;
+    Some(ReleaseTest {
+        free,
+        held,
+        contradicted,
+    })
+}
+
+/// The DOF dominating mode `e` (an [`eigen_of`] row) of the mass matrix `m`: the larger
+/// share M_ii φ_i² of its kinetic energy (0 heave, 1 pitch).
+fn dominant_dof(m: &Matrix2<f64>, e: &(f64, f64, [f64; 2])) -> usize {
+    usize::from(m[(1, 1)] * e.2[1] * e.2[1] > m[(0, 0)] * e.2[0] * e.2[0])
+}
+
+/// Rows for the given modes that no window of any record reads, from the releases
+/// ([`release_test`] with the spring of each unread mode's dominant DOF held): when the
+/// releases contradict the held springs, the free fit's mode j (with `st`'s rest terms,
+/// [`rest_linearisation`]) gives the row's frequency, its standard uncertainty by the
+/// delta method from the free fit's covariance, and no linear damping ratio. When they do
+/// not there is no row (the mode stays unread, its spring held as before) and the note
+/// says why.
+///
+/// A mode damped out within a few periods (a friction's slope at rest, generated set 7 of
+/// seed 2027: ζ 0.165) leaves no window to read, but it is in the first periods of every
+/// release that excites it. A linear fit to a non-viscous decay moves the frequency by its
+/// bias (0.3–0.7 % on generated friction sets) as readily as a real stiffness error does;
+/// only a contradiction of the held spring is evidence (DECISIONS, "A heavily damped mode
+/// read from the release, round 35").
+fn release_rows(
+    records: &[&Record],
+    sec: &Section,
+    st: &Structure,
+    m: &Matrix2<f64>,
+    rows: &[ModeCheck],
+    modes_given: &[(f64, f64)],
+) -> (Vec<ModeCheck>, Option<String>) {
+    let (ke, ce) = rest_linearisation(st);
+    let eig_given = eigen_of(
+        m,
+        &(st.stiffness_matrix() + ke),
+        &(st.damping_matrix() + ce),
+    );
+    let mut held = [false; 2];
+    for (j, e) in eig_given.iter().enumerate() {
+        if !rows.iter().any(|r| r.given_mode == j) {
+            held[dominant_dof(m, e)] = true;
         }
-        None => (
-            free_fit,
-            "its spring freed (the held fit failed)".to_string(),
-        ),
+    }
+    let lowest = modes_given.first().map_or(1.0, |g| g.0);
+    let Some(test) = release_test(records, sec, st, m, rows, lowest, held) else {
+        return (Vec::new(), None);
     };
+    if !test.contradicted {
+        // no evidence against the held spring: the mode stays unread (a row would free
+        // its spring in every candidate's conformation, and move those fits by the fit's
+        // bias alone: generated set 5 of seed 2027)
+        let note = format!(
+            "releases (output error): the modes no window reads do not contradict the given \
+             springs (misfit {:.3} held, {:.3} freed)",
+            test.held.misfit, test.free.misfit
+        );
+        return (Vec::new(), Some(note));
+    }
+    let fit = &test.free;
+    let spring = format!(
+        "its spring freed: held, the releases' misfit is {:.3} against {:.3}",
+        test.held.misfit, fit.misfit
+    );
     let eig_at = |theta: &[f64; 4]| {
         let v = [0, 1, 2, 3].map(|i| fit.values[i] * theta[i].exp());
         let k = Matrix2::new(v[0], 0.0, 0.0, v[1]) + ke;
@@ -1040,19 +1103,25 @@ fn release_rows(
             };
             gf[p] = (ej.0 - eig[j].0) / h;
         }
-        let f_sd = (gf.transpose() * covariance * gf)[(0, 0)].max(0.0).sqrt();
-        let (f, z, phi) = eig[j];
+        let f_sd = (gf.transpose() * fit.covariance * gf)[(0, 0)]
+            .max(0.0)
+            .sqrt();
+        let (f, z, _) = eig[j];
         if !(f.is_finite() && z.is_finite() && f_sd.is_finite()) {
             continue;
         }
-        let pitch = m[(1, 1)] * phi[1] * phi[1] > m[(0, 0)] * phi[0] * phi[0];
         out.push(ModeCheck {
             case: records
                 .iter()
                 .map(|r| r.meta.id.as_str())
                 .collect::<Vec<_>>()
                 .join("+"),
-            dof: if pitch { "pitch" } else { "heave" }.into(),
+            dof: if dominant_dof(m, &eig[j]) == 1 {
+                "pitch"
+            } else {
+                "heave"
+            }
+            .into(),
             measured_hz: f,
             given_hz: g.0,
             frequency_error: (f - g.0) / g.0,
