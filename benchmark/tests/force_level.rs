@@ -210,6 +210,54 @@ fn vortex_shedding_is_named() {
     );
 }
 
+/// A shedding line is signal, not sensor noise (round 35): on the same records (same seed,
+/// same noise draws) the force level's noise level of a shedding set equals its
+/// effect-free twin's, although the time-domain median of |Δ³L| — the estimator it
+/// replaced — reads the line of the highest speeds as noise. That overstated noise kept the
+/// follow-ups of shedding sets 293 and 328 at `none` (gap statistic 1.50 and 1.26 against
+/// the twins' true noise 2.3 and 2.1).
+#[test]
+fn a_shedding_line_does_not_raise_the_noise_level() {
+    let seed = 8;
+    let set = cat(Effect::VortexShedding, 0.7, seed);
+    let twin = blind(BlindEffect::None, 0.0, Form::Primary, seed);
+    // the old estimator on the raw lift records at the top wind speed
+    let top = set
+        .records
+        .iter()
+        .map(|r| r.meta.wind_speed)
+        .fold(0.0_f64, f64::max);
+    let old = |ds: &Dataset| -> f64 {
+        ds.records
+            .iter()
+            .filter(|r| r.meta.wind_speed == top)
+            .map(|r| identify::preprocess::noise_sigma(r.lift.as_ref().unwrap()))
+            .sum()
+    };
+    let old_ratio = old(&set) / old(&twin);
+    let opts = ForceOptions {
+        candidates: vec![],
+        ..Default::default()
+    };
+    let (a, b) = (
+        force_level(&set, &opts).unwrap(),
+        force_level(&twin, &opts).unwrap(),
+    );
+    let ratio = a.noise_level / b.noise_level;
+    eprintln!(
+        "top speed {top} m/s: median |Δ³L| set/twin {old_ratio:.3}; level noise set {:.5} \
+         twin {:.5} ({ratio:.3}); gap statistic set {:.2} twin {:.2}",
+        a.noise_level, b.noise_level, a.gap_statistic, b.gap_statistic
+    );
+    assert!(old_ratio > 1.1, "the old estimator: {old_ratio}");
+    assert!((ratio - 1.0).abs() < 0.02, "noise level set/twin {ratio}");
+    for (c, t) in a.cases.iter().zip(&b.cases) {
+        assert_eq!(c.id, t.id);
+        let r = c.noise_level / t.noise_level;
+        assert!((r - 1.0).abs() < 0.06, "case {}: noise set/twin {r}", c.id);
+    }
+}
+
 // Statistic 2.58 > threshold 1.8 (force3: stratified folds brought the effect-free
 // statistics to 1.50–1.60, so the threshold came back from 2.7); no candidate above shrink
 // 0.03.

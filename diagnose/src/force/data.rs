@@ -7,10 +7,11 @@ use std::sync::{Arc, Mutex};
 
 use identify::dataset::Dataset;
 use identify::library::Term;
-use identify::preprocess::{harmonic_fit, noise_sigma, HarmonicFit, PreprocessOptions};
+use identify::preprocess::{harmonic_fit, HarmonicFit, PreprocessOptions};
 use identify::record::NondimCase;
 use identify::workflow::prepare_dataset;
 
+use crate::numerics::white_noise_sigma;
 use crate::{Error, Result};
 
 /// Channel names in index order.
@@ -29,7 +30,8 @@ pub(crate) struct CaseData {
     pub y: [Vec<f64>; 2],
     /// C → force per unit span: qB (lift), qB² (moment).
     pub scale: [f64; 2],
-    /// Sensor-noise σ̂ of C_L, C_M ([`noise_sigma`]).
+    /// Sensor-noise σ̂ of C_L, C_M (`numerics::white_noise_sigma`: the white floor of the
+    /// third difference's spectrum, which a shedding line does not inflate).
     pub sigma: [f64; 2],
     /// Pitch / heave forcing frequency \[Hz\].
     pub f_alpha: f64,
@@ -164,7 +166,7 @@ pub(crate) fn prepare(forced: &Dataset) -> Result<(Vec<CaseData>, Vec<Node>, Opt
         let b = section.chord;
         let scale = [q * b, q * b * b];
         let y = [nd.c_lift.clone(), nd.c_moment.clone()];
-        let sigma = [noise_sigma(&y[0]), noise_sigma(&y[1])];
+        let sigma = [white_noise_sigma(&y[0]), white_noise_sigma(&y[1])];
         let freqs = nd.forcing.frequencies();
         let rep = std::array::from_fn(|k| harmonic_fit(&nd.x[k], nd.dt, &freqs).ok());
         let amp_deg = match nd.meta.amplitude {

@@ -28,7 +28,8 @@
 //!    Scanlan pairs, `law::interpolate_scalar` otherwise).
 //! 3. **Gap** (`gaps`): sqrt(Σr²/ΣF²) per channel in forces per unit span over the
 //!    held-out cases, combined as the rms of the channels; the noise level is the same
-//!    metric with Σr² replaced by Σ n σ̂² (σ̂ = `noise_sigma` of each force channel).
+//!    metric with Σr² replaced by Σ n σ̂² (σ̂ of each force channel: `numerics::white_noise_sigma`,
+//!    the white floor of the third difference's spectrum).
 //!
 //! Candidates (fit, score, significance): the `candidates` submodule; `where`, signatures
 //! and spectra: the `analysis` submodule.
