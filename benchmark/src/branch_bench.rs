@@ -114,7 +114,8 @@ pub struct BranchOutcome {
     pub correct: bool,
     /// Held-out shrink of the named candidate.
     pub shrink: Option<f64>,
-    /// Wall time \[s\].
+    /// Wall time of the diagnosis \[s\] (drawing the truth, its diagram and its decays,
+    /// and the decays' structure check, excluded).
     pub seconds: f64,
     /// The given structure's error, when the set mis-gives it
     /// ([`BranchBenchOptions::misgiven_structure`]).
