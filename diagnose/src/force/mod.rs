@@ -727,6 +727,14 @@ pub fn force_effects() -> Vec<Effect> {
         .collect()
 }
 
+/// The effects of `opts.candidates` that have a force-level fit, with it.
+fn force_fits(opts: &ForceOptions) -> Vec<(Effect, &'static dyn candidates::ForceFit)> {
+    opts.candidates
+        .iter()
+        .filter_map(|&e| Some((e, e.entry().force()?)))
+        .collect()
+}
+
 /// The early forms ([`candidates::ForceFit::early`]) of the effects of `opts.candidates`
 /// that have one, in parallel: (effect, form, seconds spent in its own task).
 fn early_all(
@@ -734,11 +742,7 @@ fn early_all(
     opts: &ForceOptions,
 ) -> Vec<(Effect, candidates::Early, f64)> {
     use rayon::prelude::*;
-    let fits: Vec<(Effect, &dyn candidates::ForceFit)> = opts
-        .candidates
-        .iter()
-        .filter_map(|&e| Some((e, e.entry().force()?)))
-        .collect();
+    let fits = force_fits(opts);
     fits.par_iter()
         .filter_map(|&(e, fit)| {
             let t0 = std::time::Instant::now();
@@ -759,11 +763,7 @@ fn score_all(
     cache: &NodeCache,
 ) -> Vec<(Effect, candidates::Scored, f64)> {
     use rayon::prelude::*;
-    let fits: Vec<(Effect, &dyn candidates::ForceFit)> = opts
-        .candidates
-        .iter()
-        .filter_map(|&e| Some((e, e.entry().force()?)))
-        .collect();
+    let fits = force_fits(opts);
     fits.par_iter()
         .map(|&(e, fit)| {
             let t0 = std::time::Instant::now();
