@@ -35,10 +35,24 @@ fn run(n: usize, seed: u64) -> BlindReport {
     r
 }
 
-/// 22 sets (two per label), CI size.
+/// 11 sets (one per label), CI size: 51 s on 2 cores (22 sets took 106 s, the longest
+/// test of the suite; docs/DECISIONS.md "CI time, round 36"). The 22-set form is
+/// `blind_benchmark_two_per_label`.
 #[test]
 fn blind_benchmark_fast() {
-    let r = run(22, 2026);
+    check_fast(&run(11, 2026));
+}
+
+/// 22 sets (two per label), the CI size before round 36.
+#[test]
+#[ignore = "≈ 110 s on 2 cores; run with --ignored --nocapture"]
+fn blind_benchmark_two_per_label() {
+    check_fast(&run(22, 2026));
+}
+
+/// The fast forms' bars: no set fails, every effect-free set is `none` or
+/// `extrapolation`, and ≥ 90 % of the strong catalogue sets are named right.
+fn check_fast(r: &BlindReport) {
     let s = &r.summary;
     assert_eq!(s.failed, 0, "every set is generated and diagnosed");
     assert_eq!(s.none_rate, 1.0, "effect-free sets are diagnosed `none`");

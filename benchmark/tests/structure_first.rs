@@ -66,20 +66,37 @@ fn decays() -> BlindScenario {
 /// hardening cubic (c₃ = 60) and a softening one (c₃ = −12: 5 % of the spring at the 4°
 /// the runs decay through), each with c₂ of both signs. A weak softening cubic (c₃ = −4:
 /// 2 % of the spring at 4°) is held to its sign and 25 % (docs/DECISIONS.md: the issue's
-/// 15 % is not met at that strength).
+/// 15 % is not met at that strength). CI form: one hardening, one softening and one weak
+/// cubic, with c₂ of both signs among them (22 s for all six, 11 s for these three;
+/// docs/DECISIONS.md "CI time, round 36"); the six are
+/// `a_pitch_polynomial_of_each_sign_is_recovered_with_its_sign_all_six`.
 #[test]
 fn a_pitch_polynomial_of_each_sign_is_recovered_with_its_sign() {
-    let sc = decays();
-    let ka = k_alpha();
-    let mut wrong = Vec::new();
-    for (seed, c2, c3) in [
+    polynomials_recovered(&[(40, 3.0, 60.0), (45, -1.5, -12.0), (42, 1.5, -4.0)]);
+}
+
+/// All six signs and strengths of [`a_pitch_polynomial_of_each_sign_is_recovered_with_its_sign`].
+#[test]
+#[ignore = "≈ 25 s on 2 cores; run with --ignored"]
+fn a_pitch_polynomial_of_each_sign_is_recovered_with_its_sign_all_six() {
+    polynomials_recovered(&[
         (40, 3.0, 60.0),
         (41, -3.0, 60.0),
         (44, 1.5, -12.0),
         (45, -1.5, -12.0),
         (42, 1.5, -4.0),
         (43, -1.5, -4.0),
-    ] {
+    ]);
+}
+
+/// Each (seed, c₂, c₃) generated, written, read back and diagnosed: named
+/// `structural_polynomial` with k2_pitch and k3_pitch of the truth's signs within 15 % (25 %
+/// for the weak c₃ = −4) and no heave term.
+fn polynomials_recovered(cases: &[(u64, f64, f64)]) {
+    let sc = decays();
+    let ka = k_alpha();
+    let mut wrong = Vec::new();
+    for &(seed, c2, c3) in cases {
         let inj = [Injection {
             effect: InjectedEffect::StructuralPolynomial { c2, c3 },
             form: Form::Primary,
