@@ -93,41 +93,20 @@ fn run(dir: &Path, args: &[String]) -> (Option<i32>, String) {
     finish(spawn(dir, args), &args.join(" "))
 }
 
-/// Relative path → bytes of every file under `p` (or of the file `p`); a PDF's lines sorted.
+/// Relative path → bytes of every file under `p` (or of the file `p`). PDFs compare byte for
+/// byte too: the PDF writer is deterministic (docs/DECISIONS.md, "PDF without svg2pdf").
 fn snapshot(p: &Path) -> BTreeMap<String, Vec<u8>> {
     fn walk(base: &Path, p: &Path, out: &mut BTreeMap<String, Vec<u8>>) {
         if p.is_dir() {
             for e in std::fs::read_dir(p).unwrap().flatten() {
                 walk(base, &e.path(), out);
             }
-        } else if let Ok(mut b) = std::fs::read(p) {
+        } else if let Ok(b) = std::fs::read(p) {
             let rel = p
                 .strip_prefix(base)
                 .unwrap_or(p)
                 .to_string_lossy()
                 .into_owned();
-            if rel.ends_with(".pdf") {
-                // svg2pdf writes fonts and their dictionaries in hash order, which differs
-                // from process to process: compare a PDF by its sorted lines without the
-                // cross-reference offsets
-                let lines: Vec<&[u8]> = b.split(|c| *c == b'\n').collect();
-                let xref = |l: &[u8]| {
-                    l.len() >= 18
-                        && l[..10].iter().all(u8::is_ascii_digit)
-                        && l[10] == b' '
-                        && l[11..16].iter().all(u8::is_ascii_digit)
-                };
-                let mut kept: Vec<&[u8]> = lines
-                    .iter()
-                    .enumerate()
-                    .filter(|(i, l)| {
-                        !xref(l) && (*i == 0 || lines[i - 1].trim_ascii() != b"startxref")
-                    })
-                    .map(|(_, l)| *l)
-                    .collect();
-                kept.sort();
-                b = kept.join(&b'\n');
-            }
             out.insert(rel, b);
         }
     }

@@ -58,7 +58,8 @@ pub enum Error {
         /// Encoder's message.
         message: String,
     },
-    /// The SVG could not be turned into outlines or PDF (`usvg`/`svg2pdf` message).
+    /// The SVG could not be turned into outlines or PDF (`usvg` message, or what the PDF writer
+    /// does not draw).
     #[error("figure `{figure}`: vector output failed: {message}")]
     Vector {
         /// Figure kind.

@@ -15,6 +15,7 @@ pub mod bifurcation_report;
 pub mod diagnosis_report;
 pub mod error;
 pub mod figures;
+mod pdf;
 pub mod render;
 pub mod report;
 mod report_parts;

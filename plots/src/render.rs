@@ -82,7 +82,7 @@ pub fn render_svg<F: Figure>(fig: &F) -> Result<String> {
 /// As [`render_svg_text`]; [`Error::Vector`] if the conversion fails.
 pub fn render_pdf<F: Figure>(fig: &F) -> Result<Vec<u8>> {
     let tree = crate::vector::parse(&render_svg_text(fig)?, F::KIND)?;
-    crate::vector::pdf(&tree, PAPER_DPI / PAPER_SCALE, F::KIND)
+    crate::pdf::pdf(&tree, PAPER_DPI / PAPER_SCALE, F::KIND)
 }
 
 /// Renders `fig` as PNG bytes (8-bit RGB). In the paper style ([`crate::FigureStyle`]) the
@@ -153,7 +153,7 @@ pub fn save<F: Figure>(fig: &F, dir: &Path, stem: &str) -> Result<FigureFiles> {
     let tree = crate::vector::parse(&tagged, F::KIND)?;
     let svg_text = crate::vector::outlined(&tree, &tagged, F::KIND)?;
     let pdf_bytes = match figure_style() {
-        FigureStyle::Paper => Some(crate::vector::pdf(&tree, PAPER_DPI / PAPER_SCALE, F::KIND)?),
+        FigureStyle::Paper => Some(crate::pdf::pdf(&tree, PAPER_DPI / PAPER_SCALE, F::KIND)?),
         FigureStyle::Screen => None,
     };
     let png_bytes = render_png(fig)?;

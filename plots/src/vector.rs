@@ -5,11 +5,9 @@
 //!
 //! Both go through one parse of the SVG that plotters writes (`usvg`, with a font database
 //! holding only the bundled faces, so no system font is ever looked up): the laid-out glyphs
-//! replace each `<text>` of plotters' SVG ([`outlined`]), or the tree goes to `svg2pdf`.
+//! replace each `<text>` of plotters' SVG ([`outlined`]), or the tree goes to [`crate::pdf`].
 
 use std::sync::{Arc, OnceLock};
-
-use svg2pdf::usvg;
 
 use crate::error::{Error, Result};
 use crate::style::{DEJAVU_SANS, DEJAVU_SANS_BOLD};
@@ -260,23 +258,6 @@ fn num(x: f32, digits: usize) -> String {
     } else {
         s
     }
-}
-
-/// A one-page PDF of `tree`, `dpi` SVG user units per inch (the page is the SVG size at
-/// that resolution), the bundled font subset embedded.
-///
-/// # Errors
-/// [`Error::Vector`] naming `figure` when `svg2pdf` refuses the drawing.
-pub(crate) fn pdf(tree: &usvg::Tree, dpi: f64, figure: &'static str) -> Result<Vec<u8>> {
-    svg2pdf::to_pdf(
-        tree,
-        svg2pdf::ConversionOptions::default(),
-        svg2pdf::PageOptions { dpi: dpi as f32 },
-    )
-    .map_err(|e| Error::Vector {
-        figure,
-        message: format!("PDF conversion failed: {e}"),
-    })
 }
 
 /// 64-bit FNV-1a hash (deterministic across runs and platforms, unlike `DefaultHasher`).
