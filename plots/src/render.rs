@@ -109,7 +109,8 @@ pub fn render_png<F: Figure>(fig: &F) -> Result<Vec<u8>> {
             RichBackend::scaled(bitmap, PAPER_SCALE, design)
         } else {
             RichBackend::new(bitmap)
-        };
+        }
+        .with_miter_limit(crate::rich::SVG_MITER_LIMIT);
         let root = backend.into_drawing_area();
         root.fill(&WHITE).ctx(F::KIND)?;
         fig.draw(&root)?;

@@ -94,6 +94,44 @@ pub struct RichBackend<DB: DrawingBackend> {
     inner: DB,
     scale: f64,
     size: (u32, u32),
+    miter_limit: Option<f64>,
+}
+
+/// SVG's default `stroke-miterlimit`: a join whose miter would reach farther than this many
+/// half stroke widths from the joint is not mitred ([`RichBackend::with_miter_limit`]).
+pub const SVG_MITER_LIMIT: f64 = 4.0;
+
+/// `pts` cut into pieces at every joint sharper than `limit` allows (miter length ratio
+/// 1/sin(θ/2) > `limit`, θ the angle between the two segments); neighbouring pieces share
+/// the joint. Zero-length segments are dropped first.
+pub(crate) fn split_sharp_joins(pts: &[BackendCoord], limit: f64) -> Vec<Vec<BackendCoord>> {
+    let mut clean: Vec<BackendCoord> = Vec::with_capacity(pts.len());
+    for &p in pts {
+        if clean.last() != Some(&p) {
+            clean.push(p);
+        }
+    }
+    // 1/sin(θ/2) > limit  ⇔  cos θ > 1 − 2/limit²  (θ the interior angle at the joint)
+    let cos_max = 1.0 - 2.0 / (limit * limit);
+    let mut pieces = Vec::new();
+    let mut current = Vec::new();
+    for (i, &p) in clean.iter().enumerate() {
+        current.push(p);
+        if i == 0 || i + 1 == clean.len() {
+            continue;
+        }
+        let (a, b) = (clean[i - 1], clean[i + 1]);
+        let d1 = ((p.0 - a.0) as f64, (p.1 - a.1) as f64);
+        let d2 = ((b.0 - p.0) as f64, (b.1 - p.1) as f64);
+        let cos = -(d1.0 * d2.0 + d1.1 * d2.1) / (d1.0.hypot(d1.1) * d2.0.hypot(d2.1));
+        if cos > cos_max {
+            pieces.push(std::mem::replace(&mut current, vec![p]));
+        }
+    }
+    if current.len() > 1 || pieces.is_empty() {
+        pieces.push(current);
+    }
+    pieces
 }
 
 impl<DB: DrawingBackend> RichBackend<DB> {
@@ -104,13 +142,28 @@ impl<DB: DrawingBackend> RichBackend<DB> {
             inner,
             scale: 1.0,
             size,
+            miter_limit: None,
         }
+    }
+
+    /// Cuts every stroked path at joints sharper than `limit` ([`split_sharp_joins`]) before
+    /// `inner` draws it. For the bitmap backend, whose thick lines are mitred without a limit
+    /// (a noisy residual drew spikes far outside its panel); an SVG viewer applies
+    /// [`SVG_MITER_LIMIT`] itself.
+    pub fn with_miter_limit(mut self, limit: f64) -> Self {
+        self.miter_limit = Some(limit);
+        self
     }
 
     /// Lays out the design size `size` and draws it onto `inner`, `scale` times larger
     /// (`inner` should be `scale` × `size`).
     pub fn scaled(inner: DB, scale: f64, size: (u32, u32)) -> Self {
-        RichBackend { inner, scale, size }
+        RichBackend {
+            inner,
+            scale,
+            size,
+            miter_limit: None,
+        }
     }
 
     fn p(&self, c: BackendCoord) -> BackendCoord {
@@ -218,7 +271,16 @@ impl<DB: DrawingBackend> DrawingBackend for RichBackend<DB> {
         style: &S,
     ) -> Result<(), DrawingErrorKind<Self::ErrorType>> {
         let pts: Vec<BackendCoord> = path.into_iter().map(|c| self.p(c)).collect();
-        self.inner.draw_path(pts, &self.style(style))
+        let style = self.style(style);
+        match self.miter_limit {
+            Some(limit) if style.stroke_width() > 1 => {
+                for piece in split_sharp_joins(&pts, limit) {
+                    self.inner.draw_path(piece, &style)?;
+                }
+                Ok(())
+            }
+            _ => self.inner.draw_path(pts, &style),
+        }
     }
 
     fn draw_circle<S: BackendStyle>(
@@ -335,6 +397,44 @@ impl<DB: DrawingBackend> DrawingBackend for RichBackend<DB> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A zigzag sharper than the miter limit is cut at each sharp joint; a gentle bend and
+    /// repeated points are not.
+    #[test]
+    fn sharp_joins_are_cut_and_gentle_ones_kept() {
+        // noise-like zigzag: 10 px up, 1 px right, 10 px down (joint angle ≈ 11°)
+        let zig = [(0, 0), (1, 10), (2, 0), (3, 10)];
+        let pieces = split_sharp_joins(&zig, SVG_MITER_LIMIT);
+        assert_eq!(
+            pieces,
+            vec![
+                vec![(0, 0), (1, 10)],
+                vec![(1, 10), (2, 0)],
+                vec![(2, 0), (3, 10)]
+            ]
+        );
+        // a right angle (miter ratio √2) and a straight run with a repeated point stay one
+        let bend = [(0, 0), (10, 0), (10, 0), (20, 0), (20, 10)];
+        assert_eq!(
+            split_sharp_joins(&bend, SVG_MITER_LIMIT),
+            vec![vec![(0, 0), (10, 0), (20, 0), (20, 10)]]
+        );
+        // the limit itself: 1/sin(θ/2) = 4 at θ ≈ 28.96°; 25° is cut, 35° is not
+        let joint = |deg: f64| {
+            let t = deg.to_radians();
+            [
+                (0, 0),
+                (1000, 0),
+                (1000 - (1000.0 * t.cos()) as i32, (1000.0 * t.sin()) as i32),
+            ]
+        };
+        assert_eq!(split_sharp_joins(&joint(25.0), SVG_MITER_LIMIT).len(), 2);
+        assert_eq!(split_sharp_joins(&joint(35.0), SVG_MITER_LIMIT).len(), 1);
+        assert_eq!(
+            split_sharp_joins(&[(3, 3)], SVG_MITER_LIMIT),
+            vec![vec![(3, 3)]]
+        );
+    }
 
     fn shown(text: &str) -> Vec<(String, bool)> {
         parse(text)
