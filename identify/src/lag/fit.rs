@@ -761,8 +761,7 @@ impl Problem<'_> {
                         m[i * NT + i] = 1.0;
                     }
                 }
-                let mut d: [f64; NT] =
-                    std::array::from_fn(|i| if held[i] { 0.0 } else { -g[i] });
+                let mut d: [f64; NT] = std::array::from_fn(|i| if held[i] { 0.0 } else { -g[i] });
                 let ok = cholesky_solve(
                     &mut m,
                     NT,
