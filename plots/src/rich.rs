@@ -146,8 +146,8 @@ impl<DB: DrawingBackend> RichBackend<DB> {
         }
     }
 
-    /// Cuts every stroked path at joints sharper than `limit` ([`split_sharp_joins`]) before
-    /// `inner` draws it. For the bitmap backend, whose thick lines are mitred without a limit
+    /// Cuts every stroked path at joints sharper than `limit` (miter length over `limit`
+    /// half stroke widths) before `inner` draws it. For the bitmap backend, whose thick lines are mitred without a limit
     /// (a noisy residual drew spikes far outside its panel); an SVG viewer applies
     /// [`SVG_MITER_LIMIT`] itself.
     pub fn with_miter_limit(mut self, limit: f64) -> Self {
