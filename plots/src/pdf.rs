@@ -357,6 +357,60 @@ pub(crate) fn pdf(tree: &usvg::Tree, dpi: f64, figure: &'static str) -> Result<V
     Ok(pdf.finish())
 }
 
+/// What the PDF needs of one face: its PostScript name, the advance of each glyph used
+/// (1/1000 em), its metrics (1/1000 em) and the TrueType subset of the glyphs used.
+struct FaceInfo {
+    name: String,
+    widths: Vec<(u16, f32)>,
+    bbox: Rect,
+    ascent: f32,
+    descent: f32,
+    cap_height: f32,
+    bold: bool,
+    subset: Vec<u8>,
+}
+
+/// [`FaceInfo`] of the face `data` (index `index`) for the glyphs `used`.
+///
+/// # Errors
+/// A message when the face does not parse or subset.
+fn face_info(
+    data: &[u8],
+    index: u32,
+    used: &BTreeSet<u16>,
+    font: &UsedFont,
+) -> std::result::Result<FaceInfo, String> {
+    let face = ttf_parser::Face::parse(data, index).map_err(|e| e.to_string())?;
+    let to_pdf = |v: i16| f32::from(v) / font.units_per_em * 1000.0;
+    let b = face.global_bounding_box();
+    Ok(FaceInfo {
+        name: face
+            .names()
+            .into_iter()
+            .filter(|n| n.name_id == ttf_parser::name_id::POST_SCRIPT_NAME)
+            .find_map(|n| n.to_string())
+            .unwrap_or_else(|| "Font".into()),
+        widths: used
+            .iter()
+            .map(|&g| {
+                let adv = face.glyph_hor_advance(ttf_parser::GlyphId(g)).unwrap_or(0);
+                (g, f32::from(adv) / font.units_per_em * 1000.0)
+            })
+            .collect(),
+        bbox: Rect::new(
+            to_pdf(b.x_min),
+            to_pdf(b.y_min),
+            to_pdf(b.x_max),
+            to_pdf(b.y_max),
+        ),
+        ascent: to_pdf(face.ascender()),
+        descent: to_pdf(face.descender()),
+        cap_height: to_pdf(face.capital_height().unwrap_or(face.ascender())),
+        bold: face.is_bold(),
+        subset: subset::subset(data, used)?,
+    })
+}
+
 /// The five objects of one embedded face: Type0 font, CIDFontType2, descriptor, ToUnicode
 /// map, font file.
 fn write_font(
@@ -371,51 +425,18 @@ fn write_font(
         message: format!("PDF: {message}"),
     };
     let used: BTreeSet<u16> = font.glyphs.keys().copied().collect();
-    let (data, name, metrics) = tree
+    let face = tree
         .fontdb()
-        .with_face_data(font.face, |data, index| {
-            let face = ttf_parser::Face::parse(data, index).map_err(|e| e.to_string())?;
-            let name = face
-                .names()
-                .into_iter()
-                .filter(|n| n.name_id == ttf_parser::name_id::POST_SCRIPT_NAME)
-                .find_map(|n| n.to_string())
-                .unwrap_or_else(|| "Font".into());
-            let widths: Vec<(u16, f32)> = used
-                .iter()
-                .map(|&g| {
-                    let adv = face.glyph_hor_advance(ttf_parser::GlyphId(g)).unwrap_or(0);
-                    (g, f32::from(adv) / font.units_per_em * 1000.0)
-                })
-                .collect();
-            let to_pdf = |v: i16| f32::from(v) / font.units_per_em * 1000.0;
-            let b = face.global_bounding_box();
-            let metrics = (
-                widths,
-                Rect::new(
-                    to_pdf(b.x_min),
-                    to_pdf(b.y_min),
-                    to_pdf(b.x_max),
-                    to_pdf(b.y_max),
-                ),
-                to_pdf(face.ascender()),
-                to_pdf(face.descender()),
-                to_pdf(face.capital_height().unwrap_or(face.ascender())),
-                face.is_bold(),
-            );
-            Ok::<_, String>((subset::subset(data, &used)?, name, metrics))
-        })
+        .with_face_data(font.face, |data, index| face_info(data, index, &used, font))
         .ok_or_else(|| err("a font face of the drawing is not in the font database".into()))?
         .map_err(err)?;
-    let (widths, bbox, ascent, descent, cap_height, bold) = metrics;
     // subset tag: six capitals from a hash of the glyphs used (deterministic)
-    let hash = used.iter().fold(0xcbf2_9ce4_8422_2325u64, |h, &g| {
-        (h ^ u64::from(g)).wrapping_mul(0x0000_0100_0000_01b3)
-    });
+    let ids: Vec<u8> = used.iter().flat_map(|g| g.to_be_bytes()).collect();
+    let hash = crate::vector::fnv1a(&ids);
     let tag: String = (0..6)
         .map(|i| char::from(b'A' + ((hash >> (5 * i)) % 26) as u8))
         .collect();
-    let base = format!("{tag}+{name}");
+    let base = format!("{tag}+{}", face.name);
 
     pdf.type0_font(type0)
         .base_font(Name(base.as_bytes()))
@@ -431,19 +452,19 @@ fn write_font(
             .default_width(0.0)
             .cid_to_gid_map_predefined(Name(b"Identity"));
         let mut wr = c.widths();
-        for (g, width) in widths {
+        for &(g, width) in &face.widths {
             wr.consecutive(g, [width]);
         }
     }
     pdf.font_descriptor(descriptor)
         .name(Name(base.as_bytes()))
         .flags(FontFlags::SYMBOLIC)
-        .bbox(bbox)
+        .bbox(face.bbox)
         .italic_angle(0.0)
-        .ascent(ascent)
-        .descent(descent)
-        .cap_height(cap_height)
-        .stem_v(if bold { 140.0 } else { 80.0 })
+        .ascent(face.ascent)
+        .descent(face.descent)
+        .cap_height(face.cap_height)
+        .stem_v(if face.bold { 140.0 } else { 80.0 })
         .font_file2(file);
     let mut map = UnicodeCmap::new(Name(b"Custom"), SYSTEM_INFO);
     for (&g, text) in &font.glyphs {
@@ -452,10 +473,10 @@ fn write_font(
         }
     }
     pdf.cmap(cmap, &map.finish());
-    let packed = deflate(&data);
+    let packed = deflate(&face.subset);
     let mut s = pdf.stream(file, &packed);
     s.filter(Filter::FlateDecode);
-    s.pair(Name(b"Length1"), data.len() as i32);
+    s.pair(Name(b"Length1"), face.subset.len() as i32);
     s.finish();
     Ok(())
 }

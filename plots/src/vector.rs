@@ -261,7 +261,7 @@ fn num(x: f32, digits: usize) -> String {
 }
 
 /// 64-bit FNV-1a hash (deterministic across runs and platforms, unlike `DefaultHasher`).
-fn fnv1a(bytes: &[u8]) -> u64 {
+pub(crate) fn fnv1a(bytes: &[u8]) -> u64 {
     bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
         (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3)
     })
