@@ -59,7 +59,9 @@ def test_map_on_a_local_cluster_equals_the_local_run(cluster):
 
 def test_blind_benchmark_on_a_local_cluster_equals_the_local_run(cluster):
     _, client = cluster
-    spec = {"kind": "blind", "n": 1, "seed": 7}
+    # Index 0 of every draw is a static offset; seed 9's set is diagnosed in 4.5 s, seed 7's
+    # (used before round 38) in 7.6 s, and the test diagnoses it twice.
+    spec = {"kind": "blind", "n": 1, "seed": 9}
     local = aeroform.sweep_local(spec)
     dist = aeroform.sweep(spec, client=client, chunk_size=1)
 
