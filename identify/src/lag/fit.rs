@@ -375,6 +375,14 @@ struct Eval {
     stacks: Vec<(Vec<Vec<f64>>, ThinQr)>,
 }
 
+/// What [`Problem::derivatives`] gives: J (NT columns; empty unless asked for), or JᵀJ
+/// (row-major NT×NT) and Jᵀr (zero when J is asked for).
+struct Derivatives {
+    jac: Vec<Vec<f64>>,
+    a: [f64; NT * NT],
+    g: [f64; NT],
+}
+
 fn ss_about_mean(y: &[f64]) -> f64 {
     if y.is_empty() {
         return 0.0;
@@ -548,8 +556,34 @@ impl Problem<'_> {
     ///
     /// # Errors
     /// [`Error::Numerical`] when a derivative is not finite.
-    #[allow(clippy::needless_range_loop)] // parallel series indexed together
     fn jacobian(&self, base: &Eval) -> Result<Vec<Vec<f64>>> {
+        Ok(self.derivatives(base, true)?.jac)
+    }
+
+    /// The normal equations JᵀJ (row-major NT×NT) and Jᵀr of [`Problem::jacobian`]'s J at
+    /// `base`, without forming J: per channel, with v_j = dA_j·β, w_j = dA_jᵀ·r and
+    /// g_j = (AᵀA)⁻¹w_j over the kept columns (0 where [`Problem::jacobian`] drops the term),
+    /// J_j = −s(P⊥v_j + A·g_j), and since P⊥A = 0, P⊥r = r and Aᵀr = 0,
+    /// (JᵀJ)_ij = s²(v_iᵀP⊥v_j + g_iᵀAᵀA·g_j) = s²(z_iᵀz_j + g_iᵀw_j) with z = the
+    /// orthogonal coordinates of v ([`ThinQr::orthogonal_coordinates`]), and
+    /// (Jᵀr)_j = −s²·v_jᵀr = −s²·βᵀw_j. Equal to [`normal_equations`] of the Jacobian up to
+    /// rounding, for half the Householder work and no m×NT matrix (docs/DECISIONS.md, "The
+    /// lag fit's normal equations", round 38).
+    ///
+    /// # Errors
+    /// [`Error::Numerical`] when a derivative is not finite.
+    fn normal_system(&self, base: &Eval) -> Result<([f64; NT * NT], [f64; NT])> {
+        let d = self.derivatives(base, false)?;
+        Ok((d.a, d.g))
+    }
+
+    /// The derivatives behind [`Problem::jacobian`] (`columns`: J itself) and
+    /// [`Problem::normal_system`] (otherwise: JᵀJ and Jᵀr only).
+    ///
+    /// # Errors
+    /// [`Error::Numerical`] when a derivative is not finite.
+    #[allow(clippy::needless_range_loop)] // parallel series indexed together
+    fn derivatives(&self, base: &Eval, columns: bool) -> Result<Derivatives> {
         let theta = base.theta;
         let law = law_of(theta, self.circ);
         let free = self.free;
@@ -568,7 +602,13 @@ impl Problem<'_> {
             })
             .collect();
         let total = base.residual.len();
-        let mut jac = vec![vec![0.0; total]; NT];
+        let mut jac = if columns {
+            vec![vec![0.0; total]; NT]
+        } else {
+            Vec::new()
+        };
+        let mut na = [0.0; NT * NT];
+        let mut ng = [0.0; NT];
         let mut offset = 0;
         for (ch, (cols, coef)) in [(&self.lift, &base.lift), (&self.moment, &base.moment)]
             .into_iter()
@@ -668,6 +708,11 @@ impl Problem<'_> {
                     gram[b * m + a] = d;
                 }
             }
+            // the normal system's pieces per free constant: z_j, g_j and w_j over the kept
+            // columns
+            let mut zs: Vec<Vec<f64>> = Vec::new();
+            let mut gs: Vec<Vec<f64>> = Vec::new();
+            let mut wks: Vec<Vec<f64>> = Vec::new();
             for (t, &j) in js.iter().enumerate() {
                 let mut v = Vec::with_capacity(n);
                 let mut w = vec![0.0; p];
@@ -678,8 +723,8 @@ impl Problem<'_> {
                     }
                 }
                 // ∂r = −P⊥ v − A (AᵀA)⁻¹ w, over the kept columns
-                let pv = qr.residual(&v);
-                let mut g: Vec<f64> = kept.iter().map(|&l| w[l]).collect();
+                let wk: Vec<f64> = kept.iter().map(|&l| w[l]).collect();
+                let mut g = wk.clone();
                 if m > 0 {
                     let mut gm = gram.clone();
                     // kept columns nearly dependent (the QR keeps a column down to 10⁻¹⁰ of
@@ -697,6 +742,16 @@ impl Problem<'_> {
                         g.fill(0.0);
                     }
                 }
+                if !columns {
+                    // (Jᵀr)_j = −s²·βᵀw_j
+                    let bw: f64 = coef.iter().zip(&w).map(|(b, w)| b * w).sum();
+                    ng[j] -= scale * scale * bw;
+                    zs.push(qr.orthogonal_coordinates(&v));
+                    gs.push(g);
+                    wks.push(wk);
+                    continue;
+                }
+                let pv = qr.residual(&v);
                 // A·g column by column: every row's sum still from 0.0 over the kept columns
                 // in order (the same value as the row-wise sum), in long unit-stride loops
                 let mut ag = vec![0.0; n];
@@ -710,15 +765,37 @@ impl Problem<'_> {
                     *c = -(p + a) * scale;
                 }
             }
+            // (JᵀJ)_ij += s²(z_iᵀz_j + g_iᵀw_j), g_iᵀw_j symmetrised (it is g_iᵀAᵀA·g_j)
+            for (t1, &i) in js.iter().enumerate().take(zs.len()) {
+                for (t2, &j) in js.iter().enumerate().take(t1 + 1) {
+                    let gw = |a: usize, b: usize| -> f64 {
+                        gs[a].iter().zip(&wks[b]).map(|(g, w)| g * w).sum()
+                    };
+                    let v = crate::numerics::qr::dot(&zs[t1], &zs[t2])
+                        + 0.5 * (gw(t1, t2) + gw(t2, t1));
+                    na[i * NT + j] += scale * scale * v;
+                }
+            }
             offset += n;
         }
-        if jac.iter().flatten().any(|v| !v.is_finite()) {
+        for i in 0..NT {
+            for j in 0..i {
+                na[j * NT + i] = na[i * NT + j];
+            }
+        }
+        if jac
+            .iter()
+            .flatten()
+            .chain(&na)
+            .chain(&ng)
+            .any(|v| !v.is_finite())
+        {
             return Err(Error::Numerical {
                 context: "lag law Jacobian".into(),
                 message: format!("non-finite derivative at θ = {theta:?}"),
             });
         }
-        Ok(jac)
+        Ok(Derivatives { jac, a: na, g: ng })
     }
 
     /// Levenberg–Marquardt from θ₀ (box bounds, projected). Returns (θ, eval, iterations).
@@ -739,8 +816,7 @@ impl Problem<'_> {
         let bounds = bounds();
         'outer: for _ in 0..max_iter {
             iters += 1;
-            let jac = self.jacobian(&cur)?;
-            let (a, g) = normal_equations(&jac, &cur.residual);
+            let (a, g) = self.normal_system(&cur)?;
             // held on its bound: the descent direction −g points out of the box
             let held: [bool; NT] = std::array::from_fn(|i| {
                 let (lo, hi) = bounds[i];
@@ -1668,6 +1744,24 @@ pub(crate) mod tests {
             let theta = [2.5, 1.1, 0.21, 2.7, 0.35, 1.3];
             let base = p.eval(theta).unwrap();
             let jac = p.jacobian(&base).unwrap();
+            // the normal system without J is J's normal equations (to rounding)
+            let (a0, g0) = normal_equations(&jac, &base.residual);
+            let (a1, g1) = p.normal_system(&base).unwrap();
+            let amax = a0.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+            let gmax = g0.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+            for (x, y) in a0.iter().zip(&a1) {
+                assert!(
+                    (x - y).abs() <= 1e-9 * amax,
+                    "circ {circ}: JᵀJ {x:e} vs {y:e}"
+                );
+            }
+            for (x, y) in g0.iter().zip(&g1) {
+                assert!(
+                    (x - y).abs() <= 1e-9 * gmax,
+                    "circ {circ}: Jᵀr {x:e} vs {y:e}"
+                );
+            }
+            assert!(amax > 0.0 && gmax > 0.0);
             for j in 0..NT {
                 let h = 1e-5 * theta[j].abs().max(0.1);
                 let (mut a, mut b) = (theta, theta);

@@ -421,6 +421,21 @@ impl ThinQr {
         z
     }
 
+    /// Qᵀy with its first `kept().len()` entries (the coordinates on the kept columns' span)
+    /// set to 0: the orthogonal part of `y` in the reflectors' basis, so that
+    /// (P⊥x)ᵀ(P⊥y) = `orthogonal_coordinates(x)`ᵀ`orthogonal_coordinates(y)` for the
+    /// projector P⊥ = I − QQᵀ of [`ThinQr::residual`], at half its work (Q is not applied
+    /// back).
+    ///
+    /// # Panics
+    /// When `y` is not of the columns' length (a programming error).
+    pub fn orthogonal_coordinates(&self, y: &[f64]) -> Vec<f64> {
+        let mut z = y.to_vec();
+        self.apply_qt(&mut z);
+        z[..self.reflectors.len()].fill(0.0);
+        z
+    }
+
     /// Least-squares coefficients of `y` on the input columns (0 for dropped columns).
     ///
     /// # Panics
