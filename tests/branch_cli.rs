@@ -225,6 +225,45 @@ fn diagnose_measured_branch_writes_its_document_figures_and_report() {
             .unwrap();
     assert_eq!(doc["format"], "aeroform-bifurcation-diagnosis/1");
     assert_eq!(doc["verdict"]["effect"], "structural_polynomial");
+    // The numbers of issue 26's acceptance, from the document (the same diagnosis as
+    // diagnose's `bristol_bifurcation_diagram_against_the_linear_model`, which is ignored in
+    // CI so that the rig is diagnosed once: docs/DECISIONS.md, "The CLI unoptimised").
+    // The linear model has no LCO: every point uncovered, score 1.
+    let score = doc["nominal"]["errors"]["score"].as_f64().unwrap();
+    assert!((score - 1.0).abs() < 1e-9, "nominal score {score}");
+    let named = &doc["candidates"][doc["verdict"]["candidate"].as_u64().unwrap() as usize];
+    let rms = |q: &str| -> f64 {
+        named["held_out"]["rows"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|r| r["branch"] == "all" && r["quantity"] == q)
+            .and_then(|r| r["rms"].as_f64())
+            .unwrap_or_else(|| panic!("no held-out {q} row: {named}"))
+    };
+    // held-out pitch amplitude RMS over the nine records ≤ 0.40° (the linear model plus the
+    // authors' published stiffness: 0.77°); heave and frequency reported the same way
+    let (pitch, heave, freq) = (rms("pitch"), rms("heave"), rms("frequency"));
+    assert!(pitch.to_degrees() <= 0.40, "pitch {}°", pitch.to_degrees());
+    assert!(heave < 0.0060, "heave {} mm", heave * 1e3);
+    assert!(freq < 0.08, "frequency {freq} Hz");
+    // Hopf within 0.5 % of the measured 17.89–17.98 m/s, subcritical; the fold where the
+    // unstable branch from it turns at 14.4–14.9 m/s
+    let hopf = &named["fit"]["hopf"][0];
+    let u = hopf["u"].as_f64().unwrap();
+    assert!(u > 17.89 * 0.995 && u < 17.98 * 1.005, "Hopf {u}");
+    assert_eq!(hopf["criticality"], "subcritical");
+    let fold = named["fit"]["folds"][0]["u"].as_f64().unwrap();
+    assert!((14.4..=14.9).contains(&fold), "fold {fold}");
+    // a hardening cubic pitch spring, as the authors'
+    let k3 = named["parameters"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|p| p["name"] == "k3_pitch")
+        .and_then(|p| p["value"].as_f64())
+        .unwrap();
+    assert!(k3 > 0.0, "k3 {k3}");
     for stem in ["bifurcation_comparison", "bifurcation_ranking"] {
         for ext in ["png", "svg", "pdf"] {
             let f = out.join("figures").join(format!("{stem}.{ext}"));
