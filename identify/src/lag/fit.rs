@@ -766,14 +766,16 @@ impl Problem<'_> {
                 }
             }
             // (JᵀJ)_ij += s²(z_iᵀz_j + g_iᵀw_j), g_iᵀw_j symmetrised (it is g_iᵀAᵀA·g_j)
-            for (t1, &i) in js.iter().enumerate().take(zs.len()) {
-                for (t2, &j) in js.iter().enumerate().take(t1 + 1) {
-                    let gw = |a: usize, b: usize| -> f64 {
-                        gs[a].iter().zip(&wks[b]).map(|(g, w)| g * w).sum()
-                    };
-                    let v = crate::numerics::qr::dot(&zs[t1], &zs[t2])
-                        + 0.5 * (gw(t1, t2) + gw(t2, t1));
-                    na[i * NT + j] += scale * scale * v;
+            if !columns {
+                let gw = |a: usize, b: usize| -> f64 {
+                    gs[a].iter().zip(&wks[b]).map(|(g, w)| g * w).sum()
+                };
+                for (t1, &i) in js.iter().enumerate() {
+                    for (t2, &j) in js.iter().enumerate().take(t1 + 1) {
+                        let v = crate::numerics::qr::dot(&zs[t1], &zs[t2])
+                            + 0.5 * (gw(t1, t2) + gw(t2, t1));
+                        na[i * NT + j] += scale * scale * v;
+                    }
                 }
             }
             offset += n;
