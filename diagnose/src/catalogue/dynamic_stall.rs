@@ -58,9 +58,13 @@ impl ForceFit for DynamicStall {
 
     /// The law with memory instead of the section's law ([`lag_form`]): it needs the
     /// folds' splits only, and its one serial fit is the force level's longest task, so it
-    /// starts first.
+    /// starts before the other candidates (where the held-out gap is significant).
     fn early(&self, ex: &EarlyContext<'_>) -> Option<Early> {
         Some(lag_form(ex))
+    }
+
+    fn has_early(&self) -> bool {
+        true
     }
 
     /// Of the two forms, the one with the lower held-out energy (the pool when the lag law

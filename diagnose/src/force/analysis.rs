@@ -37,6 +37,17 @@ use crate::numerics::periodogram_full;
 
 use super::candidates::noise_energy as energy_w;
 
+/// The gap statistic of held-out residuals `before`: their gap over the noise level
+/// ([`LevelResult::gap_statistic`]; infinite without noise).
+pub(crate) fn gap_statistic(cases: &[CaseData], before: &[[Vec<f64>; 2]]) -> f64 {
+    let noise = noise_gaps(cases);
+    if noise.combined > 0.0 {
+        gaps(cases, before).combined / noise.combined
+    } else {
+        f64::INFINITY
+    }
+}
+
 /// Builds the level result.
 pub(crate) fn assemble(
     cases: &[CaseData],
@@ -48,11 +59,7 @@ pub(crate) fn assemble(
 ) -> LevelResult {
     let g = gaps(cases, before);
     let noise = noise_gaps(cases);
-    let stat = if noise.combined > 0.0 {
-        g.combined / noise.combined
-    } else {
-        f64::INFINITY
-    };
+    let stat = gap_statistic(cases, before);
     // The held-out cases whose K lies inside the K range their fold was trained on (same
     // configuration): their prediction interpolates; the others extrapolate only because
     // cross-validation held their wind speed out (the law of every case covers them).

@@ -78,12 +78,18 @@ pub(crate) trait ForceFit: Sync {
     fn fit(&self, cx: &Context<'_>) -> Scored;
 
     /// A second form of the effect that needs only the folds' splits of the nodes, not
-    /// their identifications or factorisations: the force level starts it first, beside
-    /// the folds, the baseline and every [`ForceFit::fit`] (a long serial fit started last
-    /// would leave a core idle at the end), and hands it with the effect's `fit` to
-    /// [`ForceFit::choose`]. `None` (the default): the effect has no such form.
+    /// their identifications or factorisations: when the held-out gap is significant the
+    /// force level starts it beside every [`ForceFit::fit`] (a long serial fit started last
+    /// would leave a core idle at the end) and hands it with the effect's `fit` to
+    /// [`ForceFit::choose`]; otherwise it is not fitted (the candidate's `note` says so).
+    /// `None` (the default): the effect has no such form.
     fn early(&self, _ex: &EarlyContext<'_>) -> Option<Early> {
         None
+    }
+
+    /// Whether [`ForceFit::early`] gives a form (default `false`).
+    fn has_early(&self) -> bool {
+        false
     }
 
     /// The effect's result from its [`ForceFit::fit`] (`fitted`) and its early form

@@ -659,8 +659,11 @@ pub fn force_level_of(
             None => p,
         });
     }
-    // the candidates' early forms (they need the folds' splits only) beside everything
-    // else: started first, so that their long serial fits do not end the level alone
+    // the candidates' early forms (they need the folds' splits only): the law with memory,
+    // the force level's longest task, can only matter where the held-out gap is
+    // significant (docs/DECISIONS.md, "The law with memory only where there is a gap",
+    // round 39), so the folds and the baseline come first, then the early forms beside
+    // the other candidates
     let splits: Vec<candidates::Split> = (0..scheme.folds)
         .map(|k| candidates::Split {
             index: k,
@@ -673,26 +676,29 @@ pub fn force_level_of(
         nodes,
         splits: &splits,
     };
-    let (early, rest) = rayon::join(
-        || early_all(&ex, opts),
-        || -> Result<_> {
-            let cache = NodeCache::default();
-            let folds: Vec<Fold> = (0..scheme.folds)
-                .map(|k| {
-                    build_fold(k, &fold_of, cases, nodes, prepared, name, &cache).map(|(f, _)| f)
-                })
-                .collect::<Result<_>>()?;
-            lap("folds", &mut prof);
-            let before = held_out_residuals(cases, nodes, &folds, Aug::NONE);
-            lap("baseline", &mut prof);
-            let timed = score_all(cases, nodes, &folds, &before, opts, &cache);
-            lap("candidates (wall)", &mut prof);
-            Ok((before, timed))
+    let cache = NodeCache::default();
+    let folds: Vec<Fold> = (0..scheme.folds)
+        .map(|k| build_fold(k, &fold_of, cases, nodes, prepared, name, &cache).map(|(f, _)| f))
+        .collect::<Result<_>>()?;
+    lap("folds", &mut prof);
+    let before = held_out_residuals(cases, nodes, &folds, Aug::NONE);
+    lap("baseline", &mut prof);
+    let gap = analysis::gap_statistic(cases, &before);
+    let with_early = gap > opts.gap_threshold;
+    let (early, timed) = rayon::join(
+        || {
+            if with_early {
+                early_all(&ex, opts)
+            } else {
+                Vec::new()
+            }
         },
+        || score_all(cases, nodes, &folds, &before, opts, &cache),
     );
-    let (before, timed) = rest?;
+    lap("candidates (wall)", &mut prof);
     let mut early = early;
     let mut scored = Vec::with_capacity(timed.len());
+    let mut skipped = Vec::new();
     for (e, mut s, t) in timed {
         prof.push((format!("candidate:{}", e.name()), t));
         if let (Some(k), Some(fit)) = (
@@ -702,6 +708,8 @@ pub fn force_level_of(
             let (_, form, te) = early.swap_remove(k);
             prof.push((format!("candidate:{} (early form)", e.name()), te));
             s = fit.choose(cases, s, form);
+        } else if !with_early && e.entry().force().is_some_and(|f| f.has_early()) {
+            skipped.push(e);
         }
         scored.push((e, s));
     }
@@ -711,6 +719,17 @@ pub fn force_level_of(
         min_shrink: opts.min_shrink,
     };
     let mut r = analysis::assemble(cases, nodes, &fold_of, &before, scored, &thresholds);
+    for c in r
+        .candidates
+        .iter_mut()
+        .filter(|c| skipped.contains(&c.effect))
+    {
+        c.note = Some(format!(
+            "second form not fitted: the held-out gap is {gap:.3}× the noise level, not \
+             above the threshold {}",
+            opts.gap_threshold
+        ));
+    }
     r.fold_scheme = Some(scheme);
     lap("assemble", &mut prof);
     Ok((r, prof))
