@@ -45,15 +45,18 @@ fn bench(c: &mut Criterion) {
 fn bench_bifurcation(c: &mut Criterion) {
     use aeroelastic::files::{LoadedModel, StructureFile};
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-    let sf = StructureFile::read(&root.join("scenarios/bristol-spring1.structure.toml"))
+    let sf = StructureFile::read(&root.join("../scenarios/bristol-spring1.structure.toml"))
         .expect("structure");
-    let model = LoadedModel::load(&root.join("scenarios/bristol-spring1.model.toml"), sf.chord)
-        .expect("model");
+    let model = LoadedModel::load(
+        &root.join("../scenarios/bristol-spring1.model.toml"),
+        sf.chord,
+    )
+    .expect("model");
     let st = aeroelastic::structure::Structure::from_modal(&sf.linear).expect("modal");
     let section =
         aeroelastic::section::Section::new(st, model.model, sf.air_density).expect("section");
     let points = aeroelastic::branch::read_measured_amplitudes(
-        &root.join("diagnose/tests/data/bristol-spring1-record-points.csv"),
+        &root.join("../diagnose/tests/data/bristol-spring1-record-points.csv"),
     )
     .expect("points");
     let opts = diagnose::bifurcation::BifurcationOptions::default();

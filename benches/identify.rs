@@ -219,7 +219,7 @@ fn written_campaign(dir: &std::path::Path) {
     use aeroelastic::files::LoadedModel;
     use aeroelastic::tunnel::{self, Campaign, ForcedOptions};
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
-    let truth = LoadedModel::load(&root.join("scenarios/plate-truth.model.toml"), None)
+    let truth = LoadedModel::load(&root.join("../scenarios/plate-truth.model.toml"), None)
         .unwrap()
         .nonlinear
         .unwrap();
