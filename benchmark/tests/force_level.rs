@@ -152,6 +152,23 @@ fn effect_free_has_no_significant_gap_and_no_significant_candidate() {
         eprintln!("seed {seed}: {}", summary(&r));
         assert!(!r.significant_gap, "seed {seed}: stat {}", r.gap_statistic);
         assert!(r.candidates.iter().all(|c| !c.significant));
+        // no gap, so the law with memory (dynamic_stall's second form, the level's
+        // longest fit) is not fitted, and the candidate says so
+        let stall = r
+            .candidates
+            .iter()
+            .find(|c| c.effect == Effect::DynamicStall)
+            .expect("dynamic_stall scored");
+        assert!(
+            stall
+                .note
+                .as_deref()
+                .is_some_and(|n| n.contains("second form not fitted"))
+                && !stall.parameters.iter().any(|(n, _)| n.contains("lag_law")),
+            "seed {seed}: {:?} {:?}",
+            stall.note,
+            stall.parameters
+        );
         assert_eq!(r.held_out_cases.len(), 40);
         use diagnose::report::Split;
         for split in [Split::Channel, Split::Region, Split::State, Split::Harmonic] {

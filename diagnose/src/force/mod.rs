@@ -553,8 +553,8 @@ pub fn force_level(forced: &Dataset, opts: &ForceOptions) -> Result<LevelResult>
 /// factorisations), `baseline` (held-out residuals without augmentation), one
 /// `candidate:<name>` per scored candidate and one `candidate:<name> (early form)` per
 /// candidate with an early form (each measured inside its own task: candidates and early
-/// forms run in parallel, beside the folds, so these overlap) and `assemble` (gap, where,
-/// signatures, spectra).
+/// forms run in parallel after the baseline, so these overlap; early forms only where the
+/// held-out gap is significant) and `assemble` (gap, where, signatures, spectra).
 ///
 /// # Errors
 /// As [`force_level`].
