@@ -18,7 +18,7 @@ use aeroelastic::effects::{Form, InjectedEffect};
 use super::entry::{Draw, DrawContext, Entry};
 use super::Level;
 use crate::force::candidates::{
-    noise_energy, sparse, Context, Early, EarlyContext, ForceFit, PoolColumn, Scored, Split,
+    noise_energy, sparse, Context, Early, EarlyContext, EarlyForm, ForceFit, PoolColumn, Scored, Split,
 };
 use crate::force::data::CaseData;
 
@@ -59,12 +59,8 @@ impl ForceFit for DynamicStall {
     /// The law with memory instead of the section's law ([`lag_form`]): it needs the
     /// folds' splits only, and its one serial fit is the force level's longest task, so it
     /// starts before the other candidates (where the held-out gap is significant).
-    fn early(&self, ex: &EarlyContext<'_>) -> Option<Early> {
-        Some(lag_form(ex))
-    }
-
-    fn has_early(&self) -> bool {
-        true
+    fn early(&self) -> Option<EarlyForm> {
+        Some(lag_form)
     }
 
     /// Of the two forms, the one with the lower held-out energy (the pool when the lag law

@@ -70,6 +70,9 @@ pub(crate) struct EarlyContext<'a> {
 /// An effect's early form: its scored held-out result, or the reason it was refused.
 pub(crate) type Early = Result<Scored, String>;
 
+/// The function that fits an effect's early form ([`ForceFit::early`]).
+pub(crate) type EarlyForm = fn(&EarlyContext<'_>) -> Early;
+
 /// An effect's fit at the force level: its held-out residuals and fitted parameters.
 pub(crate) trait ForceFit: Sync {
     /// Fits the augmentation per fold on the training nodes and returns the held-out
@@ -82,14 +85,10 @@ pub(crate) trait ForceFit: Sync {
     /// force level starts it beside every [`ForceFit::fit`] (a long serial fit started last
     /// would leave a core idle at the end) and hands it with the effect's `fit` to
     /// [`ForceFit::choose`]; otherwise it is not fitted (the candidate's `note` says so).
-    /// `None` (the default): the effect has no such form.
-    fn early(&self, _ex: &EarlyContext<'_>) -> Option<Early> {
+    /// Returned as the function that fits it, so that whether an effect has the form is
+    /// known without fitting it. `None` (the default): the effect has no such form.
+    fn early(&self) -> Option<EarlyForm> {
         None
-    }
-
-    /// Whether [`ForceFit::early`] gives a form (default `false`).
-    fn has_early(&self) -> bool {
-        false
     }
 
     /// The effect's result from its [`ForceFit::fit`] (`fitted`) and its early form

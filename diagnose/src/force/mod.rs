@@ -708,7 +708,7 @@ pub fn force_level_of(
             let (_, form, te) = early.swap_remove(k);
             prof.push((format!("candidate:{} (early form)", e.name()), te));
             s = fit.choose(cases, s, form);
-        } else if !with_early && e.entry().force().is_some_and(|f| f.has_early()) {
+        } else if !with_early && e.entry().force().is_some_and(|f| f.early().is_some()) {
             skipped.push(e);
         }
         scored.push((e, s));
@@ -765,7 +765,7 @@ fn early_all(
     fits.par_iter()
         .filter_map(|&(e, fit)| {
             let t0 = std::time::Instant::now();
-            let form = fit.early(ex)?;
+            let form = fit.early()?(ex);
             Some((e, form, t0.elapsed().as_secs_f64()))
         })
         .collect()
