@@ -19,7 +19,10 @@
 //! motion (apparent mass) but not in quadrature (aerodynamic damping), which the damping
 //! candidate then had to share. Round 35: the nuisance has an aerodynamic-damping term
 //! U q̇ per outside DOF in both equations, and the set is named `structural_damping`
-//! (docs/DECISIONS.md, round 35).
+//! (docs/DECISIONS.md, round 35). Kept from round 41, when the structural forms are
+//! compared in units of each run's noise (docs/DECISIONS.md, "The form choice in units of
+//! each run's noise"): before, the column moved `structure_first.rs`'s pitch polynomial
+//! to a spurious `pitch+heave` form.
 
 use aeroelastic::effects::Form;
 use benchmark::blind::{generate, BlindEffect, BlindScenario};
