@@ -49,23 +49,9 @@ pub(crate) fn ridge_solve(
     Some((0..n).map(|i| x[i] * s[i]).collect())
 }
 
-/// Forward real FFT of length `m`, planned once per process and length and shared (the
-/// planner picks the algorithm from the length alone: bit for bit the plan a fresh planner
-/// makes; planning computes every twiddle factor, 1.7 % of job 1's CPU in round 32's
-/// profile).
-fn forward_plan(m: usize) -> std::sync::Arc<dyn realfft::RealToComplex<f64>> {
-    use std::sync::{Mutex, OnceLock};
-    static PLANNER: OnceLock<Mutex<realfft::RealFftPlanner<f64>>> = OnceLock::new();
-    let planner = PLANNER.get_or_init(|| Mutex::new(realfft::RealFftPlanner::new()));
-    match planner.lock() {
-        Ok(mut p) => p.plan_fft_forward(m),
-        Err(_) => realfft::RealFftPlanner::new().plan_fft_forward(m),
-    }
-}
-
 /// |DFT|² of x zero-padded to m points.
 pub(crate) fn periodogram_full(x: &[f64], m: usize) -> Vec<f64> {
-    let fft = forward_plan(m);
+    let fft = fft::forward(m);
     let mut input = vec![0.0; m];
     input[..x.len()].copy_from_slice(x);
     let mut out = fft.make_output_vec();

@@ -447,8 +447,7 @@ fn second_mode(x: &[f64], dt: f64, f: f64) -> Option<f64> {
         let w = 0.5 - 0.5 * (TAU * i as f64 / (n - 1) as f64).cos();
         buf[i] = (v - m) * w;
     }
-    let mut planner = realfft::RealFftPlanner::<f64>::new();
-    let fft = planner.plan_fft_forward(len);
+    let fft = fft::forward(len);
     let mut spec = fft.make_output_vec();
     fft.process(&mut buf, &mut spec).ok()?;
     let mag: Vec<f64> = spec.iter().map(|c| c.norm()).collect();

@@ -120,8 +120,7 @@ pub fn amplitude_spectrum(y: &[f64], dt: f64, f_max: f64) -> Result<(Vec<f64>, V
         .collect();
     let wsum: f64 = w.iter().sum();
     let mut input: Vec<f64> = y.iter().zip(&w).map(|(v, w)| (v - mean) * w).collect();
-    let mut planner = realfft::RealFftPlanner::<f64>::new();
-    let fft = planner.plan_fft_forward(n);
+    let fft = fft::forward(n);
     let mut out = fft.make_output_vec();
     fft.process(&mut input, &mut out)
         .map_err(|e| Error::Numerical {

@@ -185,9 +185,7 @@ fn band_bins(c: &CaseData, f: f64, b: f64) -> Vec<usize> {
 /// sinusoids: they are orthogonal on the record).
 fn remove_bins(r: &[f64], bins: &[usize]) -> Vec<f64> {
     let n = r.len();
-    let mut planner = realfft::RealFftPlanner::<f64>::new();
-    let fwd = planner.plan_fft_forward(n);
-    let inv = planner.plan_fft_inverse(n);
+    let (fwd, inv) = fft::forward_and_inverse(n);
     let mut input = r.to_vec();
     let mut spec = fwd.make_output_vec();
     if fwd.process(&mut input, &mut spec).is_err() {
@@ -195,7 +193,7 @@ fn remove_bins(r: &[f64], bins: &[usize]) -> Vec<f64> {
     }
     for &k in bins {
         if k < spec.len() {
-            spec[k] = realfft::num_complex::Complex::new(0.0, 0.0);
+            spec[k] = fft::Complex64::new(0.0, 0.0);
         }
     }
     let mut out = inv.make_output_vec();

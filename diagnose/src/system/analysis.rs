@@ -151,7 +151,6 @@ pub(crate) fn spectra(
     let freq: Vec<f64> = (0..nb).map(|k| k as f64 * df).collect();
     let mut before = [vec![0.0; nb], vec![0.0; nb]];
     let mut after = [vec![0.0; nb], vec![0.0; nb]];
-    let mut planner = realfft::RealFftPlanner::<f64>::new();
     for r in runs {
         let cols = best.map(|(e, g, _)| candidates::run_columns(*e, g, r, rho, chord));
         for c in 0..2 {
@@ -172,7 +171,7 @@ pub(crate) fn spectra(
             };
             for (x, acc) in [(&base, &mut before[c]), (&aug, &mut after[c])] {
                 let n = x.len();
-                let fft = planner.plan_fft_forward(n);
+                let fft = fft::forward(n);
                 let mean = x.iter().sum::<f64>() / n as f64;
                 let mut buf: Vec<f64> = x.iter().map(|v| v - mean).collect();
                 let mut sp = fft.make_output_vec();

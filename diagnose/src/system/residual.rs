@@ -18,14 +18,14 @@
 //! (2·half-window samples each side, where the asymmetric end windows are less
 //! accurate) are trimmed.
 
-use std::sync::{Arc, Mutex, OnceLock};
+use std::sync::{Arc, Mutex};
 
 use aeroelastic::aero::{linearize, AeroModel, Flow};
 use aeroelastic::structure::Structure;
+use fft::Complex64;
 use identify::preprocess::{noise_sigma, savitzky_golay_derivative, spectral_peak, PeakSearch};
 use identify::record::Record;
 use nalgebra::Matrix2;
-use realfft::num_complex::Complex64;
 
 use serde::{Deserialize, Serialize};
 
@@ -237,7 +237,10 @@ pub fn forces_along(
 ) -> [Vec<f64>; 2] {
     let n = q[0].len();
     let nfft = (n + 2 * pad).next_power_of_two();
-    let (fwd, inv) = fft_plans(nfft);
+    // planned once per process and length and shared (`forces_along` runs a few hundred
+    // times per diagnosis on a few lengths; planning was a quarter of its time, DECISIONS
+    // round 32): the plan a fresh planner makes, bit for bit
+    let (fwd, inv) = fft::forward_and_inverse(nfft);
     let mut spec: [Vec<Complex64>; 2] = [fwd.make_output_vec(), fwd.make_output_vec()];
     for j in 0..2 {
         let mut buf = fwd.make_input_vec();
@@ -305,28 +308,6 @@ pub fn forces_along(
         }
     }
     out
-}
-
-/// Forward and inverse real FFTs of length `nfft`, planned once per process and length and
-/// shared ([`forces_along`] runs a few hundred times per diagnosis on a few lengths;
-/// planning computes the twiddle factors, a sine and cosine each, and was a quarter of its
-/// time, DECISIONS round 32). The planner picks the algorithm from the length alone, so a
-/// shared plan is the plan a fresh planner makes: the same transform, bit for bit.
-fn fft_plans(
-    nfft: usize,
-) -> (
-    Arc<dyn realfft::RealToComplex<f64>>,
-    Arc<dyn realfft::ComplexToReal<f64>>,
-) {
-    static PLANNER: OnceLock<Mutex<realfft::RealFftPlanner<f64>>> = OnceLock::new();
-    let planner = PLANNER.get_or_init(|| Mutex::new(realfft::RealFftPlanner::new()));
-    match planner.lock() {
-        Ok(mut p) => (p.plan_fft_forward(nfft), p.plan_fft_inverse(nfft)),
-        Err(_) => {
-            let mut p = realfft::RealFftPlanner::new();
-            (p.plan_fft_forward(nfft), p.plan_fft_inverse(nfft))
-        }
-    }
 }
 
 fn sg(x: &[f64], dt: f64, s: &ResidualSettings, id: &str, what: &str) -> Result<Vec<f64>> {

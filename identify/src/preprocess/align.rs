@@ -13,8 +13,6 @@
 
 use std::ops::Range;
 
-use realfft::RealFftPlanner;
-
 use super::harmonic::noise_sigma;
 use crate::numerics::interp::uniform_cubic as interpolate_cubic;
 use crate::record::Record;
@@ -34,9 +32,7 @@ fn coarse_lag(pairs: &[(Vec<f64>, Vec<f64>)]) -> Option<f64> {
     let na = pairs[0].0.len();
     let nb = pairs[0].1.len();
     let len = (na + nb).next_power_of_two();
-    let mut planner = RealFftPlanner::<f64>::new();
-    let fwd = planner.plan_fft_forward(len);
-    let inv = planner.plan_fft_inverse(len);
+    let (fwd, inv) = fft::forward_and_inverse(len);
     let mut acc = fwd.make_output_vec();
     let mut buf = vec![0.0; len];
     let mut sa = fwd.make_output_vec();

@@ -11,10 +11,7 @@
 //! `D(θ) = Σᵤ cos θu = sin(Nθ/2)/sin(θ/2)` and its derivatives ([`dirichlet`]). A fit or a
 //! refinement step therefore reads the record only for `Σ x e^{jωu}` and `Σ u x e^{jωu}`.
 
-use std::cell::RefCell;
 use std::f64::consts::PI;
-
-use realfft::RealFftPlanner;
 
 use crate::numerics::{cholesky_solve, PivotFloor};
 
@@ -724,7 +721,7 @@ pub fn spectral_peak(x: &[f64], dt: f64, search: PeakSearch) -> Option<f64> {
             }
         }
     }
-    let fft = FFT_PLANNER.with(|p| p.borrow_mut().plan_fft_forward(len));
+    let fft = fft::forward(len);
     let mut spec = fft.make_output_vec();
     fft.process(&mut buf, &mut spec).ok()?;
     let power: Vec<f64> = spec.iter().map(|c| c.norm_sqr()).collect();
@@ -749,12 +746,6 @@ pub fn spectral_peak(x: &[f64], dt: f64, search: PeakSearch) -> Option<f64> {
         }
     }
     Some((k as f64 + off) * df)
-}
-
-thread_local! {
-    /// FFT plans are cached per thread: planning a 2¹⁵-point transform costs more than
-    /// running it.
-    static FFT_PLANNER: RefCell<RealFftPlanner<f64>> = RefCell::new(RealFftPlanner::new());
 }
 
 /// Robust estimate of the standard deviation of white sensor noise in `x`: the median
