@@ -161,8 +161,9 @@ fn a_hardening_pitch_cubic_is_named_when_the_given_pitch_frequency_is_5_percent_
     assert_eq!(verdicts[1], cubic, "pitch frequency given 5 % high");
 }
 
-/// (a), about 2 s (round 41, one test thread): T_c ≈ 1.3e-3 N m/m (strength 0.85; the generator's smoothing about
-/// 1e-3 rad/s), seed 5, every free run in the wind outside the forced range: `friction`.
+/// (a), about 2 s (round 41, one test thread): T_c ≈ 1.3e-3 N m/m (strength 0.85; the
+/// generator's smoothing about 1e-3 rad/s), seed 5, every free run in the wind outside the
+/// forced range: `friction`.
 #[test]
 fn a_sharp_pitch_friction_on_uncovered_free_runs_is_named_friction() {
     let d = diagnose_set(Effect::Friction, 0.85, 5, true);
@@ -173,8 +174,8 @@ fn a_sharp_pitch_friction_on_uncovered_free_runs_is_named_friction() {
     assert_eq!(d.verdict.effect, Verdict::Effect(Effect::Friction));
 }
 
-/// (b), about 4 s (round 41, one test thread; two diagnoses): d ≈ 2690 rad⁻² (strength 0.9, c₂ = c_α d ≈ 3.4 N m s/rad³), seed 5.
-/// With the default campaign `structural_damping` (0.928, c₂ 3.46); with every free run in
+/// (b), about 4 s (round 41, one test thread; two diagnoses): d ≈ 2690 rad⁻² (strength
+/// 0.9, c₂ = c_α d ≈ 3.4 N m s/rad³), seed 5. With the default campaign `structural_damping` (0.928, c₂ 3.46); with every free run in
 /// the wind outside the forced range `structural_damping` (0.587, c₂ 3.20; round 30:
 /// `extrapolation` 0.998, c₂ 2.82, excess shrink 0.12 against the baseline's extrapolation
 /// residue in quadrature, which the nuisance did not take). The fitted c₂ within 15 % of the
