@@ -175,11 +175,12 @@ fn a_sharp_pitch_friction_on_uncovered_free_runs_is_named_friction() {
 }
 
 /// (b), about 4 s (round 41, one test thread; two diagnoses): d ≈ 2690 rad⁻² (strength
-/// 0.9, c₂ = c_α d ≈ 3.4 N m s/rad³), seed 5. With the default campaign `structural_damping` (0.928, c₂ 3.46); with every free run in
-/// the wind outside the forced range `structural_damping` (0.587, c₂ 3.20; round 30:
-/// `extrapolation` 0.998, c₂ 2.82, excess shrink 0.12 against the baseline's extrapolation
-/// residue in quadrature, which the nuisance did not take). The fitted c₂ within 15 % of the
-/// truth's in both campaigns.
+/// 0.9, c₂ = c_α d ≈ 3.4 N m s/rad³), seed 5. With the default campaign
+/// `structural_damping` (0.928, c₂ 3.46); with every free run in the wind outside the
+/// forced range `structural_damping` (0.587, c₂ 3.20; round 30: `extrapolation` 0.998, c₂
+/// 2.82, excess shrink 0.12 against the baseline's extrapolation residue in quadrature,
+/// which the nuisance did not take). The fitted c₂ within 15 % of the truth's in both
+/// campaigns.
 #[test]
 fn amplitude_dependent_pitch_damping_on_uncovered_free_runs_is_named() {
     let mut verdicts = Vec::new();
