@@ -70,18 +70,9 @@ pub(crate) fn moments(run: &RunResidual, cols: &[Column]) -> Moments {
 /// each as q̈_d in the heave and in the pitch equation for the DOFs d of the group, and a
 /// group of linear stiffness terms:
 /// * group 0, the extrapolation: the motion whose response K leaves its forced range
-///   (the part of the law a campaign forced below the free runs' K cannot know, beyond
-///   the Theodorsen-shaped tails the sim already continues with). Per outside DOF d, in
-///   the heave and in the pitch equation: the apparent-mass term q̈_d (the K² parts of
-///   H₃*, H₄*, A₃*, A₄*: ½ρU²·K²·d = ½ρB²ω²·d, a force independent of U, i.e. a pooled
-///   ΔM), and the aerodynamic-damping term U q̇_d (issue 42 item 5(b), round 35: the
-///   parts of K·H₁*, K·H₂*, K·A₁*, K·A₂* constant in K, as Theodorsen's quasi-steady
-///   damping where C(K) → 1/2, e.g. ½ρUB·(K H₁*)·ḣ in the lift: linear in U). A free run oscillates
-///   near one frequency, where the apparent mass takes the extrapolated law's error in
-///   phase with the motion and the damping term its error in quadrature, which no other
-///   nuisance takes and which an amplitude-dependent damping would otherwise have to
-///   take. The column U q̇_d goes through the residual's smoothing ([`acc_term`]), as
-///   the structure's own C q̇;
+///   (the part of the law a campaign forced below the free runs' K cannot know: the K²
+///   apparent-mass terms of H₄*, A₃*…, beyond the Theodorsen-shaped tails the sim
+///   already continues with);
 /// * group 1, still air: both DOFs of the runs at U = 0 (the air's apparent mass, which
 ///   no identified law predicts at U = 0);
 /// * group 2, the linear structure (issue 42 item 5, round 30): a stiffness correction
@@ -106,16 +97,6 @@ pub(crate) fn nuisance_columns(run: &RunResidual, flags: Flags, dofs: Flags) -> 
             };
             v.push([x.clone(), Vec::new()]);
             v.push([Vec::new(), x]);
-            if g == 0 {
-                let c = if flags[g][d] {
-                    let uqd: Vec<f64> = run.qd[d].iter().map(|v| run.u * v).collect();
-                    acc_term(run, &uqd)
-                } else {
-                    Vec::new()
-                };
-                v.push([c.clone(), Vec::new()]);
-                v.push([Vec::new(), c]);
-            }
         }
     }
     for d in (0..2).filter(|&d| dofs[2][d]) {
@@ -334,10 +315,6 @@ pub(crate) fn variants(
             let (group, q) = (["extrapolation", "still_air"][g], ["h", "alpha"][d]);
             names.push(format!("nuisance_{group}_dM_heave_{q}"));
             names.push(format!("nuisance_{group}_dM_pitch_{q}"));
-            if g == 0 {
-                names.push(format!("nuisance_{group}_dC_heave_U{q}_dot"));
-                names.push(format!("nuisance_{group}_dC_pitch_U{q}_dot"));
-            }
         }
     }
     for d in (0..2).filter(|&d| dofs[2][d]) {

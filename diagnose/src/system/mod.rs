@@ -790,21 +790,11 @@ fn held_out(
 
 /// Whether the simpler per-run energies `simple` are within one standard error of
 /// `best` over the `active` runs (paired: the mean of the per-run differences is at most
-/// their standard error), or within the parsimony allowance `allowance`. Each run's
-/// difference is in units of that run's noise energy `noise[j]` (as a candidate's
-/// statistic is), and so is `allowance`: runs whose noise differs tenfold (a slow decay
-/// against an LCO) weigh alike, instead of the noisiest run deciding the form
-/// (docs/DECISIONS.md, "The form choice in units of each run's noise", round 41).
-fn within_one_se(
-    simple: &[[f64; 2]],
-    best: &[[f64; 2]],
-    noise: &[f64],
-    active: &[bool],
-    allowance: f64,
-) -> bool {
+/// their standard error), or within the parsimony allowance `allowance` (energy).
+fn within_one_se(simple: &[[f64; 2]], best: &[[f64; 2]], active: &[bool], allowance: f64) -> bool {
     let d: Vec<f64> = (0..simple.len())
         .filter(|&j| active[j])
-        .map(|j| (e2(simple[j]) - e2(best[j])) / noise[j].max(f64::MIN_POSITIVE))
+        .map(|j| e2(simple[j]) - e2(best[j]))
         .collect();
     crate::stats::paired_within_one_se(&d, allowance)
 }
@@ -816,10 +806,9 @@ fn within_one_se(
 ///
 /// Coverage rule (issue 29): an aerodynamic candidate is fitted and scored on the runs
 /// inside the forced range only (`uncovered[j]` false); a structural one on every run,
-/// fitted jointly with the pooled nuisances ([`candidates::nuisance_columns`]: the
-/// apparent mass and aerodynamic damping of the motion outside its forced K range, the
-/// still air's apparent mass) and scored against them alone, so that what it removes is
-/// what the law's extrapolation and the air's mass cannot.
+/// fitted jointly with the pooled apparent-mass nuisances ([`candidates::nuisance_columns`]:
+/// the motion outside its forced K range, the still air) and scored against them alone, so
+/// that what it removes is what the law's extrapolation and the air's mass cannot.
 #[allow(clippy::too_many_arguments)]
 fn score_candidate(
     effect: Effect,
@@ -889,10 +878,9 @@ fn score_candidate(
             }
         } else {
             format!(
-                "scored against the sim with an apparent-mass and aerodynamic-damping \
-                 correction of the motion outside its forced K range fitted alongside \
-                 (run(s) {}): what the candidate removes beyond it is what the law's \
-                 extrapolation cannot produce",
+                "scored against the sim with an apparent-mass correction of the motion \
+                 outside its forced K range fitted alongside (run(s) {}): what the candidate \
+                 removes beyond it is what the law's extrapolation cannot produce",
                 profiled.join(", ")
             )
         });
@@ -918,8 +906,12 @@ fn score_candidate(
         let base: Vec<Variant> = vars.iter().take(1).map(|v| v.select(&nuis_idx)).collect();
         before_runs = held_out(&base, folds, &active).0;
     }
-    // each run's noise energy: the form choice's unit
-    let noise_runs: Vec<f64> = runs.iter().map(|r| e2(r.noise_energy)).collect();
+    let noise_e = {
+        let (s, m) = (0..n).filter(|&j| active[j]).fold((0.0, 0.0), |(s, m), j| {
+            (s + e2(runs[j].noise_energy), m + 1.0)
+        });
+        s / f64::max(m, 1.0)
+    };
     let forms = term.forms();
     let results: Vec<_> = forms
         .iter()
@@ -944,9 +936,8 @@ fn score_candidate(
                 || within_one_se(
                     &results[k].2 .0,
                     &results[best].2 .0,
-                    &noise_runs,
                     &active,
-                    allowance_per_param * extra as f64,
+                    allowance_per_param * extra as f64 * noise_e,
                 )
         })
         .min_by(|&a, &b| {
