@@ -16,7 +16,6 @@
 
 use std::sync::{Arc, Mutex, OnceLock};
 
-pub use realfft::num_complex::Complex64;
 use realfft::RealFftPlanner;
 pub use realfft::{ComplexToReal, RealToComplex};
 

@@ -193,7 +193,7 @@ fn remove_bins(r: &[f64], bins: &[usize]) -> Vec<f64> {
     }
     for &k in bins {
         if k < spec.len() {
-            spec[k] = fft::Complex64::new(0.0, 0.0);
+            spec[k] = num_complex::Complex64::new(0.0, 0.0);
         }
     }
     let mut out = inv.make_output_vec();

@@ -22,10 +22,10 @@ use std::sync::{Arc, Mutex};
 
 use aeroelastic::aero::{linearize, AeroModel, Flow};
 use aeroelastic::structure::Structure;
-use fft::Complex64;
 use identify::preprocess::{noise_sigma, savitzky_golay_derivative, spectral_peak, PeakSearch};
 use identify::record::Record;
 use nalgebra::Matrix2;
+use num_complex::Complex64;
 
 use serde::{Deserialize, Serialize};
 
