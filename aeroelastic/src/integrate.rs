@@ -285,8 +285,8 @@ impl AdaptiveOptions {
 
 /// Adapter of an [`OdeSystem`] + observer to ode_solvers' `System`, counting evaluations
 /// and recording the stop reason decided in `solout`.
-struct Adapter<'a, S: OdeSystem + ?Sized> {
-    sys: &'a S,
+struct Adapter<'a> {
+    sys: &'a dyn OdeSystem,
     evals: Cell<u64>,
     steps: u64,
     t_last: f64,
@@ -295,7 +295,7 @@ struct Adapter<'a, S: OdeSystem + ?Sized> {
     observer: &'a mut StepObserver<'a>,
 }
 
-impl<const N: usize, S: OdeSystem + ?Sized> System<f64, SVector<f64, N>> for &mut Adapter<'_, S> {
+impl<const N: usize> System<f64, SVector<f64, N>> for &mut Adapter<'_> {
     #[inline]
     fn system(&self, t: f64, y: &SVector<f64, N>, dy: &mut SVector<f64, N>) {
         self.evals.set(self.evals.get() + 1);
@@ -326,8 +326,8 @@ impl<const N: usize, S: OdeSystem + ?Sized> System<f64, SVector<f64, N>> for &mu
     }
 }
 
-fn dop853_fixed<const N: usize, S: OdeSystem + ?Sized>(
-    adapter: &mut Adapter<'_, S>,
+fn dop853_fixed<const N: usize>(
+    adapter: &mut Adapter<'_>,
     t0: f64,
     t_end: f64,
     z0: &[f64],
@@ -376,8 +376,12 @@ fn dop853_fixed<const N: usize, S: OdeSystem + ?Sized>(
 /// [`Error::InvalidParameter`] for bad tolerances, a zero step cap, `t_end ≤ t0`, or a
 /// `z0` whose length differs from `sys.dim()` or is not finite; [`Error::Numerical`] for
 /// a dimension outside 1…12 (the solver's states are fixed-size vectors).
-pub fn dop853<S: OdeSystem + ?Sized>(
-    sys: &S,
+///
+/// `sys` is a trait object: the solver is compiled once per state size (twelve), not once
+/// per size and per system type; every system of the unit tests had compiled twelve more
+/// (docs/DECISIONS.md, "Dop853 compiled once per size", round 42).
+pub fn dop853(
+    sys: &dyn OdeSystem,
     t0: f64,
     t_end: f64,
     z0: &[f64],
@@ -402,7 +406,7 @@ pub fn dop853<S: OdeSystem + ?Sized>(
     macro_rules! dispatch {
         ($($k:literal),*) => {
             match n {
-                $( $k => dop853_fixed::<$k, S>(&mut a, t0, t_end, z0, opts), )*
+                $( $k => dop853_fixed::<$k>(&mut a, t0, t_end, z0, opts), )*
                 _ => {
                     return Err(Error::numerical(
                         "dop853",

