@@ -637,6 +637,11 @@ pub(crate) struct FitResult {
     pub cost: f64,
     /// The prediction at `theta`.
     pub predicted: Predicted,
+    /// The damping λ the fit ended with ([`resume`] goes on from it).
+    pub lambda: f64,
+    /// Whether the stop rule ended the fit (no lower cost, a gain ≤ 1e-6, or no slope);
+    /// `false` when the iteration budget ran out first.
+    pub stopped: bool,
 }
 
 /// Levenberg–Marquardt on `obj` from `x0` (whose prediction `p0` may be at hand), at most
@@ -650,12 +655,28 @@ pub(crate) fn levenberg_marquardt(
     p0: Option<Predicted>,
     max_iter: usize,
 ) -> FitResult {
-    let n = x0.len();
-    let mut x = x0.to_vec();
-    let mut p = p0.unwrap_or_else(|| (obj.predict)(&x));
+    let p = p0.unwrap_or_else(|| (obj.predict)(x0));
+    iterate(obj, x0.to_vec(), p, 1e-2, max_iter)
+}
+
+/// At most `max_iter` further iterations of the fit that ended in `fit`, from its θ,
+/// prediction and damping: a fit cut into stages ends where one run of the summed budget
+/// ends, bit for bit. A fit the stop rule ended is returned as it is.
+pub(crate) fn resume(obj: &Objective, fit: FitResult, max_iter: usize) -> FitResult {
+    if fit.stopped {
+        return fit;
+    }
+    iterate(obj, fit.theta, fit.predicted, fit.lambda, max_iter)
+}
+
+/// The iterations of [`levenberg_marquardt`] from θ = `x` with prediction `p` and
+/// damping `lambda`.
+fn iterate(obj: &Objective, x: Vec<f64>, p: Predicted, lambda: f64, max_iter: usize) -> FitResult {
+    let n = x.len();
+    let (mut x, mut p, mut lambda) = (x, p, lambda);
     let mut r = (obj.residuals)(&p);
     let mut c = cost(&r);
-    let mut lambda = 1e-2;
+    let mut stopped = false;
     let h = 1e-2;
     let differences = |x: &[f64], r: &[f64]| {
         let m = r.len();
@@ -683,6 +704,7 @@ pub(crate) fn levenberg_marquardt(
         if g.iter().all(|v| *v == 0.0) {
             // no slope: every step is zero and gives the same prediction, so no trial can
             // lower the cost (the fit ends where the eight trials would have left it)
+            stopped = true;
             break;
         }
         let mut gain = None;
@@ -712,6 +734,7 @@ pub(crate) fn levenberg_marquardt(
         }
         iter += 1;
         if gain.is_none_or(|g| g <= 1e-6) {
+            stopped = true;
             break;
         }
     }
@@ -719,6 +742,8 @@ pub(crate) fn levenberg_marquardt(
         theta: x,
         cost: c,
         predicted: p,
+        lambda,
+        stopped,
     }
 }
 

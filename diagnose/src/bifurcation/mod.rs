@@ -52,9 +52,10 @@ pub const FORMAT: &str = "aeroform-bifurcation-diagnosis/1";
 /// Starts of the grid from which a fit on all points runs Levenberg–Marquardt.
 const START_POINTS: usize = 12;
 
-/// With [`FitJacobian::Sensitivities`], the iterations every one of the
-/// [`START_POINTS`] starts takes before only the best [`STAGE_KEEP`] go on (DECISIONS,
-/// "The smooth bifurcation-level objective, round 33").
+/// The iterations every one of the [`START_POINTS`] starts takes before only the best
+/// [`STAGE_KEEP`] go on ([`fit::resume`]: from where the stage ended, its damping
+/// included), in both Jacobian modes (DECISIONS, "The smooth bifurcation-level objective,
+/// round 33", for sensitivities; "Staged starts for the difference fits, round 42").
 const STAGE_ITERATIONS: usize = 4;
 
 /// The starts that go on after [`STAGE_ITERATIONS`].
@@ -112,7 +113,8 @@ pub struct BifurcationOptions {
 pub enum FitJacobian {
     /// Forward differences of whole diagrams, step 1e-2 in θ: one continuation per
     /// parameter and iteration; a covered point's prediction interpolates linearly between
-    /// continuation points, an uncovered point scores as predicted 0.
+    /// continuation points, an uncovered point scores as predicted 0; every grid start
+    /// runs four iterations, the best three go on.
     #[default]
     Differences,
     /// The smooth objective, fitted by its derivatives: a covered point's orbit corrected
@@ -1231,6 +1233,20 @@ fn fit_candidate(
         };
         levenberg_marquardt(&obj, x0, p0, iterations)
     };
+    // the same fit on all points continued for `iterations` more
+    let go_on = |r: fit::FitResult, iterations: usize| {
+        let res = |p: &Predicted| all_residuals(p, all, setting);
+        let jac = |th: &[f64], p: &Predicted| residual_jacobian(&section_at, th, p, all, setting);
+        let obj = Objective {
+            predict: &predicted,
+            residuals: &res,
+            jacobian: match opts.jacobian {
+                FitJacobian::Differences => None,
+                FitJacobian::Sensitivities => Some(&jac),
+            },
+        };
+        fit::resume(&obj, r, iterations)
+    };
     let n = c.parameters.len();
     // Start: the best point of the grid (and the origin's neighbourhood); the predictions
     // of the best few are kept for their fits.
@@ -1275,7 +1291,7 @@ fn fit_candidate(
         .into_par_iter()
         .map(|r| {
             let rest = opts.max_iterations.saturating_sub(STAGE_ITERATIONS);
-            lm(all, &r.theta, Some(r.predicted), rest)
+            go_on(r, rest)
         })
         .collect::<Vec<_>>()
         .into_iter()
