@@ -637,43 +637,35 @@ pub(crate) struct FitResult {
     pub cost: f64,
     /// The prediction at `theta`.
     pub predicted: Predicted,
-    /// The damping λ the fit ended with ([`resume`] goes on from it).
+    /// The damping λ the fit ended with (a next stage goes on from it).
     pub lambda: f64,
     /// Whether the stop rule ended the fit (no lower cost, a gain ≤ 1e-6, or no slope);
     /// `false` when the iteration budget ran out first.
     pub stopped: bool,
 }
 
-/// Levenberg–Marquardt on `obj` from `x0` (whose prediction `p0` may be at hand), at most
-/// `max_iter` iterations. Each iteration takes the objective's Jacobian from sensitivities
-/// when it gives one, forward differences (step 1e-2 in θ) otherwise, and tries up to
-/// eight damped steps (λ × 4 after each that does not lower the cost); the fit stops when
-/// an iteration finds no lower cost or gains at most 1e-6 of it, or the slope is zero.
+/// The damping λ a fit starts with.
+pub(crate) const INITIAL_DAMPING: f64 = 1e-2;
+
+/// Levenberg–Marquardt on `obj` from `x0` (whose prediction `p0` may be at hand) with
+/// damping `lambda` ([`INITIAL_DAMPING`] for a new fit; a fit cut into stages goes on with
+/// the [`FitResult::lambda`] of the last and ends where one run of the summed budget ends,
+/// bit for bit), at most `max_iter` iterations. Each iteration takes the objective's
+/// Jacobian from sensitivities when it gives one, forward differences (step 1e-2 in θ)
+/// otherwise, and tries up to eight damped steps (λ × 4 after each that does not lower the
+/// cost); the fit stops when an iteration finds no lower cost or gains at most 1e-6 of it,
+/// or the slope is zero.
 pub(crate) fn levenberg_marquardt(
     obj: &Objective,
     x0: &[f64],
     p0: Option<Predicted>,
+    lambda: f64,
     max_iter: usize,
 ) -> FitResult {
-    let p = p0.unwrap_or_else(|| (obj.predict)(x0));
-    iterate(obj, x0.to_vec(), p, 1e-2, max_iter)
-}
-
-/// At most `max_iter` further iterations of the fit that ended in `fit`, from its θ,
-/// prediction and damping: a fit cut into stages ends where one run of the summed budget
-/// ends, bit for bit. A fit the stop rule ended is returned as it is.
-pub(crate) fn resume(obj: &Objective, fit: FitResult, max_iter: usize) -> FitResult {
-    if fit.stopped {
-        return fit;
-    }
-    iterate(obj, fit.theta, fit.predicted, fit.lambda, max_iter)
-}
-
-/// The iterations of [`levenberg_marquardt`] from θ = `x` with prediction `p` and
-/// damping `lambda`.
-fn iterate(obj: &Objective, x: Vec<f64>, p: Predicted, lambda: f64, max_iter: usize) -> FitResult {
-    let n = x.len();
-    let (mut x, mut p, mut lambda) = (x, p, lambda);
+    let n = x0.len();
+    let mut x = x0.to_vec();
+    let mut p = p0.unwrap_or_else(|| (obj.predict)(&x));
+    let mut lambda = lambda;
     let mut r = (obj.residuals)(&p);
     let mut c = cost(&r);
     let mut stopped = false;

@@ -53,8 +53,7 @@ pub const FORMAT: &str = "aeroform-bifurcation-diagnosis/1";
 const START_POINTS: usize = 12;
 
 /// The iterations every one of the [`START_POINTS`] starts takes before only the best
-/// [`STAGE_KEEP`] go on ([`fit::resume`]: from where the stage ended, its damping
-/// included), in both Jacobian modes (DECISIONS, "The smooth bifurcation-level objective,
+/// [`STAGE_KEEP`] go on (from where the stage ended, its damping included), in both Jacobian modes (DECISIONS, "The smooth bifurcation-level objective,
 /// round 33", for sensitivities; "Staged starts for the difference fits, round 42").
 const STAGE_ITERATIONS: usize = 4;
 
@@ -1220,7 +1219,7 @@ fn fit_candidate(
     let section_at = |theta: &[f64]| c.apply(section, theta).ok();
     // Levenberg–Marquardt on the rows `rows`: residuals of a prediction and their
     // Jacobian from its orbits' sensitivities.
-    let lm = |rows: &Rows, x0: &[f64], p0: Option<Predicted>, iterations: usize| {
+    let lm = |rows: &Rows, x0: &[f64], p0: Option<Predicted>, lambda: f64, iterations: usize| {
         let res = |p: &Predicted| all_residuals(p, rows, setting);
         let jac = |th: &[f64], p: &Predicted| residual_jacobian(&section_at, th, p, rows, setting);
         let obj = Objective {
@@ -1231,21 +1230,7 @@ fn fit_candidate(
                 FitJacobian::Sensitivities => Some(&jac),
             },
         };
-        levenberg_marquardt(&obj, x0, p0, iterations)
-    };
-    // the same fit on all points continued for `iterations` more
-    let go_on = |r: fit::FitResult, iterations: usize| {
-        let res = |p: &Predicted| all_residuals(p, all, setting);
-        let jac = |th: &[f64], p: &Predicted| residual_jacobian(&section_at, th, p, all, setting);
-        let obj = Objective {
-            predict: &predicted,
-            residuals: &res,
-            jacobian: match opts.jacobian {
-                FitJacobian::Differences => None,
-                FitJacobian::Sensitivities => Some(&jac),
-            },
-        };
-        fit::resume(&obj, r, iterations)
+        levenberg_marquardt(&obj, x0, p0, lambda, iterations)
     };
     let n = c.parameters.len();
     // Start: the best point of the grid (and the origin's neighbourhood); the predictions
@@ -1282,7 +1267,7 @@ fn fit_candidate(
     // every start takes a few iterations, the best few go on
     let mut first: Vec<_> = ranked
         .into_par_iter()
-        .map(|(_, s, p)| lm(all, &s, p, STAGE_ITERATIONS))
+        .map(|(_, s, p)| lm(all, &s, p, fit::INITIAL_DAMPING, STAGE_ITERATIONS))
         .collect();
     // stable sort: the first of equal costs stays first
     first.sort_by(|a, b| a.cost.total_cmp(&b.cost));
@@ -1290,8 +1275,13 @@ fn fit_candidate(
     let full = first
         .into_par_iter()
         .map(|r| {
+            // from where the stage ended, its damping included (a fit the stop rule
+            // ended stays as it is)
+            if r.stopped {
+                return r;
+            }
             let rest = opts.max_iterations.saturating_sub(STAGE_ITERATIONS);
-            go_on(r, rest)
+            lm(all, &r.theta, Some(r.predicted), r.lambda, rest)
         })
         .collect::<Vec<_>>()
         .into_iter()
@@ -1331,6 +1321,7 @@ fn fit_candidate(
                 &train,
                 &full.theta,
                 Some(full.predicted.clone()),
+                fit::INITIAL_DAMPING,
                 opts.max_iterations / 2,
             )
         })
