@@ -379,7 +379,8 @@ fn dop853_fixed<const N: usize>(
 ///
 /// `sys` is a trait object: the solver is compiled once per state size (twelve), not once
 /// per size and per system type; every system of the unit tests had compiled twelve more
-/// (docs/DECISIONS.md, "Dop853 compiled once per size", round 42).
+/// (docs/DECISIONS.md, "Staged starts for the difference fits, a stacked column in one
+/// piece, Dop853 once per size", round 42).
 pub fn dop853(
     sys: &dyn OdeSystem,
     t0: f64,

@@ -53,8 +53,9 @@ pub const FORMAT: &str = "aeroform-bifurcation-diagnosis/1";
 const START_POINTS: usize = 12;
 
 /// The iterations every one of the [`START_POINTS`] starts takes before only the best
-/// [`STAGE_KEEP`] go on (from where the stage ended, its damping included), in both Jacobian modes (DECISIONS, "The smooth bifurcation-level objective,
-/// round 33", for sensitivities; "Staged starts for the difference fits, round 42").
+/// [`STAGE_KEEP`] go on (from where the stage ended, its damping included), in both
+/// Jacobian modes (DECISIONS, "The smooth bifurcation-level objective, round 33", for
+/// sensitivities; "Staged starts for the difference fits…", round 42, for differences).
 const STAGE_ITERATIONS: usize = 4;
 
 /// The starts that go on after [`STAGE_ITERATIONS`].
@@ -1262,7 +1263,7 @@ fn fit_candidate(
     ranked.sort_by(|a, b| a.0.total_cmp(&b.0));
     // Levenberg–Marquardt from the best few starts (the landscape has several basins:
     // a fold can form from softening or from an even term), the best end kept.
-    // (in parallel; the first of equal ends wins, as in start order)
+    // (in parallel; of equal ends the first in the first stage's cost order wins)
     ranked.truncate(START_POINTS);
     // every start takes a few iterations, the best few go on
     let mut first: Vec<_> = ranked
