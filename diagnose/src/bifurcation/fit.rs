@@ -659,13 +659,12 @@ pub(crate) fn levenberg_marquardt(
     obj: &Objective,
     x0: &[f64],
     p0: Option<Predicted>,
-    lambda: f64,
+    mut lambda: f64,
     max_iter: usize,
 ) -> FitResult {
     let n = x0.len();
     let mut x = x0.to_vec();
     let mut p = p0.unwrap_or_else(|| (obj.predict)(&x));
-    let mut lambda = lambda;
     let mut r = (obj.residuals)(&p);
     let mut c = cost(&r);
     let mut stopped = false;
