@@ -106,7 +106,7 @@ fn blocks_of(case: &NondimCase, block_periods: f64, min_rows: usize) -> Vec<(usi
 
 impl ForceBlocks {
     fn new(
-        theta: faer::MatRef<'_, f64>,
+        theta: crate::numerics::mat::MatRef<'_, f64>,
         cols: Vec<usize>,
         y: &[f64],
         blocks: &[(usize, usize)],

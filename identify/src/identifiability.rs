@@ -21,8 +21,7 @@
 //! A group of cases is fitted on the terms that are in the basis of every case
 //! ([`group_basis`]).
 
-use faer::linalg::svd;
-use faer::{Mat, MatRef, Par};
+use crate::numerics::mat::{Mat, MatRef};
 use serde::{Deserialize, Serialize};
 
 use crate::library::{Library, Term};
@@ -343,35 +342,9 @@ fn describe_dependency(
     }
 }
 
-/// Singular values (descending) of a small square matrix, sequential.
+/// Singular values (descending) of a small square matrix.
 fn singular_values(a: MatRef<'_, f64>) -> std::result::Result<Vec<f64>, String> {
-    let (m, n) = a.shape();
-    let size = m.min(n);
-    if size == 0 {
-        return Ok(Vec::new());
-    }
-    let mut s = faer::diag::Diag::<f64>::zeros(size);
-    let mut mem = faer::dyn_stack::MemBuffer::new(svd::svd_scratch::<f64>(
-        m,
-        n,
-        svd::ComputeSvdVectors::No,
-        svd::ComputeSvdVectors::No,
-        Par::Seq,
-        Default::default(),
-    ));
-    svd::svd(
-        a,
-        s.as_mut(),
-        None,
-        None,
-        Par::Seq,
-        faer::dyn_stack::MemStack::new(&mut mem),
-        Default::default(),
-    )
-    .map_err(|e| format!("{e:?}"))?;
-    let mut v: Vec<f64> = s.column_vector().iter().map(|x| x.abs()).collect();
-    v.sort_by(|a, b| b.total_cmp(a));
-    Ok(v)
+    crate::numerics::mat::singular_values(a)
 }
 
 /// Group basis: the terms in the basis of every case, as a mask in library order.

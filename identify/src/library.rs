@@ -10,7 +10,7 @@
 //! degree, lexicographic in the variable order (the order of
 //! `itertools::combinations_with_replacement`): `alpha^2, alpha*alpha_dot, alpha*h, …`.
 
-use faer::{Mat, MatMut};
+use crate::numerics::mat::{Mat, MatMut};
 use serde::{Deserialize, Serialize};
 
 use crate::{Error, Result};

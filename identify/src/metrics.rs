@@ -24,9 +24,8 @@
 //! Σ_i w_i max(0, Re(Â_i Ā_i)) / max(|A_i|, |Â_i|)², in [0, 1], 1 only when amplitude and
 //! phase of every line match.
 
+use crate::numerics::mat::{add_at_b, Mat, MatMut, MatRef};
 use crate::numerics::scratch::Scratch;
-use faer::linalg::matmul::matmul;
-use faer::{Accum, Mat, MatMut, MatRef, Par};
 use num_complex::Complex64;
 use serde::{Deserialize, Serialize};
 
@@ -396,13 +395,10 @@ impl HarmonicProjector {
             let h = MatRef::from_column_major_slice(&hb[..rows * m], rows, m);
             for (acc, v) in hts.iter_mut().zip(signals) {
                 sb[..rows].copy_from_slice(&v[r0..r0 + rows]);
-                matmul(
-                    acc.as_mut(),
-                    Accum::Add,
-                    h.transpose(),
+                add_at_b(
+                    &mut acc.as_mut(),
+                    h,
                     MatRef::from_column_major_slice(&sb[..rows], rows, 1),
-                    1.0,
-                    Par::Seq,
                 );
             }
             if p > 0 {
@@ -410,13 +406,10 @@ impl HarmonicProjector {
                     r0,
                     MatMut::from_column_major_slice_mut(&mut tb[..rows * p], rows, p),
                 );
-                matmul(
-                    htv.as_mut(),
-                    Accum::Add,
-                    h.transpose(),
+                add_at_b(
+                    &mut htv.as_mut(),
+                    h,
                     MatRef::from_column_major_slice(&tb[..rows * p], rows, p),
-                    1.0,
-                    Par::Seq,
                 );
             }
             r0 += rows;

@@ -11,7 +11,7 @@
 
 use std::path::PathBuf;
 
-use faer::Mat;
+use identify::numerics::mat::Mat;
 use identify::regress::pysindy::PysindyStlsq;
 use serde_json::Value;
 

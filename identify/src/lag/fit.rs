@@ -29,7 +29,7 @@
 //! 3. Report ([`LagReport`]): per-case R², θ with units and Gauss–Newton standard errors and
 //!    correlations from (JᵀJ)⁻¹ at the optimum.
 
-use faer::Mat;
+use crate::numerics::mat::Mat;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 

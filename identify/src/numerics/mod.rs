@@ -7,6 +7,7 @@
 //! non-positive pivot returns [`NotPositiveDefinite`] naming the pivot, never a silent NaN.
 
 pub mod interp;
+pub mod mat;
 pub mod qr;
 pub mod scratch;
 

@@ -96,7 +96,8 @@ fn column_means(lib: &Library, x: &[Vec<f64>; 4]) -> Vec<f64> {
     let n = x[0].len();
     let p = lib.len();
     let mut sums = vec![0.0; p];
-    let mut block = faer::Mat::<f64>::zeros(crate::library::EVAL_BLOCK.min(n.max(1)), p);
+    let mut block =
+        crate::numerics::mat::Mat::<f64>::zeros(crate::library::EVAL_BLOCK.min(n.max(1)), p);
     let mut r0 = 0;
     while r0 < n {
         let rows = crate::library::EVAL_BLOCK.min(n - r0);
@@ -209,7 +210,7 @@ fn prepare_case(
         _ => (&case.x, None),
     };
     let col_means = centring.as_ref().map(|c| c.columns.as_slice());
-    let evaluate = |r0: usize, mut out: faer::MatMut<'_, f64>| {
+    let evaluate = |r0: usize, mut out: crate::numerics::mat::MatMut<'_, f64>| {
         lib.evaluate_rows(x, r0, out.as_mut());
         if let Some(m) = col_means {
             for (j, mj) in m.iter().enumerate() {
@@ -224,10 +225,13 @@ fn prepare_case(
     let held = (n <= HOLD_THETA_ROWS).then(|| {
         // `evaluate` writes every value
         let mut t = crate::numerics::scratch::Scratch::overwritten(n * p);
-        evaluate(0, faer::MatMut::from_column_major_slice_mut(&mut t, n, p));
+        evaluate(
+            0,
+            crate::numerics::mat::MatMut::from_column_major_slice_mut(&mut t, n, p),
+        );
         t
     });
-    let eval = |r0: usize, mut out: faer::MatMut<'_, f64>| match &held {
+    let eval = |r0: usize, mut out: crate::numerics::mat::MatMut<'_, f64>| match &held {
         Some(t) => {
             let rows = out.nrows();
             for j in 0..p {

@@ -7,7 +7,7 @@
 //! the identifiable basis columns only (a fit on a rank-deficient library is never
 //! reported). The δ path then sweeps pysindy's `threshold`.
 
-use faer::{Mat, MatRef};
+use crate::numerics::mat::{Mat, MatRef};
 use serde::{Deserialize, Serialize};
 
 use super::pysindy::PysindyStlsq;

@@ -16,7 +16,7 @@
 //! entries below row p, so without cancellation). Every support fit is then a tiny
 //! least-squares solve on at most p × p numbers, independent of the record length n.
 
-use faer::{Mat, MatMut, MatRef};
+use crate::numerics::mat::{Mat, MatMut, MatRef};
 
 use crate::numerics::scratch::Scratch;
 use crate::numerics::{cholesky_in_place, cholesky_solve_in_place, PivotFloor};

@@ -44,9 +44,8 @@
 //! pysindy's `fit` also drops samples whose library row is entirely NaN or whose target is
 //! NaN, and rejects any other non-finite value; [`PysindyStlsq::try_fit`] does the same.
 
-use faer::linalg::matmul::matmul;
-use faer::linalg::solvers::Solve;
-use faer::{Accum, Mat, MatRef, Par, Side};
+use crate::numerics::mat::{a_at, at_a, at_y, Mat, MatRef};
+use crate::numerics::{cholesky_solve, PivotFloor};
 
 use crate::{Error, Result};
 
@@ -356,19 +355,7 @@ impl<'a> RidgeProblem<'a> {
     fn new(x: MatRef<'a, f64>, y: &'a [f64]) -> Self {
         let (n, p) = (x.nrows(), x.ncols());
         let (gram, xty) = if p <= n {
-            let mut g = Mat::<f64>::zeros(p, p);
-            matmul(g.as_mut(), Accum::Replace, x.transpose(), x, 1.0, Par::Seq);
-            let ycol = Mat::from_fn(n, 1, |i, _| y[i]);
-            let mut b = Mat::<f64>::zeros(p, 1);
-            matmul(
-                b.as_mut(),
-                Accum::Replace,
-                x.transpose(),
-                ycol.as_ref(),
-                1.0,
-                Par::Seq,
-            );
-            (g, (0..p).map(|j| b[(j, 0)]).collect())
+            (at_a(x), at_y(x, y))
         } else {
             (Mat::zeros(0, 0), Vec::new())
         };
@@ -383,14 +370,16 @@ impl<'a> RidgeProblem<'a> {
             let xs = select_columns(self.x, cols);
             return ridge_dual(xs.as_ref(), self.y, alpha);
         }
-        let mut a = Mat::from_fn(k, k, |i, j| self.gram[(cols[i], cols[j])]);
+        // row-major k × k (symmetric: the same either way)
+        let mut a: Vec<f64> = (0..k * k)
+            .map(|e| self.gram[(cols[e / k], cols[e % k])])
+            .collect();
         for i in 0..k {
-            a[(i, i)] += alpha;
+            a[i * k + i] += alpha;
         }
-        if let Ok(llt) = a.llt(Side::Lower) {
-            let mut rhs = Mat::from_fn(k, 1, |i, _| self.xty[cols[i]]);
-            llt.solve_in_place(rhs.as_mut());
-            return ((0..k).map(|i| rhs[(i, 0)]).collect(), RidgeSolver::Cholesky);
+        let mut rhs: Vec<f64> = cols.iter().map(|&c| self.xty[c]).collect();
+        if cholesky_solve(&mut a, k, &mut rhs, 1, PivotFloor::Absolute(0.0)).is_ok() {
+            return (rhs, RidgeSolver::Cholesky);
         }
         let xs = select_columns(self.x, cols);
         (ridge_svd(xs.as_ref(), self.y, alpha), RidgeSolver::Svd)
@@ -405,9 +394,7 @@ fn select_columns(x: MatRef<'_, f64>, cols: &[usize]) -> Mat<f64> {
 /// Thin SVD `x = U diag(s) Vᵀ` as (U, s, V); `None` when the SVD does not converge
 /// (non-finite input).
 fn thin_svd(x: MatRef<'_, f64>) -> Option<(Mat<f64>, Vec<f64>, Mat<f64>)> {
-    let svd = x.thin_svd().ok()?;
-    let s: Vec<f64> = svd.S().column_vector().iter().copied().collect();
-    Some((svd.U().to_owned(), s, svd.V().to_owned()))
+    crate::numerics::mat::thin_svd(x)
 }
 
 /// `V f(s) Uᵀ y` for a thin SVD, with `f` applied to each singular value.
@@ -440,17 +427,15 @@ fn ridge_svd(x: MatRef<'_, f64>, y: &[f64], alpha: f64) -> Vec<f64> {
 /// machine epsilon).
 fn ridge_dual(x: MatRef<'_, f64>, y: &[f64], alpha: f64) -> (Vec<f64>, RidgeSolver) {
     let n = x.nrows();
-    let mut k = Mat::<f64>::zeros(n, n);
-    matmul(k.as_mut(), Accum::Replace, x, x.transpose(), 1.0, Par::Seq);
+    let mut k = a_at(x);
     for i in 0..n {
         k[(i, i)] += alpha;
     }
-    let dual = match k.llt(Side::Lower) {
-        Ok(llt) => {
-            let mut rhs = Mat::from_fn(n, 1, |i, _| y[i]);
-            llt.solve_in_place(rhs.as_mut());
-            (0..n).map(|i| rhs[(i, 0)]).collect()
-        }
+    // row-major (symmetric: the same either way)
+    let mut a: Vec<f64> = (0..n * n).map(|e| k[(e / n, e % n)]).collect();
+    let mut rhs = y.to_vec();
+    let dual = match cholesky_solve(&mut a, n, &mut rhs, 1, PivotFloor::Absolute(0.0)) {
+        Ok(()) => rhs,
         Err(_) => lstsq_min_norm(k.as_ref(), y, f64::EPSILON),
     };
     let w = (0..x.ncols())

@@ -204,7 +204,9 @@ mod tests {
         (0..4)
             .map(|c| {
                 let (n, p) = (120, 6);
-                let theta = faer::Mat::<f64>::from_fn(n, p, |_, _| rng.random::<f64>() - 0.5);
+                let theta = crate::numerics::mat::Mat::<f64>::from_fn(n, p, |_, _| {
+                    rng.random::<f64>() - 0.5
+                });
                 let y: Vec<f64> = (0..n)
                     .map(|i| {
                         1.5 * theta[(i, 0)] - 0.7 * theta[(i, 2)]

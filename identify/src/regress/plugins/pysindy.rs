@@ -284,7 +284,7 @@ mod tests {
     fn compact_paths_decode_bit_for_bit() {
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(29);
         let (n, p) = (200, 30);
-        let theta = faer::Mat::<f64>::from_fn(n, p, |_, _| rng.random::<f64>() - 0.5);
+        let theta = crate::numerics::mat::Mat::<f64>::from_fn(n, p, |_, _| rng.random::<f64>() - 0.5);
         let y: Vec<f64> = (0..n)
             .map(|i| {
                 2.0 * theta[(i, 0)] - 0.8 * theta[(i, 3)]
