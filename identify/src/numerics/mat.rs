@@ -355,28 +355,72 @@ impl IndexMut<(usize, usize)> for MatMut<'_, f64> {
     }
 }
 
-/// `Σ_i a_i b_i` over equally long slices, with eight partial sums (lane l sums the entries
-/// i ≡ l mod 8, then the lanes are added pairwise), so that the compiler may vectorise it;
-/// the order is fixed, so the value does not depend on the CPU.
+/// Partial sums per dot product: lane l sums the products of the entries i ≡ l (mod 8),
+/// then the lanes are added as ((l0 + l4) + (l2 + l6)) + ((l1 + l5) + (l3 + l7)), then the
+/// tail in order. Every product
+/// of this module uses this one order, so [`add_at_b`] and [`at_a`] give [`dot`]'s value
+/// bit for bit, on any CPU.
+const LANES: usize = 8;
+
+/// `Σ_i a_i b_i` over the common length of the slices, in the order of [`LANES`].
 pub fn dot(a: &[f64], b: &[f64]) -> f64 {
     let n = a.len().min(b.len());
-    let (a, b) = (&a[..n], &b[..n]);
-    let mut acc = [0.0f64; 8];
-    let full = n / 8 * 8;
-    for (x, y) in a[..full].chunks_exact(8).zip(b[..full].chunks_exact(8)) {
-        for l in 0..8 {
-            acc[l] += x[l] * y[l];
-        }
-    }
-    let mut s = ((acc[0] + acc[4]) + (acc[1] + acc[5])) + ((acc[2] + acc[6]) + (acc[3] + acc[7]));
-    for i in full..n {
-        s += a[i] * b[i];
+    let full = n / LANES * LANES;
+    let mut acc = [[[0.0f64; LANES]; 1]; 1];
+    lanes::<1, 1>(&mut acc, [&a[..full]], [&b[..full]]);
+    finish(&acc[0][0], &a[full..n], &b[full..n])
+}
+
+/// The eight lanes of one product reduced in the order of [`LANES`], then the tail.
+#[inline(always)]
+fn finish(c: &[f64; LANES], ta: &[f64], tb: &[f64]) -> f64 {
+    let mut s = ((c[0] + c[4]) + (c[2] + c[6])) + ((c[1] + c[5]) + (c[3] + c[7]));
+    for (x, y) in ta.iter().zip(tb) {
+        s += x * y;
     }
     s
 }
 
+/// Adds to the lanes of the A × B products of the columns `a` with the columns `b` (all
+/// of one length, a multiple of [`LANES`]) in one pass over the rows: each chunk of a
+/// column is loaded once for all the products it enters.
+#[inline(always)]
+fn lanes<const A: usize, const B: usize>(
+    acc: &mut [[[f64; LANES]; B]; A],
+    a: [&[f64]; A],
+    b: [&[f64]; B],
+) {
+    let full = a.first().map_or(0, |c| c.len());
+    let xa: [&[f64]; A] = std::array::from_fn(|k| &a[k][..full]);
+    let xb: [&[f64]; B] = std::array::from_fn(|k| &b[k][..full]);
+    let mut o = 0;
+    while o + LANES <= full {
+        let ys: [[f64; LANES]; B] = std::array::from_fn(|q| {
+            let mut y = [0.0; LANES];
+            y.copy_from_slice(&xb[q][o..o + LANES]);
+            y
+        });
+        for (ac, col) in acc.iter_mut().zip(&xa) {
+            let mut x = [0.0; LANES];
+            x.copy_from_slice(&col[o..o + LANES]);
+            for (aq, y) in ac.iter_mut().zip(&ys) {
+                for l in 0..LANES {
+                    aq[l] += x[l] * y[l];
+                }
+            }
+        }
+        o += LANES;
+    }
+}
+
+/// Rows per tile of [`add_at_b`]: 256 rows of the columns of one block stay in the core's
+/// L1 cache while every pair of the block is accumulated.
+const TILE: usize = 256;
+
 /// `acc += aᵀ b`: entry (i, j) gains [`dot`] of column i of `a` and column j of `b` (`a`
-/// and `b` with the same rows).
+/// and `b` with the same rows), bit for bit: the same lanes, updated in the same row order,
+/// only visited tile by tile ([`TILE`] rows, several columns of `a` by several of `b` per
+/// pass).
 ///
 /// # Panics
 /// When the shapes disagree.
@@ -388,25 +432,107 @@ pub fn add_at_b(acc: &mut MatMut<'_, f64>, a: MatRef<'_, f64>, b: MatRef<'_, f64
         (a.ncols, b.ncols),
         "aᵀb: result shape"
     );
-    for j in 0..b.ncols {
-        let bj = b.col(j);
-        for i in 0..a.ncols {
-            acc[(i, j)] += dot(a.col(i), bj);
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::arch::is_x86_feature_detected!("avx512f") {
+            // SAFETY: the CPU supports AVX-512F (checked just above).
+            return unsafe { add_at_b_avx512(acc, a, b) };
+        }
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU supports AVX2 (checked just above).
+            return unsafe { add_at_b_avx2(acc, a, b) };
+        }
+    }
+    add_at_b_body::<2, 2>(acc, a, b);
+}
+
+/// [`add_at_b_body`] compiled with AVX-512F: sixteen products of four columns by four, one
+/// register of eight lanes each. The same IEEE operations in the same order on every path
+/// (Rust never fuses a multiply and an add), so the same values on any CPU.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+unsafe fn add_at_b_avx512(acc: &mut MatMut<'_, f64>, a: MatRef<'_, f64>, b: MatRef<'_, f64>) {
+    add_at_b_body::<4, 4>(acc, a, b);
+}
+
+/// [`add_at_b_body`] compiled with AVX2 (the release profile targets baseline x86-64): two
+/// columns by two, two registers of four lanes each.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn add_at_b_avx2(acc: &mut MatMut<'_, f64>, a: MatRef<'_, f64>, b: MatRef<'_, f64>) {
+    add_at_b_body::<2, 2>(acc, a, b);
+}
+
+/// Tile by tile of rows, the products `W` columns of `a` by `V` of `b` at a time (4 × 4 or
+/// 2 × 2; narrower blocks at the edges), each product's lanes kept between tiles.
+#[inline(always)]
+fn add_at_b_body<const W: usize, const V: usize>(
+    acc: &mut MatMut<'_, f64>,
+    a: MatRef<'_, f64>,
+    b: MatRef<'_, f64>,
+) {
+    let (n, p, q) = (a.nrows, a.ncols, b.ncols);
+    let full = n / LANES * LANES;
+    let mut lane = vec![[0.0f64; LANES]; p * q];
+    let mut r0 = 0;
+    while r0 < full {
+        let r1 = (r0 + TILE).min(full);
+        let mut j = 0;
+        while j < q {
+            let jw = match (q - j).min(V) {
+                3 => 2,
+                w => w,
+            };
+            let mut i = 0;
+            while i < p {
+                let iw = (p - i).min(W);
+                macro_rules! block {
+                    ($na:literal, $nb:literal) => {{
+                        let mut ac: [[[f64; LANES]; $nb]; $na] = std::array::from_fn(|k| {
+                            std::array::from_fn(|l| lane[(j + l) * p + i + k])
+                        });
+                        lanes::<$na, $nb>(
+                            &mut ac,
+                            std::array::from_fn(|k| &a.col(i + k)[r0..r1]),
+                            std::array::from_fn(|k| &b.col(j + k)[r0..r1]),
+                        );
+                        for (k, row) in ac.iter().enumerate() {
+                            for (l, v) in row.iter().enumerate() {
+                                lane[(j + l) * p + i + k] = *v;
+                            }
+                        }
+                        $na
+                    }};
+                }
+                i += match (iw, jw) {
+                    (4, 4) => block!(4, 4),
+                    (2, 4) => block!(2, 4),
+                    (1, 4) => block!(1, 4),
+                    (4, 2) => block!(4, 2),
+                    (4, _) => block!(4, 1),
+                    (2, 2) => block!(2, 2),
+                    (2, _) => block!(2, 1),
+                    (_, 2) => block!(1, 2),
+                    _ => block!(1, 1),
+                };
+            }
+            j += jw;
+        }
+        r0 = r1;
+    }
+    for jj in 0..q {
+        for ii in 0..p {
+            let v = finish(&lane[jj * p + ii], &a.col(ii)[full..n], &b.col(jj)[full..n]);
+            acc[(ii, jj)] += v;
         }
     }
 }
 
-/// `aᵀ a`, symmetric (each pair computed once).
+/// `aᵀ a`, symmetric (each pair computed once, as [`dot`]).
 pub fn at_a(a: MatRef<'_, f64>) -> Mat<f64> {
     let p = a.ncols;
     let mut g = Mat::zeros(p, p);
-    for j in 0..p {
-        for i in 0..=j {
-            let v = dot(a.col(i), a.col(j));
-            g[(i, j)] = v;
-            g[(j, i)] = v;
-        }
-    }
+    add_at_b(&mut g.as_mut(), a, a);
     g
 }
 
@@ -455,42 +581,7 @@ pub fn thin_svd(a: MatRef<'_, f64>) -> Option<(Mat<f64>, Vec<f64>, Mat<f64>)> {
         let (u, s, v) = thin_svd(at.as_ref())?;
         return Some((v, s, u));
     }
-    if (0..p).any(|j| a.col(j).iter().any(|x| !x.is_finite())) {
-        return None;
-    }
-    let mut w = a.to_owned();
-    let mut v = Mat::from_fn(p, p, |i, j| if i == j { 1.0 } else { 0.0 });
-    let tol = (n.max(1) as f64) * f64::EPSILON;
-    let mut converged = p < 2;
-    for _ in 0..60 {
-        let mut rotated = false;
-        for j in 0..p {
-            for k in j + 1..p {
-                let alpha = dot(w.col(j), w.col(j));
-                let beta = dot(w.col(k), w.col(k));
-                let gamma = dot(w.col(j), w.col(k));
-                if gamma == 0.0 || gamma.abs() <= tol * (alpha * beta).sqrt() {
-                    continue;
-                }
-                rotated = true;
-                let zeta = (beta - alpha) / (2.0 * gamma);
-                let t = zeta.signum() / (zeta.abs() + (1.0 + zeta * zeta).sqrt());
-                let t = if zeta == 0.0 { 1.0 } else { t };
-                let c = 1.0 / (1.0 + t * t).sqrt();
-                let s = c * t;
-                rotate(&mut w, j, k, c, s);
-                rotate(&mut v, j, k, c, s);
-            }
-        }
-        if !rotated {
-            converged = true;
-            break;
-        }
-    }
-    if !converged {
-        return None;
-    }
-    let norms: Vec<f64> = (0..p).map(|j| dot(w.col(j), w.col(j)).sqrt()).collect();
+    let (w, norms, v) = jacobi(a, true)?;
     let mut order: Vec<usize> = (0..p).collect();
     order.sort_by(|&x, &y| norms[y].total_cmp(&norms[x]));
     let s: Vec<f64> = order.iter().map(|&j| norms[j]).collect();
@@ -504,6 +595,58 @@ pub fn thin_svd(a: MatRef<'_, f64>) -> Option<(Mat<f64>, Vec<f64>, Mat<f64>)> {
     });
     let vs = Mat::from_fn(p, p, |i, c| v[(i, order[c])]);
     Some((u, s, vs))
+}
+
+/// One-sided Jacobi on the columns of `a` (n ≥ p): the rotated columns W = A V, their
+/// norms (the singular values, unordered) and V when `vectors` (else an empty matrix).
+/// Each sweep starts from exact squared norms and updates them by the rotations (α' = α −
+/// tγ, β' = β + tγ), so a pair costs one dot product.
+fn jacobi(a: MatRef<'_, f64>, vectors: bool) -> Option<(Mat<f64>, Vec<f64>, Mat<f64>)> {
+    let p = a.ncols;
+    if (0..p).any(|j| a.col(j).iter().any(|x| !x.is_finite())) {
+        return None;
+    }
+    let mut w = a.to_owned();
+    let mut v = if vectors {
+        Mat::from_fn(p, p, |i, j| if i == j { 1.0 } else { 0.0 })
+    } else {
+        Mat::zeros(0, 0)
+    };
+    let tol = (a.nrows.max(1) as f64) * f64::EPSILON;
+    let mut converged = p < 2;
+    for _ in 0..60 {
+        let mut sq: Vec<f64> = (0..p).map(|j| dot(w.col(j), w.col(j))).collect();
+        let mut rotated = false;
+        for j in 0..p {
+            for k in j + 1..p {
+                let (alpha, beta) = (sq[j], sq[k]);
+                let gamma = dot(w.col(j), w.col(k));
+                if gamma == 0.0 || gamma.abs() <= tol * (alpha * beta).sqrt() {
+                    continue;
+                }
+                rotated = true;
+                let zeta = (beta - alpha) / (2.0 * gamma);
+                let t = zeta.signum() / (zeta.abs() + (1.0 + zeta * zeta).sqrt());
+                let c = 1.0 / (1.0 + t * t).sqrt();
+                let s = c * t;
+                rotate(&mut w, j, k, c, s);
+                if vectors {
+                    rotate(&mut v, j, k, c, s);
+                }
+                sq[j] = (alpha - t * gamma).max(0.0);
+                sq[k] = beta + t * gamma;
+            }
+        }
+        if !rotated {
+            converged = true;
+            break;
+        }
+    }
+    if !converged {
+        return None;
+    }
+    let norms = (0..p).map(|j| dot(w.col(j), w.col(j)).sqrt()).collect();
+    Some((w, norms, v))
 }
 
 /// Columns j and k of `m` rotated: (x_j, x_k) ← (c x_j − s x_k, s x_j + c x_k).
@@ -524,8 +667,18 @@ pub fn singular_values(a: MatRef<'_, f64>) -> Result<Vec<f64>, String> {
     if a.nrows == 0 || a.ncols == 0 {
         return Ok(Vec::new());
     }
-    thin_svd(a)
-        .map(|(_, s, _)| s)
+    let at;
+    let a = if a.nrows < a.ncols {
+        at = Mat::from_fn(a.ncols, a.nrows, |i, j| a[(j, i)]);
+        at.as_ref()
+    } else {
+        a
+    };
+    jacobi(a, false)
+        .map(|(_, mut s, _)| {
+            s.sort_by(|x, y| y.total_cmp(x));
+            s
+        })
         .ok_or_else(|| "singular value decomposition: non-finite entry or no convergence".into())
 }
 

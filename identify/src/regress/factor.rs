@@ -5,7 +5,7 @@
 //! identifiability priority order ([`crate::identifiability::priority_order`]). The targets
 //! are appended as extra columns and the whole n × (p + t) matrix is factorised once,
 //! `[Θ_s P | y_1 … y_t] = Q R_ext` (Householder, [`crate::numerics::qr::householder_qr`], row-blocked;
-//! not `faer`'s QR: it is rank-revealing and skips dependent columns, leaving an echelon
+//! not a pivoting library QR, which reorders or skips dependent columns and leaves an echelon
 //! form in which |R_kk| is no longer the greedy residual of column k). Then for any subset
 //! S of columns,
 //!
