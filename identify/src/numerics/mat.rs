@@ -362,7 +362,9 @@ impl IndexMut<(usize, usize)> for MatMut<'_, f64> {
 /// bit for bit, on any CPU.
 const LANES: usize = 8;
 
-/// `Σ_i a_i b_i` over the common length of the slices, in the order of [`LANES`].
+/// `Σ_i a_i b_i` over the common length of the slices: eight partial sums (lane l sums the
+/// products of the entries i ≡ l mod 8), added as ((l0 + l4) + (l2 + l6)) + ((l1 + l5) +
+/// (l3 + l7)), then the tail in order.
 pub fn dot(a: &[f64], b: &[f64]) -> f64 {
     let n = a.len().min(b.len());
     let full = n / LANES * LANES;
@@ -419,8 +421,7 @@ const TILE: usize = 256;
 
 /// `acc += aᵀ b`: entry (i, j) gains [`dot`] of column i of `a` and column j of `b` (`a`
 /// and `b` with the same rows), bit for bit: the same lanes, updated in the same row order,
-/// only visited tile by tile ([`TILE`] rows, several columns of `a` by several of `b` per
-/// pass).
+/// only visited tile by tile (256 rows, several columns of `a` by several of `b` per pass).
 ///
 /// # Panics
 /// When the shapes disagree.
