@@ -506,13 +506,14 @@ fn add_at_b_body<const W: usize, const V: usize>(
                     }};
                 }
                 i += match (iw, jw) {
+                    // `jw` is 4, 2 or 1, and every arm covers all `jw` columns of `b`
                     (4, 4) => block!(4, 4),
-                    (2, 4) => block!(2, 4),
-                    (1, 4) => block!(1, 4),
                     (4, 2) => block!(4, 2),
                     (4, _) => block!(4, 1),
+                    (2, 4) => block!(2, 4),
                     (2, 2) => block!(2, 2),
                     (2, _) => block!(2, 1),
+                    (_, 4) => block!(1, 4),
                     (_, 2) => block!(1, 2),
                     _ => block!(1, 1),
                 };
@@ -728,6 +729,37 @@ mod tests {
         assert_eq!(t[(1, 0)], a[(0, 0)]);
         assert_eq!(t[(4, 1)], a[(3, 1)]);
         assert_eq!(t[(0, 0)], 0.0);
+    }
+
+    /// Every block shape, several tiles and a tail: each entry is `dot`'s value bit for bit
+    /// (the tiles keep each product's lanes and their order), and `dot` is the plain sum to
+    /// rounding.
+    #[test]
+    fn tiled_products_are_dot_bit_for_bit_across_tiles_and_tails() {
+        let mut seed = 3;
+        for (n, p, q) in [
+            (1003, 7, 5),
+            (512, 4, 4),
+            (9, 3, 1),
+            (2050, 1, 6),
+            (7, 2, 3),
+        ] {
+            let a = Mat::from_fn(n, p, |_, _| lcg(&mut seed));
+            let b = Mat::from_fn(n, q, |_, _| lcg(&mut seed));
+            let mut acc = Mat::from_fn(p, q, |i, j| (i + 2 * j) as f64);
+            add_at_b(&mut acc.as_mut(), a.as_ref(), b.as_ref());
+            let mut body = Mat::from_fn(p, q, |i, j| (i + 2 * j) as f64);
+            add_at_b_body::<2, 2>(&mut body.as_mut(), a.as_ref(), b.as_ref());
+            for i in 0..p {
+                for j in 0..q {
+                    let d = dot(a.col(i), b.col(j));
+                    assert_eq!(acc[(i, j)].to_bits(), ((i + 2 * j) as f64 + d).to_bits());
+                    assert_eq!(body[(i, j)].to_bits(), acc[(i, j)].to_bits());
+                    let plain: f64 = (0..n).map(|r| a[(r, i)] * b[(r, j)]).sum();
+                    assert!((d - plain).abs() < 1e-12, "({n},{p},{q}) {i} {j}");
+                }
+            }
+        }
     }
 
     #[test]
