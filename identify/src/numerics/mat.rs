@@ -364,8 +364,9 @@ const LANES: usize = 8;
 
 /// `Σ_i a_i b_i` over the common length of the slices: eight partial sums (lane l sums the
 /// products of the entries i ≡ l mod 8), added as ((l0 + l4) + (l2 + l6)) + ((l1 + l5) +
-/// (l3 + l7)), then the tail in order.
-pub fn dot(a: &[f64], b: &[f64]) -> f64 {
+/// (l3 + l7)), then the tail in order. Kept beside [`crate::numerics::qr::dot`] (sixteen
+/// lanes) because [`add_at_b`] must equal this order bit for bit, tile by tile.
+fn dot(a: &[f64], b: &[f64]) -> f64 {
     let n = a.len().min(b.len());
     let full = n / LANES * LANES;
     let mut acc = [[[0.0f64; LANES]; 1]; 1];
@@ -419,7 +420,7 @@ fn lanes<const A: usize, const B: usize>(
 /// L1 cache while every pair of the block is accumulated.
 const TILE: usize = 256;
 
-/// `acc += aᵀ b`: entry (i, j) gains [`dot`] of column i of `a` and column j of `b` (`a`
+/// `acc += aᵀ b`: entry (i, j) gains the eight-lane dot product of column i of `a` and column j of `b` (`a`
 /// and `b` with the same rows), bit for bit: the same lanes, updated in the same row order,
 /// only visited tile by tile (256 rows, several columns of `a` by several of `b` per pass).
 ///
@@ -530,7 +531,7 @@ fn add_at_b_body<const W: usize, const V: usize>(
     }
 }
 
-/// `aᵀ a`, symmetric (each pair computed once, as [`dot`]).
+/// `aᵀ a`, symmetric (each pair computed once, in the same order).
 pub fn at_a(a: MatRef<'_, f64>) -> Mat<f64> {
     let p = a.ncols;
     let mut g = Mat::zeros(p, p);
