@@ -66,18 +66,16 @@ impl NodeChan {
         if let Some(g) = self.grams.lock().ok().and_then(|m| m.get(key).cloned()) {
             return g;
         }
-        // column by column, each raw column dropped once projected (peak: the projected
-        // set and one raw column, not both sets)
-        let z = cols();
-        let mut zt = Vec::with_capacity(z.len());
-        let mut absorbed = Vec::with_capacity(z.len());
-        let mut a = Vec::with_capacity(z.len());
-        for c in z {
-            let (r, ac) = self.qr.residual_and_solve(&c);
-            absorbed.push(dot(&r, &r) <= 1e-12 * dot(&c, &c));
-            a.push(ac);
-            zt.push(r);
-        }
+        // projected in place, four columns at a time through the support's reflectors
+        // (peak: one set of columns, not the raw and the projected ones)
+        let mut zt = cols();
+        let norms: Vec<f64> = zt.iter().map(|c| dot(c, c)).collect();
+        let a = self.qr.residuals_and_solves(&mut zt);
+        let absorbed = zt
+            .iter()
+            .zip(&norms)
+            .map(|(r, &n)| dot(r, r) <= 1e-12 * n)
+            .collect();
         let g = gram_matrix(&zt);
         let b = zt.iter().map(|r| dot(r, &self.res_y)).collect();
         let out = Arc::new(NodeGram { g, b, absorbed, a });
@@ -101,6 +99,10 @@ const GRAM_TILE: usize = 512;
 pub(crate) fn gram_matrix(z: &[Vec<f64>]) -> Vec<Vec<f64>> {
     #[cfg(target_arch = "x86_64")]
     {
+        if std::arch::is_x86_feature_detected!("avx512f") {
+            // SAFETY: the CPU supports AVX-512F (checked just above); as for AVX2 below
+            return unsafe { gram_matrix_avx512(z) };
+        }
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: the CPU supports AVX2 (checked just above); the function only differs
             // from the portable one by the instructions the compiler may use (no fused
@@ -117,6 +119,15 @@ pub(crate) fn gram_matrix(z: &[Vec<f64>]) -> Vec<Vec<f64>> {
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn gram_matrix_avx2(z: &[Vec<f64>]) -> Vec<Vec<f64>> {
+    gram_matrix_body(z)
+}
+
+/// [`gram_matrix_body`] compiled with AVX-512F: a pair's sixteen partial sums in two
+/// registers, the four pairs of a 2 × 2 block in eight (the same IEEE operations in the same
+/// order, so bit for bit the portable result).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+unsafe fn gram_matrix_avx512(z: &[Vec<f64>]) -> Vec<Vec<f64>> {
     gram_matrix_body(z)
 }
 
@@ -146,38 +157,110 @@ fn pair_tile2(ac: &mut [f64; 16], ad: &mut [f64; 16], a: &[f64], b: &[f64], c: &
     }
 }
 
-/// The body of [`gram_matrix`]: per tile, per column j, the pairs (j, k ≥ j) two at a time.
+/// The three pairs (a, a), (a, b), (b, b) of a diagonal 2 × 2 block over a tile, each
+/// updated in the same order as [`pair_tile`] (two loads for three pairs).
+#[inline(always)]
+fn pair_tile_diag(
+    aa: &mut [f64; 16],
+    ab: &mut [f64; 16],
+    bb: &mut [f64; 16],
+    a: &[f64],
+    b: &[f64],
+) {
+    // local copies: the sums stay in registers (three `&mut` the compiler must otherwise
+    // reload and store every chunk in case they alias)
+    let (mut p, mut q, mut r) = (*aa, *ab, *bb);
+    for (x, y) in a.chunks_exact(16).zip(b.chunks_exact(16)) {
+        for l in 0..16 {
+            p[l] += x[l] * x[l];
+            q[l] += x[l] * y[l];
+            r[l] += y[l] * y[l];
+        }
+    }
+    (*aa, *ab, *bb) = (p, q, r);
+}
+
+/// The four pairs (a, c), (a, d), (b, c), (b, d) of a 2 × 2 block over a tile, each updated
+/// in the same order as [`pair_tile`] (four loads for four pairs instead of six).
+#[inline(always)]
+fn pair_tile4(acc: [&mut [f64; 16]; 4], a: &[f64], b: &[f64], c: &[f64], d: &[f64]) {
+    let [ac, ad, bc, bd] = acc;
+    // local copies: the sums stay in registers (references in an array carry no
+    // no-alias promise, so the compiler would reload and store them every chunk)
+    let (mut p, mut q, mut r, mut t) = (*ac, *ad, *bc, *bd);
+    for (((x, y), u), w) in a
+        .chunks_exact(16)
+        .zip(b.chunks_exact(16))
+        .zip(c.chunks_exact(16))
+        .zip(d.chunks_exact(16))
+    {
+        for l in 0..16 {
+            p[l] += x[l] * u[l];
+            q[l] += x[l] * w[l];
+            r[l] += y[l] * u[l];
+            t[l] += y[l] * w[l];
+        }
+    }
+    (*ac, *ad, *bc, *bd) = (p, q, r, t);
+}
+
+/// The body of [`gram_matrix`]: per tile, the upper triangle in 2 × 2 blocks of pairs
+/// (rows j, j + 1 against columns k, k + 1), each pair's partial sums kept at its index of
+/// the packed triangle. A product is commutative in IEEE arithmetic, so a pair visited as
+/// (k, j) adds the same values as (j, k).
 #[inline(always)]
 fn gram_matrix_body(z: &[Vec<f64>]) -> Vec<Vec<f64>> {
     let m = z.len();
     let n = z.iter().map(Vec::len).min().unwrap_or(0);
     let full = n / 16 * 16;
+    // index of pair (j, k ≥ j) in the packed upper triangle, row by row
+    let tri = |j: usize, k: usize| j * (2 * m - j + 1) / 2 + (k - j);
     let mut acc = vec![[0.0f64; 16]; m * (m + 1) / 2];
     let mut s0 = 0;
     while s0 < full {
         let s1 = (s0 + GRAM_TILE).min(full);
-        let mut p = 0;
-        for j in 0..m {
-            let a = &z[j][s0..s1];
-            let mut k = j;
+        let col = |j: usize| &z[j][s0..s1];
+        let mut j = 0;
+        while j + 1 < m {
+            // the diagonal block
+            {
+                let (p, q) = (tri(j, j), tri(j + 1, j + 1));
+                let (lo, hi) = acc.split_at_mut(q);
+                let (d0, d1) = lo[p..p + 2].split_at_mut(1);
+                pair_tile_diag(&mut d0[0], &mut d1[0], &mut hi[0], col(j), col(j + 1));
+            }
+            let mut k = j + 2;
             while k + 1 < m {
-                let (lo, hi) = acc[p..p + 2].split_at_mut(1);
-                pair_tile2(&mut lo[0], &mut hi[0], a, &z[k][s0..s1], &z[k + 1][s0..s1]);
-                p += 2;
+                let (p, q) = (tri(j, k), tri(j + 1, k));
+                let (lo, hi) = acc.split_at_mut(q);
+                let (r0, r1) = hi[..2].split_at_mut(1);
+                let (l0, l1) = lo[p..p + 2].split_at_mut(1);
+                pair_tile4(
+                    [&mut l0[0], &mut l1[0], &mut r0[0], &mut r1[0]],
+                    col(j),
+                    col(j + 1),
+                    col(k),
+                    col(k + 1),
+                );
                 k += 2;
             }
             if k < m {
-                pair_tile(&mut acc[p], a, &z[k][s0..s1]);
-                p += 1;
+                // the last column against both rows: pairs (j, k) and (j + 1, k)
+                let (p, q) = (tri(j, k), tri(j + 1, k));
+                let (lo, hi) = acc.split_at_mut(q);
+                pair_tile2(&mut lo[p], &mut hi[0], col(k), col(j), col(j + 1));
             }
+            j += 2;
+        }
+        if j < m {
+            pair_tile(&mut acc[tri(j, j)], col(j), col(j));
         }
         s0 = s1;
     }
     let mut g = vec![vec![0.0; m]; m];
-    let mut p = 0;
     for j in 0..m {
         for k in j..m {
-            let ac = &acc[p];
+            let ac = &acc[tri(j, k)];
             let mut s = 0.0;
             for l in 0..4 {
                 s += (ac[l] + ac[l + 4]) + (ac[l + 8] + ac[l + 12]);
@@ -187,7 +270,6 @@ fn gram_matrix_body(z: &[Vec<f64>]) -> Vec<Vec<f64>> {
             }
             g[j][k] = s;
             g[k][j] = s;
-            p += 1;
         }
     }
     g
@@ -776,8 +858,11 @@ mod tests {
     fn tiled_gram_is_dot_bit_for_bit() {
         // lengths around the tile and chunk sizes, values spanning magnitudes (a
         // reordered sum would differ in the last bits)
-        for n in [0usize, 5, 16, 511, 512, 1000, 2 * GRAM_TILE + 37] {
-            let z: Vec<Vec<f64>> = (0..7)
+        for (m, n) in [0usize, 5, 16, 511, 512, 1000, 2 * GRAM_TILE + 37]
+            .into_iter()
+            .flat_map(|n| [(7, n), (8, n), (1, n)])
+        {
+            let z: Vec<Vec<f64>> = (0..m)
                 .map(|j| {
                     (0..n)
                         .map(|i| {
@@ -787,12 +872,22 @@ mod tests {
                         .collect()
                 })
                 .collect();
-            // the dispatched (AVX2 where the CPU has it) and the portable body, two pairs
-            // at a time and the odd one (7 columns)
+            // the dispatched (AVX-512F or AVX2 where the CPU has it) and the portable body;
+            // every block shape: diagonal, 2 × 2, the last column against two rows (7), the
+            // last row alone (7 and 1), none left over (8)
             let g = gram_matrix(&z);
             let g_portable = gram_matrix_body(&z);
-            for j in 0..7 {
-                for k in 0..7 {
+            #[cfg(target_arch = "x86_64")]
+            if std::arch::is_x86_feature_detected!("avx2") {
+                // SAFETY: the CPU supports AVX2 (checked just above)
+                let g2 = unsafe { gram_matrix_avx2(&z) };
+                let bits = |g: &[Vec<f64>]| -> Vec<u64> {
+                    g.iter().flatten().map(|v| v.to_bits()).collect()
+                };
+                assert_eq!(bits(&g2), bits(&g_portable), "n {n}, m {m}");
+            }
+            for j in 0..m {
+                for k in 0..m {
                     assert_eq!(
                         g[j][k].to_bits(),
                         dot(&z[j], &z[k]).to_bits(),

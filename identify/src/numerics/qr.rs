@@ -350,6 +350,117 @@ fn apply_reflectors_body(reflectors: &[(Vec<f64>, f64)], x: &mut [f64], reverse:
     }
 }
 
+/// Four columns at a time: each x_b ← H_{m−1} ⋯ H₀ x_b (`reverse`: H₀ ⋯ H_{m−1} x_b), with
+/// each reflector's rows read once for the four. Every column gets exactly the operations
+/// of [`apply_reflectors`] in the same order (its own sixteen partial sums of each dot
+/// product, reduced the same way), so bit for bit its result. Dispatched like it.
+fn apply_reflectors4(reflectors: &[(Vec<f64>, f64)], xs: [&mut [f64]; 4], reverse: bool) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::arch::is_x86_feature_detected!("avx512f") {
+            // SAFETY: the CPU supports AVX-512F (checked just above).
+            return unsafe { apply_reflectors4_avx512(reflectors, xs, reverse) };
+        }
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU supports AVX2 (checked just above).
+            return unsafe { apply_reflectors4_avx2(reflectors, xs, reverse) };
+        }
+    }
+    apply_reflectors4_body(reflectors, xs, reverse);
+}
+
+/// [`apply_reflectors4_body`] compiled with AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn apply_reflectors4_avx2(
+    reflectors: &[(Vec<f64>, f64)],
+    xs: [&mut [f64]; 4],
+    reverse: bool,
+) {
+    apply_reflectors4_body(reflectors, xs, reverse);
+}
+
+/// [`apply_reflectors4_body`] compiled with AVX-512F.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f")]
+unsafe fn apply_reflectors4_avx512(
+    reflectors: &[(Vec<f64>, f64)],
+    xs: [&mut [f64]; 4],
+    reverse: bool,
+) {
+    apply_reflectors4_body(reflectors, xs, reverse);
+}
+
+#[inline(always)]
+fn apply_reflectors4_body(reflectors: &[(Vec<f64>, f64)], xs: [&mut [f64]; 4], reverse: bool) {
+    let [x0, x1, x2, x3] = xs;
+    let m = reflectors.len();
+    // no closure: a closure is not compiled with its caller's target features
+    for i in 0..m {
+        let k = if reverse { m - 1 - i } else { i };
+        let (v, f) = &reflectors[k];
+        reflect4(
+            v,
+            *f,
+            &mut x0[k..],
+            &mut x1[k..],
+            &mut x2[k..],
+            &mut x3[k..],
+        );
+    }
+}
+
+/// [`reflect`] of four columns of `v`'s length: the four dot products in one pass over `v`
+/// (each with the sixteen partial sums of [`dot`], reduced as it does), then the four
+/// updates in one pass.
+#[inline(always)]
+fn reflect4(v: &[f64], f: f64, c0: &mut [f64], c1: &mut [f64], c2: &mut [f64], c3: &mut [f64]) {
+    // four `&mut` parameters (not an array of them): each carries the promise that it
+    // aliases nothing else, without which the updates below would not be vectorised
+    let n = v.len();
+    let (c0, c1, c2, c3) = (&mut c0[..n], &mut c1[..n], &mut c2[..n], &mut c3[..n]);
+    let mut acc = [[0.0f64; 16]; 4];
+    let full = n / 16 * 16;
+    for ((((a, b0), b1), b2), b3) in v[..full]
+        .chunks_exact(16)
+        .zip(c0.chunks_exact(16))
+        .zip(c1.chunks_exact(16))
+        .zip(c2.chunks_exact(16))
+        .zip(c3.chunks_exact(16))
+    {
+        for l in 0..16 {
+            acc[0][l] += a[l] * b0[l];
+            acc[1][l] += a[l] * b1[l];
+            acc[2][l] += a[l] * b2[l];
+            acc[3][l] += a[l] * b3[l];
+        }
+    }
+    let tails: [&[f64]; 4] = [&c0[full..], &c1[full..], &c2[full..], &c3[full..]];
+    let s: [f64; 4] = std::array::from_fn(|b| {
+        let ac = &acc[b];
+        let mut s = 0.0;
+        for k in 0..4 {
+            s += (ac[k] + ac[k + 4]) + (ac[k + 8] + ac[k + 12]);
+        }
+        for (x, y) in v[full..].iter().zip(tails[b]) {
+            s += x * y;
+        }
+        s * f
+    });
+    for ((((x, y0), y1), y2), y3) in v
+        .iter()
+        .zip(c0.iter_mut())
+        .zip(c1.iter_mut())
+        .zip(c2.iter_mut())
+        .zip(c3.iter_mut())
+    {
+        *y0 -= s[0] * x;
+        *y1 -= s[1] * x;
+        *y2 -= s[2] * x;
+        *y3 -= s[3] * x;
+    }
+}
+
 impl ThinQr {
     /// Factorises the columns `cols` (all of one length n), dropping dependent ones (see
     /// the type). A non-finite column is dropped too.
@@ -458,6 +569,42 @@ impl ThinQr {
         z[..self.reflectors.len()].fill(0.0);
         apply_reflectors(&self.reflectors, &mut z, true);
         (z, coefficients)
+    }
+
+    /// [`ThinQr::residual_and_solve`] of every column of `ys`, each replaced in place by its
+    /// residual; returns the coefficients, column by column. Columns go four at a time
+    /// through the reflectors (each reflector read once for four columns), every column bit
+    /// for bit its [`ThinQr::residual_and_solve`].
+    ///
+    /// # Panics
+    /// When a column is not of the factorised columns' length (a programming error).
+    #[track_caller]
+    pub fn residuals_and_solves(&self, ys: &mut [Vec<f64>]) -> Vec<Vec<f64>> {
+        let n = self.reflectors.first().map(|(v, _)| v.len());
+        assert!(
+            n.is_none_or(|n| ys.iter().all(|y| y.len() == n)),
+            "ThinQr: a column of another length"
+        );
+        let m = self.reflectors.len();
+        let mut out = Vec::with_capacity(ys.len());
+        let mut blocks = ys.chunks_exact_mut(4);
+        for blk in &mut blocks {
+            let [a, b, c, d] = blk else { unreachable!() };
+            apply_reflectors4(&self.reflectors, [a, b, c, d], false);
+            for y in blk.iter_mut() {
+                out.push(self.coefficients(y));
+                y[..m].fill(0.0);
+            }
+            let [a, b, c, d] = blk else { unreachable!() };
+            apply_reflectors4(&self.reflectors, [a, b, c, d], true);
+        }
+        for y in blocks.into_remainder() {
+            self.apply_qt(y);
+            out.push(self.coefficients(y));
+            y[..m].fill(0.0);
+            apply_reflectors(&self.reflectors, y, true);
+        }
+        out
     }
 
     /// The coefficients on the input columns (0 for dropped ones) from z = Qᵀy, by back
@@ -681,6 +828,38 @@ mod tests {
             apply_reflectors(&qr.reflectors, &mut a, reverse);
             apply_reflectors_body(&qr.reflectors, &mut b, reverse);
             assert_eq!(bits(&a), bits(&b), "reverse = {reverse}");
+        }
+        // four at a time and the rest one by one (six columns: one block, two left over),
+        // each column its own `residual_and_solve`; the portable four-column loop too
+        let ys: Vec<Vec<f64>> = (0..6)
+            .map(|j| {
+                y.iter()
+                    .enumerate()
+                    .map(|(i, v)| v * (1.0 + 0.1 * (i * j) as f64))
+                    .collect()
+            })
+            .collect();
+        let mut rs = ys.clone();
+        let xs = qr.residuals_and_solves(&mut rs);
+        for (j, yj) in ys.iter().enumerate() {
+            let (r, x) = qr.residual_and_solve(yj);
+            assert_eq!(bits(&rs[j]), bits(&r), "column {j}");
+            assert_eq!(bits(&xs[j]), bits(&x), "column {j}");
+        }
+        for reverse in [false, true] {
+            let mut a = ys[..4].to_vec();
+            let mut b = ys[..4].to_vec();
+            let [a0, a1, a2, a3] = &mut a[..] else {
+                unreachable!()
+            };
+            apply_reflectors4(&qr.reflectors, [a0, a1, a2, a3], reverse);
+            let [b0, b1, b2, b3] = &mut b[..] else {
+                unreachable!()
+            };
+            apply_reflectors4_body(&qr.reflectors, [b0, b1, b2, b3], reverse);
+            for (p, q) in a.iter().zip(&b) {
+                assert_eq!(bits(p), bits(q), "reverse = {reverse}");
+            }
         }
     }
 }
