@@ -740,10 +740,24 @@ fn trapezoid(
     stride: usize,
     active: [bool; P],
 ) -> Option<Vec<f64>> {
+    #[cfg(target_arch = "x86_64")]
+    let avx2 = std::arch::is_x86_feature_detected!("avx2");
+    #[cfg(not(target_arch = "x86_64"))]
+    let avx2 = false;
     macro_rules! sizes {
         ($($k:literal),*) => {
             match n {
-                $($k => Some(trapezoid_n::<$k>(e, g0, g1, f, stride, active)),)*
+                $($k => Some(if avx2 {
+                    #[cfg(target_arch = "x86_64")]
+                    // SAFETY: the CPU supports AVX2 (checked above)
+                    unsafe {
+                        trapezoid_n_avx2::<$k>(e, g0, g1, f, stride, active)
+                    }
+                    #[cfg(not(target_arch = "x86_64"))]
+                    unreachable!()
+                } else {
+                    trapezoid_n::<$k>(e, g0, g1, f, stride, active)
+                }),)*
                 _ => None,
             }
         };
@@ -752,6 +766,24 @@ fn trapezoid(
     sizes!(4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18, 19, 20)
 }
 
+/// [`trapezoid_n`] compiled with AVX2 (runtime-dispatched: the release profile targets
+/// baseline x86-64, two lanes per instruction): each entry gets the same IEEE operations in
+/// the same order (Rust never contracts `a * b + c` into a fused multiply-add), so bit for
+/// bit the portable result, at four lanes.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn trapezoid_n_avx2<const N: usize>(
+    e: &[f64],
+    g0: &[f64],
+    g1: &[f64],
+    f: &[[[f64; 4]; 2]],
+    stride: usize,
+    active: [bool; P],
+) -> Vec<f64> {
+    trapezoid_n::<N>(e, g0, g1, f, stride, active)
+}
+
+#[inline(always)]
 fn trapezoid_n<const N: usize>(
     e: &[f64],
     g0: &[f64],
@@ -772,7 +804,10 @@ fn trapezoid_n<const N: usize>(
             gb[r][p] = g1[r * P + p];
         }
     }
-    let forcing = |fj: &[[f64; 4]; 2], phi: &[[f64; N]; N]| -> [[f64; N]; P] {
+    // a function, not a closure: a closure is not compiled with its caller's target
+    // features (the AVX2 build above)
+    #[inline(always)]
+    fn forcing<const N: usize>(fj: &[[f64; 4]; 2], phi: &[[f64; N]; N]) -> [[f64; N]; P] {
         let mut q = [[0.0; N]; P];
         for p in 0..P {
             for c in 0..4 {
@@ -785,7 +820,7 @@ fn trapezoid_n<const N: usize>(
             }
         }
         q
-    };
+    }
     let mut phi = [[0.0; N]; N];
     for (i, row) in phi.iter_mut().enumerate() {
         row[i] = 1.0;
@@ -1336,5 +1371,9 @@ mod tests {
         for (x, y) in a.iter().zip(&b) {
             assert!((x - y).abs() < 1e-13 * (1.0 + y.abs()), "{x} vs {y}");
         }
+        // the dispatched build (AVX2 where the CPU has it) is the portable one bit for bit
+        let portable = trapezoid_n::<6>(&e, &g0, &g1, &f, 2, [true, true]);
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&a), bits(&portable));
     }
 }
