@@ -564,11 +564,18 @@ impl ThinQr {
     /// When `y` is not of the columns' length (a programming error).
     pub fn residual_and_solve(&self, y: &[f64]) -> (Vec<f64>, Vec<f64>) {
         let mut z = y.to_vec();
-        self.apply_qt(&mut z);
-        let coefficients = self.coefficients(&z);
-        z[..self.reflectors.len()].fill(0.0);
-        apply_reflectors(&self.reflectors, &mut z, true);
+        let coefficients = self.residual_and_solve_in_place(&mut z);
         (z, coefficients)
+    }
+
+    /// [`ThinQr::residual_and_solve`] with `z` replaced in place by its residual; returns
+    /// the coefficients.
+    fn residual_and_solve_in_place(&self, z: &mut [f64]) -> Vec<f64> {
+        self.apply_qt(z);
+        let coefficients = self.coefficients(z);
+        z[..self.reflectors.len()].fill(0.0);
+        apply_reflectors(&self.reflectors, z, true);
+        coefficients
     }
 
     /// [`ThinQr::residual_and_solve`] of every column of `ys`, each replaced in place by its
@@ -599,10 +606,7 @@ impl ThinQr {
             apply_reflectors4(&self.reflectors, [a, b, c, d], true);
         }
         for y in blocks.into_remainder() {
-            self.apply_qt(y);
-            out.push(self.coefficients(y));
-            y[..m].fill(0.0);
-            apply_reflectors(&self.reflectors, y, true);
+            out.push(self.residual_and_solve_in_place(y));
         }
         out
     }
