@@ -53,6 +53,7 @@ pub use figures::ranking::{
     RankingBar, RankingFigure, RankingPanel, ShareBar, ShareSegment, SharesFigure,
 };
 pub use figures::residual_spectra::{ResidualSpectraFigure, SpectraPanel};
+pub use figures::scale::{log_slope, ScaleFigure, ScalePanel};
 pub use figures::spectrum::{FreqMarker, SpectrumFigure};
 pub use figures::time_series::{TimePanel, TimeSeriesFigure};
 pub use figures::{Series, SeriesKind};

@@ -15,6 +15,7 @@ pub mod library;
 pub mod phase;
 pub mod ranking;
 pub mod residual_spectra;
+pub mod scale;
 pub mod spectrum;
 pub mod time_series;
 
