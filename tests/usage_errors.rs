@@ -100,6 +100,13 @@ fn bad_shard_and_branch_speeds_are_usage_errors_naming_the_flag() {
             vec!["diagnose", "--blind", "2", "--shard", "x", "--out", "s"],
             "--shard",
         ),
+        // the drawn-shapes benchmark shards too: the shard, not the pair, is refused
+        (
+            vec![
+                "diagnose", "--blind", "2", "--shapes", "--shard", "3/2", "--out", "s",
+            ],
+            "`3/2`: expected i/n",
+        ),
         (vec!["sweep", "spec.json", "--shard", "2/2"], "--shard"),
         (vec!["sweep", "spec.json", "--shard", "1/0"], "--shard"),
         (branch("9:5"), "--speeds"),

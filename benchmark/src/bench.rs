@@ -287,11 +287,18 @@ pub struct BlindOutcome {
     pub verdict: Option<Verdict>,
     /// Verdict confidence.
     pub confidence: f64,
-    /// True gap / noise-level gap (max over levels; 1 for effect-free sets).
+    /// True gap / noise-level gap (max over levels; 1 for effect-free sets); `null` when
+    /// the set failed.
+    #[serde(with = "nan_as_null")]
+    #[schemars(with = "Option<f64>")]
     pub gap_ratio: f64,
-    /// Headline plain shrink of the verdict (1 − after/before).
+    /// Headline plain shrink of the verdict (1 − after/before); `null` when the set failed.
+    #[serde(with = "nan_as_null")]
+    #[schemars(with = "Option<f64>")]
     pub shrink: f64,
-    /// Headline excess shrink of the verdict.
+    /// Headline excess shrink of the verdict; `null` when the set failed.
+    #[serde(with = "nan_as_null")]
+    #[schemars(with = "Option<f64>")]
     pub excess_shrink: f64,
     /// Plain held-out shrink of the true effect's own candidate, when it was scored.
     pub true_candidate_shrink: Option<f64>,

@@ -183,20 +183,27 @@ pub fn run_outcome(spec: &BlindSpec, opts: &BlindOptions) -> BlindOutcome {
     }
 }
 
-/// Runs the benchmark: `opts.n` sets drawn by [`draw_specs`], in parallel; a set that fails
+/// The `n` sets of the withheld-effect benchmark with master seed `seed` (set i's seed and
+/// strength depend on the seed and i alone; the truths are dealt over the n sets): the
+/// default benchmark's ([`draw_specs`]) or, with `shapes`, the drawn-shapes benchmark's
+/// truths, each set with its drawn campaign shape and physics
+/// ([`crate::bench::CampaignShape::draw_with_physics`]).
+pub fn blind_specs(n: usize, seed: u64, shapes: bool) -> Vec<BlindSpec> {
+    if !shapes {
+        return draw_specs(n, seed);
+    }
+    let mut specs = crate::bench::draw_specs_from(n, seed, &crate::bench::shapes_truths());
+    for s in &mut specs {
+        s.shape = Some(crate::bench::CampaignShape::draw_with_physics(s.seed));
+    }
+    specs
+}
+
+/// Runs the benchmark: `opts.n` sets drawn by [`blind_specs`], in parallel; a set that fails
 /// to generate or diagnose is recorded with its error (and counted as failed), never
 /// dropped. `observer` is called after each set.
 pub fn run_blind(opts: &BlindOptions, observer: &(dyn Fn(&BlindOutcome) + Sync)) -> BlindReport {
-    let mut specs = if opts.shapes {
-        crate::bench::draw_specs_from(opts.n, opts.seed, &crate::bench::shapes_truths())
-    } else {
-        draw_specs(opts.n, opts.seed)
-    };
-    if opts.shapes {
-        for s in &mut specs {
-            s.shape = Some(crate::bench::CampaignShape::draw_with_physics(s.seed));
-        }
-    }
+    let specs = blind_specs(opts.n, opts.seed, opts.shapes);
     let outcomes: Vec<BlindOutcome> = specs
         .par_iter()
         .map(|s| {

@@ -95,8 +95,9 @@ pub struct DiagnoseArgs {
     pub shard: Option<String>,
     /// With `--blind`: draw each set's campaign shape too (1–3 Table I configurations,
     /// 3–8 wind speeds, 3–8 amplitudes, alternate forms for a third, absolute balance
-    /// noise) and report the statistics per shape class.
-    #[arg(long, requires = "blind", conflicts_with = "shard")]
+    /// noise) and report the statistics per shape class (with `--shard`: the parts of this
+    /// benchmark, merged by `aeroform merge`).
+    #[arg(long, requires = "blind")]
     pub shapes: bool,
     /// With `--blind`: the benchmark at the bifurcation level instead (generated rigs with
     /// a withheld structural or aerodynamic effect, each a measured bifurcation diagram;

@@ -67,7 +67,7 @@ pub fn run(args: &DiagnoseArgs) -> anyhow::Result<()> {
             .clone()
             .unwrap_or_else(|| PathBuf::from("out/blind"));
         if let Some(s) = &args.shard {
-            return blind_shard(n, args.seed, s, &out);
+            return blind_shard(n, args.seed, args.shapes, s, &out);
         }
         if args.branch_level {
             let bench = benchmark::branch_bench::BranchBenchOptions {
@@ -291,9 +291,16 @@ fn blind(
 }
 
 /// One shard of the benchmark as a part document (`benchmark::sweep`).
-fn blind_shard(n: usize, seed: u64, shard: &str, out: &Path) -> anyhow::Result<()> {
+fn blind_shard(
+    n: usize,
+    seed: u64,
+    shapes: bool,
+    shard: &str,
+    out: &Path,
+) -> anyhow::Result<()> {
     let (i, k) = benchmark::sweep::parse_shard(shard)?;
-    let spec = benchmark::sweep::SweepSpec::Blind(benchmark::sweep::BlindSweep { n, seed });
+    let spec =
+        benchmark::sweep::SweepSpec::Blind(benchmark::sweep::BlindSweep { n, seed, shapes });
     spec.validate("--blind")?;
     let path = out.join(format!("blind.part-{i}-of-{k}.json"));
     crate::outdir::refuse_symlink(out, "--out")?;
