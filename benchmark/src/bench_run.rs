@@ -215,7 +215,9 @@ pub fn run_blind(opts: &BlindOptions, observer: &(dyn Fn(&BlindOutcome) + Sync))
     summarize(opts.seed, outcomes)
 }
 
-fn failed(spec: &BlindSpec, e: &Error, seconds: f64) -> BlindOutcome {
+/// The outcome of a set that failed to generate or diagnose: no verdict, `error` set, its
+/// gap ratio and shrinks NaN (written `null`).
+pub(crate) fn failed(spec: &BlindSpec, e: &Error, seconds: f64) -> BlindOutcome {
     BlindOutcome {
         spec: spec.clone(),
         verdict: None,

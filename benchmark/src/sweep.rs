@@ -862,21 +862,8 @@ mod tests {
     /// The outcome of a set that failed (what `merge` checks is the spec; its gap ratio and
     /// shrinks are NaN, written `null`: a failed set's part merged only since round 45).
     fn unrun(spec: &crate::bench::BlindSpec) -> Value {
-        serde_json::to_value(BlindOutcome {
-            spec: spec.clone(),
-            verdict: None,
-            confidence: 0.0,
-            gap_ratio: f64::NAN,
-            shrink: f64::NAN,
-            excess_shrink: f64::NAN,
-            true_candidate_shrink: None,
-            parameters: vec![],
-            error: Some("not run".into()),
-            seconds: 0.0,
-            uncovered_runs: None,
-            follow_up: None,
-        })
-        .unwrap()
+        let o = crate::bench_run::failed(spec, &sweep_err("test", "not run"), 0.0);
+        serde_json::to_value(o).unwrap()
     }
 
     #[test]
