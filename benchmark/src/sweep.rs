@@ -858,7 +858,6 @@ mod tests {
         assert_eq!(parse_shard("3/4").unwrap(), (3, 4));
     }
 
-    /// Issue 27 rows 3 and 4: counts are capped before anything is allocated.
     /// The outcome of a set that failed (what `merge` checks is the spec; its gap ratio and
     /// shrinks are NaN, written `null`: a failed set's part merged only since round 45).
     fn unrun(spec: &crate::bench::BlindSpec) -> Value {
@@ -904,6 +903,7 @@ mod tests {
         assert!(e.contains("altered or foreign"), "{e}");
     }
 
+    /// Issue 27 rows 3 and 4: counts are capped before anything is allocated.
     #[test]
     fn counts_are_capped() {
         let dir = tempfile::tempdir().unwrap();
