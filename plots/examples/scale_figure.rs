@@ -1,8 +1,8 @@
 //! The figure of docs/SCALE.md "Time against size": reads the CSV `scripts/scale-jobs` writes
 //! (`job,axis,size,wall_s,cpu_s,peak_mb,exit`), keeps the fastest run (CPU) of each job and
 //! size whose exit code is 0, and writes `scale-jobs.png` and `.svg` to DIR (docs/ keeps the
-//! PNG only); prints one
-//! markdown row per job (sizes, CPU and wall times, log–log slopes, peak memory).
+//! PNG only); prints one markdown row per job (sizes, CPU and wall times, log–log slopes,
+//! peak memory).
 //!
 //! `cargo run --release -p plots --example scale_figure -- docs/scale/scale-jobs.csv docs/figures`
 
