@@ -259,18 +259,18 @@ pub(crate) fn sparse<P: PoolColumn>(
     max_terms: usize,
     hyper: usize,
 ) -> Scored {
-    use rayon::prelude::*;
     let (cases, nodes, folds) = (cx.cases, cx.nodes, cx.folds);
-    let cols: Vec<Vec<Vec<f64>>> = cases
-        .par_iter()
-        .map(|c| pool.iter().map(|p| p.column(c)).collect())
-        .collect();
     let mut res = vec![[Vec::new(), Vec::new()]; cases.len()];
     let mut n_params = 0usize;
     let mut chosen_names: Vec<(String, f64)> = Vec::new();
-    let all = |i: usize, _c: usize| cols[i].clone();
-    // the selected columns of a case copied from the stored pool (not the whole pool)
-    let pick = |i: usize, _c: usize, s: &[usize]| s.iter().map(|&j| cols[i][j].clone()).collect();
+    // Pool columns are computed where a node's Gram or a selected column needs them, not
+    // held for every case: holding them (126 stall columns a case) was 144.5 of the 331 MB
+    // heap peak of the free-response job, and computing a column costs no more than the
+    // copy the held pool made for each use (docs/DECISIONS.md, "Where the free-response
+    // diagnosis's memory goes").
+    let all = |i: usize, _c: usize| pool.iter().map(|p| p.column(&cases[i])).collect();
+    let pick =
+        |i: usize, _c: usize, s: &[usize]| s.iter().map(|&j| pool[j].column(&cases[i])).collect();
     let pool_aug = Aug {
         key: cx.key,
         cols: &all,
