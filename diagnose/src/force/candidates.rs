@@ -265,8 +265,8 @@ pub(crate) fn sparse<P: PoolColumn>(
     let mut chosen_names: Vec<(String, f64)> = Vec::new();
     // Pool columns are computed where a node's Gram or a selected column needs them, not
     // held for every case: holding them (126 stall columns a case) was 144.5 of the 331 MB
-    // heap peak of the free-response job, and computing a column costs no more than the
-    // copy the held pool made for each use (docs/DECISIONS.md, "Where the free-response
+    // heap peak of the free-response job; each use cloned the held pool anyway, and the
+    // CPU time stayed within run-to-run noise (docs/DECISIONS.md, "Where the free-response
     // diagnosis's memory goes").
     let all = |i: usize, _c: usize| pool.iter().map(|p| p.column(&cases[i])).collect();
     let pick =
