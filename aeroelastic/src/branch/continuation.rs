@@ -227,6 +227,28 @@ impl Section {
         opts: &BranchOptions,
         observer: &dyn Fn(BranchProgress),
     ) -> Result<Branch> {
+        self.continue_branch_within(hopf, u_min, u_max, f64::INFINITY, opts, observer)
+    }
+
+    /// [`Section::continue_branch`] that also stops where the branch passes `u_reach`
+    /// [m/s] with increasing speed (ending with [`BranchEnd::SpeedRange`] at the speed of
+    /// the first orbit beyond it, whose Floquet multipliers are not computed). For a fit
+    /// to data measured below `u_reach`: the branch beyond it bears on those speeds only if
+    /// it folds back, and the orbits there are the costliest of a diagram that starts at a
+    /// Hopf point far above the data (docs/DECISIONS.md, "The fits' continuation reach").
+    /// `u_reach = ∞` is [`Section::continue_branch`] exactly.
+    ///
+    /// # Errors
+    /// As [`Section::continue_branch`].
+    pub fn continue_branch_within(
+        &self,
+        hopf: &HopfPoint,
+        u_min: f64,
+        u_max: f64,
+        u_reach: f64,
+        opts: &BranchOptions,
+        observer: &dyn Fn(BranchProgress),
+    ) -> Result<Branch> {
         opts.check()?;
         self.check_smooth()?;
         let scales = branch_scales(hopf, opts.amplitude_scale);
@@ -341,6 +363,12 @@ impl Section {
                 }
                 continue;
             };
+            let ui = sh.unknowns() - 1;
+            let u_here = y[ui] * sh.scales()[ui];
+            if u_here > u_reach && tn[ui] > 0.0 {
+                stop = BranchEnd::SpeedRange { u: u_here };
+                break;
+            }
             let p = sh.point(&y, &j)?;
             if p.u < u_min || p.u > u_max {
                 stop = BranchEnd::SpeedRange { u: p.u };
@@ -362,7 +390,6 @@ impl Section {
             points.push(p);
             ts.push(tn.clone());
             // Events between k−1 and k.
-            let ui = sh.unknowns() - 1;
             let fold = ts[k - 1][ui] * ts[k][ui] < 0.0;
             if fold {
                 let s3 = [arc[k - 2], arc[k - 1], arc[k]];

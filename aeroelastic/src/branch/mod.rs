@@ -103,6 +103,23 @@ impl Section {
         opts: &BranchOptions,
         observer: &dyn Fn(BranchProgress),
     ) -> Result<BranchSet> {
+        self.lco_branches_within(u_min, u_max, f64::INFINITY, opts, observer)
+    }
+
+    /// [`Section::lco_branches`] whose branches also stop where they pass `u_reach` [m/s]
+    /// with increasing speed ([`Section::continue_branch_within`]); the Hopf points are
+    /// searched in [`u_min`, `u_max`] as there. `u_reach = ∞` is [`Section::lco_branches`].
+    ///
+    /// # Errors
+    /// As [`Section::lco_branches`].
+    pub fn lco_branches_within(
+        &self,
+        u_min: f64,
+        u_max: f64,
+        u_reach: f64,
+        opts: &BranchOptions,
+        observer: &dyn Fn(BranchProgress),
+    ) -> Result<BranchSet> {
         opts.check()?;
         self.check_smooth()?;
         let hopf_points = self.hopf_points(u_min, u_max, opts.n_scan)?;
@@ -121,7 +138,7 @@ impl Section {
         let mut branches = Vec::new();
         for (i, h) in hopf_points.iter().enumerate() {
             let obs = |p: BranchProgress| observer(BranchProgress { branch: i, ..p });
-            branches.push(self.continue_branch(h, u_min, u_max, opts, &obs)?);
+            branches.push(self.continue_branch_within(h, u_min, u_max, u_reach, opts, &obs)?);
         }
         Ok(BranchSet {
             hopf_points,
@@ -287,6 +304,46 @@ mod tests {
             method: BranchMethod::HarmonicBalance,
             ..BranchOptions::default()
         });
+    }
+
+    /// A branch stopped at a reach is the whole branch up to it, orbit for orbit (bit for
+    /// bit), ending where it first passes the reach with increasing speed: on the
+    /// subcritical reference, whose stable branch turns up at its fold and runs past the
+    /// Hopf speed.
+    #[test]
+    fn a_branch_stopped_at_its_reach_is_the_whole_branch_up_to_it() {
+        let opts = BranchOptions {
+            method: BranchMethod::HarmonicBalance,
+            ..BranchOptions::default()
+        };
+        let s = hp1_soft_hard();
+        let whole = s.lco_branches(1.0, 3.0, &opts, &no_obs).unwrap();
+        let b = &whole.branches[0];
+        let reach = b.hopf.u * 1.05;
+        let cut = s
+            .lco_branches_within(1.0, 3.0, reach, &opts, &no_obs)
+            .unwrap();
+        let c = &cut.branches[0];
+        let n = c.points.len();
+        assert!(n >= 5 && n < b.points.len(), "{n} of {}", b.points.len());
+        for (p, q) in c.points.iter().zip(&b.points) {
+            assert_eq!(p.unknowns, q.unknowns);
+            assert_eq!(p.multipliers, q.multipliers);
+        }
+        // the whole branch's next orbit is the first beyond the reach, moving up
+        let next = &b.points[n];
+        assert!(next.u > reach && next.u > b.points[n - 1].u, "{next:?}");
+        assert!(c.points.iter().all(|p| p.u <= reach));
+        match c.stop {
+            BranchEnd::SpeedRange { u } => assert!((u - next.u).abs() < 1e-9 * u, "{u}"),
+            ref e => panic!("{e:?}"),
+        }
+        assert_eq!(c.events, b.events[..c.events.len()]);
+        // an infinite reach is the whole branch
+        let all = s
+            .lco_branches_within(1.0, 3.0, f64::INFINITY, &opts, &no_obs)
+            .unwrap();
+        assert_eq!(all.branches[0].points.len(), b.points.len());
     }
 
     fn subcritical(opts: &BranchOptions) {

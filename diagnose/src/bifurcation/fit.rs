@@ -72,6 +72,10 @@ pub(crate) struct Setting<'a> {
     /// ([`Predicted::corrected`]); empty: predictions interpolate between continuation
     /// points.
     pub points: &'a [MeasuredAmplitude],
+    /// Speed [m/s] past which a branch moving to higher speeds is not continued
+    /// ([`Section::lco_branches_within`]): the fits' evaluations stop there, the
+    /// diagrams reported are continued over the whole range (∞).
+    pub reach: f64,
 }
 
 impl Setting<'_> {
@@ -96,7 +100,7 @@ fn norm(a: f64, scale: f64) -> f64 {
 /// there or the continuation cannot start.
 pub(crate) fn diagram(section: &Section, s: &Setting) -> Option<BranchSet> {
     section
-        .lco_branches(s.range[0], s.range[1], s.branch, &|_| {})
+        .lco_branches_within(s.range[0], s.range[1], s.reach, s.branch, &|_| {})
         .ok()
 }
 
@@ -784,6 +788,7 @@ pub(crate) fn test_setting(opts: &BranchOptions) -> Setting<'_> {
         dofs: [true, false],
         row_speeds: [f64::INFINITY, f64::NEG_INFINITY],
         points: &[],
+        reach: f64::INFINITY,
     }
 }
 

@@ -79,6 +79,14 @@ const DECAY_REPRODUCED: f64 = 0.5;
 /// speed and the nominal Hopf speed.
 const HOPF_REACH: f64 = 2.0;
 
+/// The fits' continuation reach ([`Setting::reach`]) as a multiple of the largest speed of
+/// the measured points and rows: a branch that passes it with increasing speed is not
+/// continued further during a fit (the diagram reported for the fitted parameters is).
+/// No score looks beyond it: a covered point's prediction is the branch at its own speed,
+/// an uncovered point's nearest orbit counts within s_u (2 % of the mean speed) of it, an
+/// absence row looks at its own speed (docs/DECISIONS.md, "The fits' continuation reach").
+const FIT_REACH: f64 = 1.1;
+
 /// Settings of the bifurcation-level diagnosis.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, schemars::JsonSchema)]
 pub struct BifurcationOptions {
@@ -414,7 +422,8 @@ pub struct CandidateResult {
     pub score_se: f64,
     /// 1 − held-out score / nominal held-out score.
     pub shrink: f64,
-    /// Continuations run for this candidate.
+    /// Continuations run for this candidate: its fits' (each branch stopped where it
+    /// passes 1.1 times the largest measured speed going up) and the one of `fit`.
     pub evaluations: usize,
     /// Normalised error of the fit's own still-air releases, simulated from each still-air
     /// record's initial state, against those records (0 perfect, ≈ 1 a release that misses
@@ -961,6 +970,7 @@ pub fn diagnose_diagram(
             FitJacobian::Differences => &[],
             FitJacobian::Sensitivities => measured,
         },
+        reach: f64::INFINITY,
     };
     let hopf_nominal = section
         .hopf_points(probe.range[0], probe.range[1], branch.n_scan)
@@ -977,6 +987,11 @@ pub fn diagnose_diagram(
             .min(1.5 * u_max_meas);
     let range = [0.7 * u_min_meas, hi];
     let setting = Setting { range, ..probe };
+    // the fits' evaluations: branches not continued past the reach
+    let fitting = Setting {
+        reach: FIT_REACH * u_max_meas,
+        ..setting
+    };
     let all: Vec<&MeasuredAmplitude> = measured.iter().collect();
     let all_onsets: Vec<&MeasuredOnset> = onsets.iter().collect();
     let all_absences: Vec<&MeasuredAbsence> = absences.iter().collect();
@@ -1068,7 +1083,7 @@ pub fn diagnose_diagram(
                     diagram_in,
                     &all_rows,
                     &groups,
-                    &setting,
+                    &fitting,
                     opts,
                     nominal_score,
                     start,
@@ -1212,11 +1227,12 @@ fn fit_candidate(
     let measured: &[MeasuredAmplitude] = &diagram_in.points;
     let need_hopf = all.need_hopf();
     let evals = std::sync::atomic::AtomicUsize::new(0);
-    let predicted = |theta: &[f64]| -> Predicted {
+    let predicted_with = |theta: &[f64], setting: &Setting| -> Predicted {
         evals.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         let s = c.apply(section, theta).ok();
         predict(s.as_ref(), setting, need_hopf)
     };
+    let predicted = |theta: &[f64]| predicted_with(theta, setting);
     let section_at = |theta: &[f64]| c.apply(section, theta).ok();
     // Levenberg–Marquardt on the rows `rows`: residuals of a prediction and their
     // Jacobian from its orbits' sensitivities.
@@ -1405,13 +1421,13 @@ fn fit_candidate(
     } else {
         resolution
     };
-    let p_all = &full.predicted;
-    let fit = with_rows(
-        summary(p_all, measured, setting),
-        p_all,
-        diagram_in,
-        setting,
-    );
+    // the fitted parameters' diagram over the whole range (the fit's stops at the reach)
+    let shown = Setting {
+        reach: f64::INFINITY,
+        ..*setting
+    };
+    let p_all = &predicted_with(&full.theta, &shown);
+    let fit = with_rows(summary(p_all, measured, &shown), p_all, diagram_in, &shown);
     let mut values = c.values(&full.theta);
     flip(&mut values);
     Ok(CandidateResult {
